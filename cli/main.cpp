@@ -1,0 +1,48 @@
+// particlemesh: particles to surfaces, for pipelines.
+//   particlemesh triangulate IN -o OUT.ply      surface particles -> mesh
+//   particlemesh inspect MESH [--json]          topology report of a mesh
+//   particlemesh sample SHAPE -o OUT.xyz        evenly sampled demo/test particles
+#include <cstdio>
+#include <exception>
+
+#include <CLI/CLI.hpp>
+
+#include "commands.h"
+#include "particlemesh/core/error.h"
+#include "particlemesh/version.h"
+#include "progress_line.h"
+
+int main(int argc, char** argv) {
+  using namespace particlemesh;
+  CLI::App app{"particlemesh " PARTICLEMESH_VERSION_STRING ": particles to surfaces"};
+  app.set_version_flag("--version", PARTICLEMESH_VERSION_STRING);
+  app.require_subcommand(1);
+  std::vector<cli::Command> commands;
+  cli::add_triangulate(app, commands);
+  cli::add_inspect(app, commands);
+  cli::add_sample(app, commands);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);  // prints help / the usage error
+    return code == 0 ? 0 : 2;
+  }
+  cli::install_interrupt_handler();
+  for (auto& c : commands) {
+    if (!c.app->parsed()) continue;
+    try {
+      return c.run();
+    } catch (const Error& e) {
+      std::fprintf(stderr, "particlemesh %s: error: %s\n", c.app->get_name().c_str(), e.what());
+      return e.status() == Status::Cancelled ? 130 : 1;
+    } catch (const std::bad_alloc&) {
+      std::fprintf(stderr, "particlemesh %s: error: out of memory\n", c.app->get_name().c_str());
+      return 1;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "particlemesh %s: internal error: %s\n", c.app->get_name().c_str(), e.what());
+      return 1;
+    }
+  }
+  return 2;
+}

@@ -1,0 +1,61 @@
+#include "progress_line.h"
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <unistd.h>
+
+namespace particlemesh::cli {
+
+namespace {
+volatile std::sig_atomic_t g_interrupted = 0;
+
+extern "C" void on_sigint(int) {
+  g_interrupted = 1;
+  std::signal(SIGINT, SIG_DFL);  // a second Ctrl-C terminates at once
+}
+}  // namespace
+
+void install_interrupt_handler() {
+  struct sigaction sa {};
+  sa.sa_handler = on_sigint;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+
+bool interrupted() { return g_interrupted != 0; }
+
+ProgressCallback ProgressLine::callback() {
+  tty_ = isatty(STDERR_FILENO) != 0;
+  return [this](std::string_view stage, double fraction) {
+    if (interrupted()) return false;
+    if (quiet_) return true;
+    const auto now = Clock::now();
+    if (now - start_ < std::chrono::seconds(1)) return true;
+    if (tty_) {
+      if (now - last_ < std::chrono::milliseconds(100)) return true;
+      std::fprintf(stderr, "\r%-28.*s %3d%%", int(stage.size()), stage.data(), int(fraction * 100 + 0.5));
+      std::fflush(stderr);
+      shown_ = true;
+    } else if (stage != last_stage_ || now - last_ > std::chrono::seconds(5)) {
+      // Logs (CI, render farms): one line per stage, and every 5 s within a long one.
+      std::fprintf(stderr, "%.*s %d%%\n", int(stage.size()), stage.data(), int(fraction * 100 + 0.5));
+      last_stage_ = std::string(stage);
+    } else {
+      return true;
+    }
+    last_ = now;
+    return true;
+  };
+}
+
+void ProgressLine::clear() {
+  if (shown_ && tty_) {
+    std::fprintf(stderr, "\r%40s\r", "");
+    std::fflush(stderr);
+  }
+  shown_ = false;
+}
+
+}  // namespace particlemesh::cli

@@ -1,0 +1,89 @@
+#include "report_json.h"
+
+#include <sstream>
+
+#include "particlemesh/io/atomic_write.h"
+
+namespace particlemesh::cli {
+
+nlohmann::json to_json(const TopologyReport& r) {
+  nlohmann::json comps = nlohmann::json::array();
+  for (const auto& c : r.per_component) {
+    comps.push_back({{"triangles", c.triangles},
+                     {"vertices", c.vertices},
+                     {"edges", c.edges},
+                     {"boundary_edges", c.boundary_edges},
+                     {"nonmanifold_edges", c.nonmanifold_edges},
+                     {"boundary_loops", c.boundary_loops},
+                     {"euler_characteristic", c.euler_characteristic},
+                     {"closed", c.closed},
+                     {"manifold", c.manifold},
+                     {"consistently_oriented", c.consistently_oriented},
+                     {"genus", c.genus},
+                     {"signed_volume", c.signed_volume}});
+  }
+  return {{"vertices", r.vertices},
+          {"triangles", r.triangles},
+          {"vertices_used", r.vertices_used},
+          {"edges", r.edges},
+          {"boundary_edges", r.boundary_edges},
+          {"manifold_edges", r.manifold_edges},
+          {"nonmanifold_edges", r.nonmanifold_edges},
+          {"nonmanifold_vertices", r.nonmanifold_vertices},
+          {"degenerate_triangles", r.degenerate_triangles},
+          {"duplicate_triangles", r.duplicate_triangles},
+          {"orientation_conflicts", r.orientation_conflicts},
+          {"boundary_loops", r.boundary_loops},
+          {"components", r.components},
+          {"closed_components", r.closed_components},
+          {"euler_characteristic", r.euler_characteristic},
+          {"manifold", r.manifold},
+          {"closed", r.closed},
+          {"consistently_oriented", r.consistently_oriented},
+          {"outward", r.outward},
+          {"per_component", comps}};
+}
+
+nlohmann::json to_json(const TriangulateStats& s) {
+  return {{"spacing", s.spacing},
+          {"spacing_estimated", s.spacing_estimated},
+          {"max_edge", s.max_edge},
+          {"points", s.points},
+          {"duplicate_points", s.duplicate_points},
+          {"max_neighbors_seen", s.max_neighbors_seen},
+          {"candidates", s.candidates},
+          {"degenerate_triplets", s.degenerate},
+          {"ties", s.ties},
+          {"kept", s.kept},
+          {"seconds", {{"spacing", s.seconds_spacing}, {"neighbors", s.seconds_neighbors}, {"test", s.seconds_test}}}};
+}
+
+std::string describe(const TopologyReport& r) {
+  std::ostringstream o;
+  o << "  vertices      " << r.vertices << " (" << r.vertices_used << " used)\n";
+  o << "  triangles     " << r.triangles << "\n";
+  o << "  edges         " << r.edges << ": " << r.boundary_edges << " boundary, " << r.manifold_edges
+    << " shared by 2, " << r.nonmanifold_edges << " shared by >2\n";
+  o << "  components    " << r.components << " (" << r.closed_components << " closed), "
+    << r.boundary_loops << " boundary loop" << (r.boundary_loops == 1 ? "" : "s") << "\n";
+  o << "  euler char.   " << r.euler_characteristic;
+  if (!r.per_component.empty() && r.per_component.size() <= 8) {
+    o << "  (genus per component:";
+    for (const auto& c : r.per_component) o << ' ' << (c.genus >= 0 ? std::to_string(c.genus) : std::string("-"));
+    o << ')';
+  }
+  o << "\n";
+  o << "  manifold      " << (r.manifold ? "yes" : "no") << " (" << r.nonmanifold_vertices
+    << " non-manifold vertices)\n";
+  o << "  oriented      " << (r.consistently_oriented ? "consistently" : "no") << " ("
+    << r.orientation_conflicts << " conflicts)" << (r.closed_components ? (r.outward ? ", closed parts face outward" : ", some closed part faces inward") : "") << "\n";
+  if (r.degenerate_triangles || r.duplicate_triangles)
+    o << "  defects       " << r.degenerate_triangles << " degenerate, " << r.duplicate_triangles << " duplicate triangles\n";
+  return o.str();
+}
+
+void write_json_file(const nlohmann::json& j, const std::string& path) {
+  write_file_atomically(path, j.dump(2) + "\n");
+}
+
+}  // namespace particlemesh::cli

@@ -1,0 +1,22 @@
+// JSON and text renderings of the library's reports, for --report, --json and summaries.
+#pragma once
+
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "particlemesh/mesh/topology_report.h"
+#include "particlemesh/surface/triangulate.h"
+
+namespace particlemesh::cli {
+
+nlohmann::json to_json(const TopologyReport& r);
+nlohmann::json to_json(const TriangulateStats& s);
+
+/// A few lines describing the mesh, for people.
+std::string describe(const TopologyReport& r);
+
+/// Write JSON to a file atomically (temporary file + rename). @throws Error(IoError).
+void write_json_file(const nlohmann::json& j, const std::string& path);
+
+}  // namespace particlemesh::cli

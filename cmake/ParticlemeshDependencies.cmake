@@ -1,0 +1,14 @@
+# Third-party dependencies, all from Debian 12 packages (see scripts/setup.sh).
+find_package(Threads REQUIRED)
+find_package(TBB REQUIRED)
+find_package(OpenMesh REQUIRED)  # targets OpenMeshCore, OpenMeshTools
+if(PM_BUILD_CLI)
+  find_package(CLI11 REQUIRED)
+  find_package(nlohmann_json REQUIRED)
+endif()
+if(PM_BUILD_TESTS)
+  find_package(GTest REQUIRED)
+endif()
+if(PM_BUILD_BENCH)
+  find_package(benchmark REQUIRED)
+endif()

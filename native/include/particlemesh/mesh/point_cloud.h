@@ -1,0 +1,36 @@
+// Particles: positions, optional normals, optional per-point attribute channels.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "particlemesh/core/export.h"
+#include "particlemesh/core/vec3.h"
+
+namespace particlemesh {
+
+/// A named per-vertex float channel (colour, velocity, radius, ...), `components` floats per
+/// vertex, stored vertex-major: values[v * components + c].
+struct VertexAttribute {
+  std::string name;
+  int components = 1;
+  std::vector<float> values;
+};
+
+/// N particles. `normals` is either empty or has one entry per position.
+struct PointCloud {
+  std::vector<Vec3> positions;
+  std::vector<Vec3> normals;
+  std::vector<VertexAttribute> attributes;
+
+  size_t size() const { return positions.size(); }
+  bool has_normals() const { return !normals.empty(); }
+};
+
+/// Check that the cloud is usable: normals (if any) match the positions in number, every
+/// coordinate and normal component is finite, attribute sizes match.
+/// @throws Error(InvalidInput) naming the first offending element, e.g. "positions[12].y is NaN".
+PM_EXPORT void validate_point_cloud(const PointCloud& cloud);
+
+}  // namespace particlemesh

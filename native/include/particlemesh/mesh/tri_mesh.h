@@ -1,0 +1,29 @@
+// The flat indexed triangle mesh that every stage produces and consumes.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "particlemesh/core/vec3.h"
+#include "particlemesh/mesh/point_cloud.h"
+
+namespace particlemesh {
+
+/// Three vertex indices. The winding (counter-clockwise seen from outside) gives the facing.
+using Triangle = std::array<uint32_t, 3>;
+
+/// #V positions, optional #V normals, #F triangles, optional per-vertex attributes.
+/// Vertices need not all be used (a triangulation keeps every input particle as a vertex,
+/// so output index i is input particle i).
+struct TriMesh {
+  std::vector<Vec3> positions;
+  std::vector<Vec3> normals;  ///< empty or one per vertex
+  std::vector<Triangle> triangles;
+  std::vector<VertexAttribute> attributes;
+
+  size_t vertex_count() const { return positions.size(); }
+  size_t triangle_count() const { return triangles.size(); }
+};
+
+}  // namespace particlemesh

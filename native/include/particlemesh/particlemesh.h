@@ -1,0 +1,150 @@
+/* particlemesh C ABI: the stable interface for Blender (ctypes), other languages and hosts.
+ *
+ * Rules that hold for every function here:
+ *  - Every call returns a pm_status (PM_OK = 0) except pm_abi_version, pm_version_string,
+ *    pm_status_string, pm_last_error_message and the NULL-tolerant pm_*_destroy.
+ *  - No C++ exception ever crosses this boundary and nothing aborts: bad input gives a
+ *    status and pm_last_error_message() says which argument (and which point index) was wrong.
+ *  - On failure, outputs are left untouched (out-pointers are not written).
+ *  - Options structs start with struct_size and are filled by pm_<x>_options_init(); new
+ *    fields are only ever appended, so a caller built against an older header keeps working.
+ *  - Variable-size results: query the counts, then copy into caller-owned memory.
+ *  - Long calls take a progress callback (called on the calling thread only); returning
+ *    non-zero from it cancels the call, which then returns PM_STATUS_CANCELLED promptly.
+ *  - Output is identical for any thread count.
+ */
+#ifndef PARTICLEMESH_H
+#define PARTICLEMESH_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "particlemesh/core/export.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Bumped when a function or struct changes incompatibly; appending does not bump it. */
+#define PM_ABI_VERSION 1
+
+typedef enum pm_status {
+  PM_OK = 0,
+  PM_STATUS_INVALID_ARGUMENT = 1, /**< a parameter is out of range, a pointer is NULL, a size is wrong */
+  PM_STATUS_INVALID_INPUT = 2,    /**< the data is unusable: NaN coordinate, empty cloud, ... */
+  PM_STATUS_IO_ERROR = 3,         /**< a file could not be opened, read or written */
+  PM_STATUS_FORMAT_ERROR = 4,     /**< a file's contents are malformed */
+  PM_STATUS_OUT_OF_MEMORY = 5,
+  PM_STATUS_CANCELLED = 6,        /**< the progress callback returned non-zero */
+  PM_STATUS_LIMIT_EXCEEDED = 7,   /**< a resource limit was hit (see the message) */
+  PM_STATUS_INTERNAL = 8          /**< a bug in particlemesh; please report the message */
+} pm_status;
+
+typedef struct pm_cloud pm_cloud; /**< particles: positions and optional normals */
+typedef struct pm_mesh pm_mesh;   /**< an indexed triangle mesh */
+
+/** Progress: stage name and overall fraction 0..1. Return 0 to go on, non-zero to cancel. */
+typedef int (*pm_progress_fn)(void* user_data, const char* stage, double fraction);
+
+/* ---- library ------------------------------------------------------------------------ */
+
+PM_EXPORT uint32_t pm_abi_version(void);
+PM_EXPORT const char* pm_version_string(void);
+/** Static text for a status ("invalid argument", ...). */
+PM_EXPORT const char* pm_status_string(pm_status status);
+/** Message of the last failed call on this thread ("" if none). Valid until the next call. */
+PM_EXPORT const char* pm_last_error_message(void);
+
+/* ---- point clouds ------------------------------------------------------------------- */
+
+/** Copy `count` particles: positions are count*3 doubles (x y z ...), normals NULL or
+ *  count*3 doubles. Every value must be finite (the message names the first bad index). */
+PM_EXPORT pm_status pm_cloud_create(const double* positions, const double* normals, size_t count,
+                                    pm_cloud** out_cloud);
+/** The same from float32 arrays (numpy / Blender buffers). */
+PM_EXPORT pm_status pm_cloud_create_f32(const float* positions, const float* normals, size_t count,
+                                        pm_cloud** out_cloud);
+/** Read a .ply or .xyz file. */
+PM_EXPORT pm_status pm_cloud_read(const char* path, pm_cloud** out_cloud);
+PM_EXPORT pm_status pm_cloud_get_count(const pm_cloud* cloud, size_t* out_count);
+/** 1 if the cloud carries normals, else 0. */
+PM_EXPORT pm_status pm_cloud_has_normals(const pm_cloud* cloud, int32_t* out_has_normals);
+/** Copy positions / normals into `out` (capacity in points: 3*capacity floats). */
+PM_EXPORT pm_status pm_cloud_copy_positions_f32(const pm_cloud* cloud, float* out, size_t capacity);
+PM_EXPORT pm_status pm_cloud_copy_normals_f32(const pm_cloud* cloud, float* out, size_t capacity);
+PM_EXPORT void pm_cloud_destroy(pm_cloud* cloud);
+
+/** Median nearest-neighbour distance of the distinct points (threads: 0 = all cores). */
+PM_EXPORT pm_status pm_estimate_spacing(const pm_cloud* cloud, int32_t threads, double* out_spacing);
+
+/* ---- triangulation of surface particles --------------------------------------------- */
+
+/** Return the seed's exact triangle set instead of a finished surface. */
+#define PM_TRIANGULATE_RAW 0x1u
+
+typedef struct pm_triangulate_options {
+  uint32_t struct_size;     /**< sizeof(pm_triangulate_options), set by _init */
+  double spacing;           /**< r0 in world units; 0 = estimate (median NN distance) */
+  double max_edge_factor;   /**< L = factor * r0 (default 2) */
+  int32_t threads;          /**< 0 = all cores */
+  uint32_t max_neighbors;   /**< per-point neighbour cap within L (default 256) */
+  uint32_t flags;           /**< PM_TRIANGULATE_* */
+  pm_progress_fn progress;  /**< may be NULL */
+  void* progress_user_data;
+} pm_triangulate_options;
+
+typedef struct pm_triangulate_stats {
+  uint32_t struct_size;     /**< set by the caller to sizeof(pm_triangulate_stats) */
+  double spacing;           /**< r0 used */
+  double max_edge;          /**< L used */
+  int32_t spacing_estimated;
+  uint64_t points;
+  uint64_t duplicate_points;
+  uint64_t max_neighbors_seen;
+  uint64_t candidates;
+  uint64_t kept;
+} pm_triangulate_stats;
+
+PM_EXPORT void pm_triangulate_options_init(pm_triangulate_options* options);
+/** Triangulate. `options` may be NULL (defaults); `out_stats` may be NULL. The mesh's vertices
+ *  are the cloud's particles, in order. */
+PM_EXPORT pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* options,
+                                   pm_mesh** out_mesh, pm_triangulate_stats* out_stats);
+
+/* ---- meshes ------------------------------------------------------------------------- */
+
+/** Copy a mesh: positions nv*3 doubles, triangles nt*3 vertex indices, normals NULL or nv*3. */
+PM_EXPORT pm_status pm_mesh_create(const double* positions, size_t vertex_count,
+                                   const int32_t* triangles, size_t triangle_count,
+                                   const double* normals, pm_mesh** out_mesh);
+/** Read .ply / .obj / .off / .stl. */
+PM_EXPORT pm_status pm_mesh_read(const char* path, pm_mesh** out_mesh);
+/** Write .ply (binary) or .obj, atomically (temporary file, then rename). */
+PM_EXPORT pm_status pm_mesh_write(const pm_mesh* mesh, const char* path);
+PM_EXPORT pm_status pm_mesh_get_counts(const pm_mesh* mesh, size_t* out_vertex_count,
+                                       size_t* out_triangle_count);
+PM_EXPORT pm_status pm_mesh_has_normals(const pm_mesh* mesh, int32_t* out_has_normals);
+/** Copy into caller memory; capacity counts vertices (3 values each) or triangles. */
+PM_EXPORT pm_status pm_mesh_copy_positions(const pm_mesh* mesh, double* out, size_t capacity);
+PM_EXPORT pm_status pm_mesh_copy_positions_f32(const pm_mesh* mesh, float* out, size_t capacity);
+PM_EXPORT pm_status pm_mesh_copy_normals_f32(const pm_mesh* mesh, float* out, size_t capacity);
+PM_EXPORT pm_status pm_mesh_copy_triangles(const pm_mesh* mesh, int32_t* out, size_t capacity);
+PM_EXPORT void pm_mesh_destroy(pm_mesh* mesh);
+
+typedef struct pm_topology_report {
+  uint32_t struct_size;  /**< set by the caller to sizeof(pm_topology_report) */
+  uint64_t vertices, triangles, vertices_used, edges;
+  uint64_t boundary_edges, manifold_edges, nonmanifold_edges, nonmanifold_vertices;
+  uint64_t degenerate_triangles, duplicate_triangles, orientation_conflicts;
+  uint64_t boundary_loops, components, closed_components;
+  int64_t euler_characteristic;
+  int32_t manifold, closed, consistently_oriented, outward;
+} pm_topology_report;
+
+PM_EXPORT pm_status pm_mesh_report(const pm_mesh* mesh, pm_topology_report* out_report);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PARTICLEMESH_H */

@@ -1,0 +1,84 @@
+// A uniform hash grid over points, for fixed-radius neighbour queries.
+//
+// Written here rather than taken from a k-d tree library because the triangulation asks
+// one kind of question millions of times, "all points within L of this one", on evenly
+// spaced data: a grid of cell L answers it from 27 cells with no tree walk, and sorting
+// the points by cell makes every query read memory that its neighbours just read.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "particlemesh/core/export.h"
+#include "particlemesh/core/vec3.h"
+
+namespace particlemesh {
+
+class PM_EXPORT NeighborGrid {
+ public:
+  using CellCoord = std::array<int32_t, 3>;
+  static constexpr uint32_t kNoCell = 0xffffffffu;
+
+  NeighborGrid() = default;
+
+  /// Bucket `n` points into cubic cells of edge `cell_size` (> 0). Points are copied.
+  /// Cells are ordered lexicographically by (x, y, z) cell coordinate and points by cell,
+  /// then by input index, so the layout does not depend on the thread count.
+  /// @throws Error(LimitExceeded) if the extent spans more than 2^30 cells along an axis.
+  NeighborGrid(const Vec3* points, size_t n, double cell_size);
+
+  double cell_size() const { return cell_size_; }
+  size_t point_count() const { return sorted_points_.size(); }
+  size_t cell_count() const { return cell_coords_.size(); }
+
+  /// Points in cell order: sorted_point(s) is the position of input point original_index(s).
+  const Vec3& sorted_point(uint32_t s) const { return sorted_points_[s]; }
+  uint32_t original_index(uint32_t s) const { return original_index_[s]; }
+  const std::vector<Vec3>& sorted_points() const { return sorted_points_; }
+  const std::vector<uint32_t>& original_indices() const { return original_index_; }
+
+  /// Sorted-index range [cell_begin(c), cell_end(c)) of the points in cell c.
+  uint32_t cell_begin(uint32_t c) const { return cell_start_[c]; }
+  uint32_t cell_end(uint32_t c) const { return cell_start_[c + 1]; }
+  const CellCoord& cell_coord(uint32_t c) const { return cell_coords_[c]; }
+
+  /// Cell coordinate of a position (may lie outside the occupied cells).
+  CellCoord coord_of(const Vec3& p) const;
+  /// Index of the occupied cell at `coord`, or kNoCell.
+  uint32_t find_cell(const CellCoord& coord) const;
+
+  /// Call f(sorted_index, squared_distance) for every point within `radius` of `p`
+  /// (including a point at p itself), in increasing sorted index. Cost: the cells that the
+  /// query box [p - radius, p + radius] touches.
+  template <class F>
+  void for_each_within(const Vec3& p, double radius, F&& f) const {
+    const double r2 = radius * radius;
+    const CellCoord lo = coord_of(p - Vec3{radius, radius, radius});
+    const CellCoord hi = coord_of(p + Vec3{radius, radius, radius});
+    for (int32_t x = lo[0]; x <= hi[0]; ++x)
+      for (int32_t y = lo[1]; y <= hi[1]; ++y)
+        for (int32_t z = lo[2]; z <= hi[2]; ++z) {
+          const uint32_t c = find_cell({x, y, z});
+          if (c == kNoCell) continue;
+          for (uint32_t s = cell_start_[c]; s < cell_start_[c + 1]; ++s) {
+            const double d2 = squared_distance(sorted_points_[s], p);
+            if (d2 <= r2) f(s, d2);
+          }
+        }
+  }
+
+ private:
+  double cell_size_ = 0;
+  double inv_cell_ = 0;
+  Vec3 origin_;
+  std::vector<Vec3> sorted_points_;
+  std::vector<uint32_t> original_index_;
+  std::vector<uint32_t> cell_start_;
+  std::vector<CellCoord> cell_coords_;
+  std::vector<uint32_t> table_;  // open addressing: cell index or kNoCell
+  uint64_t table_mask_ = 0;
+};
+
+}  // namespace particlemesh

@@ -1,0 +1,181 @@
+// C ABI: meshes and topology reports.
+#include <climits>
+#include <memory>
+#include <string>
+
+#include "capi/firewall.h"
+#include "capi/handles.h"
+#include "particlemesh/io/mesh_io.h"
+#include "particlemesh/mesh/topology_report.h"
+
+using namespace particlemesh;
+using particlemesh::capi::guarded;
+using particlemesh::capi::require;
+
+namespace {
+
+void check_capacity(size_t capacity, size_t needed, const char* what) {
+  if (capacity < needed)
+    throw Error(Status::InvalidArgument, "capacity " + std::to_string(capacity) + " is less than the " +
+                                             std::to_string(needed) + " " + what);
+}
+
+}  // namespace
+
+extern "C" {
+
+pm_status pm_mesh_create(const double* positions, size_t vertex_count, const int32_t* triangles,
+                         size_t triangle_count, const double* normals, pm_mesh** out_mesh) {
+  return guarded([&] {
+    require(out_mesh, "out_mesh");
+    if (vertex_count > 0) require(positions, "positions");
+    if (triangle_count > 0) require(triangles, "triangles");
+    if (vertex_count > size_t(INT32_MAX)) throw Error(Status::LimitExceeded, "more than 2^31 - 1 vertices");
+    auto handle = std::make_unique<pm_mesh>();
+    TriMesh& m = handle->mesh;
+    m.positions.resize(vertex_count);
+    for (size_t i = 0; i < vertex_count; ++i) {
+      m.positions[i] = {positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]};
+      if (!is_finite(m.positions[i]))
+        throw Error(Status::InvalidInput, "positions[" + std::to_string(i) + "] is not finite");
+    }
+    if (normals) {
+      m.normals.resize(vertex_count);
+      for (size_t i = 0; i < vertex_count; ++i) m.normals[i] = {normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]};
+    }
+    m.triangles.resize(triangle_count);
+    for (size_t f = 0; f < triangle_count; ++f)
+      for (int c = 0; c < 3; ++c) {
+        const int32_t v = triangles[3 * f + size_t(c)];
+        if (v < 0 || size_t(v) >= vertex_count)
+          throw Error(Status::InvalidInput, "triangles[" + std::to_string(f) + "] refers to vertex " +
+                                                std::to_string(v) + " of " + std::to_string(vertex_count));
+        m.triangles[f][size_t(c)] = uint32_t(v);
+      }
+    *out_mesh = handle.release();
+  });
+}
+
+pm_status pm_mesh_read(const char* path, pm_mesh** out_mesh) {
+  return guarded([&] {
+    require(path, "path");
+    require(out_mesh, "out_mesh");
+    auto handle = std::make_unique<pm_mesh>();
+    handle->mesh = read_mesh(path);
+    *out_mesh = handle.release();
+  });
+}
+
+pm_status pm_mesh_write(const pm_mesh* mesh, const char* path) {
+  return guarded([&] {
+    require(mesh, "mesh");
+    require(path, "path");
+    write_mesh(mesh->mesh, path);
+  });
+}
+
+pm_status pm_mesh_get_counts(const pm_mesh* mesh, size_t* out_vertex_count, size_t* out_triangle_count) {
+  return guarded([&] {
+    require(mesh, "mesh");
+    if (out_vertex_count) *out_vertex_count = mesh->mesh.positions.size();
+    if (out_triangle_count) *out_triangle_count = mesh->mesh.triangles.size();
+  });
+}
+
+pm_status pm_mesh_has_normals(const pm_mesh* mesh, int32_t* out_has_normals) {
+  return guarded([&] {
+    require(mesh, "mesh");
+    require(out_has_normals, "out_has_normals");
+    *out_has_normals = mesh->mesh.normals.empty() ? 0 : 1;
+  });
+}
+
+pm_status pm_mesh_copy_positions(const pm_mesh* mesh, double* out, size_t capacity) {
+  return guarded([&] {
+    require(mesh, "mesh");
+    require(out, "out");
+    const auto& p = mesh->mesh.positions;
+    check_capacity(capacity, p.size(), "vertices");
+    for (size_t i = 0; i < p.size(); ++i) {
+      out[3 * i] = p[i].x;
+      out[3 * i + 1] = p[i].y;
+      out[3 * i + 2] = p[i].z;
+    }
+  });
+}
+
+pm_status pm_mesh_copy_positions_f32(const pm_mesh* mesh, float* out, size_t capacity) {
+  return guarded([&] {
+    require(mesh, "mesh");
+    require(out, "out");
+    const auto& p = mesh->mesh.positions;
+    check_capacity(capacity, p.size(), "vertices");
+    for (size_t i = 0; i < p.size(); ++i) {
+      out[3 * i] = float(p[i].x);
+      out[3 * i + 1] = float(p[i].y);
+      out[3 * i + 2] = float(p[i].z);
+    }
+  });
+}
+
+pm_status pm_mesh_copy_normals_f32(const pm_mesh* mesh, float* out, size_t capacity) {
+  return guarded([&] {
+    require(mesh, "mesh");
+    require(out, "out");
+    const auto& n = mesh->mesh.normals;
+    if (n.empty()) throw Error(Status::InvalidArgument, "the mesh has no normals");
+    check_capacity(capacity, n.size(), "vertices");
+    for (size_t i = 0; i < n.size(); ++i) {
+      out[3 * i] = float(n[i].x);
+      out[3 * i + 1] = float(n[i].y);
+      out[3 * i + 2] = float(n[i].z);
+    }
+  });
+}
+
+pm_status pm_mesh_copy_triangles(const pm_mesh* mesh, int32_t* out, size_t capacity) {
+  return guarded([&] {
+    require(mesh, "mesh");
+    require(out, "out");
+    const auto& t = mesh->mesh.triangles;
+    check_capacity(capacity, t.size(), "triangles");
+    if (mesh->mesh.positions.size() > size_t(INT32_MAX))
+      throw Error(Status::LimitExceeded, "vertex indices do not fit int32");
+    for (size_t f = 0; f < t.size(); ++f)
+      for (int c = 0; c < 3; ++c) out[3 * f + size_t(c)] = int32_t(t[f][size_t(c)]);
+  });
+}
+
+void pm_mesh_destroy(pm_mesh* mesh) { delete mesh; }
+
+pm_status pm_mesh_report(const pm_mesh* mesh, pm_topology_report* out_report) {
+  return guarded([&] {
+    require(mesh, "mesh");
+    require(out_report, "out_report");
+    const TopologyReport r = topology_report(mesh->mesh);
+    pm_topology_report c{};
+    c.struct_size = sizeof(c);
+    c.vertices = r.vertices;
+    c.triangles = r.triangles;
+    c.vertices_used = r.vertices_used;
+    c.edges = r.edges;
+    c.boundary_edges = r.boundary_edges;
+    c.manifold_edges = r.manifold_edges;
+    c.nonmanifold_edges = r.nonmanifold_edges;
+    c.nonmanifold_vertices = r.nonmanifold_vertices;
+    c.degenerate_triangles = r.degenerate_triangles;
+    c.duplicate_triangles = r.duplicate_triangles;
+    c.orientation_conflicts = r.orientation_conflicts;
+    c.boundary_loops = r.boundary_loops;
+    c.components = r.components;
+    c.closed_components = r.closed_components;
+    c.euler_characteristic = r.euler_characteristic;
+    c.manifold = r.manifold;
+    c.closed = r.closed;
+    c.consistently_oriented = r.consistently_oriented;
+    c.outward = r.outward;
+    capi::write_versioned(out_report, c, "out_report");
+  });
+}
+
+}  // extern "C"

@@ -1,0 +1,93 @@
+// Internal: the exception firewall of the C ABI. Every extern "C" entry point runs its body
+// through guarded(), which turns any exception into a status and a thread-local message.
+#pragma once
+
+#include <new>
+#include <string>
+
+#include "particlemesh/core/error.h"
+#include "particlemesh/particlemesh.h"
+
+namespace particlemesh::capi {
+
+void set_error(const std::string& message) noexcept;
+void clear_error() noexcept;
+
+template <class F>
+pm_status guarded(F&& body) noexcept {
+  try {
+    clear_error();
+    body();
+    return PM_OK;
+  } catch (const Error& e) {
+    set_error(e.what());
+    return static_cast<pm_status>(e.status());
+  } catch (const std::bad_alloc&) {
+    set_error("out of memory");
+    return PM_STATUS_OUT_OF_MEMORY;
+  } catch (const std::length_error&) {
+    set_error("out of memory (a size exceeded what can be allocated)");
+    return PM_STATUS_OUT_OF_MEMORY;
+  } catch (const std::exception& e) {
+    set_error(std::string("internal error: ") + e.what());
+    return PM_STATUS_INTERNAL;
+  } catch (...) {
+    set_error("internal error: unknown exception");
+    return PM_STATUS_INTERNAL;
+  }
+}
+
+/// Throw InvalidArgument naming `name` if p is NULL.
+template <class T>
+void require(const T* p, const char* name) {
+  if (p == nullptr) throw Error(Status::InvalidArgument, std::string(name) + " is NULL");
+}
+
+/// Copy the first min(caller_size, sizeof(T)) bytes of a struct whose first member is
+/// uint32_t struct_size: old callers with smaller structs keep working.
+template <class T>
+T read_versioned(const T* in, const T& defaults, const char* name);
+template <class T>
+void check_versioned(const T* out, const char* name);
+template <class T>
+void write_versioned(T* out, const T& value, const char* name);
+
+}  // namespace particlemesh::capi
+
+#include <algorithm>
+#include <cstring>
+
+namespace particlemesh::capi {
+
+template <class T>
+T read_versioned(const T* in, const T& defaults, const char* name) {
+  T out = defaults;
+  if (in == nullptr) return out;
+  const uint32_t size = in->struct_size;
+  if (size < sizeof(uint32_t) || size > 4096)
+    throw Error(Status::InvalidArgument,
+                std::string(name) + "->struct_size is " + std::to_string(size) +
+                    " (call the matching _init function first)");
+  std::memcpy(&out, in, std::min<size_t>(size, sizeof(T)));
+  out.struct_size = sizeof(T);
+  return out;
+}
+
+template <class T>
+void check_versioned(const T* out, const char* name) {
+  const uint32_t size = out->struct_size;
+  if (size < sizeof(uint32_t) || size > 4096)
+    throw Error(Status::InvalidArgument, std::string(name) + "->struct_size must be set to the "
+                                             "struct's size, got " + std::to_string(size));
+}
+
+template <class T>
+void write_versioned(T* out, const T& value, const char* name) {
+  check_versioned(out, name);
+  const uint32_t size = out->struct_size;
+  std::memcpy(reinterpret_cast<char*>(out) + sizeof(uint32_t),
+              reinterpret_cast<const char*>(&value) + sizeof(uint32_t),
+              std::min<size_t>(size, sizeof(T)) - sizeof(uint32_t));
+}
+
+}  // namespace particlemesh::capi

@@ -1,0 +1,221 @@
+#include "particlemesh/sample/shapes.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <unordered_map>
+
+#include "particlemesh/core/error.h"
+#include "spatial/cell_hash.h"
+
+namespace particlemesh {
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+double uniform01(std::mt19937_64& rng) { return double(rng() >> 11) * 0x1.0p-53; }
+
+void add_quad(std::vector<Triangle>& t, uint32_t a, uint32_t b, uint32_t c, uint32_t d) {
+  t.push_back({a, b, c});
+  t.push_back({a, c, d});
+}
+
+// A closed tube mesh around a closed curve given by position and derivative functions.
+template <class Curve, class Deriv>
+TriMesh tube_mesh(Curve curve, Deriv deriv, double radius, int nu, int nv) {
+  // Rotation-minimising frames (double reflection, Wang et al. 2008), with the closure twist
+  // spread evenly along the curve so the last ring meets the first.
+  std::vector<Vec3> P(size_t(nu) + 1), Tg(size_t(nu) + 1), Nr(size_t(nu) + 1);
+  for (int i = 0; i <= nu; ++i) {
+    const double t = 2 * kPi * i / nu;
+    P[size_t(i)] = curve(t);
+    Tg[size_t(i)] = normalized(deriv(t));
+  }
+  Vec3 up = std::abs(Tg[0].z) < 0.9 ? Vec3{0, 0, 1} : Vec3{1, 0, 0};
+  Nr[0] = normalized(cross(cross(Tg[0], up), Tg[0]));
+  for (int i = 0; i < nu; ++i) {
+    const Vec3 v1 = P[size_t(i) + 1] - P[size_t(i)];
+    const double c1 = dot(v1, v1);
+    const Vec3 rL = Nr[size_t(i)] - v1 * (2 / c1 * dot(v1, Nr[size_t(i)]));
+    const Vec3 tL = Tg[size_t(i)] - v1 * (2 / c1 * dot(v1, Tg[size_t(i)]));
+    const Vec3 v2 = Tg[size_t(i) + 1] - tL;
+    const double c2 = dot(v2, v2);
+    Nr[size_t(i) + 1] = c2 > 0 ? rL - v2 * (2 / c2 * dot(v2, rL)) : rL;
+  }
+  // Angle between the transported frame at the end and the start frame.
+  const Vec3 b0 = cross(Tg[0], Nr[0]);
+  const double twist = std::atan2(dot(Nr[size_t(nu)], b0), dot(Nr[size_t(nu)], Nr[0]));
+  TriMesh m;
+  for (int i = 0; i < nu; ++i) {
+    const double a = -twist * i / nu;
+    const Vec3 n0 = Nr[size_t(i)], b = cross(Tg[size_t(i)], n0);
+    const Vec3 n = n0 * std::cos(a) + b * std::sin(a);
+    const Vec3 bb = cross(Tg[size_t(i)], n);
+    for (int j = 0; j < nv; ++j) {
+      const double phi = 2 * kPi * j / nv;
+      const Vec3 dir = n * std::cos(phi) + bb * std::sin(phi);
+      m.positions.push_back(P[size_t(i)] + dir * radius);
+      m.normals.push_back(dir);
+    }
+  }
+  auto id = [&](int i, int j) { return uint32_t(((i + nu) % nu) * nv + (j + nv) % nv); };
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) add_quad(m.triangles, id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+  return m;
+}
+
+}  // namespace
+
+PointCloud fibonacci_sphere(size_t n, double radius, Vec3 center) {
+  PointCloud c;
+  c.positions.resize(n);
+  c.normals.resize(n);
+  const double golden = kPi * (3.0 - std::sqrt(5.0));
+  for (size_t i = 0; i < n; ++i) {
+    const double z = 1.0 - (2.0 * double(i) + 1.0) / double(n);
+    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    const double phi = golden * double(i);
+    const Vec3 d{r * std::cos(phi), r * std::sin(phi), z};
+    c.normals[i] = d;
+    c.positions[i] = center + d * radius;
+  }
+  return c;
+}
+
+TriMesh torus_mesh(double R, double r, int nu, int nv) {
+  if (nu < 3 || nv < 3) throw Error(Status::InvalidArgument, "torus needs at least 3 x 3 segments");
+  TriMesh m;
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const double u = 2 * kPi * i / nu, v = 2 * kPi * j / nv;
+      const Vec3 n{std::cos(u) * std::cos(v), std::sin(u) * std::cos(v), std::sin(v)};
+      m.positions.push_back({(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
+      m.normals.push_back(n);
+    }
+  auto id = [&](int i, int j) { return uint32_t(((i + nu) % nu) * nv + (j + nv) % nv); };
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) add_quad(m.triangles, id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+  return m;
+}
+
+TriMesh trefoil_tube_mesh(double scale, double tube_radius, int nu, int nv) {
+  if (nu < 8 || nv < 3) throw Error(Status::InvalidArgument, "trefoil tube needs at least 8 x 3 segments");
+  auto curve = [scale](double t) {
+    return Vec3{std::sin(t) + 2 * std::sin(2 * t), std::cos(t) - 2 * std::cos(2 * t), -std::sin(3 * t)} * scale;
+  };
+  auto deriv = [scale](double t) {
+    return Vec3{std::cos(t) + 4 * std::cos(2 * t), -std::sin(t) + 4 * std::sin(2 * t), -3 * std::cos(3 * t)} * scale;
+  };
+  return tube_mesh(curve, deriv, tube_radius, nu, nv);
+}
+
+TriMesh icosphere_mesh(int levels, double radius) {
+  if (levels < 0 || levels > 9) throw Error(Status::InvalidArgument, "icosphere levels must be in [0, 9]");
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  TriMesh m;
+  m.positions = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                 {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  for (auto& p : m.positions) p = normalized(p);
+  for (int l = 0; l < levels; ++l) {
+    std::unordered_map<uint64_t, uint32_t> mid;
+    auto midpoint = [&](uint32_t a, uint32_t b) {
+      const uint64_t key = a < b ? (uint64_t(a) << 32 | b) : (uint64_t(b) << 32 | a);
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      m.positions.push_back(normalized(m.positions[a] + m.positions[b]));
+      const uint32_t id = uint32_t(m.positions.size() - 1);
+      mid.emplace(key, id);
+      return id;
+    };
+    std::vector<Triangle> next;
+    for (const auto& tr : m.triangles) {
+      const uint32_t a = midpoint(tr[0], tr[1]), b = midpoint(tr[1], tr[2]), c = midpoint(tr[2], tr[0]);
+      next.push_back({tr[0], a, c});
+      next.push_back({tr[1], b, a});
+      next.push_back({tr[2], c, b});
+      next.push_back({a, b, c});
+    }
+    m.triangles = std::move(next);
+  }
+  m.normals = m.positions;
+  for (auto& p : m.positions) p = p * radius;
+  return m;
+}
+
+PointCloud poisson_disk_sample(const TriMesh& mesh, double r0, uint64_t seed, double oversampling) {
+  if (!(r0 > 0) || !std::isfinite(r0)) throw Error(Status::InvalidArgument, "r0 must be positive");
+  if (!(oversampling > 0)) throw Error(Status::InvalidArgument, "oversampling must be positive");
+  // Cumulative areas for area-uniform triangle choice.
+  std::vector<double> cum(mesh.triangles.size());
+  double area = 0;
+  for (size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const auto& t = mesh.triangles[f];
+    area += 0.5 * norm(cross(mesh.positions[t[1]] - mesh.positions[t[0]], mesh.positions[t[2]] - mesh.positions[t[0]]));
+    cum[f] = area;
+  }
+  if (!(area > 0)) throw Error(Status::InvalidInput, "the mesh has no area to sample");
+  const double want = oversampling * area / (r0 * r0);
+  if (want > 2e8) throw Error(Status::LimitExceeded, "poisson_disk_sample would draw more than 2e8 candidates");
+  const size_t candidates = size_t(std::ceil(want));
+  std::mt19937_64 rng(seed);
+  PointCloud out;
+  const double inv = 1.0 / r0;
+  std::unordered_map<uint64_t, std::vector<uint32_t>> grid;
+  auto key = [&](const std::array<int32_t, 3>& c) { return detail::hash_cell(c); };
+  auto coord = [&](const Vec3& p) {
+    return std::array<int32_t, 3>{int32_t(std::floor(p.x * inv)), int32_t(std::floor(p.y * inv)), int32_t(std::floor(p.z * inv))};
+  };
+  const double r2 = r0 * r0;
+  for (size_t c = 0; c < candidates; ++c) {
+    const double pick = uniform01(rng) * area;
+    const size_t f = size_t(std::lower_bound(cum.begin(), cum.end(), pick) - cum.begin());
+    const auto& t = mesh.triangles[std::min(f, cum.size() - 1)];
+    double u = uniform01(rng), v = uniform01(rng);
+    if (u + v > 1) { u = 1 - u; v = 1 - v; }
+    const Vec3 a = mesh.positions[t[0]], b = mesh.positions[t[1]], d = mesh.positions[t[2]];
+    const Vec3 p = a + (b - a) * u + (d - a) * v;
+    const auto cc = coord(p);
+    bool free = true;
+    for (int dx = -1; dx <= 1 && free; ++dx)
+      for (int dy = -1; dy <= 1 && free; ++dy)
+        for (int dz = -1; dz <= 1 && free; ++dz) {
+          auto it = grid.find(key({cc[0] + dx, cc[1] + dy, cc[2] + dz}));
+          if (it == grid.end()) continue;
+          for (uint32_t q : it->second)
+            if (squared_distance(out.positions[q], p) < r2) { free = false; break; }
+        }
+    if (!free) continue;
+    grid[key(cc)].push_back(uint32_t(out.positions.size()));
+    out.positions.push_back(p);
+    out.normals.push_back(normalized(cross(b - a, d - a)));
+  }
+  return out;
+}
+
+PointCloud square_lattice(int nx, int ny, double spacing) {
+  PointCloud c;
+  for (int i = 0; i < nx; ++i)
+    for (int j = 0; j < ny; ++j) {
+      c.positions.push_back({i * spacing, j * spacing, 0});
+      c.normals.push_back({0, 0, 1});
+    }
+  return c;
+}
+
+PointCloud hex_lattice(int nx, int ny, double spacing) {
+  PointCloud c;
+  const double h = spacing * std::sqrt(3.0) / 2.0;
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      c.positions.push_back({(i + 0.5 * (j & 1)) * spacing, j * h, 0});
+      c.normals.push_back({0, 0, 1});
+    }
+  return c;
+}
+
+}  // namespace particlemesh

@@ -1,0 +1,84 @@
+#include "surface/neighbor_lists.h"
+
+#include <algorithm>
+#include <string>
+
+#include "core/parallel.h"
+#include "spatial/grid_search.h"
+
+namespace particlemesh::detail {
+
+NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
+                                   double radius, size_t max_neighbors,
+                                   ProgressTracker& tracker) {
+  const size_t n = grid.point_count();
+  const double r2 = radius * radius;
+  // Fixed chunks of cells; each fills its own buffer, and buffers are joined in chunk order.
+  const size_t cells = grid.cell_count();
+  const size_t chunk_cells = 2048;
+  const size_t chunks = (cells + chunk_cells - 1) / chunk_cells;
+  std::vector<std::vector<uint32_t>> chunk_index(chunks);
+  std::vector<uint32_t> count(n, 0);
+  size_t cap_point = SIZE_MAX;  // lowest input index over the cap (written under no race:
+  std::vector<uint32_t> chunk_over(chunks, UINT32_MAX);  // per chunk, joined below)
+
+  parallel_blocks(chunks, 1, [&](size_t kb, size_t ke) {
+    for (size_t k = kb; k < ke; ++k) {
+      if (tracker.cancelled()) return;
+      auto& out = chunk_index[k];
+      const size_t cb = k * chunk_cells, ce = std::min(cells, cb + chunk_cells);
+      out.reserve((grid.cell_begin(uint32_t(std::min(ce, cells - 1))) - grid.cell_begin(uint32_t(cb)) + 1) * 16);
+      uint32_t around[27];
+      for (size_t c = cb; c < ce; ++c) {
+        const int na = neighbor_cells(grid, uint32_t(c), around);
+        for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) {
+          if (rep[s] != s) continue;
+          const Vec3 p = grid.sorted_point(s);
+          const size_t before = out.size();
+          for (int a = 0; a < na; ++a) {
+            for (uint32_t t = grid.cell_begin(around[a]); t < grid.cell_end(around[a]); ++t) {
+              if (t == s || rep[t] != t) continue;
+              if (squared_distance(grid.sorted_point(t), p) <= r2) out.push_back(t);
+            }
+          }
+          count[s] = uint32_t(out.size() - before);
+          if (count[s] > max_neighbors) chunk_over[k] = std::min(chunk_over[k], grid.original_index(s));
+        }
+        tracker.tick(grid.cell_end(uint32_t(c)) - grid.cell_begin(uint32_t(c)));
+      }
+    }
+  });
+  tracker.check();
+  for (size_t k = 0; k < chunks; ++k)
+    if (chunk_over[k] != UINT32_MAX) cap_point = std::min<size_t>(cap_point, chunk_over[k]);
+  if (cap_point != SIZE_MAX) {
+    throw Error(Status::LimitExceeded,
+                "point " + std::to_string(cap_point) + " has more than " +
+                    std::to_string(max_neighbors) + " neighbours within " + std::to_string(radius) +
+                    ": the points are packed far denser than the spacing (raise the neighbour "
+                    "limit, or give a smaller spacing / max edge factor)");
+  }
+
+  NeighborLists lists;
+  lists.offset.resize(n + 1);
+  lists.offset[0] = 0;
+  for (size_t s = 0; s < n; ++s) {
+    lists.offset[s + 1] = lists.offset[s] + count[s];
+    if (count[s] > lists.max_count) {
+      lists.max_count = count[s];
+      lists.max_point = uint32_t(s);
+    }
+  }
+  lists.index.resize(lists.offset[n]);
+  parallel_blocks(chunks, 1, [&](size_t kb, size_t ke) {
+    for (size_t k = kb; k < ke; ++k) {
+      const size_t cb = k * chunk_cells;
+      const uint64_t dst = lists.offset[grid.cell_begin(uint32_t(cb))];
+      std::copy(chunk_index[k].begin(), chunk_index[k].end(), lists.index.begin() + dst);
+      std::vector<uint32_t>().swap(chunk_index[k]);
+    }
+  });
+  return lists;
+}
+
+}  // namespace particlemesh::detail

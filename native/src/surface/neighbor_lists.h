@@ -1,0 +1,31 @@
+// Internal: compressed lists of each point's neighbours within a radius.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/progress_tracker.h"
+#include "particlemesh/spatial/neighbor_grid.h"
+
+namespace particlemesh::detail {
+
+/// CSR over sorted indices: neighbours of s are index[offset[s] .. offset[s+1]), ascending,
+/// excluding s itself and every point whose rep != itself (exact duplicates). Points that are
+/// duplicates get empty lists.
+struct NeighborLists {
+  std::vector<uint64_t> offset;
+  std::vector<uint32_t> index;
+  size_t max_count = 0;
+  uint32_t max_point = 0;  ///< sorted index of a point with max_count neighbours
+
+  const uint32_t* begin(uint32_t s) const { return index.data() + offset[s]; }
+  const uint32_t* end(uint32_t s) const { return index.data() + offset[s + 1]; }
+};
+
+/// `grid` must have cells of edge >= radius. Fails with LimitExceeded when some point has
+/// more than max_neighbors neighbours (naming the lowest input index among them).
+NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
+                                   double radius, size_t max_neighbors,
+                                   ProgressTracker& tracker);
+
+}  // namespace particlemesh::detail

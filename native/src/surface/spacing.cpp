@@ -1,0 +1,136 @@
+#include "particlemesh/surface/spacing.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "core/parallel.h"
+#include "particlemesh/core/error.h"
+#include "particlemesh/spatial/neighbor_grid.h"
+#include "spatial/grid_search.h"
+#include "surface/spacing_impl.h"
+
+namespace particlemesh {
+namespace detail {
+
+namespace {
+
+// A cell size at which the grid holds a few points per occupied cell, so that a point's
+// nearest neighbour is almost always in the 27 cells around it. Starts from the spacing a
+// surface sample of the bounding box would have and corrects by the measured occupancy
+// (which scales as h^2 on surfaces, h^3 in volumes; the loop does not need to know which).
+double choose_cell_size(const Vec3* points, size_t n) {
+  Vec3 lo = points[0], hi = points[0];
+  for (size_t i = 1; i < n; ++i) {
+    lo = {std::min(lo.x, points[i].x), std::min(lo.y, points[i].y), std::min(lo.z, points[i].z)};
+    hi = {std::max(hi.x, points[i].x), std::max(hi.y, points[i].y), std::max(hi.z, points[i].z)};
+  }
+  const double diag = distance(lo, hi);
+  double h = diag / std::sqrt(double(n));
+  for (int it = 0; it < 6; ++it) {
+    const double occupied = double(count_occupied_cells(points, n, h));
+    const double per_cell = double(n) / std::max(1.0, occupied);
+    if (per_cell >= 2.0 && per_cell <= 8.0) break;
+    double factor = std::sqrt(4.0 / per_cell);
+    factor = std::clamp(factor, 0.25, 4.0);
+    // The extent limit of the grid: never finer than diag / 2^20 per axis.
+    h = std::max(h * factor, diag / double(1 << 20));
+  }
+  return h;
+}
+
+}  // namespace
+
+SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTracker& tracker,
+                                      double begin, double end) {
+  if (n < 2) throw Error(Status::InvalidInput, "at least two points are needed to estimate the spacing");
+  tracker.stage("estimating spacing", begin, begin + 0.1 * (end - begin));
+  double h = choose_cell_size(points, n);
+  if (!(h > 0)) throw Error(Status::InvalidInput, "all points coincide: there is no spacing");
+
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  constexpr int kMaxRing = 3;
+  for (int attempt = 0; attempt < 8; ++attempt) {
+    tracker.check();
+    NeighborGrid grid(points, n, h);
+    size_t duplicates = 0;
+    const std::vector<uint32_t> rep = find_duplicates(grid, &duplicates);
+    const size_t distinct = n - duplicates;
+    if (distinct < 2) throw Error(Status::InvalidInput, "all points coincide: there is no spacing");
+
+    tracker.stage("estimating spacing", begin + 0.1 * (end - begin), end, grid.cell_count());
+    // nn2[s] = squared distance from sorted point s to its nearest distinct point, +inf when
+    // that is farther than kMaxRing cells (such points are above the median unless h is far
+    // too small, which the retry below detects).
+    std::vector<double> nn2(n, kInf);
+    parallel_blocks(grid.cell_count(), 256, [&](size_t cb, size_t ce) {
+      if (tracker.cancelled()) return;
+      for (size_t c = cb; c < ce; ++c) {
+        const auto& cc = grid.cell_coord(uint32_t(c));
+        for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) {
+          if (rep[s] != s) continue;
+          const Vec3& p = grid.sorted_point(s);
+          double best = kInf;
+          for (int r = 1; r <= kMaxRing; ++r) {
+            for (int dx = -r; dx <= r; ++dx)
+              for (int dy = -r; dy <= r; ++dy)
+                for (int dz = -r; dz <= r; ++dz) {
+                  if (r > 1 && std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != r) continue;
+                  const uint32_t nc = grid.find_cell({cc[0] + dx, cc[1] + dy, cc[2] + dz});
+                  if (nc == NeighborGrid::kNoCell) continue;
+                  for (uint32_t t = grid.cell_begin(nc); t < grid.cell_end(nc); ++t) {
+                    const double d2 = squared_distance(grid.sorted_point(t), p);
+                    if (d2 > 0 && d2 < best) best = d2;
+                  }
+                }
+            // Everything within r cells of the point's cell is seen, so any point not yet
+            // seen is at least r*h away.
+            if (best <= double(r) * h * double(r) * h) break;
+          }
+          if (best > double(kMaxRing) * h * double(kMaxRing) * h) best = kInf;
+          nn2[s] = best;
+        }
+        tracker.tick(1);
+      }
+    });
+    tracker.check();
+
+    std::vector<double> values;
+    values.reserve(distinct);
+    for (size_t s = 0; s < n; ++s)
+      if (rep[s] == s) values.push_back(nn2[s]);
+    const size_t mid = (values.size() - 1) / 2;  // the lower median: an actual NN distance
+    std::nth_element(values.begin(), values.begin() + mid, values.end());
+    if (values[mid] == kInf) {
+      h *= 4.0;  // most points are isolated at this cell size: the guess was far too small
+      continue;
+    }
+    SpacingEstimate result;
+    result.spacing = std::sqrt(values[mid]);
+    result.distinct_points = distinct;
+    result.duplicate_points = duplicates;
+    return result;
+  }
+  throw Error(Status::InvalidInput,
+              "could not estimate the spacing: the points are too sparse for their extent "
+              "(give the spacing explicitly)");
+}
+
+}  // namespace detail
+
+SpacingEstimate estimate_spacing(const Vec3* points, size_t n, int threads,
+                                 const ProgressCallback& progress) {
+  if (points == nullptr && n > 0) throw Error(Status::InvalidArgument, "points is NULL");
+  for (size_t i = 0; i < n; ++i)
+    if (!is_finite(points[i]))
+      throw Error(Status::InvalidInput, "point " + std::to_string(i) + " has a non-finite coordinate");
+  detail::ProgressTracker tracker(progress);
+  return detail::with_threads(threads, [&] {
+    auto r = detail::estimate_spacing_impl(points, n, tracker, 0.0, 1.0);
+    tracker.finish();
+    return r;
+  });
+}
+
+}  // namespace particlemesh

@@ -1,0 +1,72 @@
+// Shared helpers for the C++ test suites.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <random>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "particlemesh/mesh/point_cloud.h"
+#include "particlemesh/mesh/tri_mesh.h"
+
+namespace particlemesh::test {
+
+/// Path of a file in the shared data folder (PM_TEST_DATA, set by CTest), or "" when the
+/// folder is absent; use PM_REQUIRE_DATA to skip with a message.
+inline std::string shared_data(const std::string& relative) {
+  const char* dir = std::getenv("PM_TEST_DATA");
+  if (dir == nullptr) return {};
+  const std::filesystem::path p = std::filesystem::path(dir) / relative;
+  return std::filesystem::exists(p) ? p.string() : std::string();
+}
+
+#define PM_REQUIRE_DATA(var, relative)                                                        \
+  const std::string var = ::particlemesh::test::shared_data(relative);                        \
+  if (var.empty()) GTEST_SKIP() << "shared test data " << (relative)                          \
+                                << " not found (set PM_TEST_DATA to the shared/data folder)"
+
+/// A scratch folder under the build tree, emptied per test.
+inline std::filesystem::path scratch_dir(const std::string& name) {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::filesystem::path p = std::filesystem::temp_directory_path() / "particlemesh_tests" /
+                            (std::string(info->test_suite_name()) + "." + info->name() + "." + name);
+  std::filesystem::remove_all(p);
+  std::filesystem::create_directories(p);
+  return p;
+}
+
+/// Triangles as sorted vertex triples in a sorted vector (orientation ignored).
+inline std::vector<Triangle> canonical(std::vector<Triangle> t) {
+  for (auto& x : t) std::sort(x.begin(), x.end());
+  std::sort(t.begin(), t.end());
+  return t;
+}
+
+/// Uniform random points in [0, size)^3 with a fixed seed.
+inline PointCloud random_cloud(size_t n, uint64_t seed, double size = 1.0) {
+  std::mt19937_64 rng(seed);
+  auto u = [&] { return double(rng() >> 11) * 0x1.0p-53 * size; };
+  PointCloud c;
+  for (size_t i = 0; i < n; ++i) c.positions.push_back({u(), u(), u()});
+  return c;
+}
+
+/// Undirected edge -> number of triangles using it.
+inline std::map<std::pair<uint32_t, uint32_t>, int> edge_counts(const std::vector<Triangle>& tris) {
+  std::map<std::pair<uint32_t, uint32_t>, int> e;
+  for (const auto& t : tris)
+    for (int c = 0; c < 3; ++c) {
+      uint32_t a = t[c], b = t[(c + 1) % 3];
+      if (a > b) std::swap(a, b);
+      ++e[{a, b}];
+    }
+  return e;
+}
+
+}  // namespace particlemesh::test
