@@ -60,9 +60,10 @@ TriMesh tube_mesh(Curve curve, Deriv deriv, double radius, int nu, int nv) {
       m.normals.push_back(dir);
     }
   }
+  // (T, n, b) is right-handed and phi turns from n to b, so this winding faces outward.
   auto id = [&](int i, int j) { return uint32_t(((i + nu) % nu) * nv + (j + nv) % nv); };
   for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) add_quad(m.triangles, id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+    for (int j = 0; j < nv; ++j) add_quad(m.triangles, id(i, j), id(i, j + 1), id(i + 1, j + 1), id(i + 1, j));
   return m;
 }
 

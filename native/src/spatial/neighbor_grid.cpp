@@ -7,14 +7,23 @@
 
 #include <tbb/parallel_sort.h>
 
+#include "core/parallel.h"
 #include "particlemesh/core/error.h"
-#include "spatial/cell_hash.h"
 
 namespace particlemesh {
 
 namespace {
-constexpr double kMaxCellsPerAxis = double(1 << 30);
+
+uint64_t mix(uint64_t h) {  // splitmix64 finaliser
+  h ^= h >> 30;
+  h *= 0xBF58476D1CE4E5B9ull;
+  h ^= h >> 27;
+  h *= 0x94D049BB133111EBull;
+  h ^= h >> 31;
+  return h;
 }
+
+}  // namespace
 
 NeighborGrid::NeighborGrid(const Vec3* points, size_t n, double cell_size) {
   if (!(cell_size > 0) || !std::isfinite(cell_size))
@@ -32,71 +41,88 @@ NeighborGrid::NeighborGrid(const Vec3* points, size_t n, double cell_size) {
     hi = {std::max(hi.x, points[i].x), std::max(hi.y, points[i].y), std::max(hi.z, points[i].z)};
   }
   if (n == 0) lo = hi = Vec3{};
-  // The origin sits one cell below the data so that queries just outside it stay in range.
+  // The origin sits one cell below the data so that the cells around any point exist.
   origin_ = lo - Vec3{cell_size, cell_size, cell_size};
   for (int a = 0; a < 3; ++a) {
-    if ((hi[a] - lo[a]) * inv_cell_ + 4 > kMaxCellsPerAxis)
+    const double cells = (hi[a] - lo[a]) * inv_cell_;
+    if (!(cells < double(kMaxCellsPerAxis - 4)))
       throw Error(Status::LimitExceeded,
-                  "the points span " + std::to_string((hi[a] - lo[a]) * inv_cell_) +
-                      " cells of size " + std::to_string(cell_size) + " along axis " +
-                      std::string(1, "xyz"[a]) +
-                      " (at most 2^30): remove far outliers or use a larger spacing");
+                  "the points span " + std::to_string(cells) + " cells of size " + std::to_string(cell_size) +
+                      " along " + std::string(1, "xyz"[a]) +
+                      " (at most 2097148): remove far outliers or use a larger spacing");
   }
 
   struct Entry {
-    CellCoord c;
+    uint64_t key;
     uint32_t index;
+    bool operator<(const Entry& o) const { return key != o.key ? key < o.key : index < o.index; }
   };
   std::vector<Entry> entries(n);
-  for (size_t i = 0; i < n; ++i) entries[i] = {coord_of(points[i]), uint32_t(i)};
-  tbb::parallel_sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) {
-    if (a.c != b.c) return a.c < b.c;
-    return a.index < b.index;
+  detail::parallel_blocks(n, 4096, [&](size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i) entries[i] = {pack(coord_of(points[i])), uint32_t(i)};
   });
+  tbb::parallel_sort(entries.begin(), entries.end());
 
   sorted_points_.resize(n);
   original_index_.resize(n);
+  detail::parallel_blocks(n, 4096, [&](size_t b, size_t e) {
+    for (size_t s = b; s < e; ++s) {
+      original_index_[s] = entries[s].index;
+      sorted_points_[s] = points[entries[s].index];
+    }
+  });
   cell_start_.clear();
-  cell_coords_.clear();
+  cell_keys_.clear();
   for (size_t s = 0; s < n; ++s) {
-    original_index_[s] = entries[s].index;
-    sorted_points_[s] = points[entries[s].index];
-    if (s == 0 || entries[s].c != entries[s - 1].c) {
+    if (s == 0 || entries[s].key != entries[s - 1].key) {
       cell_start_.push_back(uint32_t(s));
-      cell_coords_.push_back(entries[s].c);
+      cell_keys_.push_back(entries[s].key);
     }
   }
   cell_start_.push_back(uint32_t(n));
 
   uint64_t size = 16;
-  while (size < 2 * uint64_t(cell_coords_.size())) size <<= 1;
+  while (size < 2 * uint64_t(cell_keys_.size())) size <<= 1;
   table_.assign(size, kNoCell);
   table_mask_ = size - 1;
-  for (uint32_t c = 0; c < cell_coords_.size(); ++c) {
-    uint64_t h = detail::hash_cell(cell_coords_[c]) & table_mask_;
+  for (uint32_t c = 0; c < cell_keys_.size(); ++c) {
+    uint64_t h = mix(cell_keys_[c]) & table_mask_;
     while (table_[h] != kNoCell) h = (h + 1) & table_mask_;
     table_[h] = c;
   }
 }
 
 NeighborGrid::CellCoord NeighborGrid::coord_of(const Vec3& p) const {
-  // Clamp so that queries far outside the data cannot overflow int32.
+  // Clamped so that queries far outside the data stay inside the key range.
   auto axis = [&](double v, double o) {
     const double f = std::floor((v - o) * inv_cell_);
-    return int32_t(std::clamp(f, -2.0, kMaxCellsPerAxis + 8.0));
+    return int32_t(std::clamp(f, 0.0, double(kMaxCellsPerAxis + 3)));
   };
   return {axis(p.x, origin_.x), axis(p.y, origin_.y), axis(p.z, origin_.z)};
 }
 
-uint32_t NeighborGrid::find_cell(const CellCoord& coord) const {
+uint32_t NeighborGrid::find_key(uint64_t key) const {
   if (table_.empty()) return kNoCell;
-  uint64_t h = detail::hash_cell(coord) & table_mask_;
+  uint64_t h = mix(key) & table_mask_;
   while (true) {
     const uint32_t c = table_[h];
     if (c == kNoCell) return kNoCell;
-    if (cell_coords_[c] == coord) return c;
+    if (cell_keys_[c] == key) return c;
     h = (h + 1) & table_mask_;
   }
+}
+
+int NeighborGrid::neighbor_cells(uint32_t c, uint32_t out[27]) const {
+  const CellCoord cc = cell_coord(c);
+  int count = 0;
+  for (int dx = -1; dx <= 1; ++dx)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dz = -1; dz <= 1; ++dz) {
+        // Occupied cells are never on the outermost layer, so the neighbours are in range.
+        const uint32_t nc = find_key(pack({cc[0] + dx, cc[1] + dy, cc[2] + dz}));
+        if (nc != kNoCell) out[count++] = nc;
+      }
+  return count;
 }
 
 }  // namespace particlemesh

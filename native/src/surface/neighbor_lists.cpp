@@ -4,7 +4,6 @@
 #include <string>
 
 #include "core/parallel.h"
-#include "spatial/grid_search.h"
 
 namespace particlemesh::detail {
 
@@ -30,7 +29,7 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
       out.reserve((grid.cell_begin(uint32_t(std::min(ce, cells - 1))) - grid.cell_begin(uint32_t(cb)) + 1) * 16);
       uint32_t around[27];
       for (size_t c = cb; c < ce; ++c) {
-        const int na = neighbor_cells(grid, uint32_t(c), around);
+        const int na = grid.neighbor_cells(uint32_t(c), around);
         for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) {
           if (rep[s] != s) continue;
           const Vec3 p = grid.sorted_point(s);

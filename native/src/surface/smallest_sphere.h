@@ -38,7 +38,12 @@ struct SmallestSphere {
   const Vec3& corner(int i) const { return i == 0 ? a : (i == 1 ? b : c); }
 };
 
-inline SmallestSphere smallest_sphere(const Vec3& a, const Vec3& b, const Vec3& c) {
+/// The corners are put in rank order first, so the result (and its rounding) depends only on
+/// the three points, never on the order in which a caller lists them.
+inline SmallestSphere smallest_sphere(Vec3 a, Vec3 b, Vec3 c) {
+  if (lex_less(b, a)) std::swap(a, b);
+  if (lex_less(c, b)) std::swap(b, c);
+  if (lex_less(b, a)) std::swap(a, b);
   SmallestSphere s;
   s.a = a;
   s.b = b;

@@ -16,28 +16,28 @@ namespace detail {
 
 namespace {
 
-// A cell size at which the grid holds a few points per occupied cell, so that a point's
-// nearest neighbour is almost always in the 27 cells around it. Starts from the spacing a
-// surface sample of the bounding box would have and corrects by the measured occupancy
-// (which scales as h^2 on surfaces, h^3 in volumes; the loop does not need to know which).
-double choose_cell_size(const Vec3* points, size_t n) {
+// A grid whose cells hold a few points each, so that a point's nearest neighbour is almost
+// always in the 27 cells around it. Starts from the spacing a surface sample of the bounding
+// box would have and corrects by the measured occupancy (which scales as h^2 on surfaces and
+// h^3 in volumes; the loop does not need to know which).
+NeighborGrid occupancy_grid(const Vec3* points, size_t n) {
   Vec3 lo = points[0], hi = points[0];
   for (size_t i = 1; i < n; ++i) {
     lo = {std::min(lo.x, points[i].x), std::min(lo.y, points[i].y), std::min(lo.z, points[i].z)};
     hi = {std::max(hi.x, points[i].x), std::max(hi.y, points[i].y), std::max(hi.z, points[i].z)};
   }
   const double diag = distance(lo, hi);
-  double h = diag / std::sqrt(double(n));
-  for (int it = 0; it < 6; ++it) {
-    const double occupied = double(count_occupied_cells(points, n, h));
-    const double per_cell = double(n) / std::max(1.0, occupied);
-    if (per_cell >= 2.0 && per_cell <= 8.0) break;
-    double factor = std::sqrt(4.0 / per_cell);
-    factor = std::clamp(factor, 0.25, 4.0);
-    // The extent limit of the grid: never finer than diag / 2^20 per axis.
-    h = std::max(h * factor, diag / double(1 << 20));
+  if (!(diag > 0)) throw Error(Status::InvalidInput, "all points coincide: there is no spacing");
+  const double finest = diag / double(NeighborGrid::kMaxCellsPerAxis / 2);
+  double h = std::max(diag / std::sqrt(double(n)), finest);
+  for (int it = 0;; ++it) {
+    NeighborGrid grid(points, n, h);
+    const double per_cell = double(n) / double(grid.cell_count());
+    if (it == 5 || (per_cell >= 2.0 && per_cell <= 8.0)) return grid;
+    const double next = std::max(h * std::clamp(std::sqrt(4.0 / per_cell), 0.25, 4.0), finest);
+    if (next == h) return grid;
+    h = next;
   }
-  return h;
 }
 
 }  // namespace
@@ -45,38 +45,46 @@ double choose_cell_size(const Vec3* points, size_t n) {
 SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTracker& tracker,
                                       double begin, double end) {
   if (n < 2) throw Error(Status::InvalidInput, "at least two points are needed to estimate the spacing");
-  tracker.stage("estimating spacing", begin, begin + 0.1 * (end - begin));
-  double h = choose_cell_size(points, n);
-  if (!(h > 0)) throw Error(Status::InvalidInput, "all points coincide: there is no spacing");
+  tracker.stage("estimating spacing", begin, begin + 0.2 * (end - begin));
+  NeighborGrid grid = occupancy_grid(points, n);
 
   constexpr double kInf = std::numeric_limits<double>::infinity();
   constexpr int kMaxRing = 3;
   for (int attempt = 0; attempt < 8; ++attempt) {
     tracker.check();
-    NeighborGrid grid(points, n, h);
+    if (attempt > 0) grid = NeighborGrid(points, n, grid.cell_size() * 4.0);
+    const double h = grid.cell_size();
     size_t duplicates = 0;
     const std::vector<uint32_t> rep = find_duplicates(grid, &duplicates);
     const size_t distinct = n - duplicates;
     if (distinct < 2) throw Error(Status::InvalidInput, "all points coincide: there is no spacing");
 
-    tracker.stage("estimating spacing", begin + 0.1 * (end - begin), end, grid.cell_count());
+    tracker.stage("estimating spacing", begin + 0.2 * (end - begin), end, grid.cell_count());
     // nn2[s] = squared distance from sorted point s to its nearest distinct point, +inf when
     // that is farther than kMaxRing cells (such points are above the median unless h is far
     // too small, which the retry below detects).
     std::vector<double> nn2(n, kInf);
-    parallel_blocks(grid.cell_count(), 256, [&](size_t cb, size_t ce) {
+    parallel_blocks(grid.cell_count(), 512, [&](size_t cb, size_t ce) {
       if (tracker.cancelled()) return;
+      uint32_t around[27];
       for (size_t c = cb; c < ce; ++c) {
-        const auto& cc = grid.cell_coord(uint32_t(c));
+        const int na = grid.neighbor_cells(uint32_t(c), around);
         for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) {
           if (rep[s] != s) continue;
-          const Vec3& p = grid.sorted_point(s);
+          const Vec3 p = grid.sorted_point(s);
           double best = kInf;
-          for (int r = 1; r <= kMaxRing; ++r) {
+          for (int a = 0; a < na; ++a)
+            for (uint32_t t = grid.cell_begin(around[a]); t < grid.cell_end(around[a]); ++t) {
+              const double d2 = squared_distance(grid.sorted_point(t), p);
+              if (d2 > 0 && d2 < best) best = d2;
+            }
+          // Every point within h of p is in the 27 cells; beyond that, widen ring by ring.
+          const auto cc = grid.cell_coord(uint32_t(c));
+          for (int r = 2; best > double(r - 1) * h * double(r - 1) * h && r <= kMaxRing; ++r) {
             for (int dx = -r; dx <= r; ++dx)
               for (int dy = -r; dy <= r; ++dy)
                 for (int dz = -r; dz <= r; ++dz) {
-                  if (r > 1 && std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != r) continue;
+                  if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != r) continue;
                   const uint32_t nc = grid.find_cell({cc[0] + dx, cc[1] + dy, cc[2] + dz});
                   if (nc == NeighborGrid::kNoCell) continue;
                   for (uint32_t t = grid.cell_begin(nc); t < grid.cell_end(nc); ++t) {
@@ -84,9 +92,6 @@ SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTrac
                     if (d2 > 0 && d2 < best) best = d2;
                   }
                 }
-            // Everything within r cells of the point's cell is seen, so any point not yet
-            // seen is at least r*h away.
-            if (best <= double(r) * h * double(r) * h) break;
           }
           if (best > double(kMaxRing) * h * double(kMaxRing) * h) best = kInf;
           nn2[s] = best;
@@ -101,11 +106,8 @@ SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTrac
     for (size_t s = 0; s < n; ++s)
       if (rep[s] == s) values.push_back(nn2[s]);
     const size_t mid = (values.size() - 1) / 2;  // the lower median: an actual NN distance
-    std::nth_element(values.begin(), values.begin() + mid, values.end());
-    if (values[mid] == kInf) {
-      h *= 4.0;  // most points are isolated at this cell size: the guess was far too small
-      continue;
-    }
+    std::nth_element(values.begin(), values.begin() + long(mid), values.end());
+    if (values[mid] == kInf) continue;  // most points are isolated at this cell size: widen
     SpacingEstimate result;
     result.spacing = std::sqrt(values[mid]);
     result.distinct_points = distinct;

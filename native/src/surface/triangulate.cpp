@@ -70,23 +70,26 @@ TriangulateResult triangulate_raw(const PointCloud& cloud, const TriangulateOpti
       throw Error(Status::InvalidArgument, "the max edge length is not a positive finite number");
     st.seconds_spacing = seconds_since(t0);
 
-    // 2. Grid of cell L and neighbour lists within L.
+    // 2. Neighbour lists within R = 2L/sqrt(3). A point strictly inside the smallest sphere of
+    //    a triangle with edges <= L is closer than 2 rho <= 2L/sqrt(3) to *every* corner (rho is
+    //    at most L/sqrt(3) for an acute triangle, L/2 for an obtuse one), so the list of the
+    //    triangle's lowest corner alone holds every possible blocker.
     t0 = Clock::now();
     tracker.stage("neighbour search", 0.3, 0.55, n);
-    const NeighborGrid grid(cloud.positions.data(), n, st.max_edge);
+    const double block_radius = st.max_edge * (2.0 / std::sqrt(3.0)) * (1.0 + 1e-6);
+    const NeighborGrid grid(cloud.positions.data(), n, block_radius);
     size_t duplicates = 0;
     const std::vector<uint32_t> rep = detail::find_duplicates(grid, &duplicates);
     st.duplicate_points = duplicates;
     if (n - duplicates < 3)
       throw Error(Status::InvalidInput, "fewer than three distinct points (all points coincide?)");
     const detail::NeighborLists nbr =
-        detail::build_neighbor_lists(grid, rep, st.max_edge, options.max_neighbors, tracker);
+        detail::build_neighbor_lists(grid, rep, block_radius, options.max_neighbors, tracker);
     st.max_neighbors_seen = nbr.max_count;
     st.seconds_neighbors = seconds_since(t0);
 
     // 3. The test. Each triangle is generated once, from its lowest sorted index i, as a pair
-    //    j < k of i's higher neighbours; blockers lie within 0.82 L of some corner (proof in
-    //    docs/triangulation.md), so the three corners' lists hold every candidate blocker.
+    //    j < k of i's higher neighbours within L.
     t0 = Clock::now();
     tracker.stage("testing triangles", 0.55, 0.95, n);
     const double L2 = st.max_edge * st.max_edge;
@@ -96,6 +99,7 @@ TriangulateResult triangulate_raw(const PointCloud& cloud, const TriangulateOpti
     std::vector<std::vector<Triangle>> out(blocks);
     std::vector<TestCounters> counters(blocks);
     detail::parallel_blocks(blocks, 1, [&](size_t bb, size_t be) {
+      std::vector<uint32_t> near;  // i's higher neighbours within L
       for (size_t b = bb; b < be; ++b) {
         if (tracker.cancelled()) return;
         auto& tris = out[b];
@@ -104,33 +108,35 @@ TriangulateResult triangulate_raw(const PointCloud& cloud, const TriangulateOpti
         for (uint32_t i = sb; i < se; ++i) {
           const uint32_t* ni = nbr.begin(i);
           const uint32_t* ne = nbr.end(i);
-          const uint32_t* first = std::upper_bound(ni, ne, i);
-          for (const uint32_t* pj = first; pj != ne; ++pj) {
-            const uint32_t j = *pj;
-            for (const uint32_t* pk = pj + 1; pk != ne; ++pk) {
-              const uint32_t k = *pk;
+          const Vec3 pi = P[i];
+          near.clear();
+          for (const uint32_t* q = std::upper_bound(ni, ne, i); q != ne; ++q)
+            if (squared_distance(P[*q], pi) <= L2) near.push_back(*q);
+          for (size_t a = 0; a < near.size(); ++a) {
+            const uint32_t j = near[a];
+            for (size_t c = a + 1; c < near.size(); ++c) {
+              const uint32_t k = near[c];
               if (squared_distance(P[j], P[k]) > L2) continue;
-              const detail::SmallestSphere s = detail::smallest_sphere(P[i], P[j], P[k]);
+              const detail::SmallestSphere s = detail::smallest_sphere(pi, P[j], P[k]);
               if (s.degenerate) {
                 ++cnt.degenerate;
                 continue;
               }
               ++cnt.candidates;
               bool blocked = false, tie = false;
-              for (const uint32_t v : {i, j, k}) {
-                for (const uint32_t* q = nbr.begin(v); q != nbr.end(v); ++q) {
-                  if (*q == i || *q == j || *q == k) continue;
-                  if (detail::sphere_contains(s, P[*q], &tie)) {
-                    blocked = true;
-                    break;
-                  }
+              for (const uint32_t* q = ni; q != ne; ++q) {
+                if (*q == j || *q == k) continue;
+                if (detail::sphere_contains(s, P[*q], &tie)) {
+                  blocked = true;
+                  break;
                 }
-                if (blocked) break;
               }
               if (tie) ++cnt.ties;
               if (blocked) continue;
               Triangle t{grid.original_index(i), grid.original_index(j), grid.original_index(k)};
-              std::sort(t.begin(), t.end());
+              if (t[0] > t[1]) std::swap(t[0], t[1]);
+              if (t[1] > t[2]) std::swap(t[1], t[2]);
+              if (t[0] > t[1]) std::swap(t[0], t[1]);
               tris.push_back(t);
             }
           }
@@ -154,7 +160,11 @@ TriangulateResult triangulate_raw(const PointCloud& cloud, const TriangulateOpti
       tris.insert(tris.end(), v.begin(), v.end());
       std::vector<Triangle>().swap(v);
     }
-    tbb::parallel_sort(tris.begin(), tris.end());
+    // Packed keys compare as one integer (std::array's operator< goes through memcmp).
+    tbb::parallel_sort(tris.begin(), tris.end(), [](const Triangle& x, const Triangle& y) {
+      const uint64_t kx = (uint64_t(x[0]) << 32) | x[1], ky = (uint64_t(y[0]) << 32) | y[1];
+      return kx != ky ? kx < ky : x[2] < y[2];
+    });
     st.kept = tris.size();
     st.seconds_test = seconds_since(t0);
   });

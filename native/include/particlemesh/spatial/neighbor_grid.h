@@ -20,18 +20,20 @@ class PM_EXPORT NeighborGrid {
  public:
   using CellCoord = std::array<int32_t, 3>;
   static constexpr uint32_t kNoCell = 0xffffffffu;
+  static constexpr int32_t kMaxCellsPerAxis = (1 << 21) - 4;
 
   NeighborGrid() = default;
 
   /// Bucket `n` points into cubic cells of edge `cell_size` (> 0). Points are copied.
   /// Cells are ordered lexicographically by (x, y, z) cell coordinate and points by cell,
   /// then by input index, so the layout does not depend on the thread count.
-  /// @throws Error(LimitExceeded) if the extent spans more than 2^30 cells along an axis.
+  /// @throws Error(LimitExceeded) if the extent spans more than 2^21 - 4 cells along an axis
+  ///         (a sign of far outliers; the message says so).
   NeighborGrid(const Vec3* points, size_t n, double cell_size);
 
   double cell_size() const { return cell_size_; }
   size_t point_count() const { return sorted_points_.size(); }
-  size_t cell_count() const { return cell_coords_.size(); }
+  size_t cell_count() const { return cell_keys_.size(); }
 
   /// Points in cell order: sorted_point(s) is the position of input point original_index(s).
   const Vec3& sorted_point(uint32_t s) const { return sorted_points_[s]; }
@@ -42,12 +44,21 @@ class PM_EXPORT NeighborGrid {
   /// Sorted-index range [cell_begin(c), cell_end(c)) of the points in cell c.
   uint32_t cell_begin(uint32_t c) const { return cell_start_[c]; }
   uint32_t cell_end(uint32_t c) const { return cell_start_[c + 1]; }
-  const CellCoord& cell_coord(uint32_t c) const { return cell_coords_[c]; }
+  CellCoord cell_coord(uint32_t c) const { return unpack(cell_keys_[c]); }
 
   /// Cell coordinate of a position (may lie outside the occupied cells).
   CellCoord coord_of(const Vec3& p) const;
   /// Index of the occupied cell at `coord`, or kNoCell.
-  uint32_t find_cell(const CellCoord& coord) const;
+  uint32_t find_cell(const CellCoord& coord) const {
+    if (coord[0] < 0 || coord[1] < 0 || coord[2] < 0 || coord[0] > kMaxCellsPerAxis + 3 ||
+        coord[1] > kMaxCellsPerAxis + 3 || coord[2] > kMaxCellsPerAxis + 3)
+      return kNoCell;
+    return find_key(pack(coord));
+  }
+
+  /// The occupied cells among the 27 around cell c (c included), in increasing cell order,
+  /// so their points come out in increasing sorted index. Returns how many were written.
+  int neighbor_cells(uint32_t c, uint32_t out[27]) const;
 
   /// Call f(sorted_index, squared_distance) for every point within `radius` of `p`
   /// (including a point at p itself), in increasing sorted index. Cost: the cells that the
@@ -70,13 +81,23 @@ class PM_EXPORT NeighborGrid {
   }
 
  private:
+  // Cells are keyed by their coordinates packed into 21 bits each: comparing and hashing a
+  // key is one integer operation, and key order is lexicographic coordinate order.
+  static uint64_t pack(const CellCoord& c) {
+    return (uint64_t(uint32_t(c[0])) << 42) | (uint64_t(uint32_t(c[1])) << 21) | uint64_t(uint32_t(c[2]));
+  }
+  static CellCoord unpack(uint64_t k) {
+    return {int32_t(k >> 42), int32_t((k >> 21) & 0x1fffff), int32_t(k & 0x1fffff)};
+  }
+  uint32_t find_key(uint64_t key) const;
+
   double cell_size_ = 0;
   double inv_cell_ = 0;
   Vec3 origin_;
   std::vector<Vec3> sorted_points_;
   std::vector<uint32_t> original_index_;
   std::vector<uint32_t> cell_start_;
-  std::vector<CellCoord> cell_coords_;
+  std::vector<uint64_t> cell_keys_;
   std::vector<uint32_t> table_;  // open addressing: cell index or kNoCell
   uint64_t table_mask_ = 0;
 };

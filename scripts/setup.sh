@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Set-up shared by the README's two commands: install the Debian packages that are missing,
+# then configure and build everything into build/. Safe to run again: it only does what is
+# not done yet. Needs root (or sudo) only when a package is missing.
+set -euo pipefail
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+BUILD="${PM_BUILD_DIR:-$ROOT/build}"
+
+# Every package the build, the tests and the demo need, from Debian 12.
+PACKAGES=(
+  build-essential cmake ninja-build pkg-config
+  libtbb-dev libopenmesh-dev libosd-dev libeigen3-dev
+  libcli11-dev nlohmann-json3-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  python3 python3-numpy python3-pytest
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]}"
+  SUDO=""
+  if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+  $SUDO apt-get update -q
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
+
+cmake -S "$ROOT" -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+  -DPM_SHARED_DATA_DIR="${PM_SHARED_DATA_DIR:-$ROOT/../shared/data}" >/dev/null
+cmake --build "$BUILD" -j "$(nproc)"

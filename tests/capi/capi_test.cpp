@@ -1,0 +1,185 @@
+// The C ABI: statuses and messages for every kind of misuse, no exception ever escapes,
+// outputs untouched on failure, cancellation, and the same results as the C++ API.
+#include "particlemesh/particlemesh.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "particlemesh/sample/shapes.h"
+#include "particlemesh/surface/triangulate.h"
+#include "support/test_support.h"
+
+using namespace particlemesh;
+
+namespace {
+std::vector<double> flat(const std::vector<Vec3>& v) {
+  std::vector<double> out;
+  for (const Vec3& p : v) out.insert(out.end(), {p.x, p.y, p.z});
+  return out;
+}
+std::string last() { return pm_last_error_message(); }
+}  // namespace
+
+TEST(CApi, VersionAndStatusStrings) {
+  EXPECT_EQ(pm_abi_version(), uint32_t(PM_ABI_VERSION));
+  EXPECT_STRNE(pm_version_string(), "");
+  EXPECT_STREQ(pm_status_string(PM_STATUS_CANCELLED), "cancelled");
+  EXPECT_STREQ(pm_status_string(PM_OK), "ok");
+  EXPECT_STREQ(pm_status_string(static_cast<pm_status>(999)), "unknown status");
+}
+
+TEST(CApi, TriangulateMatchesTheCppApi) {
+  const PointCloud c = fibonacci_sphere(3000);
+  const auto pos = flat(c.positions);
+  pm_cloud* cloud = nullptr;
+  ASSERT_EQ(pm_cloud_create(pos.data(), nullptr, c.size(), &cloud), PM_OK);
+  pm_triangulate_options opt;
+  pm_triangulate_options_init(&opt);
+  opt.flags = PM_TRIANGULATE_RAW;
+  pm_triangulate_stats stats{};
+  stats.struct_size = sizeof(stats);
+  pm_mesh* mesh = nullptr;
+  ASSERT_EQ(pm_triangulate(cloud, &opt, &mesh, &stats), PM_OK) << last();
+  size_t nv = 0, nt = 0;
+  ASSERT_EQ(pm_mesh_get_counts(mesh, &nv, &nt), PM_OK);
+  const TriangulateResult ref = triangulate_raw(c);
+  EXPECT_EQ(nv, c.size());
+  EXPECT_EQ(nt, ref.mesh.triangles.size());
+  EXPECT_EQ(stats.kept, ref.stats.kept);
+  EXPECT_DOUBLE_EQ(stats.spacing, ref.stats.spacing);
+  EXPECT_EQ(stats.spacing_estimated, 1);
+  std::vector<int32_t> tris(3 * nt);
+  ASSERT_EQ(pm_mesh_copy_triangles(mesh, tris.data(), nt), PM_OK);
+  for (size_t f = 0; f < nt; ++f)
+    for (int k = 0; k < 3; ++k) ASSERT_EQ(uint32_t(tris[3 * f + k]), ref.mesh.triangles[f][k]);
+  std::vector<float> p32(3 * nv);
+  ASSERT_EQ(pm_mesh_copy_positions_f32(mesh, p32.data(), nv), PM_OK);
+  EXPECT_FLOAT_EQ(p32[3], float(c.positions[1].x));
+  pm_topology_report rep{};
+  rep.struct_size = sizeof(rep);
+  ASSERT_EQ(pm_mesh_report(mesh, &rep), PM_OK);
+  EXPECT_EQ(rep.triangles, nt);
+  EXPECT_EQ(rep.vertices_used, nv);
+  pm_mesh_destroy(mesh);
+  pm_cloud_destroy(cloud);
+}
+
+TEST(CApi, Float32InputAndNormals) {
+  const PointCloud c = fibonacci_sphere(500);
+  std::vector<float> p, n;
+  for (size_t i = 0; i < c.size(); ++i) {
+    p.insert(p.end(), {float(c.positions[i].x), float(c.positions[i].y), float(c.positions[i].z)});
+    n.insert(n.end(), {float(c.normals[i].x), float(c.normals[i].y), float(c.normals[i].z)});
+  }
+  pm_cloud* cloud = nullptr;
+  ASSERT_EQ(pm_cloud_create_f32(p.data(), n.data(), c.size(), &cloud), PM_OK);
+  int32_t has = 0;
+  ASSERT_EQ(pm_cloud_has_normals(cloud, &has), PM_OK);
+  EXPECT_EQ(has, 1);
+  double spacing = 0;
+  ASSERT_EQ(pm_estimate_spacing(cloud, 1, &spacing), PM_OK);
+  EXPECT_GT(spacing, 0.05);
+  EXPECT_LT(spacing, 0.2);
+  pm_cloud_destroy(cloud);
+}
+
+TEST(CApi, MisuseGivesStatusAndMessageAndLeavesOutputsAlone) {
+  const double pts[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+  pm_cloud* sentinel = reinterpret_cast<pm_cloud*>(0x1);
+  pm_cloud* out = sentinel;
+  EXPECT_EQ(pm_cloud_create(nullptr, nullptr, 4, &out), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("positions is NULL"), std::string::npos);
+  EXPECT_EQ(out, sentinel);
+  EXPECT_EQ(pm_cloud_create(pts, nullptr, 4, nullptr), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("out_cloud"), std::string::npos);
+  EXPECT_EQ(pm_cloud_create(pts, nullptr, 0, &out), PM_STATUS_INVALID_INPUT);
+  EXPECT_NE(last().find("empty"), std::string::npos);
+  double bad[] = {0, 0, 0, 1, NAN, 0, 0, 1, 0};
+  EXPECT_EQ(pm_cloud_create(bad, nullptr, 3, &out), PM_STATUS_INVALID_INPUT);
+  EXPECT_NE(last().find("positions[1].y is NaN"), std::string::npos) << last();
+  EXPECT_EQ(out, sentinel);
+
+  pm_cloud* cloud = nullptr;
+  ASSERT_EQ(pm_cloud_create(pts, nullptr, 4, &cloud), PM_OK);
+  EXPECT_EQ(last(), "");  // cleared by a successful call
+  pm_mesh* mesh = reinterpret_cast<pm_mesh*>(0x2);
+  EXPECT_EQ(pm_triangulate(nullptr, nullptr, &mesh, nullptr), PM_STATUS_INVALID_ARGUMENT);
+  pm_triangulate_options opt;
+  pm_triangulate_options_init(&opt);
+  opt.spacing = -1;
+  EXPECT_EQ(pm_triangulate(cloud, &opt, &mesh, nullptr), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("spacing"), std::string::npos);
+  opt.spacing = 0;
+  opt.struct_size = 0;  // not initialised
+  EXPECT_EQ(pm_triangulate(cloud, &opt, &mesh, nullptr), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("struct_size"), std::string::npos);
+  pm_triangulate_stats stats{};
+  stats.struct_size = 0;
+  pm_triangulate_options_init(&opt);
+  EXPECT_EQ(pm_triangulate(cloud, &opt, &mesh, &stats), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(mesh, reinterpret_cast<pm_mesh*>(0x2));
+
+  // An older, shorter options struct still works (fields beyond it take defaults).
+  pm_triangulate_options_init(&opt);
+  opt.struct_size = offsetof(pm_triangulate_options, threads);
+  mesh = nullptr;
+  ASSERT_EQ(pm_triangulate(cloud, &opt, &mesh, nullptr), PM_OK) << last();
+  size_t nt = 0;
+  ASSERT_EQ(pm_mesh_get_counts(mesh, nullptr, &nt), PM_OK);
+  std::vector<int32_t> small(3);
+  EXPECT_EQ(pm_mesh_copy_triangles(mesh, small.data(), 1), nt > 1 ? PM_STATUS_INVALID_ARGUMENT : PM_OK);
+  EXPECT_EQ(pm_mesh_copy_normals_f32(mesh, reinterpret_cast<float*>(small.data()), 4), PM_STATUS_INVALID_ARGUMENT);
+  pm_mesh_destroy(mesh);
+
+  const int32_t tri[] = {0, 1, 7};
+  EXPECT_EQ(pm_mesh_create(pts, 4, tri, 1, nullptr, &mesh), PM_STATUS_INVALID_INPUT);
+  EXPECT_NE(last().find("triangles[0]"), std::string::npos);
+  EXPECT_EQ(pm_mesh_read("/nonexistent/file.ply", &mesh), PM_STATUS_IO_ERROR);
+  EXPECT_NE(last().find("file.ply"), std::string::npos);
+  EXPECT_EQ(pm_cloud_read(nullptr, &cloud), PM_STATUS_INVALID_ARGUMENT);
+  pm_cloud_destroy(cloud);
+  pm_mesh_destroy(nullptr);
+}
+
+TEST(CApi, CoincidentAndTooFewPoints) {
+  const double same[] = {1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1};
+  pm_cloud* cloud = nullptr;
+  ASSERT_EQ(pm_cloud_create(same, nullptr, 4, &cloud), PM_OK);
+  pm_mesh* mesh = nullptr;
+  EXPECT_EQ(pm_triangulate(cloud, nullptr, &mesh, nullptr), PM_STATUS_INVALID_INPUT);
+  EXPECT_NE(last().find("coincide"), std::string::npos) << last();
+  pm_cloud_destroy(cloud);
+  ASSERT_EQ(pm_cloud_create(same, nullptr, 1, &cloud), PM_OK);
+  EXPECT_EQ(pm_triangulate(cloud, nullptr, &mesh, nullptr), PM_STATUS_INVALID_INPUT);
+  EXPECT_EQ(mesh, nullptr);
+  pm_cloud_destroy(cloud);
+}
+
+TEST(CApi, ProgressCallbackCancels) {
+  const PointCloud c = fibonacci_sphere(300000);
+  const auto pos = flat(c.positions);
+  pm_cloud* cloud = nullptr;
+  ASSERT_EQ(pm_cloud_create(pos.data(), nullptr, c.size(), &cloud), PM_OK);
+  struct State {
+    int calls = 0;
+    double last = -1;
+  } state;
+  pm_triangulate_options opt;
+  pm_triangulate_options_init(&opt);
+  opt.progress = [](void* user, const char* stage, double f) -> int {
+    auto* s = static_cast<State*>(user);
+    EXPECT_NE(stage, nullptr);
+    EXPECT_GE(f, s->last);
+    s->last = f;
+    return ++s->calls >= 3 ? 1 : 0;
+  };
+  opt.progress_user_data = &state;
+  pm_mesh* mesh = nullptr;
+  EXPECT_EQ(pm_triangulate(cloud, &opt, &mesh, nullptr), PM_STATUS_CANCELLED);
+  EXPECT_EQ(mesh, nullptr);
+  EXPECT_EQ(state.calls, 3);
+  pm_cloud_destroy(cloud);
+}

@@ -1,0 +1,136 @@
+"""particlemesh triangulate / inspect / sample, end to end through the binary."""
+import json
+import math
+import os
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+
+def test_sample_then_triangulate_knot(cli, inspect, tmp_path):
+    pts = tmp_path / "trefoil.xyz"
+    cli("sample", "trefoil", "-o", pts, "--spacing", "0.08")
+    n = sum(1 for line in pts.read_text().splitlines() if line.strip())
+    assert n > 3000
+    out = tmp_path / "trefoil.ply"
+    report = tmp_path / "report.json"
+    proc = cli("triangulate", pts, "-o", out, "--report", report)
+    assert "spacing r0" in proc.stdout and "triangles" in proc.stdout
+    r = json.loads(report.read_text())
+    assert r["triangulation"]["points"] == n
+    assert r["triangulation"]["spacing_estimated"] is True
+    assert math.isclose(r["triangulation"]["max_edge"], 2 * r["triangulation"]["spacing"])
+    assert r["topology"]["vertices_used"] == n
+    mesh = inspect(out)
+    assert mesh["triangles"] == r["triangulation"]["kept"]
+    assert mesh["vertices"] == n
+
+
+def test_raw_counts_match_reference_on_bunny(cli, inspect, data_dir, tmp_path):
+    out = tmp_path / "bunny.obj"
+    cli("triangulate", data_dir / "points/bunny_poisson.ply", "-o", out, "--raw", "--threads", "1")
+    r = inspect(out)
+    assert r["triangles"] == 21591  # shared/notes/seed-test-behaviour.md
+    assert r["nonmanifold_edges"] == 6458
+    assert r["euler_characteristic"] == -34
+
+
+def test_explicit_spacing_and_factor(cli, tmp_path):
+    pts = tmp_path / "s.xyz"
+    cli("sample", "fibonacci", "--points", "2000", "-o", pts)
+    rep = tmp_path / "r.json"
+    cli("triangulate", pts, "-o", tmp_path / "s.ply", "--spacing", "0.1", "--max-edge-factor", "1.5",
+        "--report", rep, "--ascii", "-q")
+    r = json.loads(rep.read_text())["triangulation"]
+    assert r["spacing"] == 0.1 and not r["spacing_estimated"]
+    assert math.isclose(r["max_edge"], 0.15)
+    assert (tmp_path / "s.ply").read_bytes().startswith(b"ply\nformat ascii")
+
+
+def test_threads_do_not_change_output(cli, tmp_path):
+    pts = tmp_path / "t.xyz"
+    cli("sample", "torus", "--spacing", "0.06", "-o", pts)
+    outs = []
+    for t in (1, 2, 4):
+        o = tmp_path / f"t{t}.ply"
+        cli("triangulate", pts, "-o", o, "--threads", t, "-q")
+        outs.append(o.read_bytes())
+    assert outs[0] == outs[1] == outs[2]
+
+
+def _fails(cli, tmp_path, args, needle):
+    out = tmp_path / "out.ply"
+    proc = cli("triangulate", *args, "-o", out, check=False)
+    assert proc.returncode != 0, proc.stdout
+    lines = [l for l in proc.stderr.splitlines() if l.strip()]
+    assert len(lines) == 1, proc.stderr  # one line naming the problem
+    assert needle in lines[0], lines[0]
+    assert not out.exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out")], "temporary file left"
+    return lines[0]
+
+
+def test_bad_inputs_give_one_line_errors(cli, tmp_path):
+    _fails(cli, tmp_path, [tmp_path / "missing.xyz"], "no such file")
+    (tmp_path / "empty.xyz").write_text("")
+    _fails(cli, tmp_path, [tmp_path / "empty.xyz"], "empty")
+    (tmp_path / "one.xyz").write_text("1 2 3\n")
+    _fails(cli, tmp_path, [tmp_path / "one.xyz"], "three points")
+    (tmp_path / "same.xyz").write_text("1 2 3\n" * 10)
+    _fails(cli, tmp_path, [tmp_path / "same.xyz"], "coincide")
+    (tmp_path / "nan.xyz").write_text("0 0 0\n1 0 0\n0 1 0\nnan 0 0\n")
+    _fails(cli, tmp_path, [tmp_path / "nan.xyz"], "positions[3].x is NaN")
+    (tmp_path / "inf.xyz").write_text("0 0 0\n1 0 0\n0 inf 0\n")
+    _fails(cli, tmp_path, [tmp_path / "inf.xyz"], "positions[2].y is infinite")
+    (tmp_path / "text.xyz").write_text("0 0 0\nhello world 1\n")
+    _fails(cli, tmp_path, [tmp_path / "text.xyz"], "line 2")
+    good = tmp_path / "good.xyz"
+    cli("sample", "fibonacci", "--points", "1000", "-o", good)
+    full = tmp_path / "full.ply"
+    cli("sample", "fibonacci", "--points", "1000", "-o", full)
+    data = full.read_bytes()
+    (tmp_path / "cut.ply").write_bytes(data[: len(data) // 2])
+    _fails(cli, tmp_path, [tmp_path / "cut.ply"], "cut.ply")
+    proc = cli("triangulate", good, "-o", tmp_path / "x.ply", "--spacing", "-1", check=False)
+    assert proc.returncode == 2 and "spacing" in proc.stderr
+    proc = cli("triangulate", good, "-o", tmp_path / "x.unknown", check=False)
+    assert proc.returncode != 0 and "x.unknown" in proc.stderr
+    proc = cli("triangulate", good, "-o", tmp_path / "nodir" / "x.ply", check=False)
+    assert proc.returncode != 0 and "does not exist" in proc.stderr
+
+
+def test_inspect_reads_shared_meshes(cli, inspect, data_dir):
+    r = inspect(data_dir / "meshes/rocker_arm.obj")
+    assert r["closed"] and r["components"] == 1
+    assert r["per_component"][0]["genus"] == 1
+    b = inspect(data_dir / "meshes/bunny.obj")
+    assert b["boundary_loops"] == 5
+    assert b["vertices"] - b["vertices_used"] == 1113
+    text = cli("inspect", data_dir / "meshes/spot.obj").stdout
+    assert "euler char.   2" in text
+
+
+def test_help_and_usage(cli):
+    for sub in ("triangulate", "inspect", "sample"):
+        proc = cli(sub, "--help")
+        assert "Usage" in proc.stdout or "usage" in proc.stdout.lower()
+    proc = cli("no-such-command", check=False)
+    assert proc.returncode == 2
+
+
+def test_sigint_cancels_without_partial_output(cli, tmp_path):
+    exe = os.environ["PARTICLEMESH_CLI"]
+    pts = tmp_path / "big.ply"
+    cli("sample", "fibonacci", "--points", "3000000", "-o", pts)
+    out = tmp_path / "big_out.ply"
+    proc = subprocess.Popen([exe, "triangulate", pts, "-o", out, "--raw"], stderr=subprocess.PIPE, text=True)
+    time.sleep(1.0)
+    start = time.monotonic()
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=30)
+    assert time.monotonic() - start < 1.5
+    assert proc.returncode == 130, err
+    assert "cancel" in err
+    assert not out.exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".big_out")]

@@ -1,0 +1,137 @@
+#include "particlemesh/io/mesh_io.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "particlemesh/core/error.h"
+#include "particlemesh/io/atomic_write.h"
+#include "particlemesh/sample/shapes.h"
+#include "particlemesh/surface/triangulate.h"
+#include "support/test_support.h"
+
+using namespace particlemesh;
+namespace fs = std::filesystem;
+
+namespace {
+void write_text(const fs::path& p, const std::string& s) { std::ofstream(p, std::ios::binary) << s; }
+
+Status status_of(const std::function<void()>& f, std::string* message = nullptr) {
+  try {
+    f();
+  } catch (const Error& e) {
+    if (message) *message = e.what();
+    return e.status();
+  }
+  return Status::Ok;
+}
+}  // namespace
+
+TEST(MeshIO, NonManifoldRawTrianglesRoundTripInEveryFormat) {
+  const auto dir = test::scratch_dir("io");
+  const TriangulateResult raw = triangulate_raw(poisson_disk_sample(icosphere_mesh(4), 0.1, 4));
+  for (const char* name : {"m.ply", "m.obj"}) {
+    const auto path = (dir / name).string();
+    write_mesh(raw.mesh, path);
+    const TriMesh back = read_mesh(path);
+    EXPECT_EQ(back.triangles, raw.mesh.triangles) << name;  // nothing dropped, order kept
+    ASSERT_EQ(back.positions.size(), raw.mesh.positions.size());
+    for (size_t i = 0; i < back.positions.size(); ++i)
+      EXPECT_LT(distance(back.positions[i], raw.mesh.positions[i]), 1e-6);
+    EXPECT_EQ(back.normals.size(), raw.mesh.normals.size()) << name;
+  }
+  const auto ascii = (dir / "a.ply").string();
+  write_mesh(raw.mesh, ascii, {MeshFormat::PlyAscii, true});
+  std::ifstream in(ascii);
+  std::string line;
+  std::getline(in, line);
+  std::getline(in, line);
+  EXPECT_EQ(line, "format ascii 1.0");
+  EXPECT_EQ(read_mesh(ascii).triangles, raw.mesh.triangles);
+}
+
+TEST(MeshIO, PointCloudsReadPlyAndXyz) {
+  const auto dir = test::scratch_dir("clouds");
+  PointCloud c = fibonacci_sphere(100);
+  write_point_cloud(c, (dir / "c.xyz").string());
+  write_point_cloud(c, (dir / "c.ply").string());
+  const PointCloud x = read_point_cloud((dir / "c.xyz").string());
+  EXPECT_EQ(x.positions, c.positions);  // 17 digits: exact
+  EXPECT_EQ(x.normals.size(), 100u);
+  const PointCloud p = read_point_cloud((dir / "c.ply").string());
+  ASSERT_EQ(p.size(), 100u);
+  EXPECT_TRUE(p.has_normals());
+  EXPECT_LT(distance(p.positions[42], c.positions[42]), 1e-6);
+
+  write_text(dir / "plain.xyz", "# comment\n0 0 0\n\n1 0 0  # trailing\n0,1,0\n+1.5e0 2 3\n");
+  const PointCloud q = read_point_cloud((dir / "plain.xyz").string());
+  EXPECT_EQ(q.size(), 4u);
+  EXPECT_FALSE(q.has_normals());
+  EXPECT_EQ(q.positions[3], (Vec3{1.5, 2, 3}));
+}
+
+TEST(MeshIO, SharedDataLoads) {
+  PM_REQUIRE_DATA(points, "points/bunny_poisson.ply");
+  PM_REQUIRE_DATA(obj, "meshes/spot.obj");
+  const PointCloud c = read_point_cloud(points);
+  EXPECT_EQ(c.size(), 8779u);
+  EXPECT_TRUE(c.has_normals());
+  const TriMesh m = read_mesh(obj);
+  EXPECT_EQ(m.positions.size(), 2930u);
+  EXPECT_EQ(m.triangles.size(), 5856u);
+}
+
+TEST(MeshIO, BadFilesGiveErrorsNamingFileAndProblem) {
+  const auto dir = test::scratch_dir("bad");
+  std::string msg;
+  EXPECT_EQ(status_of([&] { read_point_cloud((dir / "missing.xyz").string()); }, &msg), Status::IoError);
+  EXPECT_NE(msg.find("missing.xyz"), std::string::npos);
+  write_text(dir / "empty.xyz", "");
+  EXPECT_EQ(status_of([&] { read_point_cloud((dir / "empty.xyz").string()); }, &msg), Status::FormatError);
+  write_text(dir / "comments.xyz", "# nothing\n\n");
+  EXPECT_EQ(status_of([&] { read_point_cloud((dir / "comments.xyz").string()); }, &msg), Status::InvalidInput);
+  write_text(dir / "word.xyz", "0 0 0\n1 abc 0\n");
+  EXPECT_EQ(status_of([&] { read_point_cloud((dir / "word.xyz").string()); }, &msg), Status::FormatError);
+  EXPECT_NE(msg.find("line 2"), std::string::npos) << msg;
+  write_text(dir / "cols.xyz", "0 0 0\n1 0 0 0 0 1\n");
+  EXPECT_EQ(status_of([&] { read_point_cloud((dir / "cols.xyz").string()); }, &msg), Status::FormatError);
+  EXPECT_NE(msg.find("line 2"), std::string::npos) << msg;
+  write_text(dir / "four.xyz", "0 0 0 1\n");
+  EXPECT_EQ(status_of([&] { read_point_cloud((dir / "four.xyz").string()); }, &msg), Status::FormatError);
+  write_text(dir / "nan.xyz", "0 0 0\n1 1 1\nnan 0 0\n");
+  EXPECT_EQ(status_of([&] { read_point_cloud((dir / "nan.xyz").string()); }, &msg), Status::InvalidInput);
+  EXPECT_NE(msg.find("positions[2].x is NaN"), std::string::npos) << msg;
+  write_text(dir / "x.pts", "0 0 0\n");
+  EXPECT_EQ(status_of([&] { read_point_cloud((dir / "x.pts").string()); }, &msg), Status::FormatError);
+  EXPECT_NE(msg.find("unsupported"), std::string::npos);
+
+  // A binary PLY cut short: the reader must fail, not return zeros.
+  write_point_cloud(fibonacci_sphere(1000), (dir / "full.ply").string());
+  std::ifstream full(dir / "full.ply", std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(full)), {});
+  write_text(dir / "cut.ply", bytes.substr(0, bytes.size() / 2));
+  EXPECT_EQ(status_of([&] { read_point_cloud((dir / "cut.ply").string()); }, &msg), Status::FormatError);
+  EXPECT_NE(msg.find("cut.ply"), std::string::npos);
+  write_text(dir / "garbage.ply", "this is not a ply file\n");
+  EXPECT_EQ(status_of([&] { read_mesh((dir / "garbage.ply").string()); }, &msg), Status::FormatError);
+}
+
+TEST(MeshIO, FailedWritesLeaveNothingBehind) {
+  const auto dir = test::scratch_dir("atomic");
+  TriMesh m = icosphere_mesh(1);
+  std::string msg;
+  EXPECT_EQ(status_of([&] { write_mesh(m, (dir / "no" / "such" / "m.ply").string()); }, &msg), Status::IoError);
+  EXPECT_EQ(status_of([&] { write_mesh(m, (dir / "m.stl2").string()); }), Status::InvalidArgument);
+  m.triangles.push_back({0, 1, 999});
+  EXPECT_EQ(status_of([&] { write_mesh(m, (dir / "bad.ply").string()); }), Status::InvalidArgument);
+  EXPECT_TRUE(fs::is_empty(dir)) << "a temporary or partial file was left";
+  // A successful write replaces the old file in one step and leaves no temporary.
+  write_file_atomically((dir / "r.json").string(), "old");
+  write_file_atomically((dir / "r.json").string(), "new");
+  std::ifstream in(dir / "r.json");
+  std::string s;
+  in >> s;
+  EXPECT_EQ(s, "new");
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
+}

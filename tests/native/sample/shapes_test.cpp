@@ -1,0 +1,40 @@
+#include "particlemesh/sample/shapes.h"
+
+#include <gtest/gtest.h>
+
+#include "particlemesh/mesh/topology_report.h"
+#include "particlemesh/surface/spacing.h"
+#include "support/test_support.h"
+
+using namespace particlemesh;
+
+TEST(Shapes, MeshesAreClosedOutwardWithTheRightGenus) {
+  const TopologyReport torus = topology_report(torus_mesh(1, 0.4, 30, 12));
+  EXPECT_TRUE(torus.closed && torus.outward);
+  EXPECT_EQ(torus.per_component[0].genus, 1);
+  const TopologyReport knot = topology_report(trefoil_tube_mesh(1, 0.35, 200, 16));
+  EXPECT_TRUE(knot.closed && knot.outward && knot.consistently_oriented);
+  EXPECT_EQ(knot.per_component[0].genus, 1);
+  const TopologyReport ico = topology_report(icosphere_mesh(2));
+  EXPECT_TRUE(ico.closed && ico.outward);
+  EXPECT_EQ(ico.euler_characteristic, 2);
+}
+
+TEST(Shapes, PoissonDiskSampleIsEvenAndOnTheSurface) {
+  const PointCloud c = poisson_disk_sample(icosphere_mesh(5), 0.05, 7);
+  ASSERT_GT(c.size(), 3000u);  // 4 pi / r0^2 / ~1.6 for a maximal Poisson disk sample
+  for (const Vec3& p : c.positions) EXPECT_NEAR(norm(p), 1.0, 0.002);
+  const SpacingEstimate e = estimate_spacing(c.positions.data(), c.size());
+  EXPECT_GE(e.spacing, 0.05);
+  // Same seed, same points; another seed, other points.
+  EXPECT_EQ(poisson_disk_sample(icosphere_mesh(5), 0.05, 7).positions, c.positions);
+  EXPECT_NE(poisson_disk_sample(icosphere_mesh(5), 0.05, 8).positions, c.positions);
+}
+
+TEST(Shapes, FibonacciSphereHasUnitNormalsOutward) {
+  const PointCloud c = fibonacci_sphere(1000, 2.0, {1, 1, 1});
+  for (size_t i = 0; i < c.size(); ++i) {
+    EXPECT_NEAR(distance(c.positions[i], {1, 1, 1}), 2.0, 1e-12);
+    EXPECT_NEAR(dot(c.normals[i], normalized(c.positions[i] - Vec3{1, 1, 1})), 1.0, 1e-12);
+  }
+}

@@ -1,0 +1,61 @@
+#include "particlemesh/spatial/neighbor_grid.h"
+
+#include <gtest/gtest.h>
+
+#include "particlemesh/core/error.h"
+#include "support/test_support.h"
+
+using namespace particlemesh;
+
+TEST(NeighborGrid, RadiusQueriesMatchBruteForce) {
+  const PointCloud c = test::random_cloud(2000, 7, 10.0);
+  for (double cell : {0.3, 1.0, 2.5}) {
+    NeighborGrid grid(c.positions.data(), c.size(), cell);
+    EXPECT_EQ(grid.point_count(), c.size());
+    for (size_t q = 0; q < 50; ++q) {
+      const Vec3 p = c.positions[q * 37];
+      const double r = 0.9;
+      std::vector<uint32_t> got;
+      grid.for_each_within(p, r, [&](uint32_t s, double d2) {
+        EXPECT_LE(d2, r * r);
+        got.push_back(grid.original_index(s));
+      });
+      std::vector<uint32_t> want;
+      for (uint32_t i = 0; i < c.size(); ++i)
+        if (squared_distance(c.positions[i], p) <= r * r) want.push_back(i);
+      std::sort(got.begin(), got.end());
+      EXPECT_EQ(got, want) << "cell " << cell << " query " << q;
+    }
+  }
+}
+
+TEST(NeighborGrid, SortedLayoutIsAPermutationGroupedByCell) {
+  const PointCloud c = test::random_cloud(500, 3);
+  NeighborGrid grid(c.positions.data(), c.size(), 0.1);
+  std::vector<uint32_t> idx = grid.original_indices();
+  std::sort(idx.begin(), idx.end());
+  for (uint32_t i = 0; i < idx.size(); ++i) ASSERT_EQ(idx[i], i);
+  for (uint32_t cell = 0; cell < grid.cell_count(); ++cell) {
+    for (uint32_t s = grid.cell_begin(cell); s < grid.cell_end(cell); ++s)
+      EXPECT_EQ(grid.coord_of(grid.sorted_point(s)), grid.cell_coord(cell));
+    if (cell > 0) {
+      EXPECT_LT(grid.cell_coord(cell - 1), grid.cell_coord(cell));
+    }
+    EXPECT_EQ(grid.find_cell(grid.cell_coord(cell)), cell);
+  }
+  EXPECT_EQ(grid.find_cell({-5, -5, -5}), NeighborGrid::kNoCell);
+}
+
+TEST(NeighborGrid, RejectsBadCellSizeAndAbsurdExtent) {
+  const PointCloud c = test::random_cloud(10, 1);
+  EXPECT_THROW(NeighborGrid(c.positions.data(), c.size(), 0.0), Error);
+  EXPECT_THROW(NeighborGrid(c.positions.data(), c.size(), -1.0), Error);
+  std::vector<Vec3> far = {{0, 0, 0}, {1e12, 0, 0}};
+  try {
+    NeighborGrid g(far.data(), far.size(), 1e-3);
+    FAIL() << "expected LimitExceeded";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.status(), Status::LimitExceeded);
+    EXPECT_NE(std::string(e.what()).find("outliers"), std::string::npos);
+  }
+}

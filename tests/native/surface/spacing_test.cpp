@@ -1,0 +1,83 @@
+#include "particlemesh/surface/spacing.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "particlemesh/core/error.h"
+#include "particlemesh/sample/shapes.h"
+#include "support/test_support.h"
+
+using namespace particlemesh;
+
+namespace {
+double brute_force_median_nn(const std::vector<Vec3>& p) {
+  std::vector<double> nn;
+  std::vector<Vec3> distinct;
+  for (size_t i = 0; i < p.size(); ++i)
+    if (std::find(p.begin(), p.begin() + long(i), p[i]) == p.begin() + long(i)) distinct.push_back(p[i]);
+  for (size_t i = 0; i < distinct.size(); ++i) {
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t j = 0; j < distinct.size(); ++j)
+      if (i != j) best = std::min(best, squared_distance(distinct[i], distinct[j]));
+    nn.push_back(best);
+  }
+  std::sort(nn.begin(), nn.end());
+  return std::sqrt(nn[(nn.size() - 1) / 2]);
+}
+}  // namespace
+
+TEST(EstimateSpacing, ExactMedianOnRandomClouds) {
+  for (uint64_t seed = 1; seed <= 5; ++seed) {
+    PointCloud c = test::random_cloud(300 + 100 * seed, seed);
+    const SpacingEstimate e = estimate_spacing(c.positions.data(), c.size());
+    EXPECT_DOUBLE_EQ(e.spacing, brute_force_median_nn(c.positions)) << "seed " << seed;
+    EXPECT_EQ(e.duplicate_points, 0u);
+  }
+}
+
+TEST(EstimateSpacing, ExactWithOutliersClustersAndDuplicates) {
+  PointCloud c = test::random_cloud(400, 11);
+  c.positions.push_back({1000, 0, 0});          // a far outlier
+  c.positions.push_back({-500, 3, 1});          // another
+  for (int i = 0; i < 50; ++i) c.positions.push_back({5 + 1e-4 * i, 5, 5});  // a dense cluster
+  c.positions.push_back(c.positions[3]);        // exact duplicates
+  c.positions.push_back(c.positions[3]);
+  const SpacingEstimate e = estimate_spacing(c.positions.data(), c.size());
+  EXPECT_DOUBLE_EQ(e.spacing, brute_force_median_nn(c.positions));
+  EXPECT_EQ(e.duplicate_points, 2u);
+  EXPECT_EQ(e.distinct_points, c.size() - 2);
+}
+
+TEST(EstimateSpacing, SurfaceSampleIsCloseToThePoissonRadius) {
+  const PointCloud c = poisson_disk_sample(icosphere_mesh(5), 0.05, 3);
+  const SpacingEstimate e = estimate_spacing(c.positions.data(), c.size());
+  EXPECT_GE(e.spacing, 0.05);        // Poisson disk: no pair closer than r0
+  EXPECT_LT(e.spacing, 0.05 * 1.3);  // and a maximal sample leaves no wide gaps
+}
+
+TEST(EstimateSpacing, IndependentOfThreadsAndOrder) {
+  PointCloud c = fibonacci_sphere(20000);
+  const double a = estimate_spacing(c.positions.data(), c.size(), 1).spacing;
+  const double b = estimate_spacing(c.positions.data(), c.size(), 3).spacing;
+  std::reverse(c.positions.begin(), c.positions.end());
+  const double d = estimate_spacing(c.positions.data(), c.size(), 0).spacing;
+  EXPECT_EQ(a, b);
+  EXPECT_EQ(a, d);
+}
+
+TEST(EstimateSpacing, RejectsDegenerateInput) {
+  std::vector<Vec3> one = {{0, 0, 0}};
+  EXPECT_THROW(estimate_spacing(one.data(), one.size()), Error);
+  std::vector<Vec3> same(10, Vec3{1, 2, 3});
+  try {
+    estimate_spacing(same.data(), same.size());
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.status(), Status::InvalidInput);
+    EXPECT_NE(std::string(e.what()).find("coincide"), std::string::npos);
+  }
+  std::vector<Vec3> nan = {{0, 0, 0}, {1, std::nan(""), 0}};
+  EXPECT_THROW(estimate_spacing(nan.data(), nan.size()), Error);
+}
