@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "particlemesh/core/error.h"
+#include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
 #include "particlemesh/sample/shapes.h"
 #include "support/test_support.h"
@@ -828,4 +829,41 @@ TEST(Smooth, ProgressReportsStagesAndCancels) {
     o.progress = [&](std::string_view, double) { return ++calls < 3; };
     EXPECT_EQ(status_of([&] { smooth_mesh(m, o); }), Status::Cancelled);
   }
+}
+
+// ---- real meshes (shared data) --------------------------------------------------------------
+
+TEST(SmoothSharedData, BunnyWithHolesAndUnusedVerticesAndGenusOneRockerArm) {
+  PM_REQUIRE_DATA(bunny_path, "meshes/bunny.obj");
+  PM_REQUIRE_DATA(rocker_path, "meshes/rocker_arm.obj");
+  const TriMesh bunny = read_mesh(bunny_path);
+  const TopologyReport before = topology_report(bunny);
+  for (const SmoothOptions& o : {loop(1, true), butterfly(1)}) {
+    const SmoothResult r = smooth_mesh(bunny, o);
+    EXPECT_EQ(r.stats.dropped_vertices, 1113u);  // DATA.md: 1113 unreferenced vertices
+    EXPECT_EQ(r.stats.reoriented_triangles, 0u);
+    EXPECT_EQ(r.mesh.triangles.size(), 4 * bunny.triangles.size());
+    EXPECT_EQ(r.mesh.positions.size(), before.vertices_used + before.edges);
+    const TopologyReport t = topology_report(r.mesh);
+    EXPECT_EQ(t.boundary_loops, 5u);
+    EXPECT_EQ(t.euler_characteristic, before.euler_characteristic);
+    EXPECT_TRUE(t.manifold);
+    EXPECT_TRUE(t.consistently_oriented);
+    EXPECT_EQ(t.vertices_used, t.vertices);
+    if (o.scheme == SmoothScheme::Butterfly) {
+      for (size_t i = 0; i < r.original_vertex.size(); ++i)
+        ASSERT_EQ(r.mesh.positions[i], bunny.positions[r.original_vertex[i]]);
+    }
+  }
+  const TriMesh rocker = read_mesh(rocker_path);
+  const SmoothResult r = smooth_mesh(rocker, loop(1, true));
+  const TopologyReport t = topology_report(r.mesh);
+  EXPECT_TRUE(t.closed);
+  EXPECT_TRUE(t.outward);
+  ASSERT_EQ(t.per_component.size(), 1u);
+  EXPECT_EQ(t.per_component[0].genus, 1);
+  // Limit normals agree with the surface: outward like its faces.
+  double agree = 0;
+  for (const auto& tri : r.mesh.triangles) agree += dot(face_normal(r.mesh, tri), r.mesh.normals[tri[0]]);
+  EXPECT_GT(agree / double(r.mesh.triangles.size()), 0.95);
 }
