@@ -192,7 +192,7 @@ TEST(CApiSmooth, SmoothMisuseGivesStatusAndMessageAndLeavesTheOutputAlone) {
   o.levels = 11;
   EXPECT_EQ(pm_smooth(m.m, &o, &out), PM_STATUS_INVALID_ARGUMENT);
   EXPECT_NE(last().find("levels"), std::string::npos);
-  o.levels = 10;  // 80 * 4^10 > 2^26
+  o.levels = 10;  // 80 * 4^10 > 2^25
   EXPECT_EQ(pm_smooth(m.m, &o, &out), PM_STATUS_LIMIT_EXCEEDED);
   EXPECT_NE(last().find("max_triangles"), std::string::npos);
   pm_smooth_options_init(&o);

@@ -192,7 +192,7 @@ typedef struct pm_smooth_options {
   int32_t boundary;            /**< Loop: PM_BOUNDARY_* (default EDGE_AND_CORNER) */
   int32_t crease_method;       /**< Loop: PM_CREASE_* (default UNIFORM) */
   int32_t threads;             /**< 0 = all cores; the output does not depend on it */
-  uint64_t max_triangles;      /**< refuse larger results before allocating (default 2^26) */
+  uint64_t max_triangles;      /**< refuse larger results before allocating (default 2^25) */
   size_t crease_count;         /**< Loop: number of crease edges (default 0) */
   const int32_t* crease_edges; /**< crease_count vertex-index pairs (2 per crease), or NULL */
   const float* crease_sharpness; /**< crease_count values, or NULL = all infinitely sharp */

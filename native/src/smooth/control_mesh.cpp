@@ -58,9 +58,6 @@ void check_sizes(const TriMesh& mesh) {
                                             " components, expected " + std::to_string(nv) + " vertices x " +
                                             "components (1..4096)");
   }
-  if (!mesh.normals.empty() && mesh.normals.size() != nv)
-    throw Error(Status::InvalidInput, "the mesh has " + std::to_string(nv) + " positions but " +
-                                          std::to_string(mesh.normals.size()) + " normals");
 }
 
 void check_triangles(const TriMesh& mesh) {

@@ -755,10 +755,10 @@ TEST(SmoothInput, BadOptionsGiveClearErrors) {
   EXPECT_EQ(status_of([&] { smooth_mesh(m, o); }), Status::InvalidArgument);
   o.levels = kMaxSmoothLevels + 1;
   EXPECT_NE(message_of([&] { smooth_mesh(m, o); }).find("levels must be in [0, 10]"), std::string::npos);
-  // 320 * 4^10 = 335 544 320 > 2^26: refused before any work, naming the limit.
+  // 320 * 4^10 = 335 544 320 > 2^25: refused before any work, naming the limit.
   o.levels = 10;
   EXPECT_EQ(status_of([&] { smooth_mesh(m, o); }), Status::LimitExceeded);
-  EXPECT_NE(message_of([&] { smooth_mesh(m, o); }).find("335544320 triangles, more than max_triangles = 67108864"),
+  EXPECT_NE(message_of([&] { smooth_mesh(m, o); }).find("335544320 triangles, more than max_triangles = 33554432"),
             std::string::npos);
   o.levels = 2;
   o.max_triangles = 320 * 16 - 1;
@@ -866,4 +866,38 @@ TEST(SmoothSharedData, BunnyWithHolesAndUnusedVerticesAndGenusOneRockerArm) {
   double agree = 0;
   for (const auto& tri : r.mesh.triangles) agree += dot(face_normal(r.mesh, tri), r.mesh.normals[tri[0]]);
   EXPECT_GT(agree / double(r.mesh.triangles.size()), 0.95);
+}
+
+TEST(SmoothInput, TinyMeshesAndSeveralComponents) {
+  TriMesh one;
+  one.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  one.triangles = {{0, 1, 2}};
+  TriMesh two = one;
+  two.positions.push_back({1, 1, 0.5});
+  two.triangles.push_back({1, 3, 2});
+  TriMesh both = icosphere_mesh(0);  // a closed component and an open one, side by side
+  for (const auto& p : two.positions) both.positions.push_back(p + Vec3{3, 0, 0});
+  for (const auto& t : two.triangles) both.triangles.push_back({t[0] + 12, t[1] + 12, t[2] + 12});
+  for (const TriMesh* m : {&one, &two, &both})
+    for (const SmoothOptions& base : {loop(0, true), loop(3, true), loop(3, false), butterfly(3)})
+      for (BoundaryRule rule : {BoundaryRule::EdgeAndCorner, BoundaryRule::EdgeOnly}) {
+        SmoothOptions o = base;
+        o.boundary = rule;
+        const SmoothResult r = smooth_mesh(*m, o);
+        EXPECT_EQ(r.mesh.triangles.size(), m->triangles.size() << (2 * o.levels));
+        const TopologyReport t = topology_report(r.mesh);
+        EXPECT_TRUE(t.manifold);
+        EXPECT_TRUE(t.consistently_oriented);
+        EXPECT_EQ(t.components, topology_report(*m).components);
+        for (const auto& p : r.mesh.positions) ASSERT_TRUE(is_finite(p));
+        for (const auto& n : r.mesh.normals) ASSERT_NEAR(norm(n), 1.0, 1e-9);
+      }
+  // A single triangle with pinned corners stays the same flat triangle (Loop, limit).
+  const SmoothResult r = smooth_mesh(one, loop(2, true));
+  for (const auto& p : r.mesh.positions) {
+    EXPECT_EQ(p.z, 0);
+    EXPECT_GE(p.x, -1e-15);
+    EXPECT_GE(p.y, -1e-15);
+    EXPECT_LE(p.x + p.y, 1 + 1e-15);
+  }
 }

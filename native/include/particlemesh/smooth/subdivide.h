@@ -102,9 +102,10 @@ struct SmoothOptions {
   /// Butterfly rejects a non-empty list (OpenMesh's subdivider has no creases).
   std::vector<CreaseEdge> creases;
   /// Refuse (Error LimitExceeded) before allocating anything when F * 4^levels exceeds this
-  /// many triangles. The default, 2^26 (about 67 million), needs roughly 10 GB with Loop;
-  /// at most 2^30.
-  uint64_t max_triangles = uint64_t(1) << 26;
+  /// many triangles. Loop needs about 270 bytes per output triangle at its peak with `limit`
+  /// (OpenSubdiv's full last-level topology), about 150 without; the default, 2^25 (about
+  /// 33.5 million triangles), so stays under about 9 GB. At most 2^30.
+  uint64_t max_triangles = uint64_t(1) << 25;
   /// Worker threads, 0 = all cores. The output does not depend on it.
   int threads = 0;
   /// Called between stages (checking, refining, interpolating each level, limit, output);
