@@ -86,6 +86,14 @@ void butterfly_subdivide(const ControlMesh& control, const SmoothOptions& option
   }
 
   std::vector<Butterfly> subdividers(meshes.size());
+  // OpenMesh's SubdividerT destructor calls the pure virtual cleanup() when still attached,
+  // which terminates; detach explicitly on every exit, including a cancel (exception).
+  struct DetachAll {
+    std::vector<Butterfly>& s;
+    ~DetachAll() {
+      for (auto& x : s) x.detach();
+    }
+  } detach_all{subdividers};
   for (size_t m = 0; m < meshes.size(); ++m) subdividers[m].attach(meshes[m]);
   double total = 0, done = 0;
   for (int l = 1; l <= options.levels; ++l) total += double(nf) * double(uint64_t(1) << (2 * l));
@@ -97,7 +105,7 @@ void butterfly_subdivide(const ControlMesh& control, const SmoothOptions& option
     tbb::parallel_for(size_t(0), meshes.size(), [&](size_t m) { subdividers[m](1); });
     progress.check();
   }
-  for (auto& s : subdividers) s.detach();
+  for (auto& sub : subdividers) sub.detach();
   out.stats.seconds_refine = seconds_since(t0);
 
   auto t1 = Clock::now();
