@@ -136,22 +136,29 @@ def test_triangulate_then_smooth_in_one_step(cli, inspect, tmp_path):
     assert proc.returncode == 2 and "--smooth" in proc.stderr
 
 
-def test_triangulate_smooth_on_a_curved_sample(cli, inspect, tmp_path):
-    # The raw triangle set of a curved sample is not a manifold (overlapping pairs on quads):
-    # smoothing it fails with a line naming the step and leaves no file. Once triangulate
-    # produces a finished surface, the same command must give a smooth closed manifold.
+def test_triangulate_smooth_on_a_sampled_torus(cli, inspect, tmp_path):
+    # Particles -> finished surface -> Loop at the limit, in one step: still a closed, outward
+    # genus-1 manifold with 16x the triangles; the raw triangle set is refused with a line
+    # naming the smoothing step (it is not a manifold) and leaves no file.
     pts = tmp_path / "torus.xyz"
-    cli("sample", "torus", "--spacing", "0.12", "-o", pts)
-    out = tmp_path / "o.ply"
-    proc = cli("triangulate", pts, "-o", out, "--smooth", "loop", "--levels", "1", check=False)
-    if proc.returncode == 0:
+    cli("sample", "torus", "--spacing", "0.08", "-o", pts)
+    plain = tmp_path / "plain.ply"
+    cli("triangulate", pts, "-o", plain, "-q")
+    base = inspect(plain)
+    assert base["closed"] and base["manifold"]
+    for scheme in ("loop", "butterfly"):
+        out = tmp_path / f"{scheme}.ply"
+        cli("triangulate", pts, "-o", out, "--smooth", scheme, "--levels", "2", "-q")
         r = inspect(out)
-        assert r["manifold"] and r["consistently_oriented"]
-    else:
-        assert proc.returncode == 1, proc.stderr
-        assert "--smooth loop: " in proc.stderr and "non-manifold" in proc.stderr
-        assert len([l for l in proc.stderr.splitlines() if l.strip()]) == 1
-        assert not out.exists()
+        assert r["triangles"] == 16 * base["triangles"]
+        assert r["closed"] and r["manifold"] and r["consistently_oriented"] and r["outward"]
+        assert r["euler_characteristic"] == 0 and r["per_component"][0]["genus"] == 1
+    out = tmp_path / "raw.ply"
+    proc = cli("triangulate", pts, "-o", out, "--raw", "--smooth", "loop", check=False)
+    assert proc.returncode == 1, proc.stderr
+    assert "--smooth loop: " in proc.stderr and "non-manifold" in proc.stderr
+    assert len([l for l in proc.stderr.splitlines() if l.strip()]) == 1
+    assert not out.exists()
 
 
 def test_help(cli):
