@@ -103,6 +103,8 @@ int run_smooth(const SmoothArgs& a) {
   opt.threads = a.threads;
   opt.progress = progress.callback();
   const auto t1 = Clock::now();
+  set_phase(Phase::Computing);
+  if (interrupted()) throw Error(Status::Cancelled, "interrupted");
   const SmoothResult result = smooth_mesh(mesh, opt);
   const double t_smooth = std::chrono::duration<double>(Clock::now() - t1).count();
   progress.clear();
@@ -111,7 +113,12 @@ int run_smooth(const SmoothArgs& a) {
   WriteMeshOptions wo;
   if (a.ascii) wo.format = MeshFormat::PlyAscii;
   const auto t2 = Clock::now();
+  set_phase(Phase::Writing);
   write_mesh(result.mesh, a.output, wo);
+  if (interrupted()) {  // Ctrl-C while writing: the run is cancelled, so no output either
+    std::remove(a.output.c_str());
+    throw Error(Status::Cancelled, "interrupted");
+  }
   const double t_write = std::chrono::duration<double>(Clock::now() - t2).count();
 
   const TopologyReport report = topology_report(result.mesh);

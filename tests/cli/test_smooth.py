@@ -165,3 +165,25 @@ def test_help(cli):
     proc = cli("smooth", "--help")
     assert "--scheme" in proc.stdout and "--levels" in proc.stdout and "--no-limit" in proc.stdout
     assert "--smooth" in cli("triangulate", "--help").stdout
+
+
+def test_sigint_cancels_without_output(cli, tmp_path):
+    # Cancellation takes effect at the next stage boundary (OpenSubdiv's topology refinement is
+    # one call), so the bound is loose; what matters is status 130 and no file.
+    import os
+    import signal
+    import subprocess
+    import time
+
+    src = tmp_path / "big.obj"
+    _torus(src, nu=320, nv=160)  # 102 400 triangles -> 6.5 million at level 3
+    out = tmp_path / "big_s.ply"
+    proc = subprocess.Popen([os.environ["PARTICLEMESH_CLI"], "smooth", src, "-o", out, "--levels", "3"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(0.7)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert "cancel" in err or "interrupted" in err
+    assert not out.exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".big_s")]
