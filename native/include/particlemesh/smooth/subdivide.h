@@ -109,7 +109,8 @@ struct SmoothOptions {
   /// Worker threads, 0 = all cores. The output does not depend on it.
   int threads = 0;
   /// Called between stages (checking, refining, interpolating each level, limit, output);
-  /// returning false cancels at the next stage boundary with Error(Cancelled).
+  /// returning false cancels at the next stage boundary with Error(Cancelled). OpenSubdiv's
+  /// topology refinement is one stage (one call, about half of a Loop run).
   ProgressCallback progress;
 };
 
@@ -145,8 +146,10 @@ struct SmoothResult {
 };
 
 /// Subdivide a triangle mesh into a smooth one.
-/// Cost: linear in the output size; Loop refines the topology once and interpolates
-/// positions and all attributes through it (per-channel work runs in parallel).
+/// Cost: linear in the output size. Loop refines the topology once (OpenSubdiv, one thread:
+/// about half the run) and interpolates the positions and the attribute channels through it
+/// concurrently; the butterfly runs one OpenMesh subdivider for the positions and one per
+/// three attribute channels, concurrently. About 270 bytes per output triangle at the peak.
 /// @param[in] mesh     #V positions, #F triangles, optional attributes (#V x components)
 /// @param[in] options  scheme, levels, limit, boundary rule, creases, size limit, threads
 /// @return the smooth mesh, the vertex map and statistics
