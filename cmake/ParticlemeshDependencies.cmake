@@ -12,3 +12,8 @@ endif()
 if(PM_BUILD_BENCH)
   find_package(benchmark REQUIRED)
 endif()
+if(PM_WITH_PCL)
+  # Debian's PCL config pulls in VTK, whose targets need MPI::MPI_C (C is enabled in project()).
+  find_package(MPI COMPONENTS C)
+  find_package(PCL 1.13 REQUIRED COMPONENTS common io search kdtree surface filters features)
+endif()
