@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "commands.h"
+#include "particle_input.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
@@ -24,13 +25,15 @@ struct TriangulateArgs {
   bool quiet = false;
   int threads = 0;
   size_t max_neighbors = 256;
+  ParticleInputArgs input_options;  // .pcd, PCL preprocessing, --pcl-mesh
 };
 
 int run_triangulate(const TriangulateArgs& a) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   ProgressLine progress(a.quiet);
-  const PointCloud cloud = read_point_cloud(a.input);
+  const ParticleInput input = read_particles(a.input, a.input_options, a.threads);
+  const PointCloud& cloud = input.cloud;
   const double t_read = std::chrono::duration<double>(Clock::now() - t0).count();
 
   TriangulateOptions opt;
@@ -49,6 +52,7 @@ int run_triangulate(const TriangulateArgs& a) {
   if (a.ascii) wo.format = MeshFormat::PlyAscii;
   const auto t2 = Clock::now();
   write_mesh(result.mesh, a.output, wo);
+  write_pcl_mesh(result.mesh, a.input_options);
   const double t_write = std::chrono::duration<double>(Clock::now() - t2).count();
 
   const TopologyReport report = topology_report(result.mesh);
@@ -59,11 +63,13 @@ int run_triangulate(const TriangulateArgs& a) {
                      {"triangulation", to_json(result.stats)},
                      {"topology", to_json(report)},
                      {"seconds", {{"read", t_read}, {"triangulate", t_tri}, {"write", t_write}}}};
+    if (!input.report.is_null()) j["input_cloud"] = input.report;
     write_json_file(j, a.report);
   }
   if (!a.quiet) {
     const auto& s = result.stats;
     std::printf("particlemesh triangulate: %s -> %s\n", a.input.c_str(), a.output.c_str());
+    std::printf("%s", input.summary.c_str());
     std::printf("  points        %zu%s\n", s.points,
                 s.duplicate_points ? (" (" + std::to_string(s.duplicate_points) + " exact duplicates set aside)").c_str() : "");
     std::printf("  spacing r0    %.6g (%s)\n", s.spacing, s.spacing_estimated ? "estimated: median nearest-neighbour distance" : "given");
@@ -82,7 +88,7 @@ int run_triangulate(const TriangulateArgs& a) {
 void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
   auto args = std::make_shared<TriangulateArgs>();
   CLI::App* app = root.add_subcommand("triangulate", "Surface particles to a triangle mesh (seed section 5.2.3)");
-  app->add_option("input", args->input, "Particles: .ply (x y z [nx ny nz]) or .xyz (x y z [nx ny nz] per line)")
+  app->add_option("input", args->input, "Particles: .ply (x y z [nx ny nz]), .xyz (x y z [nx ny nz] per line) or .pcd (PCL: ascii, binary, binary_compressed)")
       ->required();
   app->add_option("-o,--output", args->output, "Output mesh: .ply (binary; --ascii for text) or .obj")->required();
   app->add_option("--spacing", args->spacing,
@@ -102,6 +108,7 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("--report", args->report, "Also write statistics and the topology report as JSON");
   app->add_flag("--ascii", args->ascii, "Write ASCII PLY instead of binary");
   app->add_flag("-q,--quiet", args->quiet, "No summary and no progress line");
+  add_particle_input_options(*app, args->input_options);
   commands.push_back({app, [args] { return run_triangulate(*args); }});
 }
 
