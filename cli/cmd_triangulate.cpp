@@ -44,7 +44,7 @@ int run_triangulate(const TriangulateArgs& a) {
   const double t_read = std::chrono::duration<double>(Clock::now() - t0).count();
 
   SurfaceOptions opt;
-  opt.spacing = a.spacing;
+  opt.spacing = a.spacing > 0 ? a.spacing : input.spacing_hint;
   opt.max_edge_factor = a.max_edge_factor;
   opt.threads = a.threads;
   opt.max_neighbors = a.max_neighbors;

@@ -30,6 +30,7 @@ struct ParticleInput {
   PointCloud cloud;
   nlohmann::json report;  ///< what was read, dropped and preprocessed
   std::string summary;    ///< lines for the human summary ("" when nothing to say)
+  double spacing_hint = 0;  ///< the downsampling leaf size: the spacing to use when none is given
 };
 
 /// Add the input options (preprocessing switches, --pcl-mesh) to a subcommand.

@@ -15,11 +15,11 @@ namespace particlemesh::cli {
 void add_particle_input_options(CLI::App& app, ParticleInputArgs& a) {
   const char* group = "Input preprocessing (PCL; off by default)";
   auto* us = app.add_option("--uniform-sampling", a.uniform_sampling,
-                            "Downsample with pcl::UniformSampling to this spacing (voxel edge, world units)")
+                            "Downsample with pcl::UniformSampling to this spacing (voxel edge, world units; also r0 unless --spacing)")
                  ->check(CLI::PositiveNumber)
                  ->group(group);
   auto* vg = app.add_option("--voxel-grid", a.voxel_grid,
-                            "Downsample with pcl::VoxelGrid to this spacing (the input point nearest each voxel's centroid)")
+                            "Downsample with pcl::VoxelGrid to this spacing (the input point nearest each voxel's centroid; also r0 unless --spacing)")
                  ->check(CLI::PositiveNumber)
                  ->group(group);
   us->excludes(vg);
@@ -95,6 +95,7 @@ ParticleInput read_particles(const std::string& path, const ParticleInputArgs& a
   o.normal_k = a.normal_k;
   for (int k = 0; k < 3; ++k) o.viewpoint[k] = a.viewpoint.size() == 3 ? float(a.viewpoint[k]) : load.origin[k];
   o.threads = threads;
+  in.spacing_hint = o.downsampling == particlemesh_pcl::Downsampling::None ? 0.0 : o.leaf_size;
   if (particlemesh_pcl::anyPreprocessing(o)) {
     const auto p = particlemesh_pcl::preprocess(in.cloud, o);
     in.report["preprocessing"] = {{"outliers_removed", p.outliers_removed},

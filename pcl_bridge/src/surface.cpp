@@ -52,22 +52,25 @@ namespace particlemesh_pcl::detail
   }
 
   SurfaceMesh
-  buildSurface (const particlemesh::PointCloud &particles, double spacing, double max_edge_factor,
-                int threads, std::size_t max_neighbors)
+  buildSurface (const particlemesh::PointCloud &particles, const particlemesh::SurfaceOptions &options, bool raw)
   {
-    particlemesh::TriangulateOptions options;
-    options.spacing = spacing;
-    options.max_edge_factor = max_edge_factor;
-    options.threads = threads;
-    options.max_neighbors = max_neighbors;
-    particlemesh::TriangulateResult result = particlemesh::triangulate_raw (particles, options);
+    particlemesh::SurfaceResult result;
+    if (raw)
+    {
+      particlemesh::TriangulateResult r = particlemesh::triangulate_raw (particles, options);
+      result.mesh = std::move (r.mesh);
+      result.triangulation = r.stats;
+    }
+    else
+      result = particlemesh::reconstruct_surface (particles, options);
 
     SurfaceMesh out;
     out.vertex_source = vertexSource (result.mesh, particles);
     out.mesh = std::move (result.mesh);
-    out.spacing = result.stats.spacing;
-    out.spacing_estimated = result.stats.spacing_estimated;
-    out.max_edge = result.stats.max_edge;
+    out.spacing = result.triangulation.spacing;
+    out.spacing_estimated = result.triangulation.spacing_estimated;
+    out.max_edge = result.triangulation.max_edge;
+    out.surface = result.surface;
     return out;
   }
 }

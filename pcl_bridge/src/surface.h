@@ -9,6 +9,7 @@
 
 #include <particlemesh/mesh/point_cloud.h>
 #include <particlemesh/mesh/tri_mesh.h>
+#include <particlemesh/surface/reconstruct.h>
 
 namespace particlemesh_pcl::detail
 {
@@ -20,9 +21,11 @@ namespace particlemesh_pcl::detail
     double spacing = 0;
     bool spacing_estimated = false;
     double max_edge = 0;
+    particlemesh::SurfaceStats surface;  ///< zero when raw
   };
 
-  /// @throws particlemesh::Error as the surface stage does.
-  SurfaceMesh buildSurface (const particlemesh::PointCloud &particles, double spacing,
-                            double max_edge_factor, int threads, std::size_t max_neighbors);
+  /// The finished surface (particlemesh::reconstruct_surface), or the seed's exact triangle
+  /// set when `raw`. @throws particlemesh::Error as the surface stage does.
+  SurfaceMesh buildSurface (const particlemesh::PointCloud &particles,
+                            const particlemesh::SurfaceOptions &options, bool raw);
 }

@@ -44,7 +44,9 @@ def test_every_shared_pcd_triangulates(pcl_cli, inspect, data_dir, tmp_path, nam
         assert f"{nan} invalid (NaN/Inf) dropped" in proc.stdout
     mesh = inspect(tmp_path / "mesh.ply")
     assert mesh["vertices"] == points - nan
-    assert mesh["triangles"] == r["triangulation"]["kept"] > 0
+    assert mesh["triangles"] == r["topology"]["triangles"] > 0
+    # the finished surface: manifold and consistently oriented, also on these raw scans
+    assert mesh["nonmanifold_edges"] == 0 and mesh["orientation_conflicts"] == 0
 
 
 def test_kinect_frame_with_the_documented_preprocessing(pcl_cli, inspect, data_dir, tmp_path):
@@ -57,10 +59,13 @@ def test_kinect_frame_with_the_documented_preprocessing(pcl_cli, inspect, data_d
     assert p["normals_estimated"] and p["normals_failed"] == 0
     assert p["output_points"] == 307200 - 35625 - p["outliers_removed"] - p["downsampled_away"]
     assert r["triangulation"]["points"] == p["output_points"]
+    assert r["triangulation"]["spacing"] == 0.005 and not r["triangulation"]["spacing_estimated"]  # r0 = the leaf
     assert "outliers removed" in proc.stdout and "uniform sampling 0.005" in proc.stdout
     # The pcl::PolygonMesh PLY: same triangles, and it carries the frame's colours.
     ours, theirs = inspect(tmp_path / "mesh.ply"), inspect(pcl_mesh)
     assert theirs["triangles"] == ours["triangles"] and theirs["vertices"] == ours["vertices"]
+    assert ours["nonmanifold_edges"] == 0 and ours["orientation_conflicts"] == 0
+    assert ours["per_component"][0]["triangles"] > 75000  # one main surface of the scene
     header = pcl_mesh.read_bytes()[:600].split(b"end_header")[0].decode()
     assert "property uchar red" in header and "property float nx" in header
     assert "element face" in header

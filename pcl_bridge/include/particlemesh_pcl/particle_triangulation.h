@@ -13,6 +13,7 @@
 
 #include <particlemesh/mesh/point_cloud.h>
 #include <particlemesh/mesh/tri_mesh.h>
+#include <particlemesh/surface/reconstruct.h>
 #include <particlemesh_pcl/conversions.h>
 #include <particlemesh_pcl/preprocessing.h>
 
@@ -30,6 +31,7 @@ namespace particlemesh_pcl
     double spacing = 0;              ///< particle spacing r0 used (world units)
     bool spacing_estimated = false;  ///< r0 was the median nearest-neighbour distance
     double max_edge = 0;             ///< longest allowed edge L = max edge factor * r0
+    particlemesh::SurfaceStats surface;  ///< holes filled / left open, unused points, ... (zero when raw)
     double seconds = 0;              ///< wall time of the whole call
   };
 
@@ -40,6 +42,9 @@ namespace particlemesh_pcl
     double max_edge_factor = 2.0;    ///< L = factor * r0 (the seed's default: 2)
     int threads = 0;                 ///< 0 = all cores; never changes the output
     std::size_t max_neighbors = 256; ///< see particlemesh::TriangulateOptions::max_neighbors
+    double normal_angle = 90.0;      ///< co-normality limit, degrees (SurfaceOptions::normal_angle)
+    std::size_t fill_holes = 100;    ///< largest boundary loop filled, edges (SurfaceOptions::fill_holes)
+    bool raw = false;                ///< the seed's exact triangle set instead of the surface
   };
 
   namespace detail
@@ -51,6 +56,7 @@ namespace particlemesh_pcl
       /** \brief vertex_source[v] = index into the particles handed in of mesh vertex v. */
       std::vector<std::uint32_t> vertex_source;
       PreprocessReport preprocessing;
+      particlemesh::SurfaceStats surface;
       double spacing = 0;
       bool spacing_estimated = false;
       double max_edge = 0;
@@ -65,11 +71,13 @@ namespace particlemesh_pcl
                           const SurfaceSettings &surface);
   }
 
-  /** \brief ParticleTriangulation builds a triangle mesh on the input points with the
+  /** \brief ParticleTriangulation builds a surface on the input points from the
     * smallest-sphere test of Tonnesen's thesis (chapter 5, section 5.2.3): triangle (i, j, k)
-    * is kept when its edges are at most L = max edge factor x spacing and no other point lies
-    * inside the smallest sphere enclosing it. Every output vertex is an input point, so it
-    * is a pcl::MeshConstruction like pcl::GreedyProjectionTriangulation, and replaces it
+    * is a candidate when its edges are at most L = max edge factor x spacing and no other point
+    * lies inside the smallest sphere enclosing it; particlemesh::reconstruct_surface then keeps
+    * a consistently oriented 2-manifold of them (normals, co-normality, manifold extraction,
+    * small-hole filling, closed parts facing outward). Every output vertex is an input point,
+    * so it is a pcl::MeshConstruction like pcl::GreedyProjectionTriangulation, and replaces it
     * without other changes:
     * \code
     * particlemesh_pcl::ParticleTriangulation<pcl::PointNormal> pt;   // was: GreedyProjectionTriangulation
@@ -118,7 +126,8 @@ namespace particlemesh_pcl
       ~ParticleTriangulation () override = default;
 
       /** \brief Set the particle spacing r0 in world units; 0 (default) estimates it as the
-        * median nearest-neighbour distance of the points (after preprocessing).
+        * median nearest-neighbour distance of the points, or, when downsampling is on, takes
+        * the downsampling leaf size.
         * \note r0 x the max edge factor limits the maximum edge length! */
       inline void
       setSpacing (double spacing) { surface_.spacing = spacing; }
@@ -154,6 +163,35 @@ namespace particlemesh_pcl
       inline std::size_t
       getMaximumNearestNeighbors () const { return (surface_.max_neighbors); }
 
+      /** \brief Set the co-normality limit in degrees (default 90): a triangle whose corner
+        * normals disagree by more is not surface (keeps sheets that face each other apart). */
+      inline void
+      setNormalAngle (double degrees) { surface_.normal_angle = degrees; }
+
+      /** \brief Get the co-normality limit in degrees. */
+      inline double
+      getNormalAngle () const { return (surface_.normal_angle); }
+
+      /** \brief Set the largest boundary loop, in edges, that may be filled (default 100;
+        * 0 fills none). Only holes narrower than 1.5 x the longest edge are filled: the real
+        * openings of a scan stay open whatever this is. */
+      inline void
+      setMaximumHoleSize (std::size_t edges) { surface_.fill_holes = edges; }
+
+      /** \brief Get the largest boundary loop that may be filled. */
+      inline std::size_t
+      getMaximumHoleSize () const { return (surface_.fill_holes); }
+
+      /** \brief Return the seed's exact triangle set (default false): every triangle that
+        * passes the smallest-sphere test, unoriented and not a manifold (overlapping pairs on
+        * quads). For study and comparison; the default is the finished surface. */
+      inline void
+      setRawTriangulation (bool raw) { surface_.raw = raw; }
+
+      /** \brief Is the raw triangle set returned? */
+      inline bool
+      getRawTriangulation () const { return (surface_.raw); }
+
       /** \brief Statistical outlier removal before meshing (default off).
         * \param[in] enable switch
         * \param[in] mean_k neighbours for the mean distance (PCL tutorial: 50)
@@ -172,7 +210,10 @@ namespace particlemesh_pcl
 
       /** \brief Downsample to a target spacing before meshing (default Downsampling::None).
         * \param[in] method UniformSampling or VoxelGrid (None switches it off)
-        * \param[in] leaf_size voxel edge in world units (> 0); a good spacing for the mesh */
+        * \param[in] leaf_size voxel edge in world units (> 0). Unless setSpacing gives one,
+        * it is also the spacing r0 of the triangulation: a voxel sampling's median
+        * nearest-neighbour distance is well below the voxel edge, and an edge limit from it
+        * would leave gaps. */
       inline void
       setDownsampling (Downsampling method, double leaf_size = 0)
       {

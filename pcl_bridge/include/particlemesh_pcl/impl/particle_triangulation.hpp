@@ -48,6 +48,7 @@ namespace particlemesh_pcl
       report_.spacing = out.spacing;
       report_.spacing_estimated = out.spacing_estimated;
       report_.max_edge = out.max_edge;
+      report_.surface = out.surface;
       report_.ok = true;
     }
     catch (const particlemesh::Error &e)
