@@ -117,3 +117,19 @@ def test_all_nan_pcd_is_an_input_error(pcl_cli, tmp_path):
     path.write_bytes(b"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\n"
                      b"VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA binary\n" + body)
     _fails(pcl_cli, tmp_path, path, "no valid point")
+
+
+def test_estimated_normals_face_the_viewpoint(pcl_cli, tmp_path):
+    # A flat square of points at z = 0: PCL's normals are +-z, flipped toward the viewpoint.
+    pts = tmp_path / "plane.xyz"
+    pts.write_text("".join(f"{0.1 * i} {0.1 * j} 0\n" for i in range(20) for j in range(20)))
+    for vz, sign in ((5, 1), (-5, -1)):
+        out = tmp_path / f"plane{vz}.ply"
+        proc = pcl_cli("triangulate", pts, "-o", out, "--estimate-normals", "--viewpoint", 0, 0, vz, "--ascii")
+        assert f"toward 0 0 {vz}" in proc.stdout
+        lines = out.read_text().splitlines()
+        header = lines[: lines.index("end_header")]
+        assert "property float nx" in header
+        body = lines[len(header) + 1:]
+        nz = [float(l.split()[5]) for l in body[:400]]
+        assert all(n * sign > 0.99 for n in nz), nz[:5]
