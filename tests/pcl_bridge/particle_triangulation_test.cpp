@@ -61,11 +61,9 @@ std::vector<Triangle> triangles_of(const std::vector<pcl::Vertices>& polygons) {
   return t;
 }
 
-// Every polygon is a triangle of three distinct, finite points of `cloud`, none repeated
-// (unless `duplicates_allowed`: see SharedScansReconstruct).
+// Every polygon is a triangle of three distinct, finite points of `cloud`, none repeated.
 template <typename PointT>
-void expect_valid_polygons(const pcl::PointCloud<PointT>& cloud, const std::vector<pcl::Vertices>& polygons,
-                           bool duplicates_allowed = false) {
+void expect_valid_polygons(const pcl::PointCloud<PointT>& cloud, const std::vector<pcl::Vertices>& polygons) {
   std::set<Triangle> seen;
   for (const auto& p : polygons) {
     ASSERT_EQ(p.vertices.size(), 3u);
@@ -79,7 +77,7 @@ void expect_valid_polygons(const pcl::PointCloud<PointT>& cloud, const std::vect
     }
     ASSERT_TRUE(t[0] != t[1] && t[1] != t[2] && t[0] != t[2]);
     std::sort(t.begin(), t.end());
-    ASSERT_TRUE(seen.insert(t).second || duplicates_allowed) << "duplicate triangle";
+    ASSERT_TRUE(seen.insert(t).second) << "duplicate triangle";
   }
 }
 
@@ -416,9 +414,8 @@ TEST(ParticleTriangulation, PreprocessingSwitchesKeepInputIndices) {
 // Each shared PCD, loaded the PCL way and meshed (the depth frame after the documented
 // preprocessing): a manifold, consistently oriented surface indexing the original points.
 //
-// Known defect of the surface stage on these irregular scans (issue 3, reported): a few
-// triangles are emitted twice with opposite windings (closed two-triangle "pillows") and
-// some tiny closed pieces of zero volume; they are bounded here, not hidden.
+// On these open, irregular scans the surface stage (issue 3) still closes a few tiny pieces
+// (zero-volume tetrahedra and the like); they are bounded here, not hidden.
 TEST(ParticleTriangulation, SharedScansReconstruct) {
   PM_REQUIRE_DATA(bun0, "pcd/bun0.pcd");
   PM_REQUIRE_DATA(milk, "pcd/milk.pcd");
@@ -457,20 +454,23 @@ TEST(ParticleTriangulation, SharedScansReconstruct) {
     EXPECT_NEAR(double(mesh.polygons.size()), 531, 30);
   }
   {
+    // An object cut out of one depth view: documented preprocessing, normals toward the
+    // sensor (without them the spanning-tree orientation breaks this quantized scan into
+    // hundreds of pieces; bench/RESULTS.md).
     pcl::PointCloud<pcl::PointXYZ>::Ptr c(new pcl::PointCloud<pcl::PointXYZ>);
     ASSERT_EQ(pcl::io::loadPCDFile(milk, *c), 0);
     ParticleTriangulation<pcl::PointXYZ> pt;
     pt.setInputCloud(c);
+    pt.setEstimateNormals(true);
     std::vector<pcl::Vertices> polygons;
     pt.reconstruct(polygons);
     ASSERT_TRUE(pt.getReport().ok);
     EXPECT_EQ(pt.getReport().vertices, 13704u);
-    expect_valid_polygons(*c, polygons, /*duplicates_allowed=*/true);
+    expect_valid_polygons(*c, polygons);
     const TopologyReport t = topology_of(*c, polygons);
     show("milk.pcd", pt.getReport(), t);
     EXPECT_TRUE(t.manifold && t.consistently_oriented);
-    EXPECT_GT(t.per_component[0].triangles, 15000u);
-    EXPECT_LT(t.duplicate_triangles, 50u);
+    EXPECT_GT(t.per_component[0].triangles, 18000u);
   }
   {
     // The depth frame: 640 x 480, 35 625 NaN. Documented preprocessing (README): outlier
@@ -498,14 +498,13 @@ TEST(ParticleTriangulation, SharedScansReconstruct) {
     EXPECT_FALSE(r.spacing_estimated);
     EXPECT_EQ(mesh.cloud.width, 640u);
     EXPECT_EQ(mesh.cloud.height, 480u);
-    expect_valid_polygons(*c, mesh.polygons, /*duplicates_allowed=*/true);
+    expect_valid_polygons(*c, mesh.polygons);
     const TopologyReport t = topology_of(*c, mesh.polygons);
     show("kinect frame", r, t);
     EXPECT_TRUE(t.manifold && t.consistently_oriented);
     EXPECT_GT(t.per_component[0].triangles, 75000u);  // the scene is one main surface
     EXPECT_GT(t.vertices_used, r.vertices * 99 / 100);
     EXPECT_LT(t.boundary_loops, 200u);
-    EXPECT_LT(t.duplicate_triangles, 40u);
     for (const auto& c : t.per_component) {
       if (c.closed) {
         EXPECT_LE(c.triangles, 40u);
@@ -522,7 +521,7 @@ TEST(ParticleTriangulation, SharedScansReconstruct) {
     ASSERT_TRUE(pt.getReport().ok);
     EXPECT_EQ(pt.getReport().input.input_points, 1000u);
     EXPECT_TRUE(pt.getReport().input.has_color && pt.getReport().input.has_normals);
-    expect_valid_polygons(*c, polygons, /*duplicates_allowed=*/true);
+    expect_valid_polygons(*c, polygons);
     const TopologyReport t = topology_of(*c, polygons);
     show("colored_cloud.pcd", pt.getReport(), t);
     EXPECT_TRUE(t.manifold && t.consistently_oriented);
