@@ -13,12 +13,6 @@ endif()
 if(PM_BUILD_BENCH)
   find_package(benchmark REQUIRED)
 endif()
-<<<<<<< HEAD
-if(PM_WITH_PCL)
-  # Debian's PCL config pulls in VTK, whose targets need MPI::MPI_C (C is enabled in project()).
-  find_package(MPI COMPONENTS C)
-  find_package(PCL 1.13 REQUIRED COMPONENTS common io search kdtree surface filters features)
-=======
 
 # OpenSubdiv (smooth/: Loop subdivision). Debian's OpenSubdivConfig.cmake is broken, so the
 # CPU library and the headers are found directly and wrapped in an imported target.
@@ -29,5 +23,10 @@ if(NOT TARGET particlemesh_opensubdiv)
   set_target_properties(particlemesh_opensubdiv PROPERTIES
     IMPORTED_LOCATION "${PM_OPENSUBDIV_CPU_LIBRARY}"
     INTERFACE_INCLUDE_DIRECTORIES "${PM_OPENSUBDIV_INCLUDE_DIR}")
->>>>>>> main
+endif()
+
+if(PM_WITH_PCL)
+  # Debian's PCL config pulls in VTK, whose targets need MPI::MPI_C (C is enabled in project()).
+  find_package(MPI COMPONENTS C)
+  find_package(PCL 1.13 REQUIRED COMPONENTS common io search kdtree surface filters features)
 endif()
