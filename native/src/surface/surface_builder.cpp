@@ -667,7 +667,9 @@ class Builder {
         return n2 > 1e-20 * lmax * lmid;
       };
       for (const auto& [d, e] : edges) {
-        const auto [a, b] = e;
+        // Plain variables, not a structured binding: the lambdas below capture them, which
+        // clang before 16 (the sanitizer build's clang 14) does not allow.
+        const uint32_t a = e.first, b = e.second;
         std::vector<uint32_t> on_edge;
         for_each_tri(a, [&](uint32_t t) {
           const Triangle& T = tris_[t];
