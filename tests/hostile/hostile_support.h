@@ -105,8 +105,9 @@ inline ProgressTrace trace_progress(const std::function<void(const ProgressCallb
 }
 
 /// Cancel `call` from another thread `delay` seconds after it starts, as a host does (a flag
-/// the progress callback returns). Returns the seconds from the request to the call's return
-/// (negative if the call finished before the request), and its status into *status.
+/// the progress callback returns). Returns the seconds from the request to the call's return,
+/// negative if the call finished before the request or without calling the callback after
+/// it (the request came too late to be seen), and its status into *status.
 inline double cancel_after(double delay, const std::function<void(const ProgressCallback&)>& call, Status* status,
                            std::string* stage_at_cancel = nullptr) {
   std::atomic<bool> requested{false};
@@ -117,15 +118,18 @@ inline double cancel_after(double delay, const std::function<void(const Progress
     requested_at = Clock::now().time_since_epoch().count();
     requested = true;
   });
+  bool seen = false;
   *status = status_of([&] {
     call([&](std::string_view stage, double) {
       stage_seen = std::string(stage);
-      return !requested.load();
+      seen = requested.load();
+      return !seen;
     });
   });
   const auto returned = Clock::now();
   timer.join();
   if (stage_at_cancel) *stage_at_cancel = stage_seen;
+  if (!seen && *status == Status::Ok) return -1;
   return seconds(returned - Clock::time_point(Clock::duration(requested_at.load())));
 }
 

@@ -769,14 +769,22 @@ class Builder {
     tracker_.stage("repairing", 0.85, 0.97);
     start_repair();
     // Small loops first (wrong diagonals, sampling gaps), then pinches, then larger loops.
+    // A check between the steps: each is a pass over the whole mesh (up to a second at 1M
+    // points), and a host's cancel request is only seen in a check (issue 9).
     fill_loops(o_.small_hole);
     tracker_.check();
     stats_.pinches_resolved += unpinch();
+    tracker_.check();
     fill_loops(o_.small_hole);
+    tracker_.check();
     if (o_.max_hole > o_.small_hole) fill_loops(o_.max_hole);
+    tracker_.check();
     stats_.pinches_resolved += unpinch();
+    tracker_.check();
     drop_fragments(raw);
+    tracker_.check();
     if (insert_unused(raw) > 0) {
+      tracker_.check();
       fill_loops(o_.small_hole);
       stats_.pinches_resolved += unpinch();
     }
