@@ -172,6 +172,24 @@ void capi_seeds() {
                              0, 1, 2, 1, 3, 2, 1, 2, 4, 0, 0});
     put("capi_mesh", "fin_nonmanifold", fin);
   }
+  // fuzz_capi_polygonize: mode, n - 1, positions (mode-0 numbers, x 0.25), [radii], options.
+  {
+    for (int mode : {0, 1, 2}) {
+      std::string s = bytes({mode, 26});
+      for (int i = 0; i < 27; ++i)  // a 3 x 3 x 3 lattice, spacing 0.5
+        s += bytes({0, 2 * (i % 3), 0, 2 * ((i / 3) % 3), 0, 2 * (i / 9)});
+      if (mode & 1)
+        for (int i = 0; i < 27; ++i) s += bytes({1, 32 + i});  // radii 1.0 .. 1.4
+      if (mode & 2)
+        for (int i = 0; i < 27; ++i) s += bytes({1});  // strengths 1
+      s += bytes({0, 0});
+      put("capi_polygonize", "lattice_" + std::to_string(mode), s);
+    }
+    std::string cancel = bytes({0, 7});
+    for (int i = 0; i < 8; ++i) cancel += bytes({0, 4 * (i & 1), 0, 2 * ((i >> 1) & 1), 0, 4 * (i >> 2)});
+    cancel += bytes({8 | 32, 0, 0, 0, 1, 8, 2});  // cell size fuzzed (0 -> default), budget, cancel at 2
+    put("capi_polygonize", "box_budget_cancel", cancel);
+  }
 }
 
 void shared_seeds(const fs::path& shared) {

@@ -21,40 +21,6 @@
 using namespace particlemesh;
 using namespace particlemesh::test;
 
-namespace {
-
-// Seconds from the request to the return. Between two checks our own code does at most a few
-// milliseconds of work (an idle machine returns in < 0.1 s); the rest of the bound is room
-// for a loaded 2-core CI machine, 3x more under ASan.
-constexpr double kLatency = kSanitized ? 6.0 : 2.0;
-// One refinement level inside OpenSubdiv (topology) or OpenMesh (butterfly) is a single
-// third-party call that cannot be interrupted: the bound there is that level's duration
-// (about 1 s for the 80k-triangle level 2 below on an idle machine).
-constexpr double kThirdPartyLatency = kSanitized ? 12.0 : 4.0;
-
-void expect_prompt_cancellation(const char* what, const std::function<void(const ProgressCallback&)>& call,
-                                double bound = kLatency) {
-  const ProgressTrace full = trace_progress(call);
-  std::printf("%s: %.2f s, %zu stages, longest gap between callbacks %.3f s (%s)\n", what, full.seconds,
-              full.stages.size(), full.longest_gap, full.gap_stage.c_str());
-  // The callback is the only way a host can ask to stop: between two calls it cannot.
-  EXPECT_LT(full.longest_gap, bound) << what << ": no callback for " << full.longest_gap << " s in "
-                                     << full.gap_stage;
-  for (double at : {0.15, 0.5, 0.85}) {
-    Status status = Status::Ok;
-    std::string stage;
-    const double latency = cancel_after(at * full.seconds, call, &status, &stage);
-    if (latency < 0) continue;  // finished first (a faster rerun): nothing to cancel
-    std::printf("  cancelled at %2.0f %% (%s): returned after %.3f s\n", at * 100, stage.c_str(), latency);
-    EXPECT_EQ(status, Status::Cancelled) << what << " at " << at;
-    EXPECT_LT(latency, bound) << what << " cancelled at " << at * 100 << " % in stage " << stage;
-  }
-}
-
-size_t million() { return kSanitized ? 200000 : 1000000; }  // ASan: 3x slower, same code paths
-
-}  // namespace
-
 TEST(Cancellation, TriangulateRawMillionPoints) {
   const PointCloud c = fibonacci_sphere(million());
   expect_prompt_cancellation("triangulate_raw", [&](const ProgressCallback& p) {
