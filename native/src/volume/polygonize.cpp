@@ -146,6 +146,17 @@ inline uint32_t rank_of(const MeshBlock& mb, int bit) {
   return mb.prefix[w] + uint32_t(std::popcount(mb.mask[w] & ((uint64_t(1) << b) - 1)));
 }
 
+// floor / ceil for |v| < 2^31 without a library call (baseline x86-64 has no rounding
+// instruction, and these run several times per particle and block).
+inline int ifloor(double v) {
+  const int i = int(v);
+  return i - (double(i) > v);
+}
+inline int iceil(double v) {
+  const int i = int(v);
+  return i + (double(i) < v);
+}
+
 // Sum every particle's contribution into the samples of one block, in grid order.
 template <Kernel K>
 void sample_block(const ParticleField& field, const Grid& g, uint64_t key, float* out, double* acc) {
@@ -169,6 +180,11 @@ void sample_block(const ParticleField& field, const Grid& g, uint64_t key, float
   }
   std::fill(acc, acc + kBN, 0.0);
   const NeighborGrid::CellCoord clo = grid.coord_of(lo), chi = grid.coord_of(hi);
+  const double ox = g.origin.x + double(n0[0]) * h, oy = g.origin.y + double(n0[1]) * h,
+               oz = g.origin.z + double(n0[2]) * h;
+  // Uniform radius: the support in node units is the same for every particle.
+  double c2 = h * h * inv_r2_common;           // (node units)^2 -> s
+  double rn = std::sqrt(1.0 / c2);             // radius in node units
   double dx2[kB];
   for (int32_t cx = clo[0]; cx <= chi[0]; ++cx)
     for (int32_t cy = clo[1]; cy <= chi[1]; ++cy)
@@ -176,43 +192,39 @@ void sample_block(const ParticleField& field, const Grid& g, uint64_t key, float
         const uint32_t c = grid.find_cell({cx, cy, cz});
         if (c == NeighborGrid::kNoCell) continue;
         for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) {
-          const double inv_r2 = uniform ? inv_r2_common : inv_r2s[s];
           const double w = ws.empty() ? 1.0 : ws[s];
           if (w == 0.0) continue;
-          // Particle position in node units, relative to the block's first node.
-          const double u[3] = {(P[s].x - g.origin.x) * inv_h - double(n0[0]),
-                               (P[s].y - g.origin.y) * inv_h - double(n0[1]),
-                               (P[s].z - g.origin.z) * inv_h - double(n0[2])};
-          const double c2 = h * h * inv_r2;  // (node units)^2 -> s
-          const double rn = std::sqrt(1.0 / c2);  // radius in node units
-          int i0[3], i1[3];
-          bool empty = false;
-          for (int a = 0; a < 3 && !empty; ++a) {
-            const double l = std::ceil(u[a] - rn), r = std::floor(u[a] + rn);
-            if (l > double(kB - 1) || r < 0.0 || l > r) {
-              empty = true;
-              break;
-            }
-            i0[a] = int(std::max(l, 0.0));
-            i1[a] = int(std::min(r, double(kB - 1)));
+          if (!uniform) {
+            c2 = h * h * inv_r2s[s];
+            rn = std::sqrt(1.0 / c2);
           }
-          if (empty) continue;
-          for (int x = i0[0]; x <= i1[0]; ++x) {
-            const double d = (double(x) - u[0]);
+          // Particle position in node units, relative to the block's first node.
+          const double ux = (P[s].x - ox) * inv_h, uy = (P[s].y - oy) * inv_h, uz = (P[s].z - oz) * inv_h;
+          // (The cells scanned are within a few radii of the block, so these are small.)
+          const int x0 = std::max(iceil(ux - rn), 0), x1 = std::min(ifloor(ux + rn), kB - 1);
+          const int y0 = std::max(iceil(uy - rn), 0), y1 = std::min(ifloor(uy + rn), kB - 1);
+          const int z0 = std::max(iceil(uz - rn), 0), z1 = std::min(ifloor(uz + rn), kB - 1);
+          if (x0 > x1 || y0 > y1 || z0 > z1) continue;
+          for (int x = x0; x <= x1; ++x) {
+            const double d = double(x) - ux;
             dx2[x] = d * d * c2;
           }
-          for (int z = i0[2]; z <= i1[2]; ++z) {
-            const double dz = double(z) - u[2];
+          for (int z = z0; z <= z1; ++z) {
+            const double dz = double(z) - uz;
             const double sz = dz * dz * c2;
             if (!(sz < 1.0)) continue;
-            for (int y = i0[1]; y <= i1[1]; ++y) {
-              const double dy = double(y) - u[1];
+            for (int y = y0; y <= y1; ++y) {
+              const double dy = double(y) - uy;
               const double syz = sz + dy * dy * c2;
               if (!(syz < 1.0)) continue;
+              // The row's nodes inside the support: |x - ux| < sqrt((1 - syz) / c2).
+              const double half = std::sqrt((1.0 - syz) / c2);
+              const int a = std::max(x0, iceil(ux - half));
+              const int b = std::min(x1, ifloor(ux + half));
               double* row = acc + kB * (y + kB * z);
-              for (int x = i0[0]; x <= i1[0]; ++x) {
-                const double q = dx2[x] + syz;
-                if (q < 1.0) row[x] += w * detail::kernel_value_t<K>(q);
+              for (int x = a; x <= b; ++x) {
+                // max(): a node on the rounded edge of the row gets g(1) = 0.
+                row[x] += w * detail::kernel_value_t<K>(std::min(dx2[x] + syz, 1.0));
               }
             }
           }
@@ -289,7 +301,10 @@ Crossing refine_crossing(const ParticleField& field, const Vec3& a, int axis, do
     if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
     const double step = std::abs(next - t);
     t = next;
-    if (step < 1e-7) break;
+    // Newton converges quadratically: after a step this small the root is within ~1e-8 of
+    // an edge, so the last step is taken without another evaluation (the normal comes from
+    // the gradient 1e-4 h away, which is as good).
+    if (step < 1e-4) break;
   }
   t = std::clamp(t, kEdgeClamp, 1.0 - kEdgeClamp);
   out.position = at(t);
