@@ -62,6 +62,8 @@ int run_polygonize(const PolygonizeArgs& a) {
   opt.max_grid_bytes = uint64_t(a.max_grid_mib * double(1 << 20));
   opt.progress = progress.callback();
   const auto t1 = Clock::now();
+  set_phase(Phase::Computing);
+  if (interrupted()) throw Error(Status::Cancelled, "interrupted");
   PolygonizeResult result = polygonize(cloud, opt);
   const double t_poly = std::chrono::duration<double>(Clock::now() - t1).count();
   progress.clear();
@@ -70,7 +72,12 @@ int run_polygonize(const PolygonizeArgs& a) {
   WriteMeshOptions wo;
   if (a.ascii) wo.format = MeshFormat::PlyAscii;
   const auto t2 = Clock::now();
+  set_phase(Phase::Writing);
   write_mesh(result.mesh, a.output, wo);
+  if (interrupted()) {  // Ctrl-C while writing: the run is cancelled, so no output either
+    std::remove(a.output.c_str());
+    throw Error(Status::Cancelled, "interrupted");
+  }
   const double t_write = std::chrono::duration<double>(Clock::now() - t2).count();
 
   const TopologyReport report = topology_report(result.mesh);
