@@ -797,7 +797,8 @@ PolygonizeResult polygonize(const PointCloud& cloud, const PolygonizeOptions& op
     params.radii = options.radii;
     params.strengths = options.strengths;
     tracker.stage("estimating spacing", 0.0, 0.1);
-    const ParticleField field = detail::FieldBuilder::build(cloud.positions, params, tracker, 0.0, 0.1);
+    const ParticleField field =
+        detail::FieldBuilder::build(cloud.positions.data(), cloud.positions.size(), params, tracker, 0.0, 0.1);
     return polygonize_field(field, options, tracker, 0.1, PolygonizeStats{}, t0);
   });
   tracker.finish();

@@ -59,8 +59,9 @@ struct PolygonizeOptions {
   /// spacing (estimate_spacing). Ignored when `radii` is given.
   double radius = 0;
   /// T > 0. 0 = kDefaultThresholdFraction (0.5) x the field deep inside an evenly packed
-  /// volume (lattice_field), which puts the surface of a packed block about half a spacing
-  /// outside its outermost particles. See field.h.
+  /// volume at the default radius (lattice_field(kernel, 2, 1): 3.33 for Wyvill), which puts
+  /// the surface of a packed block about half a spacing outside its outermost particles when
+  /// the radius is the default. See field.h.
   double threshold = 0;
   /// Grid cell size h, world units. 0 = kDefaultCellFraction (1/4) x R (R: the radius, or
   /// the median of `radii`).
@@ -84,7 +85,7 @@ struct PolygonizeStats {
   double max_radius = 0;     ///< largest R_i
   double threshold = 0;      ///< T used
   double cell_size = 0;      ///< h used
-  double spacing = 0;        ///< median particle spacing, when a default needed it (else 0)
+  double spacing = 0;        ///< median particle spacing, when the default radius needed it (else 0)
   bool radius_defaulted = false;
   bool threshold_defaulted = false;
   bool cell_size_defaulted = false;
