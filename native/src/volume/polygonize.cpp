@@ -175,17 +175,19 @@ inline float kernel_clamped(float s) {
 typedef float Float4 __attribute__((vector_size(4 * sizeof(float))));
 typedef int32_t Int4 __attribute__((vector_size(4 * sizeof(int32_t))));
 
+// `a` and `b` carry the strength: w g = t^2 (a + b t) with a = 5w/9, b = 4w/9 for Wyvill,
+// a = w, b = 0 for Poly4, a = 0, b = w for Poly6.
 template <Kernel K>
-inline void add_row(float* row, const float* dx2, float syz, float w) {
+inline void add_row(float* row, const float* dx2, float syz, float a, float b) {
   for (int half = 0; half < 2; ++half) {
     Float4 d, r;
     std::memcpy(&d, dx2 + 4 * half, sizeof d);
     std::memcpy(&r, row + 4 * half, sizeof r);
     Float4 t = 1.0f - (d + syz);
     t = (Float4)((Int4)t & (t > 0.0f));  // max(t, 0): outside the support exactly 0
-    if constexpr (K == Kernel::Wyvill) r += w * (t * t * (5.0f + 4.0f * t) * (1.0f / 9.0f));
-    else if constexpr (K == Kernel::Poly4) r += w * (t * t);
-    else r += w * (t * t * t);
+    if constexpr (K == Kernel::Wyvill) r += t * t * (a + b * t);
+    else if constexpr (K == Kernel::Poly4) r += a * (t * t);
+    else r += b * (t * t * t);
     std::memcpy(row + 4 * half, &r, sizeof r);
   }
 }
@@ -227,6 +229,8 @@ void sample_block(const ParticleField& field, const Grid& g, uint64_t key, float
         for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) {
           const float w = ws.empty() ? 1.0f : float(ws[s]);
           if (w == 0.0f) continue;
+          const float wa = K == Kernel::Wyvill ? w * (5.0f / 9.0f) : (K == Kernel::Poly4 ? w : 0.0f);
+          const float wb = K == Kernel::Wyvill ? w * (4.0f / 9.0f) : (K == Kernel::Poly6 ? w : 0.0f);
           if (!uniform) {
             c2 = h * h * inv_r2s[s];
             rn = std::sqrt(1.0 / c2);
@@ -234,6 +238,9 @@ void sample_block(const ParticleField& field, const Grid& g, uint64_t key, float
           // Particle position in node units, relative to the block's first node. (The cells
           // scanned are within a few radii of the block, so these are small numbers.)
           const double ux = (P[s].x - ox) * inv_h, uy = (P[s].y - oy) * inv_h, uz = (P[s].z - oz) * inv_h;
+          if (ux + rn < 0 || ux - rn > kB - 1 || uy + rn < 0 || uy - rn > kB - 1 || uz + rn < 0 ||
+              uz - rn > kB - 1)
+            continue;  // the support misses the block's nodes (most scanned particles)
           const int x0 = std::max(iceil(ux - rn), 0), x1 = std::min(ifloor(ux + rn), kB - 1);
           const int y0 = std::max(iceil(uy - rn), 0), y1 = std::min(ifloor(uy + rn), kB - 1);
           const int z0 = std::max(iceil(uz - rn), 0), z1 = std::min(ifloor(uz + rn), kB - 1);
@@ -257,7 +264,7 @@ void sample_block(const ParticleField& field, const Grid& g, uint64_t key, float
               if constexpr (K == Kernel::Blinn) {
                 for (int x = 0; x < kB; ++x) row[x] += w * kernel_clamped<K>(dx2[x] + syz);
               } else {
-                add_row<K>(row, dx2, syz, w);
+                add_row<K>(row, dx2, syz, wa, wb);
               }
             }
           }
