@@ -109,6 +109,8 @@ struct MeshBlock {
   uint32_t vertex_offset = 0; // first vertex of the block: its edge crossings, then its
   uint32_t edge_vertices = 0; // cells' inside vertices (see McTable::center_count)
   uint32_t center_vertices = 0;
+  uint64_t triangle_offset = 0;  // first triangle of the block's cells
+  uint32_t triangle_count = 0;
   bool mixed = false;         // some inside and some outside node among its 9^3
   uint64_t mask[kMaskWords];  // edges with a crossing: bit 3 * (x + 8 (y + 8 z)) + axis
   uint16_t prefix[kMaskWords];// crossings before each mask word
@@ -635,7 +637,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
           count += uint32_t(std::popcount(mb.mask[w]));
         }
         mb.edge_vertices = count;
-        uint32_t centers = 0;
+        uint32_t centers = 0, triangles = 0;
         if (mb.mixed) {
           float cv[8];
           unsigned d;
@@ -643,19 +645,24 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
             for (int y = 0; y < kB; ++y)
               for (int x = 0; x < kB; ++x) {
                 const int cs = cell_case(local.get(), x, y, z, T, table, cv, &d);
-                if (cs != 0 && cs != 255) centers += uint32_t(table.center_count(cs, d));
+                if (cs == 0 || cs == 255) continue;
+                centers += uint32_t(table.center_count(cs, d));
+                triangles += uint32_t(table.triangle_count(cs, d));
               }
         }
         mb.center_vertices = centers;
+        mb.triangle_count = triangles;
       }
       tracker.tick(be - bb);
     });
     tracker.check();
   }
-  uint64_t total_vertices = 0;
+  uint64_t total_vertices = 0, total_triangles = 0;
   for (MeshBlock& mb : g.mesh) {
     mb.vertex_offset = uint32_t(total_vertices);
+    mb.triangle_offset = total_triangles;
     total_vertices += uint64_t(mb.edge_vertices) + mb.center_vertices;
+    total_triangles += mb.triangle_count;
     if (mb.mixed) ++st.surface_blocks;
     if (total_vertices >= uint64_t(kNone))
       throw Error(Status::LimitExceeded, "the mesh would have more than 4294967294 vertices (use a larger cell size)");
@@ -667,7 +674,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   TriMesh& mesh = result.mesh;
   mesh.positions.resize(total_vertices);
   mesh.normals.resize(total_vertices);
-  std::vector<std::vector<Triangle>> block_tris(nm);
+  mesh.triangles.resize(total_triangles);
   std::vector<uint64_t> block_evals(nm, 0);
   std::atomic<bool> broken{false};
   detail::parallel_blocks(nm, 4, [&](size_t bb, size_t be) {
@@ -702,7 +709,8 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
         }
       }
       // Triangles of the block's own cells (and the cells' inside vertices, in cell order).
-      auto& tris = block_tris[i];
+      Triangle* tris = mesh.triangles.data() + mb.triangle_offset;
+      Triangle* const tris_end = tris + mb.triangle_count;
       uint32_t next_center = mb.vertex_offset + mb.edge_vertices;
       for (int z = 0; z < kB; ++z)
         for (int y = 0; y < kB; ++y)
@@ -751,28 +759,23 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
                 if (!((ob.mask[bit >> 6] >> (bit & 63)) & 1)) broken = true;
                 t[k] = ob.vertex_offset + rank_of(ob, bit);
               }
-              tris.push_back(t);
+              if (tris == tris_end) {
+                broken = true;  // cannot happen: both passes classify the cells alike
+                continue;
+              }
+              *tris++ = t;
             }
           }
       block_evals[i] = evals;
+      if (tris != tris_end) broken = true;
     }
     tracker.tick(be - bb);
   });
   tracker.check();
-  if (broken) throw Error(Status::Internal, "polygonize: a cell refers to an edge without a crossing");
+  if (broken)
+    throw Error(Status::Internal, "polygonize: inconsistent cells (an edge without a crossing, or a changed triangle count)");
 
-  size_t total_tris = 0;
-  std::vector<size_t> tri_offset(nm + 1, 0);
-  for (size_t i = 0; i < nm; ++i) {
-    tri_offset[i + 1] = tri_offset[i] + block_tris[i].size();
-    st.field_evaluations += block_evals[i];
-  }
-  total_tris = tri_offset[nm];
-  mesh.triangles.resize(total_tris);
-  detail::parallel_blocks(nm, 64, [&](size_t bb, size_t be) {
-    for (size_t i = bb; i < be; ++i)
-      std::copy(block_tris[i].begin(), block_tris[i].end(), mesh.triangles.begin() + std::ptrdiff_t(tri_offset[i]));
-  });
+  for (size_t i = 0; i < nm; ++i) st.field_evaluations += block_evals[i];
   st.vertices = mesh.positions.size();
   st.triangles = mesh.triangles.size();
   st.seconds_meshing = seconds_since(t0);
