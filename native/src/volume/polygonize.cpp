@@ -5,6 +5,7 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -16,7 +17,6 @@
 #include "core/parallel.h"
 #include "core/progress_tracker.h"
 #include "particlemesh/core/error.h"
-#include "spatial/cell_hash.h"
 #include "volume/field_impl.h"
 #include "volume/mc_table.h"
 

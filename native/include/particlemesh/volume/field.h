@@ -10,7 +10,8 @@
 // ParticleField holds the particles with every parameter resolved (defaults filled in) and a
 // uniform grid of cell max_i R_i over them, so that one evaluation of F or its gradient
 // touches only the particles in the few cells around x (about 30 particles at the default
-// radius on evenly spaced input), independent of N.
+// radius on evenly spaced input), independent of N. Radii that differ by a large factor make
+// the cells, and so every evaluation, correspondingly larger.
 #pragma once
 
 #include <cstddef>
