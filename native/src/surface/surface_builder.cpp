@@ -20,8 +20,8 @@ namespace particlemesh::detail {
 
 namespace {
 
-constexpr double kTwoPi = 2.0 * std::numbers::pi;
-constexpr float kArcEps = 2e-5f;  // radians; arcs are stored as floats
+constexpr double kTwoPi = 4.0;     // the period of angle_of's pseudo-angles
+constexpr float kArcEps = 1e-5f;  // in pseudo-angle units (about 1.5e-5 rad); arcs are floats
 
 struct Frame {
   Vec3 u, w;
@@ -33,7 +33,16 @@ Frame tangent_frame(const Vec3& n) {
   return {u, cross(n, u)};
 }
 
-double angle_of(const Frame& f, const Vec3& d) { return std::atan2(dot(d, f.w), dot(d, f.u)); }
+/// The direction of d around the normal as a pseudo-angle in [0, 4): monotonic in the true
+/// angle (counter-clockwise from u) but with no trigonometry; the wedge tests only compare
+/// and order angles, so any order-preserving measure with a fixed period serves.
+double angle_of(const Frame& f, const Vec3& d) {
+  const double x = dot(d, f.u), y = dot(d, f.w);
+  const double s = std::abs(x) + std::abs(y);
+  if (!(s > 0)) return 0;
+  const double r = y / s;
+  return x >= 0 ? (r >= 0 ? r : 4 + r) : 2 - r;
+}
 
 /// A counter-clockwise arc (about the vertex normal) of a triangle's corner.
 struct Arc {
@@ -52,6 +61,16 @@ bool arcs_overlap(const Arc& a, const Arc& b) {
   if (d < 0) d += float(kTwoPi);
   if (d >= float(kTwoPi)) d -= float(kTwoPi);
   return d < a.length - kArcEps || d + b.length > float(kTwoPi) + kArcEps;
+}
+
+/// The cosine of a triangle's largest angle (the smallest of its corners' cosines): the same
+/// order as the largest angle, without the arc-cosines.
+double min_corner_cosine(const Vec3& a, const Vec3& b, const Vec3& c) {
+  auto cosine = [](const Vec3& p, const Vec3& q, const Vec3& r) {
+    const Vec3 u = q - p, v = r - p;
+    return dot(u, v) / std::sqrt(squared_norm(u) * squared_norm(v));
+  };
+  return std::min({cosine(a, b, c), cosine(b, c, a), cosine(c, a, b)});
 }
 
 double max_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
@@ -103,7 +122,7 @@ class Builder {
         if (dot(na, nb) < cosa || dot(nb, nc) < cosa || dot(na, nc) < cosa) continue;
         if (dot(fu, na) < cosa || dot(fu, nb) < cosa || dot(fu, nc) < cosa) continue;
         o[i].t = t;
-        o[i].quality = float(max_angle(P_[t[0]], P_[t[1]], P_[t[2]]));
+        o[i].quality = float(-min_corner_cosine(P_[t[0]], P_[t[1]], P_[t[2]]));  // ~ the largest angle
         o[i].ok = true;
       }
     });
