@@ -17,6 +17,8 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BUILD="${PM_ASAN_BUILD_DIR:-$ROOT/build-asan}"
 JOBS="${PM_JOBS:-$(nproc)}"
 
+# The C ABI's plain-C tests link with clang (C): -fsanitize-link-c++-runtime and libstdc++
+# give them the C++ parts of the UBSan runtime that the C++ library needs.
 # -O1: fast enough to run the suites (1M-point cancellation runs use 200k under ASan), quicker
 # to compile than -O2. fuzzer-no-link: coverage for libFuzzer in the library the fuzz
 # targets link (the targets themselves add -fsanitize=fuzzer).
@@ -27,7 +29,8 @@ cmake -S "$ROOT" -B "$BUILD" -G Ninja \
   -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g" -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" \
   -DCMAKE_C_FLAGS="$SAN" \
   -DCMAKE_CXX_FLAGS="$SAN -fsanitize=fuzzer-no-link -Wno-unknown-warning-option" \
-  -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
+  -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined -fsanitize-link-c++-runtime" \
+  -DCMAKE_C_STANDARD_LIBRARIES="-lstdc++" \
   -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
   -DPM_BUILD_CLI=OFF -DPM_BUILD_BENCH=OFF -DPM_PACKAGE_TESTS=OFF -DPM_BUILD_FUZZERS=ON \
   -DPM_WITH_PCL="${PM_WITH_PCL:-ON}" \
