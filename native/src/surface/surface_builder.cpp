@@ -341,17 +341,22 @@ class Builder {
       for (uint32_t t = 0; t < tris_.size(); ++t)
         for (uint32_t v : tris_[t]) vt_[fill[v]++] = t;
     }
+    tracker_.check();
     // Boundary half-edges, found in parallel and joined in block order.
     const size_t block = 8192, blocks = (tris_.size() + block - 1) / block;
     std::vector<std::vector<uint64_t>> found(blocks);
     detail::parallel_blocks(blocks, 1, [&](size_t bb, size_t be) {
-      for (size_t b = bb; b < be; ++b)
+      for (size_t b = bb; b < be; ++b) {
+        if (tracker_.cancelled()) return;
+        tracker_.tick(0);  // on the calling thread: lets a cancel request in (about 0.5 s at 1M)
         for (size_t t = b * block; t < std::min(tris_.size(), (b + 1) * block); ++t)
           for (int k = 0; k < 3; ++k) {
             const uint32_t a = tris_[t][k], c = tris_[t][(k + 1) % 3];
             if (!directed_used(c, a)) found[b].push_back(half_key(a, c));
           }
+      }
     });
+    tracker_.check();
     for (const auto& f : found) boundary_.insert(f.begin(), f.end());
   }
 
