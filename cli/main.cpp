@@ -3,6 +3,7 @@
 //   particlemesh inspect MESH [--json]          topology report of a mesh
 //   particlemesh sample SHAPE -o OUT.xyz        evenly sampled demo/test particles
 //   particlemesh polygonize IN -o OUT.ply       volume particles -> implicit surface mesh
+//   particlemesh render IN -o IMAGE.png         volume particles -> ray-cast image of the surface
 #include <cstdio>
 #include <exception>
 
@@ -23,6 +24,7 @@ int main(int argc, char** argv) {
   cli::add_inspect(app, commands);
   cli::add_sample(app, commands);
   cli::add_polygonize(app, commands);
+  cli::add_render(app, commands);
 
   try {
     app.parse(argc, argv);
