@@ -99,8 +99,9 @@ PovResult run_povray(const ParticleField& f, const Camera& cam, int w, int h, in
     o << "background { color rgb <0.93, 0.94, 0.96> }\n";
     o << "blob { threshold " << std::setprecision(17) << f.threshold() << "\n";
     char buf[160];
-    for (size_t i = 0; i < f.size(); ++i) {
-      const Vec3& p = f.positions()[i];
+    for (uint32_t k = 0; k < uint32_t(f.size()); ++k) {
+      const size_t i = f.grid().original_index(k);
+      const Vec3& p = f.grid().sorted_point(k);
       std::snprintf(buf, sizeof buf, "sphere { <%.9g, %.9g, %.9g>, %.9g, %.9g }\n", p.x, p.y, p.z, f.radius(i),
                     f.strength(i));
       o << buf;

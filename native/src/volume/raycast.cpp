@@ -220,7 +220,9 @@ void RayCaster::Impl::build() {
     r_min = std::min(r_min, field.radius(i));
   }
   eps_f = kTangentTolerance * (threshold + wmax);
-  const auto& P = field.positions();
+  // Centres by input index, read through the field's grid (which holds them in grid order).
+  std::vector<Vec3> P(n);
+  for (uint32_t k = 0; k < uint32_t(n); ++k) P[field.grid().original_index(k)] = field.grid().sorted_point(k);
   nodes.clear();
   if (idx.empty()) return;
   // Median split on the longest axis of the centres' box; children stored side by side.

@@ -65,10 +65,11 @@ Camera default_camera(const ParticleField& field, double aspect, const Vec3& up,
   // The particles' box grown by 0.6 R: packed particles' surface lies about R / 4 outside the
   // outermost ones, a lone blob's within 0.6 R for thresholds above ~0.2 x its strength.
   // (The supports' box, R all round, would leave most of the image empty.)
-  Vec3 lo = field.positions()[0], hi = lo;
-  for (size_t i = 0; i < field.size(); ++i) {
-    const Vec3& p = field.positions()[i];
-    const double pad = 0.6 * field.radius(i);
+  const NeighborGrid& grid = field.grid();
+  Vec3 lo = grid.sorted_point(0), hi = lo;
+  for (uint32_t k = 0; k < uint32_t(field.size()); ++k) {
+    const Vec3& p = grid.sorted_point(k);
+    const double pad = 0.6 * field.radius(grid.original_index(k));
     lo = {std::min(lo.x, p.x - pad), std::min(lo.y, p.y - pad), std::min(lo.z, p.z - pad)};
     hi = {std::max(hi.x, p.x + pad), std::max(hi.y, p.y + pad), std::max(hi.z, p.z + pad)};
   }

@@ -111,7 +111,9 @@ TEST_P(CsgIdentities, HoldOnSampledRays) {
     const auto first = csg_first_hit(A, B, CsgOp::Union, o, d);
     const RayHits un = csg_hits(ha, hb, CsgOp::Union);
     ASSERT_EQ(first.has_value(), !un.hits.empty());
-    if (first) EXPECT_EQ(first->t, un.hits[0].t);
+    if (first) {
+      EXPECT_EQ(first->t, un.hits[0].t);
+    }
   }
   EXPECT_GT(nonempty, 20);
 }

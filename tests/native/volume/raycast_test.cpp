@@ -158,7 +158,9 @@ TEST(RayRoots, DoubleRootsAreNoCrossing) {
     for (const auto* x : {&a, &b}) {
       const auto u = resolved(*x, 1e-14);
       ASSERT_EQ(int(u.size()), want);
-      if (want == 1) EXPECT_NEAR(u[0], 0.7, 1e-13);
+      if (want == 1) {
+        EXPECT_NEAR(u[0], 0.7, 1e-13);
+      }
       EXPECT_EQ(x->start_inside != x->end_inside, want == 1);
     }
   }
@@ -246,9 +248,14 @@ TEST_P(OneParticleRay, TangentRaysGiveNoSpuriousDoubleRoots) {
       const Vec3 o = centre + side * b - d * 3.0;
       const RayHits h = caster.all_hits(o, d);
       ASSERT_TRUE(h.hits.size() == 0 || h.hits.size() == 2) << "rel " << rel;
-      if (rel >= 0) EXPECT_TRUE(h.hits.empty()) << kernel_name(k) << " rel " << rel;
-      if (rel <= -1e-9 && k != Kernel::Blinn) EXPECT_EQ(h.hits.size(), 2u) << kernel_name(k) << " rel " << rel;
-      if (rel <= -1e-4 || (rel <= -1e-6 && k != Kernel::Blinn)) EXPECT_EQ(h.hits.size(), 2u) << kernel_name(k) << " rel " << rel;
+      // Touching or missing: nothing. Crossing by 1e-9 of the radius: both hits, except for
+      // Blinn, whose march resolves slivers down to kBlinnMinStep R only.
+      if (rel >= 0) {
+        EXPECT_TRUE(h.hits.empty()) << kernel_name(k) << " rel " << rel;
+      }
+      if (rel <= -1e-4 || (rel <= -1e-9 && k != Kernel::Blinn)) {
+        EXPECT_EQ(h.hits.size(), 2u) << kernel_name(k) << " rel " << rel;
+      }
       if (h.hits.size() == 2) {
         EXPECT_TRUE(h.hits[0].entering);
         EXPECT_FALSE(h.hits[1].entering);
