@@ -14,7 +14,7 @@ volatile std::sig_atomic_t g_phase = 0;  // Phase::Reading
 extern "C" void on_sigint(int) {
   g_interrupted = 1;
   if (g_phase == int(Phase::Reading)) {
-    static const char msg[] = "particlemesh: interrupted\n";
+    static const char msg[] = "particlemesh: cancelled (interrupted)\n";
     (void)!write(STDERR_FILENO, msg, sizeof msg - 1);
     _exit(130);  // async-signal-safe; nothing has been written yet
   }

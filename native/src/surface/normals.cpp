@@ -39,9 +39,21 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
     sorted_of.resize(n);
     for (uint32_t s = 0; s < n; ++s) sorted_of[grid.original_index(s)] = s;
   }
+  // Each raw triangle's plane, once.
+  std::vector<Vec3> tri_normal;
+  if (triangles != nullptr) {
+    tri_normal.resize(triangles->size());
+    parallel_blocks(triangles->size(), 8192, [&](size_t b, size_t e) {
+      for (size_t i = b; i < e; ++i) {
+        const Triangle& t = (*triangles)[i];
+        tri_normal[i] = normalized(cross(grid.sorted_point(sorted_of[t[1]]) - grid.sorted_point(sorted_of[t[0]]),
+                                         grid.sorted_point(sorted_of[t[2]]) - grid.sorted_point(sorted_of[t[0]])));
+      }
+    });
+  }
   parallel_blocks(n, 2048, [&](size_t b, size_t e) {
     if (tracker.cancelled()) return;
-    std::vector<Vec3> near;
+    std::vector<Vec3> near, tried;
     std::vector<uint8_t> inlier;
     for (size_t s = b; s < e; ++s) {
       if (rep[s] != s) continue;
@@ -61,15 +73,20 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
         double best = 0;
         size_t best_count = 0;
         Vec3 best_n;
+        tried.clear();
         for (uint32_t i = tri_off[o]; i < tri_off[o + 1]; ++i) {
-          const Triangle& t = (*triangles)[tri_ids[i]];
-          const Vec3 tn = normalized(cross(grid.sorted_point(sorted_of[t[1]]) - grid.sorted_point(sorted_of[t[0]]),
-                                           grid.sorted_point(sorted_of[t[2]]) - grid.sorted_point(sorted_of[t[0]])));
+          const Vec3 tn = tri_normal[tri_ids[i]];
+          // Planes within ~8 degrees of one already scored would score about the same.
+          bool seen = false;
+          for (const Vec3& x : tried) seen |= std::abs(dot(x, tn)) > 0.99;
+          if (seen) continue;
+          tried.push_back(tn);
           double score = 0;
           size_t count = 0;
           for (const Vec3& d : near)
             if (std::abs(dot(d, tn)) <= band) {
-              score += std::exp(-4.0 * squared_norm(d) / r2);
+              const double w = 1.0 - squared_norm(d) / r2;  // ~exp(-4 d^2 / r^2), 0 at the radius
+              score += (w * w) * (w * w);
               ++count;
             }
           if (score > best) {
