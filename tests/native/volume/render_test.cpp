@@ -146,6 +146,15 @@ TEST(Render, PngRoundTripAndErrors) {
   EXPECT_THROW(render(c, o), Error);
   o.camera = Camera{{0, 5, 0}, {0, 0, 0}, {0, 1, 0}, 40};  // up along the view
   EXPECT_THROW(render(c, o), Error);
+  // Cancelling from the progress callback.
+  o = small();
+  o.progress = [](std::string_view, double) { return false; };
+  try {
+    render(c, o);
+    ADD_FAILURE() << "not cancelled";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.status(), Status::Cancelled);
+  }
   EXPECT_EQ(shading_from_name("Normal"), Shading::Normal);
   EXPECT_THROW(shading_from_name("phong"), Error);
 }

@@ -9,7 +9,7 @@
 // Wyvill and Poly6; Tonnesen 1989, Wyvill and Trotman 1989), whose roots are the surface.
 //
 // - Acceleration: a bounding volume hierarchy over the particles' support spheres (binary,
-//   median split on the longest axis, at most 4 particles per leaf), walked front to back
+//   median split on the longest axis, at most 8 particles per leaf), walked front to back
 //   with a priority queue of nodes ordered by where the ray enters their boxes. Chosen over a
 //   uniform grid because radii may differ per particle (a grid sized for the largest one
 //   puts too many particles in each cell), particles come in clusters with wide empty gaps
