@@ -11,6 +11,9 @@
 // OpenVDB: voxel size s/2, narrow band 3 voxels, every particle a sphere of radius s (the
 // smallest radius at which the spheres of a lattice of spacing s fill its volume is
 // s sqrt(3)/2), iso-value 0, adaptivity 0.
+// --sph DIR: the three SPH frames of ../shared/data/particles (particle radius r = 0.025,
+// rest spacing 2r) with splashsurf's parameters mapped to ours (R = 4r, h = r/2,
+// T = 0.6 x lattice_field(4r, 2r)), and OpenVDB with spheres of radius 2r, voxel r/2.
 //
 // Each measurement runs in a child process forked from the parent that generated the
 // particles: time = wall clock of the call (best of R), memory = the child's peak resident
@@ -246,12 +249,13 @@ int main(int argc, char** argv) {
       row(shortname.c_str(), c.size(), "particlemesh (splashsurf params)", ours);
       if (vdb) {
         const Measure peer = best_of(reps, threads, [&](Measure& m) {
-          const peer::VdbResult res = peer::openvdb_particles_to_mesh(c.positions, r, 0.5 * r);
+          // Spheres of the rest spacing 2r (as for the block: radius = spacing), voxel r/2.
+          const peer::VdbResult res = peer::openvdb_particles_to_mesh(c.positions, 2 * r, 0.5 * r);
           m.seconds = res.seconds;
           m.vertices = res.vertices;
           m.triangles = res.triangles;
         });
-        row(shortname.c_str(), c.size(), "OpenVDB (sphere radius r, voxel r/2)", peer);
+        row(shortname.c_str(), c.size(), "OpenVDB (spheres 2r, voxel r/2)", peer);
       }
     }
   }

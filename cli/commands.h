@@ -17,8 +17,8 @@ struct Command {
 void add_triangulate(CLI::App& root, std::vector<Command>& commands);
 void add_inspect(CLI::App& root, std::vector<Command>& commands);
 void add_sample(CLI::App& root, std::vector<Command>& commands);
+void add_smooth(CLI::App& root, std::vector<Command>& commands);
 void add_polygonize(CLI::App& root, std::vector<Command>& commands);
 void add_render(CLI::App& root, std::vector<Command>& commands);
-void add_smooth(CLI::App& root, std::vector<Command>& commands);
 
 }  // namespace particlemesh::cli

@@ -2,9 +2,9 @@
 //   particlemesh triangulate IN -o OUT.ply      surface particles -> mesh
 //   particlemesh inspect MESH [--json]          topology report of a mesh
 //   particlemesh sample SHAPE -o OUT.xyz        evenly sampled demo/test particles
+//   particlemesh smooth MESH -o OUT.ply         Loop / butterfly subdivision
 //   particlemesh polygonize IN -o OUT.ply       volume particles -> implicit surface mesh
 //   particlemesh render IN -o IMAGE.png         volume particles -> ray-cast image of the surface
-//   particlemesh smooth MESH -o OUT.ply         Loop / butterfly subdivision
 #include <cstdio>
 #include <exception>
 
@@ -24,9 +24,9 @@ int main(int argc, char** argv) {
   cli::add_triangulate(app, commands);
   cli::add_inspect(app, commands);
   cli::add_sample(app, commands);
+  cli::add_smooth(app, commands);
   cli::add_polygonize(app, commands);
   cli::add_render(app, commands);
-  cli::add_smooth(app, commands);
 
   try {
     app.parse(argc, argv);

@@ -106,3 +106,25 @@ def test_sph_frames(cli, inspect, data_dir, tmp_path, name):
     mesh = inspect(out)
     assert mesh["closed"] and mesh["manifold"] and mesh["consistently_oriented"]
     assert mesh["triangles"] > 1000
+
+
+def test_sigint_cancels_without_partial_output(cli, tmp_path):
+    import os
+    import signal
+    import subprocess
+    import time
+    exe = os.environ["PARTICLEMESH_CLI"]
+    pts = tmp_path / "big.ply"
+    cli("sample", "fibonacci", "--points", "2000000", "-o", pts)
+    out = tmp_path / "big_out.ply"
+    proc = subprocess.Popen([exe, "polygonize", pts, "-o", out, "--radius", "0.004", "--threshold", "0.5"],
+                            stderr=subprocess.PIPE, text=True)
+    time.sleep(1.5)
+    start = time.monotonic()
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert time.monotonic() - start < 2.0
+    assert proc.returncode == 130, err
+    assert "interrupted" in err or "cancel" in err
+    assert not out.exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".big_out")]

@@ -70,10 +70,9 @@ double lattice_field(Kernel kernel, double radius, double spacing) {
 
 namespace detail {
 
-ParticleField FieldBuilder::build(std::vector<Vec3> positions, const FieldParams& params,
+ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldParams& params,
                                   ProgressTracker& tracker, double begin, double end) {
   ParticleField f;
-  const size_t n = positions.size();
   validate_kernel(params.kernel);
   if (n == 0) throw Error(Status::InvalidInput, "there are no particles");
   if (n >= size_t(std::numeric_limits<uint32_t>::max()))
@@ -110,17 +109,15 @@ ParticleField FieldBuilder::build(std::vector<Vec3> positions, const FieldParams
   f.params_ = params;
   const bool need_radius = params.radii.empty() && params.radius == 0;
   const bool need_threshold = params.threshold == 0;
-  if (need_radius || need_threshold) {
+  if (need_radius) {
     try {
-      f.spacing_ = estimate_spacing_impl(positions.data(), n, tracker, begin, end).spacing;
+      f.spacing_ = estimate_spacing_impl(positions, n, tracker, begin, end).spacing;
     } catch (const Error& e) {
       if (e.status() == Status::Cancelled) throw;
-      throw Error(e.status(), std::string("the default ") + (need_radius ? "radius" : "threshold") +
-                                  " needs the particle spacing, which cannot be estimated: " + e.what() +
-                                  " (give " + (need_radius ? "a radius" : "a threshold") + ")");
+      throw Error(e.status(), std::string("the default radius needs the particle spacing, which cannot be "
+                                          "estimated: ") + e.what() + " (give a radius)");
     }
-    if (!(f.spacing_ > 0))
-      throw Error(Status::InvalidInput, "the particle spacing estimate is 0 (give a radius and a threshold)");
+    if (!(f.spacing_ > 0)) throw Error(Status::InvalidInput, "the particle spacing estimate is 0 (give a radius)");
   }
   if (need_radius) {
     f.params_.radius = kDefaultRadiusFactor * f.spacing_;
@@ -133,7 +130,7 @@ ParticleField FieldBuilder::build(std::vector<Vec3> positions, const FieldParams
     if (!(w > 0))
       throw Error(Status::InvalidArgument,
                   "the default threshold needs a positive median strength (got " + num(w) + "): give a threshold");
-    f.params_.threshold = kDefaultThresholdFraction * w * lattice_field(params.kernel, f.params_.radius, f.spacing_);
+    f.params_.threshold = kDefaultThresholdFraction * w * lattice_field(params.kernel, kDefaultRadiusFactor, 1.0);
     f.threshold_defaulted_ = true;
   }
 
@@ -153,7 +150,9 @@ ParticleField FieldBuilder::build(std::vector<Vec3> positions, const FieldParams
   f.support_lo_ = lo;
   f.support_hi_ = hi;
 
-  f.grid_ = NeighborGrid(positions.data(), n, f.max_radius_);
+  f.grid_ = NeighborGrid(positions, n, f.max_radius_);  // the particles are kept once, in grid order
+  f.sorted_index_.resize(n);
+  for (uint32_t s = 0; s < n; ++s) f.sorted_index_[f.grid_.original_index(s)] = s;
   if (!f.uniform_) {
     f.sorted_inv_r2_.resize(n);
     for (uint32_t s = 0; s < n; ++s) {
@@ -165,7 +164,6 @@ ParticleField FieldBuilder::build(std::vector<Vec3> positions, const FieldParams
     f.sorted_strength_.resize(n);
     for (uint32_t s = 0; s < n; ++s) f.sorted_strength_[s] = params.strengths[f.grid_.original_index(s)];
   }
-  f.positions_ = std::move(positions);
   return f;
 }
 
@@ -175,19 +173,24 @@ ParticleField::ParticleField(std::vector<Vec3> positions, const FieldParams& par
                              const ProgressCallback& progress) {
   detail::ProgressTracker tracker(progress);
   *this = detail::with_threads(threads, [&] {
-    return detail::FieldBuilder::build(std::move(positions), params, tracker, 0.0, 1.0);
+    return detail::FieldBuilder::build(positions.data(), positions.size(), params, tracker, 0.0, 1.0);
   });
   tracker.finish();
 }
 
 ParticleField::ParticleField(const PointCloud& cloud, const FieldParams& params, int threads,
-                             const ProgressCallback& progress)
-    : ParticleField(cloud.positions, params, threads, progress) {}
+                             const ProgressCallback& progress) {
+  detail::ProgressTracker tracker(progress);
+  *this = detail::with_threads(threads, [&] {
+    return detail::FieldBuilder::build(cloud.positions.data(), cloud.positions.size(), params, tracker, 0.0, 1.0);
+  });
+  tracker.finish();
+}
 
 double ParticleField::value_and_gradient(const Vec3& x, Vec3* gradient) const {
   double v = 0;
   Vec3 g{};
-  if (positions_.empty()) {
+  if (size() == 0) {
     if (gradient) *gradient = g;
     return 0;
   }

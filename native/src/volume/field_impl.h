@@ -10,7 +10,7 @@ namespace particlemesh::detail {
 struct FieldBuilder {
   /// Resolve, validate and build. Runs in the caller's TBB arena; reports progress in
   /// [begin, end) of the overall fraction (only when the spacing has to be estimated).
-  static ParticleField build(std::vector<Vec3> positions, const FieldParams& params,
+  static ParticleField build(const Vec3* positions, size_t n, const FieldParams& params,
                              ProgressTracker& tracker, double begin, double end);
 };
 

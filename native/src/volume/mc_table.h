@@ -13,10 +13,14 @@
 // decision bit (1 = the two inside corners are joined across the face, 0 = they are cut off
 // separately), taken at run time from that face's four samples only (asymptotic decider), so
 // both cells sharing a face take the same decision. The table holds the triangles for every
-// (case, decisions) pair; it is built once by tracing, for each pair, the closed loops that
-// the face segments form around the cube and fanning each loop. Each face segment is
-// oriented with the inside corners on its right seen from outside the cube, which makes
-// every loop, and so every triangle, counter-clockwise seen from outside the surface.
+// (case, decisions) pair (656 in all); it is built once by tracing, for each pair, the closed
+// loops that the face segments form around the cube, and triangulating each loop with
+// diagonals that lie on no cube face (a diagonal in a face could be produced by the
+// neighbouring cell too, giving an edge with four triangles); the few loops that admit no such
+// triangulation (8-, 9- and 12-gons around joined ambiguous faces) are fanned around a vertex
+// inside the cell. Each face segment is oriented with the inside corners on its right seen
+// from outside the cube, which makes every loop, and so every triangle, counter-clockwise seen
+// from outside the surface.
 #pragma once
 
 #include <array>

@@ -5,6 +5,7 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -16,7 +17,6 @@
 #include "core/parallel.h"
 #include "core/progress_tracker.h"
 #include "particlemesh/core/error.h"
-#include "spatial/cell_hash.h"
 #include "volume/field_impl.h"
 #include "volume/mc_table.h"
 
@@ -109,6 +109,8 @@ struct MeshBlock {
   uint32_t vertex_offset = 0; // first vertex of the block: its edge crossings, then its
   uint32_t edge_vertices = 0; // cells' inside vertices (see McTable::center_count)
   uint32_t center_vertices = 0;
+  uint64_t triangle_offset = 0;  // first triangle of the block's cells
+  uint32_t triangle_count = 0;
   bool mixed = false;         // some inside and some outside node among its 9^3
   uint64_t mask[kMaskWords];  // edges with a crossing: bit 3 * (x + 8 (y + 8 z)) + axis
   uint16_t prefix[kMaskWords];// crossings before each mask word
@@ -175,17 +177,19 @@ inline float kernel_clamped(float s) {
 typedef float Float4 __attribute__((vector_size(4 * sizeof(float))));
 typedef int32_t Int4 __attribute__((vector_size(4 * sizeof(int32_t))));
 
+// `a` and `b` carry the strength: w g = t^2 (a + b t) with a = 5w/9, b = 4w/9 for Wyvill,
+// a = w, b = 0 for Poly4, a = 0, b = w for Poly6.
 template <Kernel K>
-inline void add_row(float* row, const float* dx2, float syz, float w) {
+inline void add_row(float* row, const float* dx2, float syz, float a, float b) {
   for (int half = 0; half < 2; ++half) {
     Float4 d, r;
     std::memcpy(&d, dx2 + 4 * half, sizeof d);
     std::memcpy(&r, row + 4 * half, sizeof r);
     Float4 t = 1.0f - (d + syz);
     t = (Float4)((Int4)t & (t > 0.0f));  // max(t, 0): outside the support exactly 0
-    if constexpr (K == Kernel::Wyvill) r += w * (t * t * (5.0f + 4.0f * t) * (1.0f / 9.0f));
-    else if constexpr (K == Kernel::Poly4) r += w * (t * t);
-    else r += w * (t * t * t);
+    if constexpr (K == Kernel::Wyvill) r += t * t * (a + b * t);
+    else if constexpr (K == Kernel::Poly4) r += a * (t * t);
+    else r += b * (t * t * t);
     std::memcpy(row + 4 * half, &r, sizeof r);
   }
 }
@@ -227,6 +231,8 @@ void sample_block(const ParticleField& field, const Grid& g, uint64_t key, float
         for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) {
           const float w = ws.empty() ? 1.0f : float(ws[s]);
           if (w == 0.0f) continue;
+          const float wa = K == Kernel::Wyvill ? w * (5.0f / 9.0f) : (K == Kernel::Poly4 ? w : 0.0f);
+          const float wb = K == Kernel::Wyvill ? w * (4.0f / 9.0f) : (K == Kernel::Poly6 ? w : 0.0f);
           if (!uniform) {
             c2 = h * h * inv_r2s[s];
             rn = std::sqrt(1.0 / c2);
@@ -234,6 +240,9 @@ void sample_block(const ParticleField& field, const Grid& g, uint64_t key, float
           // Particle position in node units, relative to the block's first node. (The cells
           // scanned are within a few radii of the block, so these are small numbers.)
           const double ux = (P[s].x - ox) * inv_h, uy = (P[s].y - oy) * inv_h, uz = (P[s].z - oz) * inv_h;
+          if (ux + rn < 0 || ux - rn > kB - 1 || uy + rn < 0 || uy - rn > kB - 1 || uz + rn < 0 ||
+              uz - rn > kB - 1)
+            continue;  // the support misses the block's nodes (most scanned particles)
           const int x0 = std::max(iceil(ux - rn), 0), x1 = std::min(ifloor(ux + rn), kB - 1);
           const int y0 = std::max(iceil(uy - rn), 0), y1 = std::min(ifloor(uy + rn), kB - 1);
           const int z0 = std::max(iceil(uz - rn), 0), z1 = std::min(ifloor(uz + rn), kB - 1);
@@ -257,7 +266,7 @@ void sample_block(const ParticleField& field, const Grid& g, uint64_t key, float
               if constexpr (K == Kernel::Blinn) {
                 for (int x = 0; x < kB; ++x) row[x] += w * kernel_clamped<K>(dx2[x] + syz);
               } else {
-                add_row<K>(row, dx2, syz, w);
+                add_row<K>(row, dx2, syz, wa, wb);
               }
             }
           }
@@ -628,7 +637,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
           count += uint32_t(std::popcount(mb.mask[w]));
         }
         mb.edge_vertices = count;
-        uint32_t centers = 0;
+        uint32_t centers = 0, triangles = 0;
         if (mb.mixed) {
           float cv[8];
           unsigned d;
@@ -636,19 +645,24 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
             for (int y = 0; y < kB; ++y)
               for (int x = 0; x < kB; ++x) {
                 const int cs = cell_case(local.get(), x, y, z, T, table, cv, &d);
-                if (cs != 0 && cs != 255) centers += uint32_t(table.center_count(cs, d));
+                if (cs == 0 || cs == 255) continue;
+                centers += uint32_t(table.center_count(cs, d));
+                triangles += uint32_t(table.triangle_count(cs, d));
               }
         }
         mb.center_vertices = centers;
+        mb.triangle_count = triangles;
       }
       tracker.tick(be - bb);
     });
     tracker.check();
   }
-  uint64_t total_vertices = 0;
+  uint64_t total_vertices = 0, total_triangles = 0;
   for (MeshBlock& mb : g.mesh) {
     mb.vertex_offset = uint32_t(total_vertices);
+    mb.triangle_offset = total_triangles;
     total_vertices += uint64_t(mb.edge_vertices) + mb.center_vertices;
+    total_triangles += mb.triangle_count;
     if (mb.mixed) ++st.surface_blocks;
     if (total_vertices >= uint64_t(kNone))
       throw Error(Status::LimitExceeded, "the mesh would have more than 4294967294 vertices (use a larger cell size)");
@@ -660,7 +674,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   TriMesh& mesh = result.mesh;
   mesh.positions.resize(total_vertices);
   mesh.normals.resize(total_vertices);
-  std::vector<std::vector<Triangle>> block_tris(nm);
+  mesh.triangles.resize(total_triangles);
   std::vector<uint64_t> block_evals(nm, 0);
   std::atomic<bool> broken{false};
   detail::parallel_blocks(nm, 4, [&](size_t bb, size_t be) {
@@ -695,7 +709,8 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
         }
       }
       // Triangles of the block's own cells (and the cells' inside vertices, in cell order).
-      auto& tris = block_tris[i];
+      Triangle* tris = mesh.triangles.data() + mb.triangle_offset;
+      Triangle* const tris_end = tris + mb.triangle_count;
       uint32_t next_center = mb.vertex_offset + mb.edge_vertices;
       for (int z = 0; z < kB; ++z)
         for (int y = 0; y < kB; ++y)
@@ -744,28 +759,23 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
                 if (!((ob.mask[bit >> 6] >> (bit & 63)) & 1)) broken = true;
                 t[k] = ob.vertex_offset + rank_of(ob, bit);
               }
-              tris.push_back(t);
+              if (tris == tris_end) {
+                broken = true;  // cannot happen: both passes classify the cells alike
+                continue;
+              }
+              *tris++ = t;
             }
           }
       block_evals[i] = evals;
+      if (tris != tris_end) broken = true;
     }
     tracker.tick(be - bb);
   });
   tracker.check();
-  if (broken) throw Error(Status::Internal, "polygonize: a cell refers to an edge without a crossing");
+  if (broken)
+    throw Error(Status::Internal, "polygonize: inconsistent cells (an edge without a crossing, or a changed triangle count)");
 
-  size_t total_tris = 0;
-  std::vector<size_t> tri_offset(nm + 1, 0);
-  for (size_t i = 0; i < nm; ++i) {
-    tri_offset[i + 1] = tri_offset[i] + block_tris[i].size();
-    st.field_evaluations += block_evals[i];
-  }
-  total_tris = tri_offset[nm];
-  mesh.triangles.resize(total_tris);
-  detail::parallel_blocks(nm, 64, [&](size_t bb, size_t be) {
-    for (size_t i = bb; i < be; ++i)
-      std::copy(block_tris[i].begin(), block_tris[i].end(), mesh.triangles.begin() + std::ptrdiff_t(tri_offset[i]));
-  });
+  for (size_t i = 0; i < nm; ++i) st.field_evaluations += block_evals[i];
   st.vertices = mesh.positions.size();
   st.triangles = mesh.triangles.size();
   st.seconds_meshing = seconds_since(t0);
@@ -797,7 +807,8 @@ PolygonizeResult polygonize(const PointCloud& cloud, const PolygonizeOptions& op
     params.radii = options.radii;
     params.strengths = options.strengths;
     tracker.stage("estimating spacing", 0.0, 0.1);
-    const ParticleField field = detail::FieldBuilder::build(cloud.positions, params, tracker, 0.0, 0.1);
+    const ParticleField field =
+        detail::FieldBuilder::build(cloud.positions.data(), cloud.positions.size(), params, tracker, 0.0, 0.1);
     return polygonize_field(field, options, tracker, 0.1, PolygonizeStats{}, t0);
   });
   tracker.finish();

@@ -104,7 +104,7 @@ TEST(ParticleField, ContributorsAreExactlyTheParticlesWhoseSupportHoldsX) {
     std::vector<size_t> got, want;
     f.for_each_contributor(x, [&](size_t i, double s) {
       got.push_back(i);
-      EXPECT_NEAR(s, squared_distance(x, c.positions[i]) / (radii[i] * radii[i]), 1e-12);
+      EXPECT_NEAR(s, squared_distance(x, f.position(i)) / (radii[i] * radii[i]), 1e-12);
       EXPECT_LT(s, 1.0);
     });
     for (size_t i = 0; i < c.size(); ++i)
@@ -148,7 +148,8 @@ TEST(ParticleField, DefaultsComeFromTheSpacing) {
   EXPECT_EQ(g.spacing(), 0.0);
   EXPECT_EQ(g.params().radius, 0.3);
   EXPECT_EQ(g.threshold(), 0.7);
-  // Per-particle radii: the reference radius is their median; strengths scale the default T.
+  // Per-particle radii: the reference radius is their median; strengths scale the default T,
+  // which is a constant per kernel (no spacing estimate when no radius is defaulted).
   FieldParams p;
   p.radii.assign(c.size(), 0.25);
   p.radii[0] = 5;
@@ -156,7 +157,16 @@ TEST(ParticleField, DefaultsComeFromTheSpacing) {
   const ParticleField h(c, p);
   EXPECT_EQ(h.params().radius, 0.25);
   EXPECT_EQ(h.max_radius(), 5.0);
-  EXPECT_DOUBLE_EQ(h.threshold(), 0.5 * 2.0 * lattice_field(Kernel::Wyvill, 0.25, spacing));
+  EXPECT_DOUBLE_EQ(h.threshold(), 0.5 * 2.0 * lattice_field(Kernel::Wyvill, 2, 1));
+  EXPECT_EQ(h.spacing(), 0.0);
+  EXPECT_TRUE(h.threshold_defaulted());
+  // The stated constants.
+  EXPECT_NEAR(0.5 * lattice_field(Kernel::Wyvill, 2, 1), 3.3333, 1e-4);
+  EXPECT_NEAR(0.5 * lattice_field(Kernel::Poly4, 2, 1), 3.9375, 1e-4);
+  EXPECT_NEAR(0.5 * lattice_field(Kernel::Poly6, 2, 1), 2.5781, 1e-4);
+  EXPECT_NEAR(0.5 * lattice_field(Kernel::Blinn, 2, 1), 1.2334, 1e-4);
+  // Positions come back in input order.
+  for (size_t i = 0; i < c.size(); ++i) ASSERT_EQ(h.position(i), c.positions[i]);
 }
 
 TEST(ParticleField, BadInputGivesClearErrors) {
@@ -197,4 +207,5 @@ TEST(ParticleField, BadInputGivesClearErrors) {
   EXPECT_EQ(e.status(), Status::InvalidInput);
   EXPECT_NE(std::string(e.what()).find("give a radius"), std::string::npos) << e.what();
   EXPECT_NO_THROW(build(FieldParams{Kernel::Wyvill, 1, 0.5, {}, {}}, one)());
+  EXPECT_NO_THROW(build(FieldParams{Kernel::Wyvill, 1, 0, {}, {}}, one)());  // default T needs no spacing
 }

@@ -10,10 +10,12 @@
 // ParticleField holds the particles with every parameter resolved (defaults filled in) and a
 // uniform grid of cell max_i R_i over them, so that one evaluation of F or its gradient
 // touches only the particles in the few cells around x (about 30 particles at the default
-// radius on evenly spaced input), independent of N.
+// radius on evenly spaced input), independent of N. Radii that differ by a large factor make
+// the cells, and so every evaluation, correspondingly larger.
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "particlemesh/core/export.h"
@@ -35,11 +37,14 @@ struct FieldBuilder;
 inline constexpr double kDefaultRadiusFactor = 2.0;
 
 /// Default threshold: T = kDefaultThresholdFraction x the field deep inside an evenly packed
-/// volume (see lattice_field), x the median strength. At half the interior level the surface
-/// of a packed block lies about half a spacing outside its outermost particles: the boundary
-/// of the volume the particles stand for (for a flat face of a continuum, exactly there).
-/// Isolated particles (F = 1 at their centre) then fall below T and vanish, like splashes in
-/// SPH surface reconstruction; give a threshold below 1 to keep every particle as a blob.
+/// volume at the default radius, lattice_field(kernel, kDefaultRadiusFactor, 1), x the median
+/// strength: a constant per kernel (3.33 Wyvill, 3.94 Poly4, 2.58 Poly6, 1.23 Blinn), so it
+/// needs no spacing estimate. With the default radius, the surface of a packed block then lies
+/// about half a spacing outside its outermost particles: the boundary of the volume the
+/// particles stand for (for a flat face of a continuum, exactly there); a larger radius
+/// fattens the surface. Isolated particles (F = 1 at their centre) fall below T and vanish,
+/// like splashes in SPH surface reconstruction; give a threshold below 1 to keep every
+/// particle as a blob.
 inline constexpr double kDefaultThresholdFraction = 0.5;
 
 /// The field at a particle of an infinite simple cubic lattice of unit-strength particles
@@ -51,16 +56,15 @@ inline constexpr double kDefaultThresholdFraction = 0.5;
 ///         radius / spacing <= 1000.
 PM_EXPORT double lattice_field(Kernel kernel, double radius, double spacing);
 
-/// The field's parameters. Zero radius / threshold ask for the defaults above, which need
-/// the particle spacing and therefore at least two distinct particles.
+/// The field's parameters. Zero radius / threshold ask for the defaults above; the default
+/// radius needs the particle spacing and therefore at least two distinct particles.
 struct FieldParams {
   Kernel kernel = Kernel::Wyvill;
   /// R for every particle, world units (not relative). 0 = kDefaultRadiusFactor x the median
   /// spacing. Ignored when `radii` is given.
   double radius = 0;
   /// T > 0, in the units of F (sums of kernel values times strengths). 0 = the default
-  /// (kDefaultThresholdFraction x median strength x lattice_field(kernel, R, spacing), with R
-  /// the median radius).
+  /// (kDefaultThresholdFraction x median strength x lattice_field(kernel, 2, 1)).
   double threshold = 0;
   /// Empty, or one radius R_i > 0 per particle (world units).
   std::vector<double> radii;
@@ -75,12 +79,12 @@ class PM_EXPORT ParticleField {
  public:
   ParticleField() = default;
 
-  /// Copy the particles and resolve the parameters: estimate the spacing when a default is
-  /// asked for (threads: 0 = all cores; the result does not depend on it), check every value.
-  /// Cost: O(N) expected (a sort of the particles into grid cells, and the spacing estimate
-  /// when needed).
-  /// @throws Error(InvalidInput) no particle, a non-finite coordinate, or a default asked
-  ///         for with fewer than two distinct particles;
+  /// Copy the particles and resolve the parameters: estimate the spacing when the default
+  /// radius is asked for (threads: 0 = all cores; the result does not depend on it), check
+  /// every value. Cost: O(N) expected (a sort of the particles into grid cells, and the
+  /// spacing estimate when needed).
+  /// @throws Error(InvalidInput) no particle, a non-finite coordinate, or the default radius
+  ///         asked for with fewer than two distinct particles;
   ///         Error(InvalidArgument) a radius, strength or threshold out of range, naming the
   ///         index for per-particle values (e.g. "radii[12] is -1 (must be > 0)"), or a
   ///         radii/strengths array whose size is not the particle count;
@@ -97,13 +101,14 @@ class PM_EXPORT ParticleField {
   const FieldParams& params() const { return params_; }
   Kernel kernel() const { return params_.kernel; }
   double threshold() const { return params_.threshold; }
-  /// The median particle spacing when a default needed it, else 0.
+  /// The median particle spacing when the default radius needed it, else 0.
   double spacing() const { return spacing_; }
   bool radius_defaulted() const { return radius_defaulted_; }
   bool threshold_defaulted() const { return threshold_defaulted_; }
 
-  size_t size() const { return positions_.size(); }
-  const std::vector<Vec3>& positions() const { return positions_; }
+  size_t size() const { return grid_.point_count(); }
+  /// Centre of particle i (input order). The particles are kept once, in grid order.
+  const Vec3& position(size_t i) const { return grid_.sorted_point(sorted_index_[i]); }
   double radius(size_t i) const { return params_.radii.empty() ? params_.radius : params_.radii[i]; }
   double strength(size_t i) const { return params_.strengths.empty() ? 1.0 : params_.strengths[i]; }
   double max_radius() const { return max_radius_; }
@@ -124,7 +129,7 @@ class PM_EXPORT ParticleField {
   /// in a fixed order (by grid cell, then by index) that does not depend on threads.
   template <class F>
   void for_each_contributor(const Vec3& x, F&& f) const {
-    if (positions_.empty()) return;
+    if (size() == 0) return;
     grid_.for_each_within(x, max_radius_, [&](uint32_t sorted, double d2) {
       const double inv_r2 = uniform_ ? inv_r2_ : sorted_inv_r2_[sorted];
       const double s = d2 * inv_r2;
@@ -142,8 +147,8 @@ class PM_EXPORT ParticleField {
  private:
   friend struct detail::FieldBuilder;
   FieldParams params_;
-  std::vector<Vec3> positions_;
   NeighborGrid grid_;
+  std::vector<uint32_t> sorted_index_;  // input index -> grid (sorted) index
   std::vector<double> sorted_inv_r2_;
   std::vector<double> sorted_strength_;
   bool uniform_ = true;
