@@ -8,6 +8,7 @@
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
 #include "particlemesh/volume/polygonize.h"
+#include "particle_input.h"
 #include "progress_line.h"
 #include "report_json.h"
 
@@ -50,7 +51,8 @@ int run_polygonize(const PolygonizeArgs& a) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   ProgressLine progress(a.quiet);
-  const PointCloud cloud = read_point_cloud(a.input);
+  const ParticleInput input = read_particles(a.input, ParticleInputArgs{}, a.threads);
+  const PointCloud& cloud = input.cloud;
   const double t_read = std::chrono::duration<double>(Clock::now() - t0).count();
 
   PolygonizeOptions opt;
@@ -84,6 +86,7 @@ int run_polygonize(const PolygonizeArgs& a) {
   if (!a.report.empty()) {
     nlohmann::json j{{"input", a.input},
                      {"output", a.output},
+                     {"read", input.report},
                      {"polygonize", stats_json(result.stats)},
                      {"topology", to_json(report)},
                      {"seconds", {{"read", t_read}, {"polygonize", t_poly}, {"write", t_write}}}};
@@ -93,6 +96,7 @@ int run_polygonize(const PolygonizeArgs& a) {
     const auto& s = result.stats;
     std::printf("particlemesh polygonize: %s -> %s\n", a.input.c_str(), a.output.c_str());
     std::printf("  particles     %zu\n", s.particles);
+    if (!input.summary.empty()) std::printf("%s", input.summary.c_str());
     if (s.spacing > 0) std::printf("  spacing       %.6g (median nearest-neighbour distance)\n", s.spacing);
     std::printf("  kernel        %s (C%d at R)\n", kernel_name(s.kernel), kernel_continuity(s.kernel));
     std::printf("  radius R      %.6g (%s)\n", s.radius, s.radius_defaulted ? "default: 2 x spacing" : "given");
@@ -114,7 +118,9 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
   auto args = std::make_shared<PolygonizeArgs>();
   CLI::App* app = root.add_subcommand(
       "polygonize", "Volume particles to the mesh of their implicit surface (seed section 5.1, marching cubes)");
-  app->add_option("input", args->input, "Particles: .ply (x y z ...) or .xyz (x y z per line)")->required();
+  app->add_option("input", args->input,
+                  "Particles: .ply (x y z ...), .xyz (x y z per line) or, with the PCL bridge, .pcd")
+      ->required();
   app->add_option("-o,--output", args->output, "Output mesh with normals: .ply (binary; --ascii for text) or .obj")
       ->required();
   app->add_option("--radius", args->radius,

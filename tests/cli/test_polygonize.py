@@ -128,3 +128,18 @@ def test_sigint_cancels_without_partial_output(cli, tmp_path):
     assert "interrupted" in err or "cancel" in err
     assert not out.exists()
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".big_out")]
+
+
+def test_pcd_input_through_the_cli_reader(cli, inspect, data_dir, tmp_path):
+    # The CLI's shared particle reader: .pcd through the PCL bridge when it is built.
+    probe = cli("polygonize", "--help")
+    if ".pcd" not in probe.stdout:
+        pytest.skip("built without the PCL bridge")
+    out = tmp_path / "bun.ply"
+    report = tmp_path / "r.json"
+    cli("polygonize", data_dir / "pcd/bunny.pcd", "-o", out, "--radius", "0.01", "--threshold", "0.5",
+        "--report", report, "-q")
+    r = json.loads(report.read_text())
+    assert r["polygonize"]["particles"] == 397
+    mesh = inspect(out)
+    assert mesh["closed"] and mesh["manifold"] and mesh["consistently_oriented"]

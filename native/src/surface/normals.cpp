@@ -18,6 +18,11 @@
 namespace particlemesh {
 namespace detail {
 
+namespace {
+// Above this ratio of the two smallest variances a neighbourhood is too thick for one plane.
+constexpr double kMaxFlatness = 0.2;
+}  // namespace
+
 std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
                                      const NeighborLists& lists, double radius, ProgressTracker& tracker,
                                      const std::vector<Triangle>* triangles) {
@@ -65,8 +70,36 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
         if (squared_norm(d) <= r2) near.push_back(d);
       }
       if (near.size() < 3) continue;  // too few neighbours for a plane: unknown (0,0,0)
+      // PCA of the inliers: returns the normal and the ratio of the two smallest variances
+      // (small for points that lie close to one plane).
+      auto pca = [&](const std::vector<uint8_t>& use, double* flatness) {
+        Vec3 sum{};
+        int count = 0;
+        for (size_t k = 0; k < near.size(); ++k)
+          if (use[k]) {
+            sum += near[k];
+            ++count;
+          }
+        const Vec3 mean = sum / double(count);
+        Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+        for (size_t k = 0; k < near.size(); ++k) {
+          if (!use[k]) continue;
+          const Eigen::Vector3d v(near[k].x - mean.x, near[k].y - mean.y, near[k].z - mean.z);
+          cov += v * v.transpose();
+        }
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+        eig.computeDirect(cov);
+        const Eigen::Vector3d ev = eig.eigenvalues();  // ascending
+        if (flatness) *flatness = ev(1) > 0 ? ev(0) / ev(1) : 1.0;
+        const Eigen::Vector3d v = eig.eigenvectors().col(0);
+        return normalized(Vec3{v.x(), v.y(), v.z()});
+      };
       inlier.assign(near.size(), 1);
-      if (triangles != nullptr) {
+      double flatness = 0;
+      Vec3 normal = pca(inlier, &flatness);
+      // Points that already lie close to one plane keep it (noise and the steps of a depth
+      // scan or a lattice do not call for more). A thick neighbourhood may be two sheets.
+      if (triangles != nullptr && flatness > kMaxFlatness) {
         const uint32_t o = grid.original_index(uint32_t(s));
         // Inliers count more the closer they are: next to the point its own sheet dominates
         // even where another sheet ends nearby (the free ends of a folded sheet).
@@ -95,27 +128,12 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
             best_n = tn;
           }
         }
-        if (best_count >= 3)
+        if (best_count >= 3) {
           for (size_t k = 0; k < near.size(); ++k) inlier[k] = std::abs(dot(near[k], best_n)) <= band;
-      }
-      Vec3 sum{};
-      int count = 0;
-      for (size_t k = 0; k < near.size(); ++k)
-        if (inlier[k]) {
-          sum += near[k];
-          ++count;
+          normal = pca(inlier, nullptr);
         }
-      const Vec3 mean = sum / double(count);
-      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-      for (size_t k = 0; k < near.size(); ++k) {
-        if (!inlier[k]) continue;
-        const Eigen::Vector3d v(near[k].x - mean.x, near[k].y - mean.y, near[k].z - mean.z);
-        cov += v * v.transpose();
       }
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-      eig.computeDirect(cov);
-      const Eigen::Vector3d v = eig.eigenvectors().col(0);  // smallest eigenvalue first
-      normals[s] = normalized(Vec3{v.x(), v.y(), v.z()});
+      normals[s] = normal;
     }
     tracker.tick(e - b);
   });
@@ -123,6 +141,59 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
   for (size_t s = 0; s < n; ++s)
     if (rep[s] != s) normals[s] = normals[rep[s]];
   return normals;
+}
+
+void orient_normals_by_reference(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
+                                 const NeighborLists& lists, double radius, std::vector<Vec3>& normals,
+                                 const std::vector<Vec3>& reference, ProgressTracker& tracker) {
+  const size_t n = grid.point_count();
+  const double r2 = radius * radius;
+  // 0 = undecided, 1 = decided. Where the reference clearly says which way a point faces it
+  // decides; elsewhere (reference nearly in the tangent plane, or missing) the neighbours
+  // of the same sheet that are decided vote, round after round.
+  std::vector<uint8_t> decided(n, 0);
+  std::vector<uint32_t> open;
+  for (size_t s = 0; s < n; ++s) {
+    if (rep[s] != s || !(squared_norm(normals[s]) > 0)) continue;
+    const Vec3 r = reference[s];
+    const double len = norm(r);
+    const double c = len > 0 ? dot(normals[s], r) / len : 0.0;
+    if (std::abs(c) >= 0.3) {
+      if (c < 0) normals[s] = -normals[s];
+      decided[s] = 1;
+    } else {
+      open.push_back(uint32_t(s));
+    }
+  }
+  for (int round = 0; round < 64 && !open.empty(); ++round) {
+    tracker.check();
+    std::vector<uint32_t> still;
+    std::vector<std::pair<uint32_t, bool>> flips;
+    for (uint32_t s : open) {
+      double vote = 0;
+      const Vec3 p = grid.sorted_point(s);
+      for (const uint32_t* q = lists.begin(s); q != lists.end(s); ++q) {
+        if (!decided[*q]) continue;
+        const Vec3 d = grid.sorted_point(*q) - p;
+        if (squared_norm(d) > r2) continue;
+        // Same-sheet neighbours (the edge in both tangent planes) count, gap-crossing ones
+        // count reversed, like the spanning tree's signed edges.
+        const double slope = (std::abs(dot(d, normals[s])) + std::abs(dot(d, normals[*q]))) / (2 * norm(d));
+        const double agree = dot(normals[s], normals[*q]);
+        vote += slope > 0.5 ? -agree : agree;
+      }
+      if (vote == 0) still.push_back(s);
+      else flips.push_back({s, vote < 0});
+    }
+    if (flips.empty()) break;
+    for (auto [s, flip] : flips) {
+      if (flip) normals[s] = -normals[s];
+      decided[s] = 1;
+    }
+    open.swap(still);
+  }
+  for (size_t s = 0; s < n; ++s)
+    if (rep[s] != s) normals[s] = normals[rep[s]];
 }
 
 void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
