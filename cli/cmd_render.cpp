@@ -5,9 +5,9 @@
 
 #include "commands.h"
 #include "particlemesh/core/error.h"
-#include "particlemesh/io/mesh_io.h"
 #include "particlemesh/io/png.h"
 #include "particlemesh/volume/render.h"
+#include "particle_input.h"
 #include "progress_line.h"
 
 namespace particlemesh::cli {
@@ -27,7 +27,8 @@ int run_render(const RenderArgs& a) {
   const auto t0 = Clock::now();
   ProgressLine progress(a.quiet);
   set_phase(Phase::Reading);
-  const PointCloud cloud = read_point_cloud(a.input);
+  const ParticleInput input = read_particles(a.input, ParticleInputArgs{}, a.threads);
+  const PointCloud& cloud = input.cloud;
   set_phase(Phase::Computing);
   FieldParams p;
   p.kernel = kernel_from_name(a.kernel);
@@ -63,6 +64,7 @@ int run_render(const RenderArgs& a) {
     const Camera& c = r.camera;
     std::printf("particlemesh render: %s -> %s\n", a.input.c_str(), a.output.c_str());
     std::printf("  particles     %zu\n", f.size());
+    if (!input.summary.empty()) std::printf("%s", input.summary.c_str());
     std::printf("  kernel        %s\n", kernel_name(f.kernel()));
     std::printf("  radius R      %.6g (%s)\n", f.params().radius, f.radius_defaulted() ? "default: 2 x spacing" : "given");
     std::printf("  threshold T   %.6g (%s)\n", f.threshold(),
@@ -84,7 +86,9 @@ void add_render(CLI::App& root, std::vector<Command>& commands) {
   auto args = std::make_shared<RenderArgs>();
   CLI::App* app = root.add_subcommand(
       "render", "Ray cast the exact iso-surface of volume particles into a PNG (seed section 5.1.3)");
-  app->add_option("input", args->input, "Particles: .ply (x y z ...) or .xyz (x y z per line)")->required();
+  app->add_option("input", args->input,
+                  "Particles: .ply (x y z ...), .xyz (x y z per line) or, with the PCL bridge, .pcd")
+      ->required();
   app->add_option("-o,--output", args->output, "Output image (.png)")->required();
   app->add_option("--radius", args->radius,
                   "Particle radius R (the field's support), world units (default: 2 x the median particle spacing)")
