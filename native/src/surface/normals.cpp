@@ -21,6 +21,9 @@ namespace detail {
 namespace {
 // Above this ratio of the two smallest variances a neighbourhood is too thick for one plane.
 constexpr double kMaxFlatness = 0.2;
+// Above this fraction of same-sheet neighbours facing opposite ways, reference normals are
+// not a consistent orientation and only vote per piece.
+constexpr double kMaxReferenceDisagreement = 0.01;
 }  // namespace
 
 std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
@@ -143,7 +146,7 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
   return normals;
 }
 
-void orient_normals_by_reference(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
+bool orient_normals_by_reference(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
                                  const NeighborLists& lists, double radius, std::vector<Vec3>& normals,
                                  const std::vector<Vec3>& reference, ProgressTracker& tracker) {
   const size_t n = grid.point_count();
@@ -192,8 +195,26 @@ void orient_normals_by_reference(const NeighborGrid& grid, const std::vector<uin
     }
     open.swap(still);
   }
+  // Are the references consistent? Neighbours of one sheet (the edge lies in both tangent
+  // planes) should agree. Normals turned toward a scanner's viewpoint on a closed object, for
+  // instance, face inward on its far side, and disagree along the silhouette.
+  size_t pairs = 0, disagree = 0;
+  for (size_t s = 0; s < n; ++s) {
+    if (rep[s] != s || !decided[s]) continue;
+    const Vec3 p = grid.sorted_point(uint32_t(s));
+    for (const uint32_t* q = lists.begin(uint32_t(s)); q != lists.end(uint32_t(s)); ++q) {
+      if (*q <= s || !decided[*q]) continue;
+      const Vec3 d = grid.sorted_point(*q) - p;
+      if (squared_norm(d) > r2) continue;
+      const double slope = (std::abs(dot(d, normals[s])) + std::abs(dot(d, normals[*q]))) / (2 * norm(d));
+      if (slope > 0.3) continue;
+      ++pairs;
+      disagree += dot(normals[s], normals[*q]) < 0;
+    }
+  }
   for (size_t s = 0; s < n; ++s)
     if (rep[s] != s) normals[s] = normals[rep[s]];
+  return pairs == 0 || double(disagree) <= kMaxReferenceDisagreement * double(pairs);
 }
 
 void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
@@ -324,12 +345,6 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
     if (vote && agreement < 0)
       for (uint32_t s : piece) normals[s] = -normals[s];
   }
-  // Where the reference clearly says which way a point faces, it wins over the tree (a
-  // misread edge at a thin rim can flip a few points). Nearly perpendicular references say
-  // nothing and are ignored.
-  if (vote)
-    for (size_t s = 0; s < n; ++s)
-      if (dot(normals[s], normalized(reference[s])) < -0.3) normals[s] = -normals[s];
   for (size_t s = 0; s < n; ++s)
     if (rep[s] != s) normals[s] = normals[rep[s]];
 }

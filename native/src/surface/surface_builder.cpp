@@ -5,6 +5,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <numeric>
 #include <queue>
@@ -15,6 +16,7 @@
 
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
+#include "particlemesh/spatial/neighbor_grid.h"
 
 namespace particlemesh::detail {
 
@@ -576,6 +578,22 @@ class Builder {
     return removed_fans;
   }
 
+  /// Does a boundary half-edge start at v (an edge v -> w of a triangle with no w -> v)?
+  bool starts_boundary(uint32_t v) const {
+    bool found = false;
+    for_each_tri(v, [&](uint32_t t) {
+      const Triangle& T = tris_[t];
+      const uint32_t w = T[(corner_of(T, v) + 1) % 3];
+      bool twin = false;
+      for_each_tri(v, [&](uint32_t u) {
+        const Triangle& U = tris_[u];
+        twin = twin || U[(corner_of(U, v) + 2) % 3] == w;
+      });
+      found = found || !twin;
+    });
+    return found;
+  }
+
   /// A particle the surface passed by is inserted into the surface triangle it lies over
   /// (split in three), or, at a boundary, joined to the nearest boundary edge: every input
   /// particle ends up a vertex of the surface.
@@ -596,6 +614,7 @@ class Builder {
         if (it != unused.end() && *it == t[k])
           for (int q = 1; q < 3; ++q) around[size_t(it - unused.begin())].push_back(t[(k + q) % 3]);
       }
+    std::unique_ptr<NeighborGrid> near;
     size_t inserted = 0;
     for (size_t u = 0; u < unused.size(); ++u) {
       const uint32_t p = unused[u];
@@ -606,10 +625,13 @@ class Builder {
         // In no raw triangle (fewer than two neighbours within L, e.g. at the rim of a real
         // opening): the surface near it can only be its boundary. Take the boundary vertices
         // within L as its neighbours.
-        for (uint64_t e : boundary_) {
-          const uint32_t a = uint32_t(e >> 32);
-          if (squared_distance(P_[a], P_[p]) <= o_.max_edge * o_.max_edge) nb.push_back(a);
-        }
+        // A grid over the particles, built at the first such particle: scanning the whole
+        // boundary per particle is quadratic on scans with many openings.
+        if (!near) near = std::make_unique<NeighborGrid>(P_.data(), P_.size(), o_.max_edge);
+        near->for_each_within(P_[p], o_.max_edge, [&](uint32_t s, double) {
+          const uint32_t a = near->original_index(s);
+          if (a != p && active_[a] && starts_boundary(a)) nb.push_back(a);
+        });
         std::sort(nb.begin(), nb.end());
         nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
       }
