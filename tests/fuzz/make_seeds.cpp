@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "particlemesh/io/mesh_io.h"
+#include "particlemesh/io/png.h"
 #include "particlemesh/sample/shapes.h"
 
 namespace fs = std::filesystem;
@@ -108,6 +109,18 @@ void file_seeds() {
     put("read_obj", "stl_binary.bin", stl);
   }
 
+  // PNG: our writer's files.
+  for (int size : {1, 7, 40}) {
+    Image img;
+    img.width = size;
+    img.height = size + 1;
+    for (int i = 0; i < img.width * img.height * 3; ++i) img.rgb.push_back(uint8_t(i * 37));
+    const fs::path p = g_out / ".scratch.png";
+    write_png(img, p.string());
+    put("read_png", "rgb_" + std::to_string(size) + ".png", slurp(p));
+    fs::remove(p);
+  }
+
   // XYZ.
   put("read_xyz", "sphere_normals.xyz", via_cloud_writer(sphere, ".xyz"));
   put("read_xyz", "sphere.xyz", via_cloud_writer(bare, ".xyz"));
@@ -189,6 +202,22 @@ void capi_seeds() {
     for (int i = 0; i < 8; ++i) cancel += bytes({0, 4 * (i & 1), 0, 2 * ((i >> 1) & 1), 0, 4 * (i >> 2)});
     cancel += bytes({8 | 32, 0, 0, 0, 1, 8, 2});  // cell size fuzzed (0 -> default), budget, cancel at 2
     put("capi_polygonize", "box_budget_cancel", cancel);
+  }
+  // fuzz_capi_raycast: mode, n - 1, positions, field options byte, rays - 0, per ray
+  // (flag, origin / number) and direction numbers, ray options, outputs mask, CSG op.
+  {
+    std::string s = bytes({0, 7});
+    for (int i = 0; i < 8; ++i) s += bytes({0, 2 * (i & 1), 0, 2 * ((i >> 1) & 1), 0, 2 * (i >> 2)});
+    s += bytes({0, 4});
+    for (int r = 0; r < 4; ++r) {
+      for (int a = 0; a < 3; ++a) s += bytes({1});              // origins: near a particle, 4 R away
+      for (int a = 0; a < 3; ++a) s += bytes({0, a == r % 3 ? 4 : 1});  // directions
+    }
+    s += bytes({0, 0, 1});
+    put("capi_raycast", "cube_4_rays", s);
+    std::string k = s;
+    k[0] = 3;
+    put("capi_raycast", "cube_radii_strengths", k);
   }
 }
 

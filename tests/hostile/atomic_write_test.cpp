@@ -9,11 +9,13 @@
 #include <csignal>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sys/resource.h>
 
 #include "hostile_support.h"
 #include "particlemesh/io/atomic_write.h"
 #include "particlemesh/io/mesh_io.h"
+#include "particlemesh/io/png.h"
 #include "particlemesh/sample/shapes.h"
 #include "support/test_support.h"
 
@@ -96,4 +98,14 @@ TEST(AtomicWrite, CloudAndTextWritersNeverLeaveATruncatedFile) {
   expect_atomic_failure(dir, "c.xyz", [&](const std::string& p) { write_point_cloud(c, p); });
   const std::string text(50000, 'x');
   expect_atomic_failure(dir, "r.json", [&](const std::string& p) { write_file_atomically(p, text); });
+}
+
+TEST(AtomicWrite, PngWriterNeverLeavesATruncatedFile) {
+  const auto dir = scratch_dir("png");
+  Image img;
+  img.width = 300;
+  img.height = 200;
+  std::mt19937 rng(7);
+  for (int i = 0; i < img.width * img.height * 3; ++i) img.rgb.push_back(uint8_t(rng() >> 24));  // noise: no compression
+  expect_atomic_failure(dir, "i.png", [&](const std::string& p) { write_png(img, p); });
 }
