@@ -44,7 +44,7 @@ export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1${UBSAN_OPTIONS:+:$UBSAN
 if [ -z "${PM_SKIP_SUITES:-}" ]; then
   # The determinism suite repeats whole runs 6 times: it checks the results, not memory
   # safety, and runs in the Release build; the sanitizers see the same code in the others.
-  ctest --test-dir "$BUILD" --output-on-failure -j "$JOBS" -E '^hostile\.Determinism\.'"
+  ctest --test-dir "$BUILD" --output-on-failure -j "$JOBS" -E '^hostile\.Determinism\.'
 fi
 
 SECONDS_PER_TARGET="${PM_FUZZ_SECONDS:-20}"
