@@ -29,8 +29,8 @@ cmake -S "$ROOT" -B "$BUILD" -G Ninja \
   -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g" -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" \
   -DCMAKE_C_FLAGS="$SAN" \
   -DCMAKE_CXX_FLAGS="$SAN -fsanitize=fuzzer-no-link -Wno-unknown-warning-option" \
-  -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined -fsanitize-link-c++-runtime" \
-  -DCMAKE_C_STANDARD_LIBRARIES="-lstdc++" \
+  -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
+  -DCMAKE_C_STANDARD_LIBRARIES="-fsanitize-link-c++-runtime -lstdc++" \
   -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
   -DPM_BUILD_CLI=OFF -DPM_BUILD_BENCH=OFF -DPM_PACKAGE_TESTS=OFF -DPM_BUILD_FUZZERS=ON \
   -DPM_WITH_PCL="${PM_WITH_PCL:-ON}" \
