@@ -1,0 +1,181 @@
+"""Live mode (a persistent frame handler regenerates the mesh from the evaluated particles,
+with a per-frame cache, render settings while rendering) and baking (one mesh per frame,
+swapped in as the frame changes; PLY sequence)."""
+import os
+
+import bpy
+import numpy as np
+import pytest
+
+from conftest import emitter, living_particles, mesh_arrays, undo
+
+
+def live_object(pm, **kwargs):
+    assert bpy.ops.particlemesh.triangulate(live=True, **kwargs) == {"FINISHED"}
+    obj = bpy.context.active_object
+    assert obj.particlemesh.live
+    return obj
+
+
+def test_live_mesh_follows_the_particles(pm, clean_scene):
+    em = emitter(speed=1.0)
+    obj = live_object(pm)
+    assert pm.live.on_frame_change_post in bpy.app.handlers.frame_change_post
+    radii = []
+    for frame in (1, 5, 10, 20):
+        clean_scene.frame_set(frame)
+        record = pm.live.last_update[obj.name]
+        assert record["frame"] == frame and record["mode"] == "VIEWPORT"
+        assert "error" not in record, record
+        positions, velocities = living_particles(em)
+        co, tris = mesh_arrays(obj.data)
+        np.testing.assert_allclose(co, positions, atol=1e-5)  # vertex i is particle i, now
+        np.testing.assert_allclose(pm.blender_mesh.get_point_attribute(obj.data, "velocity"),
+                                   velocities, atol=1e-5)
+        assert 2 * 642 * 0.95 <= len(tris) <= 2 * 642 * 1.35
+        assert not obj.data.validate(verbose=False)
+        radii.append(float(np.linalg.norm(co, axis=1).mean()))
+    assert radii == sorted(radii) and radii[-1] > radii[0] + 0.5  # the sphere expands
+    # The same frame again comes from the cache.
+    clean_scene.frame_set(10)
+    assert pm.live.last_update[obj.name]["cached"] is True
+    entries, size = pm.live.cache_info(obj)
+    assert entries >= 4 and size > 0
+
+
+def test_live_off_leaves_the_mesh_alone(pm, clean_scene):
+    emitter()
+    assert bpy.ops.particlemesh.triangulate() == {"FINISHED"}
+    obj = bpy.context.active_object
+    before, _ = mesh_arrays(obj.data)
+    clean_scene.frame_set(8)
+    after, _ = mesh_arrays(obj.data)
+    np.testing.assert_array_equal(before, after)
+    # Switching it on regenerates at once.
+    obj.particlemesh.live = True
+    now, _ = mesh_arrays(obj.data)
+    assert np.linalg.norm(now, axis=1).mean() > np.linalg.norm(before, axis=1).mean() + 0.2
+
+
+def test_settings_change_regenerates(pm, clean_scene):
+    emitter()
+    obj = live_object(pm)
+    faces = len(obj.data.polygons)
+    obj.particlemesh.viewport.max_edge_factor = 1.05  # tighter than the icosphere's edges
+    assert len(obj.data.polygons) < faces
+    assert pm.live.last_update[obj.name]["cached"] is False
+
+
+def test_a_live_error_is_recorded_not_raised(pm, clean_scene):
+    em = emitter(frame_start=1, frame_end=1, lifetime=5)  # all particles die at frame 6
+    obj = live_object(pm)
+    clean_scene.frame_set(10)
+    record = pm.live.last_update[obj.name]
+    assert "no living particles" in record["error"]
+    clean_scene.frame_set(3)  # and it recovers
+    assert "error" not in pm.live.last_update[obj.name]
+    assert em.name in bpy.data.objects
+
+
+def render_animation(scene, tmp_path, frames):
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = 1
+    scene.cycles.use_denoising = False
+    scene.render.resolution_x = scene.render.resolution_y = 16
+    scene.render.resolution_percentage = 100
+    scene.frame_start, scene.frame_end = frames
+    scene.render.filepath = str(tmp_path / "frame_")
+    if scene.camera is None:
+        cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
+        scene.collection.objects.link(cam)
+        cam.location = (0, -8, 0)
+        cam.rotation_euler = (1.5708, 0, 0)
+        scene.camera = cam
+    assert bpy.ops.render.render(animation=True) == {"FINISHED"}
+
+
+def test_render_uses_the_render_settings(pm, clean_scene, tmp_path):
+    emitter()
+    obj = live_object(pm)
+    state = obj.particlemesh
+    state.use_render_settings = True
+    state.render.max_edge_factor = 1.3  # fewer triangles than the viewport's 2.0
+    viewport_triangles = len(obj.data.polygons)
+    pm.live.history.clear()
+    render_animation(clean_scene, tmp_path, (2, 3))
+    renders = [r for name, r in pm.live.history if name == obj.name and r["mode"] == "RENDER"]
+    assert [r["frame"] for r in renders] == [2, 3], list(pm.live.history)
+    assert all("error" not in r for r in renders)
+    assert all(r["vertices"] == 642 and r["triangles"] < viewport_triangles for r in renders)
+    assert (tmp_path / "frame_0002.png").is_file() and (tmp_path / "frame_0003.png").is_file()
+    # Back in the viewport: the viewport settings again.
+    clean_scene.frame_set(5)
+    record = pm.live.last_update[obj.name]
+    assert record["mode"] == "VIEWPORT"
+    assert record["triangles"] > max(r["triangles"] for r in renders)
+
+
+def test_bake_five_frames_and_step_through(pm, clean_scene, tmp_path):
+    em = emitter(speed=1.0)
+    obj = live_object(pm)
+    material = bpy.data.materials.new("Baked")
+    obj.data.materials.append(material)
+    unbaked = obj.data
+    folder = tmp_path / "seq"
+    assert bpy.ops.particlemesh.bake(frame_start=1, frame_end=5, write_ply=True,
+                                     directory=str(folder)) == {"FINISHED"}
+    state = obj.particlemesh
+    assert state.baked and (state.bake_start, state.bake_end) == (1, 5)
+    assert sorted(item.frame for item in state.bake_frames) == [1, 2, 3, 4, 5]
+    meshes = {item.frame: item.mesh for item in state.bake_frames}
+    assert len(set(m.name for m in meshes.values())) == 5
+    files = sorted(os.listdir(folder))
+    assert files == [f"{obj.name}_{f:05d}.ply" for f in range(1, 6)]
+    for frame in (1, 2, 3, 4, 5, 3, 1):
+        clean_scene.frame_set(frame)
+        assert obj.data == meshes[frame], frame
+        assert list(obj.data.materials) == [material]
+        positions, _ = living_particles(em)
+        co, tris = mesh_arrays(obj.data)
+        np.testing.assert_allclose(co, positions, atol=1e-5)
+        on_disk = pm.native.read_mesh(folder / f"{obj.name}_{frame:05d}.ply")
+        assert on_disk.triangle_count == len(tris)
+        np.testing.assert_allclose(on_disk.positions, co, atol=1e-6)
+    clean_scene.frame_set(9)  # past the range: the last baked frame stays
+    assert obj.data == meshes[5]
+    # Free the bake: the live mesh comes back, the baked meshes go.
+    names = [m.name for m in meshes.values()]
+    assert bpy.ops.particlemesh.free_bake() == {"FINISHED"}
+    assert obj.data == unbaked and not state.baked
+    assert not any(name in bpy.data.meshes for name in names)
+
+
+def test_baked_frames_render(pm, clean_scene, tmp_path):
+    emitter(speed=1.0)
+    obj = live_object(pm)
+    assert bpy.ops.particlemesh.bake(frame_start=1, frame_end=3) == {"FINISHED"}
+    meshes = {item.frame: item.mesh.name for item in obj.particlemesh.bake_frames}
+    seen = []
+
+    def watch(scene, depsgraph=None):
+        seen.append((scene.frame_current, obj.data.name))
+
+    bpy.app.handlers.render_post.append(watch)
+    try:
+        render_animation(clean_scene, tmp_path, (2, 3))
+    finally:
+        bpy.app.handlers.render_post.remove(watch)
+    assert seen == [(2, meshes[2]), (3, meshes[3])]
+
+
+def test_bake_undo(pm, clean_scene):
+    emitter()
+    obj = live_object(pm)
+    name = obj.name
+    bpy.ops.ed.undo_push(message="before bake")
+    assert bpy.ops.particlemesh.bake("INVOKE_DEFAULT", True, frame_start=1, frame_end=3) == {"FINISHED"}
+    assert obj.particlemesh.baked and len(obj.particlemesh.bake_frames) == 3
+    undo()
+    obj = bpy.data.objects[name]
+    assert not obj.particlemesh.baked and len(obj.particlemesh.bake_frames) == 0
