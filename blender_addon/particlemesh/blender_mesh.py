@@ -22,33 +22,58 @@ def write(mesh, data, *, custom_normals=True, attributes=True):
 
     Materials stay (clear_geometry keeps them), faces are smooth shaded, the library's
     normals become custom split normals, and per-vertex channels (velocity, colour...) become
-    POINT attributes named as in data.attributes."""
+    POINT attributes named as in data.attributes. When the mesh already has exactly these
+    triangles (live mode on a stable topology), only the vertices move."""
     positions = np.ascontiguousarray(data.positions, dtype=np.float32)
     triangles = np.ascontiguousarray(data.triangles, dtype=np.int32)
     nv, nt = len(positions), len(triangles)
-    mesh.clear_geometry()
-    mesh.vertices.add(nv)
-    mesh.vertices.foreach_set("co", positions.ravel())
-    if nt:
-        mesh.loops.add(3 * nt)
-        mesh.loops.foreach_set("vertex_index", triangles.ravel())
-        mesh.polygons.add(nt)
-        mesh.polygons.foreach_set("loop_start", mesh_arrays.loop_starts(nt))
-        if _SET_LOOP_TOTAL:
-            mesh.polygons.foreach_set("loop_total", np.full(nt, 3, dtype=np.int32))
-        mesh.polygons.foreach_set("use_smooth", np.ones(nt, dtype=bool))
-    mesh.update(calc_edges=True)
+    rebuild = not _same_triangles(mesh, nv, triangles)
+    if not rebuild:
+        mesh.vertices.foreach_set("co", positions.ravel())
+    else:
+        mesh.clear_geometry()
+        mesh.vertices.add(nv)
+        mesh.vertices.foreach_set("co", positions.ravel())
+        if nt:
+            mesh.loops.add(3 * nt)
+            mesh.loops.foreach_set("vertex_index", triangles.ravel())
+            mesh.polygons.add(nt)
+            mesh.polygons.foreach_set("loop_start", mesh_arrays.loop_starts(nt))
+            if _SET_LOOP_TOTAL:
+                mesh.polygons.foreach_set("loop_total", np.full(nt, 3, dtype=np.int32))
+            mesh.polygons.foreach_set("use_smooth", np.ones(nt, dtype=bool))
+    mesh.update(calc_edges=rebuild)
     if custom_normals and data.normals is not None and nt:
         if hasattr(mesh, "use_auto_smooth"):
             mesh.use_auto_smooth = True
             mesh.auto_smooth_angle = np.pi
         mesh.normals_split_custom_set_from_vertices(np.asarray(data.normals, dtype=np.float64))
-    elif hasattr(mesh, "use_auto_smooth"):
-        mesh.use_auto_smooth = False
+    else:
+        _clear_custom_normals(mesh)
+        if hasattr(mesh, "use_auto_smooth"):
+            mesh.use_auto_smooth = False
     if attributes:
         for name, values in data.attributes.items():
             set_point_attribute(mesh, name, values)
     return mesh
+
+
+def _same_triangles(mesh, nv, triangles):
+    """Whether the mesh is made of exactly these triangles over nv vertices (cheap check)."""
+    nt = len(triangles)
+    if nt == 0 or len(mesh.vertices) != nv or len(mesh.polygons) != nt or len(mesh.loops) != 3 * nt:
+        return False
+    loops = np.empty(3 * nt, dtype=np.int32)
+    mesh.loops.foreach_get("vertex_index", loops)
+    return np.array_equal(loops, triangles.ravel())
+
+
+def _clear_custom_normals(mesh):
+    """Drop custom split normals without an operator (mesh.customdata_custom_splitnormals_clear
+    needs a context)."""
+    if mesh.has_custom_normals:
+        mesh.normals_split_custom_set_from_vertices(
+            np.zeros((len(mesh.vertices), 3), dtype=np.float64))
 
 
 def set_point_attribute(mesh, name, values):
@@ -56,10 +81,12 @@ def set_point_attribute(mesh, name, values):
     kind, field = _ATTRIBUTE_TYPES.get(values.shape[1], (None, None))
     if kind is None:
         return None
-    old = mesh.attributes.get(name)
-    if old is not None:
-        mesh.attributes.remove(old)
-    attribute = mesh.attributes.new(name, kind, "POINT")
+    attribute = mesh.attributes.get(name)
+    if attribute is not None and (attribute.data_type != kind or attribute.domain != "POINT"):
+        mesh.attributes.remove(attribute)
+        attribute = None
+    if attribute is None:
+        attribute = mesh.attributes.new(name, kind, "POINT")
     attribute.data.foreach_set(field, values.ravel())
     return attribute
 

@@ -92,25 +92,33 @@ def settings_for(obj, mode):
     return properties.snapshot(group, state.method)
 
 
-def compute(obj, depsgraph, mode=None, use_cache=True, progress=None):
+def compute(obj, depsgraph, mode=None, use_cache=True, progress=None, timings=None):
     """Mesh data of generated object `obj` for the depsgraph's frame (from the cache when it
-    was made before). Returns (MeshData, settings, cached)."""
+    was made before). Returns (MeshData, settings, cached). `timings` (a dict), if given,
+    receives the seconds spent reading the source and meshing."""
     state = obj.particlemesh
     mode = mode or depsgraph.mode
     source = state.source
     if source is None:
         raise sources.SourceError(f"'{obj.name}' has lost its source object")
     settings = settings_for(obj, mode)
+    t0 = time.perf_counter()
     particles = sources.read(source, depsgraph, state.source_kind, state.particle_system,
                              need_sizes=(state.method == "POLYGONIZE"))
     key = (depsgraph.scene.frame_current, mode, state.method, state.source_kind,
            properties_key(settings), particles.digest())
+    t1 = time.perf_counter()
+    if timings is not None:
+        timings["source"] = t1 - t0
+        timings["particles"] = len(particles.positions)
     cache = cache_for(obj)
     if use_cache:
         data = cache.get(key)
         if data is not None:
             return data, settings, True
     data = generate.run(state.method, particles, settings, progress=progress)
+    if timings is not None:
+        timings["mesh"] = time.perf_counter() - t1
     if use_cache:
         cache.put(key, data, _cache_limit())
     return data, settings, False
@@ -132,8 +140,10 @@ def update_object(obj, depsgraph, mode=None):
     mode = mode or depsgraph.mode
     record = {"frame": depsgraph.scene.frame_current, "mode": mode}
     try:
-        data, settings, cached = compute(obj, depsgraph, mode)
+        data, settings, cached = compute(obj, depsgraph, mode, timings=record)
+        t = time.perf_counter()
         apply(obj, data, settings)
+        record["write"] = time.perf_counter() - t
         record.update(cached=cached, vertices=data.vertex_count, triangles=data.triangle_count)
     except (native.ParticlemeshError, sources.SourceError) as e:
         record["error"] = str(e)

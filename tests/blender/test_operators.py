@@ -380,3 +380,95 @@ def test_worker_job_cancels(pm):
     assert job.wait(120) and job.error is None
     assert job.result.triangle_count > 9000
     assert "%" in job.status_text()
+
+
+# ---- the interactive path (modal operator, worker thread, Esc) --------------------------------
+
+class _Event:
+    def __init__(self, type, value="NOTHING"):
+        self.type, self.value = type, value
+
+
+class _Recorder:
+    """Stands in for the window manager / workspace of an interactive session."""
+
+    def __init__(self):
+        self.calls = []
+
+    def __getattr__(self, name):
+        return lambda *a, **k: self.calls.append((name, a))
+
+
+class _Context:
+    def __init__(self):
+        self.window_manager = _Recorder()
+        self.workspace = _Recorder()
+        self.window = object()
+
+
+def modal_driver(pm, job, finished):
+    """A _ModalJob as Blender drives it, without a window system: TIMER events until done."""
+    class Driver(pm.operators._ModalJob):
+        def __init__(self):
+            self.reports = []
+            self._timer = None
+
+        def report(self, kind, message):
+            self.reports.append((kind, message))
+
+        def job_finished(self, context, result):
+            finished.append(result)
+
+    driver = Driver()
+    context = _Context()
+    assert driver.start_job(context, job) == {"RUNNING_MODAL"}
+    return driver, context
+
+
+def run_modal(driver, context, first=None):
+    if first is not None:
+        assert driver.modal(context, first) == {"RUNNING_MODAL"}
+    for _ in range(6000):
+        state = driver.modal(context, _Event("TIMER"))
+        if state != {"RUNNING_MODAL"}:
+            return state
+        driver._job.wait(0.01)
+    raise AssertionError("the job never finished")
+
+
+def test_modal_job_finishes_and_shows_progress(pm):
+    finished = []
+    particles = pm.generate.Particles(fibonacci_sphere(20000))
+    job = pm.jobs.Job(pm.generate.run, "TRIANGULATE", particles, {"auto_spacing": True})
+    driver, context = modal_driver(pm, job, finished)
+    # Navigation passes through, other input is held while the job runs.
+    assert driver.modal(context, _Event("MIDDLEMOUSE", "PRESS")) == {"PASS_THROUGH"}
+    assert driver.modal(context, _Event("A", "PRESS")) == {"RUNNING_MODAL"}
+    assert run_modal(driver, context) == {"FINISHED"}
+    assert finished and finished[0].triangle_count > 40000
+    names = [c[0] for c in context.window_manager.calls]
+    assert names[:3] == ["event_timer_add", "modal_handler_add", "progress_begin"]
+    assert "progress_update" in names and names[-1] == "progress_end"
+    assert ("status_text_set", (None,)) in context.workspace.calls  # status bar cleared
+
+
+def test_modal_job_escape_cancels(pm):
+    finished = []
+    particles = pm.generate.Particles(fibonacci_sphere(300000))
+    job = pm.jobs.Job(pm.generate.run, "TRIANGULATE", particles, {"auto_spacing": True})
+    driver, context = modal_driver(pm, job, finished)
+    assert run_modal(driver, context, first=_Event("ESC", "PRESS")) == {"CANCELLED"}
+    assert not finished
+    assert driver.reports == [({"WARNING"}, "particlemesh: cancelled")]
+    assert [c[0] for c in context.window_manager.calls][-1] == "progress_end"
+
+
+def test_modal_job_error_is_reported(pm):
+    finished = []
+    p = fibonacci_sphere(1000)
+    p[7, 0] = np.inf
+    job = pm.jobs.Job(pm.generate.run, "TRIANGULATE", pm.generate.Particles(p), {})
+    driver, context = modal_driver(pm, job, finished)
+    assert run_modal(driver, context) == {"CANCELLED"}
+    assert driver.reports and driver.reports[0][0] == {"ERROR"}
+    assert "positions[7].x" in driver.reports[0][1]
