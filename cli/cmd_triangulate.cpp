@@ -7,6 +7,7 @@
 #include "particlemesh/core/error.h"
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
+#include "particlemesh/surface/reconstruct.h"
 #include "particlemesh/surface/triangulate.h"
 #include "progress_line.h"
 #include "report_json.h"
@@ -20,6 +21,12 @@ struct TriangulateArgs {
   double spacing = 0;
   double max_edge_factor = 2.0;
   bool raw = false;
+  bool no_orient = false;
+  bool no_repair = false;
+  std::string normals = "auto";
+  size_t fill_holes = 100;
+  double fill_edge_factor = 1.5;
+  double normal_angle = 90.0;
   bool ascii = false;
   bool quiet = false;
   int threads = 0;
@@ -33,14 +40,29 @@ int run_triangulate(const TriangulateArgs& a) {
   const PointCloud cloud = read_point_cloud(a.input);
   const double t_read = std::chrono::duration<double>(Clock::now() - t0).count();
 
-  TriangulateOptions opt;
+  SurfaceOptions opt;
   opt.spacing = a.spacing;
   opt.max_edge_factor = a.max_edge_factor;
   opt.threads = a.threads;
   opt.max_neighbors = a.max_neighbors;
+  opt.normal_angle = a.normal_angle;
+  opt.normals = a.normals == "input" ? SurfaceOptions::NormalSource::Input
+                : a.normals == "estimate" ? SurfaceOptions::NormalSource::Estimate
+                                          : SurfaceOptions::NormalSource::Auto;
+  opt.repair = !a.no_repair;
+  opt.fill_holes = a.fill_holes;
+  opt.fill_edge_factor = a.fill_edge_factor;
+  opt.orient = !a.no_orient;
   opt.progress = progress.callback();
   const auto t1 = Clock::now();
-  TriangulateResult result = triangulate_raw(cloud, opt);
+  SurfaceResult result;
+  if (a.raw) {
+    TriangulateResult r = triangulate_raw(cloud, opt);
+    result.mesh = std::move(r.mesh);
+    result.triangulation = r.stats;
+  } else {
+    result = reconstruct_surface(cloud, opt);
+  }
   const double t_tri = std::chrono::duration<double>(Clock::now() - t1).count();
   progress.clear();
   if (interrupted()) throw Error(Status::Cancelled, "interrupted");
@@ -55,14 +77,15 @@ int run_triangulate(const TriangulateArgs& a) {
   if (!a.report.empty()) {
     nlohmann::json j{{"input", a.input},
                      {"output", a.output},
-                     {"mode", a.raw ? "raw" : "raw"},
-                     {"triangulation", to_json(result.stats)},
+                     {"mode", a.raw ? "raw" : "surface"},
+                     {"triangulation", to_json(result.triangulation)},
+                     {"surface", a.raw ? nlohmann::json(nullptr) : to_json(result.surface)},
                      {"topology", to_json(report)},
                      {"seconds", {{"read", t_read}, {"triangulate", t_tri}, {"write", t_write}}}};
     write_json_file(j, a.report);
   }
   if (!a.quiet) {
-    const auto& s = result.stats;
+    const auto& s = result.triangulation;
     std::printf("particlemesh triangulate: %s -> %s\n", a.input.c_str(), a.output.c_str());
     std::printf("  points        %zu%s\n", s.points,
                 s.duplicate_points ? (" (" + std::to_string(s.duplicate_points) + " exact duplicates set aside)").c_str() : "");
@@ -70,6 +93,16 @@ int run_triangulate(const TriangulateArgs& a) {
     std::printf("  max edge L    %.6g (%g x r0)\n", s.max_edge, a.max_edge_factor);
     std::printf("  seed's test   %zu candidate triplets, %zu kept%s\n", s.candidates, s.kept,
                 s.ties ? (", " + std::to_string(s.ties) + " ties broken").c_str() : "");
+    if (!a.raw) {
+      const auto& f = result.surface;
+      std::printf("  normals       %s\n", f.normals_estimated ? (cloud.has_normals() && a.normals == "auto" ? "plane fits, facing as the input's normals" : "plane fits, oriented by a spanning tree") : "the input's");
+      std::printf("  surface       %zu co-normal candidates (%zu dropped), %zu grown from %zu seeds\n", f.candidates,
+                  f.rejected_conormal, f.grown, f.seeds);
+      std::printf("  repair        %zu holes filled (%zu triangles), %zu pinches resolved, %zu loops left open%s\n",
+                  f.holes_filled, f.hole_triangles, f.pinches_resolved, f.holes_left,
+                  f.holes_left ? (" (largest " + std::to_string(f.largest_hole_left) + " edges)").c_str() : "");
+      if (f.unused_points) std::printf("  unused        %zu particles in no triangle\n", f.unused_points);
+    }
     std::printf("%s", describe(report).c_str());
     std::printf("  time          %.2f s (read %.2f, triangulate %.2f, write %.2f)\n",
                 t_read + t_tri + t_write, t_read, t_tri, t_write);
@@ -92,6 +125,24 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
       ->check(CLI::Range(1e-6, 100.0))
       ->capture_default_str();
   app->add_flag("--raw", args->raw, "Return the seed's exact triangle set (not a surface: overlapping pairs on quads)");
+  app->add_option("--normal-angle", args->normal_angle,
+                  "Co-normality: drop triangles whose corner or face normals differ by more than this (degrees)")
+      ->check(CLI::Range(1.0, 180.0))
+      ->capture_default_str();
+  app->add_option("--normals", args->normals,
+                  "auto: plane-fit directions, facing as the input's normals say (if any); "
+                  "input: the input's normals as they are; estimate: ignore the input's normals")
+      ->check(CLI::IsMember({"auto", "input", "estimate"}))
+      ->capture_default_str();
+  app->add_flag("--no-repair", args->no_repair, "Skip the repair stage (hole filling, unpinching)");
+  app->add_option("--fill-holes", args->fill_holes, "Fill boundary loops of up to N edges (0 = none)")
+      ->check(CLI::Range(size_t(0), size_t(100000)))
+      ->capture_default_str();
+  app->add_option("--fill-edge-factor", args->fill_edge_factor,
+                  "Fill triangles' edges at most this x L: wider openings are real and stay open")
+      ->check(CLI::Range(0.1, 10.0))
+      ->capture_default_str();
+  app->add_flag("--no-orient", args->no_orient, "Do not turn closed components to face outward");
   app->add_option("--threads", args->threads, "Worker threads, 0 = all cores (the output does not depend on it)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();

@@ -58,6 +58,22 @@ nlohmann::json to_json(const TriangulateStats& s) {
           {"seconds", {{"spacing", s.seconds_spacing}, {"neighbors", s.seconds_neighbors}, {"test", s.seconds_test}}}};
 }
 
+nlohmann::json to_json(const SurfaceStats& s) {
+  return {{"normals_estimated", s.normals_estimated},
+          {"candidates", s.candidates},
+          {"rejected_conormal", s.rejected_conormal},
+          {"grown", s.grown},
+          {"seeds", s.seeds},
+          {"pinches_resolved", s.pinches_resolved},
+          {"holes_filled", s.holes_filled},
+          {"hole_triangles", s.hole_triangles},
+          {"holes_left", s.holes_left},
+          {"largest_hole_left", s.largest_hole_left},
+          {"components_flipped", s.components_flipped},
+          {"unused_points", s.unused_points},
+          {"seconds", {{"normals", s.seconds_normals}, {"extraction", s.seconds_extraction}, {"repair", s.seconds_repair}, {"orient", s.seconds_orient}}}};
+}
+
 std::string describe(const TopologyReport& r) {
   std::ostringstream o;
   o << "  vertices      " << r.vertices << " (" << r.vertices_used << " used)\n";

@@ -6,12 +6,14 @@
 #include <nlohmann/json.hpp>
 
 #include "particlemesh/mesh/topology_report.h"
+#include "particlemesh/surface/reconstruct.h"
 #include "particlemesh/surface/triangulate.h"
 
 namespace particlemesh::cli {
 
 nlohmann::json to_json(const TopologyReport& r);
 nlohmann::json to_json(const TriangulateStats& s);
+nlohmann::json to_json(const SurfaceStats& s);
 
 /// A few lines describing the mesh, for people.
 std::string describe(const TopologyReport& r);

@@ -23,8 +23,13 @@ def test_sample_then_triangulate_knot(cli, inspect, tmp_path):
     assert math.isclose(r["triangulation"]["max_edge"], 2 * r["triangulation"]["spacing"])
     assert r["topology"]["vertices_used"] == n
     mesh = inspect(out)
-    assert mesh["triangles"] == r["triangulation"]["kept"]
+    assert mesh["triangles"] == r["topology"]["triangles"]
     assert mesh["vertices"] == n
+    # The knotted tube is one closed, outward oriented torus-like surface using every particle.
+    assert mesh["closed"] and mesh["manifold"] and mesh["outward"]
+    assert mesh["components"] == 1 and mesh["per_component"][0]["genus"] == 1
+    assert mesh["vertices_used"] == n
+    assert r["surface"]["unused_points"] == 0
 
 
 def test_raw_counts_match_reference_on_bunny(cli, inspect, data_dir, tmp_path):

@@ -43,6 +43,9 @@ class ProgressTracker {
 
   bool cancelled() const { return cancelled_.load(std::memory_order_relaxed); }
 
+  /// The overall fraction at the start of the current stage.
+  double position() const { return begin_; }
+
   /// Throw Error(Cancelled) if cancellation was requested. Call from the owner thread
   /// (or anywhere: it only reads the flag).
   void check() const {

@@ -13,6 +13,7 @@
 #include "particlemesh/spatial/neighbor_grid.h"
 #include "spatial/grid_search.h"
 #include "surface/neighbor_lists.h"
+#include "surface/raw_triangulation.h"
 #include "surface/smallest_sphere.h"
 #include "surface/spacing_impl.h"
 
@@ -43,132 +44,146 @@ struct TestCounters {
 
 }  // namespace
 
-TriangulateResult triangulate_raw(const PointCloud& cloud, const TriangulateOptions& options) {
+namespace detail {
+
+RawTriangulation run_raw_triangulation(const PointCloud& cloud, const TriangulateOptions& options,
+                                       ProgressTracker& tracker, double begin, double end) {
   check_options(options);
   validate_point_cloud(cloud);
   const size_t n = cloud.size();
   if (n == 0) throw Error(Status::InvalidInput, "the point cloud is empty");
   if (n < 3) throw Error(Status::InvalidInput, "at least three points are needed, got " + std::to_string(n));
+  auto at = [&](double f) { return begin + (end - begin) * f; };
 
-  detail::ProgressTracker tracker(options.progress);
-  TriangulateResult result;
-  TriangulateStats& st = result.stats;
+  RawTriangulation raw;
+  TriangulateStats& st = raw.stats;
   st.points = n;
 
-  detail::with_threads(options.threads, [&] {
-    // 1. Spacing.
-    auto t0 = Clock::now();
-    if (options.spacing > 0) {
-      st.spacing = options.spacing;
-    } else {
-      const SpacingEstimate est = detail::estimate_spacing_impl(cloud.positions.data(), n, tracker, 0.0, 0.3);
-      st.spacing = est.spacing;
-      st.spacing_estimated = true;
-    }
-    st.max_edge = options.max_edge_factor * st.spacing;
-    if (!(st.max_edge > 0) || !std::isfinite(st.max_edge))
-      throw Error(Status::InvalidArgument, "the max edge length is not a positive finite number");
-    st.seconds_spacing = seconds_since(t0);
+  // 1. Spacing.
+  auto t0 = Clock::now();
+  if (options.spacing > 0) {
+    st.spacing = options.spacing;
+  } else {
+    const SpacingEstimate est = estimate_spacing_impl(cloud.positions.data(), n, tracker, at(0.0), at(0.3));
+    st.spacing = est.spacing;
+    st.spacing_estimated = true;
+  }
+  st.max_edge = options.max_edge_factor * st.spacing;
+  if (!(st.max_edge > 0) || !std::isfinite(st.max_edge))
+    throw Error(Status::InvalidArgument, "the max edge length is not a positive finite number");
+  st.seconds_spacing = seconds_since(t0);
 
-    // 2. Neighbour lists within R = 2L/sqrt(3). A point strictly inside the smallest sphere of
-    //    a triangle with edges <= L is closer than 2 rho <= 2L/sqrt(3) to *every* corner (rho is
-    //    at most L/sqrt(3) for an acute triangle, L/2 for an obtuse one), so the list of the
-    //    triangle's lowest corner alone holds every possible blocker.
-    t0 = Clock::now();
-    tracker.stage("neighbour search", 0.3, 0.55, n);
-    const double block_radius = st.max_edge * (2.0 / std::sqrt(3.0)) * (1.0 + 1e-6);
-    const NeighborGrid grid(cloud.positions.data(), n, block_radius);
-    size_t duplicates = 0;
-    const std::vector<uint32_t> rep = detail::find_duplicates(grid, &duplicates);
-    st.duplicate_points = duplicates;
-    if (n - duplicates < 3)
-      throw Error(Status::InvalidInput, "fewer than three distinct points (all points coincide?)");
-    const detail::NeighborLists nbr =
-        detail::build_neighbor_lists(grid, rep, block_radius, options.max_neighbors, tracker);
-    st.max_neighbors_seen = nbr.max_count;
-    st.seconds_neighbors = seconds_since(t0);
+  // 2. Neighbour lists within R = 2L/sqrt(3). A point strictly inside the smallest sphere of
+  //    a triangle with edges <= L is closer than 2 rho <= 2L/sqrt(3) to *every* corner (rho is
+  //    at most L/sqrt(3) for an acute triangle, L/2 for an obtuse one), so the list of the
+  //    triangle's lowest corner alone holds every possible blocker.
+  t0 = Clock::now();
+  tracker.stage("neighbour search", at(0.3), at(0.55), n);
+  raw.neighbor_radius = st.max_edge * (2.0 / std::sqrt(3.0)) * (1.0 + 1e-6);
+  raw.grid = std::make_unique<NeighborGrid>(cloud.positions.data(), n, raw.neighbor_radius);
+  const NeighborGrid& grid = *raw.grid;
+  size_t duplicates = 0;
+  raw.rep = find_duplicates(grid, &duplicates);
+  st.duplicate_points = duplicates;
+  if (n - duplicates < 3)
+    throw Error(Status::InvalidInput, "fewer than three distinct points (all points coincide?)");
+  raw.neighbors = build_neighbor_lists(grid, raw.rep, raw.neighbor_radius, options.max_neighbors, tracker);
+  const NeighborLists& nbr = raw.neighbors;
+  st.max_neighbors_seen = nbr.max_count;
+  st.seconds_neighbors = seconds_since(t0);
 
-    // 3. The test. Each triangle is generated once, from its lowest sorted index i, as a pair
-    //    j < k of i's higher neighbours within L.
-    t0 = Clock::now();
-    tracker.stage("testing triangles", 0.55, 0.95, n);
-    const double L2 = st.max_edge * st.max_edge;
-    const auto& P = grid.sorted_points();
-    const size_t block = 1024;
-    const size_t blocks = (n + block - 1) / block;
-    std::vector<std::vector<Triangle>> out(blocks);
-    std::vector<TestCounters> counters(blocks);
-    detail::parallel_blocks(blocks, 1, [&](size_t bb, size_t be) {
-      std::vector<uint32_t> near;  // i's higher neighbours within L
-      for (size_t b = bb; b < be; ++b) {
-        if (tracker.cancelled()) return;
-        auto& tris = out[b];
-        auto& cnt = counters[b];
-        const uint32_t sb = uint32_t(b * block), se = uint32_t(std::min(n, (b + 1) * block));
-        for (uint32_t i = sb; i < se; ++i) {
-          const uint32_t* ni = nbr.begin(i);
-          const uint32_t* ne = nbr.end(i);
-          const Vec3 pi = P[i];
-          near.clear();
-          for (const uint32_t* q = std::upper_bound(ni, ne, i); q != ne; ++q)
-            if (squared_distance(P[*q], pi) <= L2) near.push_back(*q);
-          for (size_t a = 0; a < near.size(); ++a) {
-            const uint32_t j = near[a];
-            for (size_t c = a + 1; c < near.size(); ++c) {
-              const uint32_t k = near[c];
-              if (squared_distance(P[j], P[k]) > L2) continue;
-              const detail::SmallestSphere s = detail::smallest_sphere(pi, P[j], P[k]);
-              if (s.degenerate) {
-                ++cnt.degenerate;
-                continue;
-              }
-              ++cnt.candidates;
-              bool blocked = false, tie = false;
-              for (const uint32_t* q = ni; q != ne; ++q) {
-                if (*q == j || *q == k) continue;
-                if (detail::sphere_contains(s, P[*q], &tie)) {
-                  blocked = true;
-                  break;
-                }
-              }
-              if (tie) ++cnt.ties;
-              if (blocked) continue;
-              Triangle t{grid.original_index(i), grid.original_index(j), grid.original_index(k)};
-              if (t[0] > t[1]) std::swap(t[0], t[1]);
-              if (t[1] > t[2]) std::swap(t[1], t[2]);
-              if (t[0] > t[1]) std::swap(t[0], t[1]);
-              tris.push_back(t);
+  // 3. The test. Each triangle is generated once, from its lowest sorted index i, as a pair
+  //    j < k of i's higher neighbours within L.
+  t0 = Clock::now();
+  tracker.stage("testing triangles", at(0.55), at(0.95), n);
+  const double L2 = st.max_edge * st.max_edge;
+  const auto& P = grid.sorted_points();
+  const size_t block = 1024;
+  const size_t blocks = (n + block - 1) / block;
+  std::vector<std::vector<Triangle>> out(blocks);
+  std::vector<TestCounters> counters(blocks);
+  parallel_blocks(blocks, 1, [&](size_t bb, size_t be) {
+    std::vector<uint32_t> near;  // i's higher neighbours within L
+    for (size_t b = bb; b < be; ++b) {
+      if (tracker.cancelled()) return;
+      auto& tris = out[b];
+      auto& cnt = counters[b];
+      const uint32_t sb = uint32_t(b * block), se = uint32_t(std::min(n, (b + 1) * block));
+      for (uint32_t i = sb; i < se; ++i) {
+        const uint32_t* ni = nbr.begin(i);
+        const uint32_t* ne = nbr.end(i);
+        const Vec3 pi = P[i];
+        near.clear();
+        for (const uint32_t* q = std::upper_bound(ni, ne, i); q != ne; ++q)
+          if (squared_distance(P[*q], pi) <= L2) near.push_back(*q);
+        for (size_t a = 0; a < near.size(); ++a) {
+          const uint32_t j = near[a];
+          for (size_t c = a + 1; c < near.size(); ++c) {
+            const uint32_t k = near[c];
+            if (squared_distance(P[j], P[k]) > L2) continue;
+            const SmallestSphere s = smallest_sphere(pi, P[j], P[k]);
+            if (s.degenerate) {
+              ++cnt.degenerate;
+              continue;
             }
+            ++cnt.candidates;
+            bool blocked = false, tie = false;
+            for (const uint32_t* q = ni; q != ne; ++q) {
+              if (*q == j || *q == k) continue;
+              if (sphere_contains(s, P[*q], &tie)) {
+                blocked = true;
+                break;
+              }
+            }
+            if (tie) ++cnt.ties;
+            if (blocked) continue;
+            Triangle t{grid.original_index(i), grid.original_index(j), grid.original_index(k)};
+            if (t[0] > t[1]) std::swap(t[0], t[1]);
+            if (t[1] > t[2]) std::swap(t[1], t[2]);
+            if (t[0] > t[1]) std::swap(t[0], t[1]);
+            tris.push_back(t);
           }
         }
-        tracker.tick(se - sb);
       }
-    });
-    tracker.check();
-
-    size_t total = 0;
-    for (size_t b = 0; b < blocks; ++b) {
-      total += out[b].size();
-      st.candidates += counters[b].candidates;
-      st.degenerate += counters[b].degenerate;
-      st.ties += counters[b].ties;
+      tracker.tick(se - sb);
     }
-    tracker.stage("sorting", 0.95, 1.0);
-    std::vector<Triangle>& tris = result.mesh.triangles;
-    tris.reserve(total);
-    for (auto& v : out) {
-      tris.insert(tris.end(), v.begin(), v.end());
-      std::vector<Triangle>().swap(v);
-    }
-    // Packed keys compare as one integer (std::array's operator< goes through memcmp).
-    tbb::parallel_sort(tris.begin(), tris.end(), [](const Triangle& x, const Triangle& y) {
-      const uint64_t kx = (uint64_t(x[0]) << 32) | x[1], ky = (uint64_t(y[0]) << 32) | y[1];
-      return kx != ky ? kx < ky : x[2] < y[2];
-    });
-    st.kept = tris.size();
-    st.seconds_test = seconds_since(t0);
   });
+  tracker.check();
 
+  size_t total = 0;
+  for (size_t b = 0; b < blocks; ++b) {
+    total += out[b].size();
+    st.candidates += counters[b].candidates;
+    st.degenerate += counters[b].degenerate;
+    st.ties += counters[b].ties;
+  }
+  tracker.stage("sorting", at(0.95), at(1.0));
+  std::vector<Triangle>& tris = raw.triangles;
+  tris.reserve(total);
+  for (auto& v : out) {
+    tris.insert(tris.end(), v.begin(), v.end());
+    std::vector<Triangle>().swap(v);
+  }
+  // Packed keys compare as one integer (std::array's operator< goes through memcmp).
+  tbb::parallel_sort(tris.begin(), tris.end(), [](const Triangle& x, const Triangle& y) {
+    const uint64_t kx = (uint64_t(x[0]) << 32) | x[1], ky = (uint64_t(y[0]) << 32) | y[1];
+    return kx != ky ? kx < ky : x[2] < y[2];
+  });
+  st.kept = tris.size();
+  st.seconds_test = seconds_since(t0);
+  return raw;
+}
+
+}  // namespace detail
+
+TriangulateResult triangulate_raw(const PointCloud& cloud, const TriangulateOptions& options) {
+  check_options(options);
+  detail::ProgressTracker tracker(options.progress);
+  detail::RawTriangulation raw = detail::with_threads(
+      options.threads, [&] { return detail::run_raw_triangulation(cloud, options, tracker, 0.0, 1.0); });
+  TriangulateResult result;
+  result.stats = raw.stats;
+  result.mesh.triangles = std::move(raw.triangles);
   result.mesh.positions = cloud.positions;
   result.mesh.normals = cloud.normals;
   result.mesh.attributes = cloud.attributes;

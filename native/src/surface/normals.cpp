@@ -1,0 +1,230 @@
+#include "particlemesh/surface/normals.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <numeric>
+
+#include <Eigen/Eigenvalues>
+#include <tbb/parallel_sort.h>
+
+#include "core/parallel.h"
+#include "particlemesh/core/error.h"
+#include "spatial/grid_search.h"
+#include "surface/normals_impl.h"
+#include "surface/spacing_impl.h"
+
+namespace particlemesh {
+namespace detail {
+
+std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
+                                     const NeighborLists& lists, double radius, ProgressTracker& tracker) {
+  const size_t n = grid.point_count();
+  std::vector<Vec3> normals(n);
+  const double r2 = radius * radius;
+  parallel_blocks(n, 2048, [&](size_t b, size_t e) {
+    if (tracker.cancelled()) return;
+    for (size_t s = b; s < e; ++s) {
+      if (rep[s] != s) continue;
+      const Vec3 p = grid.sorted_point(uint32_t(s));
+      // Covariance about the centroid of the point and its neighbours, in local coordinates.
+      Vec3 sum{};
+      int count = 1;
+      for (const uint32_t* q = lists.begin(uint32_t(s)); q != lists.end(uint32_t(s)); ++q) {
+        const Vec3 d = grid.sorted_point(*q) - p;
+        if (squared_norm(d) > r2) continue;
+        sum += d;
+        ++count;
+      }
+      if (count < 3) continue;  // too few neighbours for a plane: unknown (0,0,0)
+      const Vec3 mean = sum / double(count);
+      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+      auto add = [&](const Vec3& d) {
+        const Eigen::Vector3d v(d.x - mean.x, d.y - mean.y, d.z - mean.z);
+        cov += v * v.transpose();
+      };
+      add(Vec3{});
+      for (const uint32_t* q = lists.begin(uint32_t(s)); q != lists.end(uint32_t(s)); ++q) {
+        const Vec3 d = grid.sorted_point(*q) - p;
+        if (squared_norm(d) <= r2) add(d);
+      }
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+      eig.computeDirect(cov);
+      const Eigen::Vector3d v = eig.eigenvectors().col(0);  // smallest eigenvalue first
+      normals[s] = normalized(Vec3{v.x(), v.y(), v.z()});
+    }
+    tracker.tick(e - b);
+  });
+  tracker.check();
+  for (size_t s = 0; s < n; ++s)
+    if (rep[s] != s) normals[s] = normals[rep[s]];
+  return normals;
+}
+
+void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
+                        const NeighborLists& lists, double radius, std::vector<Vec3>& normals,
+                        const std::vector<Vec3>& reference, ProgressTracker& tracker) {
+  const size_t n = grid.point_count();
+  const double r2 = radius * radius;
+  // Edges s < t of the neighbour graph, keyed by (cost as float bits, edge index): sorting
+  // the keys sorts by cost with ties broken by position in the list (deterministic).
+  std::vector<uint64_t> offset(n + 1, 0);
+  for (size_t s = 0; s < n; ++s) {
+    uint64_t c = 0;
+    if (rep[s] == s && squared_norm(normals[s]) > 0)
+      for (const uint32_t* q = std::upper_bound(lists.begin(uint32_t(s)), lists.end(uint32_t(s)), uint32_t(s));
+           q != lists.end(uint32_t(s)); ++q)
+        c += squared_norm(normals[*q]) > 0 && squared_distance(grid.sorted_point(*q), grid.sorted_point(uint32_t(s))) <= r2;
+    offset[s + 1] = offset[s] + c;
+  }
+  const uint64_t m = offset[n];
+  if (m >= (uint64_t(1) << 31)) throw Error(Status::LimitExceeded, "too many neighbour pairs for normal orientation");
+  std::vector<uint32_t> edge_from(m), edge_to(m);
+  std::vector<uint64_t> keys(m);
+  parallel_blocks(n, 2048, [&](size_t b, size_t e) {
+    for (size_t s = b; s < e; ++s) {
+      uint64_t k = offset[s];
+      if (k == offset[s + 1]) continue;
+      const Vec3 p = grid.sorted_point(uint32_t(s));
+      const Vec3 ns = normals[s];
+      for (const uint32_t* q = std::upper_bound(lists.begin(uint32_t(s)), lists.end(uint32_t(s)), uint32_t(s));
+           q != lists.end(uint32_t(s)); ++q) {
+        const Vec3 d = grid.sorted_point(*q) - p;
+        if (!(squared_norm(normals[*q]) > 0) || squared_norm(d) > r2) continue;
+        const Vec3 nt = normals[*q];
+        const double len = norm(d);
+        // Slope of the edge out of the tangent planes: ~0 within a sheet, ~1 across a gap.
+        const double slope = (std::abs(dot(d, ns)) + std::abs(dot(d, nt))) / (2 * len);
+        const bool across = slope > 0.5;
+        const float cost = float(1.0 - std::abs(dot(ns, nt)) + (across ? 1.0 - slope : slope));
+        uint32_t bits;
+        std::memcpy(&bits, &cost, sizeof bits);  // non-negative floats order as their bits
+        edge_from[k] = uint32_t(s);
+        edge_to[k] = *q;
+        // The low bit of the index slot carries the edge's kind (k < 2^31 is checked above).
+        keys[k] = (uint64_t(bits) << 32) | (uint64_t(k) << 1) | uint64_t(across);
+        ++k;
+      }
+    }
+  });
+  tracker.check();
+  tbb::parallel_sort(keys.begin(), keys.end());
+  tracker.check();
+
+  // Kruskal: the tree's adjacency, then a traversal from each tree's highest point.
+  std::vector<uint32_t> parent(n);
+  std::iota(parent.begin(), parent.end(), 0u);
+  auto find = [&](uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  std::vector<uint32_t> tree_deg(n + 1, 0);
+  std::vector<uint32_t> tree_edges;
+  tree_edges.reserve(n);
+  std::vector<uint8_t> across(m, 0);
+  size_t step = 0;
+  for (uint64_t key : keys) {
+    if ((++step & 0xfffff) == 0) tracker.check();
+    const uint32_t k = uint32_t((key & 0xffffffffu) >> 1);
+    const uint32_t a = find(edge_from[k]), b = find(edge_to[k]);
+    if (a == b) continue;
+    parent[std::max(a, b)] = std::min(a, b);
+    tree_edges.push_back(k);
+    across[k] = uint8_t(key & 1u);
+  }
+  std::vector<uint32_t>().swap(parent);
+  for (uint32_t k : tree_edges) {
+    ++tree_deg[edge_from[k] + 1];
+    ++tree_deg[edge_to[k] + 1];
+  }
+  std::partial_sum(tree_deg.begin(), tree_deg.end(), tree_deg.begin());
+  std::vector<uint32_t> adj(tree_deg[n]);
+  std::vector<uint8_t> adj_across(tree_deg[n]);
+  {
+    std::vector<uint32_t> fill(tree_deg.begin(), tree_deg.end() - 1);
+    for (uint32_t k : tree_edges) {
+      adj_across[fill[edge_from[k]]] = across[k];
+      adj[fill[edge_from[k]]++] = edge_to[k];
+      adj_across[fill[edge_to[k]]] = across[k];
+      adj[fill[edge_to[k]]++] = edge_from[k];
+    }
+  }
+  // Roots: visit points from the highest down; each unvisited one starts a tree.
+  std::vector<uint32_t> order;
+  order.reserve(n);
+  for (uint32_t s = 0; s < n; ++s)
+    if (rep[s] == s && squared_norm(normals[s]) > 0) order.push_back(s);
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+    const Vec3 &p = grid.sorted_point(a), &q = grid.sorted_point(b);
+    if (p.z != q.z) return p.z > q.z;
+    if (p.x != q.x) return p.x > q.x;
+    return p.y > q.y;
+  });
+  std::vector<uint8_t> seen(n, 0);
+  std::vector<uint32_t> stack, piece;
+  const bool vote = !reference.empty();
+  tracker.check();
+  for (uint32_t root : order) {
+    if (seen[root]) continue;
+    Vec3& nr = normals[root];
+    if (nr.z < 0 || (nr.z == 0 && (nr.x < 0 || (nr.x == 0 && nr.y < 0)))) nr = -nr;
+    seen[root] = 1;
+    stack.push_back(root);
+    piece.clear();
+    double agreement = 0;
+    while (!stack.empty()) {
+      const uint32_t s = stack.back();
+      stack.pop_back();
+      piece.push_back(s);
+      if (vote) agreement += dot(normals[s], reference[s]);
+      for (uint32_t i = tree_deg[s]; i < tree_deg[s + 1]; ++i) {
+        const uint32_t t = adj[i];
+        if (seen[t]) continue;
+        seen[t] = 1;
+        // Within a sheet the normals agree; across a gap they are opposite.
+        if ((dot(normals[t], normals[s]) < 0) != bool(adj_across[i])) normals[t] = -normals[t];
+        stack.push_back(t);
+      }
+    }
+    if (vote && agreement < 0)
+      for (uint32_t s : piece) normals[s] = -normals[s];
+  }
+  // Where the reference clearly says which way a point faces, it wins over the tree (a
+  // misread edge at a thin rim can flip a few points). Nearly perpendicular references say
+  // nothing and are ignored.
+  if (vote)
+    for (size_t s = 0; s < n; ++s)
+      if (dot(normals[s], normalized(reference[s])) < -0.3) normals[s] = -normals[s];
+  for (size_t s = 0; s < n; ++s)
+    if (rep[s] != s) normals[s] = normals[rep[s]];
+}
+
+}  // namespace detail
+
+std::vector<Vec3> estimate_normals(const PointCloud& cloud, const NormalOptions& options) {
+  validate_point_cloud(cloud);
+  if (cloud.size() < 3) throw Error(Status::InvalidInput, "at least three points are needed to estimate normals");
+  if (!(options.radius >= 0) || !std::isfinite(options.radius))
+    throw Error(Status::InvalidArgument, "normal radius must be >= 0 (0 = 2 x spacing)");
+  detail::ProgressTracker tracker(options.progress);
+  return detail::with_threads(options.threads, [&] {
+    double radius = options.radius;
+    if (radius == 0)
+      radius = 2.0 * detail::estimate_spacing_impl(cloud.positions.data(), cloud.size(), tracker, 0, 0.3).spacing;
+    const NeighborGrid grid(cloud.positions.data(), cloud.size(), radius);
+    size_t dups = 0;
+    const auto rep = detail::find_duplicates(grid, &dups);
+    tracker.stage("neighbour search", 0.3, 0.5, cloud.size());
+    const detail::NeighborLists lists = detail::build_neighbor_lists(grid, rep, radius, size_t(1) << 20, tracker);
+    tracker.stage("estimating normals", 0.5, 0.8, cloud.size());
+    std::vector<Vec3> sorted = detail::pca_normals_sorted(grid, rep, lists, radius, tracker);
+    tracker.stage("orienting normals", 0.8, 1.0);
+    detail::orient_normals_mst(grid, rep, lists, radius, sorted, {}, tracker);
+    std::vector<Vec3> out(cloud.size());
+    for (uint32_t s = 0; s < cloud.size(); ++s) out[grid.original_index(s)] = sorted[s];
+    tracker.finish();
+    return out;
+  });
+}
+
+}  // namespace particlemesh

@@ -1,0 +1,31 @@
+// Internal: normal estimation over an existing grid and neighbour lists.
+#pragma once
+
+#include <vector>
+
+#include "core/progress_tracker.h"
+#include "particlemesh/core/vec3.h"
+#include "particlemesh/spatial/neighbor_grid.h"
+#include "surface/neighbor_lists.h"
+
+namespace particlemesh::detail {
+
+/// Normals indexed by SORTED index (duplicates copy their representative's), from the lists'
+/// neighbours within `radius` (<= the lists' radius). `oriented`: also run the MST
+/// orientation; otherwise only the PCA directions (arbitrary signs).
+std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
+                                     const NeighborLists& lists, double radius, ProgressTracker& tracker);
+
+/// Orient unit normals (sorted index) consistently over a minimum spanning tree of the
+/// neighbour graph (Hoppe et al. 1992) with signed edges: an edge that lies in the tangent
+/// planes joins points of one sheet, whose normals must agree; an edge along the (parallel)
+/// normals crosses a gap between two sheets, whose normals must be opposite (across any gap
+/// of a closed surface the outward normals both face the gap or both face away). Each edge
+/// costs 1 - |n_i . n_j| plus how far it is from being clearly one or the other, so the tree
+/// follows the clearest evidence first. Each tree faces as `reference` normals (sorted index,
+/// may be empty) say on the majority of its points, else its highest point faces +z.
+void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
+                        const NeighborLists& lists, double radius, std::vector<Vec3>& normals,
+                        const std::vector<Vec3>& reference, ProgressTracker& tracker);
+
+}  // namespace particlemesh::detail

@@ -1,0 +1,747 @@
+#include "surface/surface_builder.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <numbers>
+#include <numeric>
+#include <queue>
+#include <unordered_map>
+#include <unordered_set>
+
+#include <tbb/parallel_sort.h>
+
+#include "core/parallel.h"
+#include "particlemesh/core/error.h"
+
+namespace particlemesh::detail {
+
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+constexpr float kArcEps = 2e-5f;  // radians; arcs are stored as floats
+
+struct Frame {
+  Vec3 u, w;
+};
+
+Frame tangent_frame(const Vec3& n) {
+  const Vec3 axis = std::abs(n.x) < 0.57 ? Vec3{1, 0, 0} : (std::abs(n.y) < 0.57 ? Vec3{0, 1, 0} : Vec3{0, 0, 1});
+  const Vec3 u = normalized(cross(n, axis));
+  return {u, cross(n, u)};
+}
+
+double angle_of(const Frame& f, const Vec3& d) { return std::atan2(dot(d, f.w), dot(d, f.u)); }
+
+/// A counter-clockwise arc (about the vertex normal) of a triangle's corner.
+struct Arc {
+  float start = 0, length = 0;
+};
+
+Arc make_arc(const Frame& f, const Vec3& v, const Vec3& succ, const Vec3& pred) {
+  const double a = angle_of(f, succ - v), b = angle_of(f, pred - v);
+  double len = b - a;
+  if (len < 0) len += kTwoPi;
+  return {float(a), float(len)};
+}
+
+bool arcs_overlap(const Arc& a, const Arc& b) {
+  float d = b.start - a.start;
+  if (d < 0) d += float(kTwoPi);
+  if (d >= float(kTwoPi)) d -= float(kTwoPi);
+  return d < a.length - kArcEps || d + b.length > float(kTwoPi) + kArcEps;
+}
+
+double max_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
+  auto ang = [](const Vec3& p, const Vec3& q, const Vec3& r) {
+    const Vec3 u = q - p, v = r - p;
+    const double d = dot(u, v) / std::sqrt(squared_norm(u) * squared_norm(v));
+    return std::acos(std::clamp(d, -1.0, 1.0));
+  };
+  return std::max({ang(a, b, c), ang(b, c, a), ang(c, a, b)});
+}
+
+int corner_of(const Triangle& t, uint32_t v) { return t[0] == v ? 0 : (t[1] == v ? 1 : 2); }
+
+class Builder {
+ public:
+  Builder(const std::vector<Vec3>& P, const std::vector<Vec3>& N, const std::vector<uint8_t>& active,
+          const BuilderOptions& o, BuilderStats& stats, ProgressTracker& tracker)
+      : P_(P), N_(N), active_(active), o_(o), stats_(stats), tracker_(tracker), frame_(P.size()) {
+    detail::parallel_blocks(P.size(), 4096, [&](size_t b, size_t e) {
+      for (size_t i = b; i < e; ++i)
+        if (squared_norm(N_[i]) > 0) frame_[i] = tangent_frame(N_[i]);
+    });
+  }
+
+  // ---- candidates ------------------------------------------------------------------------
+
+  void add_candidates(const std::vector<Triangle>& raw) {
+    struct Oriented {
+      Triangle t;
+      float quality;
+      bool ok;
+    };
+    std::vector<Oriented> o(raw.size());
+    const double cosa = o_.cos_normal_angle;
+    detail::parallel_blocks(raw.size(), 4096, [&](size_t b, size_t e) {
+      for (size_t i = b; i < e; ++i) {
+        Triangle t = raw[i];
+        o[i].ok = false;
+        if (!active_[t[0]] || !active_[t[1]] || !active_[t[2]]) continue;
+        const Vec3 &na = N_[t[0]], &nb = N_[t[1]], &nc = N_[t[2]];
+        if (!(squared_norm(na) > 0 && squared_norm(nb) > 0 && squared_norm(nc) > 0)) continue;
+        Vec3 f = cross(P_[t[1]] - P_[t[0]], P_[t[2]] - P_[t[0]]);
+        if (dot(f, na + nb + nc) < 0) {
+          std::swap(t[1], t[2]);
+          f = -f;
+        }
+        const Vec3 fu = normalized(f);
+        // Co-normality (seed 5.2.4): corners agree with each other and with the face.
+        if (dot(na, nb) < cosa || dot(nb, nc) < cosa || dot(na, nc) < cosa) continue;
+        if (dot(fu, na) < cosa || dot(fu, nb) < cosa || dot(fu, nc) < cosa) continue;
+        o[i].t = t;
+        o[i].quality = float(max_angle(P_[t[0]], P_[t[1]], P_[t[2]]));
+        o[i].ok = true;
+      }
+    });
+    tracker_.check();
+    size_t kept = 0;
+    for (const auto& x : o) kept += x.ok;
+    stats_.rejected_conormal = raw.size() - kept;
+    stats_.candidates = kept;
+    // Best first: the smallest largest angle (the Delaunay diagonal of a quad beats the
+    // overlapping obtuse triangle), then the raw order (sorted indices) - deterministic.
+    std::vector<uint32_t> order;
+    order.reserve(kept);
+    for (uint32_t i = 0; i < o.size(); ++i)
+      if (o[i].ok) order.push_back(i);
+    tbb::parallel_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+      return o[a].quality != o[b].quality ? o[a].quality < o[b].quality : a < b;
+    });
+    tracker_.check();
+    cand_.resize(kept);
+    state_.assign(kept, kOpen);
+    arc_.resize(3 * kept);
+    detail::parallel_blocks(kept, 4096, [&](size_t b, size_t e) {
+      for (size_t c = b; c < e; ++c) {
+        const Triangle& t = o[order[c]].t;
+        cand_[c] = t;
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t v = t[k], s = t[(k + 1) % 3], p = t[(k + 2) % 3];
+          arc_[3 * c + k] = make_arc(frame_[v], P_[v], P_[s], P_[p]);
+        }
+      }
+    });
+    tracker_.check();
+    // Vertex -> candidates.
+    const size_t n = P_.size();
+    vc_off_.assign(n + 1, 0);
+    for (const Triangle& t : cand_)
+      for (uint32_t v : t) ++vc_off_[v + 1];
+    std::partial_sum(vc_off_.begin(), vc_off_.end(), vc_off_.begin());
+    vc_.resize(vc_off_[n]);
+    std::vector<uint32_t> fill(vc_off_.begin(), vc_off_.end() - 1);
+    for (uint32_t c = 0; c < cand_.size(); ++c)
+      for (uint32_t v : cand_[c]) vc_[fill[v]++] = c;
+    acc_count_.assign(n, 0);
+  }
+
+  // ---- growth ----------------------------------------------------------------------------
+
+  enum : uint8_t { kOpen = 0, kAccepted = 1, kDead = 2 };
+  enum Check { kOk = 0, kPinch = 1, kInvalid = 2 };
+
+  Check check(uint32_t c) const {
+    if (state_[c] != kOpen) return kInvalid;
+    const Triangle& C = cand_[c];
+    bool pinch = false;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = C[k];
+      if (acc_count_[v] == 0) continue;
+      const uint32_t succ = C[(k + 1) % 3], pred = C[(k + 2) % 3];
+      bool adjacent = false;
+      for (uint32_t i = vc_off_[v]; i < vc_off_[v + 1]; ++i) {
+        const uint32_t t = vc_[i];
+        if (state_[t] != kAccepted) continue;
+        const Triangle& T = cand_[t];
+        const int kt = corner_of(T, v);
+        const uint32_t ts = T[(kt + 1) % 3], tp = T[(kt + 2) % 3];
+        if (ts == succ || tp == pred) return kInvalid;  // a directed edge is taken
+        if (arcs_overlap(arc_[3 * t + kt], arc_[3 * c + k])) return kInvalid;
+        if (tp == succ || ts == pred) adjacent = true;
+      }
+      if (!adjacent) pinch = true;
+    }
+    return pinch ? kPinch : kOk;
+  }
+
+  template <class F>
+  void for_each_candidate_on_edge(uint32_t a, uint32_t b, F&& f) const {
+    const uint32_t x = (vc_off_[a + 1] - vc_off_[a] <= vc_off_[b + 1] - vc_off_[b]) ? a : b;
+    const uint32_t y = x == a ? b : a;
+    for (uint32_t i = vc_off_[x]; i < vc_off_[x + 1]; ++i) {
+      const Triangle& T = cand_[vc_[i]];
+      if (T[0] == y || T[1] == y || T[2] == y) f(vc_[i]);
+    }
+  }
+
+  void accept(uint32_t c, std::priority_queue<uint32_t, std::vector<uint32_t>, std::greater<>>& heap) {
+    state_[c] = kAccepted;
+    const Triangle& C = cand_[c];
+    for (uint32_t v : C) ++acc_count_[v];
+    ++stats_.grown;
+    // Candidates across each edge, wound the other way, join the front.
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = C[k], b = C[(k + 1) % 3];
+      for_each_candidate_on_edge(a, b, [&](uint32_t t) {
+        if (state_[t] != kOpen) return;
+        const Triangle& T = cand_[t];
+        const int kb = corner_of(T, b);
+        if (T[(kb + 1) % 3] == a) heap.push(t);  // T holds b -> a
+        else state_[t] = kDead;                  // T holds a -> b: can never be used
+      });
+    }
+  }
+
+  void grow() {
+    std::priority_queue<uint32_t, std::vector<uint32_t>, std::greater<>> heap, deferred;
+    size_t seed_ptr = 0, touch_ptr = 0;
+    tracker_.stage("extracting the surface", 0.7, 0.85, cand_.size());
+    size_t since_tick = 0;
+    while (true) {
+      if (++since_tick == 4096) {
+        tracker_.tick(4096);
+        since_tick = 0;
+        if (tracker_.cancelled()) tracker_.check();
+      }
+      if (!heap.empty()) {
+        const uint32_t c = heap.top();
+        heap.pop();
+        const Check r = check(c);
+        if (r == kOk) accept(c, heap);
+        else if (r == kPinch) deferred.push(c);
+        else if (state_[c] == kOpen) state_[c] = kDead;
+        continue;
+      }
+      if (!deferred.empty()) {
+        const uint32_t c = deferred.top();
+        deferred.pop();
+        if (check(c) != kInvalid) accept(c, heap);
+        continue;
+      }
+      // The front is exhausted: seed a new region on untouched points, best candidate first.
+      bool seeded = false;
+      for (; seed_ptr < cand_.size(); ++seed_ptr) {
+        const Triangle& C = cand_[seed_ptr];
+        if (state_[seed_ptr] == kOpen && acc_count_[C[0]] == 0 && acc_count_[C[1]] == 0 && acc_count_[C[2]] == 0) {
+          accept(uint32_t(seed_ptr), heap);
+          ++stats_.seeds;
+          seeded = true;
+          break;
+        }
+      }
+      if (seeded) continue;
+      // Last: give points that no region reached a triangle, even at the cost of a pinch.
+      for (; touch_ptr < cand_.size(); ++touch_ptr) {
+        const Triangle& C = cand_[touch_ptr];
+        if (acc_count_[C[0]] && acc_count_[C[1]] && acc_count_[C[2]]) continue;
+        if (check(uint32_t(touch_ptr)) != kInvalid) {
+          accept(uint32_t(touch_ptr), heap);
+          seeded = true;
+          break;
+        }
+      }
+      if (!seeded) break;
+    }
+    tracker_.check();
+    for (uint32_t c = 0; c < cand_.size(); ++c)
+      if (state_[c] == kAccepted) tris_.push_back(cand_[c]);
+    // Free the growth structures; repair works on the accepted triangles only.
+    std::vector<Triangle>().swap(cand_);
+    std::vector<Arc>().swap(arc_);
+    std::vector<uint32_t>().swap(vc_);
+    std::vector<uint32_t>().swap(vc_off_);
+  }
+
+  // ---- repair ----------------------------------------------------------------------------
+  //
+  // Works on the accepted triangles: vertex -> triangles as a CSR built once plus a small
+  // overflow for triangles added later, and the set of boundary half-edges (a -> b with no
+  // b -> a), kept up to date as triangles come and go, so that tracing loops and finding
+  // pinched vertices look only at the boundary, not at the whole surface.
+
+  template <class F>
+  void for_each_tri(uint32_t v, F&& f) const {
+    for (uint32_t i = vt_off_[v]; i < vt_off_[v + 1]; ++i)
+      if (alive_[vt_[i]]) f(vt_[i]);
+    if (!extra_.empty()) {
+      auto it = extra_.find(v);
+      if (it != extra_.end())
+        for (uint32_t t : it->second)
+          if (alive_[t]) f(t);
+    }
+  }
+
+  bool directed_used(uint32_t a, uint32_t b) const {
+    bool used = false;
+    for_each_tri(a, [&](uint32_t t) {
+      const Triangle& T = tris_[t];
+      if (T[(corner_of(T, a) + 1) % 3] == b) used = true;
+    });
+    return used;
+  }
+
+  bool edge_exists(uint32_t a, uint32_t b) const { return directed_used(a, b) || directed_used(b, a); }
+
+  static uint64_t half_key(uint32_t a, uint32_t b) { return (uint64_t(a) << 32) | b; }
+
+  void start_repair() {
+    const size_t n = P_.size();
+    alive_.assign(tris_.size(), 1);
+    vt_off_.assign(n + 1, 0);
+    for (const Triangle& t : tris_)
+      for (uint32_t v : t) ++vt_off_[v + 1];
+    std::partial_sum(vt_off_.begin(), vt_off_.end(), vt_off_.begin());
+    vt_.resize(vt_off_[n]);
+    {
+      std::vector<uint32_t> fill(vt_off_.begin(), vt_off_.end() - 1);
+      for (uint32_t t = 0; t < tris_.size(); ++t)
+        for (uint32_t v : tris_[t]) vt_[fill[v]++] = t;
+    }
+    // Boundary half-edges, found in parallel and joined in block order.
+    const size_t block = 8192, blocks = (tris_.size() + block - 1) / block;
+    std::vector<std::vector<uint64_t>> found(blocks);
+    detail::parallel_blocks(blocks, 1, [&](size_t bb, size_t be) {
+      for (size_t b = bb; b < be; ++b)
+        for (size_t t = b * block; t < std::min(tris_.size(), (b + 1) * block); ++t)
+          for (int k = 0; k < 3; ++k) {
+            const uint32_t a = tris_[t][k], c = tris_[t][(k + 1) % 3];
+            if (!directed_used(c, a)) found[b].push_back(half_key(a, c));
+          }
+    });
+    for (const auto& f : found) boundary_.insert(f.begin(), f.end());
+  }
+
+  void add_triangle(const Triangle& T) {
+    const uint32_t id = uint32_t(tris_.size());
+    tris_.push_back(T);
+    alive_.push_back(1);
+    for (uint32_t v : T) extra_[v].push_back(id);
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = T[k], b = T[(k + 1) % 3];
+      if (!boundary_.erase(half_key(b, a))) boundary_.insert(half_key(a, b));
+    }
+  }
+
+  void kill_triangle(uint32_t t) {
+    alive_[t] = 0;
+    const Triangle& T = tris_[t];
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = T[k], b = T[(k + 1) % 3];
+      if (!boundary_.erase(half_key(a, b))) boundary_.insert(half_key(b, a));
+    }
+  }
+
+  /// Boundary loops, each a vertex sequence following the boundary edges v_i -> v_{i+1};
+  /// loops through a vertex twice are split there. Sorted, each starting at its smallest
+  /// vertex, so the repair is deterministic.
+  std::vector<std::vector<uint32_t>> trace_loops() const {
+    std::vector<uint64_t> bnd(boundary_.begin(), boundary_.end());
+    std::sort(bnd.begin(), bnd.end());
+    std::vector<uint8_t> used(bnd.size(), 0);
+    auto find_edge = [&](uint32_t a, uint32_t b) -> int64_t {
+      auto it = std::lower_bound(bnd.begin(), bnd.end(), half_key(a, b));
+      return it != bnd.end() && *it == half_key(a, b) ? it - bnd.begin() : -1;
+    };
+    // Next boundary edge after a -> b: leave b along the wedge that follows, counter-clockwise,
+    // the gap where a -> b's triangle ends.
+    auto next_edge = [&](uint32_t a, uint32_t b) -> int64_t {
+      const double gap = angle_of(frame_[b], P_[a] - P_[b]);
+      double best = INFINITY;
+      int64_t best_e = -1;
+      for_each_tri(b, [&](uint32_t t) {
+        const Triangle& T = tris_[t];
+        const uint32_t s = T[(corner_of(T, b) + 1) % 3];
+        const int64_t e = find_edge(b, s);
+        if (e < 0 || used[size_t(e)]) return;
+        double d = angle_of(frame_[b], P_[s] - P_[b]) - gap;
+        while (d < 0) d += kTwoPi;
+        while (d >= kTwoPi) d -= kTwoPi;
+        if (d < best) {
+          best = d;
+          best_e = e;
+        }
+      });
+      return best_e;
+    };
+    std::vector<std::vector<uint32_t>> loops;
+    for (size_t start = 0; start < bnd.size(); ++start) {
+      if (used[start]) continue;
+      std::vector<uint32_t> path;
+      int64_t e = int64_t(start);
+      while (e >= 0 && !used[size_t(e)]) {
+        used[size_t(e)] = 1;
+        const uint32_t a = uint32_t(bnd[size_t(e)] >> 32), b = uint32_t(bnd[size_t(e)]);
+        // Split at a repeated vertex: the part since its last visit is a loop of its own.
+        auto it = std::find(path.begin(), path.end(), a);
+        if (it != path.end()) {
+          loops.emplace_back(it, path.end());
+          path.erase(it, path.end());
+        }
+        path.push_back(a);
+        if (b == path.front()) break;
+        e = next_edge(a, b);
+      }
+      if (path.size() >= 3) loops.push_back(std::move(path));
+    }
+    for (auto& l : loops) std::rotate(l.begin(), std::min_element(l.begin(), l.end()), l.end());
+    std::sort(loops.begin(), loops.end());
+    return loops;
+  }
+
+  /// Fill one loop, keeping the surface manifold: no edge that exists elsewhere may become a
+  /// diagonal, edges stay within the fill limit. Small loops (wrong diagonals, sampling gaps)
+  /// take the triangulation that minimises the largest angle; a loop is one gap at each of its
+  /// vertices, so any such fill keeps every fan a disk. Larger loops take the one that
+  /// minimises the largest dihedral angle, then the area (Liepa 2003), with no fold sharper
+  /// than kMaxFillDihedral against each other or the surrounding surface, so the patch
+  /// continues the surface instead of folding over it. Returns false (and adds nothing) when
+  /// no such triangulation exists.
+  bool fill_loop(const std::vector<uint32_t>& L) {
+    const size_t m = L.size();
+    if (m < 3) return false;
+    const double limit2 = std::pow(o_.fill_edge_factor * o_.max_edge, 2);
+    const bool smooth = m > o_.small_hole;
+    constexpr double kMaxFillDihedral = 2.1;  // radians, 120 degrees
+    auto diag_ok = [&](size_t i, size_t j) {
+      if ((j == i + 1) || (i == 0 && j == m - 1)) return true;
+      return squared_distance(P_[L[i]], P_[L[j]]) <= limit2 && !edge_exists(L[i], L[j]);
+    };
+    // The surface's triangle across each loop edge L[i] -> L[i+1], for the dihedral angles.
+    std::vector<Vec3> outside(m);
+    if (smooth)
+      for (size_t i = 0; i < m; ++i) {
+        const uint32_t a = L[i], b = L[(i + 1) % m];
+        for_each_tri(a, [&](uint32_t t) {
+          const Triangle& T = tris_[t];
+          if (T[(corner_of(T, a) + 1) % 3] == b)
+            outside[i] = normalized(cross(P_[T[1]] - P_[T[0]], P_[T[2]] - P_[T[0]]));
+        });
+      }
+    auto unit_normal = [&](size_t i, size_t j, size_t k) {  // of the fill triangle (L[k], L[j], L[i])
+      return normalized(cross(P_[L[j]] - P_[L[k]], P_[L[i]] - P_[L[k]]));
+    };
+    auto bend = [](const Vec3& a, const Vec3& b) { return std::acos(std::clamp(dot(a, b), -1.0, 1.0)); };
+    // (worst value, total) of the best triangulation of the chain i..k, and its apex.
+    std::vector<double> worst(m * m, INFINITY), total(m * m, INFINITY);
+    std::vector<uint32_t> apex(m * m, 0);
+    for (size_t i = 0; i + 1 < m; ++i) worst[i * m + i + 1] = total[i * m + i + 1] = 0;
+    auto chain_normal = [&](size_t i, size_t j) {
+      return j == i + 1 ? outside[i] : unit_normal(i, apex[i * m + j], j);
+    };
+    for (size_t len = 2; len < m; ++len)
+      for (size_t i = 0; i + len < m; ++i) {
+        const size_t k = i + len;
+        if (!diag_ok(i, k)) continue;
+        for (size_t j = i + 1; j < k; ++j) {
+          const double wl = worst[i * m + j], wr = worst[j * m + k];
+          if (!std::isfinite(wl) || !std::isfinite(wr)) continue;
+          const Vec3 f = cross(P_[L[j]] - P_[L[k]], P_[L[i]] - P_[L[k]]);
+          const double area = 0.5 * norm(f);
+          if (!(area > 0)) continue;
+          double value, add;
+          if (!smooth) {
+            value = max_angle(P_[L[k]], P_[L[j]], P_[L[i]]);
+            add = value;
+          } else {
+            const Vec3 nrm = f / (2 * area);
+            value = std::max(bend(nrm, chain_normal(i, j)), bend(nrm, chain_normal(j, k)));
+            if (i == 0 && k == m - 1) value = std::max(value, bend(nrm, outside[m - 1]));
+            if (value > kMaxFillDihedral) continue;
+            add = area;
+          }
+          const double w = std::max({wl, wr, value}), tt = total[i * m + j] + total[j * m + k] + add;
+          if (w < worst[i * m + k] || (w == worst[i * m + k] && tt < total[i * m + k])) {
+            worst[i * m + k] = w;
+            total[i * m + k] = tt;
+            apex[i * m + k] = uint32_t(j);
+          }
+        }
+      }
+    if (!std::isfinite(worst[m - 1])) return false;
+    std::vector<std::pair<size_t, size_t>> todo{{0, m - 1}};
+    std::vector<Triangle> added;
+    while (!todo.empty()) {
+      auto [i, k] = todo.back();
+      todo.pop_back();
+      if (k <= i + 1) continue;
+      const size_t j = apex[i * m + k];
+      added.push_back({L[k], L[j], L[i]});
+      todo.push_back({i, j});
+      todo.push_back({j, k});
+    }
+    for (const Triangle& T : added) add_triangle(T);
+    ++stats_.holes_filled;
+    stats_.hole_triangles += added.size();
+    return true;
+  }
+
+  /// Fill every loop with at most `max_size` edges; returns how many were filled.
+  size_t fill_loops(size_t max_size) {
+    if (boundary_.empty()) return 0;
+    size_t filled = 0;
+    for (const auto& L : trace_loops())
+      if (L.size() <= max_size && fill_loop(L)) ++filled;
+    return filled;
+  }
+
+  /// At vertices whose triangles form more than one fan, keep the largest fan. Such a vertex
+  /// has a gap between its fans, so it starts two or more boundary edges: only those are checked.
+  size_t unpinch() {
+    std::vector<uint32_t> starts;
+    for (uint64_t e : boundary_) starts.push_back(uint32_t(e >> 32));
+    std::sort(starts.begin(), starts.end());
+    std::vector<uint32_t> suspects;
+    for (size_t i = 1; i < starts.size(); ++i)
+      if (starts[i] == starts[i - 1]) suspects.push_back(starts[i]);
+    // Fills and insertions are not held to the wedge rule: check their corners too.
+    for (const auto& [v, list] : extra_) suspects.push_back(v);
+    std::sort(suspects.begin(), suspects.end());
+    suspects.erase(std::unique(suspects.begin(), suspects.end()), suspects.end());
+    size_t removed_fans = 0;
+    std::vector<uint32_t> ts, parent, size;
+    for (uint32_t v : suspects) {
+      ts.clear();
+      for_each_tri(v, [&](uint32_t t) { ts.push_back(t); });
+      if (ts.size() < 2) continue;
+      parent.resize(ts.size());
+      std::iota(parent.begin(), parent.end(), 0u);
+      auto find = [&](uint32_t x) {
+        while (parent[x] != x) x = parent[x] = parent[parent[x]];
+        return x;
+      };
+      for (size_t i = 0; i < ts.size(); ++i)
+        for (size_t j = i + 1; j < ts.size(); ++j) {
+          const Triangle &A = tris_[ts[i]], &B = tris_[ts[j]];
+          const int ka = corner_of(A, v), kb = corner_of(B, v);
+          if (A[(ka + 1) % 3] == B[(kb + 2) % 3] || A[(ka + 2) % 3] == B[(kb + 1) % 3])
+            parent[find(uint32_t(i))] = find(uint32_t(j));
+        }
+      size.assign(ts.size(), 0);
+      for (size_t i = 0; i < ts.size(); ++i) ++size[find(uint32_t(i))];
+      uint32_t best = find(0);
+      size_t fans = 0;
+      for (size_t i = 0; i < ts.size(); ++i)
+        if (find(uint32_t(i)) == i) {
+          ++fans;
+          if (size[i] > size[best]) best = uint32_t(i);
+        }
+      if (fans < 2) continue;
+      for (size_t i = 0; i < ts.size(); ++i)
+        if (find(uint32_t(i)) != best) kill_triangle(ts[i]);
+      removed_fans += fans - 1;
+    }
+    return removed_fans;
+  }
+
+  /// A particle the surface passed by is inserted into the surface triangle it lies over
+  /// (split in three), or, at a boundary, joined to the nearest boundary edge: every input
+  /// particle ends up a vertex of the surface.
+  size_t insert_unused(const std::vector<Triangle>& raw) {
+    std::vector<uint32_t> unused;
+    for (uint32_t p = 0; p < P_.size(); ++p) {
+      if (!active_[p]) continue;
+      bool used = false;
+      for_each_tri(p, [&](uint32_t) { used = true; });
+      if (!used) unused.push_back(p);
+    }
+    if (unused.empty()) return 0;
+    // The raw triangles at each unused particle tell which surface is around it.
+    std::vector<std::vector<uint32_t>> around(unused.size());
+    for (const Triangle& t : raw)
+      for (int k = 0; k < 3; ++k) {
+        auto it = std::lower_bound(unused.begin(), unused.end(), t[k]);
+        if (it != unused.end() && *it == t[k])
+          for (int q = 1; q < 3; ++q) around[size_t(it - unused.begin())].push_back(t[(k + q) % 3]);
+      }
+    size_t inserted = 0;
+    const double limit2 = std::pow(o_.fill_edge_factor * o_.max_edge, 2);
+    for (size_t u = 0; u < unused.size(); ++u) {
+      const uint32_t p = unused[u];
+      auto& nb = around[u];
+      std::sort(nb.begin(), nb.end());
+      nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
+      double best = INFINITY;
+      int64_t best_t = -1;
+      for (uint32_t w : nb)
+        for_each_tri(w, [&](uint32_t t) {
+          const Triangle& T = tris_[t];
+          const Vec3 a = P_[T[0]], b = P_[T[1]], c = P_[T[2]];
+          const Vec3 n = cross(b - a, c - a);
+          const double n2 = squared_norm(n);
+          if (!(n2 > 0)) return;
+          const Vec3 q = P_[p];
+          const double la = dot(cross(c - b, q - b), n) / n2, lb = dot(cross(a - c, q - c), n) / n2;
+          if (la < -1e-9 || lb < -1e-9 || 1 - la - lb < -1e-9) return;
+          const double h = std::abs(dot(q - a, n)) / std::sqrt(n2);
+          if (h < best) {
+            best = h;
+            best_t = t;
+          }
+        });
+      if (best_t >= 0 && best <= o_.max_edge) {
+        const Triangle T = tris_[size_t(best_t)];
+        kill_triangle(uint32_t(best_t));
+        add_triangle({T[0], T[1], p});
+        add_triangle({T[1], T[2], p});
+        add_triangle({T[2], T[0], p});
+        ++inserted;
+        continue;
+      }
+      // Else the nearest boundary edge a -> b within the fill limit gets the triangle (b, a, p).
+      double best_d = INFINITY;
+      std::pair<uint32_t, uint32_t> edge{0, 0};
+      for (uint32_t w : nb)
+        for_each_tri(w, [&](uint32_t t) {
+          for (int k = 0; k < 3; ++k) {
+            const uint32_t a = tris_[t][k], b = tris_[t][(k + 1) % 3];
+            if (!boundary_.count(half_key(a, b))) continue;
+            const double da = squared_distance(P_[a], P_[p]), db = squared_distance(P_[b], P_[p]);
+            if (da > limit2 || db > limit2) continue;
+            if (da + db < best_d) {
+              best_d = da + db;
+              edge = {a, b};
+            }
+          }
+        });
+      if (std::isfinite(best_d)) {
+        add_triangle({edge.second, edge.first, p});
+        ++inserted;
+      }
+    }
+    return inserted;
+  }
+
+  void repair(const std::vector<Triangle>& raw) {
+    tracker_.stage("repairing", 0.85, 0.97);
+    start_repair();
+    // Small loops first (wrong diagonals, sampling gaps), then pinches, then larger loops.
+    fill_loops(o_.small_hole);
+    tracker_.check();
+    stats_.pinches_resolved += unpinch();
+    fill_loops(o_.small_hole);
+    if (o_.max_hole > o_.small_hole) fill_loops(o_.max_hole);
+    stats_.pinches_resolved += unpinch();
+    if (insert_unused(raw) > 0) {
+      fill_loops(o_.small_hole);
+      stats_.pinches_resolved += unpinch();
+    }
+    tracker_.check();
+    if (!boundary_.empty()) {
+      const auto left = trace_loops();
+      stats_.holes_left = left.size();
+      for (const auto& l : left) stats_.largest_hole_left = std::max(stats_.largest_hole_left, l.size());
+    }
+    std::vector<Triangle> out;
+    out.reserve(tris_.size());
+    for (uint32_t t = 0; t < tris_.size(); ++t)
+      if (alive_[t]) out.push_back(tris_[t]);
+    tris_.swap(out);
+  }
+
+  std::vector<Triangle> take() { return std::move(tris_); }
+  /// Boundary half-edges left (only meaningful after repair()).
+  std::vector<uint64_t> boundary() const {
+    std::vector<uint64_t> b(boundary_.begin(), boundary_.end());
+    std::sort(b.begin(), b.end());
+    return b;
+  }
+
+ private:
+  const std::vector<Vec3>& P_;
+  const std::vector<Vec3>& N_;
+  const std::vector<uint8_t>& active_;
+  BuilderOptions o_;
+  BuilderStats& stats_;
+  ProgressTracker& tracker_;
+  std::vector<Frame> frame_;
+  // growth
+  std::vector<Triangle> cand_;
+  std::vector<uint8_t> state_;
+  std::vector<Arc> arc_;
+  std::vector<uint32_t> vc_off_, vc_;
+  std::vector<uint16_t> acc_count_;
+
+  // repair
+  std::vector<Triangle> tris_;
+  std::vector<uint8_t> alive_;
+  std::vector<uint32_t> vt_off_, vt_;
+  std::unordered_map<uint32_t, std::vector<uint32_t>> extra_;
+  std::unordered_set<uint64_t> boundary_;
+};
+
+}  // namespace
+
+std::vector<Triangle> build_surface(const std::vector<Vec3>& positions, const std::vector<Vec3>& normals,
+                                    const std::vector<uint8_t>& active, const std::vector<Triangle>& raw,
+                                    const BuilderOptions& options, bool repair, BuilderStats& stats,
+                                    ProgressTracker& tracker) {
+  using Clock = std::chrono::steady_clock;
+  auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
+  auto t0 = Clock::now();
+  Builder b(positions, normals, active, options, stats, tracker);
+  b.add_candidates(raw);
+  stats.seconds_candidates = since(t0);
+  t0 = Clock::now();
+  b.grow();
+  stats.seconds_growth = since(t0);
+  t0 = Clock::now();
+  if (repair) b.repair(raw);
+  stats.seconds_repair = since(t0);
+  if (repair) stats.boundary = b.boundary();
+  stats.boundary_known = repair;
+  return b.take();
+}
+
+size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<Triangle>& T,
+                                        const std::vector<uint64_t>& boundary) {
+  // Components by shared vertices (the same as by shared edges on a manifold without
+  // pinches); a component is open if it holds a boundary half-edge.
+  const size_t n = P.size();
+  std::vector<uint32_t> parent(n);
+  std::iota(parent.begin(), parent.end(), 0u);
+  auto find = [&](uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  auto unite = [&](uint32_t a, uint32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  };
+  for (const Triangle& t : T) {
+    unite(t[0], t[1]);
+    unite(t[1], t[2]);
+  }
+  std::vector<uint8_t> open(n, 0);
+  for (uint64_t e : boundary) open[find(uint32_t(e >> 32))] = 1;
+  std::vector<double> vol(n, 0.0);
+  for (const Triangle& t : T) {
+    const uint32_t r = find(t[0]);
+    const Vec3 o = P[r];
+    vol[r] += dot(P[t[0]] - o, cross(P[t[1]] - o, P[t[2]] - o));
+  }
+  for (Triangle& t : T) {
+    const uint32_t r = find(t[0]);
+    if (!open[r] && vol[r] < 0) std::swap(t[1], t[2]);
+  }
+  size_t flipped = 0;
+  for (uint32_t v = 0; v < n; ++v)
+    if (find(v) == v && !open[v] && vol[v] < 0) ++flipped;
+  return flipped;
+}
+
+}  // namespace particlemesh::detail
