@@ -53,7 +53,7 @@ def _smooth(mesh, settings, progress):
         return mesh
     out = native.smooth(mesh.positions, mesh.triangles, scheme=native.SCHEMES[scheme],
                         levels=levels, normals=mesh.normals, attributes=mesh.attributes,
-                        progress=progress)
+                        threads=int(settings.get("threads", 0)), progress=progress)
     out.stats = dict(mesh.stats, smooth_levels=levels)
     return out
 

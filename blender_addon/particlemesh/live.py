@@ -202,7 +202,8 @@ def on_load_post(*_args):
 
 
 def live_toggled(obj, context):
-    if obj.particlemesh.live and obj.particlemesh.is_generated and not obj.particlemesh.baked:
+    state = obj.particlemesh
+    if state.live and state.is_generated and not state.baked and obj.name_full not in suspended:
         update_object(obj, context.evaluated_depsgraph_get())
 
 

@@ -155,6 +155,14 @@ class SmoothOptions(Structure):
         ("struct_size", c_uint32),
         ("scheme", c_int32),
         ("levels", c_int32),
+        ("limit", c_int32),
+        ("boundary", c_int32),
+        ("crease_method", c_int32),
+        ("threads", c_int32),
+        ("max_triangles", c_uint64),
+        ("crease_count", c_size_t),
+        ("crease_edges", POINTER(c_int32)),
+        ("crease_sharpness", POINTER(c_float)),
         ("progress", PROGRESS_FN),
         ("progress_user_data", c_void_p),
     ]
@@ -203,11 +211,13 @@ _OPTIONAL = {
                               POINTER(_mesh_p)]),
     "pm_smooth_options_init": (None, [POINTER(SmoothOptions)]),
     "pm_smooth": (c_int, [_mesh_p, POINTER(SmoothOptions), POINTER(_mesh_p)]),
-    # Per-vertex float channels: (handle, name, values, vertex count, components).
-    "pm_cloud_set_attribute": (c_int, [_cloud_p, c_char_p, _f32p, c_size_t, c_int32]),
-    "pm_mesh_set_attribute": (c_int, [_mesh_p, c_char_p, _f32p, c_size_t, c_int32]),
+    # Per-vertex float channels, vertex-major: (handle, name, components, values, vertex count).
+    "pm_cloud_set_attribute": (c_int, [_cloud_p, c_char_p, c_int32, _f32p, c_size_t]),
+    "pm_mesh_set_attribute": (c_int, [_mesh_p, c_char_p, c_int32, _f32p, c_size_t]),
     "pm_mesh_get_attribute_components": (c_int, [_mesh_p, c_char_p, POINTER(c_int32)]),
     "pm_mesh_copy_attribute": (c_int, [_mesh_p, c_char_p, _f32p, c_size_t]),
+    "pm_mesh_get_attribute_count": (c_int, [_mesh_p, POINTER(c_size_t)]),
+    "pm_mesh_get_attribute_name": (c_int, [_mesh_p, c_size_t, POINTER(c_char_p)]),
 }
 
 
@@ -468,8 +478,8 @@ def _set_cloud_attributes(lib, cloud, attributes, count):
     for name, values in attributes.items():
         a = np.ascontiguousarray(values, dtype=np.float32)
         a = a.reshape(count, -1)
-        _check(lib, lib.pm_cloud_set_attribute(cloud, name.encode(), _ptr(a, c_float), count,
-                                               a.shape[1]))
+        _check(lib, lib.pm_cloud_set_attribute(cloud, name.encode(), a.shape[1], _ptr(a, c_float),
+                                               count))
 
 
 def _new_mesh(lib, positions, triangles, normals=None):
@@ -487,27 +497,40 @@ def _set_mesh_attributes(lib, mesh, attributes, count):
         return
     for name, values in attributes.items():
         a = np.ascontiguousarray(values, dtype=np.float32).reshape(count, -1)
-        _check(lib, lib.pm_mesh_set_attribute(mesh, name.encode(), _ptr(a, c_float), count,
-                                              a.shape[1]))
+        _check(lib, lib.pm_mesh_set_attribute(mesh, name.encode(), a.shape[1], _ptr(a, c_float),
+                                              count))
 
 
-def _mesh_attributes(lib, mesh, names, count):
+def _mesh_attribute_names(lib, mesh):
+    if not (lib.has("pm_mesh_get_attribute_count") and lib.has("pm_mesh_get_attribute_name")):
+        return ()
+    n = c_size_t(0)
+    _check(lib, lib.pm_mesh_get_attribute_count(mesh, ctypes.byref(n)))
+    names = []
+    for i in range(n.value):
+        name = c_char_p()
+        _check(lib, lib.pm_mesh_get_attribute_name(mesh, i, ctypes.byref(name)))
+        names.append(name.value.decode(errors="replace"))
+    return tuple(names)
+
+
+def _mesh_attributes(lib, mesh, count):
+    """Every per-vertex channel the library put on the mesh, {name: (V, C) float32}."""
     out = {}
-    if not names or not (lib.has("pm_mesh_get_attribute_components")
-                         and lib.has("pm_mesh_copy_attribute")):
+    if not (lib.has("pm_mesh_get_attribute_components") and lib.has("pm_mesh_copy_attribute")):
         return out
-    for name in names:
+    for name in _mesh_attribute_names(lib, mesh):
         components = c_int32(0)
-        status = lib.pm_mesh_get_attribute_components(mesh, name.encode(), ctypes.byref(components))
-        if status != OK or components.value <= 0:
-            continue  # the library did not carry this channel
+        _check(lib, lib.pm_mesh_get_attribute_components(mesh, name.encode(),
+                                                         ctypes.byref(components)))
         a = np.empty((count, components.value), dtype=np.float32)
-        _check(lib, lib.pm_mesh_copy_attribute(mesh, name.encode(), _ptr(a, c_float), count))
+        if count:
+            _check(lib, lib.pm_mesh_copy_attribute(mesh, name.encode(), _ptr(a, c_float), count))
         out[name] = a
     return out
 
 
-def _mesh_to_data(lib, mesh, attribute_names=()):
+def _mesh_to_data(lib, mesh):
     nv, nt = c_size_t(0), c_size_t(0)
     _check(lib, lib.pm_mesh_get_counts(mesh, ctypes.byref(nv), ctypes.byref(nt)))
     nv, nt = nv.value, nt.value
@@ -523,7 +546,7 @@ def _mesh_to_data(lib, mesh, attribute_names=()):
     if has.value and nv:
         normals = np.empty((nv, 3), dtype=np.float32)
         _check(lib, lib.pm_mesh_copy_normals_f32(mesh, _ptr(normals, c_float), nv))
-    return MeshData(positions, triangles, normals, _mesh_attributes(lib, mesh, attribute_names, nv))
+    return MeshData(positions, triangles, normals, _mesh_attributes(lib, mesh, nv))
 
 
 def _cloud_to_data(lib, cloud):
@@ -636,7 +659,7 @@ def polygonize(positions, radii=None, strengths=None, kernel=KERNEL_WYVILL, radi
         _check(lib, lib.pm_polygonize(cloud, _ptr(r, c_double), _ptr(s, c_double),
                                       ctypes.byref(opt), ctypes.byref(mesh)))
         try:
-            return _mesh_to_data(lib, mesh, tuple(attributes or ()))
+            return _mesh_to_data(lib, mesh)
         finally:
             lib.pm_mesh_destroy(mesh)
     finally:
@@ -644,7 +667,7 @@ def polygonize(positions, radii=None, strengths=None, kernel=KERNEL_WYVILL, radi
 
 
 def smooth(positions, triangles, scheme=SMOOTH_LOOP, levels=1, normals=None, attributes=None,
-           progress=None):
+           threads=0, progress=None):
     """Loop or butterfly subdivision (pm_smooth). Returns a new MeshData; `attributes`
     {name: (V, C)} are interpolated when the library supports attribute channels."""
     lib = load()
@@ -654,6 +677,7 @@ def smooth(positions, triangles, scheme=SMOOTH_LOOP, levels=1, normals=None, att
     lib.pm_smooth_options_init(ctypes.byref(opt))
     opt.scheme = int(scheme)
     opt.levels = int(levels)
+    opt.threads = int(threads)
     opt.progress = _progress_fn(progress)
     mesh = _new_mesh(lib, positions, triangles, normals)
     try:
@@ -661,7 +685,7 @@ def smooth(positions, triangles, scheme=SMOOTH_LOOP, levels=1, normals=None, att
         out = c_void_p()
         _check(lib, lib.pm_smooth(mesh, ctypes.byref(opt), ctypes.byref(out)))
         try:
-            return _mesh_to_data(lib, out, tuple(attributes or ()))
+            return _mesh_to_data(lib, out)
         finally:
             lib.pm_mesh_destroy(out)
     finally:

@@ -7,7 +7,7 @@ import bpy
 import numpy as np
 import pytest
 
-from conftest import emitter, living_particles, mesh_arrays, undo
+from conftest import emitter, living_particles, make_active, mesh_arrays, undo
 
 
 def live_object(pm, **kwargs):
@@ -179,3 +179,30 @@ def test_bake_undo(pm, clean_scene):
     undo()
     obj = bpy.data.objects[name]
     assert not obj.particlemesh.baked and len(obj.particlemesh.bake_frames) == 0
+
+
+def test_update_now_and_clear_cache(pm, clean_scene):
+    em = emitter(speed=1.0)
+    assert bpy.ops.particlemesh.triangulate() == {"FINISHED"}  # live off
+    obj = bpy.context.active_object
+    clean_scene.frame_set(12)
+    before, _ = mesh_arrays(obj.data)
+    assert bpy.ops.particlemesh.update() == {"FINISHED"}
+    after, _ = mesh_arrays(obj.data)
+    positions, _ = living_particles(em)
+    np.testing.assert_allclose(after, positions, atol=1e-5)
+    assert not np.allclose(before, after)
+    assert pm.live.cache_info(obj)[0] == 1
+    assert bpy.ops.particlemesh.clear_cache() == {"FINISHED"}
+    assert pm.live.cache_info(obj) == (0, 0)
+
+
+def test_source_deleted(pm, clean_scene):
+    em = emitter()
+    obj = live_object(pm)
+    bpy.data.objects.remove(em)
+    clean_scene.frame_set(3)
+    assert "lost its source" in pm.live.last_update[obj.name]["error"]
+    make_active(obj)
+    with pytest.raises(RuntimeError, match="lost its source"):
+        bpy.ops.particlemesh.update()
