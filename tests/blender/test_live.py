@@ -78,6 +78,11 @@ def test_a_live_error_is_recorded_not_raised(pm, clean_scene):
 
 
 def render_animation(scene, tmp_path, frames):
+    render_animation_settings(scene, tmp_path, frames)
+    assert bpy.ops.render.render(animation=True) == {"FINISHED"}
+
+
+def render_animation_settings(scene, tmp_path, frames):
     scene.render.engine = "CYCLES"
     scene.cycles.device = "CPU"
     scene.cycles.samples = 1
@@ -92,7 +97,6 @@ def render_animation(scene, tmp_path, frames):
         cam.location = (0, -8, 0)
         cam.rotation_euler = (1.5708, 0, 0)
         scene.camera = cam
-    assert bpy.ops.render.render(animation=True) == {"FINISHED"}
 
 
 def test_render_uses_the_render_settings(pm, clean_scene, tmp_path):
@@ -206,3 +210,43 @@ def test_source_deleted(pm, clean_scene):
     make_active(obj)
     with pytest.raises(RuntimeError, match="lost its source"):
         bpy.ops.particlemesh.update()
+
+
+def test_command_line_animation_render(pm, clean_scene, tmp_path):
+    """`blender -b file.blend -a` in a separate process: the saved live object regenerates at
+    every rendered frame, with the render settings."""
+    import json
+    import os
+    import subprocess
+
+    emitter(speed=1.0)
+    obj = live_object(pm)
+    obj.particlemesh.use_render_settings = True
+    obj.particlemesh.render.max_edge_factor = 1.3
+    render_animation_settings(clean_scene, tmp_path, (2, 4))
+    blend = tmp_path / "live.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    log = tmp_path / "frames.jsonl"
+    expr = (
+        "import bpy, json\n"
+        "def post(scene, depsgraph=None):\n"
+        f"    o = bpy.data.objects[{obj.name!r}]\n"
+        f"    with open({str(log)!r}, 'a') as f:\n"
+        "        f.write(json.dumps([scene.frame_current, len(o.data.vertices), len(o.data.polygons),"
+        " sum(v.co.length for v in o.data.vertices[:50]) / 50]) + '\\n')\n"
+        "bpy.app.handlers.render_post.append(post)\n")
+    env = dict(os.environ)
+    proc = subprocess.run(
+        [bpy.app.binary_path, "--background", "--factory-startup", "-noaudio", str(blend),
+         "--addons", "particlemesh", "--python-expr", expr, "--render-anim"],
+        env=env, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    rows = [json.loads(line) for line in log.read_text().splitlines()]
+    assert [r[0] for r in rows] == [2, 3, 4], proc.stdout[-2000:]
+    assert all(r[1] == 642 for r in rows)
+    viewport_faces = len(obj.data.polygons)
+    assert all(0 < r[2] < viewport_faces for r in rows)  # the render settings' tighter edges
+    radii = [r[3] for r in rows]
+    assert radii == sorted(radii) and radii[-1] > radii[0]  # regenerated at every frame
+    for frame in (2, 3, 4):
+        assert (tmp_path / f"frame_{frame:04d}.png").is_file()
