@@ -48,6 +48,7 @@ def finish(context, obj, start, end):
     state.bake_start = start
     state.bake_end = end
     state.baked = True
+    live.lock_interface_for_renders(context.scene)
     live.show_baked_frame(obj, context.scene.frame_current)
 
 

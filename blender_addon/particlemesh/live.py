@@ -201,8 +201,18 @@ def on_load_post(*_args):
     suspended.clear()
 
 
+def lock_interface_for_renders(scene):
+    """Renders started from the UI run frame handlers on the render thread: Blender asks
+    handlers that edit data (ours replace meshes) to run with Render > Lock Interface on,
+    which keeps the UI from touching the same data meanwhile."""
+    if scene is not None and not scene.render.use_lock_interface:
+        scene.render.use_lock_interface = True
+
+
 def live_toggled(obj, context):
     state = obj.particlemesh
+    if state.live:
+        lock_interface_for_renders(context.scene)
     if state.live and state.is_generated and not state.baked and obj.name_full not in suspended:
         update_object(obj, context.evaluated_depsgraph_get())
 

@@ -157,6 +157,8 @@ class _Generate(SourceProps, CommonProps, SmoothProps, _ModalJob):
             properties.copy_settings(self, state.viewport)
             properties.copy_settings(self, state.render)
             state.live = self.live
+            if self.live:
+                live.lock_interface_for_renders(context.scene)
         finally:
             live.suspended.discard(obj.name_full)
         for selected in context.selected_objects:

@@ -14,6 +14,7 @@ def live_object(pm, **kwargs):
     assert bpy.ops.particlemesh.triangulate(live=True, **kwargs) == {"FINISHED"}
     obj = bpy.context.active_object
     assert obj.particlemesh.live
+    assert bpy.context.scene.render.use_lock_interface  # safe renders from the UI
     return obj
 
 
