@@ -217,8 +217,12 @@ def points_to_volume(points, radius, voxel):
     obj = bpy.data.objects.new("points_to_volume", mesh)
     scene.collection.objects.link(obj)
     tree = bpy.data.node_groups.new("points_to_volume", "GeometryNodeTree")
-    tree.inputs.new("NodeSocketGeometry", "Geometry")
-    tree.outputs.new("NodeSocketGeometry", "Geometry")
+    if hasattr(tree, "interface"):  # Blender 4.0+
+        tree.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
+        tree.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
+    else:
+        tree.inputs.new("NodeSocketGeometry", "Geometry")
+        tree.outputs.new("NodeSocketGeometry", "Geometry")
     n_in = tree.nodes.new("NodeGroupInput")
     n_out = tree.nodes.new("NodeGroupOutput")
     to_points = tree.nodes.new("GeometryNodeMeshToPoints")

@@ -105,7 +105,8 @@ def compute(obj, depsgraph, mode=None, use_cache=True, progress=None, timings=No
     t0 = time.perf_counter()
     particles = sources.read(source, depsgraph, state.source_kind, state.particle_system,
                              need_sizes=(state.method == "POLYGONIZE"))
-    key = (depsgraph.scene.frame_current, mode, state.method, state.source_kind,
+    # frame_current_final includes the subframe (motion blur steps evaluate between frames).
+    key = (depsgraph.scene.frame_current_final, mode, state.method, state.source_kind,
            properties_key(settings), particles.digest())
     t1 = time.perf_counter()
     if timings is not None:
