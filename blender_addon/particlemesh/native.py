@@ -145,6 +145,7 @@ class PolygonizeOptions(Structure):
         ("threshold", c_double),
         ("cell_size", c_double),
         ("threads", c_int32),
+        ("max_grid_bytes", c_uint64),
         ("progress", PROGRESS_FN),
         ("progress_user_data", c_void_p),
     ]
