@@ -2,7 +2,9 @@
 in and out, errors as exceptions with the library's message, progress and cancellation, and
 handles freed on every path."""
 import ctypes
+import re
 import threading
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -359,3 +361,56 @@ def test_smooth_when_available(native):
         assert rep["closed"] and rep["euler_characteristic"] == 2
     bf = native.smooth(p, t, scheme=native.SMOOTH_BUTTERFLY, levels=1)
     np.testing.assert_allclose(bf.positions[:4], p, atol=1e-6)  # interpolating
+
+
+# ---- the binding's structs against the header and the library ---------------------------------
+
+HEADER = Path(__file__).resolve().parents[2] / "native/include/particlemesh/particlemesh.h"
+
+
+def header_struct_fields(name):
+    """Field names, in order, of `typedef struct name { ... } name;` in particlemesh.h."""
+    text = HEADER.read_text()
+    text = re.sub(r"/\*.*?\*/", "", text, flags=re.S)
+    m = re.search(r"typedef struct %s \{(.*?)\} %s;" % (name, name), text, flags=re.S)
+    if not m:
+        return None
+    fields = []
+    for decl in m.group(1).split(";"):
+        decl = decl.strip()
+        if not decl:
+            continue
+        decl = re.sub(r"\(\s*\*\s*(\w+)\s*\)\s*\(.*\)", r"\1", decl)  # function pointers
+        head, *rest = [d.strip() for d in decl.split(",")]
+        fields.append(re.findall(r"(\w+)\s*$", head)[0])
+        fields.extend(rest)
+    return fields
+
+
+STRUCTS = {"pm_triangulate_options": "TriangulateOptions",
+           "pm_triangulate_stats": "TriangulateStats",
+           "pm_topology_report": "TopologyReport",
+           "pm_polygonize_options": "PolygonizeOptions",
+           "pm_smooth_options": "SmoothOptions"}
+
+
+@pytest.mark.parametrize("c_name", sorted(STRUCTS))
+def test_structs_match_the_header(native, c_name):
+    fields = header_struct_fields(c_name)
+    if fields is None:
+        pytest.skip(f"{c_name} is not in this particlemesh.h yet")
+    ours = [f for f, _ in getattr(native, STRUCTS[c_name])._fields_]
+    assert ours == fields
+
+
+@pytest.mark.parametrize("init,struct", [("pm_triangulate_options_init", "TriangulateOptions"),
+                                         ("pm_polygonize_options_init", "PolygonizeOptions"),
+                                         ("pm_smooth_options_init", "SmoothOptions")])
+def test_struct_sizes_match_the_library(native, init, struct):
+    lib = native.load()
+    if not lib.has(init):
+        pytest.skip(f"{init} is not in this library")
+    buffer = (ctypes.c_uint8 * 4096)()
+    getattr(lib.cdll, init)(ctypes.cast(buffer, ctypes.POINTER(getattr(native, struct))))
+    size = ctypes.c_uint32.from_buffer(buffer).value
+    assert size == ctypes.sizeof(getattr(native, struct))
