@@ -251,3 +251,80 @@ def test_command_line_animation_render(pm, clean_scene, tmp_path):
     assert radii == sorted(radii) and radii[-1] > radii[0]  # regenerated at every frame
     for frame in (2, 3, 4):
         assert (tmp_path / f"frame_{frame:04d}.png").is_file()
+
+
+class _Layout:
+    """Records what a panel draws; checks every property and operator it names exists."""
+
+    def __init__(self, log):
+        self.log = log
+        self.use_property_split = False
+        self.active = self.enabled = self.alert = True
+
+    def _child(self, *args, **kwargs):
+        return _Layout(self.log)
+
+    column = row = box = split = _child
+
+    def prop(self, data, name, **kwargs):
+        assert name in data.bl_rna.properties, f"{type(data).__name__} has no property {name}"
+        self.log.append(("prop", name))
+
+    def operator(self, idname, **kwargs):
+        module, name = idname.split(".")
+        assert hasattr(getattr(bpy.ops, module), name), idname
+        self.log.append(("operator", idname))
+
+    def label(self, text="", **kwargs):
+        self.log.append(("label", text))
+
+
+class _PanelSelf:
+    def __init__(self, log):
+        self.layout = _Layout(log)
+
+
+def draw_panels(pm, context):
+    log = []
+    for cls in pm.ui.classes:
+        if hasattr(cls, "poll") and not cls.poll(context):
+            continue
+        panel = _PanelSelf(log)
+        if hasattr(cls, "draw_header"):
+            cls.draw_header(panel, context)
+        cls.draw(panel, context)
+    return log
+
+
+def test_panels_draw(pm, clean_scene):
+    log = draw_panels(pm, bpy.context)
+    assert ("operator", "particlemesh.triangulate") in log
+    assert ("operator", "particlemesh.import_cloud") in log
+    em = emitter()
+    obj = live_object(pm)
+    clean_scene.frame_set(3)
+    log = draw_panels(pm, bpy.context)
+    props = [name for kind, name in log if kind == "prop"]
+    for name in ("source", "live", "auto_spacing", "max_edge_factor", "smooth", "use_render_settings"):
+        assert name in props, name
+    assert any(kind == "label" and "frame 3" in text for kind, text in log)
+    assert ("operator", "particlemesh.bake") in log
+    obj.particlemesh.method = "POLYGONIZE"
+    props = [name for kind, name in draw_panels(pm, bpy.context) if kind == "prop"]
+    assert "kernel" in props and "radius_mode" in props
+    assert em.name in bpy.data.objects
+
+
+def test_operator_redo_panels_draw(pm):
+    """Each operator's draw() (its redo panel) names only real properties."""
+    for cls in (pm.operators.PARTICLEMESH_OT_triangulate, pm.operators.PARTICLEMESH_OT_polygonize):
+        log = []
+        props = bpy.context.window_manager.operator_properties_last(cls.bl_idname)
+        fake = _PanelSelf(log)
+        for name in props.bl_rna.properties.keys():
+            if name != "rna_type":
+                setattr(fake, name, getattr(props, name))
+        fake.bl_rna = props.bl_rna  # the layout checks names against the operator's RNA
+        fake.method = cls.method
+        cls.draw(fake, bpy.context)
+        assert ("prop", "source") in log and ("prop", "live") in log
