@@ -55,6 +55,8 @@ int run_triangulate(const TriangulateArgs& a) {
   opt.orient = !a.no_orient;
   opt.progress = progress.callback();
   const auto t1 = Clock::now();
+  set_phase(Phase::Computing);
+  if (interrupted()) throw Error(Status::Cancelled, "interrupted");
   SurfaceResult result;
   if (a.raw) {
     TriangulateResult r = triangulate_raw(cloud, opt);
@@ -70,7 +72,12 @@ int run_triangulate(const TriangulateArgs& a) {
   WriteMeshOptions wo;
   if (a.ascii) wo.format = MeshFormat::PlyAscii;
   const auto t2 = Clock::now();
+  set_phase(Phase::Writing);
   write_mesh(result.mesh, a.output, wo);
+  if (interrupted()) {  // Ctrl-C while writing: the run is cancelled, so no output either
+    std::remove(a.output.c_str());
+    throw Error(Status::Cancelled, "interrupted");
+  }
   const double t_write = std::chrono::duration<double>(Clock::now() - t2).count();
 
   const TopologyReport report = topology_report(result.mesh);

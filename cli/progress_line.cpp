@@ -9,12 +9,24 @@ namespace particlemesh::cli {
 
 namespace {
 volatile std::sig_atomic_t g_interrupted = 0;
+volatile std::sig_atomic_t g_phase = 0;  // Phase::Reading
 
 extern "C" void on_sigint(int) {
   g_interrupted = 1;
+  if (g_phase == int(Phase::Reading)) {
+    static const char msg[] = "particlemesh: cancelled (interrupted)\n";
+    (void)!write(STDERR_FILENO, msg, sizeof msg - 1);
+    _exit(130);  // async-signal-safe; nothing has been written yet
+  }
   std::signal(SIGINT, SIG_DFL);  // a second Ctrl-C terminates at once
+  std::signal(SIGTERM, SIG_DFL);
 }
 }  // namespace
+
+void set_phase(Phase phase) {
+  g_phase = int(phase);
+  if (phase == Phase::Reading && g_interrupted) _exit(130);
+}
 
 void install_interrupt_handler() {
   struct sigaction sa {};

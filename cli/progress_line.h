@@ -10,9 +10,16 @@
 
 namespace particlemesh::cli {
 
-/// Install the SIGINT handler (the first Ctrl-C cancels; a second one kills).
+/// Install the SIGINT/SIGTERM handler. While the command computes, the first Ctrl-C sets a
+/// flag that the progress callback turns into the library's cancellation; while it only reads
+/// input (nothing to cancel, nothing written yet) the process exits at once with status 130.
+/// A second Ctrl-C always exits at once.
 void install_interrupt_handler();
 bool interrupted();
+
+enum class Phase { Reading, Computing, Writing };
+/// Tell the handler what the command is doing now.
+void set_phase(Phase phase);
 
 class ProgressLine {
  public:

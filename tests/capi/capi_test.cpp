@@ -67,6 +67,42 @@ TEST(CApi, TriangulateMatchesTheCppApi) {
   pm_cloud_destroy(cloud);
 }
 
+TEST(CApi, DefaultIsTheFinishedSurface) {
+  const PointCloud c = fibonacci_sphere(5000);
+  const auto pos = flat(c.positions);
+  pm_cloud* cloud = nullptr;
+  ASSERT_EQ(pm_cloud_create(pos.data(), nullptr, c.size(), &cloud), PM_OK);
+  pm_triangulate_stats stats{};
+  stats.struct_size = sizeof(stats);
+  pm_mesh* mesh = nullptr;
+  ASSERT_EQ(pm_triangulate(cloud, nullptr, &mesh, &stats), PM_OK) << last();
+  pm_topology_report rep{};
+  rep.struct_size = sizeof(rep);
+  ASSERT_EQ(pm_mesh_report(mesh, &rep), PM_OK);
+  EXPECT_EQ(rep.closed, 1);
+  EXPECT_EQ(rep.outward, 1);
+  EXPECT_EQ(rep.euler_characteristic, 2);
+  EXPECT_EQ(rep.vertices_used, c.size());
+  EXPECT_EQ(stats.unused_points, 0u);
+  EXPECT_EQ(stats.holes_left, 0u);
+  EXPECT_EQ(stats.normals_estimated, 1);  // the cloud came without normals
+  int32_t has = 0;
+  ASSERT_EQ(pm_mesh_has_normals(mesh, &has), PM_OK);
+  EXPECT_EQ(has, 1);
+  pm_mesh_destroy(mesh);
+  pm_triangulate_options opt;
+  pm_triangulate_options_init(&opt);
+  opt.normals = PM_NORMALS_INPUT;  // the cloud has none
+  EXPECT_EQ(pm_triangulate(cloud, &opt, &mesh, nullptr), PM_STATUS_INVALID_ARGUMENT);
+  opt.normals = 7;
+  EXPECT_EQ(pm_triangulate(cloud, &opt, &mesh, nullptr), PM_STATUS_INVALID_ARGUMENT);
+  pm_triangulate_options_init(&opt);
+  opt.flags = 0x80;
+  EXPECT_EQ(pm_triangulate(cloud, &opt, &mesh, nullptr), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("flags"), std::string::npos);
+  pm_cloud_destroy(cloud);
+}
+
 TEST(CApi, Float32InputAndNormals) {
   const PointCloud c = fibonacci_sphere(500);
   std::vector<float> p, n;
@@ -131,7 +167,9 @@ TEST(CApi, MisuseGivesStatusAndMessageAndLeavesOutputsAlone) {
   ASSERT_EQ(pm_mesh_get_counts(mesh, nullptr, &nt), PM_OK);
   std::vector<int32_t> small(3);
   EXPECT_EQ(pm_mesh_copy_triangles(mesh, small.data(), 1), nt > 1 ? PM_STATUS_INVALID_ARGUMENT : PM_OK);
-  EXPECT_EQ(pm_mesh_copy_normals_f32(mesh, reinterpret_cast<float*>(small.data()), 4), PM_STATUS_INVALID_ARGUMENT);
+  std::vector<float> normals(3);
+  EXPECT_EQ(pm_mesh_copy_normals_f32(mesh, normals.data(), 1), PM_STATUS_INVALID_ARGUMENT);  // 4 vertices
+  EXPECT_NE(last().find("capacity"), std::string::npos);
   pm_mesh_destroy(mesh);
 
   const int32_t tri[] = {0, 1, 7};

@@ -79,8 +79,17 @@ PM_EXPORT pm_status pm_estimate_spacing(const pm_cloud* cloud, int32_t threads, 
 
 /* ---- triangulation of surface particles --------------------------------------------- */
 
-/** Return the seed's exact triangle set instead of a finished surface. */
+/** Return the seed's exact triangle set (not a surface) instead of the finished surface. */
 #define PM_TRIANGULATE_RAW 0x1u
+/** Skip the repair stage (hole filling, unpinching, inserting passed-by particles). */
+#define PM_TRIANGULATE_NO_REPAIR 0x2u
+/** Do not turn closed components to face outward. */
+#define PM_TRIANGULATE_NO_ORIENT 0x4u
+
+/** Where the surface's normals come from (see particlemesh/surface/reconstruct.h). */
+#define PM_NORMALS_AUTO 0     /**< plane fits, facing as the cloud's normals say (if any) */
+#define PM_NORMALS_INPUT 1    /**< the cloud's normals as they are */
+#define PM_NORMALS_ESTIMATE 2 /**< plane fits and a spanning tree only */
 
 typedef struct pm_triangulate_options {
   uint32_t struct_size;     /**< sizeof(pm_triangulate_options), set by _init */
@@ -91,6 +100,11 @@ typedef struct pm_triangulate_options {
   uint32_t flags;           /**< PM_TRIANGULATE_* */
   pm_progress_fn progress;  /**< may be NULL */
   void* progress_user_data;
+  /* -- finishing stages (ignored with PM_TRIANGULATE_RAW) -- */
+  double normal_angle;      /**< co-normality limit in degrees (default 90) */
+  uint32_t fill_holes;      /**< fill boundary loops of up to this many edges (default 100, 0 = none) */
+  double fill_edge_factor;  /**< fill edges at most this x L: wider openings stay open (default 1.5) */
+  int32_t normals;          /**< PM_NORMALS_* (default PM_NORMALS_AUTO) */
 } pm_triangulate_options;
 
 typedef struct pm_triangulate_stats {
@@ -101,13 +115,22 @@ typedef struct pm_triangulate_stats {
   uint64_t points;
   uint64_t duplicate_points;
   uint64_t max_neighbors_seen;
-  uint64_t candidates;
-  uint64_t kept;
+  uint64_t candidates;      /**< triplets the seed's test examined */
+  uint64_t kept;            /**< triangles the seed's test kept */
+  /* -- finishing stages (0 with PM_TRIANGULATE_RAW) -- */
+  uint64_t holes_filled;
+  uint64_t holes_left;      /**< boundary loops left open (real openings) */
+  uint64_t largest_hole_left; /**< edges of the largest loop left open */
+  uint64_t pinches_resolved;
+  uint64_t unused_points;   /**< distinct particles in no triangle */
+  int32_t normals_estimated;
 } pm_triangulate_stats;
 
 PM_EXPORT void pm_triangulate_options_init(pm_triangulate_options* options);
-/** Triangulate. `options` may be NULL (defaults); `out_stats` may be NULL. The mesh's vertices
- *  are the cloud's particles, in order. */
+/** Triangulate: by default the finished surface (a consistently oriented 2-manifold, closed
+ *  components facing outward, with per-vertex normals); with PM_TRIANGULATE_RAW the seed's
+ *  exact triangle set. `options` may be NULL (defaults); `out_stats` may be NULL. The mesh's
+ *  vertices are the cloud's particles, in order. */
 PM_EXPORT pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* options,
                                    pm_mesh** out_mesh, pm_triangulate_stats* out_stats);
 

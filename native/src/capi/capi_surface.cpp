@@ -3,6 +3,7 @@
 
 #include "capi/firewall.h"
 #include "capi/handles.h"
+#include "particlemesh/surface/reconstruct.h"
 #include "particlemesh/surface/triangulate.h"
 
 using namespace particlemesh;
@@ -25,7 +26,7 @@ extern "C" {
 
 void pm_triangulate_options_init(pm_triangulate_options* options) {
   if (options == nullptr) return;
-  const TriangulateOptions d;
+  const SurfaceOptions d;
   *options = pm_triangulate_options{};
   options->struct_size = sizeof(pm_triangulate_options);
   options->spacing = d.spacing;
@@ -35,6 +36,10 @@ void pm_triangulate_options_init(pm_triangulate_options* options) {
   options->flags = 0;
   options->progress = nullptr;
   options->progress_user_data = nullptr;
+  options->normal_angle = d.normal_angle;
+  options->fill_holes = uint32_t(d.fill_holes);
+  options->fill_edge_factor = d.fill_edge_factor;
+  options->normals = PM_NORMALS_AUTO;
 }
 
 pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* options,
@@ -46,26 +51,51 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
     pm_triangulate_options_init(&defaults);
     const pm_triangulate_options o = capi::read_versioned(options, defaults, "options");
     if (out_stats) capi::check_versioned(out_stats, "out_stats");
-    TriangulateOptions opt;
+    if (o.flags & ~uint32_t(PM_TRIANGULATE_RAW | PM_TRIANGULATE_NO_REPAIR | PM_TRIANGULATE_NO_ORIENT))
+      throw Error(Status::InvalidArgument, "options->flags has unknown bits");
+    if (o.normals < PM_NORMALS_AUTO || o.normals > PM_NORMALS_ESTIMATE)
+      throw Error(Status::InvalidArgument, "options->normals must be PM_NORMALS_AUTO, _INPUT or _ESTIMATE");
+    SurfaceOptions opt;
     opt.spacing = o.spacing;
     opt.max_edge_factor = o.max_edge_factor;
     opt.threads = o.threads;
     opt.max_neighbors = o.max_neighbors;
     opt.progress = wrap_progress(o.progress, o.progress_user_data);
-    TriangulateResult r = triangulate_raw(cloud->cloud, opt);
+    opt.normal_angle = o.normal_angle;
+    opt.fill_holes = o.fill_holes;
+    opt.fill_edge_factor = o.fill_edge_factor;
+    opt.repair = !(o.flags & PM_TRIANGULATE_NO_REPAIR);
+    opt.orient = !(o.flags & PM_TRIANGULATE_NO_ORIENT);
+    opt.normals = o.normals == PM_NORMALS_INPUT ? SurfaceOptions::NormalSource::Input
+                  : o.normals == PM_NORMALS_ESTIMATE ? SurfaceOptions::NormalSource::Estimate
+                                                     : SurfaceOptions::NormalSource::Auto;
+    SurfaceResult r;
+    if (o.flags & PM_TRIANGULATE_RAW) {
+      TriangulateResult raw = triangulate_raw(cloud->cloud, opt);
+      r.mesh = std::move(raw.mesh);
+      r.triangulation = raw.stats;
+    } else {
+      r = reconstruct_surface(cloud->cloud, opt);
+    }
     auto handle = std::make_unique<pm_mesh>();
     handle->mesh = std::move(r.mesh);
     if (out_stats) {
       pm_triangulate_stats s{};
       s.struct_size = sizeof(s);
-      s.spacing = r.stats.spacing;
-      s.max_edge = r.stats.max_edge;
-      s.spacing_estimated = r.stats.spacing_estimated;
-      s.points = r.stats.points;
-      s.duplicate_points = r.stats.duplicate_points;
-      s.max_neighbors_seen = r.stats.max_neighbors_seen;
-      s.candidates = r.stats.candidates;
-      s.kept = r.stats.kept;
+      s.spacing = r.triangulation.spacing;
+      s.max_edge = r.triangulation.max_edge;
+      s.spacing_estimated = r.triangulation.spacing_estimated;
+      s.points = r.triangulation.points;
+      s.duplicate_points = r.triangulation.duplicate_points;
+      s.max_neighbors_seen = r.triangulation.max_neighbors_seen;
+      s.candidates = r.triangulation.candidates;
+      s.kept = r.triangulation.kept;
+      s.holes_filled = r.surface.holes_filled;
+      s.holes_left = r.surface.holes_left;
+      s.largest_hole_left = r.surface.largest_hole_left;
+      s.pinches_resolved = r.surface.pinches_resolved;
+      s.unused_points = r.surface.unused_points;
+      s.normals_estimated = r.surface.normals_estimated;
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();

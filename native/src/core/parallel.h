@@ -5,6 +5,7 @@
 // output is byte-identical whatever the thread count.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <thread>
 #include <type_traits>
@@ -21,7 +22,9 @@ namespace particlemesh::detail {
 template <class F>
 auto with_threads(int threads, F&& f) -> decltype(f()) {
   if (threads < 0) throw Error(Status::InvalidArgument, "threads must be >= 0 (0 = all cores)");
-  const int n = threads == 0 ? tbb::this_task_arena::max_concurrency() : threads;
+  // More workers than the machine has would only make TBB warn; the output is the same.
+  const int hw = tbb::this_task_arena::max_concurrency();
+  const int n = threads == 0 ? hw : std::min(threads, hw);
   tbb::task_arena arena(n);
   if constexpr (std::is_void_v<decltype(f())>) {
     arena.execute([&] { f(); });

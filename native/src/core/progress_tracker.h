@@ -46,9 +46,13 @@ class ProgressTracker {
   /// The overall fraction at the start of the current stage.
   double position() const { return begin_; }
 
-  /// Throw Error(Cancelled) if cancellation was requested. Call from the owner thread
-  /// (or anywhere: it only reads the flag).
-  void check() const {
+  /// Throw Error(Cancelled) if cancellation was requested. On the owner thread it also asks
+  /// the callback (at most every 50 ms), so long steps without ticks still notice a request.
+  void check() {
+    if (callback_ && !cancelled() && std::this_thread::get_id() == owner_) {
+      const uint64_t done = done_.load(std::memory_order_relaxed);
+      report(begin_ + (end_ - begin_) * (double(done < total_ ? done : total_) / double(total_)), false);
+    }
     if (cancelled()) throw Error(Status::Cancelled, "cancelled by the progress callback");
   }
 

@@ -198,6 +198,75 @@ PointCloud poisson_disk_sample(const TriMesh& mesh, double r0, uint64_t seed, do
   return out;
 }
 
+PointCloud sample_implicit_surface(const std::function<double(const Vec3&)>& f,
+                                   const std::function<Vec3(const Vec3&)>& grad, Vec3 lo, Vec3 hi, double r0,
+                                   uint64_t seed, size_t candidates) {
+  if (!(r0 > 0)) throw Error(Status::InvalidArgument, "r0 must be positive");
+  const Vec3 ext = hi - lo;
+  if (candidates == 0) {
+    // Enough darts for a maximal sample: about 30 per r0^2 of the box's largest face x 6.
+    const double face = std::max({ext.x * ext.y, ext.y * ext.z, ext.x * ext.z});
+    candidates = size_t(std::min(2e7, 180.0 * face / (r0 * r0)));
+  }
+  std::mt19937_64 rng(seed);
+  std::vector<Vec3> on;
+  on.reserve(candidates);
+  for (size_t c = 0; c < candidates; ++c) {
+    Vec3 p{lo.x + ext.x * uniform01(rng), lo.y + ext.y * uniform01(rng), lo.z + ext.z * uniform01(rng)};
+    bool ok = false;
+    for (int it = 0; it < 30; ++it) {
+      const double v = f(p);
+      const Vec3 g = grad(p);
+      const double g2 = squared_norm(g);
+      if (!(g2 > 1e-20)) break;
+      const Vec3 step = g * (v / g2);
+      p -= step;
+      if (squared_norm(step) < 1e-24 * std::max(1.0, squared_norm(p))) {
+        ok = std::abs(f(p)) < 1e-9;
+        break;
+      }
+    }
+    if (ok && p.x >= lo.x && p.y >= lo.y && p.z >= lo.z && p.x <= hi.x && p.y <= hi.y && p.z <= hi.z) on.push_back(p);
+  }
+  PointCloud out;
+  const double inv = 1.0 / r0, r2 = r0 * r0;
+  std::unordered_map<uint64_t, std::vector<uint32_t>> grid;
+  auto coord = [&](const Vec3& p) {
+    return std::array<int32_t, 3>{int32_t(std::floor(p.x * inv)), int32_t(std::floor(p.y * inv)), int32_t(std::floor(p.z * inv))};
+  };
+  for (const Vec3& p : on) {
+    const auto cc = coord(p);
+    bool free = true;
+    for (int dx = -1; dx <= 1 && free; ++dx)
+      for (int dy = -1; dy <= 1 && free; ++dy)
+        for (int dz = -1; dz <= 1 && free; ++dz) {
+          auto it = grid.find(detail::hash_cell({cc[0] + dx, cc[1] + dy, cc[2] + dz}));
+          if (it == grid.end()) continue;
+          for (uint32_t q : it->second)
+            if (squared_distance(out.positions[q], p) < r2) { free = false; break; }
+        }
+    if (!free) continue;
+    grid[detail::hash_cell(cc)].push_back(uint32_t(out.positions.size()));
+    out.positions.push_back(p);
+    out.normals.push_back(normalized(grad(p)));
+  }
+  return out;
+}
+
+PointCloud double_torus_sample(double r0, uint64_t seed) {
+  // g(x, y) = x (x-1)^2 (x-2) + y^2; f = g^2 + z^2 - c.
+  constexpr double c = 0.04;
+  auto g = [](const Vec3& p) { return p.x * (p.x - 1) * (p.x - 1) * (p.x - 2) + p.y * p.y; };
+  auto f = [&](const Vec3& p) { const double gv = g(p); return gv * gv + p.z * p.z - c; };
+  auto grad = [&](const Vec3& p) {
+    const double x = p.x, gv = g(p);
+    // d/dx [x (x-1)^2 (x-2)] = (x-1)^2 (x-2) + 2x (x-1)(x-2) + x (x-1)^2
+    const double gx = (x - 1) * (x - 1) * (x - 2) + 2 * x * (x - 1) * (x - 2) + x * (x - 1) * (x - 1);
+    return Vec3{2 * gv * gx, 2 * gv * 2 * p.y, 2 * p.z};
+  };
+  return sample_implicit_surface(f, grad, {-0.5, -1.2, -0.3}, {2.5, 1.2, 0.3}, r0, seed);
+}
+
 PointCloud square_lattice(int nx, int ny, double spacing) {
   PointCloud c;
   for (int i = 0; i < nx; ++i)

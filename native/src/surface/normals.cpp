@@ -12,41 +12,105 @@
 #include "particlemesh/core/error.h"
 #include "spatial/grid_search.h"
 #include "surface/normals_impl.h"
+#include "surface/raw_triangulation.h"
 #include "surface/spacing_impl.h"
 
 namespace particlemesh {
 namespace detail {
 
 std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
-                                     const NeighborLists& lists, double radius, ProgressTracker& tracker) {
+                                     const NeighborLists& lists, double radius, ProgressTracker& tracker,
+                                     const std::vector<Triangle>* triangles) {
   const size_t n = grid.point_count();
   std::vector<Vec3> normals(n);
   const double r2 = radius * radius;
+  const double band = 0.25 * radius;
+  // Raw triangles at each point (original index -> triangle ids), and original -> sorted.
+  std::vector<uint32_t> tri_off, tri_ids, sorted_of;
+  if (triangles != nullptr) {
+    tri_off.assign(n + 1, 0);
+    for (const Triangle& t : *triangles)
+      for (uint32_t v : t) ++tri_off[v + 1];
+    std::partial_sum(tri_off.begin(), tri_off.end(), tri_off.begin());
+    tri_ids.resize(tri_off[n]);
+    std::vector<uint32_t> fill(tri_off.begin(), tri_off.end() - 1);
+    for (uint32_t t = 0; t < triangles->size(); ++t)
+      for (uint32_t v : (*triangles)[t]) tri_ids[fill[v]++] = t;
+    sorted_of.resize(n);
+    for (uint32_t s = 0; s < n; ++s) sorted_of[grid.original_index(s)] = s;
+  }
+  // Each raw triangle's plane, once.
+  std::vector<Vec3> tri_normal;
+  if (triangles != nullptr) {
+    tri_normal.resize(triangles->size());
+    parallel_blocks(triangles->size(), 8192, [&](size_t b, size_t e) {
+      for (size_t i = b; i < e; ++i) {
+        const Triangle& t = (*triangles)[i];
+        tri_normal[i] = normalized(cross(grid.sorted_point(sorted_of[t[1]]) - grid.sorted_point(sorted_of[t[0]]),
+                                         grid.sorted_point(sorted_of[t[2]]) - grid.sorted_point(sorted_of[t[0]])));
+      }
+    });
+  }
   parallel_blocks(n, 2048, [&](size_t b, size_t e) {
     if (tracker.cancelled()) return;
+    std::vector<Vec3> near, tried;
+    std::vector<uint8_t> inlier;
     for (size_t s = b; s < e; ++s) {
       if (rep[s] != s) continue;
       const Vec3 p = grid.sorted_point(uint32_t(s));
-      // Covariance about the centroid of the point and its neighbours, in local coordinates.
-      Vec3 sum{};
-      int count = 1;
+      near.clear();
+      near.push_back(Vec3{});
       for (const uint32_t* q = lists.begin(uint32_t(s)); q != lists.end(uint32_t(s)); ++q) {
         const Vec3 d = grid.sorted_point(*q) - p;
-        if (squared_norm(d) > r2) continue;
-        sum += d;
-        ++count;
+        if (squared_norm(d) <= r2) near.push_back(d);
       }
-      if (count < 3) continue;  // too few neighbours for a plane: unknown (0,0,0)
+      if (near.size() < 3) continue;  // too few neighbours for a plane: unknown (0,0,0)
+      inlier.assign(near.size(), 1);
+      if (triangles != nullptr) {
+        const uint32_t o = grid.original_index(uint32_t(s));
+        // Inliers count more the closer they are: next to the point its own sheet dominates
+        // even where another sheet ends nearby (the free ends of a folded sheet).
+        double best = 0;
+        size_t best_count = 0;
+        Vec3 best_n;
+        tried.clear();
+        for (uint32_t i = tri_off[o]; i < tri_off[o + 1]; ++i) {
+          const Vec3 tn = tri_normal[tri_ids[i]];
+          // Planes within ~8 degrees of one already scored would score about the same.
+          bool seen = false;
+          for (const Vec3& x : tried) seen |= std::abs(dot(x, tn)) > 0.99;
+          if (seen) continue;
+          tried.push_back(tn);
+          double score = 0;
+          size_t count = 0;
+          for (const Vec3& d : near)
+            if (std::abs(dot(d, tn)) <= band) {
+              const double w = 1.0 - squared_norm(d) / r2;  // ~exp(-4 d^2 / r^2), 0 at the radius
+              score += (w * w) * (w * w);
+              ++count;
+            }
+          if (score > best) {
+            best = score;
+            best_count = count;
+            best_n = tn;
+          }
+        }
+        if (best_count >= 3)
+          for (size_t k = 0; k < near.size(); ++k) inlier[k] = std::abs(dot(near[k], best_n)) <= band;
+      }
+      Vec3 sum{};
+      int count = 0;
+      for (size_t k = 0; k < near.size(); ++k)
+        if (inlier[k]) {
+          sum += near[k];
+          ++count;
+        }
       const Vec3 mean = sum / double(count);
       Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-      auto add = [&](const Vec3& d) {
-        const Eigen::Vector3d v(d.x - mean.x, d.y - mean.y, d.z - mean.z);
+      for (size_t k = 0; k < near.size(); ++k) {
+        if (!inlier[k]) continue;
+        const Eigen::Vector3d v(near[k].x - mean.x, near[k].y - mean.y, near[k].z - mean.z);
         cov += v * v.transpose();
-      };
-      add(Vec3{});
-      for (const uint32_t* q = lists.begin(uint32_t(s)); q != lists.end(uint32_t(s)); ++q) {
-        const Vec3 d = grid.sorted_point(*q) - p;
-        if (squared_norm(d) <= r2) add(d);
       }
       Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
       eig.computeDirect(cov);
@@ -208,20 +272,18 @@ std::vector<Vec3> estimate_normals(const PointCloud& cloud, const NormalOptions&
     throw Error(Status::InvalidArgument, "normal radius must be >= 0 (0 = 2 x spacing)");
   detail::ProgressTracker tracker(options.progress);
   return detail::with_threads(options.threads, [&] {
-    double radius = options.radius;
-    if (radius == 0)
-      radius = 2.0 * detail::estimate_spacing_impl(cloud.positions.data(), cloud.size(), tracker, 0, 0.3).spacing;
-    const NeighborGrid grid(cloud.positions.data(), cloud.size(), radius);
-    size_t dups = 0;
-    const auto rep = detail::find_duplicates(grid, &dups);
-    tracker.stage("neighbour search", 0.3, 0.5, cloud.size());
-    const detail::NeighborLists lists = detail::build_neighbor_lists(grid, rep, radius, size_t(1) << 20, tracker);
-    tracker.stage("estimating normals", 0.5, 0.8, cloud.size());
-    std::vector<Vec3> sorted = detail::pca_normals_sorted(grid, rep, lists, radius, tracker);
-    tracker.stage("orienting normals", 0.8, 1.0);
-    detail::orient_normals_mst(grid, rep, lists, radius, sorted, {}, tracker);
+    // The seed's raw triangles with L = radius give the robust plane fits their candidates.
+    TriangulateOptions topt;
+    topt.spacing = options.radius / 2;
+    topt.max_neighbors = size_t(1) << 20;
+    const detail::RawTriangulation raw = detail::run_raw_triangulation(cloud, topt, tracker, 0.0, 0.6);
+    const double radius = raw.stats.max_edge;
+    tracker.stage("estimating normals", 0.6, 0.85, cloud.size());
+    std::vector<Vec3> sorted = detail::pca_normals_sorted(*raw.grid, raw.rep, raw.neighbors, radius, tracker, &raw.triangles);
+    tracker.stage("orienting normals", 0.85, 1.0);
+    detail::orient_normals_mst(*raw.grid, raw.rep, raw.neighbors, radius, sorted, {}, tracker);
     std::vector<Vec3> out(cloud.size());
-    for (uint32_t s = 0; s < cloud.size(); ++s) out[grid.original_index(s)] = sorted[s];
+    for (uint32_t s = 0; s < cloud.size(); ++s) out[raw.grid->original_index(s)] = sorted[s];
     tracker.finish();
     return out;
   });

@@ -5,16 +5,23 @@
 
 #include "core/progress_tracker.h"
 #include "particlemesh/core/vec3.h"
+#include "particlemesh/mesh/tri_mesh.h"
 #include "particlemesh/spatial/neighbor_grid.h"
 #include "surface/neighbor_lists.h"
 
 namespace particlemesh::detail {
 
-/// Normals indexed by SORTED index (duplicates copy their representative's), from the lists'
-/// neighbours within `radius` (<= the lists' radius). `oriented`: also run the MST
-/// orientation; otherwise only the PCA directions (arbitrary signs).
+/// Unoriented unit normals indexed by SORTED index (duplicates copy their representative's)
+/// from the lists' neighbours within `radius` (<= the lists' radius).
+/// A plain PCA of a point's neighbourhood mixes in a second sheet that passes within the
+/// radius (at a fold, a thin part, the rim of two close surfaces), tilting the normal. So when
+/// `triangles` (the seed's raw triangles, original indices) are given, the plane comes from
+/// the raw triangle at the point with the most neighbours within a quarter of the radius of
+/// its plane (the point's own sheet is the denser one near it), refined by a PCA of those
+/// inliers. Without triangles, or where none has three inliers, the plain PCA is used.
 std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
-                                     const NeighborLists& lists, double radius, ProgressTracker& tracker);
+                                     const NeighborLists& lists, double radius, ProgressTracker& tracker,
+                                     const std::vector<Triangle>* triangles = nullptr);
 
 /// Orient unit normals (sorted index) consistently over a minimum spanning tree of the
 /// neighbour graph (Hoppe et al. 1992) with signed edges: an edge that lies in the tangent

@@ -73,7 +73,8 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
       for (size_t i = 0; i < n; ++i) normals[i] = normalized(cloud.normals[i]);
     } else {
       tracker.stage("estimating normals", 0.55, 0.65, n);
-      std::vector<Vec3> sorted = detail::pca_normals_sorted(grid, raw.rep, raw.neighbors, raw.stats.max_edge, tracker);
+      std::vector<Vec3> sorted =
+          detail::pca_normals_sorted(grid, raw.rep, raw.neighbors, raw.stats.max_edge, tracker, &raw.triangles);
       std::vector<Vec3> reference;
       if (options.normals == Source::Auto && cloud.has_normals()) {
         reference.resize(n);

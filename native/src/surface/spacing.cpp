@@ -20,7 +20,7 @@ namespace {
 // always in the 27 cells around it. Starts from the spacing a surface sample of the bounding
 // box would have and corrects by the measured occupancy (which scales as h^2 on surfaces and
 // h^3 in volumes; the loop does not need to know which).
-NeighborGrid occupancy_grid(const Vec3* points, size_t n) {
+NeighborGrid occupancy_grid(const Vec3* points, size_t n, ProgressTracker& tracker) {
   Vec3 lo = points[0], hi = points[0];
   for (size_t i = 1; i < n; ++i) {
     lo = {std::min(lo.x, points[i].x), std::min(lo.y, points[i].y), std::min(lo.z, points[i].z)};
@@ -31,6 +31,7 @@ NeighborGrid occupancy_grid(const Vec3* points, size_t n) {
   const double finest = diag / double(NeighborGrid::kMaxCellsPerAxis / 2);
   double h = std::max(diag / std::sqrt(double(n)), finest);
   for (int it = 0;; ++it) {
+    tracker.check();
     NeighborGrid grid(points, n, h);
     const double per_cell = double(n) / double(grid.cell_count());
     if (it == 5 || (per_cell >= 2.0 && per_cell <= 8.0)) return grid;
@@ -46,7 +47,7 @@ SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTrac
                                       double begin, double end) {
   if (n < 2) throw Error(Status::InvalidInput, "at least two points are needed to estimate the spacing");
   tracker.stage("estimating spacing", begin, begin + 0.2 * (end - begin));
-  NeighborGrid grid = occupancy_grid(points, n);
+  NeighborGrid grid = occupancy_grid(points, n, tracker);
 
   constexpr double kInf = std::numeric_limits<double>::infinity();
   constexpr int kMaxRing = 3;
@@ -58,6 +59,7 @@ SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTrac
     const std::vector<uint32_t> rep = find_duplicates(grid, &duplicates);
     const size_t distinct = n - duplicates;
     if (distinct < 2) throw Error(Status::InvalidInput, "all points coincide: there is no spacing");
+    tracker.check();
 
     tracker.stage("estimating spacing", begin + 0.2 * (end - begin), end, grid.cell_count());
     // nn2[s] = squared distance from sorted point s to its nearest distinct point, +inf when

@@ -1,6 +1,8 @@
 #include "surface/surface_builder.h"
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <chrono>
 #include <cmath>
 #include <functional>
@@ -298,6 +300,15 @@ class Builder {
 
   static uint64_t half_key(uint32_t a, uint32_t b) { return (uint64_t(a) << 32) | b; }
 
+  bool triangle_exists(uint32_t a, uint32_t b, uint32_t c) const {
+    bool found = false;
+    for_each_tri(a, [&](uint32_t t) {
+      const Triangle& T = tris_[t];
+      if ((T[0] == b || T[1] == b || T[2] == b) && (T[0] == c || T[1] == c || T[2] == c)) found = true;
+    });
+    return found;
+  }
+
   void start_repair() {
     const size_t n = P_.size();
     alive_.assign(tris_.size(), 1);
@@ -452,6 +463,7 @@ class Builder {
           const Vec3 f = cross(P_[L[j]] - P_[L[k]], P_[L[i]] - P_[L[k]]);
           const double area = 0.5 * norm(f);
           if (!(area > 0)) continue;
+          if (m == 3 && triangle_exists(L[0], L[1], L[2])) continue;  // the loop of a lone triangle
           double value, add;
           if (!smooth) {
             value = max_angle(P_[L[k]], P_[L[j]], P_[L[i]]);
@@ -568,7 +580,6 @@ class Builder {
           for (int q = 1; q < 3; ++q) around[size_t(it - unused.begin())].push_back(t[(k + q) % 3]);
       }
     size_t inserted = 0;
-    const double limit2 = std::pow(o_.fill_edge_factor * o_.max_edge, 2);
     for (size_t u = 0; u < unused.size(); ++u) {
       const uint32_t p = unused[u];
       auto& nb = around[u];
@@ -601,33 +612,105 @@ class Builder {
         ++inserted;
         continue;
       }
-      // Else the nearest boundary edge a -> b within the fill limit gets the triangle (b, a, p).
+      // Else split the nearest edge a -> b at p: each triangle (a, b, c) on it becomes
+      // (a, p, c) and (p, b, c). The fans stay disks and the windings agree.
       double best_d = INFINITY;
       std::pair<uint32_t, uint32_t> edge{0, 0};
       for (uint32_t w : nb)
         for_each_tri(w, [&](uint32_t t) {
           for (int k = 0; k < 3; ++k) {
             const uint32_t a = tris_[t][k], b = tris_[t][(k + 1) % 3];
-            if (!boundary_.count(half_key(a, b))) continue;
-            const double da = squared_distance(P_[a], P_[p]), db = squared_distance(P_[b], P_[p]);
-            if (da > limit2 || db > limit2) continue;
-            if (da + db < best_d) {
-              best_d = da + db;
+            const Vec3 ab = P_[b] - P_[a];
+            const double u = std::clamp(dot(P_[p] - P_[a], ab) / squared_norm(ab), 0.0, 1.0);
+            const double d = squared_distance(P_[p], P_[a] + ab * u);
+            if (d < best_d) {
+              best_d = d;
               edge = {a, b};
             }
           }
         });
-      if (std::isfinite(best_d)) {
-        add_triangle({edge.second, edge.first, p});
+      if (best_d <= o_.max_edge * o_.max_edge) {
+        const auto [a, b] = edge;
+        std::vector<uint32_t> on_edge;
+        for_each_tri(a, [&](uint32_t t) {
+          const Triangle& T = tris_[t];
+          const int k = corner_of(T, a);
+          if (T[(k + 1) % 3] == b || T[(k + 2) % 3] == b) on_edge.push_back(t);
+        });
+        for (uint32_t t : on_edge) {
+          const Triangle T = tris_[t];
+          const int k = corner_of(T, a);
+          // Rotate so the edge runs x -> y in T = (x, y, c).
+          const bool forward = T[(k + 1) % 3] == b;
+          const uint32_t x = forward ? a : b, y = forward ? b : a;
+          const int kx = corner_of(T, x);
+          const uint32_t c = T[(kx + 2) % 3];
+          kill_triangle(t);
+          add_triangle({x, p, c});
+          add_triangle({p, y, c});
+        }
         ++inserted;
       }
     }
     return inserted;
   }
 
+  /// Open fragments of a few triangles (a lone triangle grown from three particles the main
+  /// surface passed by) are dissolved; insert_unused then puts their particles into the
+  /// surface around them.
+  size_t drop_fragments() {
+    if (boundary_.empty()) return 0;
+    const size_t n = P_.size();
+    std::vector<uint32_t> parent(n);
+    std::iota(parent.begin(), parent.end(), 0u);
+    auto find = [&](uint32_t x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    for (uint32_t t = 0; t < tris_.size(); ++t) {
+      if (!alive_[t]) continue;
+      for (int k = 1; k < 3; ++k) {
+        const uint32_t a = find(tris_[t][0]), b = find(tris_[t][k]);
+        if (a != b) parent[std::max(a, b)] = std::min(a, b);
+      }
+    }
+    std::vector<uint32_t> count(n, 0);
+    for (uint32_t t = 0; t < tris_.size(); ++t)
+      if (alive_[t]) ++count[find(tris_[t][0])];
+    std::vector<uint8_t> open(n, 0);
+    for (uint64_t e : boundary_) open[find(uint32_t(e >> 32))] = 1;
+    size_t dropped = 0;
+    for (uint32_t t = 0; t < tris_.size(); ++t) {
+      if (!alive_[t]) continue;
+      const uint32_t r = find(tris_[t][0]);
+      if (open[r] && count[r] <= kMaxFragment) {
+        kill_triangle(t);
+        ++dropped;
+      }
+    }
+    return dropped;
+  }
+  static constexpr uint32_t kMaxFragment = 4;
+
+  /// Smallest possible longest edge over all triangulations of a loop (min-max DP), / L.
+  double loop_width(const std::vector<uint32_t>& L) const {
+    const size_t m = L.size();
+    std::vector<double> w(m * m, INFINITY);
+    for (size_t i = 0; i + 1 < m; ++i) w[i * m + i + 1] = distance(P_[L[i]], P_[L[i + 1]]);
+    for (size_t len = 2; len < m; ++len)
+      for (size_t i = 0; i + len < m; ++i) {
+        const size_t k = i + len;
+        const double d = distance(P_[L[i]], P_[L[k]]);
+        for (size_t j = i + 1; j < k; ++j) w[i * m + k] = std::min(w[i * m + k], std::max({w[i * m + j], w[j * m + k], d}));
+      }
+    return w[m - 1] / o_.max_edge;
+  }
+
   void repair(const std::vector<Triangle>& raw) {
     tracker_.stage("repairing", 0.85, 0.97);
     start_repair();
+    if (std::getenv("PM_DEBUG_LOOPS"))
+      for (const auto& L : trace_loops()) std::fprintf(stderr, "LOOP %zu %.3f\n", L.size(), loop_width(L));
     // Small loops first (wrong diagonals, sampling gaps), then pinches, then larger loops.
     fill_loops(o_.small_hole);
     tracker_.check();
@@ -635,6 +718,7 @@ class Builder {
     fill_loops(o_.small_hole);
     if (o_.max_hole > o_.small_hole) fill_loops(o_.max_hole);
     stats_.pinches_resolved += unpinch();
+    drop_fragments();
     if (insert_unused(raw) > 0) {
       fill_loops(o_.small_hole);
       stats_.pinches_resolved += unpinch();

@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 
 #include "particlemesh/core/export.h"
 #include "particlemesh/mesh/point_cloud.h"
@@ -34,6 +35,18 @@ PM_EXPORT TriMesh icosphere_mesh(int levels, double radius = 1.0);
 /// r0. Normals are the sampled triangles' unit normals (their winding).
 PM_EXPORT PointCloud poisson_disk_sample(const TriMesh& mesh, double r0, uint64_t seed = 1,
                                          double oversampling = 30.0);
+
+/// Maximal Poisson-disk sample of the implicit surface f = 0 inside the box [lo, hi]:
+/// random points in the box are pulled onto the surface by Newton steps along grad f, then
+/// kept in random order iff no kept point is within r0. Normals are grad f normalised (f < 0
+/// inside, so they face outward).
+PM_EXPORT PointCloud sample_implicit_surface(const std::function<double(const Vec3&)>& f,
+                                             const std::function<Vec3(const Vec3&)>& grad, Vec3 lo, Vec3 hi,
+                                             double r0, uint64_t seed = 1, size_t candidates = 0);
+
+/// A closed genus-2 surface: the double torus (x (x-1)^2 (x-2) + y^2)^2 + z^2 = 0.04 (the
+/// first coordinate spans about [-0.2, 2.2]), evenly sampled at spacing r0.
+PM_EXPORT PointCloud double_torus_sample(double r0, uint64_t seed = 1);
 
 /// nx x ny points of a flat square lattice (z = 0) with the given spacing.
 PM_EXPORT PointCloud square_lattice(int nx, int ny, double spacing = 1.0);

@@ -17,13 +17,15 @@ struct NormalOptions {
   ProgressCallback progress;
 };
 
-/// Unit normals by local PCA (the direction of least variance of the neighbours within
-/// `radius`), oriented consistently as Hoppe et al. (1992) do: propagated along a minimum
-/// spanning tree of the neighbour graph whose edge cost is 1 - |n_i . n_j| plus how far the
-/// edge leaves the tangent planes (so the tree runs along a sheet rather than across a gap
-/// to a nearby one). Each tree starts at its highest point, whose normal is turned to +z, so
-/// closed surfaces come out facing outward. Points with fewer than two neighbours get (0,0,0).
-/// Deterministic; O(N log N).
+/// Unit normals by a robust local plane fit: among the planes of the seed's triangles (edge
+/// limit L = radius) at a point, the one with the most neighbours close to it, refined by a
+/// PCA of those neighbours, so that a second sheet passing within the radius (a fold, a thin
+/// part, a nearby surface) does not tilt the normal. Oriented consistently as Hoppe et al.
+/// (1992) do, along a minimum spanning tree of the neighbour graph, with signed edges: an edge
+/// in the tangent planes keeps the orientation, an edge across a gap between two sheets
+/// reverses it (outward normals of a closed surface face each other across any gap). Each
+/// tree starts at its highest point, turned to +z, so closed surfaces face outward. Points with
+/// fewer than two neighbours get (0,0,0). Deterministic; O(N log N).
 PM_EXPORT std::vector<Vec3> estimate_normals(const PointCloud& cloud, const NormalOptions& options = {});
 
 }  // namespace particlemesh
