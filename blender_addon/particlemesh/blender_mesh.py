@@ -21,9 +21,11 @@ def write(mesh, data, *, custom_normals=True, attributes=True):
     """Replace the geometry of `mesh` with native.MeshData `data`, in place.
 
     Materials stay (clear_geometry keeps them), faces are smooth shaded, the library's
-    normals become custom split normals, and per-vertex channels (velocity, colour...) become
-    POINT attributes named as in data.attributes. When the mesh already has exactly these
-    triangles (live mode on a stable topology), only the vertices move."""
+    normals become custom split normals (unless they are the angle-weighted face normals
+    Blender computes itself: data.stats["normals_are_face_weighted"]), and per-vertex
+    channels (velocity, colour...) become POINT attributes named as in data.attributes. When
+    the mesh already has exactly these triangles (live mode on a stable topology), only the
+    vertices move."""
     positions = np.ascontiguousarray(data.positions, dtype=np.float32)
     triangles = np.ascontiguousarray(data.triangles, dtype=np.int32)
     nv, nt = len(positions), len(triangles)
@@ -43,7 +45,8 @@ def write(mesh, data, *, custom_normals=True, attributes=True):
                 mesh.polygons.foreach_set("loop_total", np.full(nt, 3, dtype=np.int32))
             mesh.polygons.foreach_set("use_smooth", np.ones(nt, dtype=bool))
     mesh.update(calc_edges=rebuild)
-    if custom_normals and data.normals is not None and nt:
+    if (custom_normals and data.normals is not None and nt
+            and not data.stats.get("normals_are_face_weighted", False)):
         if hasattr(mesh, "use_auto_smooth"):
             mesh.use_auto_smooth = True
             mesh.auto_smooth_angle = np.pi

@@ -3,10 +3,13 @@ flat settings dict in, native.MeshData out. bpy-free, so it runs in a worker thr
 tests outside Blender.
 
 Settings keys (the operators' and the generated objects' property names):
-  triangulate: auto_spacing, spacing, max_edge_factor, raw
+  triangulate: auto_spacing, spacing, max_edge_factor, raw, normal_angle (radians),
+               fill_holes, fill_edge_factor, normal_source, repair, orient
   polygonize:  kernel, radius_mode, radius, radius_factor, threshold, auto_cell, cell_size
   both:        smooth ('NONE' | 'LOOP' | 'BUTTERFLY'), smooth_levels, threads
 """
+
+import math
 
 import numpy as np
 
@@ -55,24 +58,39 @@ def _smooth(mesh, settings, progress):
                         levels=levels, normals=mesh.normals, attributes=mesh.attributes,
                         threads=int(settings.get("threads", 0)), progress=progress)
     out.stats = dict(mesh.stats, smooth_levels=levels)
+    out.stats.pop("normals_are_face_weighted", None)  # Loop / butterfly normals are their own
     return out
 
 
 def triangulate(particles, settings, progress=None):
     spacing = 0.0 if settings.get("auto_spacing", True) else float(settings["spacing"])
+    raw = bool(settings.get("raw", False))
     mesh = native.triangulate(
         particles.positions, normals=particles.normals, spacing=spacing,
         max_edge_factor=float(settings.get("max_edge_factor", 2.0)),
-        threads=int(settings.get("threads", 0)), raw=bool(settings.get("raw", False)),
+        threads=int(settings.get("threads", 0)), raw=raw,
+        normal_angle=(math.degrees(settings["normal_angle"]) if "normal_angle" in settings
+                      else None),
+        fill_holes=settings.get("fill_holes"),
+        fill_edge_factor=settings.get("fill_edge_factor"),
+        normal_source=settings.get("normal_source"),
+        repair=bool(settings.get("repair", True)), orient=bool(settings.get("orient", True)),
         progress=progress)
     if mesh.triangle_count == 0:
         raise EmptyResult(
             f"no triangles: with spacing {mesh.stats['spacing']:.6g} the longest edge is "
             f"{mesh.stats['max_edge']:.6g}, shorter than the gaps between the "
             f"{len(particles.positions)} particles (raise the spacing or the edge factor)")
-    if particles.normals is not None:
-        mesh.triangles, _ = mesh_arrays.orient_by_normals(mesh.triangles, particles.normals,
-                                                          mesh.positions)
+    if raw:
+        # The seed's triangles are not oriented (canonical a < b < c): wind them to agree
+        # with the particles' normals where there are some.
+        if mesh.normals is not None:
+            mesh.triangles, _ = mesh_arrays.orient_by_normals(mesh.triangles, mesh.normals,
+                                                              mesh.positions)
+    else:
+        # The finished surface's normals are angle-weighted face normals: exactly what
+        # Blender computes itself for smooth shading, so they need not be custom normals.
+        mesh.stats["normals_are_face_weighted"] = True
     # Output vertex i is particle i: the particles' channels are the mesh's.
     mesh.attributes.update(_attributes(particles))
     return _smooth(mesh, settings, progress)

@@ -42,7 +42,15 @@ STATUS_CANCELLED = 6
 STATUS_LIMIT_EXCEEDED = 7
 STATUS_INTERNAL = 8
 
-TRIANGULATE_RAW = 0x1
+TRIANGULATE_RAW = 0x1        # the seed's exact triangle set instead of the finished surface
+TRIANGULATE_NO_REPAIR = 0x2  # skip hole filling / unpinching
+TRIANGULATE_NO_ORIENT = 0x4  # do not turn closed components outward
+
+# Where the finished surface's normals come from (PM_NORMALS_*).
+NORMALS_AUTO = 0
+NORMALS_INPUT = 1
+NORMALS_ESTIMATE = 2
+NORMAL_SOURCES = {"AUTO": NORMALS_AUTO, "INPUT": NORMALS_INPUT, "ESTIMATE": NORMALS_ESTIMATE}
 
 # Kernels of pm_polygonize (particlemesh.h, issue 7).
 KERNEL_WYVILL = 0
@@ -106,6 +114,11 @@ class TriangulateOptions(Structure):
         ("flags", c_uint32),
         ("progress", PROGRESS_FN),
         ("progress_user_data", c_void_p),
+        # finishing stages (ignored with TRIANGULATE_RAW)
+        ("normal_angle", c_double),
+        ("fill_holes", c_uint32),
+        ("fill_edge_factor", c_double),
+        ("normals", c_int32),
     ]
 
 
@@ -120,6 +133,13 @@ class TriangulateStats(Structure):
         ("max_neighbors_seen", c_uint64),
         ("candidates", c_uint64),
         ("kept", c_uint64),
+        # finishing stages (0 with TRIANGULATE_RAW)
+        ("holes_filled", c_uint64),
+        ("holes_left", c_uint64),
+        ("largest_hole_left", c_uint64),
+        ("pinches_resolved", c_uint64),
+        ("unused_points", c_uint64),
+        ("normals_estimated", c_int32),
     ]
 
 
@@ -593,9 +613,14 @@ def estimate_spacing(positions, threads=0):
 
 
 def triangulate(positions, normals=None, spacing=0.0, max_edge_factor=2.0, threads=0,
-                max_neighbors=256, raw=False, progress=None):
-    """Triangulate surface particles. Output vertex i is particle i. Returns MeshData whose
-    `stats` holds the library's pm_triangulate_stats as a dict."""
+                max_neighbors=256, raw=False, normal_angle=None, fill_holes=None,
+                fill_edge_factor=None, normal_source=None, repair=True, orient=True,
+                progress=None):
+    """Triangulate surface particles: by default the library's finished surface (a
+    consistently oriented 2-manifold, closed parts facing outward, per-vertex normals); with
+    raw=True the seed's exact triangle set. None keeps the library's default of an option.
+    Output vertex i is particle i. Returns MeshData whose `stats` holds the library's
+    pm_triangulate_stats as a dict."""
     lib = load()
     opt = TriangulateOptions()
     lib.pm_triangulate_options_init(ctypes.byref(opt))
@@ -603,7 +628,19 @@ def triangulate(positions, normals=None, spacing=0.0, max_edge_factor=2.0, threa
     opt.max_edge_factor = float(max_edge_factor)
     opt.threads = int(threads)
     opt.max_neighbors = int(max_neighbors)
-    opt.flags = TRIANGULATE_RAW if raw else 0
+    opt.flags = ((TRIANGULATE_RAW if raw else 0) | (0 if repair else TRIANGULATE_NO_REPAIR)
+                 | (0 if orient else TRIANGULATE_NO_ORIENT))
+    if normal_angle is not None:
+        opt.normal_angle = float(normal_angle)
+    if fill_holes is not None:
+        if not 0 <= int(fill_holes) < 2 ** 32:
+            raise ParticlemeshError(f"fill_holes is {fill_holes}; it must be 0..2^32-1",
+                                    STATUS_INVALID_ARGUMENT)
+        opt.fill_holes = int(fill_holes)
+    if fill_edge_factor is not None:
+        opt.fill_edge_factor = float(fill_edge_factor)
+    if normal_source is not None:
+        opt.normals = NORMAL_SOURCES[normal_source] if isinstance(normal_source, str) else int(normal_source)
     opt.progress = _progress_fn(progress)
     stats = TriangulateStats()
     stats.struct_size = ctypes.sizeof(TriangulateStats)
@@ -619,6 +656,7 @@ def triangulate(positions, normals=None, spacing=0.0, max_edge_factor=2.0, threa
     finally:
         lib.pm_cloud_destroy(cloud)
     data.stats = {name: getattr(stats, name) for name, _ in TriangulateStats._fields_[1:]}
+    data.stats["raw"] = bool(raw)
     return data
 
 

@@ -189,6 +189,16 @@ def draw_method_settings(layout, props, method):
         sub.prop(props, "spacing")
         col.prop(props, "max_edge_factor")
         col.prop(props, "raw")
+        sub = col.column()
+        sub.active = not props.raw
+        sub.prop(props, "normal_source")
+        sub.prop(props, "normal_angle")
+        sub.prop(props, "repair")
+        fill = sub.column()
+        fill.active = props.repair
+        fill.prop(props, "fill_holes")
+        fill.prop(props, "fill_edge_factor")
+        sub.prop(props, "orient")
     else:
         col.prop(props, "kernel")
         col.prop(props, "radius_mode")

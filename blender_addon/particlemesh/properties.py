@@ -3,6 +3,8 @@
 The property mixins below are used both by operators and by PropertyGroups, so that an
 operator's settings can be stored on the object it creates and replayed every frame."""
 
+import math
+
 import bpy
 from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, FloatProperty,
                        IntProperty, PointerProperty, StringProperty)
@@ -34,7 +36,36 @@ class TriangulateProps:
                     "is 2); larger bridges bigger gaps")
     raw: BoolProperty(
         name="Raw Triangles", default=False, update=_settings_changed,
-        description="Keep the seed's exact triangle set instead of the finished surface")
+        description="Keep the seed's exact triangle set instead of the finished surface "
+                    "(not a manifold: overlapping pairs, slivers, no orientation)")
+    normal_source: EnumProperty(
+        name="Normals", default="AUTO", update=_settings_changed,
+        description="Where the surface's normals (which side faces out) come from",
+        items=[("AUTO", "Auto", "Plane fits through the particles, facing as the particles' "
+                                "normals say when they have some"),
+               ("INPUT", "Particles", "The particles' own normals as they are (a point cloud "
+                                      "with a point_normal attribute, or a mesh's normals)"),
+               ("ESTIMATE", "Estimate", "Plane fits and a spanning tree only, ignoring any "
+                                        "normals the particles have")])
+    normal_angle: FloatProperty(
+        name="Normal Angle", default=math.radians(90.0), min=0.0, max=math.pi,
+        subtype="ANGLE", update=_settings_changed,
+        description="Co-normality limit: a triangle whose corner normals differ by more than "
+                    "this is not surface (separates sheets facing each other)")
+    repair: BoolProperty(
+        name="Repair", default=True, update=_settings_changed,
+        description="Fill narrow holes and resolve pinched vertices")
+    fill_holes: IntProperty(
+        name="Fill Holes", default=100, min=0, max=1_000_000, update=_settings_changed,
+        description="Fill boundary loops of up to this many edges (0 = none)")
+    fill_edge_factor: FloatProperty(
+        name="Fill Edge Factor", default=1.5, min=1.0, soft_max=4.0, max=100.0,
+        update=_settings_changed,
+        description="Filling triangles' edges are at most this times the longest edge: wider "
+                    "openings are real and stay open")
+    orient: BoolProperty(
+        name="Face Outward", default=True, update=_settings_changed,
+        description="Turn every closed part to face outward")
 
 
 class PolygonizeProps:

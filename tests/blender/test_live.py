@@ -105,20 +105,20 @@ def test_render_uses_the_render_settings(pm, clean_scene, tmp_path):
     obj = live_object(pm)
     state = obj.particlemesh
     state.use_render_settings = True
-    state.render.max_edge_factor = 1.3  # fewer triangles than the viewport's 2.0
+    state.render.raw = True  # the seed's raw triangles: more than the viewport's surface
     viewport_triangles = len(obj.data.polygons)
+    assert viewport_triangles == 2 * 642 - 4
     pm.live.history.clear()
     render_animation(clean_scene, tmp_path, (2, 3))
     renders = [r for name, r in pm.live.history if name == obj.name and r["mode"] == "RENDER"]
     assert [r["frame"] for r in renders] == [2, 3], list(pm.live.history)
     assert all("error" not in r for r in renders)
-    assert all(r["vertices"] == 642 and r["triangles"] < viewport_triangles for r in renders)
+    assert all(r["vertices"] == 642 and r["triangles"] > viewport_triangles for r in renders)
     assert (tmp_path / "frame_0002.png").is_file() and (tmp_path / "frame_0003.png").is_file()
     # Back in the viewport: the viewport settings again.
     clean_scene.frame_set(5)
     record = pm.live.last_update[obj.name]
-    assert record["mode"] == "VIEWPORT"
-    assert record["triangles"] > max(r["triangles"] for r in renders)
+    assert record["mode"] == "VIEWPORT" and record["triangles"] == viewport_triangles
 
 
 def test_bake_five_frames_and_step_through(pm, clean_scene, tmp_path):
@@ -223,7 +223,7 @@ def test_command_line_animation_render(pm, clean_scene, tmp_path):
     emitter(speed=1.0)
     obj = live_object(pm)
     obj.particlemesh.use_render_settings = True
-    obj.particlemesh.render.max_edge_factor = 1.3
+    obj.particlemesh.render.raw = True
     render_animation_settings(clean_scene, tmp_path, (2, 4))
     blend = tmp_path / "live.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
@@ -246,7 +246,7 @@ def test_command_line_animation_render(pm, clean_scene, tmp_path):
     assert [r[0] for r in rows] == [2, 3, 4], proc.stdout[-2000:]
     assert all(r[1] == 642 for r in rows)
     viewport_faces = len(obj.data.polygons)
-    assert all(0 < r[2] < viewport_faces for r in rows)  # the render settings' tighter edges
+    assert all(r[2] > viewport_faces for r in rows)  # the render settings' raw triangles
     radii = [r[3] for r in rows]
     assert radii == sorted(radii) and radii[-1] > radii[0]  # regenerated at every frame
     for frame in (2, 3, 4):

@@ -82,20 +82,27 @@ def test_triangulate_scan_from_shared_data(pm, data_dir):
     direct = pm.native.triangulate(src_co, normals=normals)
     assert len(tris) == direct.triangle_count
     assert 2 * 8747 * 0.95 < len(tris) < 2 * 8747 * 1.35
-    # Poisson-disk r0 = 0.02: every edge within the default 2 x estimated spacing.
+    # Poisson-disk r0 = 0.02: every edge within the default 2 x estimated spacing, hole-filling
+    # triangles within 1.5 x that.
     spacing = direct.stats["spacing"]
     assert 0.02 <= spacing < 0.025
     edges = np.linalg.norm(co[tris] - co[np.roll(tris, 1, axis=1)], axis=2)
-    assert edges.max() <= 2 * spacing * (1 + 1e-5)
-    # Shading-ready: smooth faces, custom normals from the scan, winding agrees with them.
+    assert edges.max() <= 1.5 * 2 * spacing * (1 + 1e-5)
+    # The finished surface: closed, manifold, outward, genus 0 (F = 2V - 4).
+    rep = pm.native.mesh_report(co, tris)
+    assert rep["closed"] and rep["manifold"] and rep["consistently_oriented"] and rep["outward"]
+    assert rep["euler_characteristic"] == 2 and rep["vertices_used"] == 8747
+    assert len(tris) == 2 * 8747 - 4
+    # Shading-ready: smooth faces; the library's normals are angle-weighted face normals,
+    # which Blender computes itself, so no custom normals are needed: check they agree.
     smooth = np.empty(len(mesh.polygons), bool)
     mesh.polygons.foreach_get("use_smooth", smooth)
     assert smooth.all()
-    assert mesh.has_custom_normals
-    corner_sum = normals[tris].sum(axis=1)
-    assert (np.einsum("ij,ij->i", face_normals(co, tris), corner_sum) > 0).all()
-    rep = pm.native.mesh_report(co, tris)
-    assert rep["vertices_used"] == 8747 and rep["components"] == 1
+    assert not mesh.has_custom_normals
+    blender_normals = pm.blender_mesh.vertex_normals(mesh)
+    cosine = np.einsum("ij,ij->i", blender_normals, direct.normals)
+    assert cosine.min() > np.cos(np.radians(0.5))
+    assert (np.einsum("ij,ij->i", face_normals(co, tris), direct.normals[tris].sum(axis=1)) > 0).all()
     assert not mesh.validate(verbose=False), "mesh.validate() had to fix the mesh"
     # It remembers where it came from.
     state = result.particlemesh
@@ -103,16 +110,33 @@ def test_triangulate_scan_from_shared_data(pm, data_dir):
     assert state.source_kind == "VERTICES" and state.viewport.auto_spacing
 
 
-@pytest.mark.xfail(reason="pm_triangulate returns the seed's raw triangles until the lead's "
-                          "issue 3 (manifold extraction, orientation) lands", strict=False)
-def test_triangulated_scan_is_closed_and_outward(pm, data_dir):
-    import_cloud(data_dir / "points/spot_poisson.ply")
-    bpy.ops.particlemesh.triangulate()
-    co, tris = mesh_arrays(bpy.context.active_object.data)
-    rep = pm.native.mesh_report(co, tris)
-    assert rep["nonmanifold_edges"] == 0 and rep["manifold"]
-    assert rep["closed"] and rep["consistently_oriented"] and rep["outward"]
-    assert rep["euler_characteristic"] == 2
+def test_raw_triangles_use_the_scan_normals(pm, data_dir):
+    source = import_cloud(data_dir / "points/spot_poisson.ply")
+    normals = pm.blender_mesh.get_point_attribute(source.data, "point_normal")
+    assert bpy.ops.particlemesh.triangulate(raw=True) == {"FINISHED"}
+    mesh = bpy.context.active_object.data
+    co, tris = mesh_arrays(mesh)
+    assert len(tris) == pm.native.triangulate(co, raw=True).triangle_count
+    assert mesh.has_custom_normals  # the scan's normals, as custom split normals
+    assert (np.einsum("ij,ij->i", face_normals(co, tris), normals[tris].sum(axis=1)) > 0).all()
+    assert not mesh.validate(verbose=False)
+
+
+def test_property_defaults_are_the_library_defaults(pm):
+    import ctypes
+    lib = pm.native.load()
+    opt = pm.native.TriangulateOptions()
+    lib.pm_triangulate_options_init(ctypes.byref(opt))
+    props = pm.properties.PARTICLEMESH_PG_generator.bl_rna.properties
+    assert props["max_edge_factor"].default == pytest.approx(opt.max_edge_factor)
+    assert np.degrees(props["normal_angle"].default) == pytest.approx(opt.normal_angle)
+    assert props["fill_holes"].default == opt.fill_holes
+    assert props["fill_edge_factor"].default == pytest.approx(opt.fill_edge_factor)
+    assert pm.native.NORMAL_SOURCES[props["normal_source"].default] == opt.normals
+    assert props["auto_spacing"].default and opt.spacing == 0
+    assert props["threads"].default == opt.threads == 0
+    assert not props["raw"].default and not opt.flags
+    assert props["repair"].default and props["orient"].default
 
 
 def test_options_reach_the_library(pm):
@@ -123,9 +147,15 @@ def test_options_reach_the_library(pm):
     co, tris = mesh_arrays(bpy.context.active_object.data)
     assert len(tris) == pm.native.triangulate(p, spacing=0.08, max_edge_factor=1.5).triangle_count
     edges = np.linalg.norm(co[tris] - co[np.roll(tris, 1, axis=1)], axis=2)
-    assert edges.max() <= 0.12 * (1 + 1e-5)
+    assert edges.max() <= 1.5 * 0.12 * (1 + 1e-5)  # hole filling may reach 1.5 L
     s = bpy.context.active_object.particlemesh.viewport
     assert not s.auto_spacing and math.isclose(s.spacing, 0.08, rel_tol=1e-6)
+    bpy.context.view_layer.objects.active = source
+    assert bpy.ops.particlemesh.triangulate(fill_holes=0, normal_angle=0.5) == {"FINISHED"}
+    s = bpy.context.active_object.particlemesh.viewport
+    assert s.fill_holes == 0 and s.normal_angle == pytest.approx(0.5)
+    direct = pm.native.triangulate(p, fill_holes=0, normal_angle=np.degrees(0.5))
+    assert len(bpy.context.active_object.data.polygons) == direct.triangle_count
     assert source.name in bpy.data.objects
 
 
@@ -161,10 +191,10 @@ def test_triangulate_particle_system_with_velocity(pm, clean_scene):
     velocity = pm.blender_mesh.get_point_attribute(result.data, "velocity")
     np.testing.assert_allclose(velocity, velocities, atol=1e-6)
     np.testing.assert_allclose(np.linalg.norm(velocity, axis=1), 2.0, rtol=0.05)
-    # An evenly spaced sphere: every particle in the surface, one component, about 2N faces.
+    # An evenly spaced sphere: a closed outward genus-0 surface through every particle.
     rep = pm.native.mesh_report(co, tris)
     assert rep["vertices_used"] == 642 and rep["components"] == 1
-    assert 2 * 642 * 0.95 <= len(tris) <= 2 * 642 * 1.35
+    assert rep["closed"] and rep["outward"] and len(tris) == 2 * 642 - 4
     assert not result.data.validate(verbose=False)
 
 
@@ -445,7 +475,7 @@ def test_modal_job_finishes_and_shows_progress(pm):
     assert driver.modal(context, _Event("MIDDLEMOUSE", "PRESS")) == {"PASS_THROUGH"}
     assert driver.modal(context, _Event("A", "PRESS")) == {"RUNNING_MODAL"}
     assert run_modal(driver, context) == {"FINISHED"}
-    assert finished and finished[0].triangle_count > 40000
+    assert finished and finished[0].triangle_count == 2 * 20000 - 4
     names = [c[0] for c in context.window_manager.calls]
     assert names[:3] == ["event_timer_add", "modal_handler_add", "progress_begin"]
     assert "progress_update" in names and names[-1] == "progress_end"

@@ -94,26 +94,63 @@ def test_triangulate_sphere_vertices_are_the_particles(native):
     np.testing.assert_array_equal(mesh.positions, p)  # output vertex i is particle i
     assert mesh.triangles.min() >= 0 and mesh.triangles.max() < 3000
     s = mesh.stats
-    assert s["points"] == 3000 and s["spacing_estimated"] == 1
-    assert s["kept"] == mesh.triangle_count
+    assert s["points"] == 3000 and s["spacing_estimated"] == 1 and not s["raw"]
     assert s["max_edge"] == pytest.approx(2.0 * s["spacing"])
-    assert edge_lengths(mesh.positions, mesh.triangles).max() <= s["max_edge"] * (1 + 1e-5)
-    # A closed sphere: every particle is used; about 2 triangles per particle.
+    assert s["unused_points"] == 0 and s["holes_left"] == 0
+    # The finished surface of a sphere: closed, manifold, outward, genus 0, F = 2V - 4.
     rep = native.mesh_report(mesh.positions, mesh.triangles)
-    assert rep["vertices_used"] == 3000
-    assert rep["components"] == 1
-    assert 1.9 * 3000 < mesh.triangle_count < 2.6 * 3000
+    assert rep["closed"] and rep["manifold"] and rep["consistently_oriented"] and rep["outward"]
+    assert rep["euler_characteristic"] == 2 and rep["components"] == 1
+    assert mesh.triangle_count == 2 * 3000 - 4
+    assert s["kept"] >= mesh.triangle_count  # the seed's test keeps more (overlaps, slivers)
+    # Its normals: unit, outward, from the faces.
+    assert mesh.normals is not None
+    np.testing.assert_allclose(np.linalg.norm(mesh.normals, axis=1), 1.0, atol=1e-5)
+    assert (np.einsum("ij,ij->i", mesh.normals, p) > 0.99).all()
+
+
+def test_raw_is_the_seeds_triangle_set(native):
+    p = fibonacci_sphere(3000)
+    raw = native.triangulate(p, raw=True)
+    s = raw.stats
+    assert s["raw"] and s["kept"] == raw.triangle_count
+    assert s["holes_filled"] == 0 and s["unused_points"] == 0
+    assert edge_lengths(raw.positions, raw.triangles).max() <= s["max_edge"] * (1 + 1e-5)
+    assert (np.sort(raw.triangles, axis=1) == raw.triangles).all()  # canonical, not oriented
+    assert raw.triangle_count > native.triangulate(p).triangle_count
 
 
 def test_triangulate_options_reach_the_library(native):
     p = fibonacci_sphere(2000)
-    mesh = native.triangulate(p, spacing=0.1, max_edge_factor=1.5)
+    mesh = native.triangulate(p, spacing=0.1, max_edge_factor=1.5, raw=True)
     assert mesh.stats["spacing"] == pytest.approx(0.1)
     assert not mesh.stats["spacing_estimated"]
     assert mesh.stats["max_edge"] == pytest.approx(0.15)
     assert edge_lengths(mesh.positions, mesh.triangles).max() <= 0.15 * (1 + 1e-5)
-    tight = native.triangulate(p, spacing=0.1, max_edge_factor=0.5)
+    tight = native.triangulate(p, spacing=0.1, max_edge_factor=0.5, raw=True)
     assert tight.triangle_count < mesh.triangle_count
+
+
+def test_finishing_options_reach_the_library(native, data_dir):
+    cloud = native.read_cloud(data_dir / "points/spot_poisson.ply")
+    p, n = cloud.positions, cloud.normals
+    full = native.triangulate(p, normals=n)
+    rep = native.mesh_report(full.positions, full.triangles)
+    assert rep["closed"] and rep["manifold"] and rep["outward"] and rep["euler_characteristic"] == 2
+    assert full.stats["holes_filled"] > 0 and full.stats["holes_left"] == 0
+    no_fill = native.triangulate(p, normals=n, fill_holes=0)
+    assert no_fill.stats["holes_filled"] == 0 and no_fill.stats["holes_left"] > 0
+    no_repair = native.triangulate(p, normals=n, repair=False)
+    assert no_repair.stats["holes_filled"] == 0 and no_repair.triangle_count < full.triangle_count
+    strict = native.triangulate(p, normals=n, normal_angle=30.0)
+    assert strict.triangle_count != full.triangle_count
+    unoriented = native.triangulate(p, normals=n, orient=False, normal_source="ESTIMATE")
+    assert unoriented.triangle_count > 0
+    with pytest.raises(native.ParticlemeshError):
+        native.triangulate(p, fill_holes=-1)
+    with pytest.raises(native.ParticlemeshError) as e:
+        native.triangulate(p, normal_angle=-5.0)
+    assert e.value.status == native.STATUS_INVALID_ARGUMENT
 
 
 def test_threads_do_not_change_the_result(native):
@@ -138,10 +175,13 @@ def test_input_buffers_of_any_layout(native):
 
 def test_normals_are_passed_and_returned(native):
     p = fibonacci_sphere(1500)
-    mesh = native.triangulate(p, normals=p)
-    assert mesh.normals is not None
-    np.testing.assert_allclose(mesh.normals, p, atol=1e-6)
-    assert native.triangulate(p).normals is None
+    raw = native.triangulate(p, normals=p, raw=True)
+    np.testing.assert_allclose(raw.normals, p, atol=1e-6)  # raw: the particles' normals
+    assert native.triangulate(p, raw=True).normals is None
+    # Inward input normals turn the finished surface inward when they are followed as given.
+    inward = native.triangulate(p, normals=-p, normal_source="INPUT", orient=False)
+    rep = native.mesh_report(inward.positions, inward.triangles)
+    assert rep["closed"] and not rep["outward"]
 
 
 def test_real_scan_from_shared_data(native, data_dir):
@@ -155,8 +195,8 @@ def test_real_scan_from_shared_data(native, data_dir):
     assert 0.02 <= mesh.stats["spacing"] < 0.025
     rep = native.mesh_report(mesh.positions, mesh.triangles)
     assert rep["vertices_used"] == 8747
-    assert rep["components"] == 1
-    assert 2 * 8747 * 0.95 < mesh.triangle_count < 2 * 8747 * 1.35
+    assert rep["components"] == 1 and rep["closed"] and rep["outward"]
+    assert mesh.triangle_count == 2 * 8747 - 4  # the cow is genus 0
 
 
 # ---- errors -----------------------------------------------------------------------------------

@@ -144,22 +144,41 @@ def sphere(n):
                     1).astype(np.float32)
 
 
-def test_generate_triangulate_orients_by_normals_and_carries_velocity(pkg):
+def face_dots(p, triangles):
+    face = np.cross(p[triangles[:, 1]] - p[triangles[:, 0]], p[triangles[:, 2]] - p[triangles[:, 0]])
+    return np.einsum("ij,ij->i", face, p[triangles].mean(axis=1))
+
+
+def test_generate_triangulate_finished_surface_and_velocity(pkg):
     p = sphere(2000)
     velocity = np.tile(np.float32([0, 0, 1]), (2000, 1))
-    particles = pkg.generate.Particles(p, normals=p, velocities=velocity)
+    particles = pkg.generate.Particles(p, normals=-p, velocities=velocity)  # inward normals
     mesh = pkg.generate.run("TRIANGULATE", particles, {"auto_spacing": True})
     np.testing.assert_array_equal(mesh.attributes["velocity"], velocity)
-    face = np.cross(p[mesh.triangles[:, 1]] - p[mesh.triangles[:, 0]],
-                    p[mesh.triangles[:, 2]] - p[mesh.triangles[:, 0]])
-    centre = p[mesh.triangles].mean(axis=1)
-    assert (np.einsum("ij,ij->i", face, centre) > 0).all()  # all facing outward
-    # Inward normals flip every face.
-    flipped = pkg.generate.run("TRIANGULATE", pkg.generate.Particles(p, normals=-p),
-                               {"auto_spacing": True})
-    face = np.cross(p[flipped.triangles[:, 1]] - p[flipped.triangles[:, 0]],
-                    p[flipped.triangles[:, 2]] - p[flipped.triangles[:, 0]])
-    assert (np.einsum("ij,ij->i", face, centre) < 0).all()
+    assert (face_dots(p, mesh.triangles) > 0).all()  # closed parts face outward regardless
+    assert mesh.stats["normals_are_face_weighted"]    # Blender's own normals will do
+    kept = pkg.generate.run("TRIANGULATE", particles, {"orient": False, "normal_source": "INPUT"})
+    assert (face_dots(p, kept.triangles) < 0).all()   # followed the given normals
+
+
+def test_generate_raw_is_wound_by_the_normals(pkg):
+    p = sphere(2000)
+    out = pkg.generate.run("TRIANGULATE", pkg.generate.Particles(p, normals=p), {"raw": True})
+    assert (face_dots(p, out.triangles) > 0).all()
+    assert "normals_are_face_weighted" not in out.stats
+    inward = pkg.generate.run("TRIANGULATE", pkg.generate.Particles(p, normals=-p), {"raw": True})
+    assert (face_dots(p, inward.triangles) < 0).all()
+
+
+def test_generate_settings_keys_match_the_properties():
+    """Every key generate.py reads is a property of the operators and generated objects."""
+    tree = parse("properties")
+    names = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name):
+            names.add(node.target.id)
+    used = set(re.findall(r'settings(?:\.get\(|\[)"(\w+)"', (PACKAGE / "generate.py").read_text()))
+    assert used and used <= names, used - names
 
 
 def test_generate_reports_an_empty_result(pkg):
