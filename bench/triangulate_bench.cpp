@@ -4,6 +4,7 @@
 #include <benchmark/benchmark.h>
 
 #include "particlemesh/sample/shapes.h"
+#include "particlemesh/surface/reconstruct.h"
 #include "particlemesh/surface/spacing.h"
 #include "particlemesh/surface/triangulate.h"
 
@@ -29,6 +30,32 @@ BENCHMARK(BM_TriangulateRaw)
     ->Args({100000, 0})
     ->Args({1000000, 0})
     ->Args({1000000, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// The whole chain of issue 3 (raw test + normals + extraction + repair + orientation), to set
+// beside BM_TriangulateRaw on the same points. Normals: estimated (the cloud's are dropped),
+// the slower and more general path.
+static void BM_ReconstructSurface(benchmark::State& state) {
+  PointCloud c = fibonacci_sphere(size_t(state.range(0)));
+  c.normals.clear();
+  SurfaceOptions o;
+  o.threads = int(state.range(1));
+  SurfaceStats last;
+  for (auto _ : state) {
+    SurfaceResult r = reconstruct_surface(c, o);
+    last = r.surface;
+    benchmark::DoNotOptimize(r);
+  }
+  state.counters["points/s"] = benchmark::Counter(double(state.range(0)), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["normals_s"] = last.seconds_normals;
+  state.counters["extract_s"] = last.seconds_extraction;
+  state.counters["repair_s"] = last.seconds_repair;
+}
+BENCHMARK(BM_ReconstructSurface)
+    ->ArgNames({"points", "threads"})
+    ->Args({100000, 0})
+    ->Args({1000000, 0})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

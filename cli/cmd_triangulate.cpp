@@ -11,6 +11,7 @@
 #include "particlemesh/surface/triangulate.h"
 #include "progress_line.h"
 #include "report_json.h"
+#include "smooth_chain.h"
 
 namespace particlemesh::cli {
 
@@ -31,6 +32,7 @@ struct TriangulateArgs {
   bool quiet = false;
   int threads = 0;
   size_t max_neighbors = 256;
+  SmoothChainArgs smooth;  // --smooth loop|butterfly --levels K
 };
 
 int run_triangulate(const TriangulateArgs& a) {
@@ -68,6 +70,8 @@ int run_triangulate(const TriangulateArgs& a) {
   const double t_tri = std::chrono::duration<double>(Clock::now() - t1).count();
   progress.clear();
   if (interrupted()) throw Error(Status::Cancelled, "interrupted");
+
+  apply_smooth_chain(result.mesh, a.smooth, a.threads, progress);  // --smooth: after the mesh is made
 
   WriteMeshOptions wo;
   if (a.ascii) wo.format = MeshFormat::PlyAscii;
@@ -160,6 +164,7 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("--report", args->report, "Also write statistics and the topology report as JSON");
   app->add_flag("--ascii", args->ascii, "Write ASCII PLY instead of binary");
   app->add_flag("-q,--quiet", args->quiet, "No summary and no progress line");
+  add_smooth_chain_options(app, args->smooth);
   commands.push_back({app, [args] { return run_triangulate(*args); }});
 }
 

@@ -17,5 +17,6 @@ struct Command {
 void add_triangulate(CLI::App& root, std::vector<Command>& commands);
 void add_inspect(CLI::App& root, std::vector<Command>& commands);
 void add_sample(CLI::App& root, std::vector<Command>& commands);
+void add_smooth(CLI::App& root, std::vector<Command>& commands);
 
 }  // namespace particlemesh::cli

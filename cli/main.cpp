@@ -2,6 +2,7 @@
 //   particlemesh triangulate IN -o OUT.ply      surface particles -> mesh
 //   particlemesh inspect MESH [--json]          topology report of a mesh
 //   particlemesh sample SHAPE -o OUT.xyz        evenly sampled demo/test particles
+//   particlemesh smooth MESH -o OUT.ply         Loop / butterfly subdivision
 #include <cstdio>
 #include <exception>
 
@@ -21,6 +22,7 @@ int main(int argc, char** argv) {
   cli::add_triangulate(app, commands);
   cli::add_inspect(app, commands);
   cli::add_sample(app, commands);
+  cli::add_smooth(app, commands);
 
   try {
     app.parse(argc, argv);

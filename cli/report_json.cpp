@@ -1,5 +1,6 @@
 #include "report_json.h"
 
+#include <cmath>
 #include <sstream>
 
 #include "particlemesh/io/atomic_write.h"
@@ -59,7 +60,10 @@ nlohmann::json to_json(const TriangulateStats& s) {
 }
 
 nlohmann::json to_json(const SurfaceStats& s) {
-  return {{"normals_estimated", s.normals_estimated},
+  nlohmann::json loops = nlohmann::json::array();
+  for (const auto& l : s.open_loops) loops.push_back({{"edges", l.edges}, {"width_over_L", std::isfinite(l.width) ? nlohmann::json(l.width) : nlohmann::json(nullptr)}});
+  return {{"open_loops", loops},
+          {"normals_estimated", s.normals_estimated},
           {"candidates", s.candidates},
           {"rejected_conormal", s.rejected_conormal},
           {"grown", s.grown},

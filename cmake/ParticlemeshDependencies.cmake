@@ -13,3 +13,14 @@ endif()
 if(PM_BUILD_BENCH)
   find_package(benchmark REQUIRED)
 endif()
+
+# OpenSubdiv (smooth/: Loop subdivision). Debian's OpenSubdivConfig.cmake is broken, so the
+# CPU library and the headers are found directly and wrapped in an imported target.
+if(NOT TARGET particlemesh_opensubdiv)
+  find_path(PM_OPENSUBDIV_INCLUDE_DIR opensubdiv/far/topologyRefiner.h REQUIRED)
+  find_library(PM_OPENSUBDIV_CPU_LIBRARY NAMES osdCPU REQUIRED)
+  add_library(particlemesh_opensubdiv UNKNOWN IMPORTED)
+  set_target_properties(particlemesh_opensubdiv PROPERTIES
+    IMPORTED_LOCATION "${PM_OPENSUBDIV_CPU_LIBRARY}"
+    INTERFACE_INCLUDE_DIRECTORIES "${PM_OPENSUBDIV_INCLUDE_DIR}")
+endif()

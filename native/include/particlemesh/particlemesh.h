@@ -166,6 +166,71 @@ typedef struct pm_topology_report {
 
 PM_EXPORT pm_status pm_mesh_report(const pm_mesh* mesh, pm_topology_report* out_report);
 
+/* ---- per-vertex attributes ---------------------------------------------------------- */
+
+/* Named float channels per vertex (colour, velocity, radius, ...): `components` floats per
+ * vertex, vertex-major (values[v * components + c]). Smoothing carries them through; the
+ * triangulation copies a cloud's attributes onto its mesh (whose vertices are the particles). */
+
+/** Set (or replace) attribute `name` on a mesh: vertex_count must equal the mesh's vertex
+ *  count, components is 1..4096, every value finite. */
+PM_EXPORT pm_status pm_mesh_set_attribute(pm_mesh* mesh, const char* name, int32_t components,
+                                          const float* values, size_t vertex_count);
+/** Components of attribute `name`; PM_STATUS_INVALID_ARGUMENT naming it when the mesh has none. */
+PM_EXPORT pm_status pm_mesh_get_attribute_components(const pm_mesh* mesh, const char* name,
+                                                     int32_t* out_components);
+/** Copy attribute `name` into `out` (capacity_vertices * components floats). */
+PM_EXPORT pm_status pm_mesh_copy_attribute(const pm_mesh* mesh, const char* name, float* out,
+                                           size_t capacity_vertices);
+/** Number of attributes on a mesh, and the name of attribute `index` (0-based; the string
+ *  stays valid until the mesh is changed or destroyed). */
+PM_EXPORT pm_status pm_mesh_get_attribute_count(const pm_mesh* mesh, size_t* out_count);
+PM_EXPORT pm_status pm_mesh_get_attribute_name(const pm_mesh* mesh, size_t index, const char** out_name);
+/** Set (or replace) attribute `name` on a cloud (vertex_count = the cloud's point count). */
+PM_EXPORT pm_status pm_cloud_set_attribute(pm_cloud* cloud, const char* name, int32_t components,
+                                           const float* values, size_t vertex_count);
+
+/* ---- smoothing: Loop (OpenSubdiv) and modified butterfly (OpenMesh) -------------------- */
+
+#define PM_SMOOTH_LOOP 0      /**< approximating; exact limit positions and normals */
+#define PM_SMOOTH_BUTTERFLY 1 /**< interpolating: the original vertices stay exactly in place */
+
+/** Loop boundary rules (OpenSubdiv's Sdc::Options::VtxBoundaryInterpolation; its NONE
+ *  equals EDGE_ONLY under uniform refinement and is not offered, see smooth/subdivide.h). */
+#define PM_BOUNDARY_EDGE_AND_CORNER 0 /**< boundary = B-spline curve, corners pinned (default) */
+#define PM_BOUNDARY_EDGE_ONLY 1       /**< boundary = B-spline curve, corners smoothed too */
+
+/** Loop crease softening (Sdc::Options::CreasingMethod). */
+#define PM_CREASE_UNIFORM 0
+#define PM_CREASE_CHAIKIN 1
+
+/** Marks "infinitely sharp" in pm_smooth_options.crease_sharpness (any value >= 10 does). */
+#define PM_CREASE_INFINITE 10.0f
+
+typedef struct pm_smooth_options {
+  uint32_t struct_size;        /**< sizeof(pm_smooth_options), set by _init */
+  int32_t scheme;              /**< PM_SMOOTH_LOOP (default) or PM_SMOOTH_BUTTERFLY */
+  int32_t levels;              /**< 0..10, default 1; each level multiplies the triangles by 4 */
+  int32_t limit;               /**< Loop: 1 = exact limit positions, normals, attributes (default) */
+  int32_t boundary;            /**< Loop: PM_BOUNDARY_* (default EDGE_AND_CORNER) */
+  int32_t crease_method;       /**< Loop: PM_CREASE_* (default UNIFORM) */
+  int32_t threads;             /**< 0 = all cores; the output does not depend on it */
+  uint64_t max_triangles;      /**< refuse larger results before allocating (default 2^25) */
+  size_t crease_count;         /**< Loop: number of crease edges (default 0) */
+  const int32_t* crease_edges; /**< crease_count vertex-index pairs (2 per crease), or NULL */
+  const float* crease_sharpness; /**< crease_count values, or NULL = all infinitely sharp */
+  pm_progress_fn progress;     /**< may be NULL */
+  void* progress_user_data;
+} pm_smooth_options;
+
+PM_EXPORT void pm_smooth_options_init(pm_smooth_options* options);
+/** Subdivide `mesh` into a new smooth mesh (with normals and every attribute carried
+ *  through). `options` may be NULL (one Loop level at the limit). The input must be a
+ *  2-manifold; unreferenced vertices are dropped and inconsistent orientation is repaired
+ *  (see smooth/subdivide.h); anything else unusable gives PM_STATUS_INVALID_INPUT naming the
+ *  edge, vertex or triangle, and a result over max_triangles PM_STATUS_LIMIT_EXCEEDED. */
+PM_EXPORT pm_status pm_smooth(const pm_mesh* mesh, const pm_smooth_options* options, pm_mesh** out_mesh);
+
 #ifdef __cplusplus
 }
 #endif

@@ -133,6 +133,7 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     st.largest_hole_left = bs.largest_hole_left;
     st.components_flipped = bs.components_flipped;
     st.unused_points = bs.unused_points;
+    for (const auto& [edges, width] : bs.open_loops) st.open_loops.push_back({edges, width});
   });
   result.mesh.positions = cloud.positions;
   result.mesh.normals = surface_normals(cloud.positions, tris, normals);

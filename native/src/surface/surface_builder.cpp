@@ -1,8 +1,6 @@
 #include "surface/surface_builder.h"
 
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
 #include <chrono>
 #include <cmath>
 #include <functional>
@@ -655,11 +653,12 @@ class Builder {
     return inserted;
   }
 
-  /// Open fragments of a few triangles (a lone triangle grown from three particles the main
-  /// surface passed by) are dissolved; insert_unused then puts their particles into the
-  /// surface around them.
-  size_t drop_fragments() {
-    if (boundary_.empty()) return 0;
+  /// Fragments of a few triangles that lie against a larger piece of surface (a lone triangle
+  /// or a tiny closed "bubble" grown from particles the main surface passed by, where it is
+  /// thin or sharp) are dissolved; insert_unused then puts their particles into the surface
+  /// around them. A small piece on its own (a droplet of four particles) is a surface of its
+  /// own and stays: a fragment is only dissolved if a raw triangle joins it to another piece.
+  size_t drop_fragments(const std::vector<Triangle>& raw) {
     const size_t n = P_.size();
     std::vector<uint32_t> parent(n);
     std::iota(parent.begin(), parent.end(), 0u);
@@ -677,22 +676,34 @@ class Builder {
     std::vector<uint32_t> count(n, 0);
     for (uint32_t t = 0; t < tris_.size(); ++t)
       if (alive_[t]) ++count[find(tris_[t][0])];
-    std::vector<uint8_t> open(n, 0);
-    for (uint64_t e : boundary_) open[find(uint32_t(e >> 32))] = 1;
+    std::vector<uint8_t> small(n, 0), touching(n, 0);
+    bool any = false;
+    for (uint32_t v = 0; v < n; ++v)
+      if (find(v) == v && count[v] > 0 && count[v] <= kMaxFragment) small[v] = any = true;
+    if (!any) return 0;
+    // A raw triangle with corners in a small piece and in another (used) piece joins them.
+    for (const Triangle& t : raw) {
+      const uint32_t r0 = find(t[0]), r1 = find(t[1]), r2 = find(t[2]);
+      for (uint32_t a : {r0, r1, r2})
+        if (small[a])
+          for (uint32_t b : {r0, r1, r2})
+            if (b != a && count[b] > 0) touching[a] = 1;
+    }
     size_t dropped = 0;
     for (uint32_t t = 0; t < tris_.size(); ++t) {
       if (!alive_[t]) continue;
       const uint32_t r = find(tris_[t][0]);
-      if (open[r] && count[r] <= kMaxFragment) {
+      if (small[r] && touching[r]) {
         kill_triangle(t);
         ++dropped;
       }
     }
     return dropped;
   }
-  static constexpr uint32_t kMaxFragment = 4;
+  static constexpr uint32_t kMaxFragment = 12;
 
-  /// Smallest possible longest edge over all triangulations of a loop (min-max DP), / L.
+  /// The smallest possible longest edge over all triangulations of a loop (a min-max DP), in
+  /// units of L: how far apart the particles across the loop are.
   double loop_width(const std::vector<uint32_t>& L) const {
     const size_t m = L.size();
     std::vector<double> w(m * m, INFINITY);
@@ -709,8 +720,6 @@ class Builder {
   void repair(const std::vector<Triangle>& raw) {
     tracker_.stage("repairing", 0.85, 0.97);
     start_repair();
-    if (std::getenv("PM_DEBUG_LOOPS"))
-      for (const auto& L : trace_loops()) std::fprintf(stderr, "LOOP %zu %.3f\n", L.size(), loop_width(L));
     // Small loops first (wrong diagonals, sampling gaps), then pinches, then larger loops.
     fill_loops(o_.small_hole);
     tracker_.check();
@@ -718,7 +727,7 @@ class Builder {
     fill_loops(o_.small_hole);
     if (o_.max_hole > o_.small_hole) fill_loops(o_.max_hole);
     stats_.pinches_resolved += unpinch();
-    drop_fragments();
+    drop_fragments(raw);
     if (insert_unused(raw) > 0) {
       fill_loops(o_.small_hole);
       stats_.pinches_resolved += unpinch();
@@ -727,7 +736,10 @@ class Builder {
     if (!boundary_.empty()) {
       const auto left = trace_loops();
       stats_.holes_left = left.size();
-      for (const auto& l : left) stats_.largest_hole_left = std::max(stats_.largest_hole_left, l.size());
+      for (const auto& l : left) {
+        stats_.largest_hole_left = std::max(stats_.largest_hole_left, l.size());
+        if (stats_.open_loops.size() < 1000) stats_.open_loops.push_back({l.size(), l.size() <= 2000 ? loop_width(l) : INFINITY});
+      }
     }
     std::vector<Triangle> out;
     out.reserve(tris_.size());

@@ -47,6 +47,7 @@ struct BuilderStats {
   size_t unused_points = 0;       ///< distinct points in no triangle
   double seconds_candidates = 0, seconds_growth = 0, seconds_repair = 0;
   std::vector<uint64_t> boundary;  ///< boundary half-edges (a << 32 | b) after repair
+  std::vector<std::pair<size_t, double>> open_loops;  ///< (edges, width / L) of loops left open
   bool boundary_known = false;
 };
 

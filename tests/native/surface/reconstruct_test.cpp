@@ -138,8 +138,9 @@ TEST(ReconstructSurface, PoissonSamplesFromTheNotesCloseAndKeepRealOpenings) {
   double lo = INFINITY, hi = -INFINITY;
   for (const Vec3& p : b.positions) lo = std::min(lo, p.y), hi = std::max(hi, p.y);
   const auto edges = test::edge_counts(r.mesh.triangles);
-  for (const auto& [e, count] : edges)
+  for (const auto& [e, count] : edges) {
     if (count == 1) EXPECT_LT(b.positions[e.first].y, lo + 0.25 * (hi - lo));
+  }
 }
 
 TEST(ReconstructSurface, JitteredSamplingsStayManifoldAndOriented) {
@@ -248,8 +249,9 @@ TEST(ReconstructSurface, OpenDiskKeepsItsOneBoundary) {
     EXPECT_EQ(r.surface.holes_left, 1u);
     EXPECT_EQ(t.vertices_used, c.size());
     // The boundary runs along the rim.
-    for (const auto& [e, count] : test::edge_counts(r.mesh.triangles))
+    for (const auto& [e, count] : test::edge_counts(r.mesh.triangles)) {
       if (count == 1) EXPECT_GT(norm(c.positions[e.first]), 1.0 - 2 * 0.04);
+    }
   }
 }
 

@@ -66,6 +66,13 @@ struct SurfaceStats {
   size_t hole_triangles = 0;
   size_t holes_left = 0;          ///< boundary loops left open (real openings, or too large)
   size_t largest_hole_left = 0;   ///< edges of the largest loop left open
+  /// The loops left open (at most 1000): their edge count and width, the smallest possible
+  /// longest edge of a patch across them, in units of L (above fill_edge_factor: a real opening).
+  struct OpenLoop {
+    size_t edges = 0;
+    double width = 0;
+  };
+  std::vector<OpenLoop> open_loops;
   size_t components_flipped = 0;  ///< closed components turned outward
   size_t unused_points = 0;       ///< distinct particles in no triangle
   double seconds_normals = 0;

@@ -1,0 +1,185 @@
+// C ABI: per-vertex attributes and smoothing (Loop / butterfly).
+#include <cmath>
+#include <memory>
+#include <string>
+
+#include "capi/firewall.h"
+#include "capi/handles.h"
+#include "particlemesh/smooth/subdivide.h"
+
+using namespace particlemesh;
+using particlemesh::capi::guarded;
+using particlemesh::capi::require;
+
+namespace {
+
+constexpr int32_t kMaxComponents = 4096;
+
+VertexAttribute make_attribute(const char* name, int32_t components, const float* values, size_t vertex_count,
+                               size_t expected_vertices, const char* owner) {
+  require(name, "name");
+  if (name[0] == '\0') throw Error(Status::InvalidArgument, "name is empty");
+  if (components < 1 || components > kMaxComponents)
+    throw Error(Status::InvalidArgument, "components must be in [1, 4096], got " + std::to_string(components));
+  if (vertex_count != expected_vertices)
+    throw Error(Status::InvalidArgument, "vertex_count is " + std::to_string(vertex_count) + " but the " + owner +
+                                             " has " + std::to_string(expected_vertices));
+  const size_t n = vertex_count * size_t(components);
+  if (n > 0) require(values, "values");
+  VertexAttribute a{name, components, std::vector<float>(values, values + n)};
+  for (size_t i = 0; i < n; ++i)
+    if (!std::isfinite(a.values[i]))
+      throw Error(Status::InvalidInput, "values[" + std::to_string(i) + "] (vertex " +
+                                            std::to_string(i / size_t(components)) + ", component " +
+                                            std::to_string(i % size_t(components)) + ") of attribute '" + name +
+                                            "' is not finite");
+  return a;
+}
+
+void store(std::vector<VertexAttribute>& attributes, VertexAttribute a) {
+  for (auto& x : attributes)
+    if (x.name == a.name) {
+      x = std::move(a);
+      return;
+    }
+  attributes.push_back(std::move(a));
+}
+
+const VertexAttribute& find(const pm_mesh* mesh, const char* name) {
+  require(mesh, "mesh");
+  require(name, "name");
+  for (const auto& a : mesh->mesh.attributes)
+    if (a.name == name) return a;
+  throw Error(Status::InvalidArgument, std::string("the mesh has no attribute '") + name + "'");
+}
+
+ProgressCallback wrap_progress(pm_progress_fn fn, void* user) {
+  if (fn == nullptr) return {};
+  return [fn, user](std::string_view stage, double fraction) {
+    const std::string s(stage);
+    return fn(user, s.c_str(), fraction) == 0;
+  };
+}
+
+}  // namespace
+
+extern "C" {
+
+pm_status pm_mesh_set_attribute(pm_mesh* mesh, const char* name, int32_t components, const float* values,
+                                size_t vertex_count) {
+  return guarded([&] {
+    require(mesh, "mesh");
+    store(mesh->mesh.attributes,
+          make_attribute(name, components, values, vertex_count, mesh->mesh.positions.size(), "mesh"));
+  });
+}
+
+pm_status pm_cloud_set_attribute(pm_cloud* cloud, const char* name, int32_t components, const float* values,
+                                 size_t vertex_count) {
+  return guarded([&] {
+    require(cloud, "cloud");
+    store(cloud->cloud.attributes,
+          make_attribute(name, components, values, vertex_count, cloud->cloud.positions.size(), "cloud"));
+  });
+}
+
+pm_status pm_mesh_get_attribute_components(const pm_mesh* mesh, const char* name, int32_t* out_components) {
+  return guarded([&] {
+    const VertexAttribute& a = find(mesh, name);
+    require(out_components, "out_components");
+    *out_components = a.components;
+  });
+}
+
+pm_status pm_mesh_copy_attribute(const pm_mesh* mesh, const char* name, float* out, size_t capacity_vertices) {
+  return guarded([&] {
+    const VertexAttribute& a = find(mesh, name);
+    require(out, "out");
+    const size_t nv = mesh->mesh.positions.size();
+    if (capacity_vertices < nv)
+      throw Error(Status::InvalidArgument, "capacity_vertices " + std::to_string(capacity_vertices) +
+                                               " is less than the " + std::to_string(nv) + " vertices");
+    std::copy(a.values.begin(), a.values.end(), out);
+  });
+}
+
+pm_status pm_mesh_get_attribute_count(const pm_mesh* mesh, size_t* out_count) {
+  return guarded([&] {
+    require(mesh, "mesh");
+    require(out_count, "out_count");
+    *out_count = mesh->mesh.attributes.size();
+  });
+}
+
+pm_status pm_mesh_get_attribute_name(const pm_mesh* mesh, size_t index, const char** out_name) {
+  return guarded([&] {
+    require(mesh, "mesh");
+    require(out_name, "out_name");
+    const auto& attrs = mesh->mesh.attributes;
+    if (index >= attrs.size())
+      throw Error(Status::InvalidArgument, "index " + std::to_string(index) + " is out of range: the mesh has " +
+                                               std::to_string(attrs.size()) + " attributes");
+    *out_name = attrs[index].name.c_str();
+  });
+}
+
+void pm_smooth_options_init(pm_smooth_options* options) {
+  if (options == nullptr) return;
+  const SmoothOptions d;
+  *options = pm_smooth_options{};
+  options->struct_size = sizeof(pm_smooth_options);
+  options->scheme = int32_t(d.scheme);
+  options->levels = d.levels;
+  options->limit = d.limit ? 1 : 0;
+  options->boundary = int32_t(d.boundary);
+  options->crease_method = int32_t(d.crease_method);
+  options->threads = d.threads;
+  options->max_triangles = d.max_triangles;
+  options->crease_count = 0;
+  options->crease_edges = nullptr;
+  options->crease_sharpness = nullptr;
+  options->progress = nullptr;
+  options->progress_user_data = nullptr;
+}
+
+pm_status pm_smooth(const pm_mesh* mesh, const pm_smooth_options* options, pm_mesh** out_mesh) {
+  return guarded([&] {
+    require(mesh, "mesh");
+    require(out_mesh, "out_mesh");
+    pm_smooth_options defaults;
+    pm_smooth_options_init(&defaults);
+    const pm_smooth_options o = capi::read_versioned(options, defaults, "options");
+    SmoothOptions opt;
+    opt.scheme = static_cast<SmoothScheme>(o.scheme);
+    opt.levels = o.levels;
+    opt.limit = o.limit != 0;
+    opt.boundary = static_cast<BoundaryRule>(o.boundary);
+    opt.crease_method = static_cast<CreaseMethod>(o.crease_method);
+    opt.threads = o.threads;
+    opt.max_triangles = o.max_triangles;
+    if (o.crease_count > 0) {
+      require(o.crease_edges, "options->crease_edges");
+      if (o.crease_count > mesh->mesh.triangles.size() * 3)
+        throw Error(Status::InvalidArgument, "options->crease_count " + std::to_string(o.crease_count) +
+                                                 " exceeds the mesh's edge count");
+      opt.creases.resize(o.crease_count);
+      for (size_t i = 0; i < o.crease_count; ++i) {
+        const int32_t a = o.crease_edges[2 * i], b = o.crease_edges[2 * i + 1];
+        if (a < 0 || b < 0)
+          throw Error(Status::InvalidArgument, "options->crease_edges[" + std::to_string(i) + "] = (" +
+                                                   std::to_string(a) + ", " + std::to_string(b) +
+                                                   ") has a negative vertex index");
+        opt.creases[i].a = uint32_t(a);
+        opt.creases[i].b = uint32_t(b);
+        if (o.crease_sharpness) opt.creases[i].sharpness = o.crease_sharpness[i];
+      }
+    }
+    opt.progress = wrap_progress(o.progress, o.progress_user_data);
+    SmoothResult r = smooth_mesh(mesh->mesh, opt);
+    auto handle = std::make_unique<pm_mesh>();
+    handle->mesh = std::move(r.mesh);
+    *out_mesh = handle.release();
+  });
+}
+
+}  // extern "C"

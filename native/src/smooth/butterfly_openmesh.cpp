@@ -1,0 +1,144 @@
+// Modified butterfly subdivision (Zorin, Schroeder & Sweldens 1996) through OpenMesh's
+// ModifiedButterflyT. The scheme is linear in the vertex data and its stencils depend on the
+// connectivity only, so attributes are interpolated by running the same subdivider on copies
+// of the connectivity whose "points" hold three attribute channels each; the copies refine
+// identically (checked) and run in parallel with the positions.
+#include <chrono>
+#include <string>
+
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <OpenMesh/Tools/Subdivider/Uniform/ModifiedButterFlyT.hh>
+#include <tbb/parallel_for.h>
+
+#include "core/parallel.h"
+#include "particlemesh/core/error.h"
+#include "smooth/schemes.h"
+
+namespace particlemesh::detail {
+
+namespace {
+
+struct ButterflyTraits : public OpenMesh::DefaultTraits {
+  typedef OpenMesh::Vec3d Point;  // doubles: the original vertices stay bit-exact
+  typedef OpenMesh::Vec3d Normal;
+};
+using ButterflyMesh = OpenMesh::TriMesh_ArrayKernelT<ButterflyTraits>;
+using Butterfly = OpenMesh::Subdivider::Uniform::ModifiedButterflyT<ButterflyMesh, double>;
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+std::vector<Triangle> triangles_of(const ButterflyMesh& m) {
+  std::vector<Triangle> t(m.n_faces());
+  for (size_t f = 0; f < t.size(); ++f) {
+    auto h = m.halfedge_handle(ButterflyMesh::FaceHandle(int(f)));
+    const int a = m.to_vertex_handle(h).idx();
+    h = m.next_halfedge_handle(h);
+    const int b = m.to_vertex_handle(h).idx();
+    h = m.next_halfedge_handle(h);
+    const int c = m.to_vertex_handle(h).idx();
+    t[f] = {uint32_t(a), uint32_t(b), uint32_t(c)};  // h, next(h), next(next(h)): the face's winding
+  }
+  return t;
+}
+
+}  // namespace
+
+void butterfly_subdivide(const ControlMesh& control, const SmoothOptions& options,
+                         ProgressTracker& progress, SmoothResult& out) {
+  const size_t nv = control.positions.size(), nf = control.triangles.size();
+  auto t0 = Clock::now();
+  progress.stage("building the half-edge mesh (OpenMesh)", 0.05, 0.2);
+
+  ButterflyMesh base;
+  base.reserve(nv, nv + nf, nf);
+  for (const auto& p : control.positions) base.add_vertex(OpenMesh::Vec3d(p.x, p.y, p.z));
+  for (size_t f = 0; f < nf; ++f) {
+    const Triangle& t = control.triangles[f];
+    const auto fh = base.add_face(ButterflyMesh::VertexHandle(int(t[0])), ButterflyMesh::VertexHandle(int(t[1])),
+                                  ButterflyMesh::VertexHandle(int(t[2])));
+    if (!fh.is_valid())  // the control mesh is a checked manifold, so this is our bug
+      throw Error(Status::Internal, "OpenMesh refused control triangle " + std::to_string(f) +
+                                        " of the checked mesh");
+  }
+
+  // One mesh for the positions, one more per three attribute channels.
+  int channels = 0;
+  for (const auto& a : control.attributes) channels += a.components;
+  const int extra = (channels + 2) / 3;
+  std::vector<ButterflyMesh> meshes(size_t(1 + extra), base);
+  base.clear();
+  {
+    int offset = 0;
+    std::vector<double> flat(nv * size_t(channels));
+    for (const auto& a : control.attributes) {
+      for (size_t i = 0; i < nv; ++i)
+        for (int j = 0; j < a.components; ++j)
+          flat[i * size_t(channels) + size_t(offset + j)] = double(a.values[i * size_t(a.components) + size_t(j)]);
+      offset += a.components;
+    }
+    for (int m = 0; m < extra; ++m)
+      for (size_t i = 0; i < nv; ++i) {
+        OpenMesh::Vec3d p(0, 0, 0);
+        for (int j = 0; j < 3 && 3 * m + j < channels; ++j) p[j] = flat[i * size_t(channels) + size_t(3 * m + j)];
+        meshes[size_t(1 + m)].set_point(ButterflyMesh::VertexHandle(int(i)), p);
+      }
+  }
+
+  std::vector<Butterfly> subdividers(meshes.size());
+  // OpenMesh's SubdividerT destructor calls the pure virtual cleanup() when still attached,
+  // which terminates; detach explicitly on every exit, including a cancel (exception).
+  struct DetachAll {
+    std::vector<Butterfly>& s;
+    ~DetachAll() {
+      for (auto& x : s) x.detach();
+    }
+  } detach_all{subdividers};
+  for (size_t m = 0; m < meshes.size(); ++m) subdividers[m].attach(meshes[m]);
+  double total = 0, done = 0;
+  for (int l = 1; l <= options.levels; ++l) total += double(nf) * double(uint64_t(1) << (2 * l));
+  for (int l = 1; l <= options.levels; ++l) {
+    const double w = double(nf) * double(uint64_t(1) << (2 * l));
+    progress.stage("butterfly level " + std::to_string(l) + " of " + std::to_string(options.levels),
+                   0.2 + 0.65 * done / total, 0.2 + 0.65 * (done + w) / total);
+    done += w;
+    tbb::parallel_for(size_t(0), meshes.size(), [&](size_t m) { subdividers[m](1); });
+    progress.check();
+  }
+  for (auto& sub : subdividers) sub.detach();
+  out.stats.seconds_refine = seconds_since(t0);
+
+  auto t1 = Clock::now();
+  progress.stage("output", 0.85, 0.95);
+  const ButterflyMesh& pm = meshes[0];
+  const size_t n_out = pm.n_vertices();
+  out.mesh.positions.resize(n_out);
+  for (size_t i = 0; i < n_out; ++i) {
+    const auto& p = pm.point(ButterflyMesh::VertexHandle(int(i)));
+    out.mesh.positions[i] = {p[0], p[1], p[2]};
+  }
+  out.mesh.triangles = triangles_of(pm);
+  std::vector<double> flat(n_out * size_t(channels));
+  for (int m = 0; m < extra; ++m) {
+    const ButterflyMesh& am = meshes[size_t(1 + m)];
+    if (am.n_vertices() != n_out || triangles_of(am) != out.mesh.triangles)
+      throw Error(Status::Internal, "the butterfly attribute mesh refined differently from the positions");
+    for (size_t i = 0; i < n_out; ++i) {
+      const auto& p = am.point(ButterflyMesh::VertexHandle(int(i)));
+      for (int j = 0; j < 3 && 3 * m + j < channels; ++j) flat[i * size_t(channels) + size_t(3 * m + j)] = p[j];
+    }
+  }
+  out.mesh.attributes.clear();
+  int offset = 0;
+  for (const auto& a : control.attributes) {
+    const size_t k = size_t(a.components);
+    VertexAttribute o{a.name, a.components, std::vector<float>(n_out * k)};
+    for (size_t i = 0; i < n_out; ++i)
+      for (size_t j = 0; j < k; ++j) o.values[i * k + j] = float(flat[i * size_t(channels) + size_t(offset) + j]);
+    offset += a.components;
+    out.mesh.attributes.push_back(std::move(o));
+  }
+  out.stats.seconds_output = seconds_since(t1);
+}
+
+}  // namespace particlemesh::detail

@@ -1,0 +1,44 @@
+// Internal: the control mesh both subdivision schemes start from.
+//
+// OpenSubdiv and OpenMesh each reject (or misbehave on) some input: OpenMesh's add_face
+// refuses complex edges and vertices, its butterfly indexes weight tables by valence, and
+// OpenSubdiv wants every vertex referenced. prepare_control_mesh() checks the input once,
+// with messages in the caller's indices, and hands both schemes the same clean mesh.
+#pragma once
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "particlemesh/mesh/tri_mesh.h"
+
+namespace particlemesh::detail {
+
+class ProgressTracker;
+
+struct ControlMesh {
+  std::vector<Vec3> positions;                ///< referenced input vertices, input order
+  std::vector<Triangle> triangles;            ///< in control indices, orientation repaired
+  std::vector<VertexAttribute> attributes;    ///< compacted like positions
+  std::vector<uint32_t> original_vertex;      ///< control index -> input index
+  std::vector<uint32_t> control_index;        ///< input index -> control index (kDropped)
+  /// Undirected edges as (min, max) input-index pairs, sorted: the crease lookup.
+  std::vector<std::pair<uint32_t, uint32_t>> edges;
+  size_t boundary_edges = 0;
+  size_t reoriented_triangles = 0;
+  size_t dropped_vertices = 0;
+
+  static constexpr uint32_t kDropped = UINT32_MAX;
+};
+
+/// Check `mesh` (see smooth/subdivide.h for the rules), drop unreferenced vertices and
+/// repair the orientation. Parallel parts run in the caller's thread arena.
+/// @throws Error(InvalidInput | LimitExceeded) naming the triangle, edge or vertex.
+ControlMesh prepare_control_mesh(const TriMesh& mesh);
+
+/// Area-weighted unit vertex normals (sum of the adjacent triangles' cross products).
+/// A vertex whose sum vanishes gets (0, 0, 0).
+std::vector<Vec3> area_weighted_normals(const std::vector<Vec3>& positions,
+                                        const std::vector<Triangle>& triangles);
+
+}  // namespace particlemesh::detail

@@ -1,0 +1,235 @@
+// Loop subdivision through OpenSubdiv: Far::TopologyRefiner refines the connectivity once,
+// Far::PrimvarRefiner interpolates positions and every attribute channel through it, and
+// PrimvarRefiner::Limit evaluates exact limit positions, tangents and attributes.
+#include <chrono>
+#include <memory>
+#include <string>
+
+#include <opensubdiv/far/primvarRefiner.h>
+#include <opensubdiv/far/topologyDescriptor.h>
+#include <opensubdiv/far/topologyRefiner.h>
+#include <opensubdiv/far/topologyRefinerFactory.h>
+#include <tbb/parallel_invoke.h>
+
+#include "core/parallel.h"
+#include "particlemesh/core/error.h"
+#include "smooth/schemes.h"
+
+namespace particlemesh::detail {
+
+namespace {
+
+using OpenSubdiv::Far::TopologyDescriptor;
+using OpenSubdiv::Far::TopologyRefiner;
+using RefinerFactory = OpenSubdiv::Far::TopologyRefinerFactory<TopologyDescriptor>;
+using PrimvarRefiner = OpenSubdiv::Far::PrimvarRefinerReal<double>;
+namespace Sdc = OpenSubdiv::Sdc;
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+/// A position as PrimvarRefiner wants it: Clear() and AddWithWeight(). Doubles throughout,
+/// so refined and limit positions keep the input's precision.
+struct Point3 {
+  double p[3];
+  void Clear() { p[0] = p[1] = p[2] = 0; }
+  void AddWithWeight(const Point3& s, double w) {
+    p[0] += w * s.p[0];
+    p[1] += w * s.p[1];
+    p[2] += w * s.p[2];
+  }
+};
+static_assert(sizeof(Point3) == sizeof(Vec3));
+
+/// All attribute channels of one vertex (n doubles), viewed in a vertex-major buffer.
+struct Channels {
+  double* v;
+  int n;
+  void Clear() {
+    for (int i = 0; i < n; ++i) v[i] = 0;
+  }
+  void AddWithWeight(const Channels& s, double w) {
+    for (int i = 0; i < n; ++i) v[i] += w * s.v[i];
+  }
+};
+
+/// The buffer PrimvarRefiner indexes: operator[] hands out a view (Channels) by value.
+struct ChannelBuffer {
+  double* data;
+  int n;
+  Channels operator[](int i) const { return Channels{data + size_t(i) * size_t(n), n}; }
+};
+
+Sdc::Options::VtxBoundaryInterpolation to_sdc(BoundaryRule b) {
+  switch (b) {
+    case BoundaryRule::EdgeAndCorner: return Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER;
+    case BoundaryRule::EdgeOnly: return Sdc::Options::VTX_BOUNDARY_EDGE_ONLY;
+  }
+  throw Error(Status::InvalidArgument, "unknown boundary rule " + std::to_string(int(b)));
+}
+
+}  // namespace
+
+void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
+                    const std::vector<std::pair<uint32_t, uint32_t>>& crease_pairs,
+                    const std::vector<float>& crease_sharpness, ProgressTracker& progress,
+                    SmoothResult& out) {
+  const int levels = options.levels;
+  const size_t nv = control.positions.size(), nf = control.triangles.size();
+  SmoothStats& st = out.stats;
+  auto t0 = Clock::now();
+
+  // 1. The topology, through OpenSubdiv's raw-array descriptor.
+  progress.stage("refining topology (OpenSubdiv)", 0.05, 0.25);
+  std::vector<int> verts_per_face(nf, 3);
+  std::vector<int> face_verts(3 * nf);
+  parallel_blocks(nf, 8192, [&](size_t b, size_t e) {
+    for (size_t f = b; f < e; ++f)
+      for (int c = 0; c < 3; ++c) face_verts[3 * f + size_t(c)] = int(control.triangles[f][size_t(c)]);
+  });
+  std::vector<int> crease_verts(2 * crease_pairs.size());
+  for (size_t i = 0; i < crease_pairs.size(); ++i) {
+    crease_verts[2 * i] = int(crease_pairs[i].first);
+    crease_verts[2 * i + 1] = int(crease_pairs[i].second);
+  }
+  TopologyDescriptor desc;
+  desc.numVertices = int(nv);
+  desc.numFaces = int(nf);
+  desc.numVertsPerFace = verts_per_face.data();
+  desc.vertIndicesPerFace = face_verts.data();
+  desc.numCreases = int(crease_pairs.size());
+  desc.creaseVertexIndexPairs = crease_verts.data();
+  desc.creaseWeights = crease_sharpness.data();
+
+  Sdc::Options sdc;
+  sdc.SetVtxBoundaryInterpolation(to_sdc(options.boundary));
+  sdc.SetCreasingMethod(options.crease_method == CreaseMethod::Chaikin ? Sdc::Options::CREASE_CHAIKIN
+                                                                       : Sdc::Options::CREASE_UNIFORM);
+  std::unique_ptr<TopologyRefiner> refiner(
+      RefinerFactory::Create(desc, RefinerFactory::Options(Sdc::SCHEME_LOOP, sdc)));
+  if (!refiner)  // the control mesh was checked, so this is our bug, not the caller's input
+    throw Error(Status::Internal, "OpenSubdiv refused the checked control mesh");
+  verts_per_face = {};
+  face_verts = {};
+  if (levels > 0) {
+    TopologyRefiner::UniformOptions uniform(levels);
+    uniform.fullTopologyInLastLevel = options.limit;  // limit masks need the last level's edges
+    refiner->RefineUniform(uniform);
+  }
+  progress.check();
+
+  // 2. Interpolate level by level (ping-pong buffers): positions and all attribute channels
+  //    in parallel, each through the same refiner (PrimvarRefiner only reads it).
+  int channels = 0;
+  for (const auto& a : control.attributes) channels += a.components;
+  std::vector<Point3> pos(nv), pos_next;
+  for (size_t i = 0; i < nv; ++i) pos[i] = {{control.positions[i].x, control.positions[i].y, control.positions[i].z}};
+  std::vector<double> attr(nv * size_t(channels)), attr_next;
+  {
+    int offset = 0;
+    for (const auto& a : control.attributes) {
+      for (size_t i = 0; i < nv; ++i)
+        for (int j = 0; j < a.components; ++j)
+          attr[i * size_t(channels) + size_t(offset + j)] = double(a.values[i * size_t(a.components) + size_t(j)]);
+      offset += a.components;
+    }
+  }
+  const PrimvarRefiner primvar(*refiner);
+  double total_work = 0, done_work = 0;
+  for (int l = 1; l <= levels; ++l) total_work += double(refiner->GetLevel(l).GetNumVertices());
+  for (int l = 1; l <= levels; ++l) {
+    const size_t n = size_t(refiner->GetLevel(l).GetNumVertices());
+    const double w = double(n);
+    progress.stage("interpolating level " + std::to_string(l) + " of " + std::to_string(levels), 
+                   0.25 + 0.5 * done_work / total_work, 0.25 + 0.5 * (done_work + w) / total_work);
+    done_work += w;
+    pos_next.resize(n);
+    attr_next.resize(n * size_t(channels));
+    tbb::parallel_invoke(
+        [&] {
+          const Point3* src = pos.data();
+          Point3* dst = pos_next.data();
+          primvar.Interpolate(l, src, dst);
+        },
+        [&] {
+          if (channels == 0) return;
+          const ChannelBuffer src{attr.data(), channels};
+          ChannelBuffer dst{attr_next.data(), channels};
+          primvar.Interpolate(l, src, dst);
+        });
+    pos.swap(pos_next);
+    attr.swap(attr_next);
+    progress.check();
+  }
+  pos_next = {};
+  attr_next = {};
+  st.seconds_refine = seconds_since(t0);
+
+  // 3. The limit: exact positions, tangents (-> normals) and attributes.
+  const size_t n_out = pos.size();
+  auto t1 = Clock::now();
+  if (options.limit) {
+    progress.stage("limit positions and normals", 0.75, 0.85);
+    std::vector<Point3> lim(n_out), tan1(n_out), tan2(n_out);
+    std::vector<double> attr_lim(n_out * size_t(channels));
+    tbb::parallel_invoke(
+        [&] {
+          const Point3* src = pos.data();
+          Point3 *p = lim.data(), *t1p = tan1.data(), *t2p = tan2.data();
+          primvar.Limit(src, p, t1p, t2p);
+        },
+        [&] {
+          if (channels == 0) return;
+          const ChannelBuffer src{attr.data(), channels};
+          ChannelBuffer dst{attr_lim.data(), channels};
+          primvar.Limit(src, dst);
+        });
+    pos.swap(lim);
+    attr.swap(attr_lim);
+    out.mesh.normals.resize(n_out);
+    parallel_blocks(n_out, 8192, [&](size_t b, size_t e) {
+      for (size_t i = b; i < e; ++i) {
+        const Vec3 a{tan1[i].p[0], tan1[i].p[1], tan1[i].p[2]}, c{tan2[i].p[0], tan2[i].p[1], tan2[i].p[2]};
+        const Vec3 n = cross(a, c);
+        // A vanishing cross product (degenerate control geometry) is marked with a zero
+        // normal; smooth_mesh() replaces those with area-weighted normals.
+        out.mesh.normals[i] = squared_norm(n) > 1e-24 * squared_norm(a) * squared_norm(c) ? normalized(n) : Vec3{};
+      }
+    });
+    st.limit = true;
+    progress.check();
+  }
+  st.seconds_limit = seconds_since(t1);
+
+  // 4. Output arrays.
+  auto t2 = Clock::now();
+  progress.stage("output", 0.85, 0.95);
+  const auto last = refiner->GetLevel(levels);
+  const size_t nf_out = size_t(last.GetNumFaces());
+  out.mesh.positions.resize(n_out);
+  out.mesh.triangles.resize(nf_out);
+  parallel_blocks(n_out, 8192, [&](size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i) out.mesh.positions[i] = {pos[i].p[0], pos[i].p[1], pos[i].p[2]};
+  });
+  parallel_blocks(nf_out, 8192, [&](size_t b, size_t e) {
+    for (size_t f = b; f < e; ++f) {
+      const auto fv = last.GetFaceVertices(int(f));
+      out.mesh.triangles[f] = {uint32_t(fv[0]), uint32_t(fv[1]), uint32_t(fv[2])};
+    }
+  });
+  out.mesh.attributes.clear();
+  int offset = 0;
+  for (const auto& a : control.attributes) {
+    VertexAttribute o{a.name, a.components, std::vector<float>(n_out * size_t(a.components))};
+    const size_t k = size_t(a.components);
+    parallel_blocks(n_out, 8192, [&](size_t b, size_t e) {
+      for (size_t i = b; i < e; ++i)
+        for (size_t j = 0; j < k; ++j) o.values[i * k + j] = float(attr[i * size_t(channels) + size_t(offset) + j]);
+    });
+    offset += a.components;
+    out.mesh.attributes.push_back(std::move(o));
+  }
+  st.seconds_output = seconds_since(t2);
+}
+
+}  // namespace particlemesh::detail

@@ -1,0 +1,128 @@
+#include "particlemesh/smooth/subdivide.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "core/parallel.h"
+#include "core/progress_tracker.h"
+#include "particlemesh/core/error.h"
+#include "smooth/control_mesh.h"
+#include "smooth/schemes.h"
+
+namespace particlemesh {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+constexpr uint64_t kMaxTrianglesCeiling = uint64_t(1) << 30;  // OpenSubdiv indexes with int
+constexpr float kInfiniteSharpness = 10.0f;                   // Sdc::Crease::SHARPNESS_INFINITE
+
+void check_options(const SmoothOptions& o) {
+  if (o.scheme != SmoothScheme::Loop && o.scheme != SmoothScheme::Butterfly)
+    throw Error(Status::InvalidArgument, "scheme must be Loop (0) or Butterfly (1), got " + std::to_string(int(o.scheme)));
+  if (o.levels < 0 || o.levels > kMaxSmoothLevels)
+    throw Error(Status::InvalidArgument, "levels must be in [0, " + std::to_string(kMaxSmoothLevels) + "], got " +
+                                             std::to_string(o.levels) + " (each level multiplies the triangles by 4)");
+  if (o.boundary != BoundaryRule::EdgeAndCorner && o.boundary != BoundaryRule::EdgeOnly)
+    throw Error(Status::InvalidArgument, "boundary must be EdgeAndCorner (0) or EdgeOnly (1), got " +
+                                             std::to_string(int(o.boundary)));
+  if (o.crease_method != CreaseMethod::Uniform && o.crease_method != CreaseMethod::Chaikin)
+    throw Error(Status::InvalidArgument, "crease_method must be Uniform (0) or Chaikin (1), got " +
+                                             std::to_string(int(o.crease_method)));
+  if (o.max_triangles == 0 || o.max_triangles > kMaxTrianglesCeiling)
+    throw Error(Status::InvalidArgument, "max_triangles must be in [1, 2^30], got " + std::to_string(o.max_triangles));
+  if (o.threads < 0) throw Error(Status::InvalidArgument, "threads must be >= 0 (0 = all cores)");
+  if (o.scheme == SmoothScheme::Butterfly && !o.creases.empty())
+    throw Error(Status::InvalidArgument, "creases are supported by the Loop scheme only (OpenMesh's butterfly "
+                                         "subdivider has no creases)");
+  for (size_t i = 0; i < o.creases.size(); ++i) {
+    const float s = o.creases[i].sharpness;
+    if (std::isnan(s) || s < 0)
+      throw Error(Status::InvalidArgument, "creases[" + std::to_string(i) + "].sharpness is " + std::to_string(s) +
+                                               " (must be >= 0; infinity = infinitely sharp)");
+  }
+}
+
+void check_size(size_t triangles, const SmoothOptions& o) {
+  // F * 4^levels with F < 2^31 and levels <= 10 fits in 64 bits.
+  const uint64_t out = uint64_t(triangles) << (2 * o.levels);
+  if (out > o.max_triangles)
+    throw Error(Status::LimitExceeded,
+                std::to_string(o.levels) + " levels on " + std::to_string(triangles) + " triangles would make " +
+                    std::to_string(out) + " triangles, more than max_triangles = " +
+                    std::to_string(o.max_triangles) + " (each level multiplies the triangles by 4)");
+}
+
+}  // namespace
+
+SmoothResult smooth_mesh(const TriMesh& mesh, const SmoothOptions& options) {
+  check_options(options);
+  if (mesh.triangles.size() > size_t(INT32_MAX))
+    throw Error(Status::LimitExceeded, "more than 2^31 - 1 triangles");
+  check_size(mesh.triangles.size(), options);
+
+  detail::ProgressTracker tracker(options.progress);
+  SmoothResult result;
+  SmoothStats& st = result.stats;
+  detail::with_threads(options.threads, [&] {
+    auto t0 = Clock::now();
+    tracker.stage("checking the mesh", 0.0, 0.05);
+    detail::ControlMesh cm = detail::prepare_control_mesh(mesh);
+    st.input_vertices = mesh.positions.size();
+    st.dropped_vertices = cm.dropped_vertices;
+    st.control_vertices = cm.positions.size();
+    st.control_triangles = cm.triangles.size();
+    st.control_edges = cm.edges.size();
+    st.boundary_edges = cm.boundary_edges;
+    st.reoriented_triangles = cm.reoriented_triangles;
+    st.levels = options.levels;
+
+    // Creases: input indices -> control indices; each must be an edge of the mesh.
+    std::vector<std::pair<uint32_t, uint32_t>> crease_pairs;
+    std::vector<float> crease_sharpness;
+    for (size_t i = 0; i < options.creases.size(); ++i) {
+      const CreaseEdge& c = options.creases[i];
+      const std::pair<uint32_t, uint32_t> key{std::min(c.a, c.b), std::max(c.a, c.b)};
+      if (!std::binary_search(cm.edges.begin(), cm.edges.end(), key))
+        throw Error(Status::InvalidArgument, "creases[" + std::to_string(i) + "] = (" + std::to_string(c.a) + ", " +
+                                                 std::to_string(c.b) + ") is not an edge of the mesh");
+      crease_pairs.push_back({cm.control_index[c.a], cm.control_index[c.b]});
+      crease_sharpness.push_back(std::min(c.sharpness, kInfiniteSharpness));
+    }
+    st.creases = crease_pairs.size();
+    st.seconds_prepare = seconds_since(t0);
+    tracker.check();
+
+    if (options.scheme == SmoothScheme::Loop)
+      detail::loop_subdivide(cm, options, crease_pairs, crease_sharpness, tracker, result);
+    else
+      detail::butterfly_subdivide(cm, options, tracker, result);
+
+    // Normals: Loop's limit normals where they exist, area-weighted ones elsewhere.
+    auto t1 = Clock::now();
+    tracker.stage("normals", 0.95, 1.0);
+    TriMesh& m = result.mesh;
+    const bool any_zero = std::any_of(m.normals.begin(), m.normals.end(), [](const Vec3& n) { return n == Vec3{}; });
+    if (m.normals.empty() || any_zero) {
+      std::vector<Vec3> area = detail::area_weighted_normals(m.positions, m.triangles);
+      if (m.normals.empty()) {
+        m.normals = std::move(area);
+      } else {
+        for (size_t i = 0; i < m.normals.size(); ++i)
+          if (m.normals[i] == Vec3{}) m.normals[i] = area[i];
+      }
+    }
+    st.seconds_output += seconds_since(t1);
+    result.original_vertex = std::move(cm.original_vertex);
+    st.vertices = m.positions.size();
+    st.triangles = m.triangles.size();
+    tracker.finish();
+  });
+  return result;
+}
+
+}  // namespace particlemesh
