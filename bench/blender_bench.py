@@ -171,11 +171,16 @@ if "live" not in args.skip or "peers" not in args.skip:
     frames = list(range(2, args.frames + 2))
     baseline = step(frames)  # the particle simulation alone (fills Blender's point cache)
 
-if "live" not in args.skip:
+def live_run(method, **props):
+    """Live mode with `method` on the emitter: per-frame costs over `frames`, then again over
+    the same frames (now cached)."""
     scene.frame_set(1)
     pm.live.clear_cache()
+    for obj in bpy.context.view_layer.objects:
+        obj.select_set(False)
     bpy.context.view_layer.objects.active = emitter
-    assert bpy.ops.particlemesh.triangulate(live=True) == {"FINISHED"}, "triangulate failed"
+    op = getattr(bpy.ops.particlemesh, method.lower())
+    assert op(live=True, **props) == {"FINISHED"}, f"{method} failed"
     generated = bpy.context.active_object
     name = generated.name
     pm.live.history.clear()
@@ -185,22 +190,34 @@ if "live" not in args.skip:
     cached_costs = step(frames)
     cached = [r for n, r in list(pm.live.history)[len(records):] if n == name]
     assert all(r["cached"] for r in cached)
-    med = statistics.median
-    out()
-    out(f"### Live mode, {records[0]['particles']} particles "
-        f"({records[0]['triangles']} triangles), frames {frames[0]}..{frames[-1]}, median per frame")
-    out()
-    out("| what | per frame |")
-    out("|---|---|")
-    out(f"| frame change, live mode off (Blender's particle step only) | {ms(med(baseline))} |")
-    out(f"| frame change, live mode on | {ms(med(live_costs))} |")
-    out(f"| - the add-on's handler | {ms(med([r['seconds'] for r in records]))} |")
-    out(f"| -- read the evaluated particles | {ms(med([r['source'] for r in records]))} |")
-    out(f"| -- triangulate (library) | {ms(med([r['mesh'] for r in records]))} |")
-    out(f"| -- write the Blender mesh | {ms(med([r['write'] for r in records]))} |")
-    out(f"| frame change, frame already in the cache | {ms(med(cached_costs))} |")
-    out(f"| - the add-on's handler (cached) | {ms(med([r['seconds'] for r in cached]))} |")
     generated.particlemesh.live = False
+    return live_costs, records, cached_costs, cached
+
+
+if "live" not in args.skip:
+    med = statistics.median
+    methods = ["TRIANGULATE"] + (["POLYGONIZE"] if pm.native.has_polygonize() else [])
+    runs = {m: live_run(m) for m in methods}
+    first = runs["TRIANGULATE"][1][0]
+    out()
+    out(f"### Live mode, {first['particles']} particles, frames {frames[0]}..{frames[-1]}, "
+        f"median per frame")
+    out()
+    out("| what | " + " | ".join(m.lower() for m in methods) + " |")
+    out("|---|" + "---|" * len(methods))
+
+    def row(label, fn):
+        out(f"| {label} | " + " | ".join(fn(*runs[m]) for m in methods) + " |")
+
+    row("triangles", lambda lc, rec, cc, cr: str(rec[0]["triangles"]))
+    row("frame change, live mode off (Blender's particle step only)", lambda *a: ms(med(baseline)))
+    row("frame change, live mode on", lambda lc, rec, cc, cr: ms(med(lc)))
+    row("- the add-on's handler", lambda lc, rec, cc, cr: ms(med([r["seconds"] for r in rec])))
+    row("-- read the evaluated particles", lambda lc, rec, cc, cr: ms(med([r["source"] for r in rec])))
+    row("-- mesh them (library)", lambda lc, rec, cc, cr: ms(med([r["mesh"] for r in rec])))
+    row("-- write the Blender mesh", lambda lc, rec, cc, cr: ms(med([r["write"] for r in rec])))
+    row("frame change, frame already in the cache", lambda lc, rec, cc, cr: ms(med(cc)))
+    row("- the add-on's handler (cached)", lambda lc, rec, cc, cr: ms(med([r["seconds"] for r in cr])))
 
 
 # ---- 3. Blender's own volume meshers on the same particles ------------------------------------
@@ -275,7 +292,8 @@ if "peers" not in args.skip:
     particles = particles_now()
     points = particles.positions
     spacing = pm.native.estimate_spacing(points)
-    radius, voxel = 1.5 * spacing, 0.5 * spacing
+    # The library's polygonize defaults: R = 2 x spacing, cell = R / 4.
+    radius, voxel = 2.0 * spacing, 0.5 * spacing
     out()
     out(f"### Blender's volume meshers on the same {len(points)} particles "
         f"(spacing {spacing:.4g}; radius {radius:.4g}, voxel/resolution {voxel:.4g})")
@@ -286,6 +304,11 @@ if "peers" not in args.skip:
     tri = pm.native.triangulate(points)
     out(f"| particlemesh triangulation (library call only) | {ms(time.perf_counter() - t)} "
         f"| {tri.triangle_count} |")
+    if pm.native.has_polygonize():
+        t = time.perf_counter()
+        poly = pm.native.polygonize(points, radius=radius, cell_size=voxel)
+        out(f"| particlemesh polygonize (library call only) | {ms(time.perf_counter() - t)} "
+            f"| {poly.triangle_count} |")
     seconds, faces = points_to_volume(points, radius, voxel)
     out(f"| Points to Volume -> Volume to Mesh (geometry nodes) | {ms(seconds)} | {faces} |")
     rng = np.random.default_rng(1)
@@ -293,8 +316,8 @@ if "peers" not in args.skip:
         subset = points[rng.choice(len(points), size=min(count, len(points)), replace=False)]
         # Same density as the full set: scale the radius with the subset's own spacing.
         sub_spacing = pm.native.estimate_spacing(subset)
-        seconds, faces = metaballs(subset, 1.5 * sub_spacing, 0.5 * sub_spacing)
-        out(f"| metaballs, {len(subset)} elements (radius 1.5 x their spacing) "
+        seconds, faces = metaballs(subset, 2.0 * sub_spacing, 0.5 * sub_spacing)
+        out(f"| metaballs, {len(subset)} elements (radius 2 x their spacing) "
             f"| {ms(seconds)} | {faces} |")
 
 out()

@@ -171,6 +171,21 @@ class PolygonizeOptions(Structure):
     ]
 
 
+class PolygonizeStats(Structure):
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("radius", c_double),
+        ("threshold", c_double),
+        ("cell_size", c_double),
+        ("spacing", c_double),
+        ("particles", c_uint64),
+        ("sampled_blocks", c_uint64),
+        ("grid_bytes", c_uint64),
+        ("vertices", c_uint64),
+        ("triangles", c_uint64),
+    ]
+
+
 class SmoothOptions(Structure):
     _fields_ = [
         ("struct_size", c_uint32),
@@ -230,6 +245,8 @@ _OPTIONAL = {
     "pm_polygonize_options_init": (None, [POINTER(PolygonizeOptions)]),
     "pm_polygonize": (c_int, [_cloud_p, _f64p, _f64p, POINTER(PolygonizeOptions),
                               POINTER(_mesh_p)]),
+    "pm_polygonize_ex": (c_int, [_cloud_p, _f64p, _f64p, POINTER(PolygonizeOptions),
+                                 POINTER(_mesh_p), POINTER(PolygonizeStats)]),
     "pm_smooth_options_init": (None, [POINTER(SmoothOptions)]),
     "pm_smooth": (c_int, [_mesh_p, POINTER(SmoothOptions), POINTER(_mesh_p)]),
     # Per-vertex float channels, vertex-major: (handle, name, components, values, vertex count).
@@ -691,18 +708,28 @@ def polygonize(positions, radii=None, strengths=None, kernel=KERNEL_WYVILL, radi
         if len(s) != len(p):
             raise ParticlemeshError(f"strengths has {len(s)} values for {len(p)} particles",
                                     STATUS_INVALID_ARGUMENT)
+    stats = PolygonizeStats()
+    stats.struct_size = ctypes.sizeof(PolygonizeStats)
     cloud = _new_cloud(lib, p)
     try:
         _set_cloud_attributes(lib, cloud, attributes, len(p))
         mesh = c_void_p()
-        _check(lib, lib.pm_polygonize(cloud, _ptr(r, c_double), _ptr(s, c_double),
-                                      ctypes.byref(opt), ctypes.byref(mesh)))
+        if lib.has("pm_polygonize_ex"):
+            _check(lib, lib.pm_polygonize_ex(cloud, _ptr(r, c_double), _ptr(s, c_double),
+                                             ctypes.byref(opt), ctypes.byref(mesh),
+                                             ctypes.byref(stats)))
+        else:
+            _check(lib, lib.pm_polygonize(cloud, _ptr(r, c_double), _ptr(s, c_double),
+                                          ctypes.byref(opt), ctypes.byref(mesh)))
         try:
-            return _mesh_to_data(lib, mesh)
+            data = _mesh_to_data(lib, mesh)
         finally:
             lib.pm_mesh_destroy(mesh)
     finally:
         lib.pm_cloud_destroy(cloud)
+    if lib.has("pm_polygonize_ex"):
+        data.stats = {name: getattr(stats, name) for name, _ in PolygonizeStats._fields_[1:]}
+    return data
 
 
 def smooth(positions, triangles, scheme=SMOOTH_LOOP, levels=1, normals=None, attributes=None,

@@ -166,7 +166,12 @@ class _Generate(SourceProps, CommonProps, SmoothProps, _ModalJob):
         obj.select_set(True)
         context.view_layer.objects.active = obj
         stats = data.stats
-        detail = f", spacing {stats['spacing']:.4g}" if "spacing" in stats else ""
+        if self.method == "POLYGONIZE" and "radius" in stats:
+            detail = f", radius {stats['radius']:.4g}, cell {stats['cell_size']:.4g}"
+        elif "spacing" in stats:
+            detail = f", spacing {stats['spacing']:.4g}"
+        else:
+            detail = ""
         self.report({"INFO"}, f"{obj.name}: {data.vertex_count} vertices, "
                               f"{data.triangle_count} triangles{detail}")
 

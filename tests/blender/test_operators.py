@@ -313,20 +313,71 @@ def test_smooth_loop_multiplies_faces_by_four(pm):
         assert len(obj.data.polygons) == faces
 
 
-def test_polygonize_particles(pm, clean_scene):
-    em = emitter()
+def lattice(n, spacing=0.1):
+    g = np.arange(n, dtype=np.float32) * spacing
+    return np.stack(np.meshgrid(g, g, g, indexing="ij"), -1).reshape(-1, 3)
+
+
+def test_polygonize_volume_particles(pm, clean_scene):
+    p = lattice(8)
+    source = point_cloud_object("block", p)
     if not pm.native.has_polygonize():
-        with pytest.raises(RuntimeError, match="needs a newer particlemesh library"):
-            bpy.ops.particlemesh.polygonize()
-        assert [o.name for o in bpy.data.objects] == [em.name]
+        expect_error("needs a newer particlemesh library", op=bpy.ops.particlemesh.polygonize)
         pytest.xfail("pm_polygonize is not in this library yet (issue 7)")
     assert bpy.ops.particlemesh.polygonize() == {"FINISHED"}
     result = bpy.context.active_object
-    assert result.particlemesh.method == "POLYGONIZE"
+    assert result is not source and result.name == "block_polygonize"
+    state = result.particlemesh
+    assert state.method == "POLYGONIZE" and state.source == source
+    mesh = result.data
+    co, tris = mesh_arrays(mesh)
+    direct = pm.native.polygonize(p)
+    assert len(tris) == direct.triangle_count and len(co) == direct.vertex_count
+    rep = pm.native.mesh_report(co, tris)
+    assert rep["closed"] and rep["manifold"] and rep["outward"] and rep["components"] == 1
+    assert rep["euler_characteristic"] == 2
+    # The surface wraps the block: its box holds the particles' box, and nothing is far off.
+    lo, hi = p.min(axis=0), p.max(axis=0)
+    assert (co.min(axis=0) < lo).all() and (co.max(axis=0) > hi).all()
+    assert (co > lo - 0.3).all() and (co < hi + 0.3).all()
+    assert mesh.has_custom_normals  # the field gradient's normals
+    assert not mesh.validate(verbose=False)
+    # Options reach the library.
+    bpy.context.view_layer.objects.active = source
+    assert bpy.ops.particlemesh.polygonize(kernel="POLY6", radius_mode="FIXED", radius=0.25,
+                                           auto_cell=False, cell_size=0.04) == {"FINISHED"}
+    co2, tris2 = mesh_arrays(bpy.context.active_object.data)
+    direct = pm.native.polygonize(p, kernel=pm.native.KERNEL_POLY6, radius=0.25, cell_size=0.04)
+    assert len(tris2) == direct.triangle_count != len(tris)
+    # Nothing reaches the threshold: an error, no object.
+    bpy.context.view_layer.objects.active = source
+    expect_error("no surface|threshold", op=bpy.ops.particlemesh.polygonize, threshold=1000.0)
+
+
+def test_polygonize_particle_system_with_sizes(pm, clean_scene):
+    em = emitter(speed=0.5)
+    settings = em.particle_systems[0].settings
+    settings.particle_size = 0.1
+    clean_scene.frame_set(2)
+    if not pm.native.has_polygonize():
+        expect_error("needs a newer particlemesh library", op=bpy.ops.particlemesh.polygonize)
+        pytest.xfail("pm_polygonize is not in this library yet (issue 7)")
+    assert bpy.ops.particlemesh.polygonize(radius_mode="PARTICLE_SIZE", radius_factor=2.0,
+                                           live=True) == {"FINISHED"}
+    result = bpy.context.active_object
     co, tris = mesh_arrays(result.data)
     rep = pm.native.mesh_report(co, tris)
-    assert rep["closed"] and rep["manifold"] and rep["outward"]
-    assert not result.data.validate(verbose=False)
+    assert rep["closed"] and rep["manifold"] and len(tris) > 1000
+    # A shell of particles of radius about 1: the surface lies within 2 x 0.1 of it.
+    positions, _ = living_particles(em)
+    r = np.linalg.norm(co, axis=1)
+    rp = np.linalg.norm(positions, axis=1).mean()
+    assert (np.abs(r - rp) < 0.2 + 1e-3).all()
+    clean_scene.frame_set(6)  # live: follows the expanding shell
+    record = pm.live.last_update[result.name]
+    assert "error" not in record, record
+    r6 = np.linalg.norm(mesh_arrays(result.data)[0], axis=1).mean()
+    assert r6 > r.mean() + 0.05
 
 
 # ---- undo -------------------------------------------------------------------------------------

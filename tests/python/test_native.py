@@ -431,6 +431,7 @@ STRUCTS = {"pm_triangulate_options": "TriangulateOptions",
            "pm_triangulate_stats": "TriangulateStats",
            "pm_topology_report": "TopologyReport",
            "pm_polygonize_options": "PolygonizeOptions",
+           "pm_polygonize_stats": "PolygonizeStats",
            "pm_smooth_options": "SmoothOptions"}
 
 
