@@ -36,20 +36,27 @@ std::mutex& openmesh_io_mutex() {
   return m;
 }
 
-class CaptureOpenMeshErrors {
- public:
-  CaptureOpenMeshErrors() {
+// OpenMesh reports problems on its process-wide error stream. We connect that stream to a
+// buffer once (connecting and disconnecting per call leaks inside OpenMesh) and read the
+// buffer back into our Error messages; OpenMesh's chatter on its log streams is silenced.
+// Callers hold openmesh_io_mutex().
+std::ostringstream& openmesh_error_buffer() {
+  static std::ostringstream* buffer = [] {
+    auto* b = new std::ostringstream;  // lives as long as OpenMesh's own stream objects
     omerr().disconnect(std::cerr);
-    omerr().connect(buffer_);
+    omerr().connect(*b);
     omlog().disable();
     omout().disable();
-  }
-  ~CaptureOpenMeshErrors() {
+    return b;
+  }();
+  return *buffer;
+}
+
+class CaptureOpenMeshErrors {
+ public:
+  CaptureOpenMeshErrors() : buffer_(openmesh_error_buffer()) {
     omerr().flush();
-    omerr().disconnect(buffer_);
-    omerr().connect(std::cerr);
-    omlog().enable();
-    omout().enable();
+    buffer_.str("");
   }
   std::string message() {
     omerr().flush();
@@ -60,7 +67,7 @@ class CaptureOpenMeshErrors {
   }
 
  private:
-  std::ostringstream buffer_;
+  std::ostringstream& buffer_;
 };
 
 void require_readable(const std::string& path) {

