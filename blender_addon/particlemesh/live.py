@@ -182,6 +182,8 @@ def on_frame_change_post(scene, depsgraph=None):
         return
     _in_handler = True
     try:
+        for name in [n for n in _caches if n not in bpy.data.objects]:
+            del _caches[name]  # renamed or deleted objects
         if depsgraph is None:
             depsgraph = bpy.context.evaluated_depsgraph_get()
         for obj in generated_objects(scene):
