@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "commands.h"
+#include "particle_input.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
@@ -32,6 +33,7 @@ struct TriangulateArgs {
   bool quiet = false;
   int threads = 0;
   size_t max_neighbors = 256;
+  ParticleInputArgs input_options;  // .pcd, PCL preprocessing, --pcl-mesh
   SmoothChainArgs smooth;  // --smooth loop|butterfly --levels K
 };
 
@@ -39,11 +41,12 @@ int run_triangulate(const TriangulateArgs& a) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   ProgressLine progress(a.quiet);
-  const PointCloud cloud = read_point_cloud(a.input);
+  const ParticleInput input = read_particles(a.input, a.input_options, a.threads);
+  const PointCloud& cloud = input.cloud;
   const double t_read = std::chrono::duration<double>(Clock::now() - t0).count();
 
   SurfaceOptions opt;
-  opt.spacing = a.spacing;
+  opt.spacing = a.spacing > 0 ? a.spacing : input.spacing_hint;
   opt.max_edge_factor = a.max_edge_factor;
   opt.threads = a.threads;
   opt.max_neighbors = a.max_neighbors;
@@ -78,8 +81,10 @@ int run_triangulate(const TriangulateArgs& a) {
   const auto t2 = Clock::now();
   set_phase(Phase::Writing);
   write_mesh(result.mesh, a.output, wo);
+  write_pcl_mesh(result.mesh, a.input_options);
   if (interrupted()) {  // Ctrl-C while writing: the run is cancelled, so no output either
     std::remove(a.output.c_str());
+    if (!a.input_options.pcl_mesh.empty()) std::remove(a.input_options.pcl_mesh.c_str());
     throw Error(Status::Cancelled, "interrupted");
   }
   const double t_write = std::chrono::duration<double>(Clock::now() - t2).count();
@@ -93,11 +98,13 @@ int run_triangulate(const TriangulateArgs& a) {
                      {"surface", a.raw ? nlohmann::json(nullptr) : to_json(result.surface)},
                      {"topology", to_json(report)},
                      {"seconds", {{"read", t_read}, {"triangulate", t_tri}, {"write", t_write}}}};
+    if (!input.report.is_null()) j["input_cloud"] = input.report;
     write_json_file(j, a.report);
   }
   if (!a.quiet) {
     const auto& s = result.triangulation;
     std::printf("particlemesh triangulate: %s -> %s\n", a.input.c_str(), a.output.c_str());
+    std::printf("%s", input.summary.c_str());
     std::printf("  points        %zu%s\n", s.points,
                 s.duplicate_points ? (" (" + std::to_string(s.duplicate_points) + " exact duplicates set aside)").c_str() : "");
     std::printf("  spacing r0    %.6g (%s)\n", s.spacing, s.spacing_estimated ? "estimated: median nearest-neighbour distance" : "given");
@@ -126,7 +133,7 @@ int run_triangulate(const TriangulateArgs& a) {
 void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
   auto args = std::make_shared<TriangulateArgs>();
   CLI::App* app = root.add_subcommand("triangulate", "Surface particles to a triangle mesh (seed section 5.2.3)");
-  app->add_option("input", args->input, "Particles: .ply (x y z [nx ny nz]) or .xyz (x y z [nx ny nz] per line)")
+  app->add_option("input", args->input, "Particles: .ply (x y z [nx ny nz]), .xyz (x y z [nx ny nz] per line) or .pcd (PCL: ascii, binary, binary_compressed)")
       ->required();
   app->add_option("-o,--output", args->output, "Output mesh: .ply (binary; --ascii for text) or .obj")->required();
   app->add_option("--spacing", args->spacing,
@@ -164,6 +171,7 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("--report", args->report, "Also write statistics and the topology report as JSON");
   app->add_flag("--ascii", args->ascii, "Write ASCII PLY instead of binary");
   app->add_flag("-q,--quiet", args->quiet, "No summary and no progress line");
+  add_particle_input_options(*app, args->input_options);
   add_smooth_chain_options(app, args->smooth);
   commands.push_back({app, [args] { return run_triangulate(*args); }});
 }

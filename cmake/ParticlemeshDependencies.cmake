@@ -24,3 +24,9 @@ if(NOT TARGET particlemesh_opensubdiv)
     IMPORTED_LOCATION "${PM_OPENSUBDIV_CPU_LIBRARY}"
     INTERFACE_INCLUDE_DIRECTORIES "${PM_OPENSUBDIV_INCLUDE_DIR}")
 endif()
+
+if(PM_WITH_PCL)
+  # Debian's PCL config pulls in VTK, whose targets need MPI::MPI_C (C is enabled in project()).
+  find_package(MPI COMPONENTS C)
+  find_package(PCL 1.13 REQUIRED COMPONENTS common io search kdtree surface filters features)
+endif()

@@ -15,6 +15,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-numpy python3-pytest
   blender
+  libpcl-dev
 )
 
 missing=()

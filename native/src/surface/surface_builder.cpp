@@ -424,7 +424,7 @@ class Builder {
     if (m < 3) return false;
     const double limit2 = std::pow(o_.fill_edge_factor * o_.max_edge, 2);
     const bool smooth = m > o_.small_hole;
-    constexpr double kMaxFillDihedral = 2.1;  // radians, 120 degrees
+    constexpr double kMaxFillDihedral = 2.4;  // radians, about 137 degrees
     auto diag_ok = [&](size_t i, size_t j) {
       if ((j == i + 1) || (i == 0 && j == m - 1)) return true;
       return squared_distance(P_[L[i]], P_[L[j]]) <= limit2 && !edge_exists(L[i], L[j]);
@@ -583,6 +583,17 @@ class Builder {
       auto& nb = around[u];
       std::sort(nb.begin(), nb.end());
       nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
+      if (nb.empty()) {
+        // In no raw triangle (fewer than two neighbours within L, e.g. at the rim of a real
+        // opening): the surface near it can only be its boundary. Take the boundary vertices
+        // within L as its neighbours.
+        for (uint64_t e : boundary_) {
+          const uint32_t a = uint32_t(e >> 32);
+          if (squared_distance(P_[a], P_[p]) <= o_.max_edge * o_.max_edge) nb.push_back(a);
+        }
+        std::sort(nb.begin(), nb.end());
+        nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
+      }
       double best = INFINITY;
       int64_t best_t = -1;
       for (uint32_t w : nb)

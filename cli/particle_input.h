@@ -1,0 +1,45 @@
+// Reading particles for the CLI, with the PCL bridge when it is built (PM_WITH_PCL): .pcd
+// through PCL's reader (invalid points dropped and reported), optional PCL preprocessing,
+// and a pcl::PolygonMesh PLY beside the normal output. Without PCL: .ply/.xyz only.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "particlemesh/mesh/point_cloud.h"
+#include "particlemesh/mesh/tri_mesh.h"
+
+namespace particlemesh::cli {
+
+struct ParticleInputArgs {
+  double uniform_sampling = 0;  ///< leaf size, 0 = off
+  double voxel_grid = 0;        ///< leaf size, 0 = off
+  bool remove_outliers = false;
+  int outlier_k = 50;
+  double outlier_std = 1.0;
+  bool estimate_normals = false;
+  int normal_k = 20;
+  std::vector<double> viewpoint;  ///< empty = the PCD's sensor origin (else 0 0 0)
+  std::string pcl_mesh;           ///< also write a pcl::PolygonMesh PLY here
+};
+
+struct ParticleInput {
+  PointCloud cloud;
+  nlohmann::json report;  ///< what was read, dropped and preprocessed
+  std::string summary;    ///< lines for the human summary ("" when nothing to say)
+  double spacing_hint = 0;  ///< the downsampling leaf size: the spacing to use when none is given
+};
+
+/// Add the input options (preprocessing switches, --pcl-mesh) to a subcommand.
+void add_particle_input_options(CLI::App& app, ParticleInputArgs& args);
+
+/// Read `path` (.pcd, .ply, .xyz) and preprocess as asked. @throws Error naming the file.
+ParticleInput read_particles(const std::string& path, const ParticleInputArgs& args, int threads);
+
+/// Write the mesh as a pcl::PolygonMesh PLY if --pcl-mesh was given (atomically).
+void write_pcl_mesh(const TriMesh& mesh, const ParticleInputArgs& args);
+
+}  // namespace particlemesh::cli

@@ -1,0 +1,137 @@
+// particle_input.h with the PCL bridge.
+#include <cstdio>
+#include <string>
+
+#include <pcl/console/print.h>
+
+#include "particle_input.h"
+#include "particlemesh/core/error.h"
+#include "particlemesh_pcl/conversions.h"
+#include "particlemesh_pcl/io.h"
+#include "particlemesh_pcl/preprocessing.h"
+
+namespace particlemesh::cli {
+
+void add_particle_input_options(CLI::App& app, ParticleInputArgs& a) {
+  const char* group = "Input preprocessing (PCL; off by default)";
+  auto* us = app.add_option("--uniform-sampling", a.uniform_sampling,
+                            "Downsample with pcl::UniformSampling to this spacing (voxel edge, world units; also r0 unless --spacing)")
+                 ->check(CLI::PositiveNumber)
+                 ->group(group);
+  auto* vg = app.add_option("--voxel-grid", a.voxel_grid,
+                            "Downsample with pcl::VoxelGrid to this spacing (the input point nearest each voxel's centroid; also r0 unless --spacing)")
+                 ->check(CLI::PositiveNumber)
+                 ->group(group);
+  us->excludes(vg);
+  app.add_flag("--remove-outliers", a.remove_outliers,
+               "Statistical outlier removal (pcl::StatisticalOutlierRemoval) before downsampling")
+      ->group(group);
+  app.add_option("--outlier-k", a.outlier_k, "Neighbours for the outlier statistics")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str()
+      ->group(group);
+  app.add_option("--outlier-std", a.outlier_std, "Outlier threshold: mean + this x stddev")
+      ->check(CLI::Range(0.0, 1e6))
+      ->capture_default_str()
+      ->group(group);
+  app.add_flag("--estimate-normals", a.estimate_normals,
+               "Estimate normals with PCL (replacing the file's), flipped toward the viewpoint")
+      ->group(group);
+  app.add_option("--normal-k", a.normal_k, "Neighbours for normal estimation")
+      ->check(CLI::Range(3, 100000))
+      ->capture_default_str()
+      ->group(group);
+  app.add_option("--viewpoint", a.viewpoint, "Viewpoint X Y Z for normal orientation (default: the PCD's sensor origin)")
+      ->expected(3)
+      ->group(group);
+  app.add_option("--pcl-mesh", a.pcl_mesh,
+                 "Also write the mesh as a pcl::PolygonMesh PLY (pcl::io::savePLYFileBinary; with rgb/intensity)");
+}
+
+ParticleInput read_particles(const std::string& path, const ParticleInputArgs& a, int threads) {
+  // PCL's own console messages would duplicate ours; errors come back as exceptions.
+  pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
+  ParticleInput in;
+  particlemesh_pcl::LoadReport load;
+  in.cloud = particlemesh_pcl::loadParticles(path, &load);
+  const auto& c = load.conversion;
+  in.report = {{"format", load.format},
+               {"encoding", load.encoding},
+               {"points", c.input_points},
+               {"valid_points", c.valid_points},
+               {"invalid_points", c.invalid_points},
+               {"invalid_normals", c.invalid_normals},
+               {"organized", c.organized},
+               {"width", c.width},
+               {"height", c.height},
+               {"has_normals", c.has_normals},
+               {"has_color", c.has_color},
+               {"has_intensity", c.has_intensity}};
+  char line[512];
+  if (load.format == "pcd") {
+    std::snprintf(line, sizeof line, "  input         %zu points (%s%s, pcd %s%s%s%s)", c.input_points,
+                  c.organized ? (std::to_string(c.width) + " x " + std::to_string(c.height)).c_str() : "",
+                  c.organized ? " organized" : "unorganized", load.encoding.c_str(), c.has_normals ? ", normals" : "",
+                  c.has_color ? ", rgb" : "", c.has_intensity ? ", intensity" : "");
+    in.summary += line;
+    if (c.invalid_points > 0) in.summary += "; " + std::to_string(c.invalid_points) + " invalid (NaN/Inf) dropped";
+    if (c.invalid_normals > 0)
+      in.summary += "; normals dropped (" + std::to_string(c.invalid_normals) + " invalid)";
+    in.summary += "\n";
+  }
+
+  particlemesh_pcl::PreprocessOptions o;
+  o.remove_outliers = a.remove_outliers;
+  o.outlier_mean_k = a.outlier_k;
+  o.outlier_stddev_mul = a.outlier_std;
+  if (a.uniform_sampling > 0) {
+    o.downsampling = particlemesh_pcl::Downsampling::UniformSampling;
+    o.leaf_size = a.uniform_sampling;
+  } else if (a.voxel_grid > 0) {
+    o.downsampling = particlemesh_pcl::Downsampling::VoxelGrid;
+    o.leaf_size = a.voxel_grid;
+  }
+  o.estimate_normals = a.estimate_normals;
+  o.normal_k = a.normal_k;
+  for (int k = 0; k < 3; ++k) o.viewpoint[k] = a.viewpoint.size() == 3 ? float(a.viewpoint[k]) : load.origin[k];
+  o.threads = threads;
+  in.spacing_hint = o.downsampling == particlemesh_pcl::Downsampling::None ? 0.0 : o.leaf_size;
+  if (particlemesh_pcl::anyPreprocessing(o)) {
+    const auto p = particlemesh_pcl::preprocess(in.cloud, o);
+    in.report["preprocessing"] = {{"outliers_removed", p.outliers_removed},
+                                  {"downsampling", a.uniform_sampling > 0 ? "uniform_sampling"
+                                                   : a.voxel_grid > 0     ? "voxel_grid"
+                                                                          : "none"},
+                                  {"leaf_size", o.leaf_size},
+                                  {"downsampled_away", p.downsampled_away},
+                                  {"output_points", p.output_points},
+                                  {"normals_estimated", p.normals_estimated},
+                                  {"normals_failed", p.normals_failed},
+                                  {"seconds", p.seconds}};
+    std::string s = "  preprocessing";
+    if (a.remove_outliers) s += " " + std::to_string(p.outliers_removed) + " outliers removed;";
+    if (o.downsampling != particlemesh_pcl::Downsampling::None) {
+      std::snprintf(line, sizeof line, " %s %.6g: %zu points dropped;",
+                    a.uniform_sampling > 0 ? "uniform sampling" : "voxel grid", o.leaf_size, p.downsampled_away);
+      s += line;
+    }
+    if (a.estimate_normals) {
+      std::snprintf(line, sizeof line, " normals %s (k %d, toward %g %g %g);",
+                    p.normals_estimated ? "estimated" : "failed, none used", o.normal_k, o.viewpoint[0],
+                    o.viewpoint[1], o.viewpoint[2]);
+      s += line;
+    }
+    s.back() = '\n';
+    in.summary += s;
+  }
+  return in;
+}
+
+void write_pcl_mesh(const TriMesh& mesh, const ParticleInputArgs& a) {
+  if (a.pcl_mesh.empty()) return;
+  pcl::PolygonMesh pm;
+  particlemesh_pcl::toPolygonMesh(mesh, pm);
+  particlemesh_pcl::savePLYFile(a.pcl_mesh, pm);
+}
+
+}  // namespace particlemesh::cli

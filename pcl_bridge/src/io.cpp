@@ -1,0 +1,474 @@
+// PCD in through pcl::PCDReader after our own header check; PLY meshes out through PCL.
+#include <particlemesh_pcl/io.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <string_view>
+
+#include <pcl/io/pcd_io.h>
+#include <pcl/io/ply_io.h>
+
+#include <particlemesh/core/error.h>
+#include <particlemesh/io/mesh_io.h>
+
+namespace particlemesh_pcl
+{
+  namespace
+  {
+    using particlemesh::Error;
+    using particlemesh::Status;
+
+    std::vector<std::string>
+    split (std::string_view line)
+    {
+      std::vector<std::string> out;
+      std::size_t i = 0;
+      while (i < line.size ())
+      {
+        while (i < line.size () && std::isspace (static_cast<unsigned char> (line[i])))
+          ++i;
+        std::size_t j = i;
+        while (j < line.size () && !std::isspace (static_cast<unsigned char> (line[j])))
+          ++j;
+        if (j > i)
+          out.emplace_back (line.substr (i, j - i));
+        i = j;
+      }
+      return out;
+    }
+
+    bool
+    parseUnsigned (const std::string &s, std::size_t &v)
+    {
+      if (s.empty () || !std::isdigit (static_cast<unsigned char> (s[0])))
+        return false;
+      errno = 0;
+      char *end = nullptr;
+      const unsigned long long x = std::strtoull (s.c_str (), &end, 10);
+      if (errno != 0 || *end != '\0')
+        return false;
+      v = static_cast<std::size_t> (x);
+      return true;
+    }
+
+    bool
+    parseNumber (const char *begin, const char *end)
+    {
+      // strtod accepts "nan", "inf" and what PCL's ascii writer prints
+      std::string token (begin, end);
+      char *stop = nullptr;
+      std::strtod (token.c_str (), &stop);
+      return stop == token.c_str () + token.size () && !token.empty ();
+    }
+
+    std::string
+    lower (std::string s)
+    {
+      for (char &c : s)
+        c = static_cast<char> (std::tolower (static_cast<unsigned char> (c)));
+      return s;
+    }
+
+    [[noreturn]] void
+    fail (const std::string &path, const std::string &problem)
+    {
+      throw Error (Status::FormatError, path + ": " + problem);
+    }
+
+    std::string
+    joined (const std::vector<std::string> &v)
+    {
+      std::string s;
+      for (const auto &x : v)
+        s += (s.empty () ? "" : " ") + x;
+      return s;
+    }
+
+    // Up to `limit` bytes of the file from `offset` (the header lives in the first few
+    // hundred bytes; ascii data sections are read whole to count their lines).
+    std::string
+    readBytes (const std::string &path, std::size_t offset, std::size_t limit)
+    {
+      std::ifstream in (path, std::ios::binary);
+      if (!in)
+        throw Error (Status::IoError, path + ": cannot open for reading");
+      in.seekg (static_cast<std::streamoff> (offset));
+      std::string out (limit, '\0');
+      in.read (out.data (), static_cast<std::streamsize> (limit));
+      if (in.bad ())
+        throw Error (Status::IoError, path + ": read error");
+      out.resize (static_cast<std::size_t> (in.gcount ()));
+      return out;
+    }
+
+    std::size_t
+    fileSize (const std::string &path)
+    {
+      std::error_code ec;
+      if (!std::filesystem::exists (path, ec))
+        throw Error (Status::IoError, path + ": no such file");
+      if (std::filesystem::is_directory (path, ec))
+        throw Error (Status::IoError, path + ": is a directory");
+      const auto size = std::filesystem::file_size (path, ec);
+      if (ec)
+        throw Error (Status::IoError, path + ": cannot read (" + ec.message () + ")");
+      return static_cast<std::size_t> (size);
+    }
+
+    constexpr std::size_t kMaxHeader = 1 << 20;
+  }
+
+  PCDHeader
+  checkPCDFile (const std::string &path)
+  {
+    const std::size_t file_size = fileSize (path);
+    if (file_size == 0)
+      fail (path, "empty file, not a PCD file");
+    const std::string bytes = readBytes (path, 0, std::min (file_size, kMaxHeader));
+
+    PCDHeader h;
+    bool seen_fields = false, seen_size = false, seen_type = false, seen_count = false;
+    bool seen_width = false, seen_points = false, seen_data = false;
+    std::size_t pos = 0;
+    std::size_t line_no = 0;
+    while (pos < bytes.size () && !seen_data)
+    {
+      std::size_t eol = bytes.find ('\n', pos);
+      const bool last = eol == std::string::npos;
+      if (last)
+        eol = bytes.size ();
+      const std::string_view line (bytes.data () + pos, eol - pos);
+      pos = last ? eol : eol + 1;
+      ++line_no;
+      const std::vector<std::string> tok = split (line);
+      if (tok.empty () || tok[0][0] == '#')
+        continue;
+      const std::string &key = tok[0];
+      const std::vector<std::string> args (tok.begin () + 1, tok.end ());
+      const std::string where = "header line " + std::to_string (line_no) + " (" + key + ")";
+
+      auto unsignedArgs = [&] (std::vector<int> &out) {
+        out.clear ();
+        for (const auto &a : args)
+        {
+          std::size_t v;
+          if (!parseUnsigned (a, v) || v > 1u << 20)
+            fail (path, "bad header: " + where + ": '" + a + "' is not a count");
+          out.push_back (static_cast<int> (v));
+        }
+      };
+      auto one = [&] () -> std::size_t {
+        std::size_t v;
+        if (args.size () != 1 || !parseUnsigned (args[0], v))
+          fail (path, "bad header: " + where + " needs one non-negative integer");
+        return v;
+      };
+
+      if (key == "VERSION")
+        h.version = args.empty () ? "" : args[0];
+      else if (key == "FIELDS" || key == "COLUMNS")
+      {
+        h.fields = args;
+        seen_fields = true;
+      }
+      else if (key == "SIZE")
+      {
+        unsignedArgs (h.sizes);
+        seen_size = true;
+      }
+      else if (key == "TYPE")
+      {
+        h.types.clear ();
+        for (const auto &a : args)
+        {
+          if (a.size () != 1 || (a[0] != 'F' && a[0] != 'U' && a[0] != 'I'))
+            fail (path, "bad header: " + where + ": type '" + a + "' is not F, U or I");
+          h.types.push_back (a[0]);
+        }
+        seen_type = true;
+      }
+      else if (key == "COUNT")
+      {
+        unsignedArgs (h.counts);
+        seen_count = true;
+      }
+      else if (key == "WIDTH")
+      {
+        const std::size_t w = one ();
+        if (w > 0xffffffffu)
+          fail (path, "bad header: WIDTH " + args[0] + " is too large");
+        h.width = static_cast<std::uint32_t> (w);
+        seen_width = true;
+      }
+      else if (key == "HEIGHT")
+      {
+        const std::size_t v = one ();
+        if (v > 0xffffffffu)
+          fail (path, "bad header: HEIGHT " + args[0] + " is too large");
+        h.height = static_cast<std::uint32_t> (v);
+      }
+      else if (key == "VIEWPOINT")
+      {
+        if (args.size () != 7)
+          fail (path, "bad header: " + where + " needs 7 numbers (tx ty tz qw qx qy qz), has " +
+                      std::to_string (args.size ()));
+        for (int k = 0; k < 7; ++k)
+        {
+          if (!parseNumber (args[k].data (), args[k].data () + args[k].size ()))
+            fail (path, "bad header: " + where + ": '" + args[k] + "' is not a number");
+          h.viewpoint[k] = std::strtof (args[k].c_str (), nullptr);
+        }
+      }
+      else if (key == "POINTS")
+      {
+        h.points = one ();
+        seen_points = true;
+      }
+      else if (key == "DATA")
+      {
+        if (args.size () != 1)
+          fail (path, "bad header: " + where + " needs one of ascii, binary, binary_compressed");
+        h.data = lower (args[0]);
+        if (h.data != "ascii" && h.data != "binary" && h.data != "binary_compressed")
+          fail (path, "bad header: DATA '" + args[0] + "' is not ascii, binary or binary_compressed");
+        h.data_offset = pos;
+        seen_data = true;
+      }
+      else
+      {
+        const std::string shown = key.size () > 20 ? key.substr (0, 20) + "..." : key;
+        fail (path, "not a PCD file: header line " + std::to_string (line_no) + " starts with '" + shown +
+                    "', not a PCD keyword");
+      }
+    }
+
+    // What a header must have, and what must agree.
+    if (!seen_data)
+      fail (path, file_size > bytes.size () ? "not a PCD file: no DATA line in the first MiB"
+                                            : "truncated header: no DATA line");
+    if (!seen_fields || h.fields.empty ())
+      fail (path, "bad header: no FIELDS");
+    if (!seen_size)
+      fail (path, "bad header: no SIZE line");
+    if (!seen_type)
+      fail (path, "bad header: no TYPE line");
+    if (!seen_width)
+      fail (path, "bad header: no WIDTH line");
+    if (!seen_count)
+      h.counts.assign (h.fields.size (), 1);
+    const std::size_t nf = h.fields.size ();
+    if (h.sizes.size () != nf)
+      fail (path, "header count mismatch: SIZE has " + std::to_string (h.sizes.size ()) + " entries, FIELDS has " +
+                  std::to_string (nf));
+    if (h.types.size () != nf)
+      fail (path, "header count mismatch: TYPE has " + std::to_string (h.types.size ()) + " entries, FIELDS has " +
+                  std::to_string (nf));
+    if (h.counts.size () != nf)
+      fail (path, "header count mismatch: COUNT has " + std::to_string (h.counts.size ()) + " entries, FIELDS has " +
+                  std::to_string (nf));
+    h.point_size = 0;
+    std::size_t values_per_point = 0;
+    for (std::size_t f = 0; f < nf; ++f)
+    {
+      const int s = h.sizes[f];
+      const bool ok = h.types[f] == 'F' ? (s == 4 || s == 8) : (s == 1 || s == 2 || s == 4 || s == 8);
+      if (!ok)
+        fail (path, "bad header: field '" + h.fields[f] + "' has TYPE " + h.types[f] + " with SIZE " + std::to_string (s));
+      h.point_size += std::size_t (s) * std::size_t (h.counts[f]);
+      values_per_point += std::size_t (h.counts[f]);
+    }
+    for (const char *axis : {"x", "y", "z"})
+    {
+      const auto it = std::find (h.fields.begin (), h.fields.end (), axis);
+      if (it == h.fields.end ())
+        fail (path, std::string ("missing field '") + axis + "' (FIELDS: " + joined (h.fields) + ")");
+      if (h.counts[std::size_t (it - h.fields.begin ())] != 1)
+        fail (path, std::string ("field '") + axis + "' must have COUNT 1");
+    }
+    if (!seen_points)
+      h.points = std::size_t (h.width) * h.height;  // old files may omit POINTS
+    if (std::size_t (h.width) * h.height != h.points)
+      fail (path, "count mismatch: WIDTH " + std::to_string (h.width) + " x HEIGHT " + std::to_string (h.height) +
+                  " = " + std::to_string (std::size_t (h.width) * h.height) + " points, but POINTS says " +
+                  std::to_string (h.points));
+    if (h.points == 0)
+      fail (path, "no points (POINTS 0)");
+
+    // The data section.
+    const std::size_t available = file_size - h.data_offset;
+    if (h.data == "binary")
+    {
+      const std::size_t need = h.points * h.point_size;
+      if (available < need)
+        fail (path, "truncated data: " + std::to_string (available) + " bytes after the header, " +
+                    std::to_string (h.points) + " points x " + std::to_string (h.point_size) + " bytes need " +
+                    std::to_string (need));
+    }
+    else if (h.data == "binary_compressed")
+    {
+      if (available < 8)
+        fail (path, "truncated data: no compressed block header after DATA");
+      std::uint32_t sizes[2];
+      const std::string block = readBytes (path, h.data_offset, 8);
+      if (block.size () != 8)
+        fail (path, "truncated data: no compressed block header after DATA");
+      std::memcpy (sizes, block.data (), 8);
+      if (std::size_t (sizes[0]) > available - 8)
+        fail (path, "truncated data: compressed block of " + std::to_string (sizes[0]) + " bytes, only " +
+                    std::to_string (available - 8) + " left");
+      if (std::size_t (sizes[1]) != h.points * h.point_size)
+        fail (path, "count mismatch: compressed block unpacks to " + std::to_string (sizes[1]) + " bytes, " +
+                    std::to_string (h.points) + " points x " + std::to_string (h.point_size) + " bytes = " +
+                    std::to_string (h.points * h.point_size));
+    }
+    else  // ascii: one line per point, every value a number
+    {
+      const std::string body = readBytes (path, h.data_offset, available);
+      std::size_t rows = 0;
+      std::size_t p = 0;
+      std::size_t file_line = line_no;
+      while (p < body.size () && rows < h.points)
+      {
+        std::size_t eol = body.find ('\n', p);
+        if (eol == std::string::npos)
+          eol = body.size ();
+        ++file_line;
+        const char *b = body.data () + p;
+        const char *e = body.data () + eol;
+        p = eol + 1;
+        std::size_t values = 0;
+        const char *q = b;
+        while (q < e)
+        {
+          while (q < e && std::isspace (static_cast<unsigned char> (*q)))
+            ++q;
+          const char *t = q;
+          while (q < e && !std::isspace (static_cast<unsigned char> (*q)))
+            ++q;
+          if (q > t)
+          {
+            if (!parseNumber (t, q))
+              fail (path, "bad data: line " + std::to_string (file_line) + ": '" +
+                          std::string (t, std::min<std::size_t> (std::size_t (q - t), 20)) + "' is not a number");
+            ++values;
+          }
+        }
+        if (values == 0)
+          continue;  // blank line
+        if (values != values_per_point)
+          fail (path, "bad data: line " + std::to_string (file_line) + " has " + std::to_string (values) +
+                      " values, FIELDS/COUNT need " + std::to_string (values_per_point));
+        ++rows;
+      }
+      if (rows < h.points)
+        fail (path, "truncated data: " + std::to_string (rows) + " data lines, POINTS says " + std::to_string (h.points));
+    }
+    return h;
+  }
+
+  PCDFile
+  loadPCDFile (const std::string &path)
+  {
+    PCDFile file;
+    file.header = checkPCDFile (path);
+    Eigen::Vector4f origin;
+    Eigen::Quaternionf orientation;
+    int version = 0;
+    pcl::PCDReader reader;
+    const int rc = reader.read (path, file.cloud, origin, orientation, version);
+    if (rc < 0)
+      throw Error (Status::FormatError, path + ": PCL's PCD reader failed (code " + std::to_string (rc) + ")");
+    if (std::size_t (file.cloud.width) * file.cloud.height != file.header.points)
+      throw Error (Status::FormatError, path + ": PCL read " +
+                                        std::to_string (std::size_t (file.cloud.width) * file.cloud.height) +
+                                        " points, the header says " + std::to_string (file.header.points));
+    for (int c = 0; c < 4; ++c)
+      file.origin[c] = origin[c];
+    file.orientation[0] = orientation.w ();
+    file.orientation[1] = orientation.x ();
+    file.orientation[2] = orientation.y ();
+    file.orientation[3] = orientation.z ();
+    return file;
+  }
+
+  particlemesh::PointCloud
+  loadParticles (const std::string &path, LoadReport *report, pcl::Indices *index_map)
+  {
+    LoadReport r;
+    pcl::Indices map;
+    particlemesh::PointCloud particles;
+    const std::string ext = lower (std::filesystem::path (path).extension ().string ());
+    if (ext == ".pcd")
+    {
+      const PCDFile file = loadPCDFile (path);
+      r.format = "pcd";
+      r.encoding = file.header.data;
+      for (int c = 0; c < 3; ++c)
+        r.origin[c] = file.origin[c];
+      try
+      {
+        r.conversion = toParticles (file.cloud, particles, map);
+      }
+      catch (const Error &e)
+      {
+        throw Error (e.status (), path + ": " + e.what ());
+      }
+      if (particles.positions.empty ())
+        throw Error (Status::InvalidInput, path + ": no valid point (all " + std::to_string (r.conversion.input_points) +
+                                           " have a NaN or infinite coordinate)");
+    }
+    else
+    {
+      particles = particlemesh::read_point_cloud (path);
+      r.format = ext.empty () ? "" : ext.substr (1);
+      r.conversion.input_points = r.conversion.valid_points = particles.size ();
+      r.conversion.width = static_cast<std::uint32_t> (particles.size ());
+      r.conversion.height = 1;
+      r.conversion.has_normals = particles.has_normals ();
+      map.resize (particles.size ());
+      for (std::size_t i = 0; i < map.size (); ++i)
+        map[i] = static_cast<pcl::index_t> (i);
+    }
+    if (report)
+      *report = r;
+    if (index_map)
+      *index_map = std::move (map);
+    return particles;
+  }
+
+  void
+  savePLYFile (const std::string &path, const pcl::PolygonMesh &mesh)
+  {
+    namespace fs = std::filesystem;
+    const fs::path target (path);
+    std::error_code ec;
+    if (target.has_parent_path () && !fs::is_directory (target.parent_path (), ec))
+      throw Error (Status::IoError, path + ": folder does not exist");
+    // A temporary name next to the target (same file system, so the rename is atomic),
+    // keeping the extension.
+    std::random_device rd;
+    const fs::path temp = target.parent_path () /
+                          ("." + target.stem ().string () + ".tmp" + std::to_string (rd ()) + target.extension ().string ());
+    const int rc = pcl::io::savePLYFileBinary (temp.string (), mesh);
+    if (rc < 0 || !fs::exists (temp, ec))
+    {
+      fs::remove (temp, ec);
+      throw Error (Status::IoError, path + ": cannot write (PCL's PLY writer failed)");
+    }
+    fs::rename (temp, target, ec);
+    if (ec)
+    {
+      fs::remove (temp, ec);
+      throw Error (Status::IoError, path + ": cannot rename the written file into place");
+    }
+  }
+}

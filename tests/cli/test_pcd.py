@@ -1,0 +1,135 @@
+"""particlemesh triangulate on PCL's .pcd files, the PCL preprocessing switches and --pcl-mesh."""
+import json
+import struct
+
+import pytest
+
+KINECT = "pcd/kinect_frame_20121214T142255.814212.pcd"
+
+
+@pytest.fixture(scope="session")
+def pcl_cli(cli):
+    if "--pcl-mesh" not in cli("triangulate", "--help").stdout:
+        pytest.skip("the CLI was built without the PCL bridge (PM_WITH_PCL=OFF)")
+    return cli
+
+
+def _report(pcl_cli, tmp_path, src, *extra):
+    out = tmp_path / "mesh.ply"
+    rep = tmp_path / "report.json"
+    proc = pcl_cli("triangulate", src, "-o", out, "--report", rep, *extra)
+    return proc, json.loads(rep.read_text())
+
+
+@pytest.mark.parametrize(
+    "name,points,nan,encoding,organized,normals,color",
+    [
+        ("pcd/bunny.pcd", 397, 0, "ascii", False, False, False),
+        ("pcd/bun0.pcd", 397, 0, "ascii", False, True, False),
+        ("pcd/milk.pcd", 13704, 0, "binary_compressed", False, False, False),
+        ("pcd/milk_binary.pcd", 13704, 0, "binary", False, False, False),
+        (KINECT, 307200, 35625, "binary_compressed", True, False, True),
+        ("pcd/colored_cloud.pcd", 1000, 0, "binary", True, True, True),
+    ],
+)
+def test_every_shared_pcd_triangulates(pcl_cli, inspect, data_dir, tmp_path, name, points, nan, encoding,
+                                       organized, normals, color):
+    proc, r = _report(pcl_cli, tmp_path, data_dir / name)
+    c = r["input_cloud"]
+    assert c["format"] == "pcd" and c["encoding"] == encoding
+    assert c["points"] == points and c["invalid_points"] == nan and c["valid_points"] == points - nan
+    assert c["organized"] == organized and c["has_normals"] == normals and c["has_color"] == color
+    assert r["triangulation"]["points"] == points - nan
+    if nan:
+        assert f"{nan} invalid (NaN/Inf) dropped" in proc.stdout
+    mesh = inspect(tmp_path / "mesh.ply")
+    assert mesh["vertices"] == points - nan
+    assert mesh["triangles"] == r["topology"]["triangles"] > 0
+    # the finished surface: manifold and consistently oriented, also on these raw scans
+    assert mesh["nonmanifold_edges"] == 0 and mesh["orientation_conflicts"] == 0
+
+
+def test_kinect_frame_with_the_documented_preprocessing(pcl_cli, inspect, data_dir, tmp_path):
+    # README: outlier removal, uniform sampling to 5 mm, normals toward the sensor.
+    pcl_mesh = tmp_path / "pcl.ply"
+    proc, r = _report(pcl_cli, tmp_path, data_dir / KINECT, "--remove-outliers", "--uniform-sampling", "0.005",
+                      "--estimate-normals", "--pcl-mesh", pcl_mesh)
+    p = r["input_cloud"]["preprocessing"]
+    assert p["outliers_removed"] > 0 and p["downsampled_away"] > 100000
+    assert p["normals_estimated"] and p["normals_failed"] == 0
+    assert p["output_points"] == 307200 - 35625 - p["outliers_removed"] - p["downsampled_away"]
+    assert r["triangulation"]["points"] == p["output_points"]
+    assert r["triangulation"]["spacing"] == 0.005 and not r["triangulation"]["spacing_estimated"]  # r0 = the leaf
+    assert "outliers removed" in proc.stdout and "uniform sampling 0.005" in proc.stdout
+    # The pcl::PolygonMesh PLY: same triangles, and it carries the frame's colours.
+    ours, theirs = inspect(tmp_path / "mesh.ply"), inspect(pcl_mesh)
+    assert theirs["triangles"] == ours["triangles"] and theirs["vertices"] == ours["vertices"]
+    assert ours["nonmanifold_edges"] == 0 and ours["orientation_conflicts"] == 0
+    assert ours["per_component"][0]["triangles"] > 75000  # one main surface of the scene
+    header = pcl_mesh.read_bytes()[:600].split(b"end_header")[0].decode()
+    assert "property uchar red" in header and "property float nx" in header
+    assert "element face" in header
+
+
+def test_voxel_grid_and_uniform_sampling_exclude_each_other(pcl_cli, data_dir, tmp_path):
+    proc = pcl_cli("triangulate", data_dir / "pcd/milk.pcd", "-o", tmp_path / "m.ply", "--uniform-sampling", "0.003",
+                   "--voxel-grid", "0.003", check=False)
+    assert proc.returncode == 2
+    _, r = _report(pcl_cli, tmp_path, data_dir / "pcd/milk.pcd", "--voxel-grid", "0.003")
+    assert r["input_cloud"]["preprocessing"]["downsampling"] == "voxel_grid"
+    assert r["triangulation"]["points"] < 13704
+
+
+def _fails(pcl_cli, tmp_path, src, needle):
+    out = tmp_path / "out.ply"
+    proc = pcl_cli("triangulate", src, "-o", out, check=False)
+    assert proc.returncode == 1, proc.stdout
+    lines = [l for l in proc.stderr.splitlines() if l.strip()]
+    assert len(lines) == 1, proc.stderr
+    assert str(src) in lines[0] and needle in lines[0], lines[0]
+    assert not out.exists()
+
+
+def test_malformed_pcd_files_give_one_line_errors(pcl_cli, data_dir, tmp_path):
+    ascii_ = (data_dir / "pcd/bunny.pcd").read_bytes()
+    binary = (data_dir / "pcd/milk_binary.pcd").read_bytes()
+    compressed = (data_dir / "pcd/milk.pcd").read_bytes()
+    cases = {
+        "cut_binary.pcd": (binary[:5000], "truncated data"),
+        "cut_compressed.pcd": (compressed[:3000], "truncated data"),
+        "cut_ascii.pcd": (ascii_[: len(ascii_) // 3], "truncated data"),
+        "garbage.pcd": (b"hello world\n", "not a PCD file"),
+        "empty.pcd": (b"", "empty file"),
+        "fields.pcd": (ascii_.replace(b"FIELDS x y z", b"FIELDS a b c"), "missing field 'x'"),
+        "points.pcd": (ascii_.replace(b"POINTS 397", b"POINTS 400"), "count mismatch"),
+        "size.pcd": (ascii_.replace(b"SIZE 4 4 4", b"SIZE 4 4"), "count mismatch"),
+    }
+    for name, (content, needle) in cases.items():
+        path = tmp_path / name
+        path.write_bytes(content)
+        _fails(pcl_cli, tmp_path, path, needle)
+    _fails(pcl_cli, tmp_path, tmp_path / "missing.pcd", "no such file")
+
+
+def test_all_nan_pcd_is_an_input_error(pcl_cli, tmp_path):
+    path = tmp_path / "nan.pcd"
+    body = struct.pack("<6f", *([float("nan")] * 6))
+    path.write_bytes(b"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\n"
+                     b"VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA binary\n" + body)
+    _fails(pcl_cli, tmp_path, path, "no valid point")
+
+
+def test_estimated_normals_face_the_viewpoint(pcl_cli, tmp_path):
+    # A flat square of points at z = 0: PCL's normals are +-z, flipped toward the viewpoint.
+    pts = tmp_path / "plane.xyz"
+    pts.write_text("".join(f"{0.1 * i} {0.1 * j} 0\n" for i in range(20) for j in range(20)))
+    for vz, sign in ((5, 1), (-5, -1)):
+        out = tmp_path / f"plane{vz}.ply"
+        proc = pcl_cli("triangulate", pts, "-o", out, "--estimate-normals", "--viewpoint", 0, 0, vz, "--ascii")
+        assert f"toward 0 0 {vz}" in proc.stdout
+        lines = out.read_text().splitlines()
+        header = lines[: lines.index("end_header")]
+        assert "property float nx" in header
+        body = lines[len(header) + 1:]
+        nz = [float(l.split()[5]) for l in body[:400]]
+        assert all(n * sign > 0.99 for n in nz), nz[:5]
