@@ -18,6 +18,11 @@
 namespace particlemesh {
 namespace detail {
 
+namespace {
+// Above this ratio of the two smallest variances a neighbourhood is too thick for one plane.
+constexpr double kMaxFlatness = 0.2;
+}  // namespace
+
 std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
                                      const NeighborLists& lists, double radius, ProgressTracker& tracker,
                                      const std::vector<Triangle>* triangles) {
@@ -65,8 +70,36 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
         if (squared_norm(d) <= r2) near.push_back(d);
       }
       if (near.size() < 3) continue;  // too few neighbours for a plane: unknown (0,0,0)
+      // PCA of the inliers: returns the normal and the ratio of the two smallest variances
+      // (small for points that lie close to one plane).
+      auto pca = [&](const std::vector<uint8_t>& use, double* flatness) {
+        Vec3 sum{};
+        int count = 0;
+        for (size_t k = 0; k < near.size(); ++k)
+          if (use[k]) {
+            sum += near[k];
+            ++count;
+          }
+        const Vec3 mean = sum / double(count);
+        Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+        for (size_t k = 0; k < near.size(); ++k) {
+          if (!use[k]) continue;
+          const Eigen::Vector3d v(near[k].x - mean.x, near[k].y - mean.y, near[k].z - mean.z);
+          cov += v * v.transpose();
+        }
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+        eig.computeDirect(cov);
+        const Eigen::Vector3d ev = eig.eigenvalues();  // ascending
+        if (flatness) *flatness = ev(1) > 0 ? ev(0) / ev(1) : 1.0;
+        const Eigen::Vector3d v = eig.eigenvectors().col(0);
+        return normalized(Vec3{v.x(), v.y(), v.z()});
+      };
       inlier.assign(near.size(), 1);
-      if (triangles != nullptr) {
+      double flatness = 0;
+      Vec3 normal = pca(inlier, &flatness);
+      // Points that already lie close to one plane keep it (noise and the steps of a depth
+      // scan or a lattice do not call for more). A thick neighbourhood may be two sheets.
+      if (triangles != nullptr && flatness > kMaxFlatness) {
         const uint32_t o = grid.original_index(uint32_t(s));
         // Inliers count more the closer they are: next to the point its own sheet dominates
         // even where another sheet ends nearby (the free ends of a folded sheet).
@@ -95,27 +128,12 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
             best_n = tn;
           }
         }
-        if (best_count >= 3)
+        if (best_count >= 3) {
           for (size_t k = 0; k < near.size(); ++k) inlier[k] = std::abs(dot(near[k], best_n)) <= band;
-      }
-      Vec3 sum{};
-      int count = 0;
-      for (size_t k = 0; k < near.size(); ++k)
-        if (inlier[k]) {
-          sum += near[k];
-          ++count;
+          normal = pca(inlier, nullptr);
         }
-      const Vec3 mean = sum / double(count);
-      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-      for (size_t k = 0; k < near.size(); ++k) {
-        if (!inlier[k]) continue;
-        const Eigen::Vector3d v(near[k].x - mean.x, near[k].y - mean.y, near[k].z - mean.z);
-        cov += v * v.transpose();
       }
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-      eig.computeDirect(cov);
-      const Eigen::Vector3d v = eig.eigenvectors().col(0);  // smallest eigenvalue first
-      normals[s] = normalized(Vec3{v.x(), v.y(), v.z()});
+      normals[s] = normal;
     }
     tracker.tick(e - b);
   });

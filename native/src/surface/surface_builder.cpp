@@ -605,7 +605,9 @@ class Builder {
           if (!(n2 > 0)) return;
           const Vec3 q = P_[p];
           const double la = dot(cross(c - b, q - b), n) / n2, lb = dot(cross(a - c, q - c), n) / n2;
-          if (la < -1e-9 || lb < -1e-9 || 1 - la - lb < -1e-9) return;
+          // Strictly inside: a particle on an edge goes to the edge split below, which keeps
+          // every triangle non-degenerate.
+          if (la < 1e-6 || lb < 1e-6 || 1 - la - lb < 1e-6) return;
           const double h = std::abs(dot(q - a, n)) / std::sqrt(n2);
           if (h < best) {
             best = h;
@@ -622,9 +624,10 @@ class Builder {
         continue;
       }
       // Else split the nearest edge a -> b at p: each triangle (a, b, c) on it becomes
-      // (a, p, c) and (p, b, c). The fans stay disks and the windings agree.
-      double best_d = INFINITY;
-      std::pair<uint32_t, uint32_t> edge{0, 0};
+      // (a, p, c) and (p, b, c). The fans stay disks and the windings agree. Edges whose split
+      // would give a degenerate triangle (p in line with a corner: rows of a depth scan) are
+      // passed over for the next nearest.
+      std::vector<std::pair<double, std::pair<uint32_t, uint32_t>>> edges;
       for (uint32_t w : nb)
         for_each_tri(w, [&](uint32_t t) {
           for (int k = 0; k < 3; ++k) {
@@ -632,33 +635,46 @@ class Builder {
             const Vec3 ab = P_[b] - P_[a];
             const double u = std::clamp(dot(P_[p] - P_[a], ab) / squared_norm(ab), 0.0, 1.0);
             const double d = squared_distance(P_[p], P_[a] + ab * u);
-            if (d < best_d) {
-              best_d = d;
-              edge = {a, b};
-            }
+            if (d <= o_.max_edge * o_.max_edge) edges.push_back({d, {std::min(a, b), std::max(a, b)}});
           }
         });
-      if (best_d <= o_.max_edge * o_.max_edge) {
-        const auto [a, b] = edge;
+      std::sort(edges.begin(), edges.end());
+      edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+      auto proper = [&](uint32_t a, uint32_t b, uint32_t c) {
+        const Vec3 u = P_[b] - P_[a], v = P_[c] - P_[a], w = P_[c] - P_[b];
+        const double n2 = squared_norm(cross(u, v));
+        const double l1 = squared_norm(u), l2 = squared_norm(v), l3 = squared_norm(w);
+        const double lmax = std::max({l1, l2, l3}), lmid = l1 + l2 + l3 - lmax - std::min({l1, l2, l3});
+        return n2 > 1e-20 * lmax * lmid;
+      };
+      for (const auto& [d, e] : edges) {
+        const auto [a, b] = e;
         std::vector<uint32_t> on_edge;
         for_each_tri(a, [&](uint32_t t) {
           const Triangle& T = tris_[t];
           const int k = corner_of(T, a);
           if (T[(k + 1) % 3] == b || T[(k + 2) % 3] == b) on_edge.push_back(t);
         });
+        bool ok = !on_edge.empty();
+        for (uint32_t t : on_edge) {
+          const Triangle& T = tris_[t];
+          const uint32_t c = T[0] != a && T[0] != b ? T[0] : (T[1] != a && T[1] != b ? T[1] : T[2]);
+          ok = ok && proper(a, p, c) && proper(p, b, c);
+        }
+        if (!ok) continue;
         for (uint32_t t : on_edge) {
           const Triangle T = tris_[t];
           const int k = corner_of(T, a);
-          // Rotate so the edge runs x -> y in T = (x, y, c).
+          // Name the corners so the edge runs x -> y in T = (x, y, c).
           const bool forward = T[(k + 1) % 3] == b;
           const uint32_t x = forward ? a : b, y = forward ? b : a;
-          const int kx = corner_of(T, x);
-          const uint32_t c = T[(kx + 2) % 3];
+          const uint32_t c = T[(corner_of(T, x) + 2) % 3];
           kill_triangle(t);
           add_triangle({x, p, c});
           add_triangle({p, y, c});
         }
         ++inserted;
+        break;
       }
     }
     return inserted;
