@@ -3,6 +3,7 @@
 //   particlemesh inspect MESH [--json]          topology report of a mesh
 //   particlemesh sample SHAPE -o OUT.xyz        evenly sampled demo/test particles
 //   particlemesh smooth MESH -o OUT.ply         Loop / butterfly subdivision
+//   particlemesh polygonize IN -o OUT.ply       volume particles -> implicit surface mesh
 #include <cstdio>
 #include <exception>
 
@@ -23,6 +24,7 @@ int main(int argc, char** argv) {
   cli::add_inspect(app, commands);
   cli::add_sample(app, commands);
   cli::add_smooth(app, commands);
+  cli::add_polygonize(app, commands);
 
   try {
     app.parse(argc, argv);

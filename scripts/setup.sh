@@ -16,6 +16,7 @@ PACKAGES=(
   python3 python3-numpy python3-pytest
   blender
   libpcl-dev
+  libopenvdb-dev  # the polygonize benchmark's peer (bench/ only)
 )
 
 missing=()

@@ -451,7 +451,7 @@ TEST(ParticleTriangulation, SharedScansReconstruct) {
         EXPECT_LE(c.triangles, 12u);
       }
     }
-    EXPECT_NEAR(double(mesh.polygons.size()), 531, 30);
+    EXPECT_NEAR(double(mesh.polygons.size()), 572, 30);
   }
   {
     // An object cut out of one depth view: documented preprocessing, normals toward the

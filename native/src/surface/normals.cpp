@@ -21,6 +21,9 @@ namespace detail {
 namespace {
 // Above this ratio of the two smallest variances a neighbourhood is too thick for one plane.
 constexpr double kMaxFlatness = 0.2;
+// Above this fraction of same-sheet neighbours facing opposite ways, reference normals are
+// not a consistent orientation and only vote per piece.
+constexpr double kMaxReferenceDisagreement = 0.01;
 }  // namespace
 
 std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
@@ -141,6 +144,77 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
   for (size_t s = 0; s < n; ++s)
     if (rep[s] != s) normals[s] = normals[rep[s]];
   return normals;
+}
+
+bool orient_normals_by_reference(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
+                                 const NeighborLists& lists, double radius, std::vector<Vec3>& normals,
+                                 const std::vector<Vec3>& reference, ProgressTracker& tracker) {
+  const size_t n = grid.point_count();
+  const double r2 = radius * radius;
+  // 0 = undecided, 1 = decided. Where the reference clearly says which way a point faces it
+  // decides; elsewhere (reference nearly in the tangent plane, or missing) the neighbours
+  // of the same sheet that are decided vote, round after round.
+  std::vector<uint8_t> decided(n, 0);
+  std::vector<uint32_t> open;
+  for (size_t s = 0; s < n; ++s) {
+    if (rep[s] != s || !(squared_norm(normals[s]) > 0)) continue;
+    const Vec3 r = reference[s];
+    const double len = norm(r);
+    const double c = len > 0 ? dot(normals[s], r) / len : 0.0;
+    if (std::abs(c) >= 0.3) {
+      if (c < 0) normals[s] = -normals[s];
+      decided[s] = 1;
+    } else {
+      open.push_back(uint32_t(s));
+    }
+  }
+  for (int round = 0; round < 64 && !open.empty(); ++round) {
+    tracker.check();
+    std::vector<uint32_t> still;
+    std::vector<std::pair<uint32_t, bool>> flips;
+    for (uint32_t s : open) {
+      double vote = 0;
+      const Vec3 p = grid.sorted_point(s);
+      for (const uint32_t* q = lists.begin(s); q != lists.end(s); ++q) {
+        if (!decided[*q]) continue;
+        const Vec3 d = grid.sorted_point(*q) - p;
+        if (squared_norm(d) > r2) continue;
+        // Same-sheet neighbours (the edge in both tangent planes) count, gap-crossing ones
+        // count reversed, like the spanning tree's signed edges.
+        const double slope = (std::abs(dot(d, normals[s])) + std::abs(dot(d, normals[*q]))) / (2 * norm(d));
+        const double agree = dot(normals[s], normals[*q]);
+        vote += slope > 0.5 ? -agree : agree;
+      }
+      if (vote == 0) still.push_back(s);
+      else flips.push_back({s, vote < 0});
+    }
+    if (flips.empty()) break;
+    for (auto [s, flip] : flips) {
+      if (flip) normals[s] = -normals[s];
+      decided[s] = 1;
+    }
+    open.swap(still);
+  }
+  // Are the references consistent? Neighbours of one sheet (the edge lies in both tangent
+  // planes) should agree. Normals turned toward a scanner's viewpoint on a closed object, for
+  // instance, face inward on its far side, and disagree along the silhouette.
+  size_t pairs = 0, disagree = 0;
+  for (size_t s = 0; s < n; ++s) {
+    if (rep[s] != s || !decided[s]) continue;
+    const Vec3 p = grid.sorted_point(uint32_t(s));
+    for (const uint32_t* q = lists.begin(uint32_t(s)); q != lists.end(uint32_t(s)); ++q) {
+      if (*q <= s || !decided[*q]) continue;
+      const Vec3 d = grid.sorted_point(*q) - p;
+      if (squared_norm(d) > r2) continue;
+      const double slope = (std::abs(dot(d, normals[s])) + std::abs(dot(d, normals[*q]))) / (2 * norm(d));
+      if (slope > 0.3) continue;
+      ++pairs;
+      disagree += dot(normals[s], normals[*q]) < 0;
+    }
+  }
+  for (size_t s = 0; s < n; ++s)
+    if (rep[s] != s) normals[s] = normals[rep[s]];
+  return pairs == 0 || double(disagree) <= kMaxReferenceDisagreement * double(pairs);
 }
 
 void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
@@ -271,12 +345,6 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
     if (vote && agreement < 0)
       for (uint32_t s : piece) normals[s] = -normals[s];
   }
-  // Where the reference clearly says which way a point faces, it wins over the tree (a
-  // misread edge at a thin rim can flip a few points). Nearly perpendicular references say
-  // nothing and are ignored.
-  if (vote)
-    for (size_t s = 0; s < n; ++s)
-      if (dot(normals[s], normalized(reference[s])) < -0.3) normals[s] = -normals[s];
   for (size_t s = 0; s < n; ++s)
     if (rep[s] != s) normals[s] = normals[rep[s]];
 }

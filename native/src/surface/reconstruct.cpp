@@ -81,7 +81,11 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
         for (uint32_t s = 0; s < n; ++s) reference[s] = cloud.normals[grid.original_index(s)];
       }
       tracker.stage("orienting normals", 0.65, 0.7);
-      detail::orient_normals_mst(grid, raw.rep, raw.neighbors, raw.stats.max_edge, sorted, reference, tracker);
+      // The cloud's normals orient directly when they are consistent; otherwise (or without
+      // them) the spanning tree orients, and they only vote which way each piece faces.
+      if (reference.empty() ||
+          !detail::orient_normals_by_reference(grid, raw.rep, raw.neighbors, raw.stats.max_edge, sorted, reference, tracker))
+        detail::orient_normals_mst(grid, raw.rep, raw.neighbors, raw.stats.max_edge, sorted, reference, tracker);
       for (uint32_t s = 0; s < n; ++s) normals[grid.original_index(s)] = sorted[s];
       st.normals_estimated = true;
     }

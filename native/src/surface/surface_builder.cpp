@@ -5,6 +5,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <numeric>
 #include <queue>
@@ -15,13 +16,14 @@
 
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
+#include "particlemesh/spatial/neighbor_grid.h"
 
 namespace particlemesh::detail {
 
 namespace {
 
-constexpr double kTwoPi = 2.0 * std::numbers::pi;
-constexpr float kArcEps = 2e-5f;  // radians; arcs are stored as floats
+constexpr double kTwoPi = 4.0;     // the period of angle_of's pseudo-angles
+constexpr float kArcEps = 1e-5f;  // in pseudo-angle units (about 1.5e-5 rad); arcs are floats
 
 struct Frame {
   Vec3 u, w;
@@ -33,7 +35,16 @@ Frame tangent_frame(const Vec3& n) {
   return {u, cross(n, u)};
 }
 
-double angle_of(const Frame& f, const Vec3& d) { return std::atan2(dot(d, f.w), dot(d, f.u)); }
+/// The direction of d around the normal as a pseudo-angle in [0, 4): monotonic in the true
+/// angle (counter-clockwise from u) but with no trigonometry; the wedge tests only compare
+/// and order angles, so any order-preserving measure with a fixed period serves.
+double angle_of(const Frame& f, const Vec3& d) {
+  const double x = dot(d, f.u), y = dot(d, f.w);
+  const double s = std::abs(x) + std::abs(y);
+  if (!(s > 0)) return 0;
+  const double r = y / s;
+  return x >= 0 ? (r >= 0 ? r : 4 + r) : 2 - r;
+}
 
 /// A counter-clockwise arc (about the vertex normal) of a triangle's corner.
 struct Arc {
@@ -52,6 +63,16 @@ bool arcs_overlap(const Arc& a, const Arc& b) {
   if (d < 0) d += float(kTwoPi);
   if (d >= float(kTwoPi)) d -= float(kTwoPi);
   return d < a.length - kArcEps || d + b.length > float(kTwoPi) + kArcEps;
+}
+
+/// The cosine of a triangle's largest angle (the smallest of its corners' cosines): the same
+/// order as the largest angle, without the arc-cosines.
+double min_corner_cosine(const Vec3& a, const Vec3& b, const Vec3& c) {
+  auto cosine = [](const Vec3& p, const Vec3& q, const Vec3& r) {
+    const Vec3 u = q - p, v = r - p;
+    return dot(u, v) / std::sqrt(squared_norm(u) * squared_norm(v));
+  };
+  return std::min({cosine(a, b, c), cosine(b, c, a), cosine(c, a, b)});
 }
 
 double max_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
@@ -103,7 +124,7 @@ class Builder {
         if (dot(na, nb) < cosa || dot(nb, nc) < cosa || dot(na, nc) < cosa) continue;
         if (dot(fu, na) < cosa || dot(fu, nb) < cosa || dot(fu, nc) < cosa) continue;
         o[i].t = t;
-        o[i].quality = float(max_angle(P_[t[0]], P_[t[1]], P_[t[2]]));
+        o[i].quality = float(-min_corner_cosine(P_[t[0]], P_[t[1]], P_[t[2]]));  // ~ the largest angle
         o[i].ok = true;
       }
     });
@@ -557,6 +578,22 @@ class Builder {
     return removed_fans;
   }
 
+  /// Does a boundary half-edge start at v (an edge v -> w of a triangle with no w -> v)?
+  bool starts_boundary(uint32_t v) const {
+    bool found = false;
+    for_each_tri(v, [&](uint32_t t) {
+      const Triangle& T = tris_[t];
+      const uint32_t w = T[(corner_of(T, v) + 1) % 3];
+      bool twin = false;
+      for_each_tri(v, [&](uint32_t u) {
+        const Triangle& U = tris_[u];
+        twin = twin || U[(corner_of(U, v) + 2) % 3] == w;
+      });
+      found = found || !twin;
+    });
+    return found;
+  }
+
   /// A particle the surface passed by is inserted into the surface triangle it lies over
   /// (split in three), or, at a boundary, joined to the nearest boundary edge: every input
   /// particle ends up a vertex of the surface.
@@ -577,6 +614,7 @@ class Builder {
         if (it != unused.end() && *it == t[k])
           for (int q = 1; q < 3; ++q) around[size_t(it - unused.begin())].push_back(t[(k + q) % 3]);
       }
+    std::unique_ptr<NeighborGrid> near;
     size_t inserted = 0;
     for (size_t u = 0; u < unused.size(); ++u) {
       const uint32_t p = unused[u];
@@ -587,10 +625,13 @@ class Builder {
         // In no raw triangle (fewer than two neighbours within L, e.g. at the rim of a real
         // opening): the surface near it can only be its boundary. Take the boundary vertices
         // within L as its neighbours.
-        for (uint64_t e : boundary_) {
-          const uint32_t a = uint32_t(e >> 32);
-          if (squared_distance(P_[a], P_[p]) <= o_.max_edge * o_.max_edge) nb.push_back(a);
-        }
+        // A grid over the particles, built at the first such particle: scanning the whole
+        // boundary per particle is quadratic on scans with many openings.
+        if (!near) near = std::make_unique<NeighborGrid>(P_.data(), P_.size(), o_.max_edge);
+        near->for_each_within(P_[p], o_.max_edge, [&](uint32_t s, double) {
+          const uint32_t a = near->original_index(s);
+          if (a != p && active_[a] && starts_boundary(a)) nb.push_back(a);
+        });
         std::sort(nb.begin(), nb.end());
         nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
       }

@@ -99,6 +99,22 @@ TEST(ReconstructSurface, TorusTrefoilAndDoubleTorusKeepTheirGenus) {
   }
 }
 
+// A scanner's normals point toward its viewpoint: on a closed object they face inward on the
+// far side. Such normals are not an orientation; the surface must still come out closed and
+// outward (the spanning tree orients, the given normals only vote).
+TEST(ReconstructSurface, NormalsTurnedTowardAViewpointStillGiveOutwardSurfaces) {
+  const Vec3 viewpoint{0.3, 0.2, 10.0};
+  auto toward_viewpoint = [&](PointCloud c) {
+    for (size_t i = 0; i < c.size(); ++i)
+      if (dot(c.normals[i], viewpoint - c.positions[i]) < 0) c.normals[i] = -c.normals[i];
+    return c;
+  };
+  const PointCloud sphere = toward_viewpoint(poisson_disk_sample(icosphere_mesh(5), 0.04, 1));
+  const PointCloud pretzel = toward_viewpoint(double_torus_sample(0.03, 1));
+  expect_closed_surfaces(sphere, reconstruct_surface(sphere), 1, 0, "sphere, viewpoint normals");
+  expect_closed_surfaces(pretzel, reconstruct_surface(pretzel), 1, 2, "double torus, viewpoint normals");
+}
+
 TEST(ReconstructSurface, ResampledRealModels) {
   PM_REQUIRE_DATA(spot, "meshes/spot.obj");
   PM_REQUIRE_DATA(rocker, "meshes/rocker_arm.obj");

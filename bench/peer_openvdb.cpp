@@ -1,0 +1,62 @@
+#include "peer_openvdb.h"
+
+#include <chrono>
+
+#ifdef PM_BENCH_WITH_OPENVDB
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/ParticlesToLevelSet.h>
+#include <openvdb/tools/VolumeToMesh.h>
+#endif
+
+namespace peer {
+
+#ifdef PM_BENCH_WITH_OPENVDB
+
+namespace {
+// The particle list interface ParticlesToLevelSet expects.
+struct ParticleList {
+  using PosType = openvdb::Vec3R;
+  std::vector<openvdb::Vec3R> p;
+  openvdb::Real r = 0;
+  size_t size() const { return p.size(); }
+  void getPos(size_t n, openvdb::Vec3R& xyz) const { xyz = p[n]; }
+  void getPosRad(size_t n, openvdb::Vec3R& xyz, openvdb::Real& rad) const {
+    xyz = p[n];
+    rad = r;
+  }
+};
+}  // namespace
+
+bool openvdb_available() { return true; }
+
+VdbResult openvdb_particles_to_mesh(const std::vector<particlemesh::Vec3>& positions, double sphere_radius,
+                                    double voxel) {
+  openvdb::initialize();
+  ParticleList list;
+  list.r = sphere_radius;
+  list.p.reserve(positions.size());
+  for (const auto& q : positions) list.p.emplace_back(q.x, q.y, q.z);
+  VdbResult out;
+  const auto t0 = std::chrono::steady_clock::now();
+  openvdb::FloatGrid::Ptr ls = openvdb::createLevelSet<openvdb::FloatGrid>(voxel, 3.0);
+  openvdb::tools::ParticlesToLevelSet<openvdb::FloatGrid> raster(*ls);
+  raster.rasterizeSpheres(list);
+  raster.finalize(/*prune=*/true);
+  std::vector<openvdb::Vec3s> points;
+  std::vector<openvdb::Vec3I> triangles;
+  std::vector<openvdb::Vec4I> quads;
+  openvdb::tools::volumeToMesh(*ls, points, triangles, quads, /*isovalue=*/0.0, /*adaptivity=*/0.0);
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  out.vertices = points.size();
+  out.triangles = triangles.size() + 2 * quads.size();
+  return out;
+}
+
+#else
+
+bool openvdb_available() { return false; }
+VdbResult openvdb_particles_to_mesh(const std::vector<particlemesh::Vec3>&, double, double) { return {}; }
+
+#endif
+
+}  // namespace peer

@@ -1,0 +1,150 @@
+// particlemesh polygonize IN -o OUT: volume particles to the mesh of their implicit surface.
+#include <chrono>
+#include <cstdio>
+#include <memory>
+
+#include "commands.h"
+#include "particlemesh/core/error.h"
+#include "particlemesh/io/mesh_io.h"
+#include "particlemesh/mesh/topology_report.h"
+#include "particlemesh/volume/polygonize.h"
+#include "particle_input.h"
+#include "progress_line.h"
+#include "report_json.h"
+
+namespace particlemesh::cli {
+
+namespace {
+
+struct PolygonizeArgs {
+  std::string input, output, report, kernel = "wyvill";
+  double radius = 0, threshold = 0, cell = 0;
+  double max_grid_mib = double(kDefaultMaxGridBytes >> 20);
+  int threads = 0;
+  bool ascii = false, quiet = false;
+};
+
+nlohmann::json stats_json(const PolygonizeStats& s) {
+  return {{"particles", s.particles},
+          {"kernel", kernel_name(s.kernel)},
+          {"radius", s.radius},
+          {"max_radius", s.max_radius},
+          {"threshold", s.threshold},
+          {"cell_size", s.cell_size},
+          {"spacing", s.spacing},
+          {"radius_defaulted", s.radius_defaulted},
+          {"threshold_defaulted", s.threshold_defaulted},
+          {"cell_size_defaulted", s.cell_size_defaulted},
+          {"candidate_blocks", s.candidate_blocks},
+          {"sampled_blocks", s.sampled_blocks},
+          {"surface_blocks", s.surface_blocks},
+          {"sampled_nodes", s.sampled_nodes},
+          {"bounding_box_nodes", s.bounding_box_nodes},
+          {"grid_bytes", s.grid_bytes},
+          {"vertices", s.vertices},
+          {"triangles", s.triangles},
+          {"field_evaluations", s.field_evaluations},
+          {"seconds", {{"setup", s.seconds_setup}, {"sampling", s.seconds_sampling}, {"meshing", s.seconds_meshing}}}};
+}
+
+int run_polygonize(const PolygonizeArgs& a) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  ProgressLine progress(a.quiet);
+  const ParticleInput input = read_particles(a.input, ParticleInputArgs{}, a.threads);
+  const PointCloud& cloud = input.cloud;
+  const double t_read = std::chrono::duration<double>(Clock::now() - t0).count();
+
+  PolygonizeOptions opt;
+  opt.kernel = kernel_from_name(a.kernel);
+  opt.radius = a.radius;
+  opt.threshold = a.threshold;
+  opt.cell_size = a.cell;
+  opt.threads = a.threads;
+  opt.max_grid_bytes = uint64_t(a.max_grid_mib * double(1 << 20));
+  opt.progress = progress.callback();
+  const auto t1 = Clock::now();
+  set_phase(Phase::Computing);
+  if (interrupted()) throw Error(Status::Cancelled, "interrupted");
+  PolygonizeResult result = polygonize(cloud, opt);
+  const double t_poly = std::chrono::duration<double>(Clock::now() - t1).count();
+  progress.clear();
+  if (interrupted()) throw Error(Status::Cancelled, "interrupted");
+
+  WriteMeshOptions wo;
+  if (a.ascii) wo.format = MeshFormat::PlyAscii;
+  const auto t2 = Clock::now();
+  set_phase(Phase::Writing);
+  write_mesh(result.mesh, a.output, wo);
+  if (interrupted()) {  // Ctrl-C while writing: the run is cancelled, so no output either
+    std::remove(a.output.c_str());
+    throw Error(Status::Cancelled, "interrupted");
+  }
+  const double t_write = std::chrono::duration<double>(Clock::now() - t2).count();
+
+  const TopologyReport report = topology_report(result.mesh);
+  if (!a.report.empty()) {
+    nlohmann::json j{{"input", a.input},
+                     {"output", a.output},
+                     {"read", input.report},
+                     {"polygonize", stats_json(result.stats)},
+                     {"topology", to_json(report)},
+                     {"seconds", {{"read", t_read}, {"polygonize", t_poly}, {"write", t_write}}}};
+    write_json_file(j, a.report);
+  }
+  if (!a.quiet) {
+    const auto& s = result.stats;
+    std::printf("particlemesh polygonize: %s -> %s\n", a.input.c_str(), a.output.c_str());
+    std::printf("  particles     %zu\n", s.particles);
+    if (!input.summary.empty()) std::printf("%s", input.summary.c_str());
+    if (s.spacing > 0) std::printf("  spacing       %.6g (median nearest-neighbour distance)\n", s.spacing);
+    std::printf("  kernel        %s (C%d at R)\n", kernel_name(s.kernel), kernel_continuity(s.kernel));
+    std::printf("  radius R      %.6g (%s)\n", s.radius, s.radius_defaulted ? "default: 2 x spacing" : "given");
+    std::printf("  threshold T   %.6g (%s)\n", s.threshold,
+                s.threshold_defaulted ? "default: half the field inside a packed volume at R = 2 spacings" : "given");
+    std::printf("  cell h        %.6g (%s)\n", s.cell_size, s.cell_size_defaulted ? "default: R / 4" : "given");
+    std::printf("  grid          %zu blocks of 8^3 sampled (%.1f MiB), %zu with surface\n", s.sampled_blocks,
+                double(s.grid_bytes) / double(1 << 20), s.surface_blocks);
+    std::printf("%s", describe(report).c_str());
+    std::printf("  time          %.2f s (read %.2f, polygonize %.2f, write %.2f)\n", t_read + t_poly + t_write, t_read,
+                t_poly, t_write);
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
+  auto args = std::make_shared<PolygonizeArgs>();
+  CLI::App* app = root.add_subcommand(
+      "polygonize", "Volume particles to the mesh of their implicit surface (seed section 5.1, marching cubes)");
+  app->add_option("input", args->input,
+                  "Particles: .ply (x y z ...), .xyz (x y z per line) or, with the PCL bridge, .pcd")
+      ->required();
+  app->add_option("-o,--output", args->output, "Output mesh with normals: .ply (binary; --ascii for text) or .obj")
+      ->required();
+  app->add_option("--radius", args->radius,
+                  "Particle radius R (the field's support), world units (default: 2 x the median particle spacing)")
+      ->check(CLI::PositiveNumber);
+  app->add_option("--threshold", args->threshold,
+                  "Iso level T of the summed field (default: half the field inside an evenly packed volume at "
+                  "R = 2 spacings: 3.33 wyvill, 3.94 poly4, 2.58 poly6, 1.23 blinn)")
+      ->check(CLI::PositiveNumber);
+  app->add_option("--kernel", args->kernel, "Field kernel: wyvill (C1), poly4 (C1), poly6 (C2), blinn (C0)")
+      ->check(CLI::IsMember({"wyvill", "poly4", "poly6", "blinn"}, CLI::ignore_case))
+      ->capture_default_str();
+  app->add_option("--cell", args->cell, "Grid cell size h, world units (default: R / 4)")->check(CLI::PositiveNumber);
+  app->add_option("--threads", args->threads, "Worker threads, 0 = all cores (the output does not depend on it)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app->add_option("--max-grid-mib", args->max_grid_mib,
+                  "Fail before the sparse grid would need more memory than this, MiB (0 = no limit)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app->add_option("--report", args->report, "Also write statistics and the topology report as JSON");
+  app->add_flag("--ascii", args->ascii, "Write ASCII PLY instead of binary");
+  app->add_flag("-q,--quiet", args->quiet, "No summary and no progress line");
+  commands.push_back({app, [args] { return run_polygonize(*args); }});
+}
+
+}  // namespace particlemesh::cli

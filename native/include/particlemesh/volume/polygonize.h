@@ -1,0 +1,129 @@
+// Polygonization of the implicit surface of volume particles (thesis chapter 5, section 5.1.2:
+// sample space, classify the samples inside/outside, place the crossings on the edges between
+// inside and outside samples, fit polygons), done so that the work follows the surface.
+//
+// 1. Sampling only where the field can cross T. Space is cut into blocks of 8 x 8 x 8 grid
+//    nodes (cell size h); only the blocks that some particle's support reaches are allocated
+//    and sampled: F is zero everywhere else, and T > 0, so nothing else can hold surface.
+//    Memory and time therefore grow with the volume the particles occupy (a thin sheet costs
+//    a thin layer of blocks), never with their bounding box. Each block sums its particles'
+//    contributions in a fixed order, so the samples do not depend on the thread count.
+// 2. Classification: a node is inside when F >= T.
+// 3. Crossings: a vertex on every grid edge between an inside and an outside node, first by
+//    linear interpolation of the samples, then refined on the true field F along the edge
+//    (safeguarded Newton), so vertices lie on the iso-surface, not on its trilinear
+//    approximation; each vertex is created once (by the block owning the edge's lower node)
+//    and shared by the four cells around its edge: an indexed mesh without duplicates.
+//    Vertex normals are -grad F / |grad F| at the vertex (outward).
+// 4. Polygons: marching cubes with every ambiguous face resolved by the asymptotic decider
+//    (Nielsen and Hamann 1991), computed from that face's four samples only, so the two cells
+//    sharing a face always agree: the mesh is crack-free. The polygons of a cell are traced
+//    from its face segments (a table built once from that rule, not copied), so every
+//    surface edge is shared by exactly two triangles and every vertex has a single fan: the
+//    output is a closed, consistently oriented 2-manifold (counter-clockwise seen from
+//    outside). An ambiguous cell interior is resolved as separate sheets (no tunnel); the
+//    rare long polygons around several joined ambiguous faces get a vertex inside the cell
+//    (on the surface, found along the gradient) so that no diagonal lies on a cell face.
+//    Features thinner than a cell can be missed or merged, as in any sampled method, and in
+//    blobs only a cell or two across a few triangles can face against the gradient (the
+//    sampled topology is right but the geometry is below the resolution): none on the SPH
+//    test frames at splashsurf's parameters, under 1 % of the area on splashy data.
+//
+// Vertices are clamped to at least 1e-3 h from grid nodes (so no two coincide). The output is
+// byte-identical for any thread count.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "particlemesh/core/export.h"
+#include "particlemesh/core/progress.h"
+#include "particlemesh/mesh/point_cloud.h"
+#include "particlemesh/mesh/tri_mesh.h"
+#include "particlemesh/volume/field.h"
+#include "particlemesh/volume/kernel.h"
+
+namespace particlemesh {
+
+/// Default cell size: h = kDefaultCellFraction x R (with the default radius, half the
+/// particle spacing).
+inline constexpr double kDefaultCellFraction = 0.25;
+
+/// Default memory budget for the sampled grid: 4 GiB.
+inline constexpr uint64_t kDefaultMaxGridBytes = uint64_t(4) << 30;
+
+struct PolygonizeOptions {
+  Kernel kernel = Kernel::Wyvill;
+  /// R for every particle, world units. 0 = kDefaultRadiusFactor (2) x the median particle
+  /// spacing (estimate_spacing). Ignored when `radii` is given.
+  double radius = 0;
+  /// T > 0. 0 = kDefaultThresholdFraction (0.5) x the field deep inside an evenly packed
+  /// volume at the default radius (lattice_field(kernel, 2, 1): 3.33 for Wyvill), which puts
+  /// the surface of a packed block about half a spacing outside its outermost particles when
+  /// the radius is the default. See field.h.
+  double threshold = 0;
+  /// Grid cell size h, world units. 0 = kDefaultCellFraction (1/4) x R (R: the radius, or
+  /// the median of `radii`).
+  double cell_size = 0;
+  /// Empty, or one radius per particle (> 0, world units).
+  std::vector<double> radii;
+  /// Empty (all 1), or one strength per particle (finite).
+  std::vector<double> strengths;
+  /// Worker threads, 0 = all cores. The output does not depend on it.
+  int threads = 0;
+  /// Fail with LimitExceeded, before allocating, if the sampled grid (blocks of samples and
+  /// their bookkeeping) would need more than this many bytes. 0 = no limit.
+  uint64_t max_grid_bytes = kDefaultMaxGridBytes;
+  ProgressCallback progress;
+};
+
+struct PolygonizeStats {
+  size_t particles = 0;
+  Kernel kernel = Kernel::Wyvill;
+  double radius = 0;         ///< R used (median of the radii when per particle)
+  double max_radius = 0;     ///< largest R_i
+  double threshold = 0;      ///< T used
+  double cell_size = 0;      ///< h used
+  double spacing = 0;        ///< median particle spacing, when the default radius needed it (else 0)
+  bool radius_defaulted = false;
+  bool threshold_defaulted = false;
+  bool cell_size_defaulted = false;
+  size_t candidate_blocks = 0;  ///< blocks near some particle, before the exact support test
+  size_t sampled_blocks = 0;    ///< blocks of 8^3 nodes that some support reaches (sampled)
+  size_t surface_blocks = 0;    ///< blocks with an inside/outside change (meshed)
+  uint64_t sampled_nodes = 0;   ///< sampled_blocks x 512
+  uint64_t bounding_box_nodes = 0;  ///< nodes a dense grid over the supports' box would need
+  uint64_t grid_bytes = 0;      ///< memory of the sparse grid (samples + bookkeeping)
+  size_t vertices = 0;
+  size_t triangles = 0;
+  uint64_t field_evaluations = 0;  ///< exact evaluations of F (edge refinement and normals)
+  double seconds_setup = 0;     ///< spacing estimate, field grid, block search
+  double seconds_sampling = 0;  ///< summing the particles into the blocks
+  double seconds_meshing = 0;   ///< classification, vertices (refinement), triangles
+};
+
+struct PolygonizeResult {
+  /// The surface: vertices with normals from the field gradient (outward), triangles
+  /// counter-clockwise seen from outside. Empty (no vertex) when F >= T nowhere on the grid.
+  TriMesh mesh;
+  PolygonizeStats stats;
+};
+
+/// Polygonize the iso-surface F = T of the particles' field (see the top of this file).
+/// Cost: O(N (R/h)^3) to sample (each particle touches the nodes in its support) and O(surface
+/// cells) to mesh; memory proportional to the occupied volume / (8h)^3 blocks plus the mesh.
+/// @throws Error(InvalidInput) empty cloud, non-finite coordinate;
+///         Error(InvalidArgument) kernel, radius, threshold, cell size, radii or strengths
+///         out of range (the message names the option or the index);
+///         Error(LimitExceeded) the grid would exceed max_grid_bytes (checked before the
+///         allocation, the message says how much it would need), or the particles span more
+///         than 2^24 cells along an axis, or the mesh would exceed 2^32 - 1 vertices;
+///         Error(Cancelled) when the progress callback returns false.
+PM_EXPORT PolygonizeResult polygonize(const PointCloud& cloud, const PolygonizeOptions& options = {});
+
+/// The same on a field built beforehand (reusing its parameters and particle grid); the
+/// kernel, radius, threshold, radii and strengths of `options` are ignored.
+PM_EXPORT PolygonizeResult polygonize(const ParticleField& field, const PolygonizeOptions& options = {});
+
+}  // namespace particlemesh

@@ -1,0 +1,109 @@
+// C ABI: volume particles (kernels, lattice field, polygonization).
+#include <memory>
+#include <string>
+
+#include "capi/firewall.h"
+#include "capi/handles.h"
+#include "particlemesh/volume/field.h"
+#include "particlemesh/volume/kernel.h"
+#include "particlemesh/volume/polygonize.h"
+
+using namespace particlemesh;
+using particlemesh::capi::guarded;
+using particlemesh::capi::require;
+
+static_assert(PM_KERNEL_WYVILL == int(Kernel::Wyvill) && PM_KERNEL_POLY4 == int(Kernel::Poly4) &&
+                  PM_KERNEL_POLY6 == int(Kernel::Poly6) && PM_KERNEL_BLINN == int(Kernel::Blinn),
+              "the C kernel numbers are those of particlemesh::Kernel");
+
+namespace {
+
+ProgressCallback wrap_progress(pm_progress_fn fn, void* user) {
+  if (fn == nullptr) return {};
+  return [fn, user](std::string_view stage, double fraction) {
+    const std::string s(stage);
+    return fn(user, s.c_str(), fraction) == 0;
+  };
+}
+
+Kernel to_kernel(int32_t k) {
+  const Kernel kernel = static_cast<Kernel>(k);
+  validate_kernel(kernel);
+  return kernel;
+}
+
+}  // namespace
+
+extern "C" {
+
+void pm_polygonize_options_init(pm_polygonize_options* options) {
+  if (options == nullptr) return;
+  const PolygonizeOptions d;
+  *options = pm_polygonize_options{};
+  options->struct_size = sizeof(pm_polygonize_options);
+  options->kernel = int32_t(d.kernel);
+  options->radius = d.radius;
+  options->threshold = d.threshold;
+  options->cell_size = d.cell_size;
+  options->threads = d.threads;
+  options->max_grid_bytes = d.max_grid_bytes;
+  options->progress = nullptr;
+  options->progress_user_data = nullptr;
+}
+
+pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii, const double* strengths,
+                           const pm_polygonize_options* options, pm_mesh** out_mesh,
+                           pm_polygonize_stats* out_stats) {
+  return guarded([&] {
+    require(cloud, "cloud");
+    require(out_mesh, "out_mesh");
+    pm_polygonize_options defaults;
+    pm_polygonize_options_init(&defaults);
+    const pm_polygonize_options o = capi::read_versioned(options, defaults, "options");
+    if (out_stats) capi::check_versioned(out_stats, "out_stats");
+    PolygonizeOptions opt;
+    opt.kernel = to_kernel(o.kernel);
+    opt.radius = o.radius;
+    opt.threshold = o.threshold;
+    opt.cell_size = o.cell_size;
+    opt.threads = o.threads;
+    opt.max_grid_bytes = o.max_grid_bytes;
+    opt.progress = wrap_progress(o.progress, o.progress_user_data);
+    const size_t n = cloud->cloud.size();
+    if (radii) opt.radii.assign(radii, radii + n);
+    if (strengths) opt.strengths.assign(strengths, strengths + n);
+    PolygonizeResult r = polygonize(cloud->cloud, opt);
+    auto handle = std::make_unique<pm_mesh>();
+    handle->mesh = std::move(r.mesh);
+    if (out_stats) {
+      pm_polygonize_stats s{};
+      s.struct_size = sizeof(s);
+      s.radius = r.stats.radius;
+      s.threshold = r.stats.threshold;
+      s.cell_size = r.stats.cell_size;
+      s.spacing = r.stats.spacing;
+      s.particles = r.stats.particles;
+      s.sampled_blocks = r.stats.sampled_blocks;
+      s.grid_bytes = r.stats.grid_bytes;
+      s.vertices = r.stats.vertices;
+      s.triangles = r.stats.triangles;
+      capi::write_versioned(out_stats, s, "out_stats");
+    }
+    *out_mesh = handle.release();
+  });
+}
+
+pm_status pm_polygonize(const pm_cloud* cloud, const double* radii, const double* strengths,
+                        const pm_polygonize_options* options, pm_mesh** out_mesh) {
+  return pm_polygonize_ex(cloud, radii, strengths, options, out_mesh, nullptr);
+}
+
+pm_status pm_lattice_field(int32_t kernel, double radius, double spacing, double* out_value) {
+  return guarded([&] {
+    require(out_value, "out_value");
+    const double v = lattice_field(to_kernel(kernel), radius, spacing);
+    *out_value = v;
+  });
+}
+
+}  // extern "C"

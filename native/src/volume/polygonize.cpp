@@ -1,0 +1,818 @@
+#include "particlemesh/volume/polygonize.h"
+
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <numbers>
+#include <string>
+
+#include <tbb/parallel_sort.h>
+
+#include "core/parallel.h"
+#include "core/progress_tracker.h"
+#include "particlemesh/core/error.h"
+#include "volume/field_impl.h"
+#include "volume/mc_table.h"
+
+namespace particlemesh {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+std::string num(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+std::string bytes_text(double b) {
+  char buf[64];
+  if (b >= double(1ull << 30)) std::snprintf(buf, sizeof buf, "%.2f GiB", b / double(1ull << 30));
+  else if (b >= double(1ull << 20)) std::snprintf(buf, sizeof buf, "%.1f MiB", b / double(1ull << 20));
+  else std::snprintf(buf, sizeof buf, "%.0f bytes", b);
+  return buf;
+}
+
+// ---- the sparse block grid -----------------------------------------------------------------
+//
+// Nodes sit at origin + h (i, j, k). A block holds the 8 x 8 x 8 nodes [8b, 8b + 8) on each
+// axis; block coordinates are packed 21 bits per axis (z highest), so key order is z, y, x.
+constexpr int kB = 8;
+constexpr int kBN = kB * kB * kB;        // nodes per block
+constexpr int kL = kB + 1;               // the local gather spans one more node per axis
+constexpr int kLN = kL * kL * kL;
+constexpr int kMaskWords = 3 * kBN / 64; // one bit per (node, axis) edge owned by a block
+constexpr int64_t kMaxBlocksPerAxis = (int64_t(1) << 21) - 2;
+constexpr uint32_t kNone = 0xffffffffu;
+// Vertices stay at least this fraction of an edge away from its nodes (no two coincide).
+constexpr double kEdgeClamp = 1e-3;
+
+uint64_t pack(int64_t bx, int64_t by, int64_t bz) {
+  return (uint64_t(bz) << 42) | (uint64_t(by) << 21) | uint64_t(bx);
+}
+void unpack(uint64_t k, int64_t* b) {
+  b[0] = int64_t(k & 0x1fffff);
+  b[1] = int64_t((k >> 21) & 0x1fffff);
+  b[2] = int64_t(k >> 42);
+}
+
+// Sorted keys -> index, by open addressing.
+class BlockMap {
+ public:
+  explicit BlockMap(const std::vector<uint64_t>& sorted_keys) : keys_(sorted_keys) {
+    uint64_t size = 16;
+    while (size < 2 * uint64_t(keys_.size())) size <<= 1;
+    table_.assign(size, kNone);
+    mask_ = size - 1;
+    for (uint32_t i = 0; i < keys_.size(); ++i) {
+      uint64_t h = mix(keys_[i]) & mask_;
+      while (table_[h] != kNone) h = (h + 1) & mask_;
+      table_[h] = i;
+    }
+  }
+  uint32_t find(uint64_t key) const {
+    uint64_t h = mix(key) & mask_;
+    while (true) {
+      const uint32_t i = table_[h];
+      if (i == kNone || keys_[i] == key) return i;
+      h = (h + 1) & mask_;
+    }
+  }
+  size_t bytes() const { return table_.size() * sizeof(uint32_t); }
+
+ private:
+  static uint64_t mix(uint64_t h) {
+    h ^= h >> 30;
+    h *= 0xBF58476D1CE4E5B9ull;
+    h ^= h >> 27;
+    h *= 0x94D049BB133111EBull;
+    h ^= h >> 31;
+    return h;
+  }
+  const std::vector<uint64_t>& keys_;
+  std::vector<uint32_t> table_;
+  uint64_t mask_ = 0;
+};
+
+// What the mesher keeps per block of the marching set.
+struct MeshBlock {
+  uint32_t sampled = kNone;   // index of the block's samples, kNone = all zero
+  uint32_t up[7];             // marching-set index of block b + d, d = 1..7 (bit 0 x, 1 y, 2 z)
+  uint32_t vertex_offset = 0; // first vertex of the block: its edge crossings, then its
+  uint32_t edge_vertices = 0; // cells' inside vertices (see McTable::center_count)
+  uint32_t center_vertices = 0;
+  uint64_t triangle_offset = 0;  // first triangle of the block's cells
+  uint32_t triangle_count = 0;
+  bool mixed = false;         // some inside and some outside node among its 9^3
+  uint64_t mask[kMaskWords];  // edges with a crossing: bit 3 * (x + 8 (y + 8 z)) + axis
+  uint16_t prefix[kMaskWords];// crossings before each mask word
+};
+
+struct Grid {
+  Vec3 origin;
+  double h = 0;
+  std::vector<uint64_t> sampled_keys;  // blocks some support reaches, sorted
+  std::vector<float> values;           // kBN per sampled block, node x + 8 (y + 8 z)
+  std::vector<uint64_t> mesh_keys;     // sampled blocks and their lower neighbours, sorted
+  std::vector<MeshBlock> mesh;
+};
+
+// The 9^3 samples of block b's nodes [8b, 8b + 8] from the up to 8 blocks holding them.
+void gather(const Grid& g, const MeshBlock& mb, float* local) {
+  for (int d = 0; d < 8; ++d) {
+    const uint32_t mi = d == 0 ? kNone : mb.up[d - 1];
+    const uint32_t si = d == 0 ? mb.sampled : (mi == kNone ? kNone : g.mesh[mi].sampled);
+    const int dx = d & 1, dy = (d >> 1) & 1, dz = (d >> 2) & 1;
+    const int x0 = dx ? kB : 0, x1 = dx ? kB + 1 : kB;
+    const int y0 = dy ? kB : 0, y1 = dy ? kB + 1 : kB;
+    const int z0 = dz ? kB : 0, z1 = dz ? kB + 1 : kB;
+    const float* src = si == kNone ? nullptr : g.values.data() + size_t(si) * kBN;
+    for (int z = z0; z < z1; ++z)
+      for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x)
+          local[x + kL * (y + kL * z)] =
+              src ? src[(x - x0) + kB * ((y - y0) + kB * (z - z0))] : 0.0f;
+  }
+}
+
+inline uint32_t rank_of(const MeshBlock& mb, int bit) {
+  const int w = bit >> 6, b = bit & 63;
+  return mb.prefix[w] + uint32_t(std::popcount(mb.mask[w] & ((uint64_t(1) << b) - 1)));
+}
+
+// floor / ceil for |v| < 2^31 without a library call (baseline x86-64 has no rounding
+// instruction, and these run several times per particle and block).
+inline int ifloor(double v) {
+  const int i = int(v);
+  return i - (double(i) > v);
+}
+inline int iceil(double v) {
+  const int i = int(v);
+  return i + (double(i) < v);
+}
+
+// g(s) with s clamped to the support, in float: t = max(0, 1 - s), so s >= 1 gives exactly
+// 0 with no branch (the polynomial kernels are written in t).
+template <Kernel K>
+inline float kernel_clamped(float s) {
+  const float t = std::max(0.0f, 1.0f - s);
+  if constexpr (K == Kernel::Wyvill) return t * t * (5.0f + 4.0f * t) * (1.0f / 9.0f);
+  else if constexpr (K == Kernel::Poly4) return t * t;
+  else if constexpr (K == Kernel::Poly6) return t * t * t;
+  else return float(kernel_value(Kernel::Blinn, double(s)));
+}
+
+// row[x] += w g(dx2[x] + syz) for the 8 nodes of a row, as two 4-float vectors (GCC/Clang
+// vector extensions: portable, one SSE2 / NEON operation each). Written this way because the
+// plain loop keeps a branch for the clamp and stays scalar, and 8-wide vectors get their
+// comparisons split lane by lane on hardware with 4-wide registers.
+typedef float Float4 __attribute__((vector_size(4 * sizeof(float))));
+typedef int32_t Int4 __attribute__((vector_size(4 * sizeof(int32_t))));
+
+// `a` and `b` carry the strength: w g = t^2 (a + b t) with a = 5w/9, b = 4w/9 for Wyvill,
+// a = w, b = 0 for Poly4, a = 0, b = w for Poly6.
+template <Kernel K>
+inline void add_row(float* row, const float* dx2, float syz, float a, float b) {
+  for (int half = 0; half < 2; ++half) {
+    Float4 d, r;
+    std::memcpy(&d, dx2 + 4 * half, sizeof d);
+    std::memcpy(&r, row + 4 * half, sizeof r);
+    Float4 t = 1.0f - (d + syz);
+    t = (Float4)((Int4)t & (t > 0.0f));  // max(t, 0): outside the support exactly 0
+    if constexpr (K == Kernel::Wyvill) r += t * t * (a + b * t);
+    else if constexpr (K == Kernel::Poly4) r += a * (t * t);
+    else r += b * (t * t * t);
+    std::memcpy(row + 4 * half, &r, sizeof r);
+  }
+}
+
+// Sum every particle's contribution into the samples of one block, in grid order.
+// The samples are float (as stored), and each row of 8 nodes is summed whole, branch-free
+// (nodes outside the support get exactly 0): fixed-length float loops that the compiler
+// vectorises with baseline SSE2, several times faster than finding each row's exact ends.
+// The order of the sums is fixed (particles in grid order), so the samples do not depend on
+// the thread count.
+template <Kernel K>
+void sample_block(const ParticleField& field, const Grid& g, uint64_t key, float* out) {
+  int64_t b[3];
+  unpack(key, b);
+  const double h = g.h, inv_h = 1.0 / h;
+  const NeighborGrid& grid = field.grid();
+  const auto& P = grid.sorted_points();
+  const auto& inv_r2s = field.sorted_inverse_squared_radii();
+  const auto& ws = field.sorted_strengths();
+  const bool uniform = field.uniform_radius();
+  const double inv_r2_common = 1.0 / (field.params().radius * field.params().radius);
+  const double rmax = field.max_radius();
+  const int64_t n0[3] = {b[0] * kB, b[1] * kB, b[2] * kB};
+  const double ox = g.origin.x + double(n0[0]) * h, oy = g.origin.y + double(n0[1]) * h,
+               oz = g.origin.z + double(n0[2]) * h;
+  const Vec3 lo{ox - rmax, oy - rmax, oz - rmax};
+  const Vec3 hi{ox + double(kB - 1) * h + rmax, oy + double(kB - 1) * h + rmax, oz + double(kB - 1) * h + rmax};
+  std::fill(out, out + kBN, 0.0f);
+  const NeighborGrid::CellCoord clo = grid.coord_of(lo), chi = grid.coord_of(hi);
+  // Uniform radius: the support in node units is the same for every particle.
+  double c2 = h * h * inv_r2_common;  // (node units)^2 -> s
+  double rn = std::sqrt(1.0 / c2);    // radius in node units
+  alignas(32) float dx2[kB];
+  for (int32_t cx = clo[0]; cx <= chi[0]; ++cx)
+    for (int32_t cy = clo[1]; cy <= chi[1]; ++cy)
+      for (int32_t cz = clo[2]; cz <= chi[2]; ++cz) {
+        const uint32_t c = grid.find_cell({cx, cy, cz});
+        if (c == NeighborGrid::kNoCell) continue;
+        for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) {
+          const float w = ws.empty() ? 1.0f : float(ws[s]);
+          if (w == 0.0f) continue;
+          const float wa = K == Kernel::Wyvill ? w * (5.0f / 9.0f) : (K == Kernel::Poly4 ? w : 0.0f);
+          const float wb = K == Kernel::Wyvill ? w * (4.0f / 9.0f) : (K == Kernel::Poly6 ? w : 0.0f);
+          if (!uniform) {
+            c2 = h * h * inv_r2s[s];
+            rn = std::sqrt(1.0 / c2);
+          }
+          // Particle position in node units, relative to the block's first node. (The cells
+          // scanned are within a few radii of the block, so these are small numbers.)
+          const double ux = (P[s].x - ox) * inv_h, uy = (P[s].y - oy) * inv_h, uz = (P[s].z - oz) * inv_h;
+          if (ux + rn < 0 || ux - rn > kB - 1 || uy + rn < 0 || uy - rn > kB - 1 || uz + rn < 0 ||
+              uz - rn > kB - 1)
+            continue;  // the support misses the block's nodes (most scanned particles)
+          const int x0 = std::max(iceil(ux - rn), 0), x1 = std::min(ifloor(ux + rn), kB - 1);
+          const int y0 = std::max(iceil(uy - rn), 0), y1 = std::min(ifloor(uy + rn), kB - 1);
+          const int z0 = std::max(iceil(uz - rn), 0), z1 = std::min(ifloor(uz + rn), kB - 1);
+          if (x0 > x1 || y0 > y1 || z0 > z1) continue;
+          for (int x = 0; x < kB; ++x) {
+            const double d = double(x) - ux;
+            dx2[x] = float(d * d * c2);
+          }
+          for (int z = z0; z <= z1; ++z) {
+            const double dz = double(z) - uz;
+            const double sz = dz * dz * c2;
+            if (!(sz < 1.0)) continue;
+            // The rows of this slice that meet the support (one square root per slice instead
+            // of a hard-to-predict test per row; a row grazing the edge just adds zeros).
+            const double half = std::sqrt((1.0 - sz) / c2);
+            const int ya = std::max(y0, iceil(uy - half)), yb = std::min(y1, ifloor(uy + half));
+            for (int y = ya; y <= yb; ++y) {
+              const double dy = double(y) - uy;
+              const float syz = float(sz + dy * dy * c2);
+              float* row = out + kB * (y + kB * z);
+              if constexpr (K == Kernel::Blinn) {
+                for (int x = 0; x < kB; ++x) row[x] += w * kernel_clamped<K>(dx2[x] + syz);
+              } else {
+                add_row<K>(row, dx2, syz, wa, wb);
+              }
+            }
+          }
+        }
+      }
+}
+
+// Does some particle's support reach a node of block `key`? (A cheap superset test: the
+// support's bounding box against the block's node box.)
+bool block_reached(const ParticleField& field, const Grid& g, uint64_t key) {
+  int64_t b[3];
+  unpack(key, b);
+  const double h = g.h;
+  const NeighborGrid& grid = field.grid();
+  const auto& P = grid.sorted_points();
+  const auto& inv_r2s = field.sorted_inverse_squared_radii();
+  const bool uniform = field.uniform_radius();
+  const double r_common = field.params().radius;
+  const double rmax = field.max_radius();
+  double lo[3], hi[3];
+  const double o[3] = {g.origin.x, g.origin.y, g.origin.z};
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = o[a] + double(b[a] * kB) * h;
+    hi[a] = lo[a] + double(kB - 1) * h;
+  }
+  const NeighborGrid::CellCoord clo = grid.coord_of({lo[0] - rmax, lo[1] - rmax, lo[2] - rmax});
+  const NeighborGrid::CellCoord chi = grid.coord_of({hi[0] + rmax, hi[1] + rmax, hi[2] + rmax});
+  for (int32_t cx = clo[0]; cx <= chi[0]; ++cx)
+    for (int32_t cy = clo[1]; cy <= chi[1]; ++cy)
+      for (int32_t cz = clo[2]; cz <= chi[2]; ++cz) {
+        const uint32_t c = grid.find_cell({cx, cy, cz});
+        if (c == NeighborGrid::kNoCell) continue;
+        for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) {
+          const double r = uniform ? r_common : 1.0 / std::sqrt(inv_r2s[s]);
+          double d2 = 0;
+          const double p[3] = {P[s].x, P[s].y, P[s].z};
+          for (int a = 0; a < 3; ++a) {
+            const double d = p[a] < lo[a] ? lo[a] - p[a] : (p[a] > hi[a] ? p[a] - hi[a] : 0.0);
+            d2 += d * d;
+          }
+          if (d2 < r * r) return true;
+        }
+      }
+  return false;
+}
+
+// Place the crossing on the edge from node position a (sample fa) to a + h e_axis (sample
+// fb): linear interpolation of the samples, then safeguarded Newton on the true field.
+struct Crossing {
+  Vec3 position, normal;
+  int evaluations = 0;
+};
+
+Crossing refine_crossing(const ParticleField& field, const Vec3& a, int axis, double h, double fa, double fb,
+                         double T) {
+  Crossing out;
+  double lo = 0, hi = 1;
+  const double phi_lo = fa - T;  // sign at t = 0
+  double t = std::clamp((T - fa) / (fb - fa), kEdgeClamp, 1.0 - kEdgeClamp);
+  Vec3 grad{};
+  auto at = [&](double tt) {
+    Vec3 x = a;
+    (axis == 0 ? x.x : axis == 1 ? x.y : x.z) += tt * h;
+    return x;
+  };
+  for (int it = 0; it < 8; ++it) {
+    const double phi = field.value_and_gradient(at(t), &grad) - T;
+    ++out.evaluations;
+    if (phi == 0) break;
+    if ((phi < 0) == (phi_lo < 0)) lo = t; else hi = t;
+    const double dphi = grad[axis] * h;
+    double next = dphi != 0 ? t - phi / dphi : 0.5 * (lo + hi);
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    const double step = std::abs(next - t);
+    t = next;
+    // Newton converges quadratically (error ~ (g''/2g') step^2, with g''/g' of order h/R):
+    // after a step below 1e-2 of the edge the root is within ~1e-5 h, so that last step is
+    // taken without another evaluation (the normal comes from the gradient that close by).
+    if (step < 1e-2) break;
+  }
+  t = std::clamp(t, kEdgeClamp, 1.0 - kEdgeClamp);
+  out.position = at(t);
+  const double gn = norm(grad);
+  if (gn > 0 && std::isfinite(gn)) {
+    out.normal = grad * (-1.0 / gn);
+  } else {
+    // No gradient (a flat spot): fall back to the edge direction, from inside to outside.
+    Vec3 e{};
+    (axis == 0 ? e.x : axis == 1 ? e.y : e.z) = fa >= T ? 1.0 : -1.0;
+    out.normal = e;
+  }
+  return out;
+}
+
+// Case (bit c set: corner c inside) and decision bits of the cell whose lower corner is
+// local node (x, y, z); its eight samples go to cv.
+inline int cell_case(const float* local, int x, int y, int z, double T, const detail::McTable& table,
+                     float cv[8], unsigned* decisions) {
+  int cs = 0;
+  for (int c = 0; c < 8; ++c) {
+    cv[c] = local[(x + (c & 1)) + kL * ((y + ((c >> 1) & 1)) + kL * (z + ((c >> 2) & 1)))];
+    if (double(cv[c]) >= T) cs |= 1 << c;
+  }
+  *decisions = 0;
+  if (cs == 0 || cs == 255) return cs;
+  const uint8_t amb = table.ambiguous_faces(cs);
+  int j = 0;
+  for (int f = 0; amb && f < 6; ++f) {
+    if (!((amb >> f) & 1)) continue;
+    const auto& q = detail::mc_face_corners(f);
+    const bool first_in = (cs >> q[0]) & 1;
+    const double va = cv[first_in ? q[0] : q[1]], vc = cv[first_in ? q[2] : q[3]];
+    const double vb = cv[first_in ? q[1] : q[0]], vd = cv[first_in ? q[3] : q[2]];
+    // Asymptotic decider: the bilinear interpolant's saddle value
+    // (va vc - vb vd) / ((va + vc) - (vb + vd)) >= T joins the inside corners. Products of
+    // floats are exact in double and the sums commute, so both cells sharing this face
+    // compute the same bit.
+    if (va * vc - vb * vd >= T * ((va + vc) - (vb + vd))) *decisions |= 1u << j;
+    ++j;
+  }
+  return cs;
+}
+
+// A vertex inside a cell for a loop fanned around it: the mean of the loop's linearly
+// interpolated crossings, moved onto the surface along the gradient (kept in the cell).
+Crossing center_vertex(const ParticleField& field, const Vec3& cell_lo, double h, const float cv[8],
+                       const uint8_t* loop, int len, double T) {
+  Crossing out;
+  Vec3 x{};
+  for (int k = 0; k < len; ++k) {
+    const int e = loop[k];
+    const int lc = detail::mc_edge_lower_corner(e), axis = detail::mc_edge_axis(e);
+    const double f0 = cv[lc], f1 = cv[lc + (1 << axis)];
+    const double t = std::clamp((T - f0) / (f1 - f0), 0.0, 1.0);
+    Vec3 p{double(lc & 1), double((lc >> 1) & 1), double((lc >> 2) & 1)};
+    (axis == 0 ? p.x : axis == 1 ? p.y : p.z) += t;
+    x += p;
+  }
+  x = cell_lo + x * (h / len);
+  Vec3 grad{};
+  for (int it = 0; it < 6; ++it) {
+    const double phi = field.value_and_gradient(x, &grad) - T;
+    ++out.evaluations;
+    const double g2 = squared_norm(grad);
+    if (!(g2 > 0) || phi == 0) break;
+    Vec3 next = x - grad * (phi / g2);
+    next = {std::clamp(next.x, cell_lo.x, cell_lo.x + h), std::clamp(next.y, cell_lo.y, cell_lo.y + h),
+            std::clamp(next.z, cell_lo.z, cell_lo.z + h)};
+    const double step = distance(next, x);
+    x = next;
+    if (step < 1e-7 * h) break;
+  }
+  out.position = x;
+  const double gn = norm(grad);
+  out.normal = gn > 0 && std::isfinite(gn) ? grad * (-1.0 / gn) : Vec3{0, 0, 1};
+  return out;
+}
+
+PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOptions& options,
+                                  detail::ProgressTracker& tracker, double begin, PolygonizeStats st,
+                                  Clock::time_point t_start) {
+  const double T = field.threshold();
+  const double R = field.params().radius;
+  const double rmax = field.max_radius();
+  st.particles = field.size();
+  st.kernel = field.kernel();
+  st.radius = R;
+  st.max_radius = rmax;
+  st.threshold = T;
+  st.spacing = field.spacing();
+  st.radius_defaulted = field.radius_defaulted();
+  st.threshold_defaulted = field.threshold_defaulted();
+  if (!(options.cell_size >= 0) || !std::isfinite(options.cell_size))
+    throw Error(Status::InvalidArgument,
+                "cell_size is " + num(options.cell_size) + " (must be a finite length > 0, or 0 for the default)");
+  const double h = options.cell_size > 0 ? options.cell_size : kDefaultCellFraction * R;
+  st.cell_size = h;
+  st.cell_size_defaulted = options.cell_size == 0;
+  const uint64_t budget = options.max_grid_bytes;
+
+  // A lower bound before anything else: one particle's support alone.
+  {
+    const double per_particle = 4.0 / 3.0 * std::numbers::pi * std::pow(rmax / h, 3.0) * sizeof(float);
+    if (budget != 0 && per_particle > double(budget))
+      throw Error(Status::LimitExceeded,
+                  "cell size " + num(h) + " is too small for radius " + num(rmax) + ": one particle's support alone spans " +
+                      num(per_particle / sizeof(float)) + " grid nodes (" + bytes_text(per_particle) +
+                      "), more than the grid memory budget of " + bytes_text(double(budget)) +
+                      " (max_grid_bytes; use a larger cell size or raise the budget)");
+  }
+  Grid g;
+  g.h = h;
+  // One block plus one cell of margin below the supports, so that every block that can hold
+  // a crossing, and its lower neighbours, have non-negative coordinates.
+  g.origin = field.support_min() - Vec3{1, 1, 1} * (double(kB + 1) * h);
+  {
+    double box_nodes = 1;
+    for (int a = 0; a < 3; ++a) {
+      const double extent = (field.support_max()[a] - field.support_min()[a]) / h;
+      if (!(extent < double(kMaxBlocksPerAxis - 4) * kB))
+        throw Error(Status::LimitExceeded,
+                    "the particles' supports span " + num(extent) + " cells of size " + num(h) + " along " +
+                        std::string(1, "xyz"[a]) + " (at most " + std::to_string((kMaxBlocksPerAxis - 4) * kB) +
+                        "): use a larger cell size or remove far outliers");
+      box_nodes *= std::floor(extent) + 1;
+    }
+    st.bounding_box_nodes = box_nodes < 1.8e19 ? uint64_t(box_nodes) : std::numeric_limits<uint64_t>::max();
+  }
+
+  const NeighborGrid& pgrid = field.grid();
+  const auto& P = pgrid.sorted_points();
+  const size_t ncells = pgrid.cell_count();
+
+  // ---- 1. candidate blocks: the blocks each particle-grid cell's supports reach ------------
+  tracker.stage("finding blocks", begin, begin + 0.05 * (1 - begin), ncells);
+  auto cell_block_range = [&](uint32_t c, int64_t* blo, int64_t* bhi) {
+    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+    for (uint32_t s = pgrid.cell_begin(c); s < pgrid.cell_end(c); ++s) {
+      const double r = field.uniform_radius() ? R : 1.0 / std::sqrt(field.sorted_inverse_squared_radii()[s]);
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::min(lo[a], P[s][a] - r);
+        hi[a] = std::max(hi[a], P[s][a] + r);
+      }
+    }
+    for (int a = 0; a < 3; ++a) {
+      const double o = g.origin[a];
+      blo[a] = int64_t(std::floor((lo[a] - o) / h)) / kB;
+      bhi[a] = int64_t(std::floor((hi[a] - o) / h)) / kB;
+    }
+  };
+  std::vector<uint64_t> counts(ncells + 1, 0);
+  detail::parallel_blocks(ncells, 256, [&](size_t cb, size_t ce) {
+    for (size_t c = cb; c < ce; ++c) {
+      int64_t blo[3], bhi[3];
+      cell_block_range(uint32_t(c), blo, bhi);
+      counts[c + 1] = uint64_t(bhi[0] - blo[0] + 1) * uint64_t(bhi[1] - blo[1] + 1) * uint64_t(bhi[2] - blo[2] + 1);
+    }
+  });
+  for (size_t c = 0; c < ncells; ++c) counts[c + 1] += counts[c];
+  const uint64_t candidate_keys = counts[ncells];
+  if (budget != 0 && double(candidate_keys) * sizeof(uint64_t) > double(budget))
+    throw Error(Status::LimitExceeded,
+                "the block search alone would need " + bytes_text(double(candidate_keys) * sizeof(uint64_t)) +
+                    ", more than the grid memory budget of " + bytes_text(double(budget)) +
+                    " (max_grid_bytes; use a larger cell size or raise the budget)");
+  std::vector<uint64_t> cand(candidate_keys);
+  detail::parallel_blocks(ncells, 256, [&](size_t cb, size_t ce) {
+    for (size_t c = cb; c < ce; ++c) {
+      int64_t blo[3], bhi[3];
+      cell_block_range(uint32_t(c), blo, bhi);
+      uint64_t k = counts[c];
+      for (int64_t z = blo[2]; z <= bhi[2]; ++z)
+        for (int64_t y = blo[1]; y <= bhi[1]; ++y)
+          for (int64_t x = blo[0]; x <= bhi[0]; ++x) cand[k++] = pack(x, y, z);
+    }
+    tracker.tick(ce - cb);
+  });
+  tracker.check();
+  tbb::parallel_sort(cand.begin(), cand.end());
+  cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+  st.candidate_blocks = cand.size();
+
+  // ---- 2. the blocks some support really reaches ----------------------------------------------
+  tracker.stage("finding blocks", begin + 0.05 * (1 - begin), begin + 0.1 * (1 - begin), cand.size());
+  {
+    std::vector<uint8_t> reached(cand.size(), 0);
+    detail::parallel_blocks(cand.size(), 64, [&](size_t cb, size_t ce) {
+      if (tracker.cancelled()) return;
+      for (size_t i = cb; i < ce; ++i) reached[i] = block_reached(field, g, cand[i]);
+      tracker.tick(ce - cb);
+    });
+    tracker.check();
+    for (size_t i = 0; i < cand.size(); ++i)
+      if (reached[i]) g.sampled_keys.push_back(cand[i]);
+  }
+  std::vector<uint64_t>().swap(cand);
+  {
+    std::vector<uint64_t> keys;
+    keys.reserve(g.sampled_keys.size() * 8);
+    for (uint64_t k : g.sampled_keys) {
+      int64_t b[3];
+      unpack(k, b);
+      for (int d = 0; d < 8; ++d) keys.push_back(pack(b[0] - (d & 1), b[1] - ((d >> 1) & 1), b[2] - ((d >> 2) & 1)));
+    }
+    tbb::parallel_sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    g.mesh_keys = std::move(keys);
+  }
+  st.sampled_blocks = g.sampled_keys.size();
+  st.sampled_nodes = uint64_t(st.sampled_blocks) * kBN;
+  const double grid_bytes = double(g.sampled_keys.size()) * (kBN * sizeof(float) + sizeof(uint64_t)) +
+                            double(g.mesh_keys.size()) * (sizeof(MeshBlock) + sizeof(uint64_t) + 2 * sizeof(uint32_t));
+  if (budget != 0 && grid_bytes > double(budget))
+    throw Error(Status::LimitExceeded,
+                "the sampled grid would need " + bytes_text(grid_bytes) + " (" + std::to_string(st.sampled_blocks) +
+                    " blocks of 8^3 nodes of size " + num(h) + "), more than the grid memory budget of " +
+                    bytes_text(double(budget)) + " (max_grid_bytes; use a larger cell size or raise the budget)");
+  st.grid_bytes = uint64_t(grid_bytes);
+  if (g.mesh_keys.size() >= kNone || st.sampled_blocks >= kNone)
+    throw Error(Status::LimitExceeded, "more than 4294967294 blocks");
+  st.seconds_setup += seconds_since(t_start);
+
+  // ---- 3. sampling ---------------------------------------------------------------------------
+  auto t0 = Clock::now();
+  const size_t ns = g.sampled_keys.size();
+  tracker.stage("sampling the field", begin + 0.1 * (1 - begin), begin + 0.6 * (1 - begin), ns);
+  g.values.resize(ns * kBN);
+  detail::dispatch_kernel(field.kernel(), [&]<Kernel K>() {
+    detail::parallel_blocks(ns, 4, [&](size_t bb, size_t be) {
+      if (tracker.cancelled()) return;
+      for (size_t i = bb; i < be; ++i) sample_block<K>(field, g, g.sampled_keys[i], g.values.data() + i * kBN);
+      tracker.tick(be - bb);
+    });
+  });
+  tracker.check();
+  st.seconds_sampling = seconds_since(t0);
+
+  // ---- 4. classification: crossings per block -----------------------------------------------
+  t0 = Clock::now();
+  const size_t nm = g.mesh_keys.size();
+  tracker.stage("classifying", begin + 0.6 * (1 - begin), begin + 0.7 * (1 - begin), nm);
+  g.mesh.resize(nm);
+  const detail::McTable& table = detail::McTable::get();
+  {
+    const BlockMap mesh_map(g.mesh_keys);
+    const BlockMap sampled_map(g.sampled_keys);
+    detail::parallel_blocks(nm, 256, [&](size_t bb, size_t be) {
+      for (size_t i = bb; i < be; ++i) {
+        MeshBlock& mb = g.mesh[i];
+        int64_t b[3];
+        unpack(g.mesh_keys[i], b);
+        mb.sampled = sampled_map.find(g.mesh_keys[i]);
+        for (int d = 1; d < 8; ++d)
+          mb.up[d - 1] = mesh_map.find(pack(b[0] + (d & 1), b[1] + ((d >> 1) & 1), b[2] + ((d >> 2) & 1)));
+      }
+    });
+    detail::parallel_blocks(nm, 16, [&](size_t bb, size_t be) {
+      if (tracker.cancelled()) return;
+      std::unique_ptr<float[]> local(new float[kLN]);
+      for (size_t i = bb; i < be; ++i) {
+        MeshBlock& mb = g.mesh[i];
+        gather(g, mb, local.get());
+        bool any_in = false, any_out = false;
+        for (int k = 0; k < kLN; ++k) {
+          if (double(local[k]) >= T) any_in = true; else any_out = true;
+        }
+        mb.mixed = any_in && any_out;
+        std::memset(mb.mask, 0, sizeof mb.mask);
+        if (mb.mixed) {
+          for (int z = 0; z < kB; ++z)
+            for (int y = 0; y < kB; ++y)
+              for (int x = 0; x < kB; ++x) {
+                const int l = x + kL * (y + kL * z);
+                const bool in = double(local[l]) >= T;
+                const int li = x + kB * (y + kB * z);
+                const int steps[3] = {1, kL, kL * kL};
+                for (int a = 0; a < 3; ++a) {
+                  if ((double(local[l + steps[a]]) >= T) != in) {
+                    const int bit = 3 * li + a;
+                    mb.mask[bit >> 6] |= uint64_t(1) << (bit & 63);
+                  }
+                }
+              }
+        }
+        uint32_t count = 0;
+        for (int w = 0; w < kMaskWords; ++w) {
+          mb.prefix[w] = uint16_t(count);
+          count += uint32_t(std::popcount(mb.mask[w]));
+        }
+        mb.edge_vertices = count;
+        uint32_t centers = 0, triangles = 0;
+        if (mb.mixed) {
+          float cv[8];
+          unsigned d;
+          for (int z = 0; z < kB; ++z)
+            for (int y = 0; y < kB; ++y)
+              for (int x = 0; x < kB; ++x) {
+                const int cs = cell_case(local.get(), x, y, z, T, table, cv, &d);
+                if (cs == 0 || cs == 255) continue;
+                centers += uint32_t(table.center_count(cs, d));
+                triangles += uint32_t(table.triangle_count(cs, d));
+              }
+        }
+        mb.center_vertices = centers;
+        mb.triangle_count = triangles;
+      }
+      tracker.tick(be - bb);
+    });
+    tracker.check();
+  }
+  uint64_t total_vertices = 0, total_triangles = 0;
+  for (MeshBlock& mb : g.mesh) {
+    mb.vertex_offset = uint32_t(total_vertices);
+    mb.triangle_offset = total_triangles;
+    total_vertices += uint64_t(mb.edge_vertices) + mb.center_vertices;
+    total_triangles += mb.triangle_count;
+    if (mb.mixed) ++st.surface_blocks;
+    if (total_vertices >= uint64_t(kNone))
+      throw Error(Status::LimitExceeded, "the mesh would have more than 4294967294 vertices (use a larger cell size)");
+  }
+
+  // ---- 5. vertices (refined on the true field) and triangles --------------------------------
+  tracker.stage("meshing", begin + 0.7 * (1 - begin), begin + 1.0 * (1 - begin), nm);
+  PolygonizeResult result;
+  TriMesh& mesh = result.mesh;
+  mesh.positions.resize(total_vertices);
+  mesh.normals.resize(total_vertices);
+  mesh.triangles.resize(total_triangles);
+  std::vector<uint64_t> block_evals(nm, 0);
+  std::atomic<bool> broken{false};
+  detail::parallel_blocks(nm, 4, [&](size_t bb, size_t be) {
+    if (tracker.cancelled()) return;
+    std::unique_ptr<float[]> local(new float[kLN]);
+    for (size_t i = bb; i < be; ++i) {
+      const MeshBlock& mb = g.mesh[i];
+      if (!mb.mixed) continue;
+      int64_t b[3];
+      unpack(g.mesh_keys[i], b);
+      gather(g, mb, local.get());
+      const double base[3] = {g.origin.x + double(b[0] * kB) * h, g.origin.y + double(b[1] * kB) * h,
+                              g.origin.z + double(b[2] * kB) * h};
+      // Vertices of the block's own crossing edges, in bit order.
+      uint32_t v = mb.vertex_offset;
+      uint64_t evals = 0;
+      for (int w = 0; w < kMaskWords; ++w) {
+        uint64_t bits = mb.mask[w];
+        while (bits) {
+          const int bit = 64 * w + std::countr_zero(bits);
+          bits &= bits - 1;
+          const int li = bit / 3, a = bit % 3;
+          const int x = li % kB, y = (li / kB) % kB, z = li / (kB * kB);
+          const int l = x + kL * (y + kL * z);
+          const int step = a == 0 ? 1 : (a == 1 ? kL : kL * kL);
+          const Vec3 pa{base[0] + x * h, base[1] + y * h, base[2] + z * h};
+          const Crossing c = refine_crossing(field, pa, a, h, local[l], local[l + step], T);
+          evals += uint64_t(c.evaluations);
+          mesh.positions[v] = c.position;
+          mesh.normals[v] = c.normal;
+          ++v;
+        }
+      }
+      // Triangles of the block's own cells (and the cells' inside vertices, in cell order).
+      Triangle* tris = mesh.triangles.data() + mb.triangle_offset;
+      Triangle* const tris_end = tris + mb.triangle_count;
+      uint32_t next_center = mb.vertex_offset + mb.edge_vertices;
+      for (int z = 0; z < kB; ++z)
+        for (int y = 0; y < kB; ++y)
+          for (int x = 0; x < kB; ++x) {
+            float cv[8];
+            unsigned decisions;
+            const int cs = cell_case(local.get(), x, y, z, T, table, cv, &decisions);
+            if (cs == 0 || cs == 255) continue;
+            uint32_t center_id[4] = {0, 0, 0, 0};
+            const int nc = table.center_count(cs, decisions);
+            if (nc > 0) {
+              const uint8_t* cl = table.center_loops_begin(cs, decisions);
+              const Vec3 cell_lo{base[0] + x * h, base[1] + y * h, base[2] + z * h};
+              for (int k = 0; k < nc && k < 4; ++k) {
+                const int len = *cl++;
+                const Crossing c = center_vertex(field, cell_lo, h, cv, cl, len, T);
+                cl += len;
+                evals += uint64_t(c.evaluations);
+                mesh.positions[next_center] = c.position;
+                mesh.normals[next_center] = c.normal;
+                center_id[k] = next_center++;
+              }
+            }
+            const uint8_t* e = table.triangles_begin(cs, decisions);
+            const uint8_t* ee = table.triangles_end(cs, decisions);
+            for (; e != ee; e += 3) {
+              Triangle t;
+              for (int k = 0; k < 3; ++k) {
+                const int edge = e[k];
+                if (edge >= detail::kCenterBase) {
+                  t[k] = center_id[(edge - detail::kCenterBase) & 3];
+                  continue;
+                }
+                const int lc = detail::mc_edge_lower_corner(edge);
+                const int axis = detail::mc_edge_axis(edge);
+                const int nx = x + (lc & 1), ny = y + ((lc >> 1) & 1), nz = z + ((lc >> 2) & 1);
+                const int d = (nx >> 3) | ((ny >> 3) << 1) | ((nz >> 3) << 2);
+                const uint32_t owner = d == 0 ? uint32_t(i) : mb.up[d - 1];
+                if (owner == kNone) {
+                  broken = true;
+                  t[k] = 0;
+                  continue;
+                }
+                const MeshBlock& ob = g.mesh[owner];
+                const int bit = 3 * ((nx & 7) + kB * ((ny & 7) + kB * (nz & 7))) + axis;
+                if (!((ob.mask[bit >> 6] >> (bit & 63)) & 1)) broken = true;
+                t[k] = ob.vertex_offset + rank_of(ob, bit);
+              }
+              if (tris == tris_end) {
+                broken = true;  // cannot happen: both passes classify the cells alike
+                continue;
+              }
+              *tris++ = t;
+            }
+          }
+      block_evals[i] = evals;
+      if (tris != tris_end) broken = true;
+    }
+    tracker.tick(be - bb);
+  });
+  tracker.check();
+  if (broken)
+    throw Error(Status::Internal, "polygonize: inconsistent cells (an edge without a crossing, or a changed triangle count)");
+
+  for (size_t i = 0; i < nm; ++i) st.field_evaluations += block_evals[i];
+  st.vertices = mesh.positions.size();
+  st.triangles = mesh.triangles.size();
+  st.seconds_meshing = seconds_since(t0);
+  result.stats = st;
+  return result;
+}
+
+}  // namespace
+
+PolygonizeResult polygonize(const ParticleField& field, const PolygonizeOptions& options) {
+  detail::ProgressTracker tracker(options.progress);
+  const auto t0 = Clock::now();
+  if (field.size() == 0) throw Error(Status::InvalidInput, "the field has no particles");
+  PolygonizeResult r = detail::with_threads(options.threads, [&] {
+    return polygonize_field(field, options, tracker, 0.0, PolygonizeStats{}, t0);
+  });
+  tracker.finish();
+  return r;
+}
+
+PolygonizeResult polygonize(const PointCloud& cloud, const PolygonizeOptions& options) {
+  detail::ProgressTracker tracker(options.progress);
+  const auto t0 = Clock::now();
+  PolygonizeResult r = detail::with_threads(options.threads, [&] {
+    FieldParams params;
+    params.kernel = options.kernel;
+    params.radius = options.radius;
+    params.threshold = options.threshold;
+    params.radii = options.radii;
+    params.strengths = options.strengths;
+    tracker.stage("estimating spacing", 0.0, 0.1);
+    const ParticleField field =
+        detail::FieldBuilder::build(cloud.positions.data(), cloud.positions.size(), params, tracker, 0.0, 0.1);
+    return polygonize_field(field, options, tracker, 0.1, PolygonizeStats{}, t0);
+  });
+  tracker.finish();
+  return r;
+}
+
+}  // namespace particlemesh

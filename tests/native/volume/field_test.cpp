@@ -1,0 +1,211 @@
+// The particle field: F and its gradient against a brute-force sum, the local search, the
+// defaults (radius from the spacing, threshold from the lattice field) and bad input.
+#include "particlemesh/volume/field.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <random>
+
+#include "particlemesh/core/error.h"
+#include "particlemesh/sample/shapes.h"
+#include "particlemesh/surface/spacing.h"
+#include "support/test_support.h"
+
+using namespace particlemesh;
+
+namespace {
+
+double brute_value(const std::vector<Vec3>& P, const std::vector<double>& R, const std::vector<double>& W, Kernel k,
+                   const Vec3& x, Vec3* grad) {
+  double v = 0;
+  Vec3 g{};
+  for (size_t i = 0; i < P.size(); ++i) {
+    const double s = squared_distance(x, P[i]) / (R[i] * R[i]);
+    v += W[i] * kernel_value(k, s);
+    g += (x - P[i]) * (2 * W[i] * kernel_derivative(k, s) / (R[i] * R[i]));
+  }
+  if (grad) *grad = g;
+  return v;
+}
+
+Error error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e;
+  }
+  return Error(Status::Ok, "no error");
+}
+
+}  // namespace
+
+TEST(ParticleField, ValueAndGradientMatchBruteForce) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(0, 1), r(0.05, 0.3), w(-0.5, 2.0);
+  const PointCloud c = test::random_cloud(400, 3);
+  std::vector<double> radii, strengths;
+  for (size_t i = 0; i < c.size(); ++i) {
+    radii.push_back(r(rng));
+    strengths.push_back(w(rng));
+  }
+  for (Kernel k : {Kernel::Wyvill, Kernel::Poly4, Kernel::Poly6, Kernel::Blinn}) {
+    FieldParams p;
+    p.kernel = k;
+    p.threshold = 0.5;
+    p.radii = radii;
+    p.strengths = strengths;
+    const ParticleField f(c, p);
+    EXPECT_EQ(f.size(), c.size());
+    EXPECT_DOUBLE_EQ(f.max_radius(), *std::max_element(radii.begin(), radii.end()));
+    for (int q = 0; q < 300; ++q) {
+      const Vec3 x{u(rng) * 1.2 - 0.1, u(rng) * 1.2 - 0.1, u(rng) * 1.2 - 0.1};
+      Vec3 gb, gf;
+      const double vb = brute_value(c.positions, radii, strengths, k, x, &gb);
+      const double vf = f.value_and_gradient(x, &gf);
+      ASSERT_NEAR(vf, vb, 1e-12) << kernel_name(k);
+      ASSERT_NEAR(f.value(x), vb, 1e-12);
+      ASSERT_NEAR(norm(gf - gb), 0.0, 1e-9);
+      ASSERT_NEAR(norm(f.gradient(x) - gb), 0.0, 1e-9);
+      ASSERT_EQ(f.inside(x), vb >= 0.5);
+    }
+  }
+}
+
+TEST(ParticleField, GradientMatchesFiniteDifferences) {
+  const PointCloud c = test::random_cloud(200, 5);
+  const ParticleField f(c, FieldParams{Kernel::Poly6, 0.2, 1.0, {}, {}});
+  std::mt19937_64 rng(2);
+  std::uniform_real_distribution<double> u(0.1, 0.9);
+  for (int q = 0; q < 100; ++q) {
+    const Vec3 x{u(rng), u(rng), u(rng)};
+    const double d = 1e-6;
+    const Vec3 fd{(f.value(x + Vec3{d, 0, 0}) - f.value(x - Vec3{d, 0, 0})) / (2 * d),
+                  (f.value(x + Vec3{0, d, 0}) - f.value(x - Vec3{0, d, 0})) / (2 * d),
+                  (f.value(x + Vec3{0, 0, d}) - f.value(x - Vec3{0, 0, d})) / (2 * d)};
+    EXPECT_NEAR(norm(f.gradient(x) - fd), 0.0, 1e-5 * std::max(1.0, norm(fd)));
+  }
+}
+
+TEST(ParticleField, ContributorsAreExactlyTheParticlesWhoseSupportHoldsX) {
+  const PointCloud c = test::random_cloud(1000, 9);
+  std::vector<double> radii(c.size());
+  for (size_t i = 0; i < c.size(); ++i) radii[i] = 0.03 + 0.1 * double(i % 7) / 7;
+  FieldParams p;
+  p.radii = radii;
+  p.threshold = 1;
+  const ParticleField f(c, p);
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (int q = 0; q < 200; ++q) {
+    const Vec3 x{u(rng), u(rng), u(rng)};
+    std::vector<size_t> got, want;
+    f.for_each_contributor(x, [&](size_t i, double s) {
+      got.push_back(i);
+      EXPECT_NEAR(s, squared_distance(x, f.position(i)) / (radii[i] * radii[i]), 1e-12);
+      EXPECT_LT(s, 1.0);
+    });
+    for (size_t i = 0; i < c.size(); ++i)
+      if (squared_distance(x, c.positions[i]) < radii[i] * radii[i]) want.push_back(i);
+    std::sort(got.begin(), got.end());
+    ASSERT_EQ(got, want);
+  }
+}
+
+TEST(ParticleField, LatticeFieldCountsTheLatticeSupport) {
+  // R <= spacing: only the particle itself.
+  EXPECT_DOUBLE_EQ(lattice_field(Kernel::Poly4, 1.0, 1.0), 1.0);
+  EXPECT_DOUBLE_EQ(lattice_field(Kernel::Poly4, 0.5, 1.0), 1.0);
+  // R slightly above the spacing: itself plus the 6 face neighbours at s = (1/1.2)^2.
+  const double s1 = 1 / (1.2 * 1.2);
+  EXPECT_NEAR(lattice_field(Kernel::Wyvill, 1.2, 1.0), 1 + 6 * kernel_value(Kernel::Wyvill, s1), 1e-14);
+  // Scale invariance and the continuum limit (R / spacing > 64 switches to the integral).
+  EXPECT_DOUBLE_EQ(lattice_field(Kernel::Poly6, 2.0, 1.0), lattice_field(Kernel::Poly6, 0.02, 0.01));
+  for (Kernel k : {Kernel::Wyvill, Kernel::Poly4, Kernel::Poly6, Kernel::Blinn}) {
+    const double a = lattice_field(k, 63.9, 1.0), b = lattice_field(k, 64.1, 1.0);
+    EXPECT_NEAR(b / a, std::pow(64.1 / 63.9, 3), 2e-3) << kernel_name(k);
+  }
+  EXPECT_THROW(lattice_field(Kernel::Wyvill, 0, 1), Error);
+  EXPECT_THROW(lattice_field(Kernel::Wyvill, 1, -1), Error);
+  EXPECT_THROW(lattice_field(Kernel::Wyvill, std::nan(""), 1), Error);
+}
+
+TEST(ParticleField, DefaultsComeFromTheSpacing) {
+  const PointCloud c = square_lattice(20, 20, 0.1);
+  const double spacing = estimate_spacing(c.positions.data(), c.size()).spacing;
+  const ParticleField f(c, FieldParams{Kernel::Poly6, 0, 0, {}, {}});
+  EXPECT_TRUE(f.radius_defaulted());
+  EXPECT_TRUE(f.threshold_defaulted());
+  EXPECT_DOUBLE_EQ(f.spacing(), spacing);
+  EXPECT_DOUBLE_EQ(f.params().radius, kDefaultRadiusFactor * spacing);
+  EXPECT_DOUBLE_EQ(f.threshold(), kDefaultThresholdFraction * lattice_field(Kernel::Poly6, 2 * spacing, spacing));
+  // Given values are kept and no spacing is estimated.
+  const ParticleField g(c, FieldParams{Kernel::Poly6, 0.3, 0.7, {}, {}});
+  EXPECT_FALSE(g.radius_defaulted());
+  EXPECT_FALSE(g.threshold_defaulted());
+  EXPECT_EQ(g.spacing(), 0.0);
+  EXPECT_EQ(g.params().radius, 0.3);
+  EXPECT_EQ(g.threshold(), 0.7);
+  // Per-particle radii: the reference radius is their median; strengths scale the default T,
+  // which is a constant per kernel (no spacing estimate when no radius is defaulted).
+  FieldParams p;
+  p.radii.assign(c.size(), 0.25);
+  p.radii[0] = 5;
+  p.strengths.assign(c.size(), 2.0);
+  const ParticleField h(c, p);
+  EXPECT_EQ(h.params().radius, 0.25);
+  EXPECT_EQ(h.max_radius(), 5.0);
+  EXPECT_DOUBLE_EQ(h.threshold(), 0.5 * 2.0 * lattice_field(Kernel::Wyvill, 2, 1));
+  EXPECT_EQ(h.spacing(), 0.0);
+  EXPECT_TRUE(h.threshold_defaulted());
+  // The stated constants.
+  EXPECT_NEAR(0.5 * lattice_field(Kernel::Wyvill, 2, 1), 3.3333, 1e-4);
+  EXPECT_NEAR(0.5 * lattice_field(Kernel::Poly4, 2, 1), 3.9375, 1e-4);
+  EXPECT_NEAR(0.5 * lattice_field(Kernel::Poly6, 2, 1), 2.5781, 1e-4);
+  EXPECT_NEAR(0.5 * lattice_field(Kernel::Blinn, 2, 1), 1.2334, 1e-4);
+  // Positions come back in input order.
+  for (size_t i = 0; i < c.size(); ++i) ASSERT_EQ(h.position(i), c.positions[i]);
+}
+
+TEST(ParticleField, BadInputGivesClearErrors) {
+  const PointCloud c = test::random_cloud(10, 1);
+  auto build = [&](FieldParams p, PointCloud cloud) { return [p, cloud] { ParticleField f(cloud, p); }; };
+  PointCloud nan = c;
+  nan.positions[3].y = std::nan("");
+  Error e = error_of(build(FieldParams{Kernel::Wyvill, 1, 1, {}, {}}, nan));
+  EXPECT_EQ(e.status(), Status::InvalidInput);
+  EXPECT_NE(std::string(e.what()).find("positions[3].y is NaN"), std::string::npos) << e.what();
+
+  EXPECT_EQ(error_of(build(FieldParams{Kernel::Wyvill, 1, 1, {}, {}}, PointCloud{})).status(), Status::InvalidInput);
+  for (double r : {-1.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    e = error_of(build(FieldParams{Kernel::Wyvill, r, 1, {}, {}}, c));
+    EXPECT_EQ(e.status(), Status::InvalidArgument);
+    EXPECT_NE(std::string(e.what()).find("radius"), std::string::npos);
+  }
+  for (double t : {-1.0, std::nan("")}) {
+    e = error_of(build(FieldParams{Kernel::Wyvill, 1, t, {}, {}}, c));
+    EXPECT_EQ(e.status(), Status::InvalidArgument);
+    EXPECT_NE(std::string(e.what()).find("threshold"), std::string::npos);
+  }
+  FieldParams p{Kernel::Wyvill, 1, 1, std::vector<double>(10, 0.1), {}};
+  p.radii[7] = 0;
+  e = error_of(build(p, c));
+  EXPECT_EQ(e.status(), Status::InvalidArgument);
+  EXPECT_NE(std::string(e.what()).find("radii[7] is 0"), std::string::npos) << e.what();
+  p.radii.resize(9, 0.1);
+  EXPECT_NE(std::string(error_of(build(p, c)).what()).find("radii has 9 values for 10"), std::string::npos);
+  FieldParams q{Kernel::Wyvill, 1, 1, {}, std::vector<double>(10, 1.0)};
+  q.strengths[2] = std::nan("");
+  EXPECT_NE(std::string(error_of(build(q, c)).what()).find("strengths[2] is NaN"), std::string::npos);
+  EXPECT_EQ(error_of(build(FieldParams{static_cast<Kernel>(9), 1, 1, {}, {}}, c)).status(), Status::InvalidArgument);
+  // A default needs the spacing: one particle cannot give it.
+  PointCloud one;
+  one.positions.push_back({0, 0, 0});
+  e = error_of(build(FieldParams{Kernel::Wyvill, 0, 1, {}, {}}, one));
+  EXPECT_EQ(e.status(), Status::InvalidInput);
+  EXPECT_NE(std::string(e.what()).find("give a radius"), std::string::npos) << e.what();
+  EXPECT_NO_THROW(build(FieldParams{Kernel::Wyvill, 1, 0.5, {}, {}}, one)());
+  EXPECT_NO_THROW(build(FieldParams{Kernel::Wyvill, 1, 0, {}, {}}, one)());  // default T needs no spacing
+}
