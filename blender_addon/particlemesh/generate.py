@@ -111,11 +111,27 @@ def polygonize_radii(particles, settings):
     return 0.0, None
 
 
+def polygonize_threshold(settings, from_sizes):
+    """The iso level T; 0 = the library's default, which assumes R = 2 particle spacings. With
+    radii from the particles' sizes the size says the spacing instead: particles of size
+    (radius) s packed touching are 2 s apart, and T is half the field inside such a packing,
+    0.5 x lattice_field(kernel, factor x s, 2 s), which depends on the kernel and the factor
+    only (at the default factor 2 it is 0.5: an isolated particle becomes a ball of about its
+    size, touching ones merge)."""
+    threshold = float(settings.get("threshold", 0.0))
+    if threshold > 0 or not from_sizes:
+        return threshold
+    factor = float(settings.get("radius_factor", 2.0))
+    kernel = native.KERNELS[settings.get("kernel", "WYVILL")]
+    return 0.5 * native.lattice_field(kernel, factor, 2.0)
+
+
 def polygonize(particles, settings, progress=None):
     radius, radii = polygonize_radii(particles, settings)
+    from_sizes = settings.get("radius_mode") == "PARTICLE_SIZE" and (radius > 0 or radii is not None)
     mesh = native.polygonize(
         particles.positions, radii=radii, kernel=native.KERNELS[settings.get("kernel", "WYVILL")],
-        radius=radius, threshold=float(settings.get("threshold", 0.0)),
+        radius=radius, threshold=polygonize_threshold(settings, from_sizes),
         cell_size=0.0 if settings.get("auto_cell", True) else float(settings["cell_size"]),
         threads=int(settings.get("threads", 0)), attributes=_attributes(particles),
         progress=progress)

@@ -247,6 +247,7 @@ _OPTIONAL = {
                               POINTER(_mesh_p)]),
     "pm_polygonize_ex": (c_int, [_cloud_p, _f64p, _f64p, POINTER(PolygonizeOptions),
                                  POINTER(_mesh_p), POINTER(PolygonizeStats)]),
+    "pm_lattice_field": (c_int, [c_int32, c_double, c_double, POINTER(c_double)]),
     "pm_smooth_options_init": (None, [POINTER(SmoothOptions)]),
     "pm_smooth": (c_int, [_mesh_p, POINTER(SmoothOptions), POINTER(_mesh_p)]),
     # Per-vertex float channels, vertex-major: (handle, name, components, values, vertex count).
@@ -730,6 +731,18 @@ def polygonize(positions, radii=None, strengths=None, kernel=KERNEL_WYVILL, radi
     if lib.has("pm_polygonize_ex"):
         data.stats = {name: getattr(stats, name) for name, _ in PolygonizeStats._fields_[1:]}
     return data
+
+
+def lattice_field(kernel, radius, spacing):
+    """The field deep inside a simple cubic lattice of unit-strength particles
+    (pm_lattice_field): an iso level as a fraction of the rest density is that fraction of
+    lattice_field(kernel, R, rest spacing)."""
+    lib = load()
+    if not lib.has("pm_lattice_field"):
+        raise NotAvailableError("pm_lattice_field")
+    out = c_double(0)
+    _check(lib, lib.pm_lattice_field(int(kernel), float(radius), float(spacing), ctypes.byref(out)))
+    return out.value
 
 
 def smooth(positions, triangles, scheme=SMOOTH_LOOP, levels=1, normals=None, attributes=None,

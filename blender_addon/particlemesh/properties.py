@@ -92,7 +92,8 @@ class PolygonizeProps:
         description="Field radius as a multiple of the particle size (Particle Size)")
     threshold: FloatProperty(
         name="Threshold", default=0.0, min=0.0, soft_max=10.0, update=_settings_changed,
-        description="Iso-value T of the summed field; 0 uses the library's default")
+        description="Iso-value T of the summed field; 0 = auto: half the field inside packed "
+                    "particles (2 spacings per radius, or touching balls of the particle size)")
     auto_cell: BoolProperty(
         name="Auto Cell Size", default=True, update=_settings_changed,
         description="Grid cell size as the library's default fraction of the radius")

@@ -198,6 +198,35 @@ def test_polygonize_radii(pkg):
                                                     "radius_factor": 2}) == (0.5, None)
 
 
+def test_polygonize_threshold_from_particle_sizes(pkg):
+    """Radii from the particles' sizes: the default threshold takes the size as half the rest
+    spacing (touching balls), so an isolated particle becomes a ball of about its size and a
+    sparse sheet of particles still has a surface, where the library's R = 2 spacings default
+    (3.33 for Wyvill) would give none."""
+    if not pkg.native.has_polygonize():
+        pytest.skip("pm_polygonize is not in this library (issue 7)")
+    threshold = pkg.generate.polygonize_threshold
+    sizes = {"radius_mode": "PARTICLE_SIZE", "radius_factor": 2.0, "kernel": "WYVILL"}
+    assert threshold(sizes, True) == pytest.approx(0.5)  # only the particle itself within 2 s
+    assert threshold({**sizes, "radius_factor": 4.0}, True) == pytest.approx(
+        0.5 * pkg.native.lattice_field(pkg.native.KERNEL_WYVILL, 2.0, 1.0))
+    assert threshold({**sizes, "threshold": 1.5}, True) == 1.5     # an explicit level stays
+    assert threshold({"radius_mode": "AUTO"}, False) == 0.0        # the library's default
+    assert threshold({**sizes}, False) == 0.0                       # no sizes: as AUTO
+    one = pkg.generate.Particles(np.zeros((1, 3), np.float32), sizes=np.float32([0.1]))
+    ball = pkg.generate.run("POLYGONIZE", one, sizes)
+    r = np.linalg.norm(ball.positions, axis=1)
+    assert ball.triangle_count > 100 and abs(r.mean() - 0.1) < 0.01 and r.std() < 0.005
+    # A sheet of particles 1.46 sizes apart (a 642-vertex icosphere of radius 1, size 0.1).
+    p = sphere(642)
+    shell = pkg.generate.Particles(p, sizes=np.full(642, 0.1, np.float32))
+    mesh = pkg.generate.run("POLYGONIZE", shell, sizes)
+    assert mesh.triangle_count > 1000
+    assert (np.abs(np.linalg.norm(mesh.positions, axis=1) - 1.0) < 0.2).all()
+    with pytest.raises(pkg.native.ParticlemeshError, match="no surface"):
+        pkg.generate.run("POLYGONIZE", shell, {**sizes, "threshold": 3.33})
+
+
 def test_job_runs_and_cancels(pkg):
     particles = pkg.generate.Particles(sphere(100000))
     job = pkg.jobs.Job(pkg.generate.run, "TRIANGULATE", particles, {})
