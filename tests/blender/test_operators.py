@@ -279,6 +279,25 @@ def test_import_several_files_at_once(pm, data_dir):
     assert sorted(o.name for o in bpy.context.selected_objects) == ["bunny_poisson", "spot_poisson"]
 
 
+def test_point_cloud_mesh_keeps_normals_and_colours(pm):
+    """What import_cloud builds from a cloud: normals as `point_normal`, RGB(A) colours as the
+    `Col` colour attribute, other channels by name. (The library's readers deliver positions
+    and normals only: pm_cloud_read gives no colour channel to carry yet.)"""
+    p = fibonacci_sphere(50)
+    rgb = np.random.default_rng(1).random((50, 3)).astype(np.float32)
+    mesh = pm.blender_mesh.new_point_cloud_mesh("coloured", p, normals=p, colors=rgb,
+                                                attributes={"radius": np.full((50, 1), 0.1, np.float32)})
+    col = mesh.attributes["Col"]
+    assert col.domain == "POINT" and col.data_type == "FLOAT_COLOR"
+    np.testing.assert_allclose(pm.blender_mesh.get_point_attribute(mesh, "Col"),
+                               np.concatenate([rgb, np.ones((50, 1), np.float32)], 1))
+    np.testing.assert_allclose(pm.blender_mesh.get_point_attribute(mesh, "point_normal"), p)
+    np.testing.assert_allclose(pm.blender_mesh.get_point_attribute(mesh, "radius"), 0.1)
+    assert len(mesh.vertices) == 50 and len(mesh.polygons) == 0
+    assert not mesh.validate(verbose=False)
+    bpy.data.meshes.remove(mesh)
+
+
 # ---- smooth and polygonize (C ABI from issues 4 and 7) ----------------------------------------
 
 def icosphere_object():
