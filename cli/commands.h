@@ -19,5 +19,6 @@ void add_inspect(CLI::App& root, std::vector<Command>& commands);
 void add_sample(CLI::App& root, std::vector<Command>& commands);
 void add_smooth(CLI::App& root, std::vector<Command>& commands);
 void add_polygonize(CLI::App& root, std::vector<Command>& commands);
+void add_render(CLI::App& root, std::vector<Command>& commands);
 
 }  // namespace particlemesh::cli

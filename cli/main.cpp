@@ -4,6 +4,7 @@
 //   particlemesh sample SHAPE -o OUT.xyz        evenly sampled demo/test particles
 //   particlemesh smooth MESH -o OUT.ply         Loop / butterfly subdivision
 //   particlemesh polygonize IN -o OUT.ply       volume particles -> implicit surface mesh
+//   particlemesh render IN -o IMAGE.png         volume particles -> ray-cast image of the surface
 #include <cstdio>
 #include <exception>
 
@@ -25,6 +26,7 @@ int main(int argc, char** argv) {
   cli::add_sample(app, commands);
   cli::add_smooth(app, commands);
   cli::add_polygonize(app, commands);
+  cli::add_render(app, commands);
 
   try {
     app.parse(argc, argv);

@@ -3,6 +3,7 @@ find_package(Threads REQUIRED)
 find_package(TBB REQUIRED)
 find_package(OpenMesh REQUIRED)  # targets OpenMeshCore, OpenMeshTools
 find_package(Eigen3 REQUIRED NO_MODULE)
+find_package(PNG REQUIRED)       # libpng16 (Debian's libpng-dev): the renderer's PNG output
 if(PM_BUILD_CLI)
   find_package(CLI11 REQUIRED)
   find_package(nlohmann_json REQUIRED)

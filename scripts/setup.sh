@@ -12,6 +12,7 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config
   libtbb-dev libopenmesh-dev libosd-dev libeigen3-dev
   libcli11-dev nlohmann-json3-dev
+  libpng-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-numpy python3-pytest
   blender

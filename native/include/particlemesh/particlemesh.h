@@ -286,6 +286,84 @@ PM_EXPORT pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii,
  *  T = fraction x pm_lattice_field(kernel, R, rest spacing). */
 PM_EXPORT pm_status pm_lattice_field(int32_t kernel, double radius, double spacing, double* out_value);
 
+/* ---- volume particles: exact ray casting of the iso-surface (issue 8) ----------------- */
+
+/* Every crossing of a ray o + t d with the surface F(x) = T (see particlemesh/volume/raycast.h):
+ * the ray is cut into intervals where a fixed set of particles contributes, and each
+ * interval's polynomial is solved exactly (closed form for PM_KERNEL_POLY4, certified
+ * Bernstein isolation for WYVILL and POLY6; a proven bracketing march for BLINN). A ray that
+ * only touches the surface reports no hit there. Normals are -grad F / |grad F| (outward). */
+
+typedef struct pm_field pm_field;       /**< particles, field parameters and their ray hierarchy */
+typedef struct pm_ray_hits pm_ray_hits; /**< all hits of a batch of rays */
+
+typedef struct pm_field_options {
+  uint32_t struct_size;     /**< sizeof(pm_field_options), set by _init */
+  int32_t kernel;           /**< PM_KERNEL_* (default PM_KERNEL_WYVILL) */
+  double radius;            /**< R in world units; 0 = 2 x the median particle spacing */
+  double threshold;         /**< T > 0; 0 = half the field inside an evenly packed volume */
+  int32_t threads;          /**< 0 = all cores (for the spacing estimate) */
+  pm_progress_fn progress;  /**< may be NULL */
+  void* progress_user_data;
+} pm_field_options;
+
+PM_EXPORT void pm_field_options_init(pm_field_options* options);
+/** Build a field for ray queries. `radii` / `strengths` are NULL or one value per particle,
+ *  as in pm_polygonize. Reuse the field for many batches: building costs O(N log N). */
+PM_EXPORT pm_status pm_field_create(const pm_cloud* cloud, const double* radii, const double* strengths,
+                                    const pm_field_options* options, pm_field** out_field);
+/** The radius (median of the radii when per particle) and threshold in use. Either may be NULL. */
+PM_EXPORT pm_status pm_field_get_params(const pm_field* field, double* out_radius, double* out_threshold);
+/** F at `count` points (count*3 doubles) into out_values (count doubles). */
+PM_EXPORT pm_status pm_field_values(const pm_field* field, const double* points, size_t count, double* out_values);
+PM_EXPORT void pm_field_destroy(pm_field* field);
+
+typedef struct pm_raycast_options {
+  uint32_t struct_size;     /**< sizeof(pm_raycast_options), set by _init */
+  double t_min;             /**< hits with t_min <= t <= t_max only (default 0 and +infinity) */
+  double t_max;
+  int32_t threads;          /**< 0 = all cores; the results do not depend on it */
+  pm_progress_fn progress;  /**< may be NULL */
+  void* progress_user_data;
+} pm_raycast_options;
+
+PM_EXPORT void pm_raycast_options_init(pm_raycast_options* options);
+
+/** First hit of each of `count` rays: origins and directions are count*3 doubles (directions
+ *  non-zero, any length; t is in units of the direction's length). Outputs, each NULL or
+ *  caller memory: out_t (count doubles, +infinity for a miss), out_positions and out_normals
+ *  (count*3 doubles, zero for a miss), out_entering (count values: 1 the ray enters the
+ *  inside, 0 it leaves it or misses), out_hit_count (rays with a hit). */
+PM_EXPORT pm_status pm_raycast_first(const pm_field* field, const double* origins, const double* directions,
+                                     size_t count, const pm_raycast_options* options, double* out_t,
+                                     double* out_positions, double* out_normals, int32_t* out_entering,
+                                     size_t* out_hit_count);
+
+/** All hits of each of `count` rays, into a new pm_ray_hits (query the counts, then copy). */
+PM_EXPORT pm_status pm_raycast_all(const pm_field* field, const double* origins, const double* directions,
+                                   size_t count, const pm_raycast_options* options, pm_ray_hits** out_hits);
+
+/** CSG of two fields along rays: all hits of the surface of A op B. */
+#define PM_CSG_UNION 0        /**< inside A or inside B */
+#define PM_CSG_INTERSECTION 1 /**< inside A and inside B */
+#define PM_CSG_DIFFERENCE 2   /**< inside A and not inside B (normals of B's part flipped) */
+PM_EXPORT pm_status pm_raycast_csg(const pm_field* a, const pm_field* b, int32_t op, const double* origins,
+                                   const double* directions, size_t count, const pm_raycast_options* options,
+                                   pm_ray_hits** out_hits);
+
+/** Number of rays and of hits in all. */
+PM_EXPORT pm_status pm_ray_hits_get_counts(const pm_ray_hits* hits, size_t* out_ray_count, size_t* out_hit_count);
+/** offsets: ray_count + 1 values; the hits of ray i are [offsets[i], offsets[i + 1]).
+ *  capacity counts values (must be >= ray_count + 1). */
+PM_EXPORT pm_status pm_ray_hits_copy_offsets(const pm_ray_hits* hits, uint64_t* out_offsets, size_t capacity);
+/** Per ray: 1 if the ray starts inside (F >= T at t_min), else 0. capacity >= ray_count. */
+PM_EXPORT pm_status pm_ray_hits_copy_starts_inside(const pm_ray_hits* hits, int32_t* out, size_t capacity);
+/** Per hit, in order (each output NULL or caller memory; capacity counts hits, >= hit_count):
+ *  t, position (3 doubles), normal (3 doubles), entering (1) or leaving (0). */
+PM_EXPORT pm_status pm_ray_hits_copy(const pm_ray_hits* hits, double* out_t, double* out_positions,
+                                     double* out_normals, int32_t* out_entering, size_t capacity);
+PM_EXPORT void pm_ray_hits_destroy(pm_ray_hits* hits);
+
 #ifdef __cplusplus
 }
 #endif
