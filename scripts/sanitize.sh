@@ -4,7 +4,7 @@
 #  1. configures build-asan/ with clang, AddressSanitizer + UndefinedBehaviorSanitizer (every
 #     report is fatal) and libFuzzer's coverage instrumentation, and builds the library, the
 #     PCL bridge, the C++ suites (native, hostile, bridge), the C ABI suites and the fuzz
-#     targets. No CLI, no benchmarks, no pytest/CMake-package tests: they only drive the same
+#     targets. No CLI, no benchmarks, no pytest/Blender/CMake-package tests: they only drive the same
 #     library code through a process boundary (an uninstrumented python would need the ASan
 #     runtime preloaded), and the CLI's own code is covered by the Release suites;
 #  2. runs them through CTest (LeakSanitizer checks every test process at exit);
@@ -32,7 +32,8 @@ cmake -S "$ROOT" -B "$BUILD" -G Ninja \
   -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
   -DCMAKE_C_STANDARD_LIBRARIES="-fsanitize-link-c++-runtime -lstdc++" \
   -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
-  -DPM_BUILD_CLI=OFF -DPM_BUILD_BENCH=OFF -DPM_PACKAGE_TESTS=OFF -DPM_BUILD_FUZZERS=ON \
+  -DPM_BUILD_CLI=OFF -DPM_BUILD_BENCH=OFF -DPM_PACKAGE_TESTS=OFF -DPM_PYTHON_TESTS=OFF \
+  -DPM_BUILD_BLENDER_ADDON=OFF -DPM_BUILD_FUZZERS=ON \
   -DPM_WITH_PCL="${PM_WITH_PCL:-ON}" \
   -DPM_SHARED_DATA_DIR="${PM_SHARED_DATA_DIR:-$ROOT/../shared/data}" >/dev/null
 cmake --build "$BUILD" -j "$JOBS"

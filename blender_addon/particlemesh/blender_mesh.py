@@ -1,0 +1,173 @@
+"""Blender meshes from and to numpy arrays, in bulk (foreach_get / foreach_set; no per-vertex
+Python), as io_mesh_ply does."""
+
+import bpy
+import numpy as np
+
+from . import mesh_arrays
+
+# Blender 4.0 made MeshPolygon.loop_total read-only (sizes follow from loop_start);
+# 4.1 removed Mesh.use_auto_smooth (custom normals no longer need it).
+_SET_LOOP_TOTAL = bpy.app.version < (4, 0, 0)
+
+#: The POINT attribute holding particle normals on point-cloud meshes.
+NORMAL_ATTRIBUTE = "point_normal"
+
+_ATTRIBUTE_TYPES = {1: ("FLOAT", "value"), 2: ("FLOAT2", "vector"), 3: ("FLOAT_VECTOR", "vector"),
+                    4: ("FLOAT_COLOR", "color")}
+
+
+def write(mesh, data, *, custom_normals=True, attributes=True):
+    """Replace the geometry of `mesh` with native.MeshData `data`, in place.
+
+    Materials stay (clear_geometry keeps them), faces are smooth shaded, the library's
+    normals become custom split normals (unless they are the angle-weighted face normals
+    Blender computes itself: data.stats["normals_are_face_weighted"]), and per-vertex
+    channels (velocity, colour...) become POINT attributes named as in data.attributes. When
+    the mesh already has exactly these triangles (live mode on a stable topology), only the
+    vertices move."""
+    positions = np.ascontiguousarray(data.positions, dtype=np.float32)
+    triangles = np.ascontiguousarray(data.triangles, dtype=np.int32)
+    nv, nt = len(positions), len(triangles)
+    rebuild = not _same_triangles(mesh, nv, triangles)
+    if not rebuild:
+        mesh.vertices.foreach_set("co", positions.ravel())
+    else:
+        mesh.clear_geometry()
+        mesh.vertices.add(nv)
+        mesh.vertices.foreach_set("co", positions.ravel())
+        if nt:
+            mesh.loops.add(3 * nt)
+            mesh.loops.foreach_set("vertex_index", triangles.ravel())
+            mesh.polygons.add(nt)
+            mesh.polygons.foreach_set("loop_start", mesh_arrays.loop_starts(nt))
+            if _SET_LOOP_TOTAL:
+                mesh.polygons.foreach_set("loop_total", np.full(nt, 3, dtype=np.int32))
+            mesh.polygons.foreach_set("use_smooth", np.ones(nt, dtype=bool))
+    mesh.update(calc_edges=rebuild)
+    if (custom_normals and data.normals is not None and nt
+            and not data.stats.get("normals_are_face_weighted", False)):
+        if hasattr(mesh, "use_auto_smooth"):
+            mesh.use_auto_smooth = True
+            mesh.auto_smooth_angle = np.pi
+        mesh.normals_split_custom_set_from_vertices(np.asarray(data.normals, dtype=np.float64))
+    else:
+        _clear_custom_normals(mesh)
+        if hasattr(mesh, "use_auto_smooth"):
+            mesh.use_auto_smooth = False
+    if attributes:
+        for name, values in data.attributes.items():
+            set_point_attribute(mesh, name, values)
+    return mesh
+
+
+def _same_triangles(mesh, nv, triangles):
+    """Whether the mesh is made of exactly these triangles over nv vertices (cheap check)."""
+    nt = len(triangles)
+    if nt == 0 or len(mesh.vertices) != nv or len(mesh.polygons) != nt or len(mesh.loops) != 3 * nt:
+        return False
+    loops = np.empty(3 * nt, dtype=np.int32)
+    mesh.loops.foreach_get("vertex_index", loops)
+    return np.array_equal(loops, triangles.ravel())
+
+
+def _clear_custom_normals(mesh):
+    """Drop custom split normals without an operator (mesh.customdata_custom_splitnormals_clear
+    needs a context)."""
+    if mesh.has_custom_normals:
+        mesh.normals_split_custom_set_from_vertices(
+            np.zeros((len(mesh.vertices), 3), dtype=np.float64))
+
+
+def set_point_attribute(mesh, name, values):
+    values = np.ascontiguousarray(values, dtype=np.float32).reshape(len(mesh.vertices), -1)
+    kind, field = _ATTRIBUTE_TYPES.get(values.shape[1], (None, None))
+    if kind is None:
+        return None
+    attribute = mesh.attributes.get(name)
+    if attribute is not None and (attribute.data_type != kind or attribute.domain != "POINT"):
+        mesh.attributes.remove(attribute)
+        attribute = None
+    if attribute is None:
+        attribute = mesh.attributes.new(name, kind, "POINT")
+    attribute.data.foreach_set(field, values.ravel())
+    return attribute
+
+
+def get_point_attribute(mesh, name):
+    """(V, C) float32 values of a float POINT attribute, or None."""
+    attribute = mesh.attributes.get(name)
+    if attribute is None or attribute.domain != "POINT":
+        return None
+    for components, (kind, field) in _ATTRIBUTE_TYPES.items():
+        if attribute.data_type == kind:
+            out = np.empty(len(mesh.vertices) * components, dtype=np.float32)
+            attribute.data.foreach_get(field, out)
+            return out.reshape(-1, components)
+    return None
+
+
+def float_point_attributes(mesh, skip=()):
+    """Every float POINT attribute of the mesh (user channels to carry through smoothing)."""
+    out = {}
+    for attribute in mesh.attributes:
+        if attribute.name in skip or attribute.name.startswith(".") or attribute.name == "position":
+            continue
+        values = get_point_attribute(mesh, attribute.name)
+        if values is not None:
+            out[attribute.name] = values
+    return out
+
+
+def positions(mesh):
+    out = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
+    mesh.vertices.foreach_get("co", out)
+    return out.reshape(-1, 3)
+
+
+def triangles(mesh):
+    """The mesh's triangles (F, 3) int32: its own faces when all are triangles, else Blender's
+    tessellation (loop_triangles) of its polygons."""
+    polys = len(mesh.polygons)
+    if polys == 0:
+        return np.zeros((0, 3), dtype=np.int32)
+    sizes = np.empty(polys, dtype=np.int32)
+    mesh.polygons.foreach_get("loop_total", sizes)
+    if np.all(sizes == 3):
+        loops = np.empty(len(mesh.loops), dtype=np.int32)
+        mesh.loops.foreach_get("vertex_index", loops)
+        starts = np.empty(polys, dtype=np.int32)
+        mesh.polygons.foreach_get("loop_start", starts)
+        return loops[starts[:, None] + np.arange(3)]
+    mesh.calc_loop_triangles()
+    out = np.empty(len(mesh.loop_triangles) * 3, dtype=np.int32)
+    mesh.loop_triangles.foreach_get("vertices", out)
+    return out.reshape(-1, 3)
+
+
+def vertex_normals(mesh):
+    out = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
+    if hasattr(mesh, "vertex_normals"):
+        mesh.vertex_normals.foreach_get("vector", out)
+    else:
+        mesh.vertices.foreach_get("normal", out)
+    return out.reshape(-1, 3)
+
+
+def new_point_cloud_mesh(name, positions, normals=None, colors=None, attributes=None):
+    """A vertex-only mesh: particles as vertices, normals as the `point_normal` POINT attribute
+    (Blender reserves `normal`), colours as the `Col` colour attribute (RGBA float)."""
+    mesh = bpy.data.meshes.new(name)
+    mesh.vertices.add(len(positions))
+    mesh.vertices.foreach_set("co", np.ascontiguousarray(positions, dtype=np.float32).ravel())
+    if normals is not None:
+        set_point_attribute(mesh, NORMAL_ATTRIBUTE, normals)
+    if colors is not None:
+        c = np.asarray(colors, dtype=np.float32).reshape(len(positions), -1)
+        if c.shape[1] == 3:
+            c = np.concatenate([c, np.ones((len(c), 1), np.float32)], axis=1)
+        set_point_attribute(mesh, "Col", c)
+    for name_, values in (attributes or {}).items():
+        set_point_attribute(mesh, name_, values)
+    mesh.update()
+    return mesh

@@ -1,0 +1,148 @@
+"""The meshing pipelines behind the operators and live mode: particles (numpy arrays) and a
+flat settings dict in, native.MeshData out. bpy-free, so it runs in a worker thread and in
+tests outside Blender.
+
+Settings keys (the operators' and the generated objects' property names):
+  triangulate: auto_spacing, spacing, max_edge_factor, raw, normal_angle (radians),
+               fill_holes, fill_edge_factor, normal_source, repair, orient
+  polygonize:  kernel, radius_mode, radius, radius_factor, threshold, auto_cell, cell_size
+  both:        smooth ('NONE' | 'LOOP' | 'BUTTERFLY'), smooth_levels, threads
+"""
+
+import math
+
+import numpy as np
+
+from . import mesh_arrays, native
+
+
+class Particles:
+    """What the source gives: positions (N, 3) float32 in world space, optional normals,
+    velocities (N, 3) and sizes (N,), and the particle system's particle size if any."""
+
+    __slots__ = ("positions", "normals", "velocities", "sizes", "particle_size", "label")
+
+    def __init__(self, positions, normals=None, velocities=None, sizes=None, particle_size=0.0,
+                 label=""):
+        self.positions = positions
+        self.normals = normals
+        self.velocities = velocities
+        self.sizes = sizes
+        self.particle_size = particle_size
+        self.label = label
+
+    def digest(self):
+        return mesh_arrays.content_hash(self.positions, self.normals, self.velocities, self.sizes)
+
+
+class EmptyResult(native.ParticlemeshError):
+    """The library succeeded but produced no triangles (a parameter far off the data)."""
+
+    def __init__(self, message):
+        super().__init__(message, native.STATUS_INVALID_ARGUMENT)
+
+
+def _attributes(particles):
+    attrs = {}
+    if particles.velocities is not None:
+        attrs["velocity"] = particles.velocities
+    return attrs
+
+
+def _smooth(mesh, settings, progress):
+    scheme = settings.get("smooth", "NONE")
+    levels = int(settings.get("smooth_levels", 1))
+    if scheme == "NONE" or levels <= 0:
+        return mesh
+    out = native.smooth(mesh.positions, mesh.triangles, scheme=native.SCHEMES[scheme],
+                        levels=levels, normals=mesh.normals, attributes=mesh.attributes,
+                        threads=int(settings.get("threads", 0)), progress=progress)
+    out.stats = dict(mesh.stats, smooth_levels=levels)
+    out.stats.pop("normals_are_face_weighted", None)  # Loop / butterfly normals are their own
+    return out
+
+
+def triangulate(particles, settings, progress=None):
+    spacing = 0.0 if settings.get("auto_spacing", True) else float(settings["spacing"])
+    raw = bool(settings.get("raw", False))
+    mesh = native.triangulate(
+        particles.positions, normals=particles.normals, spacing=spacing,
+        max_edge_factor=float(settings.get("max_edge_factor", 2.0)),
+        threads=int(settings.get("threads", 0)), raw=raw,
+        normal_angle=(math.degrees(settings["normal_angle"]) if "normal_angle" in settings
+                      else None),
+        fill_holes=settings.get("fill_holes"),
+        fill_edge_factor=settings.get("fill_edge_factor"),
+        normal_source=settings.get("normal_source"),
+        repair=bool(settings.get("repair", True)), orient=bool(settings.get("orient", True)),
+        progress=progress)
+    if mesh.triangle_count == 0:
+        raise EmptyResult(
+            f"no triangles: with spacing {mesh.stats['spacing']:.6g} the longest edge is "
+            f"{mesh.stats['max_edge']:.6g}, shorter than the gaps between the "
+            f"{len(particles.positions)} particles (raise the spacing or the edge factor)")
+    if raw:
+        # The seed's triangles are not oriented (canonical a < b < c): wind them to agree
+        # with the particles' normals where there are some.
+        if mesh.normals is not None:
+            mesh.triangles, _ = mesh_arrays.orient_by_normals(mesh.triangles, mesh.normals,
+                                                              mesh.positions)
+    else:
+        # The finished surface's normals are angle-weighted face normals: exactly what
+        # Blender computes itself for smooth shading, so they need not be custom normals.
+        mesh.stats["normals_are_face_weighted"] = True
+    # Output vertex i is particle i: the particles' channels are the mesh's.
+    mesh.attributes.update(_attributes(particles))
+    return _smooth(mesh, settings, progress)
+
+
+def polygonize_radii(particles, settings):
+    """(radius, radii): one radius for all (0 = the library's default from the spacing), or
+    per-particle radii from the particles' sizes."""
+    mode = settings.get("radius_mode", "AUTO")
+    if mode == "FIXED":
+        return float(settings["radius"]), None
+    if mode == "PARTICLE_SIZE":
+        factor = float(settings.get("radius_factor", 2.0))
+        if particles.sizes is not None:
+            return 0.0, particles.sizes.astype(np.float64) * factor
+        if particles.particle_size > 0:
+            return particles.particle_size * factor, None
+    return 0.0, None
+
+
+def polygonize_threshold(settings, from_sizes):
+    """The iso level T; 0 = the library's default, which assumes R = 2 particle spacings. With
+    radii from the particles' sizes the size says the spacing instead: particles of size
+    (radius) s packed touching are 2 s apart, and T is half the field inside such a packing,
+    0.5 x lattice_field(kernel, factor x s, 2 s), which depends on the kernel and the factor
+    only (at the default factor 2 it is 0.5: an isolated particle becomes a ball of about its
+    size, touching ones merge)."""
+    threshold = float(settings.get("threshold", 0.0))
+    if threshold > 0 or not from_sizes:
+        return threshold
+    factor = float(settings.get("radius_factor", 2.0))
+    kernel = native.KERNELS[settings.get("kernel", "WYVILL")]
+    return 0.5 * native.lattice_field(kernel, factor, 2.0)
+
+
+def polygonize(particles, settings, progress=None):
+    radius, radii = polygonize_radii(particles, settings)
+    from_sizes = settings.get("radius_mode") == "PARTICLE_SIZE" and (radius > 0 or radii is not None)
+    mesh = native.polygonize(
+        particles.positions, radii=radii, kernel=native.KERNELS[settings.get("kernel", "WYVILL")],
+        radius=radius, threshold=polygonize_threshold(settings, from_sizes),
+        cell_size=0.0 if settings.get("auto_cell", True) else float(settings["cell_size"]),
+        threads=int(settings.get("threads", 0)), attributes=_attributes(particles),
+        progress=progress)
+    if mesh.triangle_count == 0:
+        raise EmptyResult("no surface: the summed field stays below the threshold everywhere "
+                          "(raise the radius or lower the threshold)")
+    return _smooth(mesh, settings, progress)
+
+
+METHODS = {"TRIANGULATE": triangulate, "POLYGONIZE": polygonize}
+
+
+def run(method, particles, settings, progress=None):
+    return METHODS[method](particles, settings, progress=progress)

@@ -1,0 +1,142 @@
+"""Particles from Blender: an object's evaluated vertices (a point cloud mesh) or one of its
+evaluated particle systems (living particles only), as numpy arrays in world space."""
+
+import bpy
+import numpy as np
+
+from . import blender_mesh, mesh_arrays
+from .generate import Particles
+
+
+class SourceError(Exception):
+    """The source cannot give particles (wrong type, empty, hair...). The message is for the
+    user."""
+
+
+def _alive_state_values(settings):
+    """alive_state values to keep: alive ones, plus unborn / dead ones when the particle
+    settings show them (Blender's own Unborn / Died visibility)."""
+    items = bpy.types.Particle.bl_rna.properties["alive_state"].enum_items
+    keep = {"ALIVE", "DYING"}
+    if getattr(settings, "show_unborn", False):
+        keep.add("UNBORN")
+    if getattr(settings, "use_dead", False):
+        keep.add("DEAD")
+    return [items[name].value for name in keep]
+
+
+def particle_systems(obj):
+    """The object's emitter (non-hair) particle systems."""
+    if obj is None or obj.type != "MESH":
+        return []
+    return [ps for ps in obj.particle_systems if ps.settings.type == "EMITTER"]
+
+
+def resolve_kind(obj, kind):
+    if kind == "AUTO":
+        return "PARTICLES" if particle_systems(obj) else "VERTICES"
+    return kind
+
+
+def check_object(obj):
+    if obj is None:
+        raise SourceError("no active object: select a point cloud mesh or a particle emitter")
+    if obj.type != "MESH":
+        raise SourceError(f"'{obj.name}' is a {obj.type.lower()} object; particlemesh needs a mesh "
+                          "(its vertices) or a particle emitter")
+
+
+def read(obj, depsgraph, kind="AUTO", system_name="", need_sizes=False):
+    """Particles of `obj` as evaluated in `depsgraph` (viewport or render).
+
+    kind: 'VERTICES' (the evaluated mesh's vertices, normals from its faces or from a
+    `point_normal` attribute), 'PARTICLES' (a particle system: `system_name` or the active
+    one), or 'AUTO' (particles if the object has an emitter system, else vertices)."""
+    check_object(obj)
+    kind = resolve_kind(obj, kind)
+    if kind == "PARTICLES":
+        return _read_particles(obj, depsgraph, system_name, need_sizes)
+    return _read_vertices(obj, depsgraph)
+
+
+def _read_vertices(obj, depsgraph):
+    evaluated = obj.evaluated_get(depsgraph)
+    mesh = evaluated.to_mesh()
+    try:
+        if mesh is None or len(mesh.vertices) == 0:
+            raise SourceError(f"'{obj.name}' has no vertices to mesh")
+        local = blender_mesh.positions(mesh)
+        _check_finite(obj, local)
+        normals = blender_mesh.get_point_attribute(mesh, blender_mesh.NORMAL_ATTRIBUTE)
+        if normals is None and len(mesh.polygons):
+            normals = blender_mesh.vertex_normals(mesh)
+        velocities = blender_mesh.get_point_attribute(mesh, "velocity")
+        if velocities is not None and velocities.shape[1] != 3:
+            velocities = None
+    finally:
+        evaluated.to_mesh_clear()
+    matrix = np.array(evaluated.matrix_world, dtype=np.float64)
+    positions = mesh_arrays.transform_points(local, matrix)
+    if normals is not None:
+        normals = mesh_arrays.transform_normals(normals, matrix)
+        if not np.all(np.isfinite(normals)):
+            normals = None  # the library would reject them; the positions are what matter
+    if velocities is not None:
+        velocities = (velocities.astype(np.float64) @ matrix[:3, :3].T).astype(np.float32)
+    return Particles(positions, normals=normals, velocities=velocities, label=obj.name)
+
+
+def _check_finite(obj, positions):
+    try:
+        mesh_arrays.check_finite(positions, "positions")
+    except ValueError as e:
+        raise SourceError(f"'{obj.name}': {e}") from None
+
+
+def find_system(obj, system_name=""):
+    systems = particle_systems(obj)
+    if not systems:
+        if len(obj.particle_systems):
+            raise SourceError(f"'{obj.name}' has only hair particle systems; particlemesh meshes "
+                              "emitter particles")
+        raise SourceError(f"'{obj.name}' has no particle system")
+    if system_name:
+        for ps in systems:
+            if ps.name == system_name:
+                return ps
+        raise SourceError(f"'{obj.name}' has no emitter particle system named '{system_name}'")
+    active = obj.particle_systems.active
+    return active if active in systems else systems[0]
+
+
+def _read_particles(obj, depsgraph, system_name, need_sizes):
+    name = find_system(obj, system_name).name
+    evaluated = obj.evaluated_get(depsgraph)
+    psys = evaluated.particle_systems.get(name)
+    if psys is None:
+        raise SourceError(f"particle system '{name}' of '{obj.name}' is not evaluated "
+                          "(is the object hidden or its modifier disabled?)")
+    particles = psys.particles
+    n = len(particles)
+    states = np.empty(n, dtype=np.int32)
+    particles.foreach_get("alive_state", states)
+    keep = mesh_arrays.alive_mask(states, _alive_state_values(psys.settings))
+    count = int(keep.sum())
+    if count == 0:
+        raise SourceError(f"particle system '{name}' of '{obj.name}' has no living particles at "
+                          f"frame {depsgraph.scene.frame_current}")
+    location = np.empty(n * 3, dtype=np.float32)
+    particles.foreach_get("location", location)
+    velocity = np.empty(n * 3, dtype=np.float32)
+    particles.foreach_get("velocity", velocity)
+    positions = location.reshape(-1, 3)[keep]
+    _check_finite(obj, positions)
+    velocities = velocity.reshape(-1, 3)[keep]
+    sizes = None
+    if need_sizes:
+        size = np.empty(n, dtype=np.float32)
+        particles.foreach_get("size", size)
+        sizes = size[keep]
+    return Particles(positions, velocities=velocities, sizes=sizes,
+                     particle_size=float(psys.settings.particle_size),
+                     label=f"{obj.name}/{name}")

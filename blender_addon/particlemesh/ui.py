@@ -1,0 +1,159 @@
+"""The 3D View sidebar panel (N panel, "Particlemesh" tab)."""
+
+import bpy
+
+from . import live, native
+from .operators import draw_method_settings
+
+
+class _Panel:
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "Particlemesh"
+
+
+class VIEW3D_PT_particlemesh(_Panel, bpy.types.Panel):
+    bl_label = "Particlemesh"
+
+    def draw(self, context):
+        layout = self.layout
+        ok, info = native.available()
+        if not ok:
+            box = layout.box()
+            box.alert = True
+            for line in _wrap(info, 40):
+                box.label(text=line)
+        col = layout.column(align=True)
+        col.enabled = ok
+        col.operator("particlemesh.triangulate", icon="MESH_ICOSPHERE")
+        row = col.row(align=True)
+        row.operator("particlemesh.polygonize", icon="META_BALL")
+        row.active = ok and native.has_polygonize()
+        row = col.row(align=True)
+        row.operator("particlemesh.smooth", icon="MOD_SUBSURF")
+        row.active = ok and native.has_smooth()
+        layout.operator("particlemesh.import_cloud", icon="IMPORT")
+        if ok and not (native.has_polygonize() and native.has_smooth()):
+            layout.label(text="Some tools need a newer particlemesh library", icon="INFO")
+
+
+class VIEW3D_PT_particlemesh_object(_Panel, bpy.types.Panel):
+    bl_label = "Generated Mesh"
+    bl_parent_id = "VIEW3D_PT_particlemesh"
+
+    @classmethod
+    def poll(cls, context):
+        obj = context.active_object
+        return obj is not None and obj.type == "MESH" and obj.particlemesh.is_generated
+
+    def draw(self, context):
+        obj = context.active_object
+        state = obj.particlemesh
+        layout = self.layout
+        layout.use_property_split = True
+        layout.prop(state, "source")
+        layout.label(text=f"{state.method.title()} the {state.source_kind.lower()}"
+                          + (f" '{state.particle_system}'" if state.particle_system else ""))
+        row = layout.row()
+        row.enabled = not state.baked
+        row.prop(state, "live")
+        layout.operator("particlemesh.update", icon="FILE_REFRESH")
+        record = live.last_update.get(obj.name_full)
+        if record:
+            if "error" in record:
+                box = layout.box()
+                box.alert = True
+                for line in _wrap(f"frame {record['frame']}: {record['error']}", 40):
+                    box.label(text=line)
+            else:
+                layout.label(text=f"frame {record['frame']} ({record['mode'].lower()}): "
+                                  f"{1000 * record['seconds']:.0f} ms"
+                                  + (", cached" if record.get("cached") else ""))
+        entries, size = live.cache_info(obj)
+        row = layout.row()
+        row.label(text=f"cache: {entries} frames, {size / 2**20:.1f} MB")
+        row.operator("particlemesh.clear_cache", text="", icon="TRASH")
+
+
+class VIEW3D_PT_particlemesh_viewport(_Panel, bpy.types.Panel):
+    bl_label = "Viewport Settings"
+    bl_parent_id = "VIEW3D_PT_particlemesh_object"
+
+    @classmethod
+    def poll(cls, context):
+        return VIEW3D_PT_particlemesh_object.poll(context)
+
+    def draw(self, context):
+        state = context.active_object.particlemesh
+        self.layout.use_property_split = True
+        draw_method_settings(self.layout, state.viewport, state.method)
+
+
+class VIEW3D_PT_particlemesh_render(_Panel, bpy.types.Panel):
+    bl_label = "Render Settings"
+    bl_parent_id = "VIEW3D_PT_particlemesh_object"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    @classmethod
+    def poll(cls, context):
+        return VIEW3D_PT_particlemesh_object.poll(context)
+
+    def draw_header(self, context):
+        self.layout.prop(context.active_object.particlemesh, "use_render_settings", text="")
+
+    def draw(self, context):
+        state = context.active_object.particlemesh
+        self.layout.use_property_split = True
+        self.layout.active = state.use_render_settings
+        draw_method_settings(self.layout, state.render, state.method)
+
+
+class VIEW3D_PT_particlemesh_bake(_Panel, bpy.types.Panel):
+    bl_label = "Bake"
+    bl_parent_id = "VIEW3D_PT_particlemesh_object"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    @classmethod
+    def poll(cls, context):
+        return VIEW3D_PT_particlemesh_object.poll(context)
+
+    def draw(self, context):
+        state = context.active_object.particlemesh
+        layout = self.layout
+        if state.baked:
+            layout.label(text=f"baked frames {state.bake_start}..{state.bake_end}", icon="CHECKMARK")
+            layout.operator("particlemesh.free_bake", icon="TRASH")
+        else:
+            layout.operator("particlemesh.bake", icon="RENDER_ANIMATION")
+
+
+def _wrap(text, width):
+    words, line, lines = text.split(), "", []
+    for word in words:
+        if line and len(line) + 1 + len(word) > width:
+            lines.append(line)
+            line = word
+        else:
+            line = f"{line} {word}" if line else word
+    if line:
+        lines.append(line)
+    return lines
+
+
+classes = (
+    VIEW3D_PT_particlemesh,
+    VIEW3D_PT_particlemesh_object,
+    VIEW3D_PT_particlemesh_viewport,
+    VIEW3D_PT_particlemesh_render,
+    VIEW3D_PT_particlemesh_bake,
+)
+
+
+def register():
+    for cls in classes:
+        bpy.utils.register_class(cls)
+
+
+def unregister():
+    for cls in reversed(classes):
+        bpy.utils.unregister_class(cls)

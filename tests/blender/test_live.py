@@ -1,0 +1,330 @@
+"""Live mode (a persistent frame handler regenerates the mesh from the evaluated particles,
+with a per-frame cache, render settings while rendering) and baking (one mesh per frame,
+swapped in as the frame changes; PLY sequence)."""
+import os
+
+import bpy
+import numpy as np
+import pytest
+
+from conftest import emitter, living_particles, make_active, mesh_arrays, undo
+
+
+def live_object(pm, **kwargs):
+    assert bpy.ops.particlemesh.triangulate(live=True, **kwargs) == {"FINISHED"}
+    obj = bpy.context.active_object
+    assert obj.particlemesh.live
+    assert bpy.context.scene.render.use_lock_interface  # safe renders from the UI
+    return obj
+
+
+def test_live_mesh_follows_the_particles(pm, clean_scene):
+    em = emitter(speed=1.0)
+    obj = live_object(pm)
+    assert pm.live.on_frame_change_post in bpy.app.handlers.frame_change_post
+    radii = []
+    for frame in (1, 5, 10, 20):
+        clean_scene.frame_set(frame)
+        record = pm.live.last_update[obj.name]
+        assert record["frame"] == frame and record["mode"] == "VIEWPORT"
+        assert "error" not in record, record
+        positions, velocities = living_particles(em)
+        co, tris = mesh_arrays(obj.data)
+        np.testing.assert_allclose(co, positions, atol=1e-5)  # vertex i is particle i, now
+        np.testing.assert_allclose(pm.blender_mesh.get_point_attribute(obj.data, "velocity"),
+                                   velocities, atol=1e-5)
+        assert 2 * 642 * 0.95 <= len(tris) <= 2 * 642 * 1.35
+        assert not obj.data.validate(verbose=False)
+        radii.append(float(np.linalg.norm(co, axis=1).mean()))
+    assert radii == sorted(radii) and radii[-1] > radii[0] + 0.5  # the sphere expands
+    # The same frame again comes from the cache.
+    clean_scene.frame_set(10)
+    assert pm.live.last_update[obj.name]["cached"] is True
+    entries, size = pm.live.cache_info(obj)
+    assert entries >= 4 and size > 0
+
+
+def test_live_off_leaves_the_mesh_alone(pm, clean_scene):
+    emitter()
+    assert bpy.ops.particlemesh.triangulate() == {"FINISHED"}
+    obj = bpy.context.active_object
+    before, _ = mesh_arrays(obj.data)
+    clean_scene.frame_set(8)
+    after, _ = mesh_arrays(obj.data)
+    np.testing.assert_array_equal(before, after)
+    # Switching it on regenerates at once.
+    obj.particlemesh.live = True
+    now, _ = mesh_arrays(obj.data)
+    assert np.linalg.norm(now, axis=1).mean() > np.linalg.norm(before, axis=1).mean() + 0.2
+
+
+def test_settings_change_regenerates(pm, clean_scene):
+    emitter()
+    obj = live_object(pm)
+    faces = len(obj.data.polygons)
+    obj.particlemesh.viewport.max_edge_factor = 1.05  # tighter than the icosphere's edges
+    assert len(obj.data.polygons) < faces
+    assert pm.live.last_update[obj.name]["cached"] is False
+
+
+def test_a_live_error_is_recorded_not_raised(pm, clean_scene):
+    em = emitter(frame_start=1, frame_end=1, lifetime=5)  # all particles die at frame 6
+    obj = live_object(pm)
+    clean_scene.frame_set(10)
+    record = pm.live.last_update[obj.name]
+    assert "no living particles" in record["error"]
+    clean_scene.frame_set(3)  # and it recovers
+    assert "error" not in pm.live.last_update[obj.name]
+    assert em.name in bpy.data.objects
+
+
+def render_animation(scene, tmp_path, frames):
+    render_animation_settings(scene, tmp_path, frames)
+    assert bpy.ops.render.render(animation=True) == {"FINISHED"}
+
+
+def render_animation_settings(scene, tmp_path, frames):
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = 1
+    scene.cycles.use_denoising = False
+    scene.render.resolution_x = scene.render.resolution_y = 16
+    scene.render.resolution_percentage = 100
+    scene.frame_start, scene.frame_end = frames
+    scene.render.filepath = str(tmp_path / "frame_")
+    if scene.camera is None:
+        cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
+        scene.collection.objects.link(cam)
+        cam.location = (0, -8, 0)
+        cam.rotation_euler = (1.5708, 0, 0)
+        scene.camera = cam
+
+
+def test_render_uses_the_render_settings(pm, clean_scene, tmp_path):
+    emitter()
+    obj = live_object(pm)
+    state = obj.particlemesh
+    state.use_render_settings = True
+    state.render.raw = True  # the seed's raw triangles: more than the viewport's surface
+    viewport_triangles = len(obj.data.polygons)
+    assert viewport_triangles == 2 * 642 - 4
+    pm.live.history.clear()
+    render_animation(clean_scene, tmp_path, (2, 3))
+    renders = [r for name, r in pm.live.history if name == obj.name and r["mode"] == "RENDER"]
+    assert [r["frame"] for r in renders] == [2, 3], list(pm.live.history)
+    assert all("error" not in r for r in renders)
+    assert all(r["vertices"] == 642 and r["triangles"] > viewport_triangles for r in renders)
+    assert (tmp_path / "frame_0002.png").is_file() and (tmp_path / "frame_0003.png").is_file()
+    # Back in the viewport: the viewport settings again.
+    clean_scene.frame_set(5)
+    record = pm.live.last_update[obj.name]
+    assert record["mode"] == "VIEWPORT" and record["triangles"] == viewport_triangles
+
+
+def test_bake_five_frames_and_step_through(pm, clean_scene, tmp_path):
+    em = emitter(speed=1.0)
+    obj = live_object(pm)
+    material = bpy.data.materials.new("Baked")
+    obj.data.materials.append(material)
+    unbaked = obj.data
+    folder = tmp_path / "seq"
+    assert bpy.ops.particlemesh.bake(frame_start=1, frame_end=5, write_ply=True,
+                                     directory=str(folder)) == {"FINISHED"}
+    state = obj.particlemesh
+    assert state.baked and (state.bake_start, state.bake_end) == (1, 5)
+    assert sorted(item.frame for item in state.bake_frames) == [1, 2, 3, 4, 5]
+    meshes = {item.frame: item.mesh for item in state.bake_frames}
+    assert len(set(m.name for m in meshes.values())) == 5
+    files = sorted(os.listdir(folder))
+    assert files == [f"{obj.name}_{f:05d}.ply" for f in range(1, 6)]
+    for frame in (1, 2, 3, 4, 5, 3, 1):
+        clean_scene.frame_set(frame)
+        assert obj.data == meshes[frame], frame
+        assert list(obj.data.materials) == [material]
+        positions, _ = living_particles(em)
+        co, tris = mesh_arrays(obj.data)
+        np.testing.assert_allclose(co, positions, atol=1e-5)
+        on_disk = pm.native.read_mesh(folder / f"{obj.name}_{frame:05d}.ply")
+        assert on_disk.triangle_count == len(tris)
+        np.testing.assert_allclose(on_disk.positions, co, atol=1e-6)
+    clean_scene.frame_set(9)  # past the range: the last baked frame stays
+    assert obj.data == meshes[5]
+    # Free the bake: the live mesh comes back, the baked meshes go.
+    names = [m.name for m in meshes.values()]
+    assert bpy.ops.particlemesh.free_bake() == {"FINISHED"}
+    assert obj.data == unbaked and not state.baked
+    assert not any(name in bpy.data.meshes for name in names)
+
+
+def test_baked_frames_render(pm, clean_scene, tmp_path):
+    emitter(speed=1.0)
+    obj = live_object(pm)
+    assert bpy.ops.particlemesh.bake(frame_start=1, frame_end=3) == {"FINISHED"}
+    meshes = {item.frame: item.mesh.name for item in obj.particlemesh.bake_frames}
+    seen = []
+
+    def watch(scene, depsgraph=None):
+        seen.append((scene.frame_current, obj.data.name))
+
+    bpy.app.handlers.render_post.append(watch)
+    try:
+        render_animation(clean_scene, tmp_path, (2, 3))
+    finally:
+        bpy.app.handlers.render_post.remove(watch)
+    assert seen == [(2, meshes[2]), (3, meshes[3])]
+
+
+def test_bake_undo(pm, clean_scene):
+    emitter()
+    obj = live_object(pm)
+    name = obj.name
+    bpy.ops.ed.undo_push(message="before bake")
+    assert bpy.ops.particlemesh.bake("INVOKE_DEFAULT", True, frame_start=1, frame_end=3) == {"FINISHED"}
+    assert obj.particlemesh.baked and len(obj.particlemesh.bake_frames) == 3
+    undo()
+    obj = bpy.data.objects[name]
+    assert not obj.particlemesh.baked and len(obj.particlemesh.bake_frames) == 0
+
+
+def test_update_now_and_clear_cache(pm, clean_scene):
+    em = emitter(speed=1.0)
+    assert bpy.ops.particlemesh.triangulate() == {"FINISHED"}  # live off
+    obj = bpy.context.active_object
+    clean_scene.frame_set(12)
+    before, _ = mesh_arrays(obj.data)
+    assert bpy.ops.particlemesh.update() == {"FINISHED"}
+    after, _ = mesh_arrays(obj.data)
+    positions, _ = living_particles(em)
+    np.testing.assert_allclose(after, positions, atol=1e-5)
+    assert not np.allclose(before, after)
+    assert pm.live.cache_info(obj)[0] == 1
+    assert bpy.ops.particlemesh.clear_cache() == {"FINISHED"}
+    assert pm.live.cache_info(obj) == (0, 0)
+
+
+def test_source_deleted(pm, clean_scene):
+    em = emitter()
+    obj = live_object(pm)
+    bpy.data.objects.remove(em)
+    clean_scene.frame_set(3)
+    assert "lost its source" in pm.live.last_update[obj.name]["error"]
+    make_active(obj)
+    with pytest.raises(RuntimeError, match="lost its source"):
+        bpy.ops.particlemesh.update()
+
+
+def test_command_line_animation_render(pm, clean_scene, tmp_path):
+    """`blender -b file.blend -a` in a separate process: the saved live object regenerates at
+    every rendered frame, with the render settings."""
+    import json
+    import os
+    import subprocess
+
+    emitter(speed=1.0)
+    obj = live_object(pm)
+    obj.particlemesh.use_render_settings = True
+    obj.particlemesh.render.raw = True
+    render_animation_settings(clean_scene, tmp_path, (2, 4))
+    blend = tmp_path / "live.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    log = tmp_path / "frames.jsonl"
+    expr = (
+        "import bpy, json\n"
+        "def post(scene, depsgraph=None):\n"
+        f"    o = bpy.data.objects[{obj.name!r}]\n"
+        f"    with open({str(log)!r}, 'a') as f:\n"
+        "        f.write(json.dumps([scene.frame_current, len(o.data.vertices), len(o.data.polygons),"
+        " sum(v.co.length for v in o.data.vertices[:50]) / 50]) + '\\n')\n"
+        "bpy.app.handlers.render_post.append(post)\n")
+    env = dict(os.environ)
+    proc = subprocess.run(
+        [bpy.app.binary_path, "--background", "--factory-startup", "-noaudio", str(blend),
+         "--addons", "particlemesh", "--python-expr", expr, "--render-anim"],
+        env=env, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    rows = [json.loads(line) for line in log.read_text().splitlines()]
+    assert [r[0] for r in rows] == [2, 3, 4], proc.stdout[-2000:]
+    assert all(r[1] == 642 for r in rows)
+    viewport_faces = len(obj.data.polygons)
+    assert all(r[2] > viewport_faces for r in rows)  # the render settings' raw triangles
+    radii = [r[3] for r in rows]
+    assert radii == sorted(radii) and radii[-1] > radii[0]  # regenerated at every frame
+    for frame in (2, 3, 4):
+        assert (tmp_path / f"frame_{frame:04d}.png").is_file()
+
+
+class _Layout:
+    """Records what a panel draws; checks every property and operator it names exists."""
+
+    def __init__(self, log):
+        self.log = log
+        self.use_property_split = False
+        self.active = self.enabled = self.alert = True
+
+    def _child(self, *args, **kwargs):
+        return _Layout(self.log)
+
+    column = row = box = split = _child
+
+    def prop(self, data, name, **kwargs):
+        assert name in data.bl_rna.properties, f"{type(data).__name__} has no property {name}"
+        self.log.append(("prop", name))
+
+    def operator(self, idname, **kwargs):
+        module, name = idname.split(".")
+        assert hasattr(getattr(bpy.ops, module), name), idname
+        self.log.append(("operator", idname))
+
+    def label(self, text="", **kwargs):
+        self.log.append(("label", text))
+
+
+class _PanelSelf:
+    def __init__(self, log):
+        self.layout = _Layout(log)
+
+
+def draw_panels(pm, context):
+    log = []
+    for cls in pm.ui.classes:
+        if hasattr(cls, "poll") and not cls.poll(context):
+            continue
+        panel = _PanelSelf(log)
+        if hasattr(cls, "draw_header"):
+            cls.draw_header(panel, context)
+        cls.draw(panel, context)
+    return log
+
+
+def test_panels_draw(pm, clean_scene):
+    log = draw_panels(pm, bpy.context)
+    assert ("operator", "particlemesh.triangulate") in log
+    assert ("operator", "particlemesh.import_cloud") in log
+    em = emitter()
+    obj = live_object(pm)
+    clean_scene.frame_set(3)
+    log = draw_panels(pm, bpy.context)
+    props = [name for kind, name in log if kind == "prop"]
+    for name in ("source", "live", "auto_spacing", "max_edge_factor", "smooth", "use_render_settings"):
+        assert name in props, name
+    assert any(kind == "label" and "frame 3" in text for kind, text in log)
+    assert ("operator", "particlemesh.bake") in log
+    obj.particlemesh.method = "POLYGONIZE"
+    props = [name for kind, name in draw_panels(pm, bpy.context) if kind == "prop"]
+    assert "kernel" in props and "radius_mode" in props
+    assert em.name in bpy.data.objects
+
+
+def test_operator_redo_panels_draw(pm):
+    """Each operator's draw() (its redo panel) names only real properties."""
+    for cls in (pm.operators.PARTICLEMESH_OT_triangulate, pm.operators.PARTICLEMESH_OT_polygonize):
+        log = []
+        props = bpy.context.window_manager.operator_properties_last(cls.bl_idname)
+        fake = _PanelSelf(log)
+        for name in props.bl_rna.properties.keys():
+            if name != "rna_type":
+                setattr(fake, name, getattr(props, name))
+        fake.bl_rna = props.bl_rna  # the layout checks names against the operator's RNA
+        fake.method = cls.method
+        cls.draw(fake, bpy.context)
+        assert ("prop", "source") in log and ("prop", "live") in log

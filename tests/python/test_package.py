@@ -1,0 +1,258 @@
+"""The add-on package outside Blender: a valid Blender 4.2 extension manifest that agrees with
+bl_info, relative imports only, bpy-free modules that really are, the built zip's layout and
+its library; and the bpy-free pipeline modules (generate, jobs, mesh_arrays)."""
+import ast
+import importlib
+import os
+import re
+import sys
+import tomllib
+import types
+import zipfile
+
+import numpy as np
+import pytest
+
+from conftest import NATIVE_PY, ROOT
+
+PACKAGE = ROOT / "blender_addon" / "particlemesh"
+BPY_FREE = ("native", "mesh_arrays", "jobs", "generate")
+
+
+def parse(name):
+    return ast.parse((PACKAGE / f"{name}.py").read_text(), filename=f"{name}.py")
+
+
+def bl_info():
+    for node in parse("__init__").body:
+        if isinstance(node, ast.Assign) and node.targets[0].id == "bl_info":
+            return ast.literal_eval(node.value)
+    raise AssertionError("no bl_info")
+
+
+# ---- manifest (rules of Blender 4.2's extension validation, cli/blender_ext.py) ---------------
+
+SEMVER = re.compile(r"^(0|[1-9]\d*)\.(0|[1-9]\d*)\.(0|[1-9]\d*)$")
+
+
+def test_manifest_is_a_valid_extension_manifest():
+    m = tomllib.loads((PACKAGE / "blender_manifest.toml").read_text())
+    for key in ("schema_version", "id", "name", "tagline", "version", "type", "maintainer",
+                "license", "blender_version_min"):
+        assert key in m, key
+    assert m["schema_version"] == "1.0.0"
+    assert m["id"].isidentifier() and "__" not in m["id"] and not m["id"].startswith("_")
+    assert SEMVER.match(m["version"])
+    assert m["type"] == "add-on"
+    assert len(m["tagline"]) <= 64 and (m["tagline"][-1].isalnum() or m["tagline"][-1] in ")]}")
+    assert m["tagline"] == m["tagline"].strip()
+    assert all(lic.startswith("SPDX:") for lic in m["license"]) and m["license"]
+    assert m["blender_version_min"].count(".") == 2
+    assert tuple(map(int, m["blender_version_min"].split("."))) >= (4, 2, 0)
+    assert set(m["platforms"]) <= {"windows-x64", "windows-arm64", "macos-x64", "macos-arm64",
+                                   "linux-x64"}
+    for key, reason in m.get("permissions", {}).items():
+        assert key in {"files", "network", "clipboard", "camera", "microphone"}
+        assert len(reason) <= 64 and reason[-1].isalnum()
+
+
+def test_manifest_agrees_with_bl_info_and_the_project():
+    m = tomllib.loads((PACKAGE / "blender_manifest.toml").read_text())
+    info = bl_info()
+    assert m["version"] == ".".join(map(str, info["version"]))
+    assert m["id"] == PACKAGE.name == info["name"]
+    assert info["blender"] == (3, 4, 0)
+    cmake = (ROOT / "CMakeLists.txt").read_text()
+    project_version = re.search(r"project\(particlemesh VERSION (\S+)", cmake).group(1)
+    assert m["version"] == project_version
+
+
+def test_relative_imports_only():
+    """An extension is imported as bl_ext.<repo>.particlemesh: no absolute self-imports."""
+    for path in PACKAGE.glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                assert not any(a.name.split(".")[0] == "particlemesh" for a in node.names), path
+            if isinstance(node, ast.ImportFrom) and node.level == 0:
+                assert node.module.split(".")[0] != "particlemesh", path
+    assert "__package__" in (PACKAGE / "properties.py").read_text()  # AddonPreferences id
+
+
+def test_bpy_free_modules_do_not_import_bpy():
+    for name in BPY_FREE:
+        for node in ast.walk(parse(name)):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0:
+                names = [node.module]
+            assert not any(n.split(".")[0] in ("bpy", "bmesh", "mathutils") for n in names), name
+
+
+# ---- the zip ----------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def addon_zip():
+    path = os.environ.get("PM_ADDON_ZIP")
+    if not path or not os.path.isfile(path):
+        pytest.skip("PM_ADDON_ZIP is not set to the built add-on zip")
+    return path
+
+
+def test_zip_layout(addon_zip):
+    with zipfile.ZipFile(addon_zip) as z:
+        names = set(z.namelist())
+    sources = {f"particlemesh/{p.name}" for p in PACKAGE.glob("*.py")}
+    assert sources <= names
+    assert "particlemesh/blender_manifest.toml" in names
+    assert "particlemesh/lib/libparticlemesh.so" in names
+    # One top-level folder: Blender 3.4 unpacks it into addons/, 4.2 finds the manifest in it.
+    assert {n.split("/")[0] for n in names} == {"particlemesh"}
+    assert not any("__pycache__" in n or n.endswith(".pyc") for n in names)
+
+
+def test_zip_library_loads_and_matches(addon_zip, native, tmp_path):
+    with zipfile.ZipFile(addon_zip) as z:
+        z.extractall(tmp_path)
+    lib = native.load(str(tmp_path / "particlemesh/lib/libparticlemesh.so"))
+    assert lib.abi_version == native.ABI_VERSION
+    assert lib.version == native.load().version
+
+
+# ---- bpy-free modules of the package ----------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def pkg(native):
+    """The package's bpy-free modules, imported under a stand-in package (its __init__ needs
+    bpy), so their relative imports resolve."""
+    name = "pm_addon_bpy_free"
+    package = types.ModuleType(name)
+    package.__path__ = [str(PACKAGE)]
+    sys.modules[name] = package
+    try:
+        return types.SimpleNamespace(**{m: importlib.import_module(f"{name}.{m}") for m in BPY_FREE})
+    finally:
+        for key in [k for k in sys.modules if k == name or k.startswith(name + ".")]:
+            del sys.modules[key]
+
+
+def sphere(n):
+    i = np.arange(n) + 0.5
+    phi = np.arccos(1 - 2 * i / n)
+    theta = np.pi * (1 + 5 ** 0.5) * i
+    return np.stack([np.cos(theta) * np.sin(phi), np.sin(theta) * np.sin(phi), np.cos(phi)],
+                    1).astype(np.float32)
+
+
+def face_dots(p, triangles):
+    face = np.cross(p[triangles[:, 1]] - p[triangles[:, 0]], p[triangles[:, 2]] - p[triangles[:, 0]])
+    return np.einsum("ij,ij->i", face, p[triangles].mean(axis=1))
+
+
+def test_generate_triangulate_finished_surface_and_velocity(pkg):
+    p = sphere(2000)
+    velocity = np.tile(np.float32([0, 0, 1]), (2000, 1))
+    particles = pkg.generate.Particles(p, normals=-p, velocities=velocity)  # inward normals
+    mesh = pkg.generate.run("TRIANGULATE", particles, {"auto_spacing": True})
+    np.testing.assert_array_equal(mesh.attributes["velocity"], velocity)
+    assert (face_dots(p, mesh.triangles) > 0).all()  # closed parts face outward regardless
+    assert mesh.stats["normals_are_face_weighted"]    # Blender's own normals will do
+    kept = pkg.generate.run("TRIANGULATE", particles, {"orient": False, "normal_source": "INPUT"})
+    assert (face_dots(p, kept.triangles) < 0).all()   # followed the given normals
+
+
+def test_generate_raw_is_wound_by_the_normals(pkg):
+    p = sphere(2000)
+    out = pkg.generate.run("TRIANGULATE", pkg.generate.Particles(p, normals=p), {"raw": True})
+    assert (face_dots(p, out.triangles) > 0).all()
+    assert "normals_are_face_weighted" not in out.stats
+    inward = pkg.generate.run("TRIANGULATE", pkg.generate.Particles(p, normals=-p), {"raw": True})
+    assert (face_dots(p, inward.triangles) < 0).all()
+
+
+def test_generate_settings_keys_match_the_properties():
+    """Every key generate.py reads is a property of the operators and generated objects."""
+    tree = parse("properties")
+    names = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name):
+            names.add(node.target.id)
+    used = set(re.findall(r'settings(?:\.get\(|\[)"(\w+)"', (PACKAGE / "generate.py").read_text()))
+    assert used and used <= names, used - names
+
+
+def test_generate_reports_an_empty_result(pkg):
+    particles = pkg.generate.Particles(sphere(500))
+    with pytest.raises(pkg.native.ParticlemeshError, match="no triangles"):
+        pkg.generate.run("TRIANGULATE", particles, {"auto_spacing": False, "spacing": 1e-4})
+
+
+def test_polygonize_radii(pkg):
+    p = pkg.generate.Particles(sphere(10), sizes=np.full(10, 0.5, np.float32), particle_size=0.5)
+    assert pkg.generate.polygonize_radii(p, {"radius_mode": "AUTO"}) == (0.0, None)
+    assert pkg.generate.polygonize_radii(p, {"radius_mode": "FIXED", "radius": 0.3}) == (0.3, None)
+    r, radii = pkg.generate.polygonize_radii(p, {"radius_mode": "PARTICLE_SIZE", "radius_factor": 3})
+    assert r == 0.0 and np.allclose(radii, 1.5)
+    no_sizes = pkg.generate.Particles(sphere(10), particle_size=0.25)
+    assert pkg.generate.polygonize_radii(no_sizes, {"radius_mode": "PARTICLE_SIZE",
+                                                    "radius_factor": 2}) == (0.5, None)
+
+
+def test_polygonize_threshold_from_particle_sizes(pkg):
+    """Radii from the particles' sizes: the default threshold takes the size as half the rest
+    spacing (touching balls), so an isolated particle becomes a ball of about its size and a
+    sparse sheet of particles still has a surface, where the library's R = 2 spacings default
+    (3.33 for Wyvill) would give none."""
+    if not pkg.native.has_polygonize():
+        pytest.skip("pm_polygonize is not in this library (issue 7)")
+    threshold = pkg.generate.polygonize_threshold
+    sizes = {"radius_mode": "PARTICLE_SIZE", "radius_factor": 2.0, "kernel": "WYVILL"}
+    assert threshold(sizes, True) == pytest.approx(0.5)  # only the particle itself within 2 s
+    assert threshold({**sizes, "radius_factor": 4.0}, True) == pytest.approx(
+        0.5 * pkg.native.lattice_field(pkg.native.KERNEL_WYVILL, 2.0, 1.0))
+    assert threshold({**sizes, "threshold": 1.5}, True) == 1.5     # an explicit level stays
+    assert threshold({"radius_mode": "AUTO"}, False) == 0.0        # the library's default
+    assert threshold({**sizes}, False) == 0.0                       # no sizes: as AUTO
+    one = pkg.generate.Particles(np.zeros((1, 3), np.float32), sizes=np.float32([0.1]))
+    ball = pkg.generate.run("POLYGONIZE", one, sizes)
+    r = np.linalg.norm(ball.positions, axis=1)
+    assert ball.triangle_count > 100 and abs(r.mean() - 0.1) < 0.01 and r.std() < 0.005
+    # A sheet of particles 1.46 sizes apart (a 642-vertex icosphere of radius 1, size 0.1).
+    p = sphere(642)
+    shell = pkg.generate.Particles(p, sizes=np.full(642, 0.1, np.float32))
+    mesh = pkg.generate.run("POLYGONIZE", shell, sizes)
+    assert mesh.triangle_count > 1000
+    assert (np.abs(np.linalg.norm(mesh.positions, axis=1) - 1.0) < 0.2).all()
+    with pytest.raises(pkg.native.ParticlemeshError, match="no surface"):
+        pkg.generate.run("POLYGONIZE", shell, {**sizes, "threshold": 3.33})
+
+
+def test_job_runs_and_cancels(pkg):
+    particles = pkg.generate.Particles(sphere(100000))
+    job = pkg.jobs.Job(pkg.generate.run, "TRIANGULATE", particles, {})
+    job.cancel()
+    job.start()
+    assert job.wait(60)
+    assert isinstance(job.error, pkg.native.CancelledError) and job.result is None
+    job = pkg.jobs.Job(pkg.generate.run, "TRIANGULATE", pkg.generate.Particles(sphere(3000)), {})
+    assert job.start().wait(60) and job.error is None and job.result.triangle_count > 5000
+    assert job.progress.fraction > 0 and job.progress.stage
+
+
+def test_mesh_arrays(pkg):
+    ma = pkg.mesh_arrays
+    m = np.eye(4)
+    m[:3, :3] *= 2
+    m[:3, 3] = [1, 2, 3]
+    np.testing.assert_allclose(ma.transform_points([[1, 1, 1]], m), [[3, 4, 5]])
+    np.testing.assert_allclose(ma.transform_normals([[0, 0, 3]], m), [[0, 0, 1]])
+    p = np.zeros((4, 3), np.float32)
+    p[2, 1] = np.inf
+    with pytest.raises(ValueError, match=r"positions\[2\]\.y is infinite"):
+        ma.check_finite(p, "positions")
+    ma.check_finite(np.ones((3, 3)), "positions")
+    assert ma.alive_mask([1, 2, 3, 4], [3, 4]).tolist() == [False, False, True, True]
+    a = np.arange(12, dtype=np.float32)
+    assert ma.content_hash(a) == ma.content_hash(a.copy()) != ma.content_hash(a + 1)
+    assert ma.content_hash(a, None) != ma.content_hash(a)
+    assert ma.loop_starts(3).tolist() == [0, 3, 6]
