@@ -5,7 +5,8 @@ Installs as a zip on Blender 3.4+ (Preferences > Add-ons > Install) and as a Ble
 extension (blender_manifest.toml). Relative imports only, and __package__ for our own name,
 so it works under either package name (`particlemesh` or `bl_ext.<repo>.particlemesh`).
 
-Modules: native (ctypes binding, bpy-free), generate / mesh_arrays / jobs (bpy-free work),
+Modules: native (ctypes binding, bpy-free; lib/libparticlemesh.so, and for .pcd files the
+PCL bridge lib/libparticlemesh_pcl.so, loaded on the first .pcd), generate / mesh_arrays / jobs (bpy-free work),
 sources (particles out of Blender), blender_mesh (bulk mesh IO), properties, operators, live
 (frame handler, cache), bake, ui."""
 

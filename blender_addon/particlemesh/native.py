@@ -15,6 +15,11 @@ Rules kept here (STYLE.md section 8):
 Functions that newer libraries add (pm_polygonize, pm_smooth, attribute channels) are bound
 when the symbols exist; `has_polygonize()` / `has_smooth()` say so, and calling them on an
 older library raises NotAvailableError ("needs a newer particlemesh library").
+
+.pcd files are read by the PCL bridge, a second library (libparticlemesh_pcl, next to
+libparticlemesh in the add-on's lib/), loaded lazily on the first .pcd: everything else works
+without it, and a .pcd without it gives one clear message (PclBridgeNotFoundError).
+PARTICLEMESH_PCL_LIBRARY overrides where it is loaded from.
 """
 
 import ctypes
@@ -65,6 +70,11 @@ SMOOTH_BUTTERFLY = 1
 SCHEMES = {"LOOP": SMOOTH_LOOP, "BUTTERFLY": SMOOTH_BUTTERFLY}
 
 LIBRARY_ENV = "PARTICLEMESH_LIBRARY"
+PCL_LIBRARY_ENV = "PARTICLEMESH_PCL_LIBRARY"
+
+#: The bridge's C ABI version this binding is written against (PM_PCL_ABI_VERSION in
+#: pcl_bridge/include/particlemesh_pcl/particlemesh_pcl_c.h).
+PCL_ABI_VERSION = 1
 
 
 # ---- errors ---------------------------------------------------------------------------------
@@ -86,6 +96,13 @@ class CancelledError(ParticlemeshError):
 
 class LibraryNotFoundError(ParticlemeshError):
     """The native library could not be found or loaded."""
+
+    def __init__(self, message):
+        super().__init__(message, STATUS_IO_ERROR)
+
+
+class PclBridgeNotFoundError(ParticlemeshError):
+    """The PCL bridge library (needed for .pcd files only) could not be found or loaded."""
 
     def __init__(self, message):
         super().__init__(message, STATUS_IO_ERROR)
@@ -208,6 +225,22 @@ class SmoothOptions(Structure):
     ]
 
 
+class PclReadInfo(Structure):
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("input_points", c_uint64),
+        ("valid_points", c_uint64),
+        ("invalid_points", c_uint64),
+        ("invalid_normals", c_uint64),
+        ("width", c_uint32),
+        ("height", c_uint32),
+        ("has_normals", c_int32),
+        ("has_color", c_int32),
+        ("has_intensity", c_int32),
+        ("origin", c_float * 3),
+    ]
+
+
 _cloud_p = c_void_p
 _mesh_p = c_void_p
 _f32p = POINTER(c_float)
@@ -261,6 +294,18 @@ _OPTIONAL = {
     "pm_mesh_copy_attribute": (c_int, [_mesh_p, c_char_p, _f32p, c_size_t]),
     "pm_mesh_get_attribute_count": (c_int, [_mesh_p, POINTER(c_size_t)]),
     "pm_mesh_get_attribute_name": (c_int, [_mesh_p, c_size_t, POINTER(c_char_p)]),
+    # A cloud's channels read back (what a file's colours became).
+    "pm_cloud_get_attribute_count": (c_int, [_cloud_p, POINTER(c_size_t)]),
+    "pm_cloud_get_attribute_name": (c_int, [_cloud_p, c_size_t, POINTER(c_char_p)]),
+    "pm_cloud_get_attribute_components": (c_int, [_cloud_p, c_char_p, POINTER(c_int32)]),
+    "pm_cloud_copy_attribute": (c_int, [_cloud_p, c_char_p, _f32p, c_size_t]),
+}
+
+# The PCL bridge's C entry points (libparticlemesh_pcl).
+_PCL_FUNCTIONS = {
+    "pm_pcl_abi_version": (c_uint32, []),
+    "pm_pcl_last_error_message": (c_char_p, []),
+    "pm_pcl_read_cloud": (c_int, [c_char_p, POINTER(_cloud_p), POINTER(PclReadInfo)]),
 }
 
 
@@ -362,6 +407,109 @@ def available():
     """(True, version) if the library loads, else (False, the reason)."""
     try:
         return True, load().version
+    except ParticlemeshError as e:
+        return False, str(e)
+
+
+# ---- the PCL bridge (.pcd), loaded on demand ------------------------------------------------
+
+def _pcl_candidate_paths(core_path):
+    """Where the bridge is looked for: $PARTICLEMESH_PCL_LIBRARY, else next to the loaded
+    libparticlemesh, the add-on's lib/ and the system's library path."""
+    env = os.environ.get(PCL_LIBRARY_ENV)
+    if env:
+        return [env], []
+    if sys.platform == "win32":
+        patterns = ["particlemesh_pcl.dll"]
+    elif sys.platform == "darwin":
+        patterns = ["libparticlemesh_pcl.dylib", "libparticlemesh_pcl.*.dylib"]
+    else:
+        patterns = ["libparticlemesh_pcl.so", "libparticlemesh_pcl.so.*"]
+    folders = []
+    if core_path and os.sep in core_path:
+        folders.append(os.path.dirname(os.path.abspath(core_path)))
+    folders.append(os.path.join(os.path.dirname(os.path.abspath(__file__)), "lib"))
+    paths = []
+    for folder in dict.fromkeys(folders):
+        for pattern in patterns:
+            paths.extend(sorted(glob.glob(os.path.join(folder, pattern))))
+    system = ctypes.util.find_library("particlemesh_pcl")
+    if system:
+        paths.append(system)
+    return paths, folders
+
+
+class PclBridge:
+    """The loaded PCL bridge with its signatures declared. It uses the libparticlemesh that
+    is already loaded (the dynamic loader matches its soname), so load() comes first."""
+
+    def __init__(self, path):
+        try:
+            self.cdll = ctypes.CDLL(path)
+        except OSError as e:
+            raise PclBridgeNotFoundError(
+                f"reading .pcd needs the PCL bridge library, and {path} does not load: {e} "
+                f"(it needs PCL 1.13's libraries, e.g. Debian's libpcl-io1.13)") from e
+        self.path = path
+        missing = [name for name in _PCL_FUNCTIONS if not hasattr(self.cdll, name)]
+        if missing:
+            raise PclBridgeNotFoundError(
+                f"{path} is not a usable PCL bridge library (missing {', '.join(missing)})")
+        for name, (restype, argtypes) in _PCL_FUNCTIONS.items():
+            fn = getattr(self.cdll, name)
+            fn.restype = restype
+            fn.argtypes = argtypes
+        self.abi_version = int(self.cdll.pm_pcl_abi_version())
+        if self.abi_version != PCL_ABI_VERSION:
+            raise PclBridgeNotFoundError(
+                f"{path} has PCL bridge ABI version {self.abi_version}; this add-on needs "
+                f"version {PCL_ABI_VERSION}")
+
+    def __getattr__(self, name):
+        if name.startswith("pm_pcl_"):
+            return getattr(self.cdll, name)
+        raise AttributeError(name)
+
+
+_pcl = {}
+
+
+def load_pcl(path=None):
+    """Load (once per path) and return the PCL bridge; PclBridgeNotFoundError with a clear
+    message when it is absent or does not load."""
+    core = load()
+    with _lock:
+        if path is None and core.path in _pcl:
+            return _pcl[core.path]
+        if path:
+            paths, folders = [path], []
+        else:
+            paths, folders = _pcl_candidate_paths(core.path)
+        errors = []
+        for candidate in paths:
+            if os.sep in candidate and not os.path.exists(candidate):
+                errors.append(f"{candidate} does not exist")
+                continue
+            try:
+                bridge = PclBridge(candidate)
+            except PclBridgeNotFoundError as e:
+                errors.append(str(e))
+                continue
+            if path is None:
+                _pcl[core.path] = bridge
+            return bridge
+        if errors:
+            raise PclBridgeNotFoundError("; ".join(errors))
+        raise PclBridgeNotFoundError(
+            "reading .pcd needs the PCL bridge library libparticlemesh_pcl, which was not "
+            f"found (looked in {', '.join(folders)} and the system library path; set "
+            f"{PCL_LIBRARY_ENV} to the library file)")
+
+
+def has_pcd():
+    """(True, path) if .pcd files can be read (the PCL bridge loads), else (False, reason)."""
+    try:
+        return True, load_pcl().path
     except ParticlemeshError as e:
         return False, str(e)
 
@@ -491,14 +639,17 @@ class MeshData:
 
 
 class CloudData:
-    """Particles as numpy arrays: positions (N, 3) float32, normals (N, 3) float32 or None."""
+    """Particles as numpy arrays: positions (N, 3) float32, normals (N, 3) float32 or None,
+    attributes {name: (N, C) float32} (a file's colours: "color", (N, 3) in [0, 1]), info
+    (dict: what a .pcd reader read and dropped, e.g. invalid_points; empty otherwise)."""
 
-    __slots__ = ("positions", "normals", "attributes")
+    __slots__ = ("positions", "normals", "attributes", "info")
 
-    def __init__(self, positions, normals=None, attributes=None):
+    def __init__(self, positions, normals=None, attributes=None, info=None):
         self.positions = positions
         self.normals = normals
         self.attributes = attributes if attributes is not None else {}
+        self.info = info if info is not None else {}
 
 
 def _new_cloud(lib, positions, normals=None):
@@ -605,21 +756,68 @@ def _cloud_to_data(lib, cloud):
     if has.value and n:
         normals = np.empty((n, 3), dtype=np.float32)
         _check(lib, lib.pm_cloud_copy_normals_f32(cloud, _ptr(normals, c_float), n))
-    return CloudData(positions, normals)
+    return CloudData(positions, normals, _cloud_attributes(lib, cloud, n))
+
+
+def _cloud_attributes(lib, cloud, count):
+    """Every per-point channel of a cloud, {name: (N, C) float32} (empty on a library
+    without the read-back functions)."""
+    out = {}
+    if not all(lib.has(f) for f in ("pm_cloud_get_attribute_count", "pm_cloud_get_attribute_name",
+                                    "pm_cloud_get_attribute_components",
+                                    "pm_cloud_copy_attribute")):
+        return out
+    n = c_size_t(0)
+    _check(lib, lib.pm_cloud_get_attribute_count(cloud, ctypes.byref(n)))
+    for i in range(n.value):
+        name = c_char_p()
+        _check(lib, lib.pm_cloud_get_attribute_name(cloud, i, ctypes.byref(name)))
+        key = name.value
+        components = c_int32(0)
+        _check(lib, lib.pm_cloud_get_attribute_components(cloud, key, ctypes.byref(components)))
+        a = np.empty((count, components.value), dtype=np.float32)
+        if count:
+            _check(lib, lib.pm_cloud_copy_attribute(cloud, key, _ptr(a, c_float), count))
+        out[key.decode(errors="replace")] = a
+    return out
 
 
 # ---- the API the add-on uses ----------------------------------------------------------------
 
 def read_cloud(path):
-    """Read particles from a file the library understands (.ply, .xyz; .pcd once the C ABI
-    reads it). Returns CloudData."""
+    """Read particles from a file: .ply (normals, vertex colours) and .xyz through the
+    library, .pcd through the PCL bridge (points with a NaN coordinate dropped and counted in
+    `info`, normals, rgb/rgba as "color", intensity). Returns CloudData."""
     lib = load()
+    if os.path.splitext(os.fspath(path))[1].lower() == ".pcd":
+        return _read_pcd(lib, path)
     cloud = c_void_p()
     _check(lib, lib.pm_cloud_read(os.fsencode(path), ctypes.byref(cloud)))
     try:
         return _cloud_to_data(lib, cloud)
     finally:
         lib.pm_cloud_destroy(cloud)
+
+
+def _read_pcd(lib, path):
+    bridge = load_pcl()
+    cloud = c_void_p()
+    info = PclReadInfo()
+    info.struct_size = ctypes.sizeof(PclReadInfo)
+    status = bridge.pm_pcl_read_cloud(os.fsencode(path), ctypes.byref(cloud), ctypes.byref(info))
+    if status != OK:
+        message = bridge.pm_pcl_last_error_message().decode(errors="replace")
+        raise ParticlemeshError(message or lib.pm_status_string(status).decode(), status)
+    try:
+        data = _cloud_to_data(lib, cloud)
+    finally:
+        lib.pm_cloud_destroy(cloud)
+    data.info = {name: getattr(info, name) for name, _ in PclReadInfo._fields_[1:]}
+    data.info["origin"] = tuple(info.origin)
+    for flag in ("has_normals", "has_color", "has_intensity"):
+        data.info[flag] = bool(data.info[flag])
+    data.info["format"] = "pcd"
+    return data
 
 
 def estimate_spacing(positions, threads=0):

@@ -319,7 +319,7 @@ class PARTICLEMESH_OT_import_cloud(bpy.types.Operator, ImportHelper):
         paths = [os.path.join(self.directory, f.name) for f in self.files if f.name]
         if not paths:
             paths = [self.filepath]
-        made, failures = [], []
+        made, failures, notes = [], [], []
         for path in paths:
             try:
                 cloud = native.read_cloud(path)
@@ -336,6 +336,9 @@ class PARTICLEMESH_OT_import_cloud(bpy.types.Operator, ImportHelper):
             obj = bpy.data.objects.new(name, mesh)
             context.collection.objects.link(obj)
             made.append(obj)
+            dropped = cloud.info.get("invalid_points", 0)
+            if dropped:  # e.g. a depth-camera frame's pixels without depth
+                notes.append(f"{obj.name}: {dropped} points with a NaN coordinate dropped")
         if not made:
             self.report({"ERROR"}, "; ".join(failures) or "nothing to import")
             return {"CANCELLED"}
@@ -347,7 +350,8 @@ class PARTICLEMESH_OT_import_cloud(bpy.types.Operator, ImportHelper):
         if failures:
             self.report({"WARNING"}, "not imported: " + "; ".join(failures))
         else:
-            self.report({"INFO"}, ", ".join(f"{o.name}: {len(o.data.vertices)} points" for o in made))
+            self.report({"INFO"}, ", ".join([f"{o.name}: {len(o.data.vertices)} points" for o in made]
+                                            + notes))
         return {"FINISHED"}
 
 

@@ -225,6 +225,10 @@ class PARTICLEMESH_AP_preferences(bpy.types.AddonPreferences):
         col = self.layout.column()
         col.label(text=f"particlemesh library {info}" if ok else info,
                   icon="CHECKMARK" if ok else "ERROR")
+        if ok:
+            pcd, where = native.has_pcd()
+            col.label(text="PCD import: PCL bridge loaded" if pcd else where,
+                      icon="CHECKMARK" if pcd else "INFO")
         col.prop(self, "cache_megabytes")
 
 

@@ -22,6 +22,7 @@ if args.data:
     os.environ["PM_TEST_DATA"] = os.path.abspath(args.data)
 # The add-on must load the library it carries in its zip, not one named by the environment.
 os.environ.pop("PARTICLEMESH_LIBRARY", None)
+os.environ.pop("PARTICLEMESH_PCL_LIBRARY", None)
 
 import pytest  # noqa: E402  (Debian's python3-pytest; Blender 3.4 runs the system Python)
 

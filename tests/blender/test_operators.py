@@ -241,34 +241,128 @@ def test_import_every_ply_and_xyz(pm, data_dir, tmp_path):
                                [[0, 0, 1]] * 3)
 
 
-def pcd_supported(pm, data_dir):
-    try:
-        pm.native.read_cloud(data_dir / "pcd/bun0.pcd")
-        return True
-    except pm.native.ParticlemeshError:
-        return False
+def read_binary_pcd(path):
+    """An independent decoder for `DATA binary` PCD files (numpy only): {field: array}."""
+    raw = path.read_bytes()
+    header, offset = {}, 0
+    for line in raw.split(b"\n"):
+        offset += len(line) + 1
+        words = line.decode("ascii").split()
+        if words and not words[0].startswith("#"):
+            header[words[0]] = words[1:]
+        if words and words[0] == "DATA":
+            assert words[1] == "binary", path
+            break
+    kinds = {("F", "4"): "<f4", ("F", "8"): "<f8", ("U", "4"): "<u4", ("U", "1"): "u1",
+             ("I", "4"): "<i4"}
+    counts = header.get("COUNT", ["1"] * len(header["FIELDS"]))
+    dtype = np.dtype([(name, kinds[(t, s)], (int(c),)) if int(c) > 1 else (name, kinds[(t, s)])
+                      for name, t, s, c in zip(header["FIELDS"], header["TYPE"], header["SIZE"], counts)])
+    n = int(header["POINTS"][0])
+    return np.frombuffer(raw, dtype=dtype, count=n, offset=offset)
+
+
+def packed_rgb(values):
+    """PCL's packed rgb/rgba (0xAARRGGBB) as float r g b in [0, 1]."""
+    v = np.asarray(values).view(np.uint32)
+    return np.stack([(v >> 16) & 255, (v >> 8) & 255, v & 255], 1).astype(np.float32) / 255.0
 
 
 def test_import_every_pcd(pm, data_dir):
+    """Every .pcd of the shared data through File > Import (the PCL bridge shipped in the
+    zip): point counts after dropping NaN points, normals where the file has them."""
+    installed = Path(pm.__file__).resolve().parent
+    assert (installed / "lib" / "libparticlemesh_pcl.so").is_file()
+    assert Path(pm.native.load_pcl().path).resolve().parent == installed / "lib"
     files = sorted((data_dir / "pcd").glob("*.pcd"))
     assert len(files) == 7
-    if not pcd_supported(pm, data_dir):
-        # The operator reports the library's refusal; .pcd waits for the PCL bridge (issue 5)
-        # to be reachable through pm_cloud_read.
-        with pytest.raises(RuntimeError, match="bun0.pcd"):
-            bpy.ops.particlemesh.import_cloud(filepath=str(data_dir / "pcd/bun0.pcd"))
-        assert not bpy.data.objects
-        pytest.xfail("pm_cloud_read does not read .pcd yet (PCL bridge, issue 5)")
+    # DATA.md: bunny/bun0 397 points, milk 13704, colored_cloud 1000, the Kinect frame
+    # 307200 of which 35625 are NaN (invalid depth) and are dropped.
     expected = {"bunny.pcd": 397, "bun0.pcd": 397, "milk.pcd": 13704, "milk_binary.pcd": 13704,
-                "colored_cloud.pcd": 1000}
+                "colored_cloud.pcd": 1000,
+                "kinect_frame_20121214T142255.814212.pcd": 307200 - 35625,
+                "kinect_frame_20121214T142255.814212_binary.pcd": 307200 - 35625}
+    with_normals = {"bun0.pcd", "colored_cloud.pcd"}
+    with_colour = {"colored_cloud.pcd", "kinect_frame_20121214T142255.814212.pcd",
+                   "kinect_frame_20121214T142255.814212_binary.pcd"}
+    assert sorted(expected) == sorted(p.name for p in files)
     for path in files:
         obj = import_cloud(path)
-        n = len(obj.data.vertices)
-        if path.name in expected:
-            assert n == expected[path.name], path.name
-        else:  # the Kinect frame: 307200 points of which 35625 are NaN (invalid depth)
-            assert n in (307200 - 35625, 307200), (path.name, n)
-    assert pm.blender_mesh.get_point_attribute(bpy.data.objects["bun0"].data, "point_normal") is not None
+        mesh = obj.data
+        assert len(mesh.vertices) == expected[path.name], path.name
+        assert len(mesh.polygons) == 0 and len(mesh.edges) == 0
+        normals = pm.blender_mesh.get_point_attribute(mesh, "point_normal")
+        assert (normals is not None) == (path.name in with_normals), path.name
+        if normals is not None:
+            np.testing.assert_allclose(np.linalg.norm(normals, axis=1), 1.0, atol=1e-3)
+        assert ("Col" in mesh.attributes) == (path.name in with_colour), path.name
+        co, _ = mesh_arrays(mesh)
+        assert np.isfinite(co).all()
+        bpy.data.objects.remove(obj)
+    # bun0.pcd's normals are the file's (x y z normal_x normal_y normal_z curvature, ascii).
+    rows = [line.split() for line in (data_dir / "pcd/bun0.pcd").read_text().splitlines()]
+    data = np.array([r for r in rows if len(r) == 7 and r[0][0] in "-.0123456789"], dtype=np.float64)
+    assert len(data) == 397
+    obj = import_cloud(data_dir / "pcd/bun0.pcd")
+    co, _ = mesh_arrays(obj.data)
+    np.testing.assert_allclose(co, data[:, :3], atol=1e-6)
+    np.testing.assert_allclose(pm.blender_mesh.get_point_attribute(obj.data, "point_normal"),
+                               data[:, 3:6], atol=1e-6)
+
+
+@pytest.mark.parametrize("name", ["colored_cloud.pcd", "kinect_frame_20121214T142255.814212_binary.pcd"])
+def test_import_pcd_colours(pm, data_dir, name):
+    """The file's rgb / rgba reaches Blender as the `Col` colour attribute (RGBA float, alpha
+    1), point for point, checked against an independent numpy decoding of the file."""
+    path = data_dir / "pcd" / name
+    points = read_binary_pcd(path)
+    xyz = np.stack([points["x"], points["y"], points["z"]], 1)
+    valid = np.isfinite(xyz).all(axis=1)
+    colour_field = "rgb" if "rgb" in points.dtype.names else "rgba"
+    expected = packed_rgb(points[colour_field][valid])
+    obj = import_cloud(path)
+    col = obj.data.attributes["Col"]
+    assert col.domain == "POINT" and col.data_type == "FLOAT_COLOR"
+    got = pm.blender_mesh.get_point_attribute(obj.data, "Col")
+    assert got.shape == (int(valid.sum()), 4)
+    np.testing.assert_allclose(got[:, :3], expected, atol=1e-6)
+    np.testing.assert_allclose(got[:, 3], 1.0)
+    assert len(np.unique(got[:, :3], axis=0)) > 10  # a real picture, not one colour
+    co, _ = mesh_arrays(obj.data)
+    np.testing.assert_allclose(co, xyz[valid], atol=1e-6)
+
+
+def test_import_ply_vertex_colours(pm, tmp_path):
+    """A PLY with red/green/blue (uchar) vertex properties: colours as `Col`, normals kept."""
+    rng = np.random.default_rng(7)
+    p = fibonacci_sphere(40)
+    rgb = rng.integers(0, 256, size=(40, 3), dtype=np.uint8)
+    path = tmp_path / "coloured.ply"
+    with open(path, "wb") as f:
+        f.write(b"ply\nformat binary_little_endian 1.0\nelement vertex 40\n"
+                b"property float x\nproperty float y\nproperty float z\n"
+                b"property float nx\nproperty float ny\nproperty float nz\n"
+                b"property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n")
+        rec = np.zeros(40, dtype=[("p", "<f4", 3), ("n", "<f4", 3), ("c", "u1", 3)])
+        rec["p"], rec["n"], rec["c"] = p, p, rgb
+        f.write(rec.tobytes())
+    obj = import_cloud(path)
+    got = pm.blender_mesh.get_point_attribute(obj.data, "Col")
+    np.testing.assert_allclose(got[:, :3], rgb / 255.0, atol=1e-6)
+    np.testing.assert_allclose(got[:, 3], 1.0)
+    np.testing.assert_allclose(pm.blender_mesh.get_point_attribute(obj.data, "point_normal"), p,
+                               atol=1e-6)
+    co, _ = mesh_arrays(obj.data)
+    np.testing.assert_allclose(co, p, atol=1e-6)
+
+
+def test_import_malformed_pcd_cancels_naming_the_file(pm, tmp_path):
+    bad = tmp_path / "broken.pcd"
+    bad.write_text("VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+                   "WIDTH 3\nHEIGHT 1\nPOINTS 3\nDATA ascii\n0 0 0\n1 0\n")
+    with pytest.raises(RuntimeError, match="broken.pcd"):
+        bpy.ops.particlemesh.import_cloud(filepath=str(bad))
+    assert not bpy.data.objects
 
 
 def test_import_several_files_at_once(pm, data_dir):
@@ -281,8 +375,8 @@ def test_import_several_files_at_once(pm, data_dir):
 
 def test_point_cloud_mesh_keeps_normals_and_colours(pm):
     """What import_cloud builds from a cloud: normals as `point_normal`, RGB(A) colours as the
-    `Col` colour attribute, other channels by name. (The library's readers deliver positions
-    and normals only: pm_cloud_read gives no colour channel to carry yet.)"""
+    `Col` colour attribute, other channels by name (files' colours: test_import_pcd_colours,
+    test_import_ply_vertex_colours)."""
     p = fibonacci_sphere(50)
     rgb = np.random.default_rng(1).random((50, 3)).astype(np.float32)
     mesh = pm.blender_mesh.new_point_cloud_mesh("coloured", p, normals=p, colors=rgb,

@@ -455,3 +455,123 @@ def test_struct_sizes_match_the_library(native, init, struct):
     getattr(lib.cdll, init)(ctypes.cast(buffer, ctypes.POINTER(getattr(native, struct))))
     size = ctypes.c_uint32.from_buffer(buffer).value
     assert size == ctypes.sizeof(getattr(native, struct))
+
+
+# ---- .pcd through the PCL bridge, colours read back (issue 6) ---------------------------------
+
+@pytest.fixture
+def bridge(native):
+    import os
+    if not os.environ.get("PARTICLEMESH_PCL_LIBRARY"):
+        pytest.skip("PARTICLEMESH_PCL_LIBRARY is not set to the built libparticlemesh_pcl")
+    return native.load_pcl()
+
+
+def test_pcl_bridge_functions_have_declared_signatures(native, bridge):
+    assert bridge.abi_version == native.PCL_ABI_VERSION == 1
+    for name, (restype, argtypes) in native._PCL_FUNCTIONS.items():
+        fn = getattr(bridge.cdll, name)
+        assert fn.argtypes == argtypes and fn.restype == restype, name
+    ok, path = native.has_pcd()
+    assert ok and path == bridge.path
+
+
+def test_read_pcd_with_normals_and_colours(native, bridge, data_dir):
+    cloud = native.read_cloud(data_dir / "pcd/colored_cloud.pcd")
+    assert cloud.positions.shape == (1000, 3) and cloud.positions.dtype == np.float32
+    assert cloud.normals.shape == (1000, 3)
+    np.testing.assert_allclose(np.linalg.norm(cloud.normals, axis=1), 1.0, atol=1e-3)
+    assert sorted(cloud.attributes) == ["color"]
+    colour = cloud.attributes["color"]
+    assert colour.shape == (1000, 3) and colour.dtype == np.float32
+    assert colour.min() >= 0.0 and colour.max() <= 1.0 and np.ptp(colour) > 0.5
+    # Every value is an 8-bit channel / 255.
+    np.testing.assert_allclose(colour * 255.0, np.round(colour * 255.0), atol=1e-3)
+    assert cloud.info["format"] == "pcd" and cloud.info["has_color"] and cloud.info["has_normals"]
+    assert (cloud.info["width"], cloud.info["height"]) == (1, 1000)
+    assert cloud.info["invalid_points"] == 0
+
+
+def test_read_pcd_drops_nan_points_and_says_so(native, bridge, data_dir):
+    for name in ("kinect_frame_20121214T142255.814212.pcd",
+                 "kinect_frame_20121214T142255.814212_binary.pcd"):
+        cloud = native.read_cloud(data_dir / "pcd" / name)
+        assert len(cloud.positions) == 307200 - 35625, name
+        assert np.isfinite(cloud.positions).all()
+        assert cloud.normals is None
+        assert cloud.attributes["color"].shape == (307200 - 35625, 3)
+        assert cloud.info["invalid_points"] == 35625
+        assert (cloud.info["width"], cloud.info["height"]) == (640, 480)
+    compressed = native.read_cloud(data_dir / "pcd/milk.pcd")
+    binary = native.read_cloud(data_dir / "pcd/milk_binary.pcd")
+    np.testing.assert_array_equal(compressed.positions, binary.positions)
+    assert len(binary.positions) == 13704 and binary.attributes == {}
+
+
+def test_read_malformed_pcd_names_the_file(native, bridge, tmp_path):
+    bad = tmp_path / "bad header.pcd"
+    bad.write_text("VERSION 0.7\nFIELDS x y\nSIZE 4 4\nTYPE F F\nWIDTH 1\nPOINTS 1\nDATA ascii\n0 0\n")
+    with pytest.raises(native.ParticlemeshError, match="missing field 'z'") as e:
+        native.read_cloud(bad)
+    assert e.value.status == native.STATUS_FORMAT_ERROR
+    assert str(bad) in str(e.value)
+    with pytest.raises(native.ParticlemeshError, match="no such file") as e:
+        native.read_cloud(tmp_path / "gone.pcd")
+    assert e.value.status == native.STATUS_IO_ERROR and "gone.pcd" in str(e.value)
+
+
+def test_missing_pcl_bridge_gives_a_clear_message(native, monkeypatch, tmp_path, data_dir):
+    other = load_native_module("pm_native_no_bridge")
+    # Nowhere to be found: one message saying what .pcd needs and where we looked.
+    monkeypatch.delenv("PARTICLEMESH_PCL_LIBRARY", raising=False)
+    monkeypatch.setattr(other, "_pcl_candidate_paths", lambda core: ([], [str(tmp_path)]))
+    with pytest.raises(other.PclBridgeNotFoundError,
+                       match=r"reading \.pcd needs the PCL bridge library libparticlemesh_pcl") as e:
+        other.read_cloud(data_dir / "pcd/bun0.pcd")
+    assert str(tmp_path) in str(e.value) and "PARTICLEMESH_PCL_LIBRARY" in str(e.value)
+    ok, why = other.has_pcd()
+    assert not ok and "PCL bridge" in why
+    # Everything else still works without it.
+    assert len(other.read_cloud(data_dir / "points/spot_poisson.ply").positions) == 8747
+    # An override that does not exist / is not a library.
+    monkeypatch.undo()
+    monkeypatch.setenv("PARTICLEMESH_PCL_LIBRARY", str(tmp_path / "libparticlemesh_pcl.so"))
+    with pytest.raises(other.PclBridgeNotFoundError, match="does not exist"):
+        other.read_cloud(data_dir / "pcd/bun0.pcd")
+    bogus = tmp_path / "bogus.so"
+    bogus.write_text("not a library")
+    monkeypatch.setenv("PARTICLEMESH_PCL_LIBRARY", str(bogus))
+    with pytest.raises(other.PclBridgeNotFoundError, match="does not load"):
+        other.read_cloud(data_dir / "pcd/bun0.pcd")
+
+
+def test_ply_vertex_colours_are_read_back(native, tmp_path):
+    p = fibonacci_sphere(20)
+    rgb = np.random.default_rng(3).integers(0, 256, size=(20, 3), dtype=np.uint8)
+    path = tmp_path / "coloured.ply"
+    rec = np.zeros(20, dtype=[("p", "<f4", 3), ("c", "u1", 3)])
+    rec["p"], rec["c"] = p, rgb
+    path.write_bytes(b"ply\nformat binary_little_endian 1.0\nelement vertex 20\n"
+                     b"property float x\nproperty float y\nproperty float z\n"
+                     b"property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n"
+                     + rec.tobytes())
+    cloud = native.read_cloud(path)
+    np.testing.assert_array_equal(cloud.positions, p)
+    assert cloud.normals is None
+    np.testing.assert_allclose(cloud.attributes["color"], rgb / 255.0, atol=1e-6)
+    assert cloud.info == {}
+
+
+def test_cloud_attributes_set_are_read_back(native):
+    lib = native.load()
+    p = fibonacci_sphere(10)
+    cloud = native._new_cloud(lib, p)
+    try:
+        speed = np.arange(30, dtype=np.float32).reshape(10, 3)
+        native._set_cloud_attributes(lib, cloud, {"velocity": speed, "radius": np.ones(10)}, 10)
+        data = native._cloud_to_data(lib, cloud)
+    finally:
+        lib.pm_cloud_destroy(cloud)
+    assert list(data.attributes) == ["velocity", "radius"]
+    np.testing.assert_array_equal(data.attributes["velocity"], speed)
+    np.testing.assert_array_equal(data.attributes["radius"], np.ones((10, 1), np.float32))

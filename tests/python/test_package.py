@@ -119,6 +119,37 @@ def test_zip_library_loads_and_matches(addon_zip, native, tmp_path):
     assert lib.version == native.load().version
 
 
+def test_zip_pcl_bridge_reads_pcd_from_the_unpacked_zip(addon_zip, data_dir, tmp_path):
+    """The zip's libparticlemesh_pcl.so, unpacked alone, in a fresh process with no override:
+    native.py finds it next to libparticlemesh and it binds to that library (its soname),
+    not to the build tree (its RUNPATH is $ORIGIN)."""
+    import subprocess
+    with zipfile.ZipFile(addon_zip) as z:
+        assert "particlemesh/lib/libparticlemesh_pcl.so" in z.namelist()
+        z.extractall(tmp_path)
+    lib_dir = tmp_path / "particlemesh" / "lib"
+    code = (
+        "import importlib.util, sys\n"
+        f"spec = importlib.util.spec_from_file_location('n', {str(tmp_path / 'particlemesh' / 'native.py')!r})\n"
+        "n = importlib.util.module_from_spec(spec); spec.loader.exec_module(n)\n"
+        f"c = n.read_cloud({str(data_dir / 'pcd' / 'colored_cloud.pcd')!r})\n"
+        "print(n.load().path); print(n.load_pcl().path); print(len(c.positions), sorted(c.attributes))\n")
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("PARTICLEMESH_LIBRARY", "PARTICLEMESH_PCL_LIBRARY", "LD_LIBRARY_PATH")}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 0, out.stderr
+    core, bridge, summary = out.stdout.strip().splitlines()
+    assert os.path.dirname(core) == str(lib_dir) and os.path.dirname(bridge) == str(lib_dir)
+    assert summary == "1000 ['color']"
+    import shutil
+    if shutil.which("readelf"):
+        dynamic = subprocess.run(["readelf", "-d", str(lib_dir / "libparticlemesh_pcl.so")],
+                                 capture_output=True, text=True, check=True).stdout
+        runpath = [line for line in dynamic.splitlines() if "RUNPATH" in line or "RPATH" in line]
+        assert runpath and all("[$ORIGIN]" in line for line in runpath), runpath
+
+
 # ---- bpy-free modules of the package ----------------------------------------------------------
 
 @pytest.fixture(scope="module")

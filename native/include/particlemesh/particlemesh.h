@@ -369,6 +369,27 @@ PM_EXPORT pm_status pm_ray_hits_copy(const pm_ray_hits* hits, double* out_t, dou
                                      double* out_normals, int32_t* out_entering, size_t capacity);
 PM_EXPORT void pm_ray_hits_destroy(pm_ray_hits* hits);
 
+/* ---- point-cloud attributes, read back (issue 6) --------------------------------------- */
+
+/* The per-point float channels a cloud carries, as the mesh functions above give them for a
+ * mesh: what pm_cloud_set_attribute stored, or what a reader found in the file. pm_cloud_read
+ * gives a PLY file's vertex colours (red green blue, any numeric type; uchar scaled by 1/255)
+ * as "color", 3 floats per point in [0, 1]; the PCL bridge's pm_pcl_read_cloud
+ * (particlemesh_pcl/particlemesh_pcl_c.h) gives a PCD file's rgb/rgba as "color" and its
+ * intensity as "intensity" (1 float per point, as stored). */
+
+/** Number of attributes on a cloud. */
+PM_EXPORT pm_status pm_cloud_get_attribute_count(const pm_cloud* cloud, size_t* out_count);
+/** Name of attribute `index` (0-based); the string stays valid until the cloud is changed or
+ *  destroyed. PM_STATUS_INVALID_ARGUMENT when index >= the count. */
+PM_EXPORT pm_status pm_cloud_get_attribute_name(const pm_cloud* cloud, size_t index, const char** out_name);
+/** Components of attribute `name`; PM_STATUS_INVALID_ARGUMENT naming it when the cloud has none. */
+PM_EXPORT pm_status pm_cloud_get_attribute_components(const pm_cloud* cloud, const char* name,
+                                                      int32_t* out_components);
+/** Copy attribute `name` into `out` (capacity_points * components floats, point-major). */
+PM_EXPORT pm_status pm_cloud_copy_attribute(const pm_cloud* cloud, const char* name, float* out,
+                                            size_t capacity_points);
+
 #ifdef __cplusplus
 }
 #endif

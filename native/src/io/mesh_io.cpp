@@ -86,6 +86,7 @@ detail::FlatImporter read_with_openmesh(const std::string& path, bool want_norma
   detail::FlatImporter importer;
   OpenMesh::IO::Options opt;
   if (want_normals) opt += OpenMesh::IO::Options::VertexNormal;
+  opt += OpenMesh::IO::Options::VertexColor;  // kept by read_point_cloud as "color"
   std::lock_guard<std::mutex> lock(openmesh_io_mutex());
   CaptureOpenMeshErrors capture;
   bool ok = false;
@@ -103,6 +104,8 @@ detail::FlatImporter read_with_openmesh(const std::string& path, bool want_norma
     throw Error(Status::FormatError, "'" + path + "': a face refers to a vertex that does not exist");
   if (!opt.check(OpenMesh::IO::Options::VertexNormal)) importer.normals.clear();
   if (!importer.normals.empty()) importer.normals.resize(importer.positions.size());
+  if (!opt.check(OpenMesh::IO::Options::VertexColor)) importer.colors.clear();
+  if (!importer.colors.empty()) importer.colors.resize(3 * importer.positions.size());
   return importer;
 }
 
@@ -197,6 +200,7 @@ PointCloud read_point_cloud(const std::string& path) {
     detail::FlatImporter imp = read_with_openmesh(path, true);
     cloud.positions = std::move(imp.positions);
     cloud.normals = std::move(imp.normals);
+    if (!imp.colors.empty()) cloud.attributes.push_back({"color", 3, std::move(imp.colors)});
   }
   if (cloud.positions.empty()) throw Error(Status::InvalidInput, "'" + path + "' holds no points");
   try {

@@ -26,6 +26,7 @@ class FlatImporter final : public OpenMesh::IO::BaseImporter {
   std::vector<Vec3> positions;
   std::vector<Vec3> normals;
   std::vector<Triangle> triangles;
+  std::vector<float> colors;  ///< r g b in [0, 1] per vertex (empty: the file has none)
   bool bad_face = false;  ///< a face referred to a vertex that does not exist
 
   VH add_vertex(const OpenMesh::Vec3f& p) override { return push(Vec3{p[0], p[1], p[2]}); }
@@ -50,10 +51,11 @@ class FlatImporter final : public OpenMesh::IO::BaseImporter {
   void set_halfedge(VH, HH) override {}
   void set_normal(VH v, const OpenMesh::Vec3f& n) override { set_n(v, Vec3{n[0], n[1], n[2]}); }
   void set_normal(VH v, const OpenMesh::Vec3d& n) override { set_n(v, Vec3{n[0], n[1], n[2]}); }
-  void set_color(VH, const OpenMesh::Vec3uc&) override {}
-  void set_color(VH, const OpenMesh::Vec4uc&) override {}
-  void set_color(VH, const OpenMesh::Vec3f&) override {}
-  void set_color(VH, const OpenMesh::Vec4f&) override {}
+  // Vertex colours (OpenMesh's PLY reader delivers red/green/blue of any type as uchar).
+  void set_color(VH v, const OpenMesh::Vec3uc& c) override { set_c(v, c[0] / 255.f, c[1] / 255.f, c[2] / 255.f); }
+  void set_color(VH v, const OpenMesh::Vec4uc& c) override { set_c(v, c[0] / 255.f, c[1] / 255.f, c[2] / 255.f); }
+  void set_color(VH v, const OpenMesh::Vec3f& c) override { set_c(v, c[0], c[1], c[2]); }
+  void set_color(VH v, const OpenMesh::Vec4f& c) override { set_c(v, c[0], c[1], c[2]); }
   void set_texcoord(VH, const OpenMesh::Vec2f&) override {}
   void set_status(VH, const OpenMesh::Attributes::StatusInfo&) override {}
   void set_next(HH, HH) override {}
@@ -92,6 +94,12 @@ class FlatImporter final : public OpenMesh::IO::BaseImporter {
     if (!valid(v)) return;
     if (normals.size() < positions.size()) normals.resize(positions.size());
     normals[size_t(v.idx())] = n;
+  }
+  void set_c(VH v, float r, float g, float b) {
+    if (!valid(v)) return;
+    if (colors.size() < 3 * positions.size()) colors.resize(3 * positions.size());
+    float* c = &colors[3 * size_t(v.idx())];
+    c[0] = r, c[1] = g, c[2] = b;
   }
 };
 

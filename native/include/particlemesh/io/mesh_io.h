@@ -35,7 +35,8 @@ PM_EXPORT void write_mesh(const TriMesh& mesh, const std::string& path,
 /// @throws Error(IoError | FormatError) naming the file and the problem.
 PM_EXPORT TriMesh read_mesh(const std::string& path);
 
-/// Read particles: .ply (vertices and, if present, nx ny nz; faces ignored) or .xyz
+/// Read particles: .ply (vertices and, if present, nx ny nz and red green blue -> the "color"
+/// attribute, 3 floats in [0, 1]; faces ignored) or .xyz
 /// (one point per line: "x y z" or "x y z nx ny nz", '#' starts a comment).
 /// The cloud is validated (see validate_point_cloud).
 /// @throws Error(IoError | FormatError | InvalidInput) naming the file and line or index.
