@@ -19,6 +19,10 @@ BUILD="${PM_ASAN_BUILD_DIR:-$ROOT/build-asan}"
 TARGET="${1:-list}"
 SECONDS_PER_TARGET="${2:-60}"
 
+export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=0}"
+export UBSAN_OPTIONS="${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}"
+export LSAN_OPTIONS="suppressions=$ROOT/tests/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
+
 if [ ! -f "$BUILD/build.ninja" ]; then
   PM_FUZZ_SECONDS=0 PM_SKIP_SUITES=1 "$ROOT/scripts/sanitize.sh"
 fi
@@ -31,9 +35,6 @@ ninja -C "$BUILD" -j "${PM_JOBS:-$(nproc)}" pm_fuzz_seeds $(for t in $targets; d
 SEEDS="$BUILD/tests/fuzz/seeds"
 "$BUILD/tests/fuzz/pm_fuzz_seeds" "$SEEDS" "${PM_SHARED_DATA_DIR:-$ROOT/../shared/data}" >/dev/null
 
-export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=0}"
-export UBSAN_OPTIONS="${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}"
-export LSAN_OPTIONS="suppressions=$ROOT/tests/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
 
 fuzz_one() {
   local t="$1" secs="$2"

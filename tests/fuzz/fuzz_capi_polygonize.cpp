@@ -25,6 +25,8 @@ struct Cancel {
 };
 
 int progress(void* user, const char* stage, double fraction) {
+  // A struct_size that covers `progress` but not `progress_user_data` gives NULL here.
+  if (user == nullptr) return 0;
   auto* c = static_cast<Cancel*>(user);
   PM_FUZZ_CHECK(stage != nullptr);
   PM_FUZZ_CHECK(fraction >= 0 && fraction <= 1);
@@ -75,7 +77,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
   }
   Cancel cancel;
-  if (size_mode & 8) {
+  if ((size_mode & 8) && opt.struct_size >= offsetof(pm_polygonize_options, progress_user_data) + sizeof(void*)) {  // a struct_size cutting the user pointer in two is the caller's bug
     opt.progress = progress;
     opt.progress_user_data = &cancel;
     cancel.cancel_at = int(in.range(0, 8));

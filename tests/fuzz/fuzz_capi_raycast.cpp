@@ -22,6 +22,8 @@ struct Cancel {
 };
 
 int progress(void* user, const char* stage, double fraction) {
+  // A struct_size that covers `progress` but not `progress_user_data` gives NULL here.
+  if (user == nullptr) return 0;
   auto* c = static_cast<Cancel*>(user);
   PM_FUZZ_CHECK(stage != nullptr);
   PM_FUZZ_CHECK(fraction >= 0 && fraction <= 1);
@@ -84,7 +86,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (which & 8) fo.threads = int32_t(in.range(0, 3)) - 1;
   if (which & 16) fo.struct_size = uint32_t(in.range(0, sizeof(fo) + 8));
   Cancel field_cancel;
-  if (which & 32) {
+  if ((which & 32) && fo.struct_size >= offsetof(pm_field_options, progress_user_data) + sizeof(void*)) {
     fo.progress = progress;
     fo.progress_user_data = &field_cancel;
     field_cancel.cancel_at = int(in.range(0, 4));
@@ -118,14 +120,16 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (rwhich & 4) ro.threads = int32_t(in.range(0, 3)) - 1;
   if (rwhich & 8) ro.struct_size = uint32_t(in.range(0, sizeof(ro) + 8));
   Cancel ray_cancel;
-  if (rwhich & 16) {
+  if ((rwhich & 16) && ro.struct_size >= offsetof(pm_raycast_options, progress_user_data) + sizeof(void*)) {
     ro.progress = progress;
     ro.progress_user_data = &ray_cancel;
     ray_cancel.cancel_at = int(in.range(0, 4));
   }
-  const bool full = ro.struct_size >= offsetof(pm_raycast_options, t_max) + sizeof(double);
-  const double t_min = full ? ro.t_min : 0, t_max = full ? ro.t_max : INFINITY;
   const pm_raycast_options* rop = (rwhich & 32) ? nullptr : &ro;
+  // The t range the call uses: the fields struct_size covers, defaults for the rest.
+  const bool has_min = rop && ro.struct_size >= offsetof(pm_raycast_options, t_min) + sizeof(double);
+  const bool has_max = rop && ro.struct_size >= offsetof(pm_raycast_options, t_max) + sizeof(double);
+  const double t_min = has_min ? ro.t_min : 0, t_max = has_max ? ro.t_max : INFINITY;
 
   // First hits, with any of the outputs NULL.
   {

@@ -105,6 +105,9 @@ TEST(FileLimits, PlyHeaderItself) {
   expect_refused(write(dir / "type.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty quad x\nend_header\n1\n"),
                  "unknown type");
   expect_refused(write(dir / "fmt.ply", "ply\nformat zip 1.0\nelement vertex 1\nend_header\n"), "not ascii or binary");
+  // OpenMesh's reader looped forever on an unparsable version (found by fuzzing).
+  expect_refused(write(dir / "ver.ply", "ply\nformat ascii ..0\nelement vertex 1\nproperty float x\nend_header\n1\n"),
+                 "format TYPE VERSION");
 }
 
 TEST(FileLimits, OffPromisingMore) {

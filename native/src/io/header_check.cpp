@@ -182,7 +182,11 @@ std::string plural(uint64_t n, const std::string& what) {
 void check_ply(const std::string& path) {
   uint64_t file_size = 0;
   const std::string head = read_prefix(path, kMaxHeader, &file_size);
-  if (head.compare(0, 3, "ply") != 0) return;  // not a PLY header: OpenMesh says so
+  // OpenMesh takes "PLY" in any case, and then loops forever on a header without end_header
+  // (found by fuzzing): check whatever it would read.
+  if (head.size() < 3 || std::tolower(static_cast<unsigned char>(head[0])) != 'p' ||
+      std::tolower(static_cast<unsigned char>(head[1])) != 'l' || std::tolower(static_cast<unsigned char>(head[2])) != 'y')
+    return;  // not a PLY header: OpenMesh says so
   enum class Format { None, Ascii, BinaryLE, BinaryBE } format = Format::None;
   std::vector<PlyElement> elements;
   size_t pos = 0;
@@ -206,6 +210,13 @@ void check_ply(const std::string& path) {
                : w[1] == "binary_big_endian" ? Format::BinaryBE
                                                : Format::None;
       if (format == Format::None) fail(path, "PLY format '" + std::string(w[1].substr(0, 40)) + "' is not ascii or binary");
+      // OpenMesh's reader loops forever on a version it cannot parse ("format ascii ..0",
+      // found by fuzzing): the version must be a number.
+      double version = 0;
+      const auto r = w.size() == 3 ? std::from_chars(w[2].data(), w[2].data() + w[2].size(), version)
+                                   : std::from_chars_result{nullptr, std::errc::invalid_argument};
+      if (r.ec != std::errc() || r.ptr != w[2].data() + w[2].size())
+        fail(path, "bad PLY header line '" + std::string(line.substr(0, 80)) + "' (format TYPE VERSION, e.g. 1.0)");
     } else if (w[0] == "element") {
       PlyElement e;
       if (w.size() != 3 || !parse_u64(w[2], e.count))
