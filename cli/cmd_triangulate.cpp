@@ -1,5 +1,6 @@
 // particlemesh triangulate IN -o OUT: surface particles to a mesh.
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <memory>
 
@@ -33,6 +34,7 @@ struct TriangulateArgs {
   bool quiet = false;
   int threads = 0;
   size_t max_neighbors = 256;
+  size_t max_triplets_per_point = TriangulateOptions{}.max_triplets_per_point;
   ParticleInputArgs input_options;  // .pcd, PCL preprocessing, --pcl-mesh
   SmoothChainArgs smooth;  // --smooth loop|butterfly --levels K
 };
@@ -50,6 +52,7 @@ int run_triangulate(const TriangulateArgs& a) {
   opt.max_edge_factor = a.max_edge_factor;
   opt.threads = a.threads;
   opt.max_neighbors = a.max_neighbors;
+  opt.max_triplets_per_point = a.max_triplets_per_point;
   opt.normal_angle = a.normal_angle;
   opt.normals = a.normals == "input" ? SurfaceOptions::NormalSource::Input
                 : a.normals == "estimate" ? SurfaceOptions::NormalSource::Estimate
@@ -167,6 +170,11 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("--max-neighbors", args->max_neighbors,
                   "Fail if a point has more neighbours within L than this (points far denser than the spacing)")
       ->check(CLI::Range(size_t(2), size_t(100000)))
+      ->capture_default_str();
+  app->add_option("--max-triplets-per-point", args->max_triplets_per_point,
+                  "Fail before the triangle test if its candidate triplets would average more than this per point "
+                  "(L far too large for the spacing; 0 = no limit)")
+      ->check(CLI::Range(size_t(0), size_t(UINT32_MAX)))
       ->capture_default_str();
   app->add_option("--report", args->report, "Also write statistics and the topology report as JSON");
   app->add_flag("--ascii", args->ascii, "Write ASCII PLY instead of binary");

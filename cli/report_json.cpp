@@ -52,6 +52,7 @@ nlohmann::json to_json(const TriangulateStats& s) {
           {"points", s.points},
           {"duplicate_points", s.duplicate_points},
           {"max_neighbors_seen", s.max_neighbors_seen},
+          {"triplets", s.triplets},
           {"candidates", s.candidates},
           {"degenerate_triplets", s.degenerate},
           {"ties", s.ties},

@@ -17,6 +17,7 @@ PACKAGES=(
   python3 python3-numpy python3-pytest
   blender
   libpcl-dev
+  clang llvm libclang-rt-14-dev  # the sanitizer build and libFuzzer (scripts/sanitize.sh, fuzz.sh)
   libopenvdb-dev  # the polygonize benchmark's peer (bench/ only)
 )
 

@@ -136,6 +136,8 @@ class TriangulateOptions(Structure):
         ("fill_holes", c_uint32),
         ("fill_edge_factor", c_double),
         ("normals", c_int32),
+        # appended (issue 9)
+        ("max_triplets_per_point", c_uint32),
     ]
 
 
@@ -157,6 +159,8 @@ class TriangulateStats(Structure):
         ("pinches_resolved", c_uint64),
         ("unused_points", c_uint64),
         ("normals_estimated", c_int32),
+        # appended (issue 9)
+        ("triplets", c_uint64),
     ]
 
 

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <sstream>
 #include <string>
@@ -19,6 +20,8 @@
 
 #include <particlemesh/core/error.h>
 #include <particlemesh/io/mesh_io.h>
+
+#include "io/header_check.h"  // native/src: the PLY completeness check (compiled in, hidden)
 
 namespace particlemesh_pcl
 {
@@ -303,8 +306,11 @@ namespace particlemesh_pcl
     if (h.points == 0)
       fail (path, "no points (POINTS 0)");
 
-    // The data section.
+    // The data section. points x point_size can exceed 64 bits in a hostile header.
     const std::size_t available = file_size - h.data_offset;
+    if (h.points > std::numeric_limits<std::size_t>::max () / h.point_size)
+      fail (path, "bad header: " + std::to_string (h.points) + " points x " + std::to_string (h.point_size) +
+                  " bytes per point is more than any file holds");
     if (h.data == "binary")
     {
       const std::size_t need = h.points * h.point_size;
@@ -463,6 +469,18 @@ namespace particlemesh_pcl
     {
       fs::remove (temp, ec);
       throw Error (Status::IoError, path + ": cannot write (PCL's PLY writer failed)");
+    }
+    // PCL's writer does not check its stream: a write cut short (disk full, file size limit)
+    // still returns 0. The file must hold everything its header promises before it is
+    // renamed into place (the same check the readers make).
+    try
+    {
+      particlemesh::detail::check_mesh_file_header (temp.string (), ".ply");
+    }
+    catch (const Error &)
+    {
+      fs::remove (temp, ec);
+      throw Error (Status::IoError, path + ": cannot write (the file came out incomplete: disk full?)");
     }
     fs::rename (temp, target, ec);
     if (ec)

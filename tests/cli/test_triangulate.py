@@ -124,18 +124,40 @@ def test_help_and_usage(cli):
     assert proc.returncode == 2
 
 
+def interrupt_while_computing(exe, args, stage, tmp_path):
+    """Start `particlemesh ARGS`, wait until its progress log (stderr, one line per stage when
+    not a terminal) shows `stage` (so it is computing, not reading), send SIGINT, and return
+    (seconds from the signal to the exit, exit status, stderr). Waiting for a stage instead of
+    a fixed sleep keeps the test meaningful on a loaded machine."""
+    proc = subprocess.Popen([exe, *map(str, args)], stderr=subprocess.PIPE, text=True)
+    seen = []
+    try:
+        for line in proc.stderr:
+            seen.append(line)
+            if stage in line:
+                break
+        else:
+            raise AssertionError(f"finished before stage '{stage}': {''.join(seen)}")
+        start = time.monotonic()
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=60)
+        return time.monotonic() - start, proc.returncode, "".join(seen) + err
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+
+
 def test_sigint_cancels_without_partial_output(cli, tmp_path):
     exe = os.environ["PARTICLEMESH_CLI"]
     pts = tmp_path / "big.ply"
     cli("sample", "fibonacci", "--points", "3000000", "-o", pts)
     out = tmp_path / "big_out.ply"
-    proc = subprocess.Popen([exe, "triangulate", pts, "-o", out, "--raw"], stderr=subprocess.PIPE, text=True)
-    time.sleep(1.0)
-    start = time.monotonic()
-    proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=30)
-    assert time.monotonic() - start < 1.5
-    assert proc.returncode == 130, err
+    report = tmp_path / "big_report.json"
+    seconds, rc, err = interrupt_while_computing(
+        exe, ["triangulate", pts, "-o", out, "--raw", "--report", report], "testing triangles", tmp_path)
+    assert seconds < 1.5, err
+    assert rc == 130, err
     assert "cancel" in err
-    assert not out.exists()
-    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".big_out")]
+    assert not out.exists() and not report.exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".big_")]

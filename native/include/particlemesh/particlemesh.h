@@ -105,6 +105,9 @@ typedef struct pm_triangulate_options {
   uint32_t fill_holes;      /**< fill boundary loops of up to this many edges (default 100, 0 = none) */
   double fill_edge_factor;  /**< fill edges at most this x L: wider openings stay open (default 1.5) */
   int32_t normals;          /**< PM_NORMALS_* (default PM_NORMALS_AUTO) */
+  /* -- appended (issue 9) -- */
+  uint32_t max_triplets_per_point; /**< fail with PM_STATUS_LIMIT_EXCEEDED before the test when the
+                                        candidate triplets average more per point (default 4096; 0 = no limit) */
 } pm_triangulate_options;
 
 typedef struct pm_triangulate_stats {
@@ -124,6 +127,8 @@ typedef struct pm_triangulate_stats {
   uint64_t pinches_resolved;
   uint64_t unused_points;   /**< distinct particles in no triangle */
   int32_t normals_estimated;
+  /* -- appended (issue 9) -- */
+  uint64_t triplets;        /**< candidate triplets the test examined (see max_triplets_per_point) */
 } pm_triangulate_stats;
 
 PM_EXPORT void pm_triangulate_options_init(pm_triangulate_options* options);

@@ -1,4 +1,6 @@
 // C ABI: library-level calls and the error channel.
+#include <cstring>
+#include <type_traits>
 #include <string>
 
 #include "capi/firewall.h"
@@ -30,7 +32,12 @@ uint32_t pm_abi_version(void) { return PM_ABI_VERSION; }
 const char* pm_version_string(void) { return PARTICLEMESH_VERSION_STRING; }
 
 const char* pm_status_string(pm_status status) {
-  return particlemesh::status_name(static_cast<particlemesh::Status>(status));
+  // A C caller may pass any int. Read it as an integer: in C++ a pm_status holding a value
+  // outside the enumerators' range is undefined behaviour (UBSan: "load of value 999").
+  std::underlying_type_t<pm_status> raw;
+  static_assert(sizeof raw == sizeof status);
+  std::memcpy(&raw, &status, sizeof raw);
+  return particlemesh::status_name(static_cast<particlemesh::Status>(raw));
 }
 
 const char* pm_last_error_message(void) { return particlemesh::capi::last_error.c_str(); }

@@ -41,7 +41,11 @@ pm_status pm_mesh_create(const double* positions, size_t vertex_count, const int
     }
     if (normals) {
       m.normals.resize(vertex_count);
-      for (size_t i = 0; i < vertex_count; ++i) m.normals[i] = {normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]};
+      for (size_t i = 0; i < vertex_count; ++i) {
+        m.normals[i] = {normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]};
+        if (!is_finite(m.normals[i]))
+          throw Error(Status::InvalidInput, "normals[" + std::to_string(i) + "] is not finite");
+      }
     }
     m.triangles.resize(triangle_count);
     for (size_t f = 0; f < triangle_count; ++f)

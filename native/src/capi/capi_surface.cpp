@@ -40,6 +40,7 @@ void pm_triangulate_options_init(pm_triangulate_options* options) {
   options->fill_holes = uint32_t(d.fill_holes);
   options->fill_edge_factor = d.fill_edge_factor;
   options->normals = PM_NORMALS_AUTO;
+  options->max_triplets_per_point = uint32_t(d.max_triplets_per_point);
 }
 
 pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* options,
@@ -60,6 +61,7 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
     opt.max_edge_factor = o.max_edge_factor;
     opt.threads = o.threads;
     opt.max_neighbors = o.max_neighbors;
+    opt.max_triplets_per_point = o.max_triplets_per_point;
     opt.progress = wrap_progress(o.progress, o.progress_user_data);
     opt.normal_angle = o.normal_angle;
     opt.fill_holes = o.fill_holes;
@@ -96,6 +98,7 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
       s.pinches_resolved = r.surface.pinches_resolved;
       s.unused_points = r.surface.unused_points;
       s.normals_estimated = r.surface.normals_estimated;
+      s.triplets = r.triangulation.triplets;
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();

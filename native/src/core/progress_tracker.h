@@ -63,7 +63,8 @@ class ProgressTracker {
   using Clock = std::chrono::steady_clock;
 
   void report(double fraction, bool force) {
-    if (!callback_ || std::this_thread::get_id() != owner_) return;
+    // Once the callback has asked to cancel it is not called again (the call is unwinding).
+    if (!callback_ || cancelled() || std::this_thread::get_id() != owner_) return;
     const auto now = Clock::now();
     if (!force && now - last_ < std::chrono::milliseconds(50)) return;
     last_ = now;

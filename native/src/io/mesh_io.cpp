@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
@@ -13,6 +15,7 @@
 #include <system_error>
 
 #include "io/atomic_file.h"
+#include "io/header_check.h"
 #include "io/openmesh_adapters.h"
 #include "io/xyz_format.h"
 #include "particlemesh/core/error.h"
@@ -141,11 +144,17 @@ void write_mesh(const TriMesh& mesh, const std::string& path, const WriteMeshOpt
   if (format == MeshFormat::PlyBinary) opt += OpenMesh::IO::Options::Binary;
   if (normals) opt += OpenMesh::IO::Options::VertexNormal;
   {
+    // OpenMesh's writers do not check their stream: a failed write (disk full, file size
+    // limit) would leave a truncated file that looks complete. So we own the stream and
+    // check it once OpenMesh is done.
+    std::ofstream out(file.temp_path(), std::ios::binary | std::ios::trunc);
+    if (!out) throw Error(Status::IoError, "cannot write '" + path + "': " + std::strerror(errno));
     std::lock_guard<std::mutex> lock(openmesh_io_mutex());
     CaptureOpenMeshErrors capture;
     bool ok = false;
+    errno = 0;
     try {
-      ok = OpenMesh::IO::IOManager().write(file.temp_path(), exporter, opt, 6);
+      ok = OpenMesh::IO::IOManager().write(out, format == MeshFormat::Obj ? "obj" : "ply", exporter, opt, 6);
     } catch (const std::exception& e) {
       throw Error(Status::IoError, "cannot write '" + path + "': " + e.what());
     }
@@ -153,6 +162,12 @@ void write_mesh(const TriMesh& mesh, const std::string& path, const WriteMeshOpt
       std::string why = capture.message();
       throw Error(Status::IoError, "cannot write '" + path + "'" + (why.empty() ? "" : ": " + why));
     }
+    out.flush();
+    const int write_errno = errno;
+    out.close();
+    if (out.fail())
+      throw Error(Status::IoError, "cannot write '" + path + "': " +
+                                       (write_errno ? std::strerror(write_errno) : "write failed"));
   }
   file.commit();
 }
@@ -160,6 +175,7 @@ void write_mesh(const TriMesh& mesh, const std::string& path, const WriteMeshOpt
 TriMesh read_mesh(const std::string& path) {
   check_extension_known(path, {".ply", ".obj", ".off", ".stl"});
   require_readable(path);
+  detail::check_mesh_file_header(path, lower_extension(path));
   detail::FlatImporter imp = read_with_openmesh(path, true);
   TriMesh mesh;
   mesh.positions = std::move(imp.positions);
@@ -180,6 +196,7 @@ PointCloud read_point_cloud(const std::string& path) {
   if (lower_extension(path) == ".xyz") {
     cloud = detail::read_xyz(path);
   } else {
+    detail::check_mesh_file_header(path, ".ply");
     detail::FlatImporter imp = read_with_openmesh(path, true);
     cloud.positions = std::move(imp.positions);
     cloud.normals = std::move(imp.normals);

@@ -157,6 +157,7 @@ bool orient_normals_by_reference(const NeighborGrid& grid, const std::vector<uin
   std::vector<uint8_t> decided(n, 0);
   std::vector<uint32_t> open;
   for (size_t s = 0; s < n; ++s) {
+    if ((s & 0xffff) == 0) tracker.check();
     if (rep[s] != s || !(squared_norm(normals[s]) > 0)) continue;
     const Vec3 r = reference[s];
     const double len = norm(r);
@@ -200,6 +201,7 @@ bool orient_normals_by_reference(const NeighborGrid& grid, const std::vector<uin
   // instance, face inward on its far side, and disagree along the silhouette.
   size_t pairs = 0, disagree = 0;
   for (size_t s = 0; s < n; ++s) {
+    if ((s & 0xffff) == 0) tracker.check();  // a serial pass: let a cancel request in
     if (rep[s] != s || !decided[s]) continue;
     const Vec3 p = grid.sorted_point(uint32_t(s));
     for (const uint32_t* q = lists.begin(uint32_t(s)); q != lists.end(uint32_t(s)); ++q) {

@@ -103,6 +103,7 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     bo.fill_edge_factor = options.fill_edge_factor;
     detail::BuilderStats bs;
     tris = detail::build_surface(cloud.positions, normals, active, raw.triangles, bo, options.repair, bs, tracker);
+    tracker.check();  // the steps below take up to a second at 1M points: let a cancel request in
     st.seconds_extraction = bs.seconds_candidates + bs.seconds_growth;
     st.seconds_repair = bs.seconds_repair;
     t0 = Clock::now();
@@ -122,6 +123,7 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
       bs.components_flipped = detail::orient_closed_components_outward(cloud.positions, tris, bs.boundary);
     }
     st.seconds_orient = seconds_since(t0);
+    tracker.check();
     std::vector<uint8_t> used(n, 0);
     for (const Triangle& t : tris)
       for (uint32_t v : t) used[v] = 1;
@@ -139,6 +141,7 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     st.unused_points = bs.unused_points;
     for (const auto& [edges, width] : bs.open_loops) st.open_loops.push_back({edges, width});
   });
+  tracker.check();
   result.mesh.positions = cloud.positions;
   result.mesh.normals = surface_normals(cloud.positions, tris, normals);
   result.mesh.triangles = std::move(tris);

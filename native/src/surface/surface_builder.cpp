@@ -341,17 +341,22 @@ class Builder {
       for (uint32_t t = 0; t < tris_.size(); ++t)
         for (uint32_t v : tris_[t]) vt_[fill[v]++] = t;
     }
+    tracker_.check();
     // Boundary half-edges, found in parallel and joined in block order.
     const size_t block = 8192, blocks = (tris_.size() + block - 1) / block;
     std::vector<std::vector<uint64_t>> found(blocks);
     detail::parallel_blocks(blocks, 1, [&](size_t bb, size_t be) {
-      for (size_t b = bb; b < be; ++b)
+      for (size_t b = bb; b < be; ++b) {
+        if (tracker_.cancelled()) return;
+        tracker_.tick(0);  // on the calling thread: lets a cancel request in (about 0.5 s at 1M)
         for (size_t t = b * block; t < std::min(tris_.size(), (b + 1) * block); ++t)
           for (int k = 0; k < 3; ++k) {
             const uint32_t a = tris_[t][k], c = tris_[t][(k + 1) % 3];
             if (!directed_used(c, a)) found[b].push_back(half_key(a, c));
           }
+      }
     });
+    tracker_.check();
     for (const auto& f : found) boundary_.insert(f.begin(), f.end());
   }
 
@@ -689,7 +694,9 @@ class Builder {
         return n2 > 1e-20 * lmax * lmid;
       };
       for (const auto& [d, e] : edges) {
-        const auto [a, b] = e;
+        // Plain variables, not a structured binding: the lambdas below capture them, which
+        // clang before 16 (the sanitizer build's clang 14) does not allow.
+        const uint32_t a = e.first, b = e.second;
         std::vector<uint32_t> on_edge;
         for_each_tri(a, [&](uint32_t t) {
           const Triangle& T = tris_[t];
@@ -789,14 +796,22 @@ class Builder {
     tracker_.stage("repairing", 0.85, 0.97);
     start_repair();
     // Small loops first (wrong diagonals, sampling gaps), then pinches, then larger loops.
+    // A check between the steps: each is a pass over the whole mesh (up to a second at 1M
+    // points), and a host's cancel request is only seen in a check (issue 9).
     fill_loops(o_.small_hole);
     tracker_.check();
     stats_.pinches_resolved += unpinch();
+    tracker_.check();
     fill_loops(o_.small_hole);
+    tracker_.check();
     if (o_.max_hole > o_.small_hole) fill_loops(o_.max_hole);
+    tracker_.check();
     stats_.pinches_resolved += unpinch();
+    tracker_.check();
     drop_fragments(raw);
+    tracker_.check();
     if (insert_unused(raw) > 0) {
+      tracker_.check();
       fill_loops(o_.small_hole);
       stats_.pinches_resolved += unpinch();
     }

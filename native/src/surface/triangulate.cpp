@@ -1,6 +1,7 @@
 #include "particlemesh/surface/triangulate.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -90,14 +91,42 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
   raw.neighbors = build_neighbor_lists(grid, raw.rep, raw.neighbor_radius, options.max_neighbors, tracker);
   const NeighborLists& nbr = raw.neighbors;
   st.max_neighbors_seen = nbr.max_count;
+
+  // The test's work, counted before it starts: the pairs (j, k) of each point's higher
+  // neighbours within L are the triplets it examines (max_triplets_per_point).
+  const double L2 = st.max_edge * st.max_edge;
+  const auto& P = grid.sorted_points();
+  {
+    std::atomic<uint64_t> triplets{0};
+    parallel_blocks(n, 4096, [&](size_t b, size_t e) {
+      if (tracker.cancelled()) return;
+      uint64_t sum = 0;
+      for (size_t i = b; i < e; ++i) {
+        uint64_t higher = 0;
+        for (const uint32_t* q = std::upper_bound(nbr.begin(uint32_t(i)), nbr.end(uint32_t(i)), uint32_t(i));
+             q != nbr.end(uint32_t(i)); ++q)
+          higher += squared_distance(P[*q], P[i]) <= L2;
+        sum += higher * (higher - (higher > 0)) / 2;
+      }
+      triplets.fetch_add(sum, std::memory_order_relaxed);
+    });
+    tracker.check();
+    st.triplets = triplets.load();
+    const uint64_t distinct = n - duplicates;
+    if (options.max_triplets_per_point > 0 && st.triplets > uint64_t(options.max_triplets_per_point) * distinct)
+      throw Error(Status::LimitExceeded,
+                  "the triangle test would examine " + std::to_string(st.triplets) + " candidate triplets (" +
+                      std::to_string(st.triplets / distinct) + " per point, more than max_triplets_per_point = " +
+                      std::to_string(options.max_triplets_per_point) + "): the max edge L = " +
+                      std::to_string(st.max_edge) + " is far too large for the spacing r0 = " +
+                      std::to_string(st.spacing) + " (lower the max edge factor, or raise the limit)");
+  }
   st.seconds_neighbors = seconds_since(t0);
 
   // 3. The test. Each triangle is generated once, from its lowest sorted index i, as a pair
   //    j < k of i's higher neighbours within L.
   t0 = Clock::now();
   tracker.stage("testing triangles", at(0.55), at(0.95), n);
-  const double L2 = st.max_edge * st.max_edge;
-  const auto& P = grid.sorted_points();
   const size_t block = 1024;
   const size_t blocks = (n + block - 1) / block;
   std::vector<std::vector<Triangle>> out(blocks);

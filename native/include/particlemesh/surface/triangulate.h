@@ -47,6 +47,14 @@ struct TriangulateOptions {
   /// Fail with LimitExceeded if a point has more neighbours within L than this: a sign the
   /// points are packed far denser than the spacing, where the triplet count would explode.
   size_t max_neighbors = 256;
+  /// Fail with LimitExceeded, before the test starts, if the candidate triplets it would
+  /// examine (pairs of a point's higher-index neighbours within L) average more than this
+  /// per distinct point: L is then far too large for the spacing, and the test's work grows
+  /// as (L / r0)^4 on a surface. With the default neighbour cap this triggers about where
+  /// that does (L ~ 7 r0 on an even surface sample); it bounds the work when max_neighbors
+  /// is raised. Evenly sampled surfaces at L = 2 r0 need about 20 per point, volume-filling
+  /// particles about 120. 0 = no limit.
+  size_t max_triplets_per_point = 4096;
   ProgressCallback progress;
 };
 
@@ -57,6 +65,7 @@ struct TriangulateStats {
   size_t points = 0;
   size_t duplicate_points = 0;   ///< exact duplicates set aside
   size_t max_neighbors_seen = 0; ///< the largest neighbour count within L
+  size_t triplets = 0;           ///< pairs of higher neighbours within L, over all points (see max_triplets_per_point)
   size_t candidates = 0;         ///< non-degenerate triplets with all edges <= L
   size_t degenerate = 0;         ///< triplets with edges <= L skipped as collinear
   size_t ties = 0;               ///< sphere tests decided by the symbolic tie-break
@@ -77,7 +86,8 @@ struct TriangulateResult {
 /// linear work for evenly spaced points, all cores used, byte-identical output for any
 /// thread count. Every input particle is a vertex of the result.
 /// @throws Error(InvalidInput) empty/one-point/all-coincident cloud, NaN or Inf coordinate;
-///         Error(InvalidArgument) bad option; Error(LimitExceeded) see max_neighbors;
+///         Error(InvalidArgument) bad option; Error(LimitExceeded) see max_neighbors and
+///         max_triplets_per_point;
 ///         Error(Cancelled) when the progress callback returns false.
 PM_EXPORT TriangulateResult triangulate_raw(const PointCloud& cloud,
                                             const TriangulateOptions& options = {});

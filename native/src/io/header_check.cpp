@@ -1,0 +1,396 @@
+#include "io/header_check.h"
+
+#include <cctype>
+#include <charconv>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "particlemesh/core/error.h"
+
+namespace particlemesh::detail {
+
+namespace {
+
+// Hand-written rather than taken from a PLY library: the point is to check a file before the
+// reader we use (OpenMesh's) trusts it, with the same reading of the header.
+
+[[noreturn]] void fail(const std::string& path, const std::string& problem) {
+  throw Error(Status::FormatError, "'" + path + "': " + problem);
+}
+
+constexpr size_t kMaxHeader = 1 << 20;
+
+/// Sequential reader over a file: whitespace-separated tokens and raw bytes.
+class Reader {
+ public:
+  Reader(const std::string& path, uint64_t offset) : in_(path, std::ios::binary), buf_(1 << 16) {
+    if (!in_) throw Error(Status::IoError, "'" + path + "': cannot open for reading");
+    in_.seekg(std::streamoff(offset));
+  }
+
+  /// The next token, or false at the end of the file. Tokens longer than 64 bytes are
+  /// truncated (only their first bytes matter here).
+  bool token(std::string& out) {
+    out.clear();
+    int c;
+    do {
+      c = get();
+      if (c < 0) return false;
+    } while (std::isspace(c));
+    while (c >= 0 && !std::isspace(c)) {
+      if (out.size() < 64) out.push_back(char(c));
+      c = get();
+    }
+    return true;
+  }
+
+  /// Skip the rest of the current line.
+  void skip_line() {
+    int c;
+    do c = get();
+    while (c >= 0 && c != '\n');
+  }
+
+  /// Skip `n` whitespace-separated tokens; returns how many were there.
+  uint64_t skip_tokens(uint64_t n) {
+    uint64_t k = 0;
+    bool in_token = false;
+    while (k < n) {
+      const int c = get();
+      if (c < 0) return k + (in_token ? 1 : 0);
+      const bool space = std::isspace(c);
+      if (in_token && space) ++k;
+      in_token = !space;
+    }
+    return k;
+  }
+
+  /// Read `n` raw bytes into `out` (false if the file ends first).
+  bool bytes(void* out, size_t n) {
+    auto* o = static_cast<unsigned char*>(out);
+    for (size_t i = 0; i < n; ++i) {
+      const int c = get();
+      if (c < 0) return false;
+      o[i] = static_cast<unsigned char>(c);
+    }
+    return true;
+  }
+
+  /// Skip `n` raw bytes (false if the file ends first).
+  bool skip_bytes(uint64_t n) {
+    const uint64_t buffered = uint64_t(end_ - pos_);
+    if (n <= buffered) {
+      pos_ += n;
+      return true;
+    }
+    n -= buffered;
+    pos_ = end_ = 0;
+    const std::streamoff here = in_.tellg();
+    in_.seekg(0, std::ios::end);
+    const std::streamoff size = in_.tellg();
+    if (here < 0 || size < 0 || uint64_t(size - here) < n) return false;
+    in_.seekg(here + std::streamoff(n));
+    return true;
+  }
+
+ private:
+  int get() {
+    if (pos_ == end_) {
+      in_.read(buf_.data(), std::streamsize(buf_.size()));
+      end_ = size_t(in_.gcount());
+      pos_ = 0;
+      if (end_ == 0) return -1;
+    }
+    return static_cast<unsigned char>(buf_[pos_++]);
+  }
+
+  std::ifstream in_;
+  std::vector<char> buf_;
+  size_t pos_ = 0, end_ = 0;
+};
+
+std::string read_prefix(const std::string& path, size_t limit, uint64_t* file_size) {
+  std::error_code ec;
+  *file_size = std::filesystem::file_size(path, ec);
+  if (ec) throw Error(Status::IoError, "'" + path + "': cannot read (" + ec.message() + ")");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(Status::IoError, "'" + path + "': cannot open for reading");
+  std::string s(size_t(std::min<uint64_t>(limit, *file_size)), '\0');
+  in.read(s.data(), std::streamsize(s.size()));
+  s.resize(size_t(in.gcount()));
+  return s;
+}
+
+bool parse_u64(std::string_view s, uint64_t& v) {
+  if (s.empty() || s[0] == '-' || s[0] == '+') return false;
+  const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
+  return r.ec == std::errc() && r.ptr == s.data() + s.size();
+}
+
+/// Saturating a * b + c.
+uint64_t mul_add(uint64_t a, uint64_t b, uint64_t c) {
+  if (b != 0 && a > (std::numeric_limits<uint64_t>::max() - c) / b) return std::numeric_limits<uint64_t>::max();
+  return a * b + c;
+}
+
+// ---- PLY ----------------------------------------------------------------------------
+
+int ply_type_size(std::string_view t) {
+  if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+  if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+  if (t == "int" || t == "uint" || t == "int32" || t == "uint32" || t == "float" || t == "float32") return 4;
+  if (t == "double" || t == "float64") return 8;
+  return 0;
+}
+
+struct PlyProperty {
+  bool list = false;
+  int size = 0;        ///< scalar size, or list item size
+  int count_size = 0;  ///< list count size
+  bool count_signed = false;
+};
+
+struct PlyElement {
+  std::string name;
+  uint64_t count = 0;
+  std::vector<PlyProperty> properties;
+};
+
+std::vector<std::string_view> split_words(std::string_view line) {
+  std::vector<std::string_view> w;
+  size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) ++i;
+    size_t j = i;
+    while (j < line.size() && !std::isspace(static_cast<unsigned char>(line[j]))) ++j;
+    if (j > i) w.push_back(line.substr(i, j - i));
+    i = j;
+  }
+  return w;
+}
+
+std::string plural(uint64_t n, const std::string& what) {
+  return std::to_string(n) + " '" + what + "' element" + (n == 1 ? "" : "s");
+}
+
+void check_ply(const std::string& path) {
+  uint64_t file_size = 0;
+  const std::string head = read_prefix(path, kMaxHeader, &file_size);
+  // OpenMesh takes "PLY" in any case, and then loops forever on a header without end_header
+  // (found by fuzzing): check whatever it would read.
+  if (head.size() < 3 || std::tolower(static_cast<unsigned char>(head[0])) != 'p' ||
+      std::tolower(static_cast<unsigned char>(head[1])) != 'l' || std::tolower(static_cast<unsigned char>(head[2])) != 'y')
+    return;  // not a PLY header: OpenMesh says so
+  enum class Format { None, Ascii, BinaryLE, BinaryBE } format = Format::None;
+  std::vector<PlyElement> elements;
+  size_t pos = 0;
+  uint64_t data_offset = 0;
+  bool ended = false;
+  while (pos < head.size()) {
+    size_t eol = head.find('\n', pos);
+    if (eol == std::string::npos) break;
+    const std::string_view line(head.data() + pos, eol - pos);
+    pos = eol + 1;
+    const auto w = split_words(line);
+    if (w.empty()) continue;
+    if (w[0] == "end_header") {
+      data_offset = pos;
+      ended = true;
+      break;
+    }
+    if (w[0] == "format" && w.size() >= 2) {
+      format = w[1] == "ascii" ? Format::Ascii
+               : w[1] == "binary_little_endian" ? Format::BinaryLE
+               : w[1] == "binary_big_endian" ? Format::BinaryBE
+                                               : Format::None;
+      if (format == Format::None) fail(path, "PLY format '" + std::string(w[1].substr(0, 40)) + "' is not ascii or binary");
+      // OpenMesh's reader loops forever on a version it cannot parse ("format ascii ..0",
+      // found by fuzzing): the version must be a number.
+      double version = 0;
+      const auto r = w.size() == 3 ? std::from_chars(w[2].data(), w[2].data() + w[2].size(), version)
+                                   : std::from_chars_result{nullptr, std::errc::invalid_argument};
+      if (r.ec != std::errc() || r.ptr != w[2].data() + w[2].size())
+        fail(path, "bad PLY header line '" + std::string(line.substr(0, 80)) + "' (format TYPE VERSION, e.g. 1.0)");
+    } else if (w[0] == "element") {
+      PlyElement e;
+      if (w.size() != 3 || !parse_u64(w[2], e.count))
+        fail(path, "bad PLY header line '" + std::string(line.substr(0, 80)) + "' (element NAME COUNT)");
+      e.name = std::string(w[1].substr(0, 40));
+      elements.push_back(std::move(e));
+    } else if (w[0] == "property") {
+      if (elements.empty()) fail(path, "bad PLY header: a property before any element");
+      PlyProperty p;
+      if (w.size() == 5 && w[1] == "list") {
+        p.list = true;
+        p.count_size = ply_type_size(w[2]);
+        p.count_signed = w[2] == "char" || w[2] == "int8" || w[2] == "short" || w[2] == "int16" || w[2] == "int" ||
+                         w[2] == "int32";
+        p.size = ply_type_size(w[3]);
+        if (p.count_size == 0 || p.size == 0 || p.count_size == 8)
+          fail(path, "bad PLY header line '" + std::string(line.substr(0, 80)) + "' (unknown list types)");
+      } else if (w.size() == 3) {
+        p.size = ply_type_size(w[1]);
+        if (p.size == 0) fail(path, "bad PLY header line '" + std::string(line.substr(0, 80)) + "' (unknown type)");
+      } else {
+        fail(path, "bad PLY header line '" + std::string(line.substr(0, 80)) + "'");
+      }
+      elements.back().properties.push_back(p);
+    }
+  }
+  if (!ended) {
+    if (file_size > head.size()) fail(path, "no end_header in the first MiB: not a PLY file");
+    fail(path, "truncated PLY header (no end_header)");
+  }
+  if (format == Format::None) fail(path, "bad PLY header: no format line");
+
+  const uint64_t available = file_size - data_offset;
+  if (format == Format::Ascii) {
+    Reader r(path, data_offset);
+    std::string tok;
+    for (const PlyElement& e : elements) {
+      for (uint64_t i = 0; i < e.count; ++i) {
+        for (const PlyProperty& p : e.properties) {
+          if (!p.list) {
+            if (r.skip_tokens(1) == 1) continue;
+          } else if (r.token(tok)) {
+            uint64_t n = 0;
+            if (!parse_u64(tok, n))
+              fail(path, "'" + e.name + "' element " + std::to_string(i) + ": list count '" + tok +
+                             "' is not a non-negative integer");
+            if (r.skip_tokens(n) == n) continue;
+          }
+          fail(path, "truncated: the header promises " + plural(e.count, e.name) + ", the file ends in element " +
+                         std::to_string(i));
+        }
+      }
+    }
+    return;
+  }
+
+  // Binary: fixed-size elements by arithmetic, elements with lists by walking their counts.
+  Reader r(path, data_offset);
+  uint64_t used = 0;
+  for (const PlyElement& e : elements) {
+    bool has_list = false;
+    uint64_t fixed = 0;
+    for (const PlyProperty& p : e.properties) {
+      has_list |= p.list;
+      fixed += uint64_t(p.list ? p.count_size : p.size);
+    }
+    const uint64_t least = mul_add(e.count, fixed, used);
+    if (least > available)
+      fail(path, "truncated: the header promises " + plural(e.count, e.name) + " (at least " +
+                     std::to_string(mul_add(e.count, fixed, 0)) + " bytes), the file holds " +
+                     std::to_string(available - std::min(used, available)) + " bytes for them");
+    if (!has_list) {
+      if (!r.skip_bytes(mul_add(e.count, fixed, 0))) fail(path, "truncated data in the '" + e.name + "' elements");
+      used = least;
+      continue;
+    }
+    for (uint64_t i = 0; i < e.count; ++i) {
+      bool complete = true;
+      for (const PlyProperty& p : e.properties) {
+        if (!p.list) {
+          complete = r.skip_bytes(uint64_t(p.size));
+          if (!complete) break;
+          used += uint64_t(p.size);
+          continue;
+        }
+        unsigned char raw[4] = {0, 0, 0, 0};
+        complete = r.bytes(raw, size_t(p.count_size));
+        if (!complete) break;
+        used += uint64_t(p.count_size);
+        if (format == Format::BinaryBE)
+          for (int a = 0, b = p.count_size - 1; a < b; ++a, --b) std::swap(raw[a], raw[b]);
+        uint64_t n = 0;
+        std::memcpy(&n, raw, size_t(p.count_size));  // little-endian host (x86-64, aarch64)
+        if (p.count_signed && (raw[p.count_size - 1] & 0x80))
+          fail(path, "'" + e.name + "' element " + std::to_string(i) + " has a negative list count");
+        const uint64_t bytes = mul_add(n, uint64_t(p.size), 0);
+        if (bytes > available - std::min(used, available))
+          fail(path, "'" + e.name + "' element " + std::to_string(i) + " has a list of " + std::to_string(n) +
+                         " items, more than the rest of the file holds");
+        complete = r.skip_bytes(bytes);
+        if (!complete) break;
+        used += bytes;
+      }
+      if (!complete)
+        fail(path, "truncated: the header promises " + plural(e.count, e.name) + ", the file ends in element " +
+                       std::to_string(i));
+    }
+  }
+}
+
+// ---- OFF ----------------------------------------------------------------------------
+
+void check_off(const std::string& path) {
+  uint64_t file_size = 0;
+  const std::string head = read_prefix(path, 4096, &file_size);
+  // The first line holds the keyword ([ST][C][N][4][n]OFF, optionally BINARY); the counts
+  // follow (comments '#' allowed before them).
+  const size_t eol = head.find('\n');
+  if (eol == std::string::npos) return;  // OpenMesh says what is wrong
+  const std::string_view first(head.data(), eol);
+  if (first.find("OFF") == std::string_view::npos) return;
+  if (first.find("BINARY") != std::string_view::npos) return;  // binary OFF: OpenMesh checks its reads
+  uint64_t counts[3] = {0, 0, 0};
+  int got = 0;
+  const auto words = split_words(first);  // "OFF 4 2 0" on one line also occurs
+  for (size_t i = 1; i < words.size() && got < 3; ++i)
+    if (parse_u64(words[i], counts[got])) ++got;
+  Reader r(path, eol + 1);
+  std::string tok;
+  while (got < 3 && r.token(tok)) {
+    if (tok[0] == '#') {  // a comment runs to the end of its line
+      r.skip_line();
+      continue;
+    }
+    if (!parse_u64(tok, counts[got])) {
+      if (got == 0 && first.find('n') != std::string_view::npos) continue;  // nOFF: dimension first
+      fail(path, "bad OFF header: '" + tok + "' is not a vertex/face/edge count");
+    }
+    ++got;
+  }
+  if (got < 2) fail(path, "truncated OFF header (no vertex and face counts)");
+  // At least 3 values per vertex and 4 (a corner count and three corners) per face.
+  const uint64_t least = mul_add(counts[0], 3, mul_add(counts[1], 4, 0));
+  const uint64_t found = r.skip_tokens(least);
+  if (found < least)
+    fail(path, "truncated: the header promises " + std::to_string(counts[0]) + " vertices and " +
+                   std::to_string(counts[1]) + " faces (at least " + std::to_string(least) +
+                   " values), the file holds " + std::to_string(found));
+}
+
+// ---- STL ----------------------------------------------------------------------------
+
+void check_stl(const std::string& path) {
+  uint64_t file_size = 0;
+  const std::string head = read_prefix(path, 84, &file_size);
+  if (file_size < 84) {
+    if (head.compare(0, 5, "solid") == 0) return;  // a short ASCII file
+    fail(path, "not an STL file: " + std::to_string(file_size) + " bytes, no 'solid' and no binary header");
+  }
+  uint32_t triangles = 0;
+  std::memcpy(&triangles, head.data() + 80, 4);
+  const uint64_t need = 84 + 50 * uint64_t(triangles);
+  if (head.compare(0, 5, "solid") == 0 && file_size != need) return;  // ASCII
+  if (file_size < need)
+    fail(path, "truncated binary STL: the header promises " + std::to_string(triangles) + " triangles (" +
+                   std::to_string(need) + " bytes), the file has " + std::to_string(file_size));
+}
+
+}  // namespace
+
+void check_mesh_file_header(const std::string& path, const std::string& ext) {
+  if (ext == ".ply") check_ply(path);
+  else if (ext == ".off") check_off(path);
+  else if (ext == ".stl") check_stl(path);
+}
+
+}  // namespace particlemesh::detail

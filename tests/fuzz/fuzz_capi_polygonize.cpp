@@ -1,0 +1,123 @@
+// Fuzz target: pm_polygonize_ex (issue 7) fed arbitrary arrays and parameter structs:
+// particles (NaN/Inf, duplicates, far apart), per-particle radii and strengths (<= 0, NaN,
+// huge), every option field (kernel, radius, threshold, cell size, threads, the grid budget,
+// struct_size), stats structs of any declared size, a progress callback that may cancel.
+// Checks: statuses and messages, outputs untouched on failure, a returned mesh is closed,
+// 2-manifold, indexes its own finite vertices, has normals, and its grid kept to the budget.
+//
+// The grid budget is kept at 16 MiB or less whatever the input (a short struct_size that
+// leaves it out also leaves out the cell size and radius that would need it), so that one
+// run stays small; the budget check itself is what is fuzzed.
+#include <cmath>
+#include <cstddef>
+#include <vector>
+
+#include "fuzz_support.h"
+
+using namespace particlemesh;
+using fuzz::check_status;
+
+namespace {
+
+struct Cancel {
+  int calls = 0;
+  int cancel_at = -1;
+};
+
+int progress(void* user, const char* stage, double fraction) {
+  // A struct_size that covers `progress` but not `progress_user_data` gives NULL here.
+  if (user == nullptr) return 0;
+  auto* c = static_cast<Cancel*>(user);
+  PM_FUZZ_CHECK(stage != nullptr);
+  PM_FUZZ_CHECK(fraction >= 0 && fraction <= 1);
+  return ++c->calls == c->cancel_at ? 1 : 0;
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  fuzz::Input in(data, size);
+  const uint8_t mode = in.take<uint8_t>();
+  const size_t n = size_t(in.range(1, 48));
+  std::vector<double> pos(3 * n);
+  for (double& v : pos) v = in.number(0.25);
+  pm_cloud* cloud = nullptr;
+  pm_status s = pm_cloud_create(pos.data(), nullptr, n, &cloud);
+  check_status(s);
+  if (s != PM_OK) return 0;
+
+  std::vector<double> radii, strengths;
+  if (mode & 1) {
+    radii.resize(n);
+    for (double& r : radii) r = in.flag() ? 0.5 + double(in.take<uint8_t>()) / 64.0 : in.number(0.25);
+  }
+  if (mode & 2) {
+    strengths.resize(n);
+    for (double& w : strengths) w = in.flag() ? 1.0 : in.number(1.0);
+  }
+
+  pm_polygonize_options opt;
+  pm_polygonize_options_init(&opt);
+  const uint8_t which = in.take<uint8_t>();
+  if (which & 1) opt.kernel = int32_t(in.range(0, 5)) - 1;
+  if (which & 2) opt.radius = in.number(0.25);
+  if (which & 4) opt.threshold = in.number(1.0);
+  if (which & 8) opt.cell_size = in.number(1.0 / 64);
+  if (which & 16) opt.threads = int32_t(in.range(0, 3)) - 1;
+  opt.max_grid_bytes = (which & 32) ? in.take<uint32_t>() % (uint64_t(16) << 20) : (uint64_t(16) << 20);
+  if (opt.max_grid_bytes == 0) opt.max_grid_bytes = 1;  // 0 would be "no limit"
+  const uint8_t size_mode = in.take<uint8_t>();
+  if (size_mode % 8 == 1) {
+    opt.struct_size = uint32_t(in.range(0, sizeof(opt) + 8));
+    if (opt.struct_size < offsetof(pm_polygonize_options, max_grid_bytes) + sizeof(uint64_t)) {
+      // The budget is not read (4 GiB default): keep the grid to the defaults' size.
+      opt.radius = 0;
+      opt.cell_size = 0;
+      radii.clear();
+    }
+  }
+  Cancel cancel;
+  if ((size_mode & 8) && opt.struct_size >= offsetof(pm_polygonize_options, progress_user_data) + sizeof(void*)) {  // a struct_size cutting the user pointer in two is the caller's bug
+    opt.progress = progress;
+    opt.progress_user_data = &cancel;
+    cancel.cancel_at = int(in.range(0, 8));
+  }
+  pm_polygonize_stats stats{};
+  stats.struct_size = sizeof(stats);
+  if (size_mode & 16) stats.struct_size = uint32_t(in.range(0, sizeof(stats)));
+  stats.grid_bytes = 12345;
+
+  pm_mesh* mesh = reinterpret_cast<pm_mesh*>(0x2);
+  s = pm_polygonize_ex(cloud, radii.empty() ? nullptr : radii.data(), strengths.empty() ? nullptr : strengths.data(),
+                       (size_mode & 32) ? nullptr : &opt, &mesh, (size_mode & 64) ? nullptr : &stats);
+  check_status(s);
+  if (s == PM_OK) {
+    size_t nv = 0, nt = 0;
+    check_status(pm_mesh_get_counts(mesh, &nv, &nt));
+    std::vector<int32_t> tris(3 * nt + 3);
+    check_status(pm_mesh_copy_triangles(mesh, tris.data(), nt));
+    for (size_t i = 0; i < 3 * nt; ++i) PM_FUZZ_CHECK(tris[i] >= 0 && size_t(tris[i]) < nv);
+    std::vector<double> p(3 * nv + 3);
+    check_status(pm_mesh_copy_positions(mesh, p.data(), nv));
+    for (size_t i = 0; i < 3 * nv; ++i) PM_FUZZ_CHECK(std::isfinite(p[i]));
+    if (nv > 0) {
+      int32_t has = 0;
+      check_status(pm_mesh_has_normals(mesh, &has));
+      PM_FUZZ_CHECK(has == 1);
+    }
+    pm_topology_report r{};
+    r.struct_size = sizeof(r);
+    check_status(pm_mesh_report(mesh, &r));
+    PM_FUZZ_CHECK(r.boundary_edges == 0 && r.nonmanifold_edges == 0 && r.duplicate_triangles == 0);
+    if (!(size_mode & 64) && stats.struct_size == sizeof(stats) && !(size_mode & 32) &&
+        opt.struct_size == sizeof(opt))
+      PM_FUZZ_CHECK(stats.grid_bytes <= opt.max_grid_bytes && stats.triangles == nt);
+    pm_mesh_destroy(mesh);
+  } else {
+    PM_FUZZ_CHECK(mesh == reinterpret_cast<pm_mesh*>(0x2));
+    PM_FUZZ_CHECK(stats.grid_bytes == 12345);
+    if (s == PM_STATUS_CANCELLED) PM_FUZZ_CHECK(cancel.calls == cancel.cancel_at);
+  }
+  pm_cloud_destroy(cloud);
+  return 0;
+}

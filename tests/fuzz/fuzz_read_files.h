@@ -1,0 +1,74 @@
+// The body shared by the file-reader fuzz targets: the bytes become a file with the given
+// extension, read through the C++ API and the C ABI, and what comes back is checked against
+// what the API promises.
+#pragma once
+
+#include <cmath>
+
+#include "fuzz_support.h"
+#include "particlemesh/core/error.h"
+#include "particlemesh/io/mesh_io.h"
+
+namespace particlemesh::fuzz {
+
+inline void check_cloud(const PointCloud& c) {
+  PM_FUZZ_CHECK(!c.positions.empty());
+  PM_FUZZ_CHECK(c.normals.empty() || c.normals.size() == c.positions.size());
+  for (const Vec3& p : c.positions) PM_FUZZ_CHECK(is_finite(p));
+  for (const Vec3& n : c.normals) PM_FUZZ_CHECK(is_finite(n));
+}
+
+inline void check_mesh(const TriMesh& m) {
+  PM_FUZZ_CHECK(m.normals.empty() || m.normals.size() == m.positions.size());
+  for (const Vec3& p : m.positions) PM_FUZZ_CHECK(is_finite(p));
+  for (const Triangle& t : m.triangles)
+    for (uint32_t v : t) PM_FUZZ_CHECK(v < m.positions.size());
+}
+
+/// read_point_cloud and/or read_mesh on the bytes (as a file named *extension), then the
+/// same through pm_cloud_read / pm_mesh_read. Only particlemesh::Error may escape the C++
+/// API; anything else propagates and is a finding.
+inline void read_both(const uint8_t* data, size_t size, const char* extension, bool as_cloud, bool as_mesh) {
+  static TempFileCleanup cleanup{extension};
+  const std::string& path = temp_file(extension, data, size);
+  if (as_cloud) {
+    try {
+      check_cloud(read_point_cloud(path));
+    } catch (const Error& e) {
+      PM_FUZZ_CHECK(e.status() != Status::Internal);
+      PM_FUZZ_CHECK(e.what()[0] != '\0');
+    }
+    pm_cloud* cloud = reinterpret_cast<pm_cloud*>(0x1);
+    const pm_status s = pm_cloud_read(path.c_str(), &cloud);
+    check_status(s);
+    if (s == PM_OK) {
+      size_t n = 0;
+      check_status(pm_cloud_get_count(cloud, &n));
+      PM_FUZZ_CHECK(n > 0);
+      pm_cloud_destroy(cloud);
+    } else {
+      PM_FUZZ_CHECK(cloud == reinterpret_cast<pm_cloud*>(0x1));  // outputs untouched on failure
+    }
+  }
+  if (as_mesh) {
+    try {
+      check_mesh(read_mesh(path));
+    } catch (const Error& e) {
+      PM_FUZZ_CHECK(e.status() != Status::Internal);
+      PM_FUZZ_CHECK(e.what()[0] != '\0');
+    }
+    pm_mesh* mesh = reinterpret_cast<pm_mesh*>(0x1);
+    const pm_status s = pm_mesh_read(path.c_str(), &mesh);
+    check_status(s);
+    if (s == PM_OK) {
+      pm_topology_report r{};
+      r.struct_size = sizeof(r);
+      check_status(pm_mesh_report(mesh, &r));
+      pm_mesh_destroy(mesh);
+    } else {
+      PM_FUZZ_CHECK(mesh == reinterpret_cast<pm_mesh*>(0x1));
+    }
+  }
+}
+
+}  // namespace particlemesh::fuzz

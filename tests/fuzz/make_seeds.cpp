@@ -1,0 +1,252 @@
+// pm_fuzz_seeds OUT [SHARED_DATA]: the seed corpus of every fuzz target, made at run time:
+// small files written by particlemesh's own writers, hand-made files for the corners of each
+// format (comments, lists, other types, endianness, quads, negative indices, OFF/STL), byte
+// strings for the C ABI targets, and the small files of the shared data folder (copied into
+// OUT, never into the repository). OUT/<target>/ gets one file per seed.
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "particlemesh/io/mesh_io.h"
+#include "particlemesh/io/png.h"
+#include "particlemesh/sample/shapes.h"
+
+namespace fs = std::filesystem;
+using namespace particlemesh;
+
+namespace {
+
+fs::path g_out;
+
+void put(const std::string& target, const std::string& name, const std::string& bytes) {
+  const fs::path dir = g_out / target;
+  fs::create_directories(dir);
+  std::ofstream(dir / name, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// Write with our writers into a scratch file and return its bytes.
+std::string via_mesh_writer(const TriMesh& m, const std::string& ext, MeshFormat f = MeshFormat::Auto) {
+  const fs::path p = g_out / (".scratch" + ext);
+  write_mesh(m, p.string(), {f, true});
+  std::string b = slurp(p);
+  fs::remove(p);
+  return b;
+}
+std::string via_cloud_writer(const PointCloud& c, const std::string& ext) {
+  const fs::path p = g_out / (".scratch" + ext);
+  write_point_cloud(c, p.string());
+  std::string b = slurp(p);
+  fs::remove(p);
+  return b;
+}
+
+template <class T>
+void append(std::string& s, T v) {
+  s.append(reinterpret_cast<const char*>(&v), sizeof v);
+}
+
+void file_seeds() {
+  const PointCloud sphere = fibonacci_sphere(40);
+  PointCloud bare = sphere;
+  bare.normals.clear();
+  const TriMesh ico = icosphere_mesh(1);
+  const TriMesh torus = torus_mesh(1.0, 0.4, 8, 6);
+
+  // PLY: our binary and ASCII writers, then hand-made corners.
+  put("read_ply", "sphere_normals_binary.ply", via_cloud_writer(sphere, ".ply"));
+  put("read_ply", "ico_binary.ply", via_mesh_writer(ico, ".ply"));
+  put("read_ply", "torus_ascii.ply", via_mesh_writer(torus, ".ply", MeshFormat::PlyAscii));
+  put("read_ply", "points_ascii_double.ply",
+      "ply\nformat ascii 1.0\ncomment made by hand\nelement vertex 4\nproperty double x\nproperty double y\n"
+      "property double z\nproperty uchar red\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0 255\n1 0 0 0\n0 1 0 7\n1 1 0.5 9\n3 0 1 2\n4 1 3 2 0\n");
+  put("read_ply", "normals_ascii.ply",
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "property float nx\nproperty float ny\nproperty float nz\nend_header\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n");
+  {
+    std::string be = "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                     "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    const float v[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    for (float f : v) {
+      uint32_t u;
+      std::memcpy(&u, &f, 4);
+      u = __builtin_bswap32(u);
+      append(be, u);
+    }
+    be += char(3);
+    for (uint32_t i : {0u, 1u, 2u}) append(be, __builtin_bswap32(i));
+    put("read_ply", "tri_big_endian.ply", be);
+  }
+
+  // OBJ (and OFF / STL behind their marker byte, see fuzz_read_obj.cpp).
+  put("read_obj", "ico.obj", via_mesh_writer(ico, ".obj"));
+  put("read_obj", "quads_negative_uv.obj",
+      "# made by hand\nmtllib none.mtl\no quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\n"
+      "vn 0 0 1\ng g1\nusemtl m\ns 1\nf 1/1/1 2/2/1 3/3/1 4/1/1\nf -4 -2 -1\nf 1//1 3//1 4//1\nl 1 2\n");
+  put("read_obj", "off.bin", "\xFF" "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n4 1 3 2 0\n");
+  put("read_obj", "off_colors.bin", "\xFF" "COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 255 255\n3 0 1 2\n");
+  put("read_obj", "stl_ascii.bin",
+      "\xFE" "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\n"
+      "endfacet\nendsolid t\n");
+  {
+    std::string stl = "\xFE";
+    stl += std::string(80, ' ');
+    append(stl, uint32_t(2));
+    const float tri[2][12] = {{0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 0, 1, 1, 0, 0, 1, 1, 0, 0, 1, 0}};
+    for (const auto& t : tri) {
+      for (float f : t) append(stl, f);
+      append(stl, uint16_t(0));
+    }
+    put("read_obj", "stl_binary.bin", stl);
+  }
+
+  // PNG: our writer's files.
+  for (int size : {1, 7, 40}) {
+    Image img;
+    img.width = size;
+    img.height = size + 1;
+    for (int i = 0; i < img.width * img.height * 3; ++i) img.rgb.push_back(uint8_t(i * 37));
+    const fs::path p = g_out / ".scratch.png";
+    write_png(img, p.string());
+    put("read_png", "rgb_" + std::to_string(size) + ".png", slurp(p));
+    fs::remove(p);
+  }
+
+  // XYZ.
+  put("read_xyz", "sphere_normals.xyz", via_cloud_writer(sphere, ".xyz"));
+  put("read_xyz", "sphere.xyz", via_cloud_writer(bare, ".xyz"));
+  put("read_xyz", "corners.xyz", "# comment\n0 0 0\n\n1,0,0\n+0.5 1e-3 -2 # trailing\n\t3 4 5\r\n1e308 0 0\n");
+
+  // PCD: ascii and binary made here (the compressed ones come from the shared data).
+  put("read_pcd", "ascii.pcd",
+      "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F U\n"
+      "COUNT 1 1 1 1\nWIDTH 4\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 4\nDATA ascii\n"
+      "0 0 0 4278190335\n1 0 0 65280\n0 1 0 255\nnan nan nan 0\n");
+  {
+    std::string bin = "VERSION 0.7\nFIELDS x y z normal_x normal_y normal_z\nSIZE 4 4 4 4 4 4\nTYPE F F F F F F\n"
+                      "COUNT 1 1 1 1 1 1\nWIDTH 2\nHEIGHT 2\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 4\nDATA binary\n";
+    const float pts[4][6] = {{0, 0, 0, 0, 0, 1}, {1, 0, 0, 0, 0, 1}, {0, 1, 0, 0, 0, 1}, {1, 1, 0, 0, 0, 1}};
+    for (const auto& p : pts)
+      for (float f : p) append(bin, f);
+    put("read_pcd", "organized_binary.pcd", bin);
+  }
+  put("read_pcd", "old_style.pcd", "COLUMNS x y z\nSIZE 8 8 8\nTYPE F F F\nWIDTH 2\nPOINTS 2\nDATA ascii\n0 0 0\n1 2 3\n");
+}
+
+// Byte strings in the encoding the C ABI targets read (see fuzz_capi_*.cpp and Input).
+void capi_seeds() {
+  auto bytes = [](std::initializer_list<int> v) {
+    std::string s;
+    for (int x : v) s += char(uint8_t(x));
+    return s;
+  };
+  // fuzz_capi_triangulate: mode, n, [sphere radius byte, edits] or numbers, option bytes.
+  put("capi_triangulate", "sphere_defaults", bytes({2, 40, 0, 0, 0, 0}));
+  put("capi_triangulate", "sphere_raw", bytes({2, 48, 0, 0, 16, 1, 0}));
+  put("capi_triangulate", "sphere_normals_cancel", bytes({3, 60, 0, 0, 0, 8, 3}));
+  put("capi_triangulate", "sphere_f32_attribute", bytes({6 | 8, 30, 8, 0, 4, 1, 1, 2, 3, 4, 5, 6, 0, 0}));
+  {
+    std::string s = bytes({0, 16});
+    for (int i = 0; i < 16; ++i)  // a 4 x 4 square lattice: co-circular sets everywhere
+      s += bytes({0, i % 4, 0, i / 4, 0, 0});
+    s += bytes({0, 0});
+    put("capi_triangulate", "square_lattice", s);
+  }
+  {
+    std::string s = bytes({0, 6});
+    for (int i = 0; i < 6; ++i) s += bytes({0, 1, 0, 1, 0, 1});  // all coincident
+    s += bytes({0, 0});
+    put("capi_triangulate", "coincident", s);
+  }
+  // fuzz_capi_mesh: mode, nv, nt, positions (mode-0 numbers), triangles, then smoothing.
+  {
+    const int v[6][3] = {{4, 0, 0}, {-4, 0, 0}, {0, 4, 0}, {0, -4, 0}, {0, 0, 4}, {0, 0, -4}};
+    const int f[8][3] = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+    for (int smooth_mode : {0, 8, 8 | 4}) {
+      std::string s = bytes({smooth_mode, 6, 8});
+      for (const auto& p : v)
+        for (int c : p) s += bytes({0, c});
+      for (const auto& t : f)
+        for (int c : t) s += bytes({c});
+      if (smooth_mode & 4) s += bytes({3, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 1, 0, 0, 2});
+      s += bytes({2, 3, 0});  // which: levels fuzzed, levels byte -> 1 level, size_mode 0
+      put("capi_mesh", "octahedron_" + std::to_string(smooth_mode), s);
+    }
+    std::string fin = bytes({8, 5, 3, 0, 0, 0, 0, 0, 0, 0, 4, 0, 0, 0, 0, 0, 4, 0, 0, 0, 4, 0, 4, 0, 4, 0, 4, 0, 4,
+                             0, 1, 2, 1, 3, 2, 1, 2, 4, 0, 0});
+    put("capi_mesh", "fin_nonmanifold", fin);
+  }
+  // fuzz_capi_polygonize: mode, n - 1, positions (mode-0 numbers, x 0.25), [radii], options.
+  {
+    for (int mode : {0, 1, 2}) {
+      std::string s = bytes({mode, 26});
+      for (int i = 0; i < 27; ++i)  // a 3 x 3 x 3 lattice, spacing 0.5
+        s += bytes({0, 2 * (i % 3), 0, 2 * ((i / 3) % 3), 0, 2 * (i / 9)});
+      if (mode & 1)
+        for (int i = 0; i < 27; ++i) s += bytes({1, 32 + i});  // radii 1.0 .. 1.4
+      if (mode & 2)
+        for (int i = 0; i < 27; ++i) s += bytes({1});  // strengths 1
+      s += bytes({0, 0});
+      put("capi_polygonize", "lattice_" + std::to_string(mode), s);
+    }
+    std::string cancel = bytes({0, 7});
+    for (int i = 0; i < 8; ++i) cancel += bytes({0, 4 * (i & 1), 0, 2 * ((i >> 1) & 1), 0, 4 * (i >> 2)});
+    cancel += bytes({8 | 32, 0, 0, 0, 1, 8, 2});  // cell size fuzzed (0 -> default), budget, cancel at 2
+    put("capi_polygonize", "box_budget_cancel", cancel);
+  }
+  // fuzz_capi_raycast: mode, n - 1, positions, field options byte, rays - 0, per ray
+  // (flag, origin / number) and direction numbers, ray options, outputs mask, CSG op.
+  {
+    std::string s = bytes({0, 7});
+    for (int i = 0; i < 8; ++i) s += bytes({0, 2 * (i & 1), 0, 2 * ((i >> 1) & 1), 0, 2 * (i >> 2)});
+    s += bytes({0, 4});
+    for (int r = 0; r < 4; ++r) {
+      for (int a = 0; a < 3; ++a) s += bytes({1});              // origins: near a particle, 4 R away
+      for (int a = 0; a < 3; ++a) s += bytes({0, a == r % 3 ? 4 : 1});  // directions
+    }
+    s += bytes({0, 0, 1});
+    put("capi_raycast", "cube_4_rays", s);
+    std::string k = s;
+    k[0] = 3;
+    put("capi_raycast", "cube_radii_strengths", k);
+  }
+}
+
+void shared_seeds(const fs::path& shared) {
+  if (shared.empty() || !fs::is_directory(shared)) return;
+  constexpr uintmax_t kMaxBytes = 2u << 20;  // the kinect frames are left out (5 MB); -max_len cuts the rest
+  for (const auto& e : fs::recursive_directory_iterator(shared)) {
+    if (!e.is_regular_file() || e.file_size() > kMaxBytes) continue;
+    const std::string ext = e.path().extension().string();
+    const std::string name = "shared_" + e.path().parent_path().filename().string() + "_" + e.path().filename().string();
+    if (ext == ".ply") put("read_ply", name, slurp(e.path()));
+    if (ext == ".obj") put("read_obj", name, slurp(e.path()));
+    if (ext == ".pcd") put("read_pcd", name, slurp(e.path()));
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: pm_fuzz_seeds OUT [SHARED_DATA]\n");
+    return 2;
+  }
+  g_out = argv[1];
+  fs::remove_all(g_out);
+  fs::create_directories(g_out);
+  file_seeds();
+  capi_seeds();
+  shared_seeds(argc > 2 ? fs::path(argv[2]) : fs::path());
+  std::printf("fuzz seeds written to %s\n", g_out.c_str());
+  return 0;
+}
