@@ -73,14 +73,7 @@ int run_polygonize(const PolygonizeArgs& a) {
 
   WriteMeshOptions wo;
   if (a.ascii) wo.format = MeshFormat::PlyAscii;
-  const auto t2 = Clock::now();
-  set_phase(Phase::Writing);
-  write_mesh(result.mesh, a.output, wo);
-  if (interrupted()) {  // Ctrl-C while writing: the run is cancelled, so no output either
-    std::remove(a.output.c_str());
-    throw Error(Status::Cancelled, "interrupted");
-  }
-  const double t_write = std::chrono::duration<double>(Clock::now() - t2).count();
+  const double t_write = write_outputs([&] { write_mesh(result.mesh, a.output, wo); }, {a.output});
 
   const TopologyReport report = topology_report(result.mesh);
   if (!a.report.empty()) {

@@ -57,8 +57,7 @@ int run_render(const RenderArgs& a) {
   const RenderResult r = render(caster, o);
   progress.clear();
   if (interrupted()) throw Error(Status::Cancelled, "interrupted");
-  set_phase(Phase::Writing);
-  write_png(r.image, a.output);
+  write_outputs([&] { write_png(r.image, a.output); }, {a.output});
   if (!a.quiet) {
     const auto& f = caster.field();
     const Camera& c = r.camera;

@@ -81,16 +81,12 @@ int run_triangulate(const TriangulateArgs& a) {
 
   WriteMeshOptions wo;
   if (a.ascii) wo.format = MeshFormat::PlyAscii;
-  const auto t2 = Clock::now();
-  set_phase(Phase::Writing);
-  write_mesh(result.mesh, a.output, wo);
-  write_pcl_mesh(result.mesh, a.input_options);
-  if (interrupted()) {  // Ctrl-C while writing: the run is cancelled, so no output either
-    std::remove(a.output.c_str());
-    if (!a.input_options.pcl_mesh.empty()) std::remove(a.input_options.pcl_mesh.c_str());
-    throw Error(Status::Cancelled, "interrupted");
-  }
-  const double t_write = std::chrono::duration<double>(Clock::now() - t2).count();
+  const double t_write = write_outputs(
+      [&] {
+        write_mesh(result.mesh, a.output, wo);
+        write_pcl_mesh(result.mesh, a.input_options);
+      },
+      {a.output, a.input_options.pcl_mesh});
 
   const TopologyReport report = topology_report(result.mesh);
   if (!a.report.empty()) {

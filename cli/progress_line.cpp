@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <unistd.h>
 
+#include "particlemesh/core/error.h"
+
 namespace particlemesh::cli {
 
 namespace {
@@ -37,6 +39,18 @@ void install_interrupt_handler() {
 }
 
 bool interrupted() { return g_interrupted != 0; }
+
+double write_outputs(const std::function<void()>& write, std::initializer_list<std::string> paths) {
+  const auto t0 = std::chrono::steady_clock::now();
+  set_phase(Phase::Writing);
+  write();
+  if (interrupted()) {  // Ctrl-C while writing: the run is cancelled, so no output either
+    for (const std::string& p : paths)
+      if (!p.empty()) std::remove(p.c_str());
+    throw Error(Status::Cancelled, "interrupted");
+  }
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
 
 ProgressCallback ProgressLine::callback() {
   tty_ = isatty(STDERR_FILENO) != 0;

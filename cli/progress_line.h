@@ -3,6 +3,8 @@
 #pragma once
 
 #include <chrono>
+#include <functional>
+#include <initializer_list>
 #include <string>
 #include <string_view>
 
@@ -20,6 +22,11 @@ bool interrupted();
 enum class Phase { Reading, Computing, Writing };
 /// Tell the handler what the command is doing now.
 void set_phase(Phase phase);
+
+/// The writing phase shared by the commands: runs `write` (whose writers are atomic), and if a
+/// Ctrl-C arrived meanwhile the run counts as cancelled, so the files it finished (`paths`;
+/// empty names are skipped) are removed and Error(Cancelled) is thrown. Returns the seconds taken.
+double write_outputs(const std::function<void()>& write, std::initializer_list<std::string> paths);
 
 class ProgressLine {
  public:
