@@ -68,6 +68,8 @@ struct SurfaceStats {
   size_t largest_hole_left = 0;   ///< edges of the largest loop left open
   /// The loops left open (at most 1000): their edge count and width, the smallest possible
   /// longest edge of a patch across them, in units of L (above fill_edge_factor: a real opening).
+  /// The width is computed for loops of up to 128 edges (it costs the cube of the edges) and is
+  /// infinite above (null in the CLI's JSON report).
   struct OpenLoop {
     size_t edges = 0;
     double width = 0;
