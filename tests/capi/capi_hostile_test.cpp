@@ -142,6 +142,84 @@ TEST(CApiHostile, EveryNullPointerIsNamed) {
   pm_mesh_destroy(nullptr);
 }
 
+// The same for the volume, ray-casting and cloud-attribute entry points.
+TEST(CApiHostile, EveryNullPointerIsNamedVolumeRaysAndAttributes) {
+  Handles h;
+  const std::vector<float> a200(200, 1.0f);
+  ASSERT_EQ(pm_cloud_set_attribute(h.cloud, "a", 1, a200.data(), 200), PM_OK) << last();
+  pm_field* field = nullptr;
+  ASSERT_EQ(pm_field_create(h.cloud, nullptr, nullptr, nullptr, &field), PM_OK) << last();
+  const double origin[] = {0, 0, -5}, direction[] = {0, 0, 1};
+  pm_ray_hits* hits = nullptr;
+  ASSERT_EQ(pm_raycast_all(field, origin, direction, 1, nullptr, &hits), PM_OK) << last();
+  pm_mesh* m = reinterpret_cast<pm_mesh*>(0x1);
+  pm_field* f = reinterpret_cast<pm_field*>(0x1);
+  pm_ray_hits* rh = reinterpret_cast<pm_ray_hits*>(0x1);
+  size_t n = 7;
+  int32_t i32 = 7;
+  double d = 7, dbuf[3 * 256];
+  float buf[256];
+  uint64_t offsets[8];
+  const char* name = nullptr;
+  struct Case {
+    const char* argument;
+    std::function<pm_status()> call;
+  };
+  const std::vector<Case> cases = {
+      {"cloud", [&] { return pm_polygonize(nullptr, nullptr, nullptr, nullptr, &m); }},
+      {"out_mesh", [&] { return pm_polygonize(h.cloud, nullptr, nullptr, nullptr, nullptr); }},
+      {"out_value", [&] { return pm_lattice_field(PM_KERNEL_WYVILL, 1.0, 0.5, nullptr); }},
+      {"cloud", [&] { return pm_field_create(nullptr, nullptr, nullptr, nullptr, &f); }},
+      {"out_field", [&] { return pm_field_create(h.cloud, nullptr, nullptr, nullptr, nullptr); }},
+      {"field", [&] { return pm_field_get_params(nullptr, &d, &d); }},
+      {"field", [&] { return pm_field_values(nullptr, origin, 1, dbuf); }},
+      {"points", [&] { return pm_field_values(field, nullptr, 1, dbuf); }},
+      {"out_values", [&] { return pm_field_values(field, origin, 1, nullptr); }},
+      {"field", [&] { return pm_raycast_first(nullptr, origin, direction, 1, nullptr, dbuf, nullptr, nullptr, nullptr, &n); }},
+      {"origins", [&] { return pm_raycast_first(field, nullptr, direction, 1, nullptr, dbuf, nullptr, nullptr, nullptr, &n); }},
+      {"directions", [&] { return pm_raycast_first(field, origin, nullptr, 1, nullptr, dbuf, nullptr, nullptr, nullptr, &n); }},
+      {"field", [&] { return pm_raycast_all(nullptr, origin, direction, 1, nullptr, &rh); }},
+      {"origins", [&] { return pm_raycast_all(field, nullptr, direction, 1, nullptr, &rh); }},
+      {"directions", [&] { return pm_raycast_all(field, origin, nullptr, 1, nullptr, &rh); }},
+      {"out_hits", [&] { return pm_raycast_all(field, origin, direction, 1, nullptr, nullptr); }},
+      {"a", [&] { return pm_raycast_csg(nullptr, field, PM_CSG_UNION, origin, direction, 1, nullptr, &rh); }},
+      {"b", [&] { return pm_raycast_csg(field, nullptr, PM_CSG_UNION, origin, direction, 1, nullptr, &rh); }},
+      {"out_hits", [&] { return pm_raycast_csg(field, field, PM_CSG_UNION, origin, direction, 1, nullptr, nullptr); }},
+      {"hits", [&] { return pm_ray_hits_get_counts(nullptr, &n, &n); }},
+      {"hits", [&] { return pm_ray_hits_copy_offsets(nullptr, offsets, 8); }},
+      {"out_offsets", [&] { return pm_ray_hits_copy_offsets(hits, nullptr, 8); }},
+      {"hits", [&] { return pm_ray_hits_copy_starts_inside(nullptr, &i32, 1); }},
+      {"out", [&] { return pm_ray_hits_copy_starts_inside(hits, nullptr, 1); }},
+      {"hits", [&] { return pm_ray_hits_copy(nullptr, dbuf, nullptr, nullptr, nullptr, 8); }},
+      {"cloud", [&] { return pm_cloud_get_attribute_count(nullptr, &n); }},
+      {"out_count", [&] { return pm_cloud_get_attribute_count(h.cloud, nullptr); }},
+      {"cloud", [&] { return pm_cloud_get_attribute_name(nullptr, 0, &name); }},
+      {"out_name", [&] { return pm_cloud_get_attribute_name(h.cloud, 0, nullptr); }},
+      {"cloud", [&] { return pm_cloud_get_attribute_components(nullptr, "a", &i32); }},
+      {"name", [&] { return pm_cloud_get_attribute_components(h.cloud, nullptr, &i32); }},
+      {"out_components", [&] { return pm_cloud_get_attribute_components(h.cloud, "a", nullptr); }},
+      {"cloud", [&] { return pm_cloud_copy_attribute(nullptr, "a", buf, 256); }},
+      {"name", [&] { return pm_cloud_copy_attribute(h.cloud, nullptr, buf, 256); }},
+      {"out", [&] { return pm_cloud_copy_attribute(h.cloud, "a", nullptr, 256); }},
+  };
+  for (const Case& k : cases) {
+    SCOPED_TRACE(std::string("argument ") + k.argument);
+    EXPECT_EQ(k.call(), PM_STATUS_INVALID_ARGUMENT) << last();
+    EXPECT_EQ(last().rfind(std::string(k.argument) + " is NULL", 0), 0u) << last();
+  }
+  EXPECT_EQ(m, reinterpret_cast<pm_mesh*>(0x1));
+  EXPECT_EQ(f, reinterpret_cast<pm_field*>(0x1));
+  EXPECT_EQ(rh, reinterpret_cast<pm_ray_hits*>(0x1));
+  EXPECT_EQ(n, 7u);
+  EXPECT_EQ(i32, 7);
+  EXPECT_EQ(d, 7);
+  EXPECT_EQ(name, nullptr);
+  pm_ray_hits_destroy(hits);
+  pm_field_destroy(field);
+  pm_field_destroy(nullptr);
+  pm_ray_hits_destroy(nullptr);
+}
+
 // Bad values name the argument and the index; nothing is created.
 TEST(CApiHostile, BadValuesNameArgumentAndIndex) {
   const double inf = INFINITY;
