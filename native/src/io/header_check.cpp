@@ -367,6 +367,45 @@ void check_off(const std::string& path) {
                    " values), the file holds " + std::to_string(found));
 }
 
+// ---- OBJ ----------------------------------------------------------------------------
+
+/// An integer index (optional sign, digits, fits an int) or, where `may_be_empty`, nothing.
+bool obj_index(std::string_view s, bool may_be_empty) {
+  if (s.empty()) return may_be_empty;
+  if (s[0] == '-' || s[0] == '+') s.remove_prefix(1);
+  int v = 0;
+  const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
+  return !s.empty() && r.ec == std::errc() && r.ptr == s.data() + s.size();
+}
+
+// OpenMesh's OBJ reader asserts (an abort in Debian's build) on a face corner whose vertex
+// index is missing ("f /1 2 3", "f //4 ..."), and reads an uninitialized index for one that is
+// not a number ("f x 2 3"). Every corner must be v, v/vt, v//vn or v/vt/vn with integers;
+// vertex indices out of range are caught after reading (the importer checks them).
+void check_obj(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  uint64_t number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    const auto w = split_words(line);
+    if (w.empty() || w[0] != "f") continue;
+    for (size_t i = 1; i < w.size(); ++i) {
+      const std::string_view corner = w[i];
+      const size_t a = corner.find('/');
+      bool ok = obj_index(corner.substr(0, a), false);
+      if (ok && a != std::string_view::npos) {
+        const std::string_view rest = corner.substr(a + 1);
+        const size_t b = rest.find('/');
+        ok = obj_index(rest.substr(0, b), true) && (b == std::string_view::npos || obj_index(rest.substr(b + 1), true));
+      }
+      if (!ok)
+        fail(path, "line " + std::to_string(number) + ": face corner '" + std::string(corner.substr(0, 40)) +
+                       "' is not v, v/vt, v//vn or v/vt/vn with integer indices");
+    }
+  }
+}
+
 // ---- STL ----------------------------------------------------------------------------
 
 void check_stl(const std::string& path) {
@@ -391,6 +430,7 @@ void check_mesh_file_header(const std::string& path, const std::string& ext) {
   if (ext == ".ply") check_ply(path);
   else if (ext == ".off") check_off(path);
   else if (ext == ".stl") check_stl(path);
+  else if (ext == ".obj") check_obj(path);
 }
 
 }  // namespace particlemesh::detail

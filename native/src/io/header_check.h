@@ -13,7 +13,8 @@ namespace particlemesh::detail {
 /// PLY: every element the header declares must be present (ASCII: token by token, list
 /// counts included; binary: sizes, list counts walked). OFF: at least 3 values per vertex and
 /// 4 per face. STL: a binary file (not starting with "solid") must hold the 50 bytes per
-/// triangle its header counts. Other extensions: nothing to check.
+/// triangle its header counts. OBJ: every face corner is v, v/vt, v//vn or v/vt/vn with
+/// integer indices. Other extensions: nothing to check.
 /// @throws Error(FormatError) naming the file, the element and the counts.
 void check_mesh_file_header(const std::string& path, const std::string& lower_extension);
 
