@@ -116,9 +116,39 @@ TEST(FileLimits, OffPromisingMore) {
                  "promises 1000000000 vertices and 1 faces", false);
   expect_refused(write(dir / "f.off", "OFF\n3 1000000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
                  "promises 3 vertices and 1000000000 faces", false);
-  expect_refused(write(dir / "c.off", "OFF\n# a comment\n3 x 0\n"), "'x' is not a vertex/face/edge count", false);
+  expect_refused(write(dir / "x.off", "OFF\n3 x 0\n"), "'x' is not a vertex/face/edge count", false);
+  expect_refused(write(dir / "c.off", "OFF\n# a comment\n3 1 0\n"), "a comment before the OFF counts", false);
+  // Found by fuzzing: the whole file on the keyword's line (OpenMesh then read its counts from
+  // a failed stream: uninitialized, an allocation of GBs).
+  expect_refused(write(dir / "line.off", "COFF \xff\xff 05 0OF 5"), "ends on its first line", false);
+  // A face's corner count is walked too: 4e9 corners in a 40-byte file was 4e9 handles pushed.
+  const std::string tri = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n";
+  expect_refused(write(dir / "k.off", tri + "4000000000 0 1 2\n"), "the file ends in face 0 (4000000000 corners)", false);
+  expect_refused(write(dir / "k2.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n9 0 1\n"),
+                 "ends in face 1 (9 corners)", false);
+  // A token the reader cannot read fails its stream: every later read is stale.
+  expect_refused(write(dir / "nan.off", "OFF\n3 1 0\n0 0 0\n1 zero 0\n0 1 0\n3 0 1 2\n"), "vertex 1: 'zero' is not a number", false);
+  expect_refused(write(dir / "idx.off", tri + "3 0 a 2\n"), "face 0: corner 'a' is not an index", false);
+  // Binary OFF: counts and corner counts against the bytes.
+  std::string bin = "OFF BINARY\n";
+  for (uint32_t c : {3u, 1u, 0u}) append(bin, c);
+  for (int i = 0; i < 9; ++i) append(bin, float(i % 2));
+  std::string bomb = bin;
+  append(bomb, uint32_t(4000000000u));
+  append(bomb, uint32_t(0));
+  expect_refused(write(dir / "b.off", bomb), "ends in face 0 (4000000000 corners)", false);
+  std::string good_bin = bin;
+  for (uint32_t c : {3u, 0u, 1u, 2u}) append(good_bin, c);
+  EXPECT_EQ(read_mesh(write(dir / "okb.off", good_bin)).triangles.size(), 1u);
+
   const TriMesh ok = read_mesh(write(dir / "ok.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n3 1 3 2\n"));
   EXPECT_EQ(ok.triangles.size(), 2u);
+  // Colours on vertex and face lines (COFF), normals (NOFF), values across lines: read.
+  const TriMesh coff = read_mesh(write(dir / "ok.coff.off",
+                                       "COFF\n3 1 0\n0 0 0 255 0 0\n1 0 0 0 255 0\n0 1 0 0 0 255 255\n3 0 1 2 10 20 30\n"));
+  EXPECT_EQ(coff.triangles.size(), 1u);
+  const TriMesh noff = read_mesh(write(dir / "ok.noff.off", "NOFF\n3 1\n0\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n3 0 1 2\n"));
+  EXPECT_EQ(noff.triangles.size(), 1u);
 }
 
 TEST(FileLimits, BinaryStlPromisingMore) {

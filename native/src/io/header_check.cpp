@@ -47,8 +47,12 @@ class Reader {
       if (out.size() < 64) out.push_back(char(c));
       c = get();
     }
+    line_start_ = c == '\n';
     return true;
   }
+
+  /// Whether the last token() ended its line (it consumed the newline after it).
+  bool at_line_start() const { return line_start_; }
 
   /// Skip the rest of the current line.
   void skip_line() {
@@ -113,6 +117,7 @@ class Reader {
   std::ifstream in_;
   std::vector<char> buf_;
   size_t pos_ = 0, end_ = 0;
+  bool line_start_ = false;
 };
 
 std::string read_prefix(const std::string& path, size_t limit, uint64_t* file_size) {
@@ -329,42 +334,90 @@ void check_ply(const std::string& path) {
 
 // ---- OFF ----------------------------------------------------------------------------
 
+/// A number as OpenMesh's `istream >> float` / `>> unsigned` reads it whole (a token it
+/// could not read would fail the stream, and every later read of the reader with it).
+bool off_number(std::string_view t, bool integer) {
+  if (t.empty() || t.size() >= 64) return false;
+  for (char c : t)
+    if (!(std::isdigit(static_cast<unsigned char>(c)) || (!integer && (c == '.' || c == 'e' || c == 'E')) ||
+          c == '-' || c == '+'))
+      return false;
+  if (integer) {
+    uint64_t v = 0;
+    return parse_u64(t, v) && v <= std::numeric_limits<uint32_t>::max();
+  }
+  return true;
+}
+
+// OpenMesh's OFF reader takes the line after the keyword's for the counts, then reads every
+// vertex (3 coordinates, 3 more with N, the rest of the line for colours / texture
+// coordinates) and every face (a corner count, then that many indices) without checking that
+// a read succeeded: a file that ends early, or a token that is not a number, leaves the stream
+// failed and the loops running on stale values (a corner count of 4e9 pushes 4e9 handles;
+// found by fuzzing). So the file is walked here the way the reader walks it, before it runs.
 void check_off(const std::string& path) {
   uint64_t file_size = 0;
   const std::string head = read_prefix(path, 4096, &file_size);
-  // The first line holds the keyword ([ST][C][N][4][n]OFF, optionally BINARY); the counts
-  // follow (comments '#' allowed before them).
+  // The first line holds the keyword ([ST][C][N][4][n]OFF, optionally BINARY).
   const size_t eol = head.find('\n');
-  if (eol == std::string::npos) return;  // OpenMesh says what is wrong
-  const std::string_view first(head.data(), eol);
-  if (first.find("OFF") == std::string_view::npos) return;
-  if (first.find("BINARY") != std::string_view::npos) return;  // binary OFF: OpenMesh checks its reads
-  uint64_t counts[3] = {0, 0, 0};
-  int got = 0;
-  const auto words = split_words(first);  // "OFF 4 2 0" on one line also occurs
-  for (size_t i = 1; i < words.size() && got < 3; ++i)
-    if (parse_u64(words[i], counts[got])) ++got;
+  const std::string_view first(head.data(), eol == std::string::npos ? head.size() : eol);
+  const size_t off = first.find("OFF");
+  if (off == std::string_view::npos) return;  // not an OFF header: OpenMesh refuses the file
+  if (eol == std::string::npos) fail(path, "OFF file without vertex and face counts (it ends on its first line)");
+  const std::string_view prefix = first.substr(0, off);
+  const bool tex = prefix.substr(0, 2) == "ST", normals = prefix.find('N') != std::string_view::npos;
+  const bool colors = prefix.find('C') != std::string_view::npos;
+  const bool binary = first.find("BINARY") != std::string_view::npos;
   Reader r(path, eol + 1);
-  std::string tok;
-  while (got < 3 && r.token(tok)) {
-    if (tok[0] == '#') {  // a comment runs to the end of its line
-      r.skip_line();
-      continue;
+  uint64_t counts[3] = {0, 0, 0};
+  if (binary) {
+    // Little-endian uint32 counts, then per vertex 4-byte values: 3 + 3 (N) + 3 (C) + 2 (ST).
+    uint32_t c[3];
+    if (!r.bytes(c, sizeof c)) fail(path, "truncated binary OFF header (no vertex and face counts)");
+    const uint64_t vertex_bytes = 4 * (3 + (normals ? 3 : 0) + (colors ? 3 : 0) + (tex ? 2 : 0));
+    if (!r.skip_bytes(mul_add(c[0], vertex_bytes, 0)))
+      fail(path, "truncated: the binary OFF header promises " + std::to_string(c[0]) + " vertices and " +
+                     std::to_string(c[1]) + " faces, the file ends in the vertices");
+    for (uint64_t f = 0; f < c[1]; ++f) {
+      uint32_t k = 0;
+      if (!r.bytes(&k, 4) || !r.skip_bytes(uint64_t(k) * 4))
+        fail(path, "truncated: the binary OFF header promises " + std::to_string(c[1]) + " faces, the file ends in face " +
+                       std::to_string(f) + (k ? " (" + std::to_string(k) + " corners)" : std::string()));
     }
-    if (!parse_u64(tok, counts[got])) {
-      if (got == 0 && first.find('n') != std::string_view::npos) continue;  // nOFF: dimension first
-      fail(path, "bad OFF header: '" + tok + "' is not a vertex/face/edge count");
-    }
-    ++got;
+    return;
   }
-  if (got < 2) fail(path, "truncated OFF header (no vertex and face counts)");
-  // At least 3 values per vertex and 4 (a corner count and three corners) per face.
-  const uint64_t least = mul_add(counts[0], 3, mul_add(counts[1], 4, 0));
-  const uint64_t found = r.skip_tokens(least);
-  if (found < least)
+  std::string tok;
+  for (int got = 0; got < 3; ++got) {
+    if (!r.token(tok)) {
+      if (got < 2) fail(path, "truncated OFF header (no vertex and face counts)");
+      break;
+    }
+    if (tok[0] == '#') fail(path, "a comment before the OFF counts (OpenMesh's reader cannot read it)");
+    if (!off_number(tok, true) || !parse_u64(tok, counts[got]))
+      fail(path, "bad OFF header: '" + tok + "' is not a vertex/face/edge count");
+  }
+  auto truncated = [&](const std::string& where) {
     fail(path, "truncated: the header promises " + std::to_string(counts[0]) + " vertices and " +
-                   std::to_string(counts[1]) + " faces (at least " + std::to_string(least) +
-                   " values), the file holds " + std::to_string(found));
+                   std::to_string(counts[1]) + " faces, the file ends in " + where);
+  };
+  for (uint64_t v = 0; v < counts[0]; ++v) {
+    for (int i = 0; i < (normals ? 6 : 3); ++i) {
+      if (!r.token(tok)) truncated("vertex " + std::to_string(v));
+      if (!off_number(tok, false)) fail(path, "vertex " + std::to_string(v) + ": '" + tok + "' is not a number");
+    }
+    if (!r.at_line_start()) r.skip_line();  // colours, texture coordinates: the rest of the line
+  }
+  for (uint64_t f = 0; f < counts[1]; ++f) {
+    uint64_t k = 0;
+    if (!r.token(tok)) truncated("face " + std::to_string(f));
+    if (!off_number(tok, true) || !parse_u64(tok, k))
+      fail(path, "face " + std::to_string(f) + ": corner count '" + tok + "' is not a number");
+    for (uint64_t i = 0; i < k; ++i) {
+      if (!r.token(tok)) truncated("face " + std::to_string(f) + " (" + std::to_string(k) + " corners)");
+      if (!off_number(tok, true)) fail(path, "face " + std::to_string(f) + ": corner '" + tok + "' is not an index");
+    }
+    if (colors && !r.at_line_start()) r.skip_line();  // a face colour
+  }
 }
 
 // ---- OBJ ----------------------------------------------------------------------------
