@@ -131,6 +131,10 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
       throw Error(Status::InvalidArgument,
                   "the default threshold needs a positive median strength (got " + num(w) + "): give a threshold");
     f.params_.threshold = kDefaultThresholdFraction * w * lattice_field(params.kernel, kDefaultRadiusFactor, 1.0);
+    // A subnormal median strength underflows to 0 here (found by fuzzing), a huge one to inf.
+    if (!(f.params_.threshold > 0) || !std::isfinite(f.params_.threshold))
+      throw Error(Status::InvalidArgument, "the default threshold from the median strength " + num(w) +
+                                               " is " + num(f.params_.threshold) + ": give a threshold");
     f.threshold_defaulted_ = true;
   }
 
