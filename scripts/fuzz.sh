@@ -9,6 +9,9 @@
 # scripts/sanitize.sh's configuration: PM_FUZZ_SECONDS=0, no suites). The corpus grows in
 # build-asan/fuzz-corpus/TARGET (seeded from the generated seeds, the shared data and every
 # past finding); a finding is written to build-asan/fuzz-findings/TARGET/ and the run fails.
+# PM_FUZZ_SEED: libFuzzer's random seed (default 0: a new one each run; scripts/sanitize.sh
+# fixes it at 1, so that CI's short run explores the same inputs for the same code and a red
+# run is a change's doing, not luck; longer runs here go further).
 # Make every finding a regression test: fix it, then
 #   cp build-asan/fuzz-findings/TARGET/crash-... tests/data/fuzz_regressions/TARGET/
 # (ctest replays that folder through the target in every build: fuzz.regressions.TARGET).
@@ -51,7 +54,7 @@ fuzz_one() {
   # -timeout: one input taking longer is a finding (a hang).
   if "$exe" "$corpus" "$SEEDS/$t" "$ROOT/tests/data/fuzz_regressions/$t" \
       -max_total_time="$secs" -max_len="$max_len" -timeout=20 -malloc_limit_mb=1024 -rss_limit_mb=3072 \
-      -artifact_prefix="$findings/" -print_final_stats=1 >"$log" 2>&1; then
+      -seed="${PM_FUZZ_SEED:-0}" -artifact_prefix="$findings/" -print_final_stats=1 >"$log" 2>&1; then
     echo "fuzz $t: ${secs} s, $(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$') runs, $(ls "$corpus" | wc -l) in corpus, no finding"
   else
     echo "fuzz $t: FINDING (see $log; input in $findings/)" >&2

@@ -55,5 +55,6 @@ fi
 
 SECONDS_PER_TARGET="${PM_FUZZ_SECONDS:-20}"
 if [ "$SECONDS_PER_TARGET" -gt 0 ]; then
-  PM_ASAN_BUILD_DIR="$BUILD" "$ROOT/scripts/fuzz.sh" all "$SECONDS_PER_TARGET"
+  # A fixed seed: the same commit explores the same inputs (see scripts/fuzz.sh).
+  PM_FUZZ_SEED="${PM_FUZZ_SEED:-1}" PM_ASAN_BUILD_DIR="$BUILD" "$ROOT/scripts/fuzz.sh" all "$SECONDS_PER_TARGET"
 fi
