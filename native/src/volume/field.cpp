@@ -101,6 +101,10 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
     for (size_t i = 0; i < n; ++i)
       if (!std::isfinite(params.strengths[i]))
         throw Error(Status::InvalidArgument, "strengths[" + std::to_string(i) + "] is " + num(params.strengths[i]));
+      else if (std::abs(params.strengths[i]) > kMaxStrength)
+        // Sums and gradients of strengths near DBL_MAX overflow to inf / NaN normals (fuzzing).
+        throw Error(Status::InvalidArgument, "strengths[" + std::to_string(i) + "] is " + num(params.strengths[i]) +
+                                                 " (its magnitude must be at most 1e100)");
   }
   if (!(params.threshold >= 0) || !std::isfinite(params.threshold))
     throw Error(Status::InvalidArgument,

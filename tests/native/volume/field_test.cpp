@@ -200,13 +200,19 @@ TEST(ParticleField, BadInputGivesClearErrors) {
   q.strengths[2] = std::nan("");
   EXPECT_NE(std::string(error_of(build(q, c)).what()).find("strengths[2] is NaN"), std::string::npos);
   // The default threshold from a subnormal median strength underflowed to T = 0 (found by
-  // fuzzing); from a huge one it overflows: both are errors that ask for a threshold.
-  for (double w : {4.9e-324, 1e308}) {
-    FieldParams z{Kernel::Wyvill, 1, 0, {}, std::vector<double>(10, w)};
-    e = error_of(build(z, c));
-    EXPECT_EQ(e.status(), Status::InvalidArgument);
-    EXPECT_NE(std::string(e.what()).find("give a threshold"), std::string::npos) << e.what();
-  }
+  // fuzzing); from a huge one (1e100, the largest accepted) it is fine.
+  FieldParams z{Kernel::Wyvill, 1, 0, {}, std::vector<double>(10, 4.9e-324)};
+  e = error_of(build(z, c));
+  EXPECT_EQ(e.status(), Status::InvalidArgument);
+  EXPECT_NE(std::string(e.what()).find("give a threshold"), std::string::npos) << e.what();
+  z.strengths.assign(10, kMaxStrength);
+  EXPECT_NO_THROW(build(z, c)());
+  // Strengths near DBL_MAX overflowed the field's sums: NaN normals at the hits (fuzzing).
+  z.strengths[4] = -1.7e308;
+  e = error_of(build(z, c));
+  EXPECT_EQ(e.status(), Status::InvalidArgument);
+  EXPECT_NE(std::string(e.what()).find("strengths[4] is"), std::string::npos) << e.what();
+  EXPECT_NE(std::string(e.what()).find("at most 1e100"), std::string::npos) << e.what();
   EXPECT_EQ(error_of(build(FieldParams{static_cast<Kernel>(9), 1, 1, {}, {}}, c)).status(), Status::InvalidArgument);
   // A default needs the spacing: one particle cannot give it.
   PointCloud one;

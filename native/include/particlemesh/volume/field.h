@@ -46,6 +46,8 @@ inline constexpr double kDefaultRadiusFactor = 2.0;
 /// like splashes in SPH surface reconstruction; give a threshold below 1 to keep every
 /// particle as a blob.
 inline constexpr double kDefaultThresholdFraction = 0.5;
+/// The largest strength magnitude accepted: sums and gradients of the field stay finite.
+inline constexpr double kMaxStrength = 1e100;
 
 /// The field at a particle of an infinite simple cubic lattice of unit-strength particles
 /// with the given spacing and radius: the sum of g(|q|^2 / R^2) over the lattice points q
@@ -68,8 +70,8 @@ struct FieldParams {
   double threshold = 0;
   /// Empty, or one radius R_i > 0 per particle (world units).
   std::vector<double> radii;
-  /// Empty (every strength 1), or one finite strength w_i per particle. Negative strengths
-  /// subtract; particles of zero strength contribute nothing.
+  /// Empty (every strength 1), or one finite strength w_i per particle, |w_i| <= kMaxStrength
+  /// (1e100). Negative strengths subtract; particles of zero strength contribute nothing.
   std::vector<double> strengths;
 };
 
