@@ -110,6 +110,25 @@ TEST(FileLimits, PlyHeaderItself) {
                  "format TYPE VERSION");
 }
 
+// OpenMesh's ASCII PLY reader neither checks a read nor reads a token twice: a value it cannot
+// read whole ("4.89859e0-17", ".0-565685") left the stream failed or shifted, and the face
+// list counts after it stale: 1 GB allocated from a 3 kB file (found by fuzzing).
+TEST(FileLimits, AsciiPlyValuesThatAreNotNumbers) {
+  const auto dir = scratch_dir("plytokens");
+  const std::string head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                           "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string verts[] = {"0 0 0\n", "1 0 0\n", "0 1 0\n"};
+  auto file = [&](const std::string& v1, const std::string& face) { return head + verts[0] + v1 + verts[2] + face; };
+  expect_refused(write(dir / "e.ply", file("1 4.89859e0-17 0\n", "3 0 1 2\n")), "'vertex' element 1: '4.89859e0-17' is not a number");
+  expect_refused(write(dir / "d.ply", file("1 .0-565685 0\n", "3 0 1 2\n")), "'.0-565685' is not a number");
+  expect_refused(write(dir / "n.ply", file("1 nan 0\n", "3 0 1 2\n")), "'nan' is not a number");
+  expect_refused(write(dir / "i.ply", file(verts[1], "3 0 1.5 2\n")), "'face' element 0: '1.5' is not an integer", false);
+  // What writers produce is read: exponents, signs, leading dots, CRLF.
+  const TriMesh m = read_mesh(write(dir / "ok.ply", file("1e0 -0.0 +.5e-3\r\n", "3 0 1 2\r\n")));
+  ASSERT_EQ(m.triangles.size(), 1u);
+  EXPECT_FLOAT_EQ(float(m.positions[1].z), 0.0005f);
+}
+
 TEST(FileLimits, OffPromisingMore) {
   const auto dir = scratch_dir("off");
   expect_refused(write(dir / "v.off", "OFF\n1000000000 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),

@@ -138,6 +138,26 @@ bool parse_u64(std::string_view s, uint64_t& v) {
   return r.ec == std::errc() && r.ptr == s.data() + s.size();
 }
 
+/// A token that OpenMesh's readers (`istream >> value`) read whole: an integer (optional sign,
+/// digits) or, unless `integer`, a decimal floating-point number. Anything else fails their
+/// stream, or leaves the rest of the token for the next read; they check neither, and loop
+/// on stale counts after it (found by fuzzing: GBs allocated from a 3 kB PLY or OFF file).
+bool numeric_token(std::string_view t, bool integer) {
+  if (t.empty() || t.size() >= 64) return false;  // Reader::token keeps 64 bytes at most
+  const size_t start = (t[0] == '-' || t[0] == '+') ? 1 : 0;
+  if (start == t.size() || !(std::isdigit(static_cast<unsigned char>(t[start])) || (!integer && t[start] == '.')))
+    return false;  // also refuses "inf" and "nan", which istream >> does not read
+  const char* end = t.data() + t.size();
+  if (integer) {
+    for (size_t i = start; i < t.size(); ++i)
+      if (!std::isdigit(static_cast<unsigned char>(t[i]))) return false;
+    return true;
+  }
+  double v = 0;
+  const auto r = std::from_chars(t.data() + (t[0] == '+' ? 1 : 0), end, v);
+  return r.ptr == end && (r.ec == std::errc() || r.ec == std::errc::result_out_of_range);
+}
+
 /// Saturating a * b + c.
 uint64_t mul_add(uint64_t a, uint64_t b, uint64_t c) {
   if (b != 0 && a > (std::numeric_limits<uint64_t>::max() - c) / b) return std::numeric_limits<uint64_t>::max();
@@ -154,9 +174,14 @@ int ply_type_size(std::string_view t) {
   return 0;
 }
 
+bool ply_integer_type(std::string_view t) {
+  return ply_type_size(t) != 0 && t != "float" && t != "float32" && t != "double" && t != "float64";
+}
+
 struct PlyProperty {
   bool list = false;
-  int size = 0;        ///< scalar size, or list item size
+  bool integer = false;  ///< the scalar or list item type is an integer type
+  int size = 0;          ///< scalar size, or list item size
   int count_size = 0;  ///< list count size
   bool count_signed = false;
 };
@@ -237,10 +262,12 @@ void check_ply(const std::string& path) {
         p.count_signed = w[2] == "char" || w[2] == "int8" || w[2] == "short" || w[2] == "int16" || w[2] == "int" ||
                          w[2] == "int32";
         p.size = ply_type_size(w[3]);
+        p.integer = ply_integer_type(w[3]);
         if (p.count_size == 0 || p.size == 0 || p.count_size == 8)
           fail(path, "bad PLY header line '" + std::string(line.substr(0, 80)) + "' (unknown list types)");
       } else if (w.size() == 3) {
         p.size = ply_type_size(w[1]);
+        p.integer = ply_integer_type(w[1]);
         if (p.size == 0) fail(path, "bad PLY header line '" + std::string(line.substr(0, 80)) + "' (unknown type)");
       } else {
         fail(path, "bad PLY header line '" + std::string(line.substr(0, 80)) + "'");
@@ -261,14 +288,24 @@ void check_ply(const std::string& path) {
     for (const PlyElement& e : elements) {
       for (uint64_t i = 0; i < e.count; ++i) {
         for (const PlyProperty& p : e.properties) {
+          auto value = [&](const std::string& t) {
+            if (!numeric_token(t, p.integer))
+              fail(path, "'" + e.name + "' element " + std::to_string(i) + ": '" + t + "' is not " +
+                             (p.integer ? "an integer" : "a number"));
+          };
           if (!p.list) {
-            if (r.skip_tokens(1) == 1) continue;
+            if (r.token(tok)) {
+              value(tok);
+              continue;
+            }
           } else if (r.token(tok)) {
             uint64_t n = 0;
             if (!parse_u64(tok, n))
               fail(path, "'" + e.name + "' element " + std::to_string(i) + ": list count '" + tok +
                              "' is not a non-negative integer");
-            if (r.skip_tokens(n) == n) continue;
+            uint64_t k = 0;
+            for (; k < n && r.token(tok); ++k) value(tok);
+            if (k == n) continue;
           }
           fail(path, "truncated: the header promises " + plural(e.count, e.name) + ", the file ends in element " +
                          std::to_string(i));
@@ -334,21 +371,6 @@ void check_ply(const std::string& path) {
 
 // ---- OFF ----------------------------------------------------------------------------
 
-/// A number as OpenMesh's `istream >> float` / `>> unsigned` reads it whole (a token it
-/// could not read would fail the stream, and every later read of the reader with it).
-bool off_number(std::string_view t, bool integer) {
-  if (t.empty() || t.size() >= 64) return false;
-  for (char c : t)
-    if (!(std::isdigit(static_cast<unsigned char>(c)) || (!integer && (c == '.' || c == 'e' || c == 'E')) ||
-          c == '-' || c == '+'))
-      return false;
-  if (integer) {
-    uint64_t v = 0;
-    return parse_u64(t, v) && v <= std::numeric_limits<uint32_t>::max();
-  }
-  return true;
-}
-
 // OpenMesh's OFF reader takes the line after the keyword's for the counts, then reads every
 // vertex (3 coordinates, 3 more with N, the rest of the line for colours / texture
 // coordinates) and every face (a corner count, then that many indices) without checking that
@@ -393,7 +415,7 @@ void check_off(const std::string& path) {
       break;
     }
     if (tok[0] == '#') fail(path, "a comment before the OFF counts (OpenMesh's reader cannot read it)");
-    if (!off_number(tok, true) || !parse_u64(tok, counts[got]))
+    if (!numeric_token(tok, true) || !parse_u64(tok, counts[got]))
       fail(path, "bad OFF header: '" + tok + "' is not a vertex/face/edge count");
   }
   auto truncated = [&](const std::string& where) {
@@ -403,18 +425,18 @@ void check_off(const std::string& path) {
   for (uint64_t v = 0; v < counts[0]; ++v) {
     for (int i = 0; i < (normals ? 6 : 3); ++i) {
       if (!r.token(tok)) truncated("vertex " + std::to_string(v));
-      if (!off_number(tok, false)) fail(path, "vertex " + std::to_string(v) + ": '" + tok + "' is not a number");
+      if (!numeric_token(tok, false)) fail(path, "vertex " + std::to_string(v) + ": '" + tok + "' is not a number");
     }
     if (!r.at_line_start()) r.skip_line();  // colours, texture coordinates: the rest of the line
   }
   for (uint64_t f = 0; f < counts[1]; ++f) {
     uint64_t k = 0;
     if (!r.token(tok)) truncated("face " + std::to_string(f));
-    if (!off_number(tok, true) || !parse_u64(tok, k))
+    if (!numeric_token(tok, true) || !parse_u64(tok, k))
       fail(path, "face " + std::to_string(f) + ": corner count '" + tok + "' is not a number");
     for (uint64_t i = 0; i < k; ++i) {
       if (!r.token(tok)) truncated("face " + std::to_string(f) + " (" + std::to_string(k) + " corners)");
-      if (!off_number(tok, true)) fail(path, "face " + std::to_string(f) + ": corner '" + tok + "' is not an index");
+      if (!numeric_token(tok, true) || tok[0] == '-') fail(path, "face " + std::to_string(f) + ": corner '" + tok + "' is not an index");
     }
     if (colors && !r.at_line_start()) r.skip_line();  // a face colour
   }
