@@ -258,6 +258,26 @@ namespace particlemesh_pcl
     if (!seen_data)
       fail (path, file_size > bytes.size () ? "not a PCD file: no DATA line in the first MiB"
                                             : "truncated header: no DATA line");
+    // pcl::PCDReader::readHeader goes on reading lines after DATA until one does not start with
+    // a header keyword (or a comment): binary data beginning with the bytes "COLUMNS" became a
+    // second FIELDS line, and PCL then read the points with garbage fields and crashed (found
+    // by fuzzing). Refuse what it would misread.
+    for (std::size_t p = h.data_offset; p < bytes.size ();)
+    {
+      std::size_t eol = bytes.find ('\n', p);
+      if (eol == std::string::npos)
+        eol = bytes.size ();
+      const std::vector<std::string> tok = split (std::string_view (bytes.data () + p, eol - p));
+      p = eol + 1;
+      if (tok.empty () || tok[0][0] == '#')
+        continue;  // PCL skips these and reads the next line as header too
+      for (const char *key : {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT", "WIDTH", "HEIGHT",
+                              "VIEWPOINT", "POINTS", "DATA"})
+        if (tok[0].rfind (key, 0) == 0)
+          fail (path, "the data after the DATA line begins like a header line ('" + std::string (key) +
+                      "...'): PCL's reader would read it as one");
+      break;
+    }
     if (!seen_fields || h.fields.empty ())
       fail (path, "bad header: no FIELDS");
     if (!seen_size)

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <csignal>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sys/resource.h>
@@ -29,6 +30,30 @@ TEST(PclBridgeFiles, PcdCountsThatOverflowAreRefused) {
                   "HEIGHT 4294967295\nDATA binary\n";
   std::ofstream(dir / "c.pcd", std::ios::binary) << c << std::string(64, '\0');
   PM_EXPECT_ERROR(particlemesh_pcl::loadParticles((dir / "c.pcd").string()), Status::FormatError, "c.pcd");
+}
+
+// pcl::PCDReader reads lines after DATA as header lines while they start with a keyword:
+// binary data beginning with the bytes "COLUMNS" became a second FIELDS line and PCL crashed
+// reading the points (found by fuzzing; a segfault in the Release CLI before the check).
+TEST(PclBridgeFiles, BinaryDataThatReadsLikeAHeaderLineIsRefused) {
+  const auto dir = scratch_dir("pcdheaderdata");
+  const std::string h = "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\n"
+                        "HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA binary\n";
+  const unsigned char body[] = {0x43, 0x4f, 0x4c, 0x55, 0x4d, 0x4e, 0x53, 0xa8, 0xe4, 0x5a, 0xbf, 0x8c,
+                                0xd5, 0x4d, 0x62, 0x3f, 0x89, 0x8b, 0x8b, 0xff, 0xa3, 0x59, 0x9c, 0xbd};
+  std::ofstream(dir / "columns.pcd", std::ios::binary) << h << std::string(reinterpret_cast<const char*>(body), sizeof body);
+  PM_EXPECT_ERROR(particlemesh_pcl::loadParticles((dir / "columns.pcd").string()), Status::FormatError,
+                  "the data after the DATA line begins like a header line ('COLUMNS...')");
+  // After a line PCL skips (a '#' comment, an empty line) the next one counts too.
+  std::ofstream(dir / "comment.pcd", std::ios::binary) << h << "#x\n\nWIDTH 9\n" << std::string(24, '\1');
+  PM_EXPECT_ERROR(particlemesh_pcl::loadParticles((dir / "comment.pcd").string()), Status::FormatError, "('WIDTH...')");
+  // Ordinary binary data (here: its first byte a newline) reads.
+  float pts[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  std::memcpy(pts, "\n\0\0\0", 4);
+  std::string ok = h;
+  ok.replace(ok.find("WIDTH 2"), 7, "WIDTH 3").replace(ok.find("POINTS 2"), 8, "POINTS 3");
+  std::ofstream(dir / "ok.pcd", std::ios::binary) << ok << std::string(reinterpret_cast<const char*>(pts), sizeof pts);
+  EXPECT_EQ(particlemesh_pcl::loadParticles((dir / "ok.pcd").string()).size(), 3u);
 }
 
 TEST(PclBridgeFiles, PlyWriterNeverLeavesATruncatedFile) {

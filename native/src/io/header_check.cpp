@@ -212,10 +212,13 @@ std::string plural(uint64_t n, const std::string& what) {
 void check_ply(const std::string& path) {
   uint64_t file_size = 0;
   const std::string head = read_prefix(path, kMaxHeader, &file_size);
-  // OpenMesh takes "PLY" in any case, and then loops forever on a header without end_header
-  // (found by fuzzing): check whatever it would read.
-  if (head.size() < 3 || std::tolower(static_cast<unsigned char>(head[0])) != 'p' ||
-      std::tolower(static_cast<unsigned char>(head[1])) != 'l' || std::tolower(static_cast<unsigned char>(head[2])) != 'y')
+  // OpenMesh takes "PLY" in any case and after any whitespace (it reads a word), and then loops
+  // forever on a header without end_header (both found by fuzzing): check whatever it reads.
+  size_t m = 0;
+  while (m < head.size() && std::isspace(static_cast<unsigned char>(head[m]))) ++m;
+  if (head.size() < m + 3 || std::tolower(static_cast<unsigned char>(head[m])) != 'p' ||
+      std::tolower(static_cast<unsigned char>(head[m + 1])) != 'l' ||
+      std::tolower(static_cast<unsigned char>(head[m + 2])) != 'y')
     return;  // not a PLY header: OpenMesh says so
   enum class Format { None, Ascii, BinaryLE, BinaryBE } format = Format::None;
   std::vector<PlyElement> elements;
