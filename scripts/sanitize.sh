@@ -8,7 +8,7 @@
 #     library code through a process boundary (an uninstrumented python would need the ASan
 #     runtime preloaded), and the CLI's own code is covered by the Release suites;
 #  2. runs them through CTest (LeakSanitizer checks every test process at exit);
-#  3. fuzzes every target for PM_FUZZ_SECONDS seconds (default 20; 0 = skip), two at a time.
+#  3. fuzzes every target for PM_FUZZ_SECONDS seconds (default 30; 0 = skip), two at a time.
 #
 # Usage: scripts/sanitize.sh   (env: PM_ASAN_BUILD_DIR, PM_FUZZ_SECONDS, PM_JOBS, PM_WITH_PCL=OFF)
 set -euo pipefail
@@ -53,7 +53,7 @@ if [ -z "${PM_SKIP_SUITES:-}" ]; then
     -E '^(hostile\.Determinism\..*|ReconstructSurface\.MillionPointSphere)$'
 fi
 
-SECONDS_PER_TARGET="${PM_FUZZ_SECONDS:-20}"
+SECONDS_PER_TARGET="${PM_FUZZ_SECONDS:-30}"
 if [ "$SECONDS_PER_TARGET" -gt 0 ]; then
   # A fixed seed: the same commit explores the same inputs (see scripts/fuzz.sh).
   PM_FUZZ_SEED="${PM_FUZZ_SEED:-1}" PM_ASAN_BUILD_DIR="$BUILD" "$ROOT/scripts/fuzz.sh" all "$SECONDS_PER_TARGET"
