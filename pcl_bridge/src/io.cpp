@@ -153,6 +153,10 @@ namespace particlemesh_pcl
       pos = last ? eol : eol + 1;
       ++line_no;
       const std::vector<std::string> tok = split (line);
+      // A line of only whitespace (" ", "\t", a CRLF blank line) makes pcl::PCDReader crash
+      // before the first keyword and stop reading after it (found by fuzzing). Empty lines are fine.
+      if (tok.empty () && !line.empty ())
+        fail (path, "header line " + std::to_string (line_no) + " holds only whitespace, which PCL's reader cannot read");
       if (tok.empty () || tok[0][0] == '#')
         continue;
       const std::string &key = tok[0];

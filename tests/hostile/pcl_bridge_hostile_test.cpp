@@ -47,6 +47,12 @@ TEST(PclBridgeFiles, BinaryDataThatReadsLikeAHeaderLineIsRefused) {
   // After a line PCL skips (a '#' comment, an empty line) the next one counts too.
   std::ofstream(dir / "comment.pcd", std::ios::binary) << h << "#x\n\nWIDTH 9\n" << std::string(24, '\1');
   PM_EXPECT_ERROR(particlemesh_pcl::loadParticles((dir / "comment.pcd").string()), Status::FormatError, "('WIDTH...')");
+  // A header line of only whitespace: pcl::PCDReader crashed on it before the first keyword.
+  for (const char* blank : {" ", "\t", "\r"}) {
+    std::ofstream(dir / "blank.pcd", std::ios::binary) << blank << "\n" << h << std::string(24, '\0');
+    PM_EXPECT_ERROR(particlemesh_pcl::loadParticles((dir / "blank.pcd").string()), Status::FormatError,
+                    "header line 1 holds only whitespace");
+  }
   // Ordinary binary data (here: its first byte a newline) reads.
   float pts[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
   std::memcpy(pts, "\n\0\0\0", 4);

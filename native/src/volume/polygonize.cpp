@@ -223,11 +223,7 @@ void sample_block(const ParticleField& field, const Grid& g, uint64_t key, float
   double c2 = h * h * inv_r2_common;  // (node units)^2 -> s
   double rn = std::sqrt(1.0 / c2);    // radius in node units
   alignas(32) float dx2[kB];
-  for (int32_t cx = clo[0]; cx <= chi[0]; ++cx)
-    for (int32_t cy = clo[1]; cy <= chi[1]; ++cy)
-      for (int32_t cz = clo[2]; cz <= chi[2]; ++cz) {
-        const uint32_t c = grid.find_cell({cx, cy, cz});
-        if (c == NeighborGrid::kNoCell) continue;
+  grid.for_each_cell_in(clo, chi, [&](uint32_t c) {
         for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) {
           const float w = ws.empty() ? 1.0f : float(ws[s]);
           if (w == 0.0f) continue;
@@ -271,7 +267,7 @@ void sample_block(const ParticleField& field, const Grid& g, uint64_t key, float
             }
           }
         }
-      }
+  });
 }
 
 // Does some particle's support reach a node of block `key`? (A cheap superset test: the
@@ -294,23 +290,20 @@ bool block_reached(const ParticleField& field, const Grid& g, uint64_t key) {
   }
   const NeighborGrid::CellCoord clo = grid.coord_of({lo[0] - rmax, lo[1] - rmax, lo[2] - rmax});
   const NeighborGrid::CellCoord chi = grid.coord_of({hi[0] + rmax, hi[1] + rmax, hi[2] + rmax});
-  for (int32_t cx = clo[0]; cx <= chi[0]; ++cx)
-    for (int32_t cy = clo[1]; cy <= chi[1]; ++cy)
-      for (int32_t cz = clo[2]; cz <= chi[2]; ++cz) {
-        const uint32_t c = grid.find_cell({cx, cy, cz});
-        if (c == NeighborGrid::kNoCell) continue;
-        for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) {
-          const double r = uniform ? r_common : 1.0 / std::sqrt(inv_r2s[s]);
-          double d2 = 0;
-          const double p[3] = {P[s].x, P[s].y, P[s].z};
-          for (int a = 0; a < 3; ++a) {
-            const double d = p[a] < lo[a] ? lo[a] - p[a] : (p[a] > hi[a] ? p[a] - hi[a] : 0.0);
-            d2 += d * d;
-          }
-          if (d2 < r * r) return true;
-        }
+  bool reached = false;
+  grid.for_each_cell_in(clo, chi, [&](uint32_t c) {
+    for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c) && !reached; ++s) {
+      const double r = uniform ? r_common : 1.0 / std::sqrt(inv_r2s[s]);
+      double d2 = 0;
+      const double p[3] = {P[s].x, P[s].y, P[s].z};
+      for (int a = 0; a < 3; ++a) {
+        const double d = p[a] < lo[a] ? lo[a] - p[a] : (p[a] > hi[a] ? p[a] - hi[a] : 0.0);
+        d2 += d * d;
       }
-  return false;
+      reached = d2 < r * r;
+    }
+  });
+  return reached;
 }
 
 // Place the crossing on the edge from node position a (sample fa) to a + h e_axis (sample

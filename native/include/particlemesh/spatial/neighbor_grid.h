@@ -6,6 +6,7 @@
 // the points by cell makes every query read memory that its neighbours just read.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -60,6 +61,37 @@ class PM_EXPORT NeighborGrid {
   /// so their points come out in increasing sorted index. Returns how many were written.
   int neighbor_cells(uint32_t c, uint32_t out[27]) const;
 
+  /// Call f(c) for every occupied cell c whose coordinate lies in the box [lo, hi], in
+  /// increasing cell order (= lexicographic coordinate order). Cost: the box's cells or the
+  /// occupied cells, whichever are fewer. (A box much larger than the cells, as a
+  /// polygonization block of cell size h >> the particles' radius, looked up every empty cell
+  /// of it: 3.8e8 lookups per block, found by fuzzing.)
+  template <class F>
+  void for_each_cell_in(CellCoord lo, CellCoord hi, F&& f) const {
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::max(lo[a], int32_t(0));
+      hi[a] = std::min(hi[a], int32_t(kMaxCellsPerAxis + 3));
+      if (lo[a] > hi[a]) return;
+    }
+    const double box = double(hi[0] - lo[0] + 1) * double(hi[1] - lo[1] + 1) * double(hi[2] - lo[2] + 1);
+    if (box <= double(cell_keys_.size())) {
+      for (int32_t x = lo[0]; x <= hi[0]; ++x)
+        for (int32_t y = lo[1]; y <= hi[1]; ++y)
+          for (int32_t z = lo[2]; z <= hi[2]; ++z) {
+            const uint32_t c = find_key(pack({x, y, z}));
+            if (c != kNoCell) f(c);
+          }
+      return;
+    }
+    // Keys are sorted: the cells with x in [lo.x, hi.x] are one run of them.
+    const auto begin = cell_keys_.begin();
+    for (auto it = std::lower_bound(begin, cell_keys_.end(), pack({lo[0], 0, 0}));
+         it != cell_keys_.end() && int32_t(*it >> 42) <= hi[0]; ++it) {
+      const CellCoord cc = unpack(*it);
+      if (cc[1] >= lo[1] && cc[1] <= hi[1] && cc[2] >= lo[2] && cc[2] <= hi[2]) f(uint32_t(it - begin));
+    }
+  }
+
   /// Call f(sorted_index, squared_distance) for every point within `radius` of `p`
   /// (including a point at p itself), in increasing sorted index. Cost: the cells that the
   /// query box [p - radius, p + radius] touches.
@@ -68,16 +100,12 @@ class PM_EXPORT NeighborGrid {
     const double r2 = radius * radius;
     const CellCoord lo = coord_of(p - Vec3{radius, radius, radius});
     const CellCoord hi = coord_of(p + Vec3{radius, radius, radius});
-    for (int32_t x = lo[0]; x <= hi[0]; ++x)
-      for (int32_t y = lo[1]; y <= hi[1]; ++y)
-        for (int32_t z = lo[2]; z <= hi[2]; ++z) {
-          const uint32_t c = find_cell({x, y, z});
-          if (c == kNoCell) continue;
-          for (uint32_t s = cell_start_[c]; s < cell_start_[c + 1]; ++s) {
-            const double d2 = squared_distance(sorted_points_[s], p);
-            if (d2 <= r2) f(s, d2);
-          }
-        }
+    for_each_cell_in(lo, hi, [&](uint32_t c) {
+      for (uint32_t s = cell_start_[c]; s < cell_start_[c + 1]; ++s) {
+        const double d2 = squared_distance(sorted_points_[s], p);
+        if (d2 <= r2) f(s, d2);
+      }
+    });
   }
 
  private:
