@@ -26,6 +26,20 @@ std::vector<double> flat(const std::vector<Vec3>& v) {
   return out;
 }
 
+// Each call passes NULL for `argument`: INVALID_ARGUMENT, and the message names it.
+struct NullCase {
+  const char* argument;
+  std::function<pm_status()> call;
+};
+
+void expect_each_null_named(const std::vector<NullCase>& cases) {
+  for (const NullCase& k : cases) {
+    SCOPED_TRACE(std::string("argument ") + k.argument);
+    EXPECT_EQ(k.call(), PM_STATUS_INVALID_ARGUMENT) << last();
+    EXPECT_EQ(last().rfind(std::string(k.argument) + " is NULL", 0), 0u) << last();
+  }
+}
+
 struct Handles {
   pm_cloud* cloud = nullptr;
   pm_mesh* mesh = nullptr;
@@ -64,11 +78,7 @@ TEST(CApiHostile, EveryNullPointerIsNamed) {
   // An attribute "a", so that the attribute calls get as far as their output pointers.
   const std::vector<float> a200(200, 1.0f);
   ASSERT_EQ(pm_mesh_set_attribute(h.mesh, "a", 1, a200.data(), 200), PM_OK) << last();
-  struct Case {
-    const char* argument;
-    std::function<pm_status()> call;
-  };
-  const std::vector<Case> cases = {
+  const std::vector<NullCase> cases = {
       {"positions", [&] { return pm_cloud_create(nullptr, nullptr, 3, &c); }},
       {"out_cloud", [&] { return pm_cloud_create(pts, nullptr, 3, nullptr); }},
       {"positions", [&] { return pm_cloud_create_f32(nullptr, nullptr, 3, &c); }},
@@ -126,11 +136,7 @@ TEST(CApiHostile, EveryNullPointerIsNamed) {
       {"mesh", [&] { return pm_smooth(nullptr, nullptr, &m); }},
       {"out_mesh", [&] { return pm_smooth(h.mesh, nullptr, nullptr); }},
   };
-  for (const Case& k : cases) {
-    SCOPED_TRACE(std::string("argument ") + k.argument);
-    EXPECT_EQ(k.call(), PM_STATUS_INVALID_ARGUMENT) << last();
-    EXPECT_EQ(last().rfind(std::string(k.argument) + " is NULL", 0), 0u) << last();
-  }
+  expect_each_null_named(cases);
   EXPECT_EQ(c, reinterpret_cast<pm_cloud*>(0x1));
   EXPECT_EQ(m, reinterpret_cast<pm_mesh*>(0x1));
   EXPECT_EQ(n, 7u);
@@ -161,11 +167,7 @@ TEST(CApiHostile, EveryNullPointerIsNamedVolumeRaysAndAttributes) {
   float buf[256];
   uint64_t offsets[8];
   const char* name = nullptr;
-  struct Case {
-    const char* argument;
-    std::function<pm_status()> call;
-  };
-  const std::vector<Case> cases = {
+  const std::vector<NullCase> cases = {
       {"cloud", [&] { return pm_polygonize(nullptr, nullptr, nullptr, nullptr, &m); }},
       {"out_mesh", [&] { return pm_polygonize(h.cloud, nullptr, nullptr, nullptr, nullptr); }},
       {"out_value", [&] { return pm_lattice_field(PM_KERNEL_WYVILL, 1.0, 0.5, nullptr); }},
@@ -202,11 +204,7 @@ TEST(CApiHostile, EveryNullPointerIsNamedVolumeRaysAndAttributes) {
       {"name", [&] { return pm_cloud_copy_attribute(h.cloud, nullptr, buf, 256); }},
       {"out", [&] { return pm_cloud_copy_attribute(h.cloud, "a", nullptr, 256); }},
   };
-  for (const Case& k : cases) {
-    SCOPED_TRACE(std::string("argument ") + k.argument);
-    EXPECT_EQ(k.call(), PM_STATUS_INVALID_ARGUMENT) << last();
-    EXPECT_EQ(last().rfind(std::string(k.argument) + " is NULL", 0), 0u) << last();
-  }
+  expect_each_null_named(cases);
   EXPECT_EQ(m, reinterpret_cast<pm_mesh*>(0x1));
   EXPECT_EQ(f, reinterpret_cast<pm_field*>(0x1));
   EXPECT_EQ(rh, reinterpret_cast<pm_ray_hits*>(0x1));

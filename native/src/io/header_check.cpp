@@ -447,13 +447,11 @@ void check_off(const std::string& path) {
 
 // ---- OBJ ----------------------------------------------------------------------------
 
-/// An integer index (optional sign, digits, fits an int) or, where `may_be_empty`, nothing.
+/// An integer index that fits an int (OpenMesh reads an int), or, where `may_be_empty`, nothing.
 bool obj_index(std::string_view s, bool may_be_empty) {
   if (s.empty()) return may_be_empty;
-  if (s[0] == '-' || s[0] == '+') s.remove_prefix(1);
   int v = 0;
-  const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
-  return !s.empty() && r.ec == std::errc() && r.ptr == s.data() + s.size();
+  return numeric_token(s, true) && std::from_chars(s.data() + (s[0] == '+'), s.data() + s.size(), v).ec == std::errc();
 }
 
 // OpenMesh's OBJ reader asserts (an abort in Debian's build) on a face corner whose vertex

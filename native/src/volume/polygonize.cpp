@@ -224,49 +224,49 @@ void sample_block(const ParticleField& field, const Grid& g, uint64_t key, float
   double rn = std::sqrt(1.0 / c2);    // radius in node units
   alignas(32) float dx2[kB];
   grid.for_each_cell_in(clo, chi, [&](uint32_t c) {
-        for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) {
-          const float w = ws.empty() ? 1.0f : float(ws[s]);
-          if (w == 0.0f) continue;
-          const float wa = K == Kernel::Wyvill ? w * (5.0f / 9.0f) : (K == Kernel::Poly4 ? w : 0.0f);
-          const float wb = K == Kernel::Wyvill ? w * (4.0f / 9.0f) : (K == Kernel::Poly6 ? w : 0.0f);
-          if (!uniform) {
-            c2 = h * h * inv_r2s[s];
-            rn = std::sqrt(1.0 / c2);
-          }
-          // Particle position in node units, relative to the block's first node. (The cells
-          // scanned are within a few radii of the block, so these are small numbers.)
-          const double ux = (P[s].x - ox) * inv_h, uy = (P[s].y - oy) * inv_h, uz = (P[s].z - oz) * inv_h;
-          if (ux + rn < 0 || ux - rn > kB - 1 || uy + rn < 0 || uy - rn > kB - 1 || uz + rn < 0 ||
-              uz - rn > kB - 1)
-            continue;  // the support misses the block's nodes (most scanned particles)
-          const int x0 = std::max(iceil(ux - rn), 0), x1 = std::min(ifloor(ux + rn), kB - 1);
-          const int y0 = std::max(iceil(uy - rn), 0), y1 = std::min(ifloor(uy + rn), kB - 1);
-          const int z0 = std::max(iceil(uz - rn), 0), z1 = std::min(ifloor(uz + rn), kB - 1);
-          if (x0 > x1 || y0 > y1 || z0 > z1) continue;
-          for (int x = 0; x < kB; ++x) {
-            const double d = double(x) - ux;
-            dx2[x] = float(d * d * c2);
-          }
-          for (int z = z0; z <= z1; ++z) {
-            const double dz = double(z) - uz;
-            const double sz = dz * dz * c2;
-            if (!(sz < 1.0)) continue;
-            // The rows of this slice that meet the support (one square root per slice instead
-            // of a hard-to-predict test per row; a row grazing the edge just adds zeros).
-            const double half = std::sqrt((1.0 - sz) / c2);
-            const int ya = std::max(y0, iceil(uy - half)), yb = std::min(y1, ifloor(uy + half));
-            for (int y = ya; y <= yb; ++y) {
-              const double dy = double(y) - uy;
-              const float syz = float(sz + dy * dy * c2);
-              float* row = out + kB * (y + kB * z);
-              if constexpr (K == Kernel::Blinn) {
-                for (int x = 0; x < kB; ++x) row[x] += w * kernel_clamped<K>(dx2[x] + syz);
-              } else {
-                add_row<K>(row, dx2, syz, wa, wb);
-              }
-            }
+    for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) {
+      const float w = ws.empty() ? 1.0f : float(ws[s]);
+      if (w == 0.0f) continue;
+      const float wa = K == Kernel::Wyvill ? w * (5.0f / 9.0f) : (K == Kernel::Poly4 ? w : 0.0f);
+      const float wb = K == Kernel::Wyvill ? w * (4.0f / 9.0f) : (K == Kernel::Poly6 ? w : 0.0f);
+      if (!uniform) {
+        c2 = h * h * inv_r2s[s];
+        rn = std::sqrt(1.0 / c2);
+      }
+      // Particle position in node units, relative to the block's first node. (The cells
+      // scanned are within a few radii of the block, so these are small numbers.)
+      const double ux = (P[s].x - ox) * inv_h, uy = (P[s].y - oy) * inv_h, uz = (P[s].z - oz) * inv_h;
+      if (ux + rn < 0 || ux - rn > kB - 1 || uy + rn < 0 || uy - rn > kB - 1 || uz + rn < 0 ||
+          uz - rn > kB - 1)
+        continue;  // the support misses the block's nodes (most scanned particles)
+      const int x0 = std::max(iceil(ux - rn), 0), x1 = std::min(ifloor(ux + rn), kB - 1);
+      const int y0 = std::max(iceil(uy - rn), 0), y1 = std::min(ifloor(uy + rn), kB - 1);
+      const int z0 = std::max(iceil(uz - rn), 0), z1 = std::min(ifloor(uz + rn), kB - 1);
+      if (x0 > x1 || y0 > y1 || z0 > z1) continue;
+      for (int x = 0; x < kB; ++x) {
+        const double d = double(x) - ux;
+        dx2[x] = float(d * d * c2);
+      }
+      for (int z = z0; z <= z1; ++z) {
+        const double dz = double(z) - uz;
+        const double sz = dz * dz * c2;
+        if (!(sz < 1.0)) continue;
+        // The rows of this slice that meet the support (one square root per slice instead
+        // of a hard-to-predict test per row; a row grazing the edge just adds zeros).
+        const double half = std::sqrt((1.0 - sz) / c2);
+        const int ya = std::max(y0, iceil(uy - half)), yb = std::min(y1, ifloor(uy + half));
+        for (int y = ya; y <= yb; ++y) {
+          const double dy = double(y) - uy;
+          const float syz = float(sz + dy * dy * c2);
+          float* row = out + kB * (y + kB * z);
+          if constexpr (K == Kernel::Blinn) {
+            for (int x = 0; x < kB; ++x) row[x] += w * kernel_clamped<K>(dx2[x] + syz);
+          } else {
+            add_row<K>(row, dx2, syz, wa, wb);
           }
         }
+      }
+    }
   });
 }
 
