@@ -419,7 +419,9 @@ void RayCaster::Impl::Query::interval_blinn(double ta, double tb, const std::vec
     if (df) *df = dv;
     return v - im.threshold;
   };
-  const double hmin = kBlinnMinStep * im.r_min;
+  // The step floor: a fraction of the smallest radius, but at most a million steps per
+  // interval (a tiny radius beside a huge one marched for minutes; found by fuzzing).
+  const double hmin = std::max(kBlinnMinStep * im.r_min, 1e-6 * (tb - ta));
   double t = ta, ft = f(ta, nullptr);
   const bool s0 = ft >= 0;
   if (!started) {
@@ -433,7 +435,8 @@ void RayCaster::Impl::Query::interval_blinn(double ta, double tb, const std::vec
   double gap = std::abs(ft);
   while (t < tb && !done) {
     const double step = std::max(std::abs(ft) / lip, hmin);
-    const double tn = std::min(t + step, tb);
+    // nextafter: t + step rounds back to t where |t| is huge beside the step (an endless loop).
+    const double tn = std::max(std::min(t + step, tb), std::nextafter(t, tb));
     const double fn = f(tn, nullptr);
     if ((fn >= 0) != (ft >= 0)) {
       // Safeguarded Newton inside the bracket [t, tn].
