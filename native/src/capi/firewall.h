@@ -68,6 +68,15 @@ T read_versioned(const T* in, const T& defaults, const char* name) {
     throw Error(Status::InvalidArgument,
                 std::string(name) + "->struct_size is " + std::to_string(size) +
                     " (call the matching _init function first)");
+  // Every options struct holds pointers or 8-byte fields, so the size of any version of it
+  // (an older caller's prefix included) is a multiple of 8. Any other size ends inside a
+  // field and would hand the library half of a caller's pointer.
+  static_assert(alignof(T) == 8, "options structs must stay 8-byte aligned");
+  if (size % alignof(T) != 0)
+    throw Error(Status::InvalidArgument,
+                std::string(name) + "->struct_size is " + std::to_string(size) +
+                    ", which ends inside a field (it is a struct's sizeof, a multiple of 8; "
+                    "call the matching _init function first)");
   std::memcpy(&out, in, std::min<size_t>(size, sizeof(T)));
   out.struct_size = sizeof(T);
   return out;
