@@ -108,6 +108,21 @@ TEST(FileLimits, PlyHeaderItself) {
   // OpenMesh's reader looped forever on an unparsable version (found by fuzzing).
   expect_refused(write(dir / "ver.ply", "ply\nformat ascii ..0\nelement vertex 1\nproperty float x\nend_header\n1\n"),
                  "format TYPE VERSION");
+  // OpenMesh reads the header word by word: a keyword inside a line made it take end_header
+  // for a property name and loop forever at the end of the stream (found by fuzzing).
+  const std::string xyz = "element vertex 1\nproperty float x\nproperty float y\nproperty float z\n";
+  expect_refused(write(dir / "mid.ply", "ply\nformat ascii 1.0\n" + xyz + "x property float\nend_header\n0 0 0\n"),
+                 "'property' inside a line");
+  expect_refused(write(dir / "mid2.ply", "ply\nformat ascii 1.0\n" + xyz + "obj_info end_header\nend_header\n0 0 0\n"),
+                 "'end_header' inside a line");
+  expect_refused(write(dir / "two.ply", "ply\nformat ascii 1.0\n" + xyz + "format binary_little_endian 1.0\nend_header\n0 0 0\n"),
+                 "a second format line");
+  // Unknown keywords and comments that merely mention a keyword are read as before.
+  const PointCloud ok = read_point_cloud(
+      write(dir / "info.ply", "ply\nformat ascii 1.0\nobj_info scanner 3\ncomment a property of end_header\n" + xyz +
+                                  "obj_info x comment property\nend_header\n0 1 2\n"));
+  ASSERT_EQ(ok.size(), 1u);
+  EXPECT_EQ(ok.positions[0].z, 2.0);
 }
 
 // OpenMesh's ASCII PLY reader neither checks a read nor reads a token twice: a value it cannot

@@ -232,12 +232,26 @@ void check_ply(const std::string& path) {
     pos = eol + 1;
     const auto w = split_words(line);
     if (w.empty()) continue;
+    // OpenMesh reads the header word by word, not line by line: a keyword anywhere is a
+    // keyword to it (only "comment" eats the rest of its line), and one read out of place
+    // makes it take end_header for an argument and loop forever at the end of the stream
+    // (found by fuzzing: "x property float" before end_header). Keep its words and ours in
+    // step: keywords start lines and take exactly their arguments.
+    const bool keyword_line = w[0] == "end_header" || w[0] == "format" || w[0] == "element" ||
+                              w[0] == "property" || w[0] == "comment";
+    if (!keyword_line)
+      for (size_t k = 1; k < w.size() && w[k] != "comment"; ++k)
+        if (w[k] == "end_header" || w[k] == "element" || w[k] == "property")
+          fail(path, "bad PLY header line '" + std::string(line.substr(0, 80)) + "' ('" + std::string(w[k]) +
+                         "' inside a line: keywords start lines)");
     if (w[0] == "end_header") {
+      if (w.size() != 1) fail(path, "bad PLY header line '" + std::string(line.substr(0, 80)) + "' (end_header alone)");
       data_offset = pos;
       ended = true;
       break;
     }
     if (w[0] == "format" && w.size() >= 2) {
+      if (format != Format::None) fail(path, "bad PLY header: a second format line");
       format = w[1] == "ascii" ? Format::Ascii
                : w[1] == "binary_little_endian" ? Format::BinaryLE
                : w[1] == "binary_big_endian" ? Format::BinaryBE
