@@ -3,6 +3,9 @@
 //   build/bench/triangulate_bench --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+#include <random>
+
 #include "particlemesh/sample/shapes.h"
 #include "particlemesh/surface/reconstruct.h"
 #include "particlemesh/surface/spacing.h"
@@ -10,8 +13,19 @@
 
 using namespace particlemesh;
 
+// The same points in a random order (a fixed seed): particles as a simulation or a merged
+// scan lists them, with no locality in their indices.
+static PointCloud shuffled(PointCloud c) {
+  std::vector<size_t> perm(c.size());
+  for (size_t i = 0; i < perm.size(); ++i) perm[i] = i;
+  std::shuffle(perm.begin(), perm.end(), std::mt19937_64(7));
+  PointCloud s;
+  for (size_t i : perm) s.positions.push_back(c.positions[i]);
+  return s;
+}
+
 static void BM_TriangulateRaw(benchmark::State& state) {
-  const PointCloud c = fibonacci_sphere(size_t(state.range(0)));
+  const PointCloud c = state.range(2) ? shuffled(fibonacci_sphere(size_t(state.range(0)))) : fibonacci_sphere(size_t(state.range(0)));
   TriangulateOptions o;
   o.threads = int(state.range(1));
   size_t kept = 0;
@@ -25,11 +39,13 @@ static void BM_TriangulateRaw(benchmark::State& state) {
   state.counters["triangles"] = double(kept);
 }
 BENCHMARK(BM_TriangulateRaw)
-    ->ArgNames({"points", "threads"})
-    ->Args({10000, 0})
-    ->Args({100000, 0})
-    ->Args({1000000, 0})
-    ->Args({1000000, 1})
+    ->ArgNames({"points", "threads", "shuffled"})
+    ->Args({10000, 0, 0})
+    ->Args({100000, 0, 0})
+    ->Args({1000000, 0, 0})
+    ->Args({1000000, 1, 0})
+    ->Args({100000, 0, 1})
+    ->Args({1000000, 0, 1})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
@@ -37,7 +53,7 @@ BENCHMARK(BM_TriangulateRaw)
 // beside BM_TriangulateRaw on the same points. Normals: estimated (the cloud's are dropped),
 // the slower and more general path.
 static void BM_ReconstructSurface(benchmark::State& state) {
-  PointCloud c = fibonacci_sphere(size_t(state.range(0)));
+  PointCloud c = state.range(2) ? shuffled(fibonacci_sphere(size_t(state.range(0)))) : fibonacci_sphere(size_t(state.range(0)));
   c.normals.clear();
   SurfaceOptions o;
   o.threads = int(state.range(1));
@@ -53,9 +69,11 @@ static void BM_ReconstructSurface(benchmark::State& state) {
   state.counters["repair_s"] = last.seconds_repair;
 }
 BENCHMARK(BM_ReconstructSurface)
-    ->ArgNames({"points", "threads"})
-    ->Args({100000, 0})
-    ->Args({1000000, 0})
+    ->ArgNames({"points", "threads", "shuffled"})
+    ->Args({100000, 0, 0})
+    ->Args({1000000, 0, 0})
+    ->Args({100000, 0, 1})
+    ->Args({1000000, 0, 1})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -158,13 +158,13 @@ TEST(CApi, MisuseGivesStatusAndMessageAndLeavesOutputsAlone) {
   EXPECT_EQ(pm_triangulate(cloud, &opt, &mesh, &stats), PM_STATUS_INVALID_ARGUMENT);
   EXPECT_EQ(mesh, reinterpret_cast<pm_mesh*>(0x2));
 
-  // A struct_size that ends inside a field (here, half-way through a pointer) is refused:
-  // the library would otherwise read half of the caller's pointer.
+  // A struct_size that ends half-way through a pointer field is refused: the library would
+  // otherwise read half of the caller's pointer (found by fuzzing).
   pm_smooth_options sopt;
   pm_smooth_options_init(&sopt);
   sopt.struct_size = offsetof(pm_smooth_options, crease_edges) + 4;
   EXPECT_EQ(pm_smooth(reinterpret_cast<pm_mesh*>(0x1), &sopt, &mesh), PM_STATUS_INVALID_ARGUMENT);
-  EXPECT_NE(last().find("options->struct_size is " + std::to_string(sopt.struct_size) + ", which ends inside a field"),
+  EXPECT_NE(last().find("options->struct_size is " + std::to_string(sopt.struct_size) + ", which ends inside a pointer field"),
             std::string::npos) << last();
   EXPECT_EQ(mesh, reinterpret_cast<pm_mesh*>(0x2));
 

@@ -148,7 +148,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     // max_triangles (2^25), so keep the levels it may read small as well.
     if (opt.struct_size < offsetof(pm_smooth_options, max_triangles) + sizeof(uint64_t)) opt.levels = std::min(opt.levels, 2);
     Cancel cancel;
-    if ((size_mode & 8) && opt.struct_size >= offsetof(pm_smooth_options, progress_user_data) + sizeof(void*)) {  // a struct_size cutting the user pointer in two is the caller's bug
+    if ((size_mode & 8) && opt.struct_size >= offsetof(pm_smooth_options, progress_user_data) + sizeof(void*)) {  // (a struct_size cutting a pointer in two is refused)
       opt.progress = progress;
       opt.progress_user_data = &cancel;
       cancel.cancel_at = int(in.range(0, 8));

@@ -117,7 +117,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const uint8_t size_mode = in.take<uint8_t>();
   if (size_mode % 8 == 1) opt.struct_size = uint32_t(in.range(0, sizeof(opt) + 8));
   Cancel cancel;
-  if ((size_mode & 8) && opt.struct_size >= offsetof(pm_triangulate_options, progress_user_data) + sizeof(void*)) {  // a struct_size cutting the user pointer in two is the caller's bug
+  if ((size_mode & 8) && opt.struct_size >= offsetof(pm_triangulate_options, progress_user_data) + sizeof(void*)) {  // (a struct_size cutting a pointer in two is refused)
     opt.progress = progress;
     opt.progress_user_data = &cancel;
     cancel.cancel_at = int(in.range(0, 6));

@@ -8,8 +8,8 @@
  *  - On failure, outputs are left untouched (out-pointers are not written).
  *  - Options structs start with struct_size and are filled by pm_<x>_options_init(); new
  *    fields are only ever appended, so a caller built against an older header keeps working.
- *    Every such struct is 8-byte aligned, so a struct_size that is not a multiple of 8 (one
- *    that would end inside a field) is refused with PM_STATUS_INVALID_ARGUMENT.
+ *    A struct_size that ends inside a pointer field (no version of a struct ever did) is
+ *    refused with PM_STATUS_INVALID_ARGUMENT.
  *  - Variable-size results: query the counts, then copy into caller-owned memory.
  *  - Long calls take a progress callback (called on the calling thread only); returning
  *    non-zero from it cancels the call, which then returns PM_STATUS_CANCELLED promptly.

@@ -36,7 +36,10 @@ const Vec3* as_vec3(const double* p) { return reinterpret_cast<const Vec3*>(p); 
 RaycastOptions to_options(const pm_raycast_options* options) {
   pm_raycast_options defaults;
   pm_raycast_options_init(&defaults);
-  const pm_raycast_options o = capi::read_versioned(options, defaults, "options");
+  const pm_raycast_options o = capi::read_versioned(
+      options, defaults, "options",
+      {offsetof(pm_raycast_options, progress),
+       offsetof(pm_raycast_options, progress_user_data)});
   RaycastOptions r;
   r.t_min = o.t_min;
   r.t_max = o.t_max;
@@ -75,7 +78,10 @@ pm_status pm_field_create(const pm_cloud* cloud, const double* radii, const doub
     require(out_field, "out_field");
     pm_field_options defaults;
     pm_field_options_init(&defaults);
-    const pm_field_options o = capi::read_versioned(options, defaults, "options");
+    const pm_field_options o = capi::read_versioned(
+        options, defaults, "options",
+        {offsetof(pm_field_options, progress),
+         offsetof(pm_field_options, progress_user_data)});
     FieldParams p;
     p.kernel = static_cast<Kernel>(o.kernel);
     validate_kernel(p.kernel);

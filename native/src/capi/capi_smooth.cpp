@@ -148,7 +148,12 @@ pm_status pm_smooth(const pm_mesh* mesh, const pm_smooth_options* options, pm_me
     require(out_mesh, "out_mesh");
     pm_smooth_options defaults;
     pm_smooth_options_init(&defaults);
-    const pm_smooth_options o = capi::read_versioned(options, defaults, "options");
+    const pm_smooth_options o = capi::read_versioned(
+        options, defaults, "options",
+        {offsetof(pm_smooth_options, crease_edges),
+         offsetof(pm_smooth_options, crease_sharpness),
+         offsetof(pm_smooth_options, progress),
+         offsetof(pm_smooth_options, progress_user_data)});
     SmoothOptions opt;
     opt.scheme = static_cast<SmoothScheme>(o.scheme);
     opt.levels = o.levels;

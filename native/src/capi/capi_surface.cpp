@@ -50,7 +50,10 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
     require(out_mesh, "out_mesh");
     pm_triangulate_options defaults;
     pm_triangulate_options_init(&defaults);
-    const pm_triangulate_options o = capi::read_versioned(options, defaults, "options");
+    const pm_triangulate_options o = capi::read_versioned(
+        options, defaults, "options",
+        {offsetof(pm_triangulate_options, progress),
+         offsetof(pm_triangulate_options, progress_user_data)});
     if (out_stats) capi::check_versioned(out_stats, "out_stats");
     if (o.flags & ~uint32_t(PM_TRIANGULATE_RAW | PM_TRIANGULATE_NO_REPAIR | PM_TRIANGULATE_NO_ORIENT))
       throw Error(Status::InvalidArgument, "options->flags has unknown bits");

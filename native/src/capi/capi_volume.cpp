@@ -59,7 +59,10 @@ pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii, const dou
     require(out_mesh, "out_mesh");
     pm_polygonize_options defaults;
     pm_polygonize_options_init(&defaults);
-    const pm_polygonize_options o = capi::read_versioned(options, defaults, "options");
+    const pm_polygonize_options o = capi::read_versioned(
+        options, defaults, "options",
+        {offsetof(pm_polygonize_options, progress),
+         offsetof(pm_polygonize_options, progress_user_data)});
     if (out_stats) capi::check_versioned(out_stats, "out_stats");
     PolygonizeOptions opt;
     opt.kernel = to_kernel(o.kernel);

@@ -2,6 +2,7 @@
 // through guarded(), which turns any exception into a status and a thread-local message.
 #pragma once
 
+#include <initializer_list>
 #include <new>
 #include <string>
 
@@ -46,7 +47,7 @@ void require(const T* p, const char* name) {
 /// Copy the first min(caller_size, sizeof(T)) bytes of a struct whose first member is
 /// uint32_t struct_size: old callers with smaller structs keep working.
 template <class T>
-T read_versioned(const T* in, const T& defaults, const char* name);
+T read_versioned(const T* in, const T& defaults, const char* name, std::initializer_list<size_t> pointer_fields);
 template <class T>
 void check_versioned(const T* out, const char* name);
 template <class T>
@@ -60,7 +61,7 @@ void write_versioned(T* out, const T& value, const char* name);
 namespace particlemesh::capi {
 
 template <class T>
-T read_versioned(const T* in, const T& defaults, const char* name) {
+T read_versioned(const T* in, const T& defaults, const char* name, std::initializer_list<size_t> pointer_fields) {
   T out = defaults;
   if (in == nullptr) return out;
   const uint32_t size = in->struct_size;
@@ -68,15 +69,13 @@ T read_versioned(const T* in, const T& defaults, const char* name) {
     throw Error(Status::InvalidArgument,
                 std::string(name) + "->struct_size is " + std::to_string(size) +
                     " (call the matching _init function first)");
-  // Every options struct holds pointers or 8-byte fields, so the size of any version of it
-  // (an older caller's prefix included) is a multiple of 8. Any other size ends inside a
-  // field and would hand the library half of a caller's pointer.
-  static_assert(alignof(T) == 8, "options structs must stay 8-byte aligned");
-  if (size % alignof(T) != 0)
-    throw Error(Status::InvalidArgument,
-                std::string(name) + "->struct_size is " + std::to_string(size) +
-                    ", which ends inside a field (it is a struct's sizeof, a multiple of 8; "
-                    "call the matching _init function first)");
+  // A size that ends inside a pointer field would hand the library half of a caller's
+  // pointer (the rest from the default): no version of a struct ever ended there.
+  for (const size_t p : pointer_fields)
+    if (size > p && size < p + sizeof(void*))
+      throw Error(Status::InvalidArgument,
+                  std::string(name) + "->struct_size is " + std::to_string(size) +
+                      ", which ends inside a pointer field (call the matching _init function first)");
   std::memcpy(&out, in, std::min<size_t>(size, sizeof(T)));
   out.struct_size = sizeof(T);
   return out;

@@ -1,6 +1,7 @@
 #include "particlemesh/surface/normals.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <numeric>
@@ -224,17 +225,20 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
                         const std::vector<Vec3>& reference, ProgressTracker& tracker) {
   const size_t n = grid.point_count();
   const double r2 = radius * radius;
-  // Edges s < t of the neighbour graph, keyed by (cost as float bits, edge index): sorting
-  // the keys sorts by cost with ties broken by position in the list (deterministic).
+  // Edges s < t of the neighbour graph, keyed by (cost as float bits, edge index): the keys
+  // order the edges by cost, ties broken by position in the list, and are all distinct.
   std::vector<uint64_t> offset(n + 1, 0);
-  for (size_t s = 0; s < n; ++s) {
-    uint64_t c = 0;
-    if (rep[s] == s && squared_norm(normals[s]) > 0)
-      for (const uint32_t* q = std::upper_bound(lists.begin(uint32_t(s)), lists.end(uint32_t(s)), uint32_t(s));
-           q != lists.end(uint32_t(s)); ++q)
-        c += squared_norm(normals[*q]) > 0 && squared_distance(grid.sorted_point(*q), grid.sorted_point(uint32_t(s))) <= r2;
-    offset[s + 1] = offset[s] + c;
-  }
+  parallel_blocks(n, 4096, [&](size_t b, size_t e) {
+    for (size_t s = b; s < e; ++s) {
+      uint64_t c = 0;
+      if (rep[s] == s && squared_norm(normals[s]) > 0)
+        for (const uint32_t* q = std::upper_bound(lists.begin(uint32_t(s)), lists.end(uint32_t(s)), uint32_t(s));
+             q != lists.end(uint32_t(s)); ++q)
+          c += squared_norm(normals[*q]) > 0 && squared_distance(grid.sorted_point(*q), grid.sorted_point(uint32_t(s))) <= r2;
+      offset[s + 1] = c;
+    }
+  });
+  std::partial_sum(offset.begin(), offset.end(), offset.begin());
   const uint64_t m = offset[n];
   if (m >= (uint64_t(1) << 31)) throw Error(Status::LimitExceeded, "too many neighbour pairs for normal orientation");
   std::vector<uint32_t> edge_from(m), edge_to(m);
@@ -266,31 +270,82 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
     }
   });
   tracker.check();
-  tbb::parallel_sort(keys.begin(), keys.end());
-  tracker.check();
-
-  // Kruskal: the tree's adjacency, then a traversal from each tree's highest point.
-  std::vector<uint32_t> parent(n);
+  // The minimum spanning forest under these keys. They are distinct, so the forest is unique
+  // (the one Kruskal's algorithm gives); it is found by Boruvka's rounds rather than by
+  // sorting every edge: each component takes its cheapest outgoing edge (a parallel pass over
+  // the edges still between components), and the components those edges join merge.
+  std::vector<uint32_t> comp(n), parent(n), labels, live;
+  std::iota(comp.begin(), comp.end(), 0u);
   std::iota(parent.begin(), parent.end(), 0u);
   auto find = [&](uint32_t x) {
     while (parent[x] != x) x = parent[x] = parent[parent[x]];
     return x;
   };
-  std::vector<uint32_t> tree_deg(n + 1, 0);
-  std::vector<uint32_t> tree_edges;
-  tree_edges.reserve(n);
-  std::vector<uint8_t> across(m, 0);
-  size_t step = 0;
-  for (uint64_t key : keys) {
-    if ((++step & 0xfffff) == 0) tracker.check();
-    const uint32_t k = uint32_t((key & 0xffffffffu) >> 1);
-    const uint32_t a = find(edge_from[k]), b = find(edge_to[k]);
-    if (a == b) continue;
-    parent[std::max(a, b)] = std::min(a, b);
-    tree_edges.push_back(k);
-    across[k] = uint8_t(key & 1u);
+  live.resize(m);
+  std::iota(live.begin(), live.end(), 0u);
+  {
+    // Every endpoint of an edge is a component of its own at the start.
+    std::vector<uint8_t> endpoint(n, 0);
+    for (uint64_t k = 0; k < m; ++k) endpoint[edge_from[k]] = endpoint[edge_to[k]] = 1;
+    labels.clear();
+    for (uint32_t s = 0; s < n; ++s)
+      if (endpoint[s]) labels.push_back(s);
   }
-  std::vector<uint32_t>().swap(parent);
+  constexpr uint64_t kNone = ~uint64_t(0);
+  std::vector<std::atomic<uint64_t>> best(n);
+  std::vector<uint64_t> tree_keys;
+  tree_keys.reserve(labels.size());
+  while (!live.empty()) {
+    tracker.check();
+    parallel_blocks(labels.size(), 8192, [&](size_t b, size_t e) {
+      for (size_t i = b; i < e; ++i) best[labels[i]].store(kNone, std::memory_order_relaxed);
+    });
+    parallel_blocks(live.size(), 8192, [&](size_t b, size_t e) {
+      for (size_t i = b; i < e; ++i) {
+        const uint32_t k = live[i];
+        const uint64_t key = keys[k];
+        for (uint32_t c : {comp[edge_from[k]], comp[edge_to[k]]}) {
+          uint64_t cur = best[c].load(std::memory_order_relaxed);
+          while (key < cur && !best[c].compare_exchange_weak(cur, key, std::memory_order_relaxed)) {
+          }
+        }
+      }
+    });
+    // Join along the chosen edges (each is in the forest; two components may choose the same).
+    for (uint32_t c : labels) {
+      const uint64_t key = best[c].load(std::memory_order_relaxed);
+      if (key == kNone) continue;
+      const uint32_t k = uint32_t((key & 0xffffffffu) >> 1);
+      const uint32_t a = find(comp[edge_from[k]]), b = find(comp[edge_to[k]]);
+      if (a == b) continue;
+      parent[std::max(a, b)] = std::min(a, b);
+      tree_keys.push_back(key);
+    }
+    std::vector<uint32_t> next_labels;
+    for (uint32_t c : labels)
+      if (find(c) == c) next_labels.push_back(c);
+    // Point every old label straight at its root (find only halves paths), then relabel.
+    for (uint32_t c : labels) parent[c] = find(c);
+    parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+      for (size_t v = b; v < e; ++v) comp[v] = parent[comp[v]];
+    });
+    labels.swap(next_labels);
+    // Keep the edges still between components (in their order: the same for any thread count).
+    live.erase(std::remove_if(live.begin(), live.end(), [&](uint32_t k) { return comp[edge_from[k]] == comp[edge_to[k]]; }),
+               live.end());
+  }
+  std::vector<std::atomic<uint64_t>>().swap(best);
+  // In key order, as Kruskal's algorithm would add them: the tree's adjacency below, and so
+  // the traversal, are then the same for any thread count.
+  tbb::parallel_sort(tree_keys.begin(), tree_keys.end());
+  std::vector<uint32_t> tree_deg(n + 1, 0);
+  std::vector<uint32_t> tree_edges(tree_keys.size());
+  std::vector<uint8_t> across(m, 0);
+  for (size_t i = 0; i < tree_keys.size(); ++i) {
+    const uint32_t k = uint32_t((tree_keys[i] & 0xffffffffu) >> 1);
+    tree_edges[i] = k;
+    across[k] = uint8_t(tree_keys[i] & 1u);
+  }
   for (uint32_t k : tree_edges) {
     ++tree_deg[edge_from[k] + 1];
     ++tree_deg[edge_to[k] + 1];
@@ -307,17 +362,24 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
       adj[fill[edge_to[k]]++] = edge_from[k];
     }
   }
-  // Roots: visit points from the highest down; each unvisited one starts a tree.
+  // Each tree's root is its highest point (then the lowest index among equals).
   std::vector<uint32_t> order;
-  order.reserve(n);
-  for (uint32_t s = 0; s < n; ++s)
-    if (rep[s] == s && squared_norm(normals[s]) > 0) order.push_back(s);
-  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-    const Vec3 &p = grid.sorted_point(a), &q = grid.sorted_point(b);
-    if (p.z != q.z) return p.z > q.z;
-    if (p.x != q.x) return p.x > q.x;
-    return p.y > q.y;
-  });
+  {
+    auto higher = [&](uint32_t a, uint32_t b) {
+      const Vec3 &p = grid.sorted_point(a), &q = grid.sorted_point(b);
+      if (p.z != q.z) return p.z > q.z;
+      if (p.x != q.x) return p.x > q.x;
+      return p.y > q.y;
+    };
+    std::vector<uint32_t> top(n, UINT32_MAX);
+    for (uint32_t s = 0; s < n; ++s) {
+      if (rep[s] != s || !(squared_norm(normals[s]) > 0)) continue;
+      uint32_t& t = top[comp[s]];
+      if (t == UINT32_MAX || higher(s, t)) t = s;
+    }
+    for (uint32_t c = 0; c < n; ++c)
+      if (top[c] != UINT32_MAX) order.push_back(top[c]);
+  }
   std::vector<uint8_t> seen(n, 0);
   std::vector<uint32_t> stack, piece;
   const bool vote = !reference.empty();

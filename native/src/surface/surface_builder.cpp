@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -135,29 +136,26 @@ class Builder {
     stats_.candidates = kept;
     // Best first: the smallest largest angle (the Delaunay diagonal of a quad beats the
     // overlapping obtuse triangle), then the raw order (sorted indices) - deterministic.
-    std::vector<uint32_t> order;
-    order.reserve(kept);
+    // Sorted as (quality, index) keys: a float's bits, with the sign folded, order as the float.
+    std::vector<uint64_t> key;
+    key.reserve(kept);
     for (uint32_t i = 0; i < o.size(); ++i)
-      if (o[i].ok) order.push_back(i);
-    tbb::parallel_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-      return o[a].quality != o[b].quality ? o[a].quality < o[b].quality : a < b;
-    });
+      if (o[i].ok) {
+        const float q = o[i].quality + 0.0f;  // -0 as +0: equal qualities tie on the index
+        uint32_t bits;
+        std::memcpy(&bits, &q, sizeof bits);
+        bits = (bits & 0x80000000u) ? ~bits : (bits | 0x80000000u);
+        key.push_back((uint64_t(bits) << 32) | i);
+      }
+    tbb::parallel_sort(key.begin(), key.end());
     tracker_.check();
     cand_.resize(kept);
     state_.assign(kept, kOpen);
-    arc_.resize(3 * kept);
-    detail::parallel_blocks(kept, 4096, [&](size_t b, size_t e) {
-      for (size_t c = b; c < e; ++c) {
-        const Triangle& t = o[order[c]].t;
-        cand_[c] = t;
-        for (int k = 0; k < 3; ++k) {
-          const uint32_t v = t[k], s = t[(k + 1) % 3], p = t[(k + 2) % 3];
-          arc_[3 * c + k] = make_arc(frame_[v], P_[v], P_[s], P_[p]);
-        }
-      }
+    detail::parallel_blocks(kept, 8192, [&](size_t b, size_t e) {
+      for (size_t c = b; c < e; ++c) cand_[c] = o[uint32_t(key[c])].t;
     });
     tracker_.check();
-    // Vertex -> candidates.
+    // Vertex -> its corners, in candidate order.
     const size_t n = P_.size();
     vc_off_.assign(n + 1, 0);
     for (const Triangle& t : cand_)
@@ -165,64 +163,90 @@ class Builder {
     std::partial_sum(vc_off_.begin(), vc_off_.end(), vc_off_.begin());
     vc_.resize(vc_off_[n]);
     std::vector<uint32_t> fill(vc_off_.begin(), vc_off_.end() - 1);
-    for (uint32_t c = 0; c < cand_.size(); ++c)
-      for (uint32_t v : cand_[c]) vc_[fill[v]++] = c;
+    for (uint32_t c = 0; c < cand_.size(); ++c) {
+      const Triangle& t = cand_[c];
+      for (int k = 0; k < 3; ++k) {
+        Corner& x = vc_[fill[t[k]]++];
+        x.c = c;
+        x.succ = t[(k + 1) % 3];
+        x.pred = t[(k + 2) % 3];
+      }
+    }
+    // Then the arcs, each vertex's in turn, in parallel.
+    detail::parallel_blocks(n, 4096, [&](size_t b, size_t e) {
+      for (size_t v = b; v < e; ++v)
+        for (uint32_t i = vc_off_[v]; i < vc_off_[v + 1]; ++i) {
+          Corner& x = vc_[i];
+          x.arc = make_arc(frame_[v], P_[v], P_[x.succ], P_[x.pred]);
+        }
+    });
     acc_count_.assign(n, 0);
   }
 
   // ---- growth ----------------------------------------------------------------------------
 
-  enum : uint8_t { kOpen = 0, kAccepted = 1, kDead = 2 };
+  enum : uint8_t { kOpen = 0, kAccepted = 1, kDead = 2, kStateMask = 3, kQueued = 4 };
   enum Check { kOk = 0, kPinch = 1, kInvalid = 2 };
 
   Check check(uint32_t c) const {
-    if (state_[c] != kOpen) return kInvalid;
+    if ((state_[c] & kStateMask) != kOpen) return kInvalid;
     const Triangle& C = cand_[c];
     bool pinch = false;
     for (int k = 0; k < 3; ++k) {
       const uint32_t v = C[k];
       if (acc_count_[v] == 0) continue;
-      const uint32_t succ = C[(k + 1) % 3], pred = C[(k + 2) % 3];
+      const uint32_t accepted_end = vc_off_[v] + acc_count_[v];
+      uint32_t own = accepted_end;
+      while (vc_[own].c != c) ++own;  // c is open: after the accepted corners
+      const Corner& mine = vc_[own];
       bool adjacent = false;
-      for (uint32_t i = vc_off_[v]; i < vc_off_[v + 1]; ++i) {
-        const uint32_t t = vc_[i];
-        if (state_[t] != kAccepted) continue;
-        const Triangle& T = cand_[t];
-        const int kt = corner_of(T, v);
-        const uint32_t ts = T[(kt + 1) % 3], tp = T[(kt + 2) % 3];
-        if (ts == succ || tp == pred) return kInvalid;  // a directed edge is taken
-        if (arcs_overlap(arc_[3 * t + kt], arc_[3 * c + k])) return kInvalid;
-        if (tp == succ || ts == pred) adjacent = true;
+      for (uint32_t i = vc_off_[v]; i < accepted_end; ++i) {
+        const Corner& t = vc_[i];  // accepted (they lead v's list)
+        if (t.succ == mine.succ || t.pred == mine.pred) return kInvalid;  // a directed edge is taken
+        if (arcs_overlap(t.arc, mine.arc)) return kInvalid;
+        if (t.pred == mine.succ || t.succ == mine.pred) adjacent = true;
       }
       if (!adjacent) pinch = true;
     }
     return pinch ? kPinch : kOk;
   }
 
+  /// f(candidate, whether it holds b -> a) for each candidate on the edge {a, b}.
   template <class F>
   void for_each_candidate_on_edge(uint32_t a, uint32_t b, F&& f) const {
-    const uint32_t x = (vc_off_[a + 1] - vc_off_[a] <= vc_off_[b + 1] - vc_off_[b]) ? a : b;
-    const uint32_t y = x == a ? b : a;
-    for (uint32_t i = vc_off_[x]; i < vc_off_[x + 1]; ++i) {
-      const Triangle& T = cand_[vc_[i]];
-      if (T[0] == y || T[1] == y || T[2] == y) f(vc_[i]);
+    if (vc_off_[a + 1] - vc_off_[a] <= vc_off_[b + 1] - vc_off_[b]) {
+      for (uint32_t i = vc_off_[a]; i < vc_off_[a + 1]; ++i)
+        if (vc_[i].succ == b || vc_[i].pred == b) f(vc_[i].c, vc_[i].pred == b);
+    } else {
+      for (uint32_t i = vc_off_[b]; i < vc_off_[b + 1]; ++i)
+        if (vc_[i].succ == a || vc_[i].pred == a) f(vc_[i].c, vc_[i].succ == a);
     }
   }
 
   void accept(uint32_t c, std::priority_queue<uint32_t, std::vector<uint32_t>, std::greater<>>& heap) {
     state_[c] = kAccepted;
     const Triangle& C = cand_[c];
-    for (uint32_t v : C) ++acc_count_[v];
+    // Keep each vertex's accepted candidates at the front of its list, so that check() reads
+    // only those (the result does not depend on the order it reads them in).
+    for (uint32_t v : C) {
+      const uint32_t front = vc_off_[v] + acc_count_[v];
+      uint32_t i = front;
+      while (vc_[i].c != c) ++i;
+      std::swap(vc_[i], vc_[front]);
+      ++acc_count_[v];
+    }
     ++stats_.grown;
     // Candidates across each edge, wound the other way, join the front.
     for (int k = 0; k < 3; ++k) {
       const uint32_t a = C[k], b = C[(k + 1) % 3];
-      for_each_candidate_on_edge(a, b, [&](uint32_t t) {
-        if (state_[t] != kOpen) return;
-        const Triangle& T = cand_[t];
-        const int kb = corner_of(T, b);
-        if (T[(kb + 1) % 3] == a) heap.push(t);  // T holds b -> a
-        else state_[t] = kDead;                  // T holds a -> b: can never be used
+      for_each_candidate_on_edge(a, b, [&](uint32_t t, bool b_to_a) {
+        if ((state_[t] & kStateMask) != kOpen) return;
+        if (!b_to_a) {
+          state_[t] = kDead;  // T holds a -> b: can never be used
+        } else if (!(state_[t] & kQueued)) {  // once in the heap is enough: a second copy
+          state_[t] |= kQueued;               // would pop right after the first, to no effect
+          heap.push(t);
+        }
       });
     }
   }
@@ -241,10 +265,11 @@ class Builder {
       if (!heap.empty()) {
         const uint32_t c = heap.top();
         heap.pop();
+        state_[c] &= uint8_t(~kQueued);
         const Check r = check(c);
         if (r == kOk) accept(c, heap);
         else if (r == kPinch) deferred.push(c);
-        else if (state_[c] == kOpen) state_[c] = kDead;
+        else if ((state_[c] & kStateMask) == kOpen) state_[c] = kDead;
         continue;
       }
       if (!deferred.empty()) {
@@ -257,7 +282,7 @@ class Builder {
       bool seeded = false;
       for (; seed_ptr < cand_.size(); ++seed_ptr) {
         const Triangle& C = cand_[seed_ptr];
-        if (state_[seed_ptr] == kOpen && acc_count_[C[0]] == 0 && acc_count_[C[1]] == 0 && acc_count_[C[2]] == 0) {
+        if ((state_[seed_ptr] & kStateMask) == kOpen && acc_count_[C[0]] == 0 && acc_count_[C[1]] == 0 && acc_count_[C[2]] == 0) {
           accept(uint32_t(seed_ptr), heap);
           ++stats_.seeds;
           seeded = true;
@@ -282,8 +307,7 @@ class Builder {
       if (state_[c] == kAccepted) tris_.push_back(cand_[c]);
     // Free the growth structures; repair works on the accepted triangles only.
     std::vector<Triangle>().swap(cand_);
-    std::vector<Arc>().swap(arc_);
-    std::vector<uint32_t>().swap(vc_);
+    std::vector<Corner>().swap(vc_);
     std::vector<uint32_t>().swap(vc_off_);
   }
 
@@ -853,9 +877,16 @@ class Builder {
   // growth
   std::vector<Triangle> cand_;
   std::vector<uint8_t> state_;
-  std::vector<Arc> arc_;
-  std::vector<uint32_t> vc_off_, vc_;
-  std::vector<uint16_t> acc_count_;
+  /// A candidate's corner at a vertex: the candidate, the vertices after and before the
+  /// vertex in its winding, and its arc about the vertex normal. Kept per vertex, so that the
+  /// growth tests read one short contiguous list instead of the candidates scattered in memory.
+  struct Corner {
+    uint32_t c, succ, pred;
+    Arc arc;
+  };
+  std::vector<Corner> vc_;
+  std::vector<uint32_t> vc_off_;
+  std::vector<uint32_t> acc_count_;
 
   // repair
   std::vector<Triangle> tris_;
