@@ -27,6 +27,46 @@ constexpr double kMaxFlatness = 0.2;
 constexpr double kMaxReferenceDisagreement = 0.01;
 }  // namespace
 
+namespace {
+
+/// The offsets from p to its neighbours within the radius, p's own (zero) first.
+void gather_near(const NeighborGrid& grid, const NeighborLists& lists, uint32_t s, double r2, std::vector<Vec3>& near) {
+  const Vec3 p = grid.sorted_point(s);
+  near.clear();
+  near.push_back(Vec3{});
+  for (const uint32_t* q = lists.begin(s); q != lists.end(s); ++q) {
+    const Vec3 d = grid.sorted_point(*q) - p;
+    if (squared_norm(d) <= r2) near.push_back(d);
+  }
+}
+
+/// PCA of the offsets marked in `use`: the normal, and the ratio of the two smallest variances
+/// (small for points that lie close to one plane).
+Vec3 pca_normal(const std::vector<Vec3>& near, const std::vector<uint8_t>& use, double* flatness) {
+  Vec3 sum{};
+  int count = 0;
+  for (size_t k = 0; k < near.size(); ++k)
+    if (use[k]) {
+      sum += near[k];
+      ++count;
+    }
+  const Vec3 mean = sum / double(count);
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (size_t k = 0; k < near.size(); ++k) {
+    if (!use[k]) continue;
+    const Eigen::Vector3d v(near[k].x - mean.x, near[k].y - mean.y, near[k].z - mean.z);
+    cov += v * v.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  eig.computeDirect(cov);
+  const Eigen::Vector3d ev = eig.eigenvalues();  // ascending
+  if (flatness) *flatness = ev(1) > 0 ? ev(0) / ev(1) : 1.0;
+  const Eigen::Vector3d v = eig.eigenvectors().col(0);
+  return normalized(Vec3{v.x(), v.y(), v.z()});
+}
+
+}  // namespace
+
 std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
                                      const NeighborLists& lists, double radius, ProgressTracker& tracker,
                                      const std::vector<Triangle>* triangles) {
@@ -34,85 +74,65 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
   std::vector<Vec3> normals(n);
   const double r2 = radius * radius;
   const double band = 0.25 * radius;
-  // Raw triangles at each point (original index -> triangle ids), and original -> sorted.
-  std::vector<uint32_t> tri_off, tri_ids, sorted_of;
-  if (triangles != nullptr) {
-    tri_off.assign(n + 1, 0);
-    for (const Triangle& t : *triangles)
-      for (uint32_t v : t) ++tri_off[v + 1];
-    std::partial_sum(tri_off.begin(), tri_off.end(), tri_off.begin());
-    tri_ids.resize(tri_off[n]);
-    std::vector<uint32_t> fill(tri_off.begin(), tri_off.end() - 1);
-    for (uint32_t t = 0; t < triangles->size(); ++t)
-      for (uint32_t v : (*triangles)[t]) tri_ids[fill[v]++] = t;
-    sorted_of.resize(n);
-    for (uint32_t s = 0; s < n; ++s) sorted_of[grid.original_index(s)] = s;
-  }
-  // Each raw triangle's plane, once.
-  std::vector<Vec3> tri_normal;
-  if (triangles != nullptr) {
-    tri_normal.resize(triangles->size());
-    parallel_blocks(triangles->size(), 8192, [&](size_t b, size_t e) {
-      for (size_t i = b; i < e; ++i) {
-        const Triangle& t = (*triangles)[i];
-        tri_normal[i] = normalized(cross(grid.sorted_point(sorted_of[t[1]]) - grid.sorted_point(sorted_of[t[0]]),
-                                         grid.sorted_point(sorted_of[t[2]]) - grid.sorted_point(sorted_of[t[0]])));
-      }
-    });
-  }
+  // 1. Every point's plane. Points that already lie close to one plane keep it (noise and the
+  //    steps of a depth scan or a lattice do not call for more); a thick neighbourhood may be
+  //    two sheets, and is looked at again below.
+  std::vector<uint8_t> thick(n, 0);
   parallel_blocks(n, 2048, [&](size_t b, size_t e) {
     if (tracker.cancelled()) return;
-    std::vector<Vec3> near, tried;
+    std::vector<Vec3> near;
     std::vector<uint8_t> inlier;
     for (size_t s = b; s < e; ++s) {
       if (rep[s] != s) continue;
-      const Vec3 p = grid.sorted_point(uint32_t(s));
-      near.clear();
-      near.push_back(Vec3{});
-      for (const uint32_t* q = lists.begin(uint32_t(s)); q != lists.end(uint32_t(s)); ++q) {
-        const Vec3 d = grid.sorted_point(*q) - p;
-        if (squared_norm(d) <= r2) near.push_back(d);
-      }
+      gather_near(grid, lists, uint32_t(s), r2, near);
       if (near.size() < 3) continue;  // too few neighbours for a plane: unknown (0,0,0)
-      // PCA of the inliers: returns the normal and the ratio of the two smallest variances
-      // (small for points that lie close to one plane).
-      auto pca = [&](const std::vector<uint8_t>& use, double* flatness) {
-        Vec3 sum{};
-        int count = 0;
-        for (size_t k = 0; k < near.size(); ++k)
-          if (use[k]) {
-            sum += near[k];
-            ++count;
-          }
-        const Vec3 mean = sum / double(count);
-        Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-        for (size_t k = 0; k < near.size(); ++k) {
-          if (!use[k]) continue;
-          const Eigen::Vector3d v(near[k].x - mean.x, near[k].y - mean.y, near[k].z - mean.z);
-          cov += v * v.transpose();
-        }
-        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-        eig.computeDirect(cov);
-        const Eigen::Vector3d ev = eig.eigenvalues();  // ascending
-        if (flatness) *flatness = ev(1) > 0 ? ev(0) / ev(1) : 1.0;
-        const Eigen::Vector3d v = eig.eigenvectors().col(0);
-        return normalized(Vec3{v.x(), v.y(), v.z()});
-      };
       inlier.assign(near.size(), 1);
       double flatness = 0;
-      Vec3 normal = pca(inlier, &flatness);
-      // Points that already lie close to one plane keep it (noise and the steps of a depth
-      // scan or a lattice do not call for more). A thick neighbourhood may be two sheets.
-      if (triangles != nullptr && flatness > kMaxFlatness) {
-        const uint32_t o = grid.original_index(uint32_t(s));
+      normals[s] = pca_normal(near, inlier, &flatness);
+      thick[s] = triangles != nullptr && flatness > kMaxFlatness;
+    }
+    tracker.tick(e - b);
+  });
+  tracker.check();
+  std::vector<uint32_t> redo;
+  for (uint32_t s = 0; s < n; ++s)
+    if (thick[s]) redo.push_back(s);
+  if (!redo.empty()) {
+    // 2. At a thick point, the raw triangles there propose planes; the one most of the
+    //    neighbours lie close to wins. Their triangles, in triangle order, for these points only.
+    std::vector<uint32_t> slot(n, UINT32_MAX), sorted_of(n);
+    for (uint32_t i = 0; i < redo.size(); ++i) slot[grid.original_index(redo[i])] = i;
+    for (uint32_t s = 0; s < n; ++s) sorted_of[grid.original_index(s)] = s;
+    std::vector<uint32_t> tri_off(redo.size() + 1, 0), tri_ids;
+    for (const Triangle& t : *triangles)
+      for (uint32_t v : t)
+        if (slot[v] != UINT32_MAX) ++tri_off[slot[v] + 1];
+    std::partial_sum(tri_off.begin(), tri_off.end(), tri_off.begin());
+    tri_ids.resize(tri_off.back());
+    {
+      std::vector<uint32_t> fill(tri_off.begin(), tri_off.end() - 1);
+      for (uint32_t t = 0; t < triangles->size(); ++t)
+        for (uint32_t v : (*triangles)[t])
+          if (slot[v] != UINT32_MAX) tri_ids[fill[slot[v]]++] = t;
+    }
+    tracker.check();
+    parallel_blocks(redo.size(), 256, [&](size_t b, size_t e) {
+      if (tracker.cancelled()) return;
+      std::vector<Vec3> near, tried;
+      std::vector<uint8_t> inlier;
+      for (size_t i = b; i < e; ++i) {
+        const uint32_t s = redo[i];
+        gather_near(grid, lists, s, r2, near);
         // Inliers count more the closer they are: next to the point its own sheet dominates
         // even where another sheet ends nearby (the free ends of a folded sheet).
         double best = 0;
         size_t best_count = 0;
         Vec3 best_n;
         tried.clear();
-        for (uint32_t i = tri_off[o]; i < tri_off[o + 1]; ++i) {
-          const Vec3 tn = tri_normal[tri_ids[i]];
+        for (uint32_t j = tri_off[i]; j < tri_off[i + 1]; ++j) {
+          const Triangle& t = (*triangles)[tri_ids[j]];
+          const Vec3 a = grid.sorted_point(sorted_of[t[0]]);
+          const Vec3 tn = normalized(cross(grid.sorted_point(sorted_of[t[1]]) - a, grid.sorted_point(sorted_of[t[2]]) - a));
           // Planes within ~8 degrees of one already scored would score about the same.
           bool seen = false;
           for (const Vec3& x : tried) seen |= std::abs(dot(x, tn)) > 0.99;
@@ -133,15 +153,14 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
           }
         }
         if (best_count >= 3) {
+          inlier.resize(near.size());
           for (size_t k = 0; k < near.size(); ++k) inlier[k] = std::abs(dot(near[k], best_n)) <= band;
-          normal = pca(inlier, nullptr);
+          normals[s] = pca_normal(near, inlier, nullptr);
         }
       }
-      normals[s] = normal;
-    }
-    tracker.tick(e - b);
-  });
-  tracker.check();
+    });
+    tracker.check();
+  }
   for (size_t s = 0; s < n; ++s)
     if (rep[s] != s) normals[s] = normals[rep[s]];
   return normals;
