@@ -1,6 +1,7 @@
 #include "surface/surface_builder.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -155,30 +156,38 @@ class Builder {
       for (size_t c = b; c < e; ++c) cand_[c] = o[uint32_t(key[c])].t;
     });
     tracker_.check();
-    // Vertex -> its corners, in candidate order.
+    // Vertex -> its corners, in candidate order. Counted and placed in parallel (a corner's
+    // slot comes from its vertex's atomic cursor), then each vertex's list is sorted by
+    // candidate: the same lists for any thread count.
     const size_t n = P_.size();
     vc_off_.assign(n + 1, 0);
-    for (const Triangle& t : cand_)
-      for (uint32_t v : t) ++vc_off_[v + 1];
+    detail::parallel_blocks(kept, 8192, [&](size_t b, size_t e) {
+      for (size_t c = b; c < e; ++c)
+        for (uint32_t v : cand_[c]) std::atomic_ref<uint32_t>(vc_off_[v + 1]).fetch_add(1, std::memory_order_relaxed);
+    });
     std::partial_sum(vc_off_.begin(), vc_off_.end(), vc_off_.begin());
     vc_.resize(vc_off_[n]);
     std::vector<uint32_t> fill(vc_off_.begin(), vc_off_.end() - 1);
-    for (uint32_t c = 0; c < cand_.size(); ++c) {
-      const Triangle& t = cand_[c];
-      for (int k = 0; k < 3; ++k) {
-        Corner& x = vc_[fill[t[k]]++];
-        x.c = c;
-        x.succ = t[(k + 1) % 3];
-        x.pred = t[(k + 2) % 3];
+    detail::parallel_blocks(kept, 8192, [&](size_t b, size_t e) {
+      for (size_t c = b; c < e; ++c) {
+        const Triangle& t = cand_[c];
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t slot = std::atomic_ref<uint32_t>(fill[t[k]]).fetch_add(1, std::memory_order_relaxed);
+          vc_[slot] = {uint32_t(c), t[(k + 1) % 3], t[(k + 2) % 3], {}};
+        }
       }
-    }
-    // Then the arcs, each vertex's in turn, in parallel.
+    });
+    tracker_.check();
+    // Then each vertex's list in order, and its arcs.
     detail::parallel_blocks(n, 4096, [&](size_t b, size_t e) {
-      for (size_t v = b; v < e; ++v)
+      for (size_t v = b; v < e; ++v) {
+        std::sort(vc_.begin() + vc_off_[v], vc_.begin() + vc_off_[v + 1],
+                  [](const Corner& x, const Corner& y) { return x.c < y.c; });
         for (uint32_t i = vc_off_[v]; i < vc_off_[v + 1]; ++i) {
           Corner& x = vc_[i];
           x.arc = make_arc(frame_[v], P_[v], P_[x.succ], P_[x.pred]);
         }
+      }
     });
     acc_count_.assign(n, 0);
   }
