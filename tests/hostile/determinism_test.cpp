@@ -27,10 +27,11 @@ void expect_same_for_any_thread_count(const char* what, const std::function<uint
 }
 
 // A jittered, duplicated, unevenly dense cloud: the inputs where scheduling order would show.
-PointCloud awkward_cloud() {
-  PointCloud c = double_torus_sample(0.02, 7);
-  const PointCloud r = test::random_cloud(c.size(), 11, 0.004);
-  for (size_t i = 0; i < c.size(); ++i) c.positions[i] += r.positions[i] - Vec3{0.002, 0.002, 0.002};
+PointCloud awkward_cloud(double spacing = 0.02) {
+  PointCloud c = double_torus_sample(spacing, 7);
+  const double jitter = 0.2 * spacing;
+  const PointCloud r = test::random_cloud(c.size(), 11, jitter);
+  for (size_t i = 0; i < c.size(); ++i) c.positions[i] += r.positions[i] - Vec3{0.5 * jitter, 0.5 * jitter, 0.5 * jitter};
   for (size_t i = 0; i < c.size(); i += 17) {
     c.positions.push_back(c.positions[i]);
     c.normals.push_back(c.normals[i]);
@@ -62,6 +63,19 @@ TEST(Determinism, ReconstructSurfaceEveryNormalSource) {
       return mesh_hash(r.mesh) ^ r.surface.holes_filled;
     });
   }
+}
+
+// 68k points: past the size where the surface grows in blocks side by side.
+TEST(Determinism, ReconstructSurfaceGrownInBlocks) {
+  const PointCloud c = awkward_cloud(0.008);
+  ASSERT_GE(c.size(), 50000u);
+  expect_same_for_any_thread_count("reconstruct_surface, blocked growth", [&](int t) {
+    SurfaceOptions o;
+    o.threads = t;
+    o.normals = SurfaceOptions::NormalSource::Estimate;
+    const SurfaceResult r = reconstruct_surface(c, o);
+    return mesh_hash(r.mesh) ^ r.surface.holes_filled;
+  });
 }
 
 TEST(Determinism, SpacingAndNormals) {

@@ -8,6 +8,7 @@
 
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
+#include "particlemesh/smooth/subdivide.h"
 
 namespace particlemesh::detail {
 
@@ -90,8 +91,15 @@ ControlMesh prepare_control_mesh(const TriMesh& mesh) {
   cm.control_index.assign(nv, ControlMesh::kDropped);
   for (size_t v = 0; v < nv; ++v)
     if (used[v]) {
-      if (!is_finite(mesh.positions[v]))
+      const Vec3& p = mesh.positions[v];
+      if (!is_finite(p))
         throw Error(Status::InvalidInput, "positions[" + std::to_string(v) + "] is not finite");
+      // Finite is not enough: Loop's and butterfly's sums of coordinates near DBL_MAX overflow
+      // to infinity (found by fuzzing).
+      if (std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > kMaxSmoothCoordinate)
+        throw Error(Status::InvalidInput, "positions[" + std::to_string(v) + "] = (" + std::to_string(p.x) + ", " +
+                                              std::to_string(p.y) + ", " + std::to_string(p.z) +
+                                              ") is too large to smooth (coordinates must be at most 1e50 in magnitude)");
       cm.control_index[v] = uint32_t(cm.original_vertex.size());
       cm.original_vertex.push_back(uint32_t(v));
     }
@@ -109,6 +117,10 @@ ControlMesh prepare_control_mesh(const TriMesh& mesh) {
         if (!std::isfinite(x))
           throw Error(Status::InvalidInput, "attribute '" + a.name + "' of vertex " +
                                                 std::to_string(cm.original_vertex[i]) + " is not finite");
+        if (std::abs(x) > kMaxSmoothAttribute)
+          throw Error(Status::InvalidInput, "attribute '" + a.name + "' of vertex " +
+                                                std::to_string(cm.original_vertex[i]) + " is " + std::to_string(x) +
+                                                ": too large to smooth (at most 1e30 in magnitude)");
         c.values[i * k + j] = x;
       }
     cm.attributes.push_back(std::move(c));

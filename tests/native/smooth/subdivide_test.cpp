@@ -25,6 +25,7 @@
 #include <opensubdiv/far/topologyRefinerFactory.h>
 
 #include <cmath>
+#include <limits>
 #include <map>
 #include <memory>
 #include <random>
@@ -699,6 +700,20 @@ TEST(SmoothInput, BadMeshesGiveClearErrors) {
     m = tet;
     m.positions[3].y = std::nan("");
     EXPECT_NE(message_of([&] { smooth_mesh(m, o); }).find("positions[3] is not finite"), std::string::npos);
+    // Finite but near DBL_MAX: the schemes' sums overflowed to infinity (found by fuzzing).
+    for (const double big : {1e300, -std::numeric_limits<double>::max()}) {
+      m = tet;
+      m.positions[2].z = big;
+      EXPECT_EQ(status_of([&] { smooth_mesh(m, o); }), Status::InvalidInput);
+      EXPECT_NE(message_of([&] { smooth_mesh(m, o); }).find("positions[2] = ("), std::string::npos);
+      EXPECT_NE(message_of([&] { smooth_mesh(m, o); }).find("is too large to smooth"), std::string::npos);
+    }
+    m = tet;
+    m.positions[2].z = kMaxSmoothCoordinate;  // the limit itself: positions and normals stay finite
+    ASSERT_EQ(status_of([&] { smooth_mesh(m, o); }), Status::Ok);
+    const TriMesh big = smooth_mesh(m, o).mesh;
+    for (const Vec3& p : big.positions) EXPECT_TRUE(is_finite(p));
+    for (const Vec3& n : big.normals) EXPECT_TRUE(is_finite(n));  // (0 where the sliver's tangents vanish in rounding)
     // A fin: a third triangle on edge (0, 1).
     m = tet;
     m.positions.push_back({0.5, -1, 0});
@@ -741,6 +756,8 @@ TEST(SmoothInput, BadMeshesGiveClearErrors) {
     m.attributes = {{"v", 1, {0.f, 1.f, std::nanf(""), 2.f}}};
     EXPECT_NE(message_of([&] { smooth_mesh(m, o); }).find("attribute 'v' of vertex 2 is not finite"),
               std::string::npos);
+    m.attributes = {{"v", 1, {0.f, 1.f, 3e38f, 2.f}}};
+    EXPECT_NE(message_of([&] { smooth_mesh(m, o); }).find("attribute 'v' of vertex 2 is 3"), std::string::npos);
     // Zero-area triangles with distinct corners are fine.
     m = tet;
     m.positions[3] = {0.5, 0.5, 0};

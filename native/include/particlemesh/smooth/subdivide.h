@@ -84,6 +84,11 @@ struct CreaseEdge {
 
 /// The most levels smooth_mesh accepts; each level multiplies the triangles by 4.
 inline constexpr int kMaxSmoothLevels = 10;
+/// The largest coordinate magnitude a mesh to smooth may have (and 1e30 for attribute
+/// values, which are floats): the schemes' weighted sums, and the limit normals' cross
+/// products, stay finite. Larger values are refused with InvalidInput.
+inline constexpr double kMaxSmoothCoordinate = 1e50;
+inline constexpr float kMaxSmoothAttribute = 1e30f;
 
 struct SmoothOptions {
   SmoothScheme scheme = SmoothScheme::Loop;
