@@ -65,11 +65,11 @@ TEST(Determinism, ReconstructSurfaceEveryNormalSource) {
   }
 }
 
-// 68k points: past the size where the surface grows in blocks side by side.
-TEST(Determinism, ReconstructSurfaceGrownInBlocks) {
+// 68k points: every parallel stage cut into many blocks.
+TEST(Determinism, ReconstructSurfaceLargerCloud) {
   const PointCloud c = awkward_cloud(0.008);
   ASSERT_GE(c.size(), 50000u);
-  expect_same_for_any_thread_count("reconstruct_surface, blocked growth", [&](int t) {
+  expect_same_for_any_thread_count("reconstruct_surface, 68k points", [&](int t) {
     SurfaceOptions o;
     o.threads = t;
     o.normals = SurfaceOptions::NormalSource::Estimate;

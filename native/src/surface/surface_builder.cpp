@@ -220,27 +220,19 @@ class Builder {
     return pinch ? kPinch : kOk;
   }
 
-  /// f(corner at a or b, whether its candidate holds b -> a) for each candidate on the edge {a, b}.
+  /// f(candidate, whether it holds b -> a) for each candidate on the edge {a, b}.
   template <class F>
   void for_each_candidate_on_edge(uint32_t a, uint32_t b, F&& f) const {
     if (vc_off_[a + 1] - vc_off_[a] <= vc_off_[b + 1] - vc_off_[b]) {
       for (uint32_t i = vc_off_[a]; i < vc_off_[a + 1]; ++i)
-        if (vc_[i].succ == b || vc_[i].pred == b) f(vc_[i], vc_[i].pred == b);
+        if (vc_[i].succ == b || vc_[i].pred == b) f(vc_[i].c, vc_[i].pred == b);
     } else {
       for (uint32_t i = vc_off_[b]; i < vc_off_[b + 1]; ++i)
-        if (vc_[i].succ == a || vc_[i].pred == a) f(vc_[i], vc_[i].succ == a);
+        if (vc_[i].succ == a || vc_[i].pred == a) f(vc_[i].c, vc_[i].succ == a);
     }
   }
 
-  /// The vertices a region may use: growth in a block touches only candidates with all three
-  /// corners in it, so blocks grow side by side without sharing anything they write.
-  struct Scope {
-    uint32_t lo = 0, hi = UINT32_MAX;
-    bool has(uint32_t v) const { return v >= lo && v < hi; }
-  };
-  using Heap = std::priority_queue<uint32_t, std::vector<uint32_t>, std::greater<>>;
-
-  void accept(uint32_t c, Heap& heap, const Scope& scope, size_t& grown) {
+  void accept(uint32_t c, std::priority_queue<uint32_t, std::vector<uint32_t>, std::greater<>>& heap) {
     state_[c] = kAccepted;
     const Triangle& C = cand_[c];
     // Keep each vertex's accepted candidates at the front of its list, so that check() reads
@@ -252,13 +244,11 @@ class Builder {
       std::swap(vc_[i], vc_[front]);
       ++acc_count_[v];
     }
-    ++grown;
+    ++stats_.grown;
     // Candidates across each edge, wound the other way, join the front.
     for (int k = 0; k < 3; ++k) {
       const uint32_t a = C[k], b = C[(k + 1) % 3];
-      for_each_candidate_on_edge(a, b, [&](const Corner& x, bool b_to_a) {
-        if (!scope.has(x.succ) || !scope.has(x.pred)) return;  // (the list's own vertex is a or b)
-        const uint32_t t = x.c;
+      for_each_candidate_on_edge(a, b, [&](uint32_t t, bool b_to_a) {
         if ((state_[t] & kStateMask) != kOpen) return;
         if (!b_to_a) {
           state_[t] = kDead;  // T holds a -> b: can never be used
@@ -270,27 +260,23 @@ class Builder {
     }
   }
 
-  /// Front growth over the candidates in `order` (best first) within `scope`: the best open
-  /// candidate across an accepted edge next, pinches deferred, a new seed on untouched points
-  /// when the front runs out; `touch` also gives points no region reached a triangle.
-  void grow_front(Heap& heap, const Scope& scope, const std::vector<uint32_t>* order, bool touch,
-                  size_t& grown, size_t& seeds) {
-    Heap deferred;
-    const size_t count = order ? order->size() : cand_.size();
-    auto at = [&](size_t i) { return order ? (*order)[i] : uint32_t(i); };
-    size_t seed_ptr = 0, touch_ptr = 0, since_tick = 0;
+  void grow() {
+    std::priority_queue<uint32_t, std::vector<uint32_t>, std::greater<>> heap, deferred;
+    size_t seed_ptr = 0, touch_ptr = 0;
+    tracker_.stage("extracting the surface", 0.7, 0.85, cand_.size());
+    size_t since_tick = 0;
     while (true) {
       if (++since_tick == 4096) {
         tracker_.tick(4096);
         since_tick = 0;
-        if (tracker_.cancelled()) return;
+        if (tracker_.cancelled()) tracker_.check();
       }
       if (!heap.empty()) {
         const uint32_t c = heap.top();
         heap.pop();
         state_[c] &= uint8_t(~kQueued);
         const Check r = check(c);
-        if (r == kOk) accept(c, heap, scope, grown);
+        if (r == kOk) accept(c, heap);
         else if (r == kPinch) deferred.push(c);
         else if ((state_[c] & kStateMask) == kOpen) state_[c] = kDead;
         continue;
@@ -298,94 +284,33 @@ class Builder {
       if (!deferred.empty()) {
         const uint32_t c = deferred.top();
         deferred.pop();
-        if (check(c) != kInvalid) accept(c, heap, scope, grown);
+        if (check(c) != kInvalid) accept(c, heap);
         continue;
       }
       // The front is exhausted: seed a new region on untouched points, best candidate first.
       bool seeded = false;
-      for (; seed_ptr < count; ++seed_ptr) {
-        const uint32_t c = at(seed_ptr);
-        const Triangle& C = cand_[c];
-        if ((state_[c] & kStateMask) == kOpen && acc_count_[C[0]] == 0 && acc_count_[C[1]] == 0 && acc_count_[C[2]] == 0) {
-          accept(c, heap, scope, grown);
-          ++seeds;
+      for (; seed_ptr < cand_.size(); ++seed_ptr) {
+        const Triangle& C = cand_[seed_ptr];
+        if ((state_[seed_ptr] & kStateMask) == kOpen && acc_count_[C[0]] == 0 && acc_count_[C[1]] == 0 && acc_count_[C[2]] == 0) {
+          accept(uint32_t(seed_ptr), heap);
+          ++stats_.seeds;
           seeded = true;
           break;
         }
       }
       if (seeded) continue;
-      if (!touch) break;
       // Last: give points that no region reached a triangle, even at the cost of a pinch.
-      for (; touch_ptr < count; ++touch_ptr) {
-        const uint32_t c = at(touch_ptr);
-        const Triangle& C = cand_[c];
+      for (; touch_ptr < cand_.size(); ++touch_ptr) {
+        const Triangle& C = cand_[touch_ptr];
         if (acc_count_[C[0]] && acc_count_[C[1]] && acc_count_[C[2]]) continue;
-        if (check(c) != kInvalid) {
-          accept(c, heap, scope, grown);
+        if (check(uint32_t(touch_ptr)) != kInvalid) {
+          accept(uint32_t(touch_ptr), heap);
           seeded = true;
           break;
         }
       }
       if (!seeded) break;
     }
-  }
-
-  /// Large clouds grow in kGrowBlocks blocks of consecutive (cell-ordered, so nearby) vertices
-  /// at once, each from its own seeds over the candidates inside it; then one front over
-  /// everything, starting from all the blocks' edges, joins them. The blocks depend on the
-  /// point count only, never on the thread count.
-  static constexpr size_t kGrowBlocks = 8;
-  static constexpr size_t kMinBlockedGrow = 50000;  // points; below, one front does it all
-
-  void grow() {
-    tracker_.stage("extracting the surface", 0.7, 0.85, cand_.size());
-    const size_t n = P_.size();
-    Heap heap;
-    if (n >= kMinBlockedGrow) {
-      const uint32_t span = uint32_t((n + kGrowBlocks - 1) / kGrowBlocks);
-      std::vector<std::vector<uint32_t>> inside(kGrowBlocks);
-      for (uint32_t c = 0; c < cand_.size(); ++c) {
-        const Triangle& C = cand_[c];
-        const uint32_t b = C[0] / span;
-        if (C[1] / span == b && C[2] / span == b) inside[b].push_back(c);
-      }
-      std::vector<size_t> grown(kGrowBlocks, 0), seeds(kGrowBlocks, 0);
-      detail::parallel_blocks(kGrowBlocks, 1, [&](size_t bb, size_t be) {
-        for (size_t b = bb; b < be; ++b) {
-          Heap h;
-          const Scope scope{uint32_t(b * span), uint32_t(std::min<size_t>(n, (b + 1) * size_t(span)))};
-          grow_front(h, scope, &inside[b], false, grown[b], seeds[b]);
-        }
-      });
-      tracker_.check();
-      for (size_t b = 0; b < kGrowBlocks; ++b) {
-        stats_.grown += grown[b];
-        stats_.seeds += seeds[b];
-      }
-      // The joining front: every open candidate across an accepted edge, wound the other way
-      // (at its vertex a, an accepted corner whose predecessor is b holds b -> a).
-      const size_t chunk = 65536, chunks = (cand_.size() + chunk - 1) / chunk;
-      std::vector<std::vector<uint32_t>> front(chunks);
-      detail::parallel_blocks(chunks, 1, [&](size_t kb, size_t ke) {
-        for (size_t k = kb; k < ke; ++k)
-          for (size_t c = k * chunk; c < std::min(cand_.size(), (k + 1) * chunk); ++c) {
-            if (state_[c] != kOpen) continue;
-            const Triangle& C = cand_[c];
-            bool across = false;
-            for (int j = 0; j < 3 && !across; ++j) {
-              const uint32_t a = C[j], b = C[(j + 1) % 3];
-              for (uint32_t i = vc_off_[a]; i < vc_off_[a] + acc_count_[a]; ++i) across |= vc_[i].pred == b;
-            }
-            if (across) front[k].push_back(uint32_t(c));
-          }
-      });
-      for (const auto& f : front)
-        for (uint32_t c : f) {
-          state_[c] |= kQueued;
-          heap.push(c);
-        }
-    }
-    grow_front(heap, Scope{}, nullptr, true, stats_.grown, stats_.seeds);
     tracker_.check();
     for (uint32_t c = 0; c < cand_.size(); ++c)
       if (state_[c] == kAccepted) tris_.push_back(cand_[c]);
