@@ -115,6 +115,12 @@ TEST(FileLimits, PlyHeaderItself) {
                  "'property' inside a line");
   expect_refused(write(dir / "mid2.ply", "ply\nformat ascii 1.0\n" + xyz + "obj_info end_header\nend_header\n0 0 0\n"),
                  "'end_header' inside a line");
+  // OpenMesh takes the three words after "ply" as the format line, whatever they are; an
+  // unreadable version there left its stream failed and it looped forever (found by fuzzing).
+  expect_refused(write(dir / "first.ply", "ply\ncomment before\nformat ascii 1.0\n" + xyz + "end_header\n0 0 0\n"),
+                 "the line after 'ply' must be: format TYPE VERSION");
+  expect_refused(write(dir / "first2.ply", "ply\nfo:rmat ascii \x01t\nformat ascii 1.0\n" + xyz + "end_header\n0 0 0\n"),
+                 "the line after 'ply' must be");
   expect_refused(write(dir / "two.ply", "ply\nformat ascii 1.0\n" + xyz + "format binary_little_endian 1.0\nend_header\n0 0 0\n"),
                  "a second format line");
   // Unknown keywords and comments that merely mention a keyword are read as before.

@@ -222,7 +222,12 @@ void check_ply(const std::string& path) {
     return;  // not a PLY header: OpenMesh says so
   enum class Format { None, Ascii, BinaryLE, BinaryBE } format = Format::None;
   std::vector<PlyElement> elements;
-  size_t pos = 0;
+  // OpenMesh takes the three words after the magic line as "format TYPE VERSION", whatever
+  // they are; a version it cannot read leaves its stream failed, and it then loops forever
+  // looking for end_header (found by fuzzing). The format line must come first.
+  size_t pos = head.find('\n', m);
+  pos = pos == std::string::npos ? head.size() : pos + 1;
+  bool first = true;
   uint64_t data_offset = 0;
   bool ended = false;
   while (pos < head.size()) {
@@ -232,6 +237,10 @@ void check_ply(const std::string& path) {
     pos = eol + 1;
     const auto w = split_words(line);
     if (w.empty()) continue;
+    if (first && (w[0] != "format" || w.size() != 3))
+      fail(path, "bad PLY header line '" + std::string(line.substr(0, 80)) +
+                     "' (the line after 'ply' must be: format TYPE VERSION)");
+    first = false;
     // OpenMesh reads the header word by word, not line by line: a keyword anywhere is a
     // keyword to it (only "comment" eats the rest of its line), and one read out of place
     // makes it take end_header for an argument and loop forever at the end of the stream
