@@ -306,7 +306,6 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
     // Every endpoint of an edge is a component of its own at the start.
     std::vector<uint8_t> endpoint(n, 0);
     for (uint64_t k = 0; k < m; ++k) endpoint[edge_from[k]] = endpoint[edge_to[k]] = 1;
-    labels.clear();
     for (uint32_t s = 0; s < n; ++s)
       if (endpoint[s]) labels.push_back(s);
   }
@@ -358,26 +357,23 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
   // the traversal, are then the same for any thread count.
   tbb::parallel_sort(tree_keys.begin(), tree_keys.end());
   std::vector<uint32_t> tree_deg(n + 1, 0);
-  std::vector<uint32_t> tree_edges(tree_keys.size());
-  std::vector<uint8_t> across(m, 0);
-  for (size_t i = 0; i < tree_keys.size(); ++i) {
-    const uint32_t k = uint32_t((tree_keys[i] & 0xffffffffu) >> 1);
-    tree_edges[i] = k;
-    across[k] = uint8_t(tree_keys[i] & 1u);
-  }
-  for (uint32_t k : tree_edges) {
-    ++tree_deg[edge_from[k] + 1];
-    ++tree_deg[edge_to[k] + 1];
+  // A tree edge is its key: the edge index, and in the low bit whether it crosses a gap.
+  auto edge_of = [](uint64_t key) { return uint32_t((key & 0xffffffffu) >> 1); };
+  for (uint64_t key : tree_keys) {
+    ++tree_deg[edge_from[edge_of(key)] + 1];
+    ++tree_deg[edge_to[edge_of(key)] + 1];
   }
   std::partial_sum(tree_deg.begin(), tree_deg.end(), tree_deg.begin());
   std::vector<uint32_t> adj(tree_deg[n]);
   std::vector<uint8_t> adj_across(tree_deg[n]);
   {
     std::vector<uint32_t> fill(tree_deg.begin(), tree_deg.end() - 1);
-    for (uint32_t k : tree_edges) {
-      adj_across[fill[edge_from[k]]] = across[k];
+    for (uint64_t key : tree_keys) {
+      const uint32_t k = edge_of(key);
+      const uint8_t across = uint8_t(key & 1u);
+      adj_across[fill[edge_from[k]]] = across;
       adj[fill[edge_from[k]]++] = edge_to[k];
-      adj_across[fill[edge_to[k]]] = across[k];
+      adj_across[fill[edge_to[k]]] = across;
       adj[fill[edge_to[k]]++] = edge_from[k];
     }
   }
