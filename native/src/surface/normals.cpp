@@ -100,9 +100,8 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
   if (!redo.empty()) {
     // 2. At a thick point, the raw triangles there propose planes; the one most of the
     //    neighbours lie close to wins. Their triangles, in triangle order, for these points only.
-    std::vector<uint32_t> slot(n, UINT32_MAX), sorted_of(n);
-    for (uint32_t i = 0; i < redo.size(); ++i) slot[grid.original_index(redo[i])] = i;
-    for (uint32_t s = 0; s < n; ++s) sorted_of[grid.original_index(s)] = s;
+    std::vector<uint32_t> slot(n, UINT32_MAX);
+    for (uint32_t i = 0; i < redo.size(); ++i) slot[redo[i]] = i;
     std::vector<uint32_t> tri_off(redo.size() + 1, 0), tri_ids;
     for (const Triangle& t : *triangles)
       for (uint32_t v : t)
@@ -131,8 +130,8 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
         tried.clear();
         for (uint32_t j = tri_off[i]; j < tri_off[i + 1]; ++j) {
           const Triangle& t = (*triangles)[tri_ids[j]];
-          const Vec3 a = grid.sorted_point(sorted_of[t[0]]);
-          const Vec3 tn = normalized(cross(grid.sorted_point(sorted_of[t[1]]) - a, grid.sorted_point(sorted_of[t[2]]) - a));
+          const Vec3 a = grid.sorted_point(t[0]);
+          const Vec3 tn = normalized(cross(grid.sorted_point(t[1]) - a, grid.sorted_point(t[2]) - a));
           // Planes within ~8 degrees of one already scored would score about the same.
           bool seen = false;
           for (const Vec3& x : tried) seen |= std::abs(dot(x, tn)) > 0.99;
@@ -311,8 +310,14 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
   }
   constexpr uint64_t kNone = ~uint64_t(0);
   std::vector<std::atomic<uint64_t>> best(n);
-  std::vector<uint64_t> tree_keys;
-  tree_keys.reserve(labels.size());
+  // The forest's edges as they are found: the order is the same for any thread count (the
+  // joins run serially over the labels), and the traversal below does not depend on it.
+  struct TreeEdge {
+    uint32_t a, b;
+    bool across;
+  };
+  std::vector<TreeEdge> tree;
+  tree.reserve(labels.size());
   while (!live.empty()) {
     tracker.check();
     parallel_blocks(labels.size(), 8192, [&](size_t b, size_t e) {
@@ -334,10 +339,11 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
       const uint64_t key = best[c].load(std::memory_order_relaxed);
       if (key == kNone) continue;
       const uint32_t k = uint32_t((key & 0xffffffffu) >> 1);
-      const uint32_t a = find(comp[edge_from[k]]), b = find(comp[edge_to[k]]);
+      const uint32_t from = edge_from[k], to = edge_to[k];
+      const uint32_t a = find(comp[from]), b = find(comp[to]);
       if (a == b) continue;
       parent[std::max(a, b)] = std::min(a, b);
-      tree_keys.push_back(key);
+      tree.push_back({from, to, bool(key & 1u)});
     }
     std::vector<uint32_t> next_labels;
     for (uint32_t c : labels)
@@ -348,35 +354,47 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
       for (size_t v = b; v < e; ++v) comp[v] = parent[comp[v]];
     });
     labels.swap(next_labels);
-    // Keep the edges still between components (in their order: the same for any thread count).
-    live.erase(std::remove_if(live.begin(), live.end(), [&](uint32_t k) { return comp[edge_from[k]] == comp[edge_to[k]]; }),
-               live.end());
+    // Keep the edges still between components, in their order (the same for any thread
+    // count): each block compacts its part, then the parts close up.
+    const size_t block = 65536, blocks = (live.size() + block - 1) / block;
+    std::vector<size_t> kept(blocks);
+    parallel_blocks(blocks, 1, [&](size_t bb, size_t be) {
+      for (size_t b = bb; b < be; ++b) {
+        size_t out = b * block;
+        for (size_t i = b * block; i < std::min(live.size(), (b + 1) * block); ++i)
+          if (comp[edge_from[live[i]]] != comp[edge_to[live[i]]]) live[out++] = live[i];
+        kept[b] = out - b * block;
+      }
+    });
+    size_t size = 0;
+    for (size_t b = 0; b < blocks; ++b) {
+      std::copy_n(live.begin() + ptrdiff_t(b * block), kept[b], live.begin() + ptrdiff_t(size));
+      size += kept[b];
+    }
+    live.resize(size);
   }
   std::vector<std::atomic<uint64_t>>().swap(best);
-  // In key order, as Kruskal's algorithm would add them: the tree's adjacency below, and so
-  // the traversal, are then the same for any thread count.
-  tbb::parallel_sort(tree_keys.begin(), tree_keys.end());
+  std::vector<uint32_t>().swap(edge_from);
+  std::vector<uint32_t>().swap(edge_to);
+  std::vector<uint64_t>().swap(keys);
   std::vector<uint32_t> tree_deg(n + 1, 0);
-  // A tree edge is its key: the edge index, and in the low bit whether it crosses a gap.
-  auto edge_of = [](uint64_t key) { return uint32_t((key & 0xffffffffu) >> 1); };
-  for (uint64_t key : tree_keys) {
-    ++tree_deg[edge_from[edge_of(key)] + 1];
-    ++tree_deg[edge_to[edge_of(key)] + 1];
+  for (const TreeEdge& e : tree) {
+    ++tree_deg[e.a + 1];
+    ++tree_deg[e.b + 1];
   }
   std::partial_sum(tree_deg.begin(), tree_deg.end(), tree_deg.begin());
   std::vector<uint32_t> adj(tree_deg[n]);
   std::vector<uint8_t> adj_across(tree_deg[n]);
   {
     std::vector<uint32_t> fill(tree_deg.begin(), tree_deg.end() - 1);
-    for (uint64_t key : tree_keys) {
-      const uint32_t k = edge_of(key);
-      const uint8_t across = uint8_t(key & 1u);
-      adj_across[fill[edge_from[k]]] = across;
-      adj[fill[edge_from[k]]++] = edge_to[k];
-      adj_across[fill[edge_to[k]]] = across;
-      adj[fill[edge_to[k]]++] = edge_from[k];
+    for (const TreeEdge& e : tree) {
+      adj_across[fill[e.a]] = e.across;
+      adj[fill[e.a]++] = e.b;
+      adj_across[fill[e.b]] = e.across;
+      adj[fill[e.b]++] = e.a;
     }
   }
+  std::vector<TreeEdge>().swap(tree);
   // Each tree's root is its highest point (then the lowest index among equals).
   std::vector<uint32_t> order;
   {
@@ -441,7 +459,8 @@ std::vector<Vec3> estimate_normals(const PointCloud& cloud, const NormalOptions&
     TriangulateOptions topt;
     topt.spacing = options.radius / 2;
     topt.max_neighbors = size_t(1) << 20;
-    const detail::RawTriangulation raw = detail::run_raw_triangulation(cloud, topt, tracker, 0.0, 0.6);
+    const detail::RawTriangulation raw = detail::run_raw_triangulation(cloud, topt, tracker, 0.0, 0.6,
+                                                                         detail::TriangleIndices::Sorted);
     const double radius = raw.stats.max_edge;
     tracker.stage("estimating normals", 0.6, 0.85, cloud.size());
     std::vector<Vec3> sorted = detail::pca_normals_sorted(*raw.grid, raw.rep, raw.neighbors, radius, tracker, &raw.triangles);

@@ -18,12 +18,18 @@ struct RawTriangulation {
   std::vector<uint32_t> rep;           ///< sorted index -> sorted index of its representative
   NeighborLists neighbors;             ///< sorted indices, within 2L/sqrt(3)
   double neighbor_radius = 0;
-  std::vector<Triangle> triangles;     ///< original indices, (a < b < c), sorted
+  /// (a < b < c), sorted; original indices, or sorted ones when asked for (see below).
+  std::vector<Triangle> triangles;
 };
+
+/// The indices `RawTriangulation::triangles` are given in. The finishing stages take sorted
+/// (cell order) indices: no mapping and no sort, and the triangles come in space-filling order.
+enum class TriangleIndices { Original, Sorted };
 
 /// Validates options and cloud, then runs the test. Call inside detail::with_threads.
 /// Progress goes to [begin, end) of the tracker's overall fraction.
 RawTriangulation run_raw_triangulation(const PointCloud& cloud, const TriangulateOptions& options,
-                                       ProgressTracker& tracker, double begin, double end);
+                                       ProgressTracker& tracker, double begin, double end,
+                                       TriangleIndices indices = TriangleIndices::Original);
 
 }  // namespace particlemesh::detail

@@ -6,7 +6,6 @@
 #include <numeric>
 #include <string>
 
-#include <tbb/parallel_sort.h>
 
 #include "core/parallel.h"
 #include "core/progress_tracker.h"
@@ -31,36 +30,6 @@ void check_surface_options(const SurfaceOptions& o) {
     throw Error(Status::InvalidArgument, "fill_holes must be at most 100000 edges, got " + std::to_string(o.fill_holes));
 }
 
-// Angle-weighted vertex normals of the surface; particles in no triangle keep `fallback`.
-std::vector<Vec3> surface_normals(const std::vector<Vec3>& P, const std::vector<Triangle>& T,
-                                  const std::vector<Vec3>& fallback) {
-  // The corners' weighted normals in parallel (the arc-cosines are the cost), then summed
-  // per vertex in triangle order: the same sums for any thread count.
-  std::vector<Vec3> corner(3 * T.size());
-  detail::parallel_blocks(T.size(), 8192, [&](size_t b, size_t e) {
-    for (size_t i = b; i < e; ++i) {
-      const Triangle& t = T[i];
-      const Vec3 f = normalized(cross(P[t[1]] - P[t[0]], P[t[2]] - P[t[0]]));
-      for (int k = 0; k < 3; ++k) {
-        const Vec3 u = P[t[(k + 1) % 3]] - P[t[k]], v = P[t[(k + 2) % 3]] - P[t[k]];
-        const double c = dot(u, v) / std::sqrt(squared_norm(u) * squared_norm(v));
-        corner[3 * i + size_t(k)] = f * std::acos(std::clamp(c, -1.0, 1.0));
-      }
-    }
-  });
-  std::vector<Vec3> n(P.size());
-  std::vector<uint8_t> touched(P.size(), 0);
-  for (size_t i = 0; i < T.size(); ++i)
-    for (int k = 0; k < 3; ++k) {
-      n[T[i][k]] += corner[3 * i + size_t(k)];
-      touched[T[i][k]] = 1;
-    }
-  detail::parallel_blocks(P.size(), 8192, [&](size_t b, size_t e) {
-    for (size_t i = b; i < e; ++i) n[i] = touched[i] ? normalized(n[i]) : fallback[i];
-  });
-  return n;
-}
-
 }  // namespace
 
 SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions& options) {
@@ -70,7 +39,8 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
   SurfaceStats& st = result.surface;
   std::vector<Triangle> tris;
   detail::with_threads(options.threads, [&] {
-    detail::RawTriangulation raw = detail::run_raw_triangulation(cloud, options, tracker, 0.0, 0.55);
+    detail::RawTriangulation raw = detail::run_raw_triangulation(cloud, options, tracker, 0.0, 0.55,
+                                                                   detail::TriangleIndices::Sorted);
     result.triangulation = raw.stats;
     const NeighborGrid& grid = *raw.grid;
     const size_t n = cloud.size();
@@ -83,13 +53,12 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     // the raw test does: points near in space are near in memory whatever order the input
     // lists them in (in input order, a shuffled million points took 2.4x longer).
     std::vector<Vec3> P(n);
-    std::vector<uint32_t> original(n), sorted_of(n);
+    std::vector<uint32_t> original(n);
     std::vector<uint8_t> active(n);
     detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
       for (size_t s = b; s < e; ++s) {
         P[s] = grid.sorted_point(uint32_t(s));
         original[s] = grid.original_index(uint32_t(s));
-        sorted_of[original[s]] = uint32_t(s);
         active[s] = raw.rep[s] == s;
       }
     });
@@ -118,13 +87,8 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     st.seconds_normals = seconds_since(t0);
     raw.grid.reset();
     raw.neighbors = {};
-    // The raw triangles in sorted indices, in their order (which breaks the builder's ties).
-    std::vector<Triangle> candidates(raw.triangles.size());
-    detail::parallel_blocks(candidates.size(), 8192, [&](size_t b, size_t e) {
-      for (size_t i = b; i < e; ++i)
-        for (int k = 0; k < 3; ++k) candidates[i][k] = sorted_of[raw.triangles[i][k]];
-    });
-    std::vector<Triangle>().swap(raw.triangles);
+    // The raw triangles (sorted indices), in their order, which breaks the builder's ties.
+    std::vector<Triangle> candidates = std::move(raw.triangles);
 
     tracker.check();
     t0 = Clock::now();
@@ -135,27 +99,14 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     bo.small_hole = std::min<size_t>(6, options.fill_holes);
     bo.fill_edge_factor = options.fill_edge_factor;
     detail::BuilderStats bs;
-    tris = detail::build_surface(P, normals, active, candidates, bo, options.repair, bs, tracker);
+    std::vector<Vec3> vertex_normals;
+    tris = detail::build_surface(P, normals, active, candidates, bo, options.repair, bs, tracker, vertex_normals);
     std::vector<Triangle>().swap(candidates);
     tracker.check();  // the steps below take up to a second at 1M points: let a cancel request in
     st.seconds_extraction = bs.seconds_candidates + bs.seconds_growth;
     st.seconds_repair = bs.seconds_repair;
     t0 = Clock::now();
-    if (options.orient) {
-      if (!bs.boundary_known) {  // no repair: find the boundary half-edges here
-        std::vector<uint64_t> half;
-        half.reserve(3 * tris.size());
-        for (const Triangle& t : tris)
-          for (int k = 0; k < 3; ++k) half.push_back((uint64_t(t[k]) << 32) | t[(k + 1) % 3]);
-        tbb::parallel_sort(half.begin(), half.end());
-        for (const Triangle& t : tris)
-          for (int k = 0; k < 3; ++k) {
-            const uint64_t rev = (uint64_t(t[(k + 1) % 3]) << 32) | t[k];
-            if (!std::binary_search(half.begin(), half.end(), rev)) bs.boundary.push_back((uint64_t(t[k]) << 32) | t[(k + 1) % 3]);
-          }
-      }
-      bs.components_flipped = detail::orient_closed_components_outward(P, tris, bs.boundary);
-    }
+    if (options.orient) bs.components_flipped = detail::orient_closed_components_outward(P, tris, bs.boundary, &vertex_normals);
     st.seconds_orient = seconds_since(t0);
     tracker.check();
     std::vector<uint8_t> used(n, 0);
@@ -177,7 +128,6 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     tracker.check();
     t0 = Clock::now();
     // Back to the input's indices.
-    const std::vector<Vec3> vertex_normals = surface_normals(P, tris, normals);
     result.mesh.normals.resize(n);
     detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
       for (size_t s = b; s < e; ++s) result.mesh.normals[original[s]] = vertex_normals[s];

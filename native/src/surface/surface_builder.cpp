@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -10,7 +11,6 @@
 #include <memory>
 #include <numbers>
 #include <numeric>
-#include <queue>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -86,6 +86,46 @@ double max_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
   return std::max({ang(a, b, c), ang(b, c, a), ang(c, a, b)});
 }
 
+/// A set of ranks in [0, n), taken smallest first: a 64-ary tree of bit words, so that adding
+/// and taking touch one word per level (4 levels for 16M ranks). Written here because the
+/// growth's binary heap held up to a fifth of all candidates (the poor ones wait until the end)
+/// and its sifts were the growth's largest cost; no standard container does this.
+class RankQueue {
+ public:
+  explicit RankQueue(size_t n) {
+    size_t m = n;
+    do {
+      m = std::max<size_t>(1, (m + 63) / 64);
+      levels_.emplace_back(m, 0);
+    } while (m > 1);
+  }
+  bool empty() const { return levels_.back()[0] == 0; }
+  void push(uint32_t r) {
+    for (auto& level : levels_) {
+      uint64_t& w = level[r >> 6];
+      const bool had = w != 0;  // then the levels above already know of this word
+      w |= uint64_t(1) << (r & 63);
+      if (had) return;
+      r >>= 6;
+    }
+  }
+  /// The smallest rank, removed. Not empty.
+  uint32_t pop() {
+    uint64_t r = 0;
+    for (size_t l = levels_.size(); l-- > 0;) r = (r << 6) | uint64_t(std::countr_zero(levels_[l][r]));
+    for (uint64_t x = r; auto& level : levels_) {
+      uint64_t& w = level[x >> 6];
+      w &= ~(uint64_t(1) << (x & 63));
+      if (w != 0) break;
+      x >>= 6;
+    }
+    return uint32_t(r);
+  }
+
+ private:
+  std::vector<std::vector<uint64_t>> levels_;  // [0] holds one bit per rank
+};
+
 int corner_of(const Triangle& t, uint32_t v) { return t[0] == v ? 0 : (t[1] == v ? 1 : 2); }
 
 class Builder {
@@ -158,22 +198,31 @@ class Builder {
     tracker_.check();
     // Vertex -> its corners, in candidate order. Counted and placed in parallel (a corner's
     // slot comes from its vertex's atomic cursor), then each vertex's list is sorted by
-    // candidate: the same lists for any thread count.
+    // candidate: the same lists for any thread count. Placed in the raw order, not the
+    // candidate order: raw triangles come vertex by vertex, so neighbouring writes land near
+    // each other (in quality order they scatter over the whole list: 3x slower at 1M points).
+    std::vector<uint32_t> rank(o.size());
+    detail::parallel_blocks(kept, 8192, [&](size_t b, size_t e) {
+      for (size_t c = b; c < e; ++c) rank[uint32_t(key[c])] = uint32_t(c);
+    });
+    std::vector<uint64_t>().swap(key);
     const size_t n = P_.size();
     vc_off_.assign(n + 1, 0);
-    detail::parallel_blocks(kept, 8192, [&](size_t b, size_t e) {
-      for (size_t c = b; c < e; ++c)
-        for (uint32_t v : cand_[c]) std::atomic_ref<uint32_t>(vc_off_[v + 1]).fetch_add(1, std::memory_order_relaxed);
+    detail::parallel_blocks(o.size(), 8192, [&](size_t b, size_t e) {
+      for (size_t i = b; i < e; ++i)
+        if (o[i].ok)
+          for (uint32_t v : o[i].t) std::atomic_ref<uint32_t>(vc_off_[v + 1]).fetch_add(1, std::memory_order_relaxed);
     });
     std::partial_sum(vc_off_.begin(), vc_off_.end(), vc_off_.begin());
     vc_.resize(vc_off_[n]);
     std::vector<uint32_t> fill(vc_off_.begin(), vc_off_.end() - 1);
-    detail::parallel_blocks(kept, 8192, [&](size_t b, size_t e) {
-      for (size_t c = b; c < e; ++c) {
-        const Triangle& t = cand_[c];
+    detail::parallel_blocks(o.size(), 8192, [&](size_t b, size_t e) {
+      for (size_t i = b; i < e; ++i) {
+        if (!o[i].ok) continue;
+        const Triangle& t = o[i].t;
         for (int k = 0; k < 3; ++k) {
           const uint32_t slot = std::atomic_ref<uint32_t>(fill[t[k]]).fetch_add(1, std::memory_order_relaxed);
-          vc_[slot] = {uint32_t(c), t[(k + 1) % 3], t[(k + 2) % 3], {}};
+          vc_[slot] = {rank[i], t[(k + 1) % 3], t[(k + 2) % 3], {}};
         }
       }
     });
@@ -194,11 +243,11 @@ class Builder {
 
   // ---- growth ----------------------------------------------------------------------------
 
-  enum : uint8_t { kOpen = 0, kAccepted = 1, kDead = 2, kStateMask = 3, kQueued = 4 };
+  enum : uint8_t { kOpen = 0, kAccepted = 1, kDead = 2 };
   enum Check { kOk = 0, kPinch = 1, kInvalid = 2 };
 
   Check check(uint32_t c) const {
-    if ((state_[c] & kStateMask) != kOpen) return kInvalid;
+    if (state_[c] != kOpen) return kInvalid;
     const Triangle& C = cand_[c];
     bool pinch = false;
     for (int k = 0; k < 3; ++k) {
@@ -232,7 +281,7 @@ class Builder {
     }
   }
 
-  void accept(uint32_t c, std::priority_queue<uint32_t, std::vector<uint32_t>, std::greater<>>& heap) {
+  void accept(uint32_t c, RankQueue& heap) {
     state_[c] = kAccepted;
     const Triangle& C = cand_[c];
     // Keep each vertex's accepted candidates at the front of its list, so that check() reads
@@ -249,19 +298,15 @@ class Builder {
     for (int k = 0; k < 3; ++k) {
       const uint32_t a = C[k], b = C[(k + 1) % 3];
       for_each_candidate_on_edge(a, b, [&](uint32_t t, bool b_to_a) {
-        if ((state_[t] & kStateMask) != kOpen) return;
-        if (!b_to_a) {
-          state_[t] = kDead;  // T holds a -> b: can never be used
-        } else if (!(state_[t] & kQueued)) {  // once in the heap is enough: a second copy
-          state_[t] |= kQueued;               // would pop right after the first, to no effect
-          heap.push(t);
-        }
+        if (state_[t] != kOpen) return;
+        if (!b_to_a) state_[t] = kDead;  // T holds a -> b: can never be used
+        else heap.push(t);
       });
     }
   }
 
   void grow() {
-    std::priority_queue<uint32_t, std::vector<uint32_t>, std::greater<>> heap, deferred;
+    RankQueue heap(cand_.size()), deferred(cand_.size());  // candidates are ranks, best first
     size_t seed_ptr = 0, touch_ptr = 0;
     tracker_.stage("extracting the surface", 0.7, 0.85, cand_.size());
     size_t since_tick = 0;
@@ -272,18 +317,15 @@ class Builder {
         if (tracker_.cancelled()) tracker_.check();
       }
       if (!heap.empty()) {
-        const uint32_t c = heap.top();
-        heap.pop();
-        state_[c] &= uint8_t(~kQueued);
+        const uint32_t c = heap.pop();
         const Check r = check(c);
         if (r == kOk) accept(c, heap);
         else if (r == kPinch) deferred.push(c);
-        else if ((state_[c] & kStateMask) == kOpen) state_[c] = kDead;
+        else if (state_[c] == kOpen) state_[c] = kDead;
         continue;
       }
       if (!deferred.empty()) {
-        const uint32_t c = deferred.top();
-        deferred.pop();
+        const uint32_t c = deferred.pop();
         if (check(c) != kInvalid) accept(c, heap);
         continue;
       }
@@ -291,7 +333,7 @@ class Builder {
       bool seeded = false;
       for (; seed_ptr < cand_.size(); ++seed_ptr) {
         const Triangle& C = cand_[seed_ptr];
-        if ((state_[seed_ptr] & kStateMask) == kOpen && acc_count_[C[0]] == 0 && acc_count_[C[1]] == 0 && acc_count_[C[2]] == 0) {
+        if (state_[seed_ptr] == kOpen && acc_count_[C[0]] == 0 && acc_count_[C[1]] == 0 && acc_count_[C[2]] == 0) {
           accept(uint32_t(seed_ptr), heap);
           ++stats_.seeds;
           seeded = true;
@@ -312,12 +354,34 @@ class Builder {
       if (!seeded) break;
     }
     tracker_.check();
-    for (uint32_t c = 0; c < cand_.size(); ++c)
-      if (state_[c] == kAccepted) tris_.push_back(cand_[c]);
-    // Free the growth structures; repair works on the accepted triangles only.
     std::vector<Triangle>().swap(cand_);
-    std::vector<Corner>().swap(vc_);
-    std::vector<uint32_t>().swap(vc_off_);
+    std::vector<uint8_t>().swap(state_);
+    // The surface's triangles in space order: each at its lowest vertex (its first corner,
+    // as raw triangles are (i < j < k) and orienting swaps the other two), in candidate order
+    // there. The repair and the vertex normals then read triangles near each other in memory.
+    const size_t n = P_.size();
+    std::vector<uint32_t> first(n + 1, 0);
+    detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+      for (size_t v = b; v < e; ++v) {
+        const Corner* x = vc_.data() + vc_off_[v];
+        uint32_t count = 0;
+        for (uint32_t i = 0; i < acc_count_[v]; ++i) count += v < x[i].succ && v < x[i].pred;
+        first[v + 1] = count;
+      }
+    });
+    std::partial_sum(first.begin(), first.end(), first.begin());
+    tris_.resize(first[n]);
+    detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+      std::vector<Corner> mine;
+      for (size_t v = b; v < e; ++v) {
+        const Corner* x = vc_.data() + vc_off_[v];
+        mine.clear();
+        for (uint32_t i = 0; i < acc_count_[v]; ++i)
+          if (v < x[i].succ && v < x[i].pred) mine.push_back(x[i]);
+        std::sort(mine.begin(), mine.end(), [](const Corner& p, const Corner& q) { return p.c < q.c; });
+        for (size_t i = 0; i < mine.size(); ++i) tris_[first[v] + i] = {uint32_t(v), mine[i].succ, mine[i].pred};
+      }
+    });
   }
 
   // ---- repair ----------------------------------------------------------------------------
@@ -331,7 +395,7 @@ class Builder {
   void for_each_tri(uint32_t v, F&& f) const {
     for (uint32_t i = vt_off_[v]; i < vt_off_[v + 1]; ++i)
       if (alive_[vt_[i]]) f(vt_[i]);
-    if (!extra_.empty()) {
+    if (has_extra_[v]) {
       auto it = extra_.find(v);
       if (it != extra_.end())
         for (uint32_t t : it->second)
@@ -361,12 +425,17 @@ class Builder {
     return found;
   }
 
-  void start_repair() {
+  /// The surface's index (vertex -> triangles, boundary half-edges) for the repair and the
+  /// vertex normals, read off the growth's corner lists (which are then freed): a vertex's
+  /// accepted corners lead its list, each with its triangle's other two corners.
+  void index() {
     const size_t n = P_.size();
     alive_.assign(tris_.size(), 1);
+    has_extra_.assign(n, 0);
     vt_off_.assign(n + 1, 0);
-    for (const Triangle& t : tris_)
-      for (uint32_t v : t) ++vt_off_[v + 1];
+    detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+      for (size_t v = b; v < e; ++v) vt_off_[v + 1] = acc_count_[v];
+    });
     std::partial_sum(vt_off_.begin(), vt_off_.end(), vt_off_.begin());
     vt_.resize(vt_off_[n]);
     {
@@ -375,29 +444,40 @@ class Builder {
         for (uint32_t v : tris_[t]) vt_[fill[v]++] = t;
     }
     tracker_.check();
-    // Boundary half-edges, found in parallel and joined in block order.
-    const size_t block = 8192, blocks = (tris_.size() + block - 1) / block;
+    // Per vertex: its boundary half-edges v -> s (no accepted triangle holds s -> v, i.e. no
+    // corner at v has s as its predecessor). Found in parallel and joined in block order.
+    const size_t block = 8192, blocks = (n + block - 1) / block;
     std::vector<std::vector<uint64_t>> found(blocks);
     detail::parallel_blocks(blocks, 1, [&](size_t bb, size_t be) {
       for (size_t b = bb; b < be; ++b) {
         if (tracker_.cancelled()) return;
-        tracker_.tick(0);  // on the calling thread: lets a cancel request in (about 0.5 s at 1M)
-        for (size_t t = b * block; t < std::min(tris_.size(), (b + 1) * block); ++t)
-          for (int k = 0; k < 3; ++k) {
-            const uint32_t a = tris_[t][k], c = tris_[t][(k + 1) % 3];
-            if (!directed_used(c, a)) found[b].push_back(half_key(a, c));
+        tracker_.tick(0);  // on the calling thread: lets a cancel request in
+        for (size_t v = b * block; v < std::min(n, (b + 1) * block); ++v) {
+          const Corner* x = vc_.data() + vc_off_[v];
+          const uint32_t m = acc_count_[v];
+          for (uint32_t i = 0; i < m; ++i) {
+            bool closed = false;
+            for (uint32_t j = 0; j < m && !closed; ++j) closed = x[j].pred == x[i].succ;
+            if (!closed) found[b].push_back(half_key(uint32_t(v), x[i].succ));
           }
+        }
       }
     });
     tracker_.check();
     for (const auto& f : found) boundary_.insert(f.begin(), f.end());
+    // Growth is over: free its structures.
+    std::vector<Corner>().swap(vc_);
+    std::vector<uint32_t>().swap(vc_off_);
   }
 
   void add_triangle(const Triangle& T) {
     const uint32_t id = uint32_t(tris_.size());
     tris_.push_back(T);
     alive_.push_back(1);
-    for (uint32_t v : T) extra_[v].push_back(id);
+    for (uint32_t v : T) {
+      extra_[v].push_back(id);
+      has_extra_[v] = 1;
+    }
     for (int k = 0; k < 3; ++k) {
       const uint32_t a = T[k], b = T[(k + 1) % 3];
       if (!boundary_.erase(half_key(b, a))) boundary_.insert(half_key(a, b));
@@ -830,7 +910,6 @@ class Builder {
 
   void repair(const std::vector<Triangle>& raw) {
     tracker_.stage("repairing", 0.85, 0.97);
-    start_repair();
     // Small loops first (wrong diagonals, sampling gaps), then pinches, then larger loops.
     // A check between the steps: each is a pass over the whole mesh (up to a second at 1M
     // points), and a host's cancel request is only seen in a check (issue 9).
@@ -860,14 +939,40 @@ class Builder {
         if (stats_.open_loops.size() < 1000) stats_.open_loops.push_back({l.size(), l.size() <= kMaxWidthLoop ? loop_width(l) : INFINITY});
       }
     }
+  }
+
+  /// The surface's angle-weighted vertex normals; points in no triangle keep `fallback`. Per
+  /// vertex in parallel, over its triangles in triangle order: the sums (so the bits) of a
+  /// serial pass over the final triangles, for any thread count.
+  std::vector<Vec3> vertex_normals(const std::vector<Vec3>& fallback) const {
+    std::vector<Vec3> out(P_.size());
+    detail::parallel_blocks(P_.size(), 4096, [&](size_t b, size_t e) {
+      for (size_t v = b; v < e; ++v) {
+        Vec3 sum;
+        bool touched = false;
+        for_each_tri(uint32_t(v), [&](uint32_t t) {
+          const Triangle& T = tris_[t];
+          const int k = corner_of(T, uint32_t(v));
+          const Vec3 f = normalized(cross(P_[T[1]] - P_[T[0]], P_[T[2]] - P_[T[0]]));
+          const Vec3 a = P_[T[(k + 1) % 3]] - P_[v], c = P_[T[(k + 2) % 3]] - P_[v];
+          const double cosine = dot(a, c) / std::sqrt(squared_norm(a) * squared_norm(c));
+          sum += f * std::acos(std::clamp(cosine, -1.0, 1.0));
+          touched = true;
+        });
+        out[v] = touched ? normalized(sum) : fallback[v];
+      }
+    });
+    return out;
+  }
+
+  /// The surface's triangles (the live ones, in order).
+  std::vector<Triangle> take() {
     std::vector<Triangle> out;
     out.reserve(tris_.size());
     for (uint32_t t = 0; t < tris_.size(); ++t)
       if (alive_[t]) out.push_back(tris_[t]);
-    tris_.swap(out);
+    return out;
   }
-
-  std::vector<Triangle> take() { return std::move(tris_); }
   /// Boundary half-edges left (only meaningful after repair()).
   std::vector<uint64_t> boundary() const {
     std::vector<uint64_t> b(boundary_.begin(), boundary_.end());
@@ -902,6 +1007,7 @@ class Builder {
   std::vector<uint8_t> alive_;
   std::vector<uint32_t> vt_off_, vt_;
   std::unordered_map<uint32_t, std::vector<uint32_t>> extra_;
+  std::vector<uint8_t> has_extra_;  ///< per vertex: holds a list in extra_
   std::unordered_set<uint64_t> boundary_;
 };
 
@@ -910,7 +1016,7 @@ class Builder {
 std::vector<Triangle> build_surface(const std::vector<Vec3>& positions, const std::vector<Vec3>& normals,
                                     const std::vector<uint8_t>& active, const std::vector<Triangle>& raw,
                                     const BuilderOptions& options, bool repair, BuilderStats& stats,
-                                    ProgressTracker& tracker) {
+                                    ProgressTracker& tracker, std::vector<Vec3>& vertex_normals) {
   using Clock = std::chrono::steady_clock;
   auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
   auto t0 = Clock::now();
@@ -919,17 +1025,19 @@ std::vector<Triangle> build_surface(const std::vector<Vec3>& positions, const st
   stats.seconds_candidates = since(t0);
   t0 = Clock::now();
   b.grow();
+  b.index();
   stats.seconds_growth = since(t0);
   t0 = Clock::now();
   if (repair) b.repair(raw);
   stats.seconds_repair = since(t0);
-  if (repair) stats.boundary = b.boundary();
-  stats.boundary_known = repair;
+  stats.boundary = b.boundary();
+  tracker.check();
+  vertex_normals = b.vertex_normals(normals);
   return b.take();
 }
 
 size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<Triangle>& T,
-                                        const std::vector<uint64_t>& boundary) {
+                                        const std::vector<uint64_t>& boundary, std::vector<Vec3>* vertex_normals) {
   // Components by shared vertices (the same as by shared edges on a manifold without
   // pinches); a component is open if it holds a boundary half-edge.
   const size_t n = P.size();
@@ -961,8 +1069,15 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
     if (!open[r] && vol[r] < 0) std::swap(t[1], t[2]);
   }
   size_t flipped = 0;
-  for (uint32_t v = 0; v < n; ++v)
-    if (find(v) == v && !open[v] && vol[v] < 0) ++flipped;
+  for (uint32_t v = 0; v < n; ++v) {
+    const uint32_t r = find(v);
+    if (open[r] || !(vol[r] < 0)) continue;
+    flipped += r == v;
+    // Reversing a triangle negates its normal exactly (the cross product's terms swap), so
+    // the vertex normals of a turned component are the negated ones, to the bit (0 - x, as a
+    // sum of negated terms gives +0 where they cancel).
+    if (vertex_normals) (*vertex_normals)[v] = Vec3{} - (*vertex_normals)[v];
+  }
   return flipped;
 }
 

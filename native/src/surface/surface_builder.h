@@ -46,21 +46,23 @@ struct BuilderStats {
   size_t components_flipped = 0;  ///< closed components turned to face outward
   size_t unused_points = 0;       ///< distinct points in no triangle
   double seconds_candidates = 0, seconds_growth = 0, seconds_repair = 0;
-  std::vector<uint64_t> boundary;  ///< boundary half-edges (a << 32 | b) after repair
+  std::vector<uint64_t> boundary;  ///< boundary half-edges (a << 32 | b), sorted
   std::vector<std::pair<size_t, double>> open_loops;  ///< (edges, width / L) of loops left open
-  bool boundary_known = false;
 };
 
-/// positions/normals in input order (normals unit or zero = unknown); `active[i]` false for
-/// duplicates; `raw` the seed's triangles. Returns oriented triangles.
+/// positions/normals (normals unit or zero = unknown); `active[i]` false for duplicates; `raw`
+/// the seed's triangles. Returns oriented triangles, and in `vertex_normals` the surface's
+/// angle-weighted vertex normals (a point in no triangle keeps its normal).
 std::vector<Triangle> build_surface(const std::vector<Vec3>& positions, const std::vector<Vec3>& normals,
                                     const std::vector<uint8_t>& active, const std::vector<Triangle>& raw,
                                     const BuilderOptions& options, bool repair, BuilderStats& stats,
-                                    ProgressTracker& tracker);
+                                    ProgressTracker& tracker, std::vector<Vec3>& vertex_normals);
 
 /// Turn every closed component (one holding none of the `boundary` half-edges) so that it
-/// encloses positive volume; returns how many flipped.
+/// encloses positive volume, negating its points' `vertex_normals` (if given) to match;
+/// returns how many flipped.
 size_t orient_closed_components_outward(const std::vector<Vec3>& positions, std::vector<Triangle>& triangles,
-                                        const std::vector<uint64_t>& boundary);
+                                        const std::vector<uint64_t>& boundary,
+                                        std::vector<Vec3>* vertex_normals = nullptr);
 
 }  // namespace particlemesh::detail

@@ -48,7 +48,8 @@ struct TestCounters {
 namespace detail {
 
 RawTriangulation run_raw_triangulation(const PointCloud& cloud, const TriangulateOptions& options,
-                                       ProgressTracker& tracker, double begin, double end) {
+                                       ProgressTracker& tracker, double begin, double end,
+                                       TriangleIndices indices) {
   check_options(options);
   validate_point_cloud(cloud);
   const size_t n = cloud.size();
@@ -166,6 +167,10 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
             }
             if (tie) ++cnt.ties;
             if (blocked) continue;
+            if (indices == TriangleIndices::Sorted) {  // i < j < k already
+              tris.push_back({i, j, k});
+              continue;
+            }
             Triangle t{grid.original_index(i), grid.original_index(j), grid.original_index(k)};
             if (t[0] > t[1]) std::swap(t[0], t[1]);
             if (t[1] > t[2]) std::swap(t[1], t[2]);
@@ -193,11 +198,14 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
     tris.insert(tris.end(), v.begin(), v.end());
     std::vector<Triangle>().swap(v);
   }
-  // Packed keys compare as one integer (std::array's operator< goes through memcmp).
-  tbb::parallel_sort(tris.begin(), tris.end(), [](const Triangle& x, const Triangle& y) {
-    const uint64_t kx = (uint64_t(x[0]) << 32) | x[1], ky = (uint64_t(y[0]) << 32) | y[1];
-    return kx != ky ? kx < ky : x[2] < y[2];
-  });
+  // In sorted indices the blocks already come in order: each triangle (i, j, k) from its
+  // lowest index i, with j < k taken in list order. Original indices need a sort; packed keys
+  // compare as one integer (std::array's operator< goes through memcmp).
+  if (indices == TriangleIndices::Original)
+    tbb::parallel_sort(tris.begin(), tris.end(), [](const Triangle& x, const Triangle& y) {
+      const uint64_t kx = (uint64_t(x[0]) << 32) | x[1], ky = (uint64_t(y[0]) << 32) | y[1];
+      return kx != ky ? kx < ky : x[2] < y[2];
+    });
   st.kept = tris.size();
   st.seconds_test = seconds_since(t0);
   return raw;
