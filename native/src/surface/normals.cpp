@@ -51,12 +51,20 @@ Vec3 pca_normal(const std::vector<Vec3>& near, const std::vector<uint8_t>& use, 
       ++count;
     }
   const Vec3 mean = sum / double(count);
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  // The six distinct entries as scalars (an Eigen outer product per neighbour cost twice as much).
+  double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
   for (size_t k = 0; k < near.size(); ++k) {
     if (!use[k]) continue;
-    const Eigen::Vector3d v(near[k].x - mean.x, near[k].y - mean.y, near[k].z - mean.z);
-    cov += v * v.transpose();
+    const double x = near[k].x - mean.x, y = near[k].y - mean.y, z = near[k].z - mean.z;
+    xx += x * x;
+    xy += x * y;
+    xz += x * z;
+    yy += y * y;
+    yz += y * z;
+    zz += z * z;
   }
+  Eigen::Matrix3d cov;
+  cov << xx, xy, xz, xy, yy, yz, xz, yz, zz;
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
   eig.computeDirect(cov);
   const Eigen::Vector3d ev = eig.eigenvalues();  // ascending
@@ -245,46 +253,53 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
   const double r2 = radius * radius;
   // Edges s < t of the neighbour graph, keyed by (cost as float bits, edge index): the keys
   // order the edges by cost, ties broken by position in the list, and are all distinct.
-  std::vector<uint64_t> offset(n + 1, 0);
-  parallel_blocks(n, 4096, [&](size_t b, size_t e) {
-    for (size_t s = b; s < e; ++s) {
-      uint64_t c = 0;
-      if (rep[s] == s && squared_norm(normals[s]) > 0)
+  // One pass: each block of points lists its edges, then the blocks are placed in order.
+  struct Found {
+    uint32_t from, to;
+    uint32_t bits;  // the cost's (a non-negative float's bits order as the float)
+    bool across;
+  };
+  const size_t eblock = 2048, eblocks = (n + eblock - 1) / eblock;
+  std::vector<std::vector<Found>> found(eblocks);
+  parallel_blocks(eblocks, 1, [&](size_t bb, size_t be) {
+    for (size_t blk = bb; blk < be; ++blk)
+      for (size_t s = blk * eblock; s < std::min(n, (blk + 1) * eblock); ++s) {
+        if (rep[s] != s || !(squared_norm(normals[s]) > 0)) continue;
+        const Vec3 p = grid.sorted_point(uint32_t(s));
+        const Vec3 ns = normals[s];
         for (const uint32_t* q = std::upper_bound(lists.begin(uint32_t(s)), lists.end(uint32_t(s)), uint32_t(s));
-             q != lists.end(uint32_t(s)); ++q)
-          c += squared_norm(normals[*q]) > 0 && squared_distance(grid.sorted_point(*q), grid.sorted_point(uint32_t(s))) <= r2;
-      offset[s + 1] = c;
-    }
+             q != lists.end(uint32_t(s)); ++q) {
+          const Vec3 d = grid.sorted_point(*q) - p;
+          if (!(squared_norm(normals[*q]) > 0) || squared_norm(d) > r2) continue;
+          const Vec3 nt = normals[*q];
+          const double len = norm(d);
+          // Slope of the edge out of the tangent planes: ~0 within a sheet, ~1 across a gap.
+          const double slope = (std::abs(dot(d, ns)) + std::abs(dot(d, nt))) / (2 * len);
+          const bool across = slope > 0.5;
+          const float cost = float(1.0 - std::abs(dot(ns, nt)) + (across ? 1.0 - slope : slope));
+          uint32_t bits;
+          std::memcpy(&bits, &cost, sizeof bits);
+          found[blk].push_back({uint32_t(s), *q, bits, across});
+        }
+      }
   });
-  std::partial_sum(offset.begin(), offset.end(), offset.begin());
-  const uint64_t m = offset[n];
+  std::vector<uint64_t> offset(eblocks + 1, 0);
+  for (size_t blk = 0; blk < eblocks; ++blk) offset[blk + 1] = offset[blk] + found[blk].size();
+  const uint64_t m = offset[eblocks];
   if (m >= (uint64_t(1) << 31)) throw Error(Status::LimitExceeded, "too many neighbour pairs for normal orientation");
   std::vector<uint32_t> edge_from(m), edge_to(m);
   std::vector<uint64_t> keys(m);
-  parallel_blocks(n, 2048, [&](size_t b, size_t e) {
-    for (size_t s = b; s < e; ++s) {
-      uint64_t k = offset[s];
-      if (k == offset[s + 1]) continue;
-      const Vec3 p = grid.sorted_point(uint32_t(s));
-      const Vec3 ns = normals[s];
-      for (const uint32_t* q = std::upper_bound(lists.begin(uint32_t(s)), lists.end(uint32_t(s)), uint32_t(s));
-           q != lists.end(uint32_t(s)); ++q) {
-        const Vec3 d = grid.sorted_point(*q) - p;
-        if (!(squared_norm(normals[*q]) > 0) || squared_norm(d) > r2) continue;
-        const Vec3 nt = normals[*q];
-        const double len = norm(d);
-        // Slope of the edge out of the tangent planes: ~0 within a sheet, ~1 across a gap.
-        const double slope = (std::abs(dot(d, ns)) + std::abs(dot(d, nt))) / (2 * len);
-        const bool across = slope > 0.5;
-        const float cost = float(1.0 - std::abs(dot(ns, nt)) + (across ? 1.0 - slope : slope));
-        uint32_t bits;
-        std::memcpy(&bits, &cost, sizeof bits);  // non-negative floats order as their bits
-        edge_from[k] = uint32_t(s);
-        edge_to[k] = *q;
+  parallel_blocks(eblocks, 1, [&](size_t bb, size_t be) {
+    for (size_t blk = bb; blk < be; ++blk) {
+      uint64_t k = offset[blk];
+      for (const Found& f : found[blk]) {
+        edge_from[k] = f.from;
+        edge_to[k] = f.to;
         // The low bit of the index slot carries the edge's kind (k < 2^31 is checked above).
-        keys[k] = (uint64_t(bits) << 32) | (uint64_t(k) << 1) | uint64_t(across);
+        keys[k] = (uint64_t(f.bits) << 32) | (k << 1) | uint64_t(f.across);
         ++k;
       }
+      std::vector<Found>().swap(found[blk]);
     }
   });
   tracker.check();
