@@ -1,5 +1,6 @@
 """particlemesh triangulate on PCL's .pcd files, the PCL preprocessing switches and --pcl-mesh."""
 import json
+import math
 import struct
 
 import pytest
@@ -69,6 +70,28 @@ def test_kinect_frame_with_the_documented_preprocessing(pcl_cli, inspect, data_d
     header = pcl_mesh.read_bytes()[:600].split(b"end_header")[0].decode()
     assert "property uchar red" in header and "property float nx" in header
     assert "element face" in header
+
+
+def test_depth_scan_gives_no_pillows_and_unit_normals_everywhere(pcl_cli, data_dir, tmp_path):
+    # The raw frame: flat rows of collinear points, depth edges, patches of a few points. Before
+    # the fold check in the small-hole fill, 346 of its 2850 components were capped patches
+    # (closed, with no volume), and 2226 used points had zero normals (triangles folded onto
+    # each other cancel in the angle-weighted sum).
+    out = tmp_path / "kinect.obj"
+    proc, r = _report(pcl_cli, tmp_path, data_dir / KINECT)
+    pcl_cli("triangulate", data_dir / KINECT, "-o", out)
+    t = r["topology"]
+    assert t["manifold"] and t["consistently_oriented"]
+    assert t["components"] > 1000 and t["closed_components"] < 20  # a room: almost nothing closed
+    normals, used = [], set()
+    for line in out.read_text().splitlines():
+        if line.startswith("vn "):
+            normals.append([float(x) for x in line.split()[1:]])
+        elif line.startswith("f "):
+            used.update(int(c.split("/")[0]) - 1 for c in line.split()[1:])
+    assert len(used) == t["vertices_used"]
+    bad = [v for v in used if abs(math.sqrt(sum(x * x for x in normals[v])) - 1) > 1e-4]
+    assert not bad, f"{len(bad)} used points without a unit normal"
 
 
 def test_voxel_grid_and_uniform_sampling_exclude_each_other(pcl_cli, data_dir, tmp_path):

@@ -155,7 +155,9 @@ TEST(ReconstructSurface, PoissonSamplesFromTheNotesCloseAndKeepRealOpenings) {
   for (const Vec3& p : b.positions) lo = std::min(lo, p.y), hi = std::max(hi, p.y);
   const auto edges = test::edge_counts(r.mesh.triangles);
   for (const auto& [e, count] : edges) {
-    if (count == 1) EXPECT_LT(b.positions[e.first].y, lo + 0.25 * (hi - lo));
+    if (count == 1) {
+      EXPECT_LT(b.positions[e.first].y, lo + 0.25 * (hi - lo));
+    }
   }
 }
 
@@ -266,7 +268,49 @@ TEST(ReconstructSurface, OpenDiskKeepsItsOneBoundary) {
     EXPECT_EQ(t.vertices_used, c.size());
     // The boundary runs along the rim.
     for (const auto& [e, count] : test::edge_counts(r.mesh.triangles)) {
-      if (count == 1) EXPECT_GT(norm(c.positions[e.first]), 1.0 - 2 * 0.04);
+      if (count == 1) {
+        EXPECT_GT(norm(c.positions[e.first]), 1.0 - 2 * 0.04);
+      }
+    }
+  }
+}
+
+TEST(ReconstructSurface, SmallIsolatedPatchesAreNotCappedIntoPillows) {
+  // A flat disk (it sets the spacing, r0 ~ 0.04) and, far from it, patches of a few points
+  // each: two triangles on a square (the flat rows of a depth scan), a pentagon around a
+  // centre. A patch's boundary loop is short, but it is the patch's outside, not a hole:
+  // filling it would lay a reversed copy on the patch, a closed component with no volume
+  // whose vertex normals cancel to zero (345 of them on the kinect frame of shared/data).
+  TriMesh disk;
+  disk.positions.push_back({0, 0, 0});
+  for (int i = 0; i < 64; ++i) disk.positions.push_back({std::cos(i * 2 * std::numbers::pi / 64), std::sin(i * 2 * std::numbers::pi / 64), 0});
+  for (uint32_t i = 0; i < 64; ++i) disk.triangles.push_back({0, 1 + i, 1 + (i + 1) % 64});
+  PointCloud c = poisson_disk_sample(disk, 0.04, 5);
+  c.normals.clear();
+  const size_t on_disk = c.size();
+  const double h = 0.04;
+  for (int p = 0; p < 3; ++p) {  // squares, tilted a little so that no four points are cocircular
+    const Vec3 o{3.0 + p, 0, 0.1 * p};
+    for (const auto& [x, y] : {std::pair{0.0, 0.0}, {h, 0.001}, {h, h}, {0.002, h}}) c.positions.push_back(o + Vec3{x, y, 0});
+  }
+  const Vec3 centre{3, 2, 0};
+  c.positions.push_back(centre);
+  for (int i = 0; i < 5; ++i)
+    c.positions.push_back(centre + Vec3{h * std::cos(i * 1.3), h * std::sin(i * 1.3), 0.003 * i});
+  for (Source src : {Source::Auto, Source::Estimate}) {
+    SurfaceOptions o;
+    o.normals = src;
+    const SurfaceResult r = reconstruct_surface(c, o);
+    const TopologyReport t = topology_report(r.mesh);
+    EXPECT_TRUE(t.manifold && t.consistently_oriented);
+    EXPECT_EQ(t.closed_components, 0u) << "a patch was capped";
+    EXPECT_EQ(t.components, 5u);
+    std::vector<int> tris_at(c.size(), 0);
+    for (const auto& tri : r.mesh.triangles)
+      for (uint32_t v : tri) ++tris_at[v];
+    for (size_t v = on_disk; v < c.size(); ++v) {
+      EXPECT_GT(tris_at[v], 0) << "patch point " << v << " unused";
+      EXPECT_NEAR(norm(r.mesh.normals[v]), 1.0, 1e-9) << "patch point " << v;
     }
   }
 }
