@@ -198,6 +198,8 @@ class Builder {
     };
     std::vector<Oriented> o(raw.size());
     const double cosa = o_.cos_normal_angle;
+    const size_t n = P_.size();
+    vc_off_.assign(n + 1, 0);  // each vertex's corners, counted here
     detail::parallel_blocks(raw.size(), 4096, [&](size_t b, size_t e) {
       for (size_t i = b; i < e; ++i) {
         Triangle t = raw[i];
@@ -217,6 +219,7 @@ class Builder {
         o[i].t = t;
         o[i].quality = float(-min_corner_cosine(P_[t[0]], P_[t[1]], P_[t[2]]));  // ~ the largest angle
         o[i].ok = true;
+        for (uint32_t v : t) std::atomic_ref<uint32_t>(vc_off_[v + 1]).fetch_add(1, std::memory_order_relaxed);
       }
     });
     tracker_.check();
@@ -245,23 +248,18 @@ class Builder {
       for (size_t c = b; c < e; ++c) cand_[c] = o[uint32_t(key[c])].t;
     });
     tracker_.check();
-    // Vertex -> its corners, in candidate order. Counted and placed in parallel (a corner's
-    // slot comes from its vertex's atomic cursor), then each vertex's list is sorted by
-    // candidate: the same lists for any thread count. Placed in the raw order, not the
-    // candidate order: raw triangles come vertex by vertex, so neighbouring writes land near
-    // each other (in quality order they scatter over the whole list: 3x slower at 1M points).
+    // Vertex -> its corners. Counted (above) and placed in parallel: a corner's slot comes
+    // from its vertex's atomic cursor, so the order within a list depends on the threads. No
+    // result does: growth reads a list as a set (check() and the edge scan answer the same in
+    // any order, and the front is a set of ranks), the boundary is sorted and the triangles
+    // are put in order explicitly. Placed in the raw order, not the candidate order: raw
+    // triangles come vertex by vertex, so neighbouring writes land near each other (in quality
+    // order they scatter over the whole list: 3x slower at 1M points).
     std::vector<uint32_t> rank(o.size());
     detail::parallel_blocks(kept, 8192, [&](size_t b, size_t e) {
       for (size_t c = b; c < e; ++c) rank[uint32_t(key[c])] = uint32_t(c);
     });
     std::vector<uint64_t>().swap(key);
-    const size_t n = P_.size();
-    vc_off_.assign(n + 1, 0);
-    detail::parallel_blocks(o.size(), 8192, [&](size_t b, size_t e) {
-      for (size_t i = b; i < e; ++i)
-        if (o[i].ok)
-          for (uint32_t v : o[i].t) std::atomic_ref<uint32_t>(vc_off_[v + 1]).fetch_add(1, std::memory_order_relaxed);
-    });
     std::partial_sum(vc_off_.begin(), vc_off_.end(), vc_off_.begin());
     vc_.resize(vc_off_[n]);
     std::vector<uint32_t> fill(vc_off_.begin(), vc_off_.end() - 1);
@@ -276,11 +274,9 @@ class Builder {
       }
     });
     tracker_.check();
-    // Then each vertex's list in order, and its arcs.
+    // Then the corners' arcs.
     detail::parallel_blocks(n, 4096, [&](size_t b, size_t e) {
       for (size_t v = b; v < e; ++v) {
-        std::sort(vc_.begin() + vc_off_[v], vc_.begin() + vc_off_[v + 1],
-                  [](const Corner& x, const Corner& y) { return x.c < y.c; });
         for (uint32_t i = vc_off_[v]; i < vc_off_[v + 1]; ++i) {
           Corner& x = vc_[i];
           x.arc = make_arc(frame_[v], P_[v], P_[x.succ], P_[x.pred]);
