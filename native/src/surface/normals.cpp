@@ -7,7 +7,6 @@
 #include <numeric>
 
 #include <Eigen/Eigenvalues>
-#include <tbb/parallel_sort.h>
 
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"

@@ -14,7 +14,6 @@
 #include <unordered_map>
 #include <unordered_set>
 
-#include <tbb/parallel_sort.h>
 
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
