@@ -84,20 +84,18 @@ bool arcs_overlap(const Arc& a, const Arc& b) {
 
 /// The cosine of a triangle's largest angle (the smallest of its corners' cosines): the same
 /// order as the largest angle, without the arc-cosines.
+/// The cosine of the triangle (p, q, r)'s angle at p.
+double corner_cosine(const Vec3& p, const Vec3& q, const Vec3& r) {
+  const Vec3 u = q - p, v = r - p;
+  return dot(u, v) / std::sqrt(squared_norm(u) * squared_norm(v));
+}
+
 double min_corner_cosine(const Vec3& a, const Vec3& b, const Vec3& c) {
-  auto cosine = [](const Vec3& p, const Vec3& q, const Vec3& r) {
-    const Vec3 u = q - p, v = r - p;
-    return dot(u, v) / std::sqrt(squared_norm(u) * squared_norm(v));
-  };
-  return std::min({cosine(a, b, c), cosine(b, c, a), cosine(c, a, b)});
+  return std::min({corner_cosine(a, b, c), corner_cosine(b, c, a), corner_cosine(c, a, b)});
 }
 
 double max_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
-  auto ang = [](const Vec3& p, const Vec3& q, const Vec3& r) {
-    const Vec3 u = q - p, v = r - p;
-    const double d = dot(u, v) / std::sqrt(squared_norm(u) * squared_norm(v));
-    return std::acos(std::clamp(d, -1.0, 1.0));
-  };
+  auto ang = [](const Vec3& p, const Vec3& q, const Vec3& r) { return std::acos(std::clamp(corner_cosine(p, q, r), -1.0, 1.0)); };
   return std::max({ang(a, b, c), ang(b, c, a), ang(c, a, b)});
 }
 
@@ -132,15 +130,14 @@ class RankQueue {
   }
   /// The smallest rank, removed. Not empty.
   uint32_t pop() {
-    uint64_t r = 0;
-    for (size_t l = levels_.size(); l-- > 0;) r = (r << 6) | uint64_t(std::countr_zero(levels_[l][r]));
-    for (uint64_t x = r; auto& level : levels_) {
+    const uint32_t r = top();
+    for (uint32_t x = r; auto& level : levels_) {
       uint64_t& w = level[x >> 6];
       w &= ~(uint64_t(1) << (x & 63));
       if (w != 0) break;
       x >>= 6;
     }
-    return uint32_t(r);
+    return r;
   }
 
  private:
@@ -452,6 +449,8 @@ class Builder {
     }
   }
 
+  Vec3 face_normal(const Triangle& T) const { return normalized(cross(P_[T[1]] - P_[T[0]], P_[T[2]] - P_[T[0]])); }
+
   bool directed_used(uint32_t a, uint32_t b) const {
     bool used = false;
     for_each_tri(a, [&](uint32_t t) {
@@ -624,19 +623,16 @@ class Builder {
       for_each_tri(a, [&](uint32_t t) {
         const Triangle& T = tris_[t];
         if (T[(corner_of(T, a) + 1) % 3] == b)
-          outside[i] = normalized(cross(P_[T[1]] - P_[T[0]], P_[T[2]] - P_[T[0]]));
+          outside[i] = face_normal(T);
       });
     }
-    auto unit_normal = [&](size_t i, size_t j, size_t k) {  // of the fill triangle (L[k], L[j], L[i])
-      return normalized(cross(P_[L[j]] - P_[L[k]], P_[L[i]] - P_[L[k]]));
-    };
     auto bend = [](const Vec3& a, const Vec3& b) { return std::acos(std::clamp(dot(a, b), -1.0, 1.0)); };
     // (worst value, total) of the best triangulation of the chain i..k, and its apex.
     std::vector<double> worst(m * m, INFINITY), total(m * m, INFINITY);
     std::vector<uint32_t> apex(m * m, 0);
     for (size_t i = 0; i + 1 < m; ++i) worst[i * m + i + 1] = total[i * m + i + 1] = 0;
     auto chain_normal = [&](size_t i, size_t j) {
-      return j == i + 1 ? outside[i] : unit_normal(i, apex[i * m + j], j);
+      return j == i + 1 ? outside[i] : face_normal({L[j], L[apex[i * m + j]], L[i]});  // the fill's (L[k], L[j], L[i])
     };
     for (size_t len = 2; len < m; ++len)
       for (size_t i = 0; i + len < m; ++i) {
@@ -649,25 +645,18 @@ class Builder {
           const double area = 0.5 * norm(f);
           if (!(area > 0)) continue;
           if (m == 3 && triangle_exists(L[0], L[1], L[2])) continue;  // the loop of a lone triangle
-          double value, add;
-          if (!smooth) {
-            // No fold back onto the triangle across a loop edge: the "hole" of a small
-            // isolated patch is its outside, and capping it would lay a second, reversed
-            // layer on the patch (a closed, flat pillow whose vertex normals cancel).
-            const Vec3 nrm = f / (2 * area);
-            if ((j == i + 1 && bend(nrm, outside[i]) > kMaxFillDihedral) ||
-                (k == j + 1 && bend(nrm, outside[j]) > kMaxFillDihedral) ||
-                (i == 0 && k == m - 1 && bend(nrm, outside[m - 1]) > kMaxFillDihedral))
-              continue;
-            value = max_angle(P_[L[k]], P_[L[j]], P_[L[i]]);
-            add = value;
-          } else {
-            const Vec3 nrm = f / (2 * area);
-            value = std::max(bend(nrm, chain_normal(i, j)), bend(nrm, chain_normal(j, k)));
-            if (i == 0 && k == m - 1) value = std::max(value, bend(nrm, outside[m - 1]));
-            if (value > kMaxFillDihedral) continue;
-            add = area;
-          }
+          // The triangle's folds: against the surface across each loop edge it holds, for
+          // every loop (the short outline of a small isolated patch is its outside, and
+          // capping it would lay a reversed copy on the patch: a flat, closed pillow), and
+          // for larger loops also against the fill triangles across its diagonals.
+          const Vec3 nrm = f / (2 * area);
+          double fold = 0;
+          if (smooth || j == i + 1) fold = bend(nrm, chain_normal(i, j));
+          if (smooth || k == j + 1) fold = std::max(fold, bend(nrm, chain_normal(j, k)));
+          if (i == 0 && k == m - 1) fold = std::max(fold, bend(nrm, outside[m - 1]));
+          if (fold > kMaxFillDihedral) continue;
+          const double value = smooth ? fold : max_angle(P_[L[k]], P_[L[j]], P_[L[i]]);
+          const double add = smooth ? area : value;
           const double w = std::max({wl, wr, value}), tt = total[i * m + j] + total[j * m + k] + add;
           if (w < worst[i * m + k] || (w == worst[i * m + k] && tt < total[i * m + k])) {
             worst[i * m + k] = w;
@@ -1009,10 +998,8 @@ class Builder {
         for_each_tri(uint32_t(v), [&](uint32_t t) {
           const Triangle& T = tris_[t];
           const int k = corner_of(T, uint32_t(v));
-          const Vec3 f = normalized(cross(P_[T[1]] - P_[T[0]], P_[T[2]] - P_[T[0]]));
-          const Vec3 a = P_[T[(k + 1) % 3]] - P_[v], c = P_[T[(k + 2) % 3]] - P_[v];
-          const double cosine = dot(a, c) / std::sqrt(squared_norm(a) * squared_norm(c));
-          const double angle = fast_acos(cosine);
+          const Vec3 f = face_normal(T);
+          const double angle = fast_acos(corner_cosine(P_[v], P_[T[(k + 1) % 3]], P_[T[(k + 2) % 3]]));
           if (!(angle > 0) || !(squared_norm(f) > 0)) return;  // a degenerate triangle
           sum += f * angle;
           weight += angle;
