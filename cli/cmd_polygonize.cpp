@@ -65,11 +65,11 @@ int run_polygonize(const PolygonizeArgs& a) {
   opt.progress = progress.callback();
   const auto t1 = Clock::now();
   set_phase(Phase::Computing);
-  if (interrupted()) throw Error(Status::Cancelled, "interrupted");
+  if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
   PolygonizeResult result = polygonize(cloud, opt);
   const double t_poly = std::chrono::duration<double>(Clock::now() - t1).count();
   progress.clear();
-  if (interrupted()) throw Error(Status::Cancelled, "interrupted");
+  if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
 
   WriteMeshOptions wo;
   if (a.ascii) wo.format = MeshFormat::PlyAscii;

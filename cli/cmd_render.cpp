@@ -56,7 +56,7 @@ int run_render(const RenderArgs& a) {
   }
   const RenderResult r = render(caster, o);
   progress.clear();
-  if (interrupted()) throw Error(Status::Cancelled, "interrupted");
+  if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
   write_outputs([&] { write_png(r.image, a.output); }, {a.output});
   if (!a.quiet) {
     const auto& f = caster.field();

@@ -104,11 +104,11 @@ int run_smooth(const SmoothArgs& a) {
   opt.progress = progress.callback();
   const auto t1 = Clock::now();
   set_phase(Phase::Computing);
-  if (interrupted()) throw Error(Status::Cancelled, "interrupted");
+  if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
   const SmoothResult result = smooth_mesh(mesh, opt);
   const double t_smooth = std::chrono::duration<double>(Clock::now() - t1).count();
   progress.clear();
-  if (interrupted()) throw Error(Status::Cancelled, "interrupted");
+  if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
 
   WriteMeshOptions wo;
   if (a.ascii) wo.format = MeshFormat::PlyAscii;
@@ -207,7 +207,7 @@ void apply_smooth_chain(TriMesh& mesh, const SmoothChainArgs& args, int threads,
     throw Error(e.status(), "--smooth " + args.scheme + ": " + e.what());
   }
   progress.clear();
-  if (interrupted()) throw Error(Status::Cancelled, "interrupted");
+  if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
 }
 
 }  // namespace particlemesh::cli

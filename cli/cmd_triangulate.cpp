@@ -64,7 +64,7 @@ int run_triangulate(const TriangulateArgs& a) {
   opt.progress = progress.callback();
   const auto t1 = Clock::now();
   set_phase(Phase::Computing);
-  if (interrupted()) throw Error(Status::Cancelled, "interrupted");
+  if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
   SurfaceResult result;
   if (a.raw) {
     TriangulateResult r = triangulate_raw(cloud, opt);
@@ -75,7 +75,7 @@ int run_triangulate(const TriangulateArgs& a) {
   }
   const double t_tri = std::chrono::duration<double>(Clock::now() - t1).count();
   progress.clear();
-  if (interrupted()) throw Error(Status::Cancelled, "interrupted");
+  if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
 
   apply_smooth_chain(result.mesh, a.smooth, a.threads, progress);  // --smooth: after the mesh is made
 

@@ -10,7 +10,9 @@
 //     touch are not joined (genus stays right).
 //  3. Growth runs best-first from the front of the surface built so far; a candidate that
 //     would start a second fan at a vertex (a pinch) waits until nothing else is left;
-//     a new seed is only taken when the front is exhausted.
+//     a new seed is only taken when the front is exhausted. It runs in parallel in fixed
+//     blocks of points, then across the seams between them, where no flat candidate is
+//     taken (see Builder::grow()).
 //  4. Repair in a fixed order: split boundary loops at repeated vertices, fill small loops,
 //     keep only the largest fan at each pinched vertex, then fill the larger loops whose
 //     fill stays within the edge limit (real openings are wider than that and stay open).
