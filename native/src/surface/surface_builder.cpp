@@ -11,7 +11,6 @@
 #include <memory>
 #include <numbers>
 #include <numeric>
-#include <span>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -290,9 +289,13 @@ class Builder {
   enum : uint8_t { kOpen = 0, kAccepted = 1, kDead = 2 };
   enum Check { kOk = 0, kPinch = 1, kInvalid = 2 };
 
-  Check check(uint32_t c) const {
-    if (state_[c] != kOpen) return kInvalid;
-    const Triangle& C = cand_[c];
+  /// Candidates are named by ids: their ranks, or in a block's growth their positions in the
+  /// block's own list (see grow()).
+  struct Region;
+
+  Check check(uint32_t c, const Region& r) const {
+    if (r.state[c] != kOpen) return kInvalid;
+    const Triangle& C = r.cand[c];
     bool pinch = false;
     for (int k = 0; k < 3; ++k) {
       const uint32_t v = C[k];
@@ -331,18 +334,18 @@ class Builder {
     }
   }
 
-  /// Where growth runs (see grow()): the candidates of one block, or all of them (the seams
-  /// pass). Its queues hold positions in `ids`, which are in rank order, so positions order as
-  /// ranks do; without `ids` a position is the rank itself.
+  /// Where growth runs (see grow()): one block, on its own candidates, or the seams pass, on
+  /// all of them. Ids are [0, count) and order as ranks do.
   struct Region {
-    const uint32_t* ids = nullptr;  ///< its candidates, ascending (null: all of them)
+    const Triangle* cand = nullptr;   ///< by id
+    uint8_t* state = nullptr;         ///< by id
     size_t count = 0;
-    uint32_t block = kSeams;                ///< its block, or kSeams
-    std::span<const uint32_t> seed_from;    ///< the candidates that may seed it, ascending
+    bool block = false;  ///< ids are the block's; corners of other candidates carry kOther
+    const std::vector<uint32_t>* seed_from = nullptr;  ///< the ids that may seed it, ascending (null: all)
     size_t grown = 0, seeds = 0;
-    uint32_t candidate(uint32_t pos) const { return ids ? ids[pos] : pos; }
   };
-  static constexpr uint32_t kSeams = UINT32_MAX;
+  /// In a block's growth, the corners of candidates it does not take carry this bit.
+  static constexpr uint32_t kOther = 0x80000000u;
 
   uint32_t block_of(uint32_t v) const { return v >> block_shift_; }
 
@@ -354,8 +357,8 @@ class Builder {
   }
 
   void accept(uint32_t c, RankQueue& heap, Region& r) {
-    state_[c] = kAccepted;
-    const Triangle& C = cand_[c];
+    r.state[c] = kAccepted;
+    const Triangle& C = r.cand[c];
     // Keep each vertex's accepted candidates at the front of its list, so that check() reads
     // only those (the result does not depend on the order it reads them in).
     for (uint32_t v : C) {
@@ -370,11 +373,11 @@ class Builder {
     // candidates it does not take to the seams pass (another block's thread may own them).
     for (int k = 0; k < 3; ++k) {
       const uint32_t a = C[k], b = C[(k + 1) % 3];
-      for_each_candidate_on_edge(a, b, [&](uint32_t t, bool b_to_a, uint32_t d) {
-        if (r.block != kSeams && !block_takes(r.block, t, a, b, d)) return;
-        if (state_[t] != kOpen) return;
-        if (!b_to_a) state_[t] = kDead;  // T holds a -> b: can never be used
-        else heap.push(r.ids ? local_[t] : t);
+      for_each_candidate_on_edge(a, b, [&](uint32_t t, bool b_to_a, uint32_t) {
+        if (r.block && (t & kOther)) return;
+        if (r.state[t] != kOpen) return;
+        if (!b_to_a) r.state[t] = kDead;  // T holds a -> b: can never be used
+        else heap.push(t);
       });
     }
   }
@@ -386,6 +389,7 @@ class Builder {
   void grow_region(Region& r, RankQueue& heap, bool flat_ok) {
     RankQueue deferred(r.count);
     size_t seed_ptr = 0, touch_ptr = 0, since_tick = 0;
+    const size_t seeds = r.seed_from ? r.seed_from->size() : r.count;
     std::vector<uint32_t> touch;  // the candidates at points no region reached, ascending
     bool touch_listed = false;
     while (true) {
@@ -395,28 +399,28 @@ class Builder {
         if (tracker_.cancelled()) return;
       }
       if (!heap.empty()) {
-        const uint32_t c = r.candidate(heap.pop());
+        const uint32_t c = heap.pop();
         if (!heap.empty()) {  // likely the next one: load it while this one is checked
-          const uint32_t next = r.candidate(heap.top());
-          __builtin_prefetch(&cand_[next]);
-          __builtin_prefetch(&state_[next]);
+          const uint32_t next = heap.top();
+          __builtin_prefetch(&r.cand[next]);
+          __builtin_prefetch(&r.state[next]);
         }
-        const Check k = !flat_ok && c >= flat_from_ ? kInvalid : check(c);
+        const Check k = !flat_ok && c >= flat_from_ ? kInvalid : check(c, r);
         if (k == kOk) accept(c, heap, r);
-        else if (k == kPinch) deferred.push(r.ids ? local_[c] : c);
-        else if (state_[c] == kOpen) state_[c] = kDead;
+        else if (k == kPinch) deferred.push(c);
+        else if (r.state[c] == kOpen) r.state[c] = kDead;
         continue;
       }
       if (!deferred.empty()) {
-        const uint32_t c = r.candidate(deferred.pop());
-        if (check(c) != kInvalid) accept(c, heap, r);
+        const uint32_t c = deferred.pop();
+        if (check(c, r) != kInvalid) accept(c, heap, r);
         continue;
       }
       bool seeded = false;
-      for (; seed_ptr < r.seed_from.size(); ++seed_ptr) {
-        const uint32_t c = r.seed_from[seed_ptr];
-        const Triangle& C = cand_[c];
-        if (state_[c] == kOpen && acc_count_[C[0]] == 0 && acc_count_[C[1]] == 0 && acc_count_[C[2]] == 0) {
+      for (; seed_ptr < seeds; ++seed_ptr) {
+        const uint32_t c = r.seed_from ? (*r.seed_from)[seed_ptr] : uint32_t(seed_ptr);
+        const Triangle& C = r.cand[c];
+        if (r.state[c] == kOpen && acc_count_[C[0]] == 0 && acc_count_[C[1]] == 0 && acc_count_[C[2]] == 0) {
           accept(c, heap, r);
           ++r.seeds;
           seeded = true;
@@ -424,16 +428,16 @@ class Builder {
         }
       }
       if (seeded) continue;
-      if (r.block != kSeams) break;
+      if (r.block) break;
       if (!touch_listed) {
         touch = candidates_at_untouched_points();
         touch_listed = true;
       }
       for (; touch_ptr < touch.size(); ++touch_ptr) {
         const uint32_t c = touch[touch_ptr];
-        const Triangle& C = cand_[c];
+        const Triangle& C = r.cand[c];
         if (acc_count_[C[0]] && acc_count_[C[1]] && acc_count_[C[2]]) continue;
-        if (check(c) != kInvalid) {
+        if (check(c, r) != kInvalid) {
           accept(c, heap, r);
           seeded = true;
           break;
@@ -490,23 +494,28 @@ class Builder {
   /// where serial growth took no flat triangle at all). So a block takes a flat candidate only
   /// two rings inside it, and the seams pass takes none: those gaps close as small holes,
   /// which the repair fills.
+  ///
+  /// A block works on its own copy of its candidates and their states, by their positions in
+  /// its list (the corner lists say so for the time), not on the ranks: the candidates it
+  /// reads are then together in memory, not spread over the whole list in quality order.
   void grow() {
     tracker_.stage("extracting the surface", 0.7, 0.85, cand_.size());
     const size_t n = P_.size(), m = cand_.size();
+    if (m >= kOther) throw Error(Status::LimitExceeded, "more than 2^31 candidate triangles");
     block_shift_ = std::max<uint32_t>(kMinBlockShift, uint32_t(std::bit_width(n / kBlocksPerCloud)));
     const size_t blocks = ((n - 1) >> block_shift_) + 1;
     mark_inner_points();
     // Each block's candidates, in rank order, and the rest (the seams'), in rank order.
     std::vector<uint32_t> block_start(blocks + 1, 0), ids(m), seams;
-    local_.resize(m);
+    std::vector<uint32_t> local(m, kOther);  // a candidate's position in its block's list
     auto block_candidate = [&](uint32_t c) {
       const Triangle& C = cand_[c];
       const uint32_t b = block_of(C[0]);
-      return block_takes(b, c, C[0], C[1], C[2]) ? b : kSeams;
+      return block_takes(b, c, C[0], C[1], C[2]) ? b : UINT32_MAX;
     };
     for (uint32_t c = 0; c < m; ++c) {
       const uint32_t b = block_candidate(c);
-      if (b != kSeams) ++block_start[b + 1];
+      if (b != UINT32_MAX) ++block_start[b + 1];
       else seams.push_back(c);
     }
     std::partial_sum(block_start.begin(), block_start.end(), block_start.begin());
@@ -514,34 +523,59 @@ class Builder {
       std::vector<uint32_t> fill(block_start.begin(), block_start.end() - 1);
       for (uint32_t c = 0; c < m; ++c) {
         const uint32_t b = block_candidate(c);
-        if (b == kSeams) continue;
-        local_[c] = fill[b] - block_start[b];
+        if (b == UINT32_MAX) continue;
+        local[c] = fill[b] - block_start[b];
         ids[fill[b]++] = c;
       }
     }
+    // The corner lists name the candidates by block positions (kOther for the seams').
+    detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+      for (uint32_t i = vc_off_[b]; i < vc_off_[e]; ++i) {
+        const uint32_t c = vc_[i].c;
+        vc_[i].c = local[c] == kOther ? c | kOther : local[c];
+      }
+    });
+    std::vector<uint32_t>().swap(local);
     std::vector<size_t> grown(blocks, 0), seeds(blocks, 0);
     detail::parallel_blocks(blocks, 1, [&](size_t bb, size_t be) {
       for (size_t b = bb; b < be; ++b) {
+        const uint32_t* id = ids.data() + block_start[b];
+        const size_t count = block_start[b + 1] - block_start[b];
+        std::vector<Triangle> cand(count);
+        std::vector<uint8_t> state(count, kOpen);
+        for (size_t i = 0; i < count; ++i) cand[i] = cand_[id[i]];
         Region r;
-        r.ids = ids.data() + block_start[b];
-        r.count = block_start[b + 1] - block_start[b];
-        r.block = uint32_t(b);
-        r.seed_from = {r.ids, r.count};
-        RankQueue heap(r.count);
+        r.cand = cand.data();
+        r.state = state.data();
+        r.count = count;
+        r.block = true;
+        RankQueue heap(count);
         grow_region(r, heap, true);
+        for (size_t i = 0; i < count; ++i) state_[id[i]] = state[i];
         grown[b] = r.grown;
         seeds[b] = r.seeds;
       }
     });
     tracker_.check();
-    std::vector<uint32_t>().swap(local_);
+    // Back to ranks.
+    detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+      for (size_t v = b; v < e; ++v) {
+        const uint32_t* id = ids.data() + block_start[block_of(uint32_t(v))];
+        for (uint32_t i = vc_off_[v]; i < vc_off_[v + 1]; ++i) {
+          Corner& x = vc_[i];
+          x.c = (x.c & kOther) ? x.c & ~kOther : id[x.c];
+        }
+      }
+    });
     std::vector<uint32_t>().swap(ids);
     // The seams pass starts from the candidates that continue a grown triangle: one of their
     // edges, reversed, is an accepted triangle's (what puts a candidate on the front). Only
     // they can seed: each block took every seed within it, and points only get touched.
     Region all;
+    all.cand = cand_.data();
+    all.state = state_.data();
     all.count = m;
-    all.seed_from = seams;
+    all.seed_from = &seams;
     RankQueue heap(m);
     if (blocks > 1) {
       std::vector<uint8_t> front(seams.size(), 0);
@@ -1220,7 +1254,6 @@ class Builder {
   std::vector<Corner, UninitAllocator<Corner>> vc_;
   std::vector<uint32_t> vc_off_;
   std::vector<uint32_t> acc_count_;
-  std::vector<uint32_t> local_;  ///< a candidate's position in its block's list
   uint32_t block_shift_ = 0;     ///< vertex v is in block v >> block_shift_
   std::vector<uint8_t> inner_;   ///< per vertex: no path of up to two candidate edges leaves its block
   /// Candidates ranked from here on are flat: largest angle over 150 degrees (see grow()).
