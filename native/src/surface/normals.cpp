@@ -39,31 +39,35 @@ void gather_near(const NeighborGrid& grid, const NeighborLists& lists, uint32_t 
   }
 }
 
-/// PCA of the offsets marked in `use`: the normal, and the ratio of the two smallest variances
-/// (small for points that lie close to one plane).
-Vec3 pca_normal(const std::vector<Vec3>& near, const std::vector<uint8_t>& use, double* flatness) {
-  Vec3 sum{};
+/// The first and second moments of a set of offsets: their count, sum and sum of products.
+struct Moments {
   int count = 0;
-  for (size_t k = 0; k < near.size(); ++k)
-    if (use[k]) {
-      sum += near[k];
-      ++count;
-    }
-  const Vec3 mean = sum / double(count);
-  // The six distinct entries as scalars (an Eigen outer product per neighbour cost twice as much).
-  double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
-  for (size_t k = 0; k < near.size(); ++k) {
-    if (!use[k]) continue;
-    const double x = near[k].x - mean.x, y = near[k].y - mean.y, z = near[k].z - mean.z;
-    xx += x * x;
-    xy += x * y;
-    xz += x * z;
-    yy += y * y;
-    yz += y * z;
-    zz += z * z;
+  double x = 0, y = 0, z = 0, xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
+  void add(const Vec3& d) {
+    ++count;
+    x += d.x;
+    y += d.y;
+    z += d.z;
+    xx += d.x * d.x;
+    xy += d.x * d.y;
+    xz += d.x * d.z;
+    yy += d.y * d.y;
+    yz += d.y * d.z;
+    zz += d.z * d.z;
   }
+};
+
+/// PCA of the offsets: the normal, and the ratio of the two smallest variances (small for
+/// points that lie close to one plane). From the moments, in one pass over the neighbours (a
+/// list of the offsets and a second pass for the covariance cost a quarter of the stage);
+/// the offsets are from the point itself, so the mean is small and the difference exact
+/// enough.
+Vec3 pca_normal(const Moments& m, double* flatness) {
+  const double c = m.count;
   Eigen::Matrix3d cov;
-  cov << xx, xy, xz, xy, yy, yz, xz, yz, zz;
+  cov << m.xx - m.x * m.x / c, m.xy - m.x * m.y / c, m.xz - m.x * m.z / c,  //
+      m.xy - m.x * m.y / c, m.yy - m.y * m.y / c, m.yz - m.y * m.z / c,   //
+      m.xz - m.x * m.z / c, m.yz - m.y * m.z / c, m.zz - m.z * m.z / c;
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
   eig.computeDirect(cov);
   const Eigen::Vector3d ev = eig.eigenvalues();  // ascending
@@ -87,15 +91,18 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
   std::vector<uint8_t> thick(n, 0);
   parallel_blocks(n, 2048, [&](size_t b, size_t e) {
     if (tracker.cancelled()) return;
-    std::vector<Vec3> near;
-    std::vector<uint8_t> inlier;
     for (size_t s = b; s < e; ++s) {
       if (rep[s] != s) continue;
-      gather_near(grid, lists, uint32_t(s), r2, near);
-      if (near.size() < 3) continue;  // too few neighbours for a plane: unknown (0,0,0)
-      inlier.assign(near.size(), 1);
+      const Vec3 p = grid.sorted_point(uint32_t(s));
+      Moments m;
+      m.add(Vec3{});  // the point itself
+      for (const uint32_t* q = lists.begin(uint32_t(s)); q != lists.end(uint32_t(s)); ++q) {
+        const Vec3 d = grid.sorted_point(*q) - p;
+        if (squared_norm(d) <= r2) m.add(d);
+      }
+      if (m.count < 3) continue;  // too few neighbours for a plane: unknown (0,0,0)
       double flatness = 0;
-      normals[s] = pca_normal(near, inlier, &flatness);
+      normals[s] = pca_normal(m, &flatness);
       thick[s] = triangles != nullptr && flatness > kMaxFlatness;
     }
     tracker.tick(e - b);
@@ -125,7 +132,6 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
     parallel_blocks(redo.size(), 256, [&](size_t b, size_t e) {
       if (tracker.cancelled()) return;
       std::vector<Vec3> near, tried;
-      std::vector<uint8_t> inlier;
       for (size_t i = b; i < e; ++i) {
         const uint32_t s = redo[i];
         gather_near(grid, lists, s, r2, near);
@@ -159,9 +165,10 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
           }
         }
         if (best_count >= 3) {
-          inlier.resize(near.size());
-          for (size_t k = 0; k < near.size(); ++k) inlier[k] = std::abs(dot(near[k], best_n)) <= band;
-          normals[s] = pca_normal(near, inlier, nullptr);
+          Moments m;
+          for (const Vec3& d : near)
+            if (std::abs(dot(d, best_n)) <= band) m.add(d);
+          normals[s] = pca_normal(m, nullptr);
         }
       }
     });

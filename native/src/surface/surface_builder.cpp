@@ -145,18 +145,37 @@ class RankQueue {
 };
 
 /// Sorts keys whose low words already ascend by their high words, stably: three counting
-/// passes of 11 bits (a pass where every key has the same digit is skipped). Linear, where a
+/// passes of 11 bits (a pass where every key has the same digit is skipped), each counted and
+/// placed in parallel over fixed chunks (so the same for any thread count). Linear, where a
 /// comparison sort of the 2.5M candidates of 1M points took 80-120 ms; TBB and the standard
 /// library have no radix sort.
 void sort_by_high_word(std::vector<uint64_t>& key) {
-  std::vector<uint64_t> tmp(key.size());
-  std::vector<uint32_t> count;
+  const size_t n = key.size(), chunk = 65536, chunks = (n + chunk - 1) / chunk;
+  std::vector<uint64_t> tmp(n);
+  std::vector<uint32_t> at(chunks * 2048);  // per chunk and digit: its count, then its slot
   for (int shift = 32; shift < 64; shift += 11) {
-    count.assign(2049, 0);
-    for (uint64_t k : key) ++count[((k >> shift) & 2047) + 1];
-    if (std::find(count.begin(), count.end(), uint32_t(key.size())) != count.end()) continue;
-    std::partial_sum(count.begin(), count.end(), count.begin());
-    for (uint64_t k : key) tmp[count[(k >> shift) & 2047]++] = k;
+    auto digit = [shift](uint64_t k) { return (k >> shift) & 2047; };
+    std::fill(at.begin(), at.end(), 0);
+    detail::parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
+      for (size_t h = hb; h < he; ++h)
+        for (size_t i = h * chunk; i < std::min(n, (h + 1) * chunk); ++i) ++at[h * 2048 + digit(key[i])];
+    });
+    uint32_t total = 0;
+    bool one_digit = false;
+    for (size_t d = 0; d < 2048; ++d) {
+      const uint32_t before = total;
+      for (size_t h = 0; h < chunks; ++h) {
+        const uint32_t c = at[h * 2048 + d];
+        at[h * 2048 + d] = total;
+        total += c;
+      }
+      one_digit = one_digit || total - before == n;
+    }
+    if (one_digit) continue;
+    detail::parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
+      for (size_t h = hb; h < he; ++h)
+        for (size_t i = h * chunk; i < std::min(n, (h + 1) * chunk); ++i) tmp[at[h * 2048 + digit(key[i])]++] = key[i];
+    });
     key.swap(tmp);
   }
 }
@@ -169,6 +188,15 @@ double fast_acos(double x) {
                    (1.5707963050 + a * (-0.2145988016 + a * (0.0889789874 + a * (-0.0501743046 + a * (0.0308918810 +
                     a * (-0.0170881256 + a * (0.0066700901 + a * -0.0012624911)))))));
   return x >= 0 ? r : std::numbers::pi - r;
+}
+
+/// A float's bits, turned so that they order as the float does (-0 taken as +0, so that equal
+/// qualities tie on what follows them in a key).
+uint32_t sortable_bits(float f) {
+  f += 0.0f;
+  uint32_t bits;
+  std::memcpy(&bits, &f, sizeof bits);
+  return (bits & 0x80000000u) ? ~bits : (bits | 0x80000000u);
 }
 
 int corner_of(const Triangle& t, uint32_t v) { return t[0] == v ? 0 : (t[1] == v ? 1 : 2); }
@@ -219,26 +247,35 @@ class Builder {
       }
     });
     tracker_.check();
-    size_t kept = 0;
-    for (const auto& x : o) kept += x.ok;
+    // Kept per chunk, for the keys below.
+    const size_t chunk = 65536, chunks = (o.size() + chunk - 1) / chunk;
+    std::vector<uint32_t> chunk_start(chunks + 1, 0);
+    detail::parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
+      for (size_t h = hb; h < he; ++h)
+        for (size_t i = h * chunk; i < std::min(o.size(), (h + 1) * chunk); ++i) chunk_start[h + 1] += o[i].ok;
+    });
+    std::partial_sum(chunk_start.begin(), chunk_start.end(), chunk_start.begin());
+    const size_t kept = chunk_start[chunks];
     stats_.rejected_conormal = raw.size() - kept;
-    flat_from_ = 0;  // the quality order puts the flat candidates last
-    for (const auto& x : o) flat_from_ += x.ok && x.quality <= kFlatQuality;
     stats_.candidates = kept;
     // Best first: the smallest largest angle (the Delaunay diagonal of a quad beats the
     // overlapping obtuse triangle), then the raw order (sorted indices) - deterministic.
     // Sorted as (quality, index) keys: a float's bits, with the sign folded, order as the float.
-    std::vector<uint64_t> key;
-    key.reserve(kept);
-    for (uint32_t i = 0; i < o.size(); ++i)
-      if (o[i].ok) {
-        const float q = o[i].quality + 0.0f;  // -0 as +0: equal qualities tie on the index
-        uint32_t bits;
-        std::memcpy(&bits, &q, sizeof bits);
-        bits = (bits & 0x80000000u) ? ~bits : (bits | 0x80000000u);
-        key.push_back((uint64_t(bits) << 32) | i);
+    std::vector<uint64_t> key(kept);
+    detail::parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
+      for (size_t h = hb; h < he; ++h) {
+        uint32_t slot = chunk_start[h];
+        for (uint32_t i = uint32_t(h * chunk); i < std::min(o.size(), (h + 1) * chunk); ++i)
+          if (o[i].ok) {
+            key[slot++] = (uint64_t(sortable_bits(o[i].quality)) << 32) | i;
+          }
       }
+    });
     sort_by_high_word(key);
+    // The quality order puts the flat candidates last.
+    flat_from_ = uint32_t(std::partition_point(key.begin(), key.end(), [](uint64_t k) {
+                            return uint32_t(k >> 32) <= sortable_bits(kFlatQuality);
+                          }) - key.begin());
     tracker_.check();
     cand_.resize(kept);
     state_.assign(kept, kOpen);
@@ -246,7 +283,7 @@ class Builder {
       for (size_t c = b; c < e; ++c) cand_[c] = o[uint32_t(key[c])].t;
     });
     tracker_.check();
-    // Vertex -> its corners. Counted (above) and placed in parallel: a corner's slot comes
+    // Vertex -> its corners, with their arcs. Counted (above) and placed in parallel: a corner's slot comes
     // from its vertex's atomic cursor, so the order within a list depends on the threads. No
     // result does: growth reads a list as a set (check() and the edge scan answer the same in
     // any order, and the front is a set of ranks), the boundary is sorted and the triangles
@@ -266,21 +303,13 @@ class Builder {
         if (!o[i].ok) continue;
         const Triangle& t = o[i].t;
         for (int k = 0; k < 3; ++k) {
-          const uint32_t slot = std::atomic_ref<uint32_t>(fill[t[k]]).fetch_add(1, std::memory_order_relaxed);
-          vc_[slot] = {rank[i], t[(k + 1) % 3], t[(k + 2) % 3], {}};
+          const uint32_t v = t[k], succ = t[(k + 1) % 3], pred = t[(k + 2) % 3];
+          const uint32_t slot = std::atomic_ref<uint32_t>(fill[v]).fetch_add(1, std::memory_order_relaxed);
+          vc_[slot] = {rank[i], succ, pred, make_arc(frame_[v], P_[v], P_[succ], P_[pred])};
         }
       }
     });
     tracker_.check();
-    // Then the corners' arcs.
-    detail::parallel_blocks(n, 4096, [&](size_t b, size_t e) {
-      for (size_t v = b; v < e; ++v) {
-        for (uint32_t i = vc_off_[v]; i < vc_off_[v + 1]; ++i) {
-          Corner& x = vc_[i];
-          x.arc = make_arc(frame_[v], P_[v], P_[x.succ], P_[x.pred]);
-        }
-      }
-    });
     acc_count_.assign(n, 0);
   }
 
@@ -506,28 +535,42 @@ class Builder {
     const size_t blocks = ((n - 1) >> block_shift_) + 1;
     mark_inner_points();
     // Each block's candidates, in rank order, and the rest (the seams'), in rank order.
-    std::vector<uint32_t> block_start(blocks + 1, 0), ids(m), seams;
+    // Counted per chunk of ranks, then placed, in parallel; the seams' list is one more block.
+    std::vector<uint32_t> block_start(blocks + 2, 0), ids(m);
     std::vector<uint32_t> local(m, kOther);  // a candidate's position in its block's list
     auto block_candidate = [&](uint32_t c) {
       const Triangle& C = cand_[c];
       const uint32_t b = block_of(C[0]);
-      return block_takes(b, c, C[0], C[1], C[2]) ? b : UINT32_MAX;
+      return block_takes(b, c, C[0], C[1], C[2]) ? b : uint32_t(blocks);
     };
-    for (uint32_t c = 0; c < m; ++c) {
-      const uint32_t b = block_candidate(c);
-      if (b != UINT32_MAX) ++block_start[b + 1];
-      else seams.push_back(c);
-    }
-    std::partial_sum(block_start.begin(), block_start.end(), block_start.begin());
     {
-      std::vector<uint32_t> fill(block_start.begin(), block_start.end() - 1);
-      for (uint32_t c = 0; c < m; ++c) {
-        const uint32_t b = block_candidate(c);
-        if (b == UINT32_MAX) continue;
-        local[c] = fill[b] - block_start[b];
-        ids[fill[b]++] = c;
+      const size_t chunk = 65536, chunks = (m + chunk - 1) / chunk, lists = blocks + 1;
+      std::vector<uint32_t> at(chunks * lists, 0);  // per chunk and list: its count, then its start
+      detail::parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
+        for (size_t h = hb; h < he; ++h)
+          for (uint32_t c = uint32_t(h * chunk); c < std::min(m, (h + 1) * chunk); ++c) ++at[h * lists + block_candidate(c)];
+      });
+      uint32_t total = 0;
+      for (size_t b = 0; b < lists; ++b) {
+        block_start[b] = total;
+        for (size_t h = 0; h < chunks; ++h) {
+          const uint32_t count = at[h * lists + b];
+          at[h * lists + b] = total;
+          total += count;
+        }
       }
+      block_start[lists] = total;
+      detail::parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
+        for (size_t h = hb; h < he; ++h)
+          for (uint32_t c = uint32_t(h * chunk); c < std::min(m, (h + 1) * chunk); ++c) {
+            const uint32_t b = block_candidate(c), pos = at[h * lists + b]++;
+            ids[pos] = c;
+            if (b < blocks) local[c] = pos - block_start[b];
+          }
+      });
     }
+    // The seams' candidates: the last list.
+    const std::vector<uint32_t> seams(ids.begin() + block_start[blocks], ids.end());
     // The corner lists name the candidates by block positions (kOther for the seams').
     detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
       for (uint32_t i = vc_off_[b]; i < vc_off_[e]; ++i) {
@@ -570,28 +613,31 @@ class Builder {
     std::vector<uint32_t>().swap(ids);
     // The seams pass starts from the candidates that continue a grown triangle: one of their
     // edges, reversed, is an accepted triangle's (what puts a candidate on the front). Only
-    // they can seed: each block took every seed within it, and points only get touched.
+    // seams' candidates on three untouched points can seed it: each block took every seed
+    // within it, and points only get touched.
+    std::vector<uint8_t> kind(seams.size(), 0);  // 1: on the front, 2: may seed
+    detail::parallel_blocks(seams.size(), 4096, [&](size_t b, size_t e) {
+      for (size_t i = b; i < e; ++i) {
+        const Triangle& C = cand_[seams[i]];
+        if (!acc_count_[C[0]] && !acc_count_[C[1]] && !acc_count_[C[2]]) kind[i] = 2;
+        for (int k = 0; k < 3 && !kind[i]; ++k) {
+          const uint32_t a = C[k], v = C[(k + 1) % 3];  // the edge a -> v; is v -> a taken?
+          const Corner* x = vc_.data() + vc_off_[v];
+          for (uint32_t j = 0; j < acc_count_[v]; ++j) kind[i] |= x[j].succ == a;
+        }
+      }
+    });
+    std::vector<uint32_t> seeds_left;
+    RankQueue heap(m);
+    for (size_t i = 0; i < seams.size(); ++i) {
+      if (kind[i] == 1) heap.push(seams[i]);
+      if (kind[i] == 2) seeds_left.push_back(seams[i]);
+    }
     Region all;
     all.cand = cand_.data();
     all.state = state_.data();
     all.count = m;
-    all.seed_from = &seams;
-    RankQueue heap(m);
-    if (blocks > 1) {
-      std::vector<uint8_t> front(seams.size(), 0);
-      detail::parallel_blocks(seams.size(), 4096, [&](size_t b, size_t e) {
-        for (size_t i = b; i < e; ++i) {
-          const Triangle& C = cand_[seams[i]];
-          for (int k = 0; k < 3 && !front[i]; ++k) {
-            const uint32_t a = C[k], v = C[(k + 1) % 3];  // the edge a -> v; is v -> a taken?
-            const Corner* x = vc_.data() + vc_off_[v];
-            for (uint32_t j = 0; j < acc_count_[v]; ++j) front[i] |= x[j].succ == a;
-          }
-        }
-      });
-      for (size_t i = 0; i < seams.size(); ++i)
-        if (front[i]) heap.push(seams[i]);
-    }
+    all.seed_from = &seeds_left;
     grow_region(all, heap, blocks == 1);
     tracker_.check();
     for (size_t b = 0; b < blocks; ++b) {
