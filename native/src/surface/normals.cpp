@@ -263,7 +263,7 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
   struct Found {
     uint32_t from, to;
     uint32_t bits;  // the cost's (a non-negative float's bits order as the float)
-    bool across;
+    bool turn;      // whether the edge turns one normal against the other
   };
   const size_t eblock = 2048, eblocks = (n + eblock - 1) / eblock;
   std::vector<std::vector<Found>> found(eblocks);
@@ -285,7 +285,8 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
           const float cost = float(1.0 - std::abs(dot(ns, nt)) + (across ? 1.0 - slope : slope));
           uint32_t bits;
           std::memcpy(&bits, &cost, sizeof bits);
-          found[blk].push_back({uint32_t(s), *q, bits, across});
+          // Within a sheet the normals should agree; across a gap they should be opposite.
+          found[blk].push_back({uint32_t(s), *q, bits, (dot(ns, nt) < 0) != across});
         }
       }
   });
@@ -301,8 +302,8 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
       for (const Found& f : found[blk]) {
         edge_from[k] = f.from;
         edge_to[k] = f.to;
-        // The low bit of the index slot carries the edge's kind (k < 2^31 is checked above).
-        keys[k] = (uint64_t(f.bits) << 32) | (k << 1) | uint64_t(f.across);
+        // The low bit of the index slot carries the edge's turn (k < 2^31 is checked above).
+        keys[k] = (uint64_t(f.bits) << 32) | (k << 1) | uint64_t(f.turn);
         ++k;
       }
       std::vector<Found>().swap(found[blk]);
@@ -313,11 +314,28 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
   // (the one Kruskal's algorithm gives); it is found by Boruvka's rounds rather than by
   // sorting every edge: each component takes its cheapest outgoing edge (a parallel pass over
   // the edges still between components), and the components those edges join merge.
+  //
+  // Hoppe's propagation turns each normal to agree with its tree neighbour's (or oppose it,
+  // across a gap), from the root down: a point's turn is the parity of the turning edges on
+  // its tree path. That parity is kept with the merges (a union-find with parity), so no
+  // traversal of the tree is needed: flip[v] is v's turn relative to its component's label,
+  // and a label's turn relative to its parent label is turn_of[label].
   std::vector<uint32_t> comp(n), parent(n), labels, live;
+  std::vector<uint8_t> flip(n, 0), turn_of(n, 0);
   std::iota(comp.begin(), comp.end(), 0u);
   std::iota(parent.begin(), parent.end(), 0u);
-  auto find = [&](uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+  // The root of x, and x's turn relative to it in `turn` (halving the path on the way).
+  auto find = [&](uint32_t x, uint8_t& turn) {
+    turn = 0;
+    while (parent[x] != x) {
+      const uint32_t up = parent[x];
+      if (parent[up] != up) {
+        turn_of[x] ^= turn_of[up];
+        parent[x] = parent[up];
+      }
+      turn ^= turn_of[x];
+      x = parent[x];
+    }
     return x;
   };
   live.resize(m);
@@ -331,14 +349,6 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
   }
   constexpr uint64_t kNone = ~uint64_t(0);
   std::vector<std::atomic<uint64_t>> best(n);
-  // The forest's edges as they are found: the order is the same for any thread count (the
-  // joins run serially over the labels), and the traversal below does not depend on it.
-  struct TreeEdge {
-    uint32_t a, b;
-    bool across;
-  };
-  std::vector<TreeEdge> tree;
-  tree.reserve(labels.size());
   while (!live.empty()) {
     tracker.check();
     parallel_blocks(labels.size(), 8192, [&](size_t b, size_t e) {
@@ -355,25 +365,40 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
         }
       }
     });
-    // Join along the chosen edges (each is in the forest; two components may choose the same).
+    // Join along the chosen edges (each is in the forest; two components may choose the same),
+    // serially over the labels: the same joins for any thread count.
     for (uint32_t c : labels) {
       const uint64_t key = best[c].load(std::memory_order_relaxed);
       if (key == kNone) continue;
       const uint32_t k = uint32_t((key & 0xffffffffu) >> 1);
       const uint32_t from = edge_from[k], to = edge_to[k];
-      const uint32_t a = find(comp[from]), b = find(comp[to]);
+      uint8_t ta, tb;
+      const uint32_t a = find(comp[from], ta), b = find(comp[to], tb);
       if (a == b) continue;
-      parent[std::max(a, b)] = std::min(a, b);
-      tree.push_back({from, to, bool(key & 1u)});
+      // turn(to) = turn(from) ^ the edge's turn; the child root's turn relative to the other.
+      const uint32_t child = std::max(a, b);
+      parent[child] = std::min(a, b);
+      turn_of[child] = uint8_t(flip[from] ^ ta ^ flip[to] ^ tb ^ uint8_t(key & 1u));
     }
     std::vector<uint32_t> next_labels;
-    for (uint32_t c : labels)
-      if (find(c) == c) next_labels.push_back(c);
+    for (uint32_t c : labels) {
+      uint8_t t;
+      if (find(c, t) == c) next_labels.push_back(c);
+    }
     // Point every old label straight at its root (find only halves paths), then relabel.
-    for (uint32_t c : labels) parent[c] = find(c);
+    for (uint32_t c : labels) {
+      uint8_t t;
+      const uint32_t root = find(c, t);
+      parent[c] = root;
+      turn_of[c] = t;
+    }
     parallel_blocks(n, 8192, [&](size_t b, size_t e) {
-      for (size_t v = b; v < e; ++v) comp[v] = parent[comp[v]];
+      for (size_t v = b; v < e; ++v) {
+        flip[v] ^= turn_of[comp[v]];
+        comp[v] = parent[comp[v]];
+      }
     });
+    for (uint32_t c : labels) turn_of[c] = 0;  // now roots or pointed at by nothing
     labels.swap(next_labels);
     // Keep the edges still between components, in their order (the same for any thread
     // count): each block compacts its part, then the parts close up.
@@ -398,70 +423,45 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
   std::vector<uint32_t>().swap(edge_from);
   std::vector<uint32_t>().swap(edge_to);
   std::vector<uint64_t>().swap(keys);
-  std::vector<uint32_t> tree_deg(n + 1, 0);
-  for (const TreeEdge& e : tree) {
-    ++tree_deg[e.a + 1];
-    ++tree_deg[e.b + 1];
+  // Each tree's root is its highest point (then the lowest index among equals), and its normal
+  // is turned to point up; every other point follows by its turn relative to the root.
+  auto higher = [&](uint32_t a, uint32_t b) {
+    const Vec3 &p = grid.sorted_point(a), &q = grid.sorted_point(b);
+    if (p.z != q.z) return p.z > q.z;
+    if (p.x != q.x) return p.x > q.x;
+    return p.y > q.y;
+  };
+  auto in_forest = [&](size_t s) { return rep[s] == s && squared_norm(normals[s]) > 0; };
+  std::vector<uint32_t> top(n, UINT32_MAX);
+  for (uint32_t s = 0; s < n; ++s) {
+    if (!in_forest(s)) continue;
+    uint32_t& t = top[comp[s]];
+    if (t == UINT32_MAX || higher(s, t)) t = s;
   }
-  std::partial_sum(tree_deg.begin(), tree_deg.end(), tree_deg.begin());
-  std::vector<uint32_t> adj(tree_deg[n]);
-  std::vector<uint8_t> adj_across(tree_deg[n]);
-  {
-    std::vector<uint32_t> fill(tree_deg.begin(), tree_deg.end() - 1);
-    for (const TreeEdge& e : tree) {
-      adj_across[fill[e.a]] = e.across;
-      adj[fill[e.a]++] = e.b;
-      adj_across[fill[e.b]] = e.across;
-      adj[fill[e.b]++] = e.a;
+  // root_flip[c]: whether component c's label turns, so that its top point faces up.
+  std::vector<uint8_t> root_flip(n, 0);
+  parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+    for (size_t c = b; c < e; ++c) {
+      if (top[c] == UINT32_MAX) continue;
+      const Vec3 nr = normals[top[c]];
+      const bool down = nr.z < 0 || (nr.z == 0 && (nr.x < 0 || (nr.x == 0 && nr.y < 0)));
+      root_flip[c] = uint8_t(down) ^ flip[top[c]];
     }
-  }
-  std::vector<TreeEdge>().swap(tree);
-  // Each tree's root is its highest point (then the lowest index among equals).
-  std::vector<uint32_t> order;
-  {
-    auto higher = [&](uint32_t a, uint32_t b) {
-      const Vec3 &p = grid.sorted_point(a), &q = grid.sorted_point(b);
-      if (p.z != q.z) return p.z > q.z;
-      if (p.x != q.x) return p.x > q.x;
-      return p.y > q.y;
-    };
-    std::vector<uint32_t> top(n, UINT32_MAX);
-    for (uint32_t s = 0; s < n; ++s) {
-      if (rep[s] != s || !(squared_norm(normals[s]) > 0)) continue;
-      uint32_t& t = top[comp[s]];
-      if (t == UINT32_MAX || higher(s, t)) t = s;
-    }
-    for (uint32_t c = 0; c < n; ++c)
-      if (top[c] != UINT32_MAX) order.push_back(top[c]);
-  }
-  std::vector<uint8_t> seen(n, 0);
-  std::vector<uint32_t> stack, piece;
-  const bool vote = !reference.empty();
+  });
   tracker.check();
-  for (uint32_t root : order) {
-    if (seen[root]) continue;
-    Vec3& nr = normals[root];
-    if (nr.z < 0 || (nr.z == 0 && (nr.x < 0 || (nr.x == 0 && nr.y < 0)))) nr = -nr;
-    seen[root] = 1;
-    stack.push_back(root);
-    piece.clear();
-    double agreement = 0;
-    while (!stack.empty()) {
-      const uint32_t s = stack.back();
-      stack.pop_back();
-      piece.push_back(s);
-      if (vote) agreement += dot(normals[s], reference[s]);
-      for (uint32_t i = tree_deg[s]; i < tree_deg[s + 1]; ++i) {
-        const uint32_t t = adj[i];
-        if (seen[t]) continue;
-        seen[t] = 1;
-        // Within a sheet the normals agree; across a gap they are opposite.
-        if ((dot(normals[t], normals[s]) < 0) != bool(adj_across[i])) normals[t] = -normals[t];
-        stack.push_back(t);
-      }
-    }
-    if (vote && agreement < 0)
-      for (uint32_t s : piece) normals[s] = -normals[s];
+  parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+    for (size_t s = b; s < e; ++s)
+      if (in_forest(s) && (flip[s] ^ root_flip[comp[s]])) normals[s] = -normals[s];
+  });
+  if (!reference.empty()) {
+    // The reference normals vote which way each tree faces (in point order: a fixed sum).
+    std::vector<double> agreement(n, 0.0);
+    for (uint32_t s = 0; s < n; ++s)
+      if (in_forest(s)) agreement[comp[s]] += dot(normals[s], reference[s]);
+    parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+      for (size_t s = b; s < e; ++s)
+        if (in_forest(s) && agreement[comp[s]] < 0) normals[s] = -normals[s];
+    });
   }
   for (size_t s = 0; s < n; ++s)
     if (rep[s] != s) normals[s] = normals[rep[s]];
