@@ -268,7 +268,8 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
   const size_t eblock = 2048, eblocks = (n + eblock - 1) / eblock;
   std::vector<std::vector<Found>> found(eblocks);
   parallel_blocks(eblocks, 1, [&](size_t bb, size_t be) {
-    for (size_t blk = bb; blk < be; ++blk)
+    for (size_t blk = bb; blk < be; ++blk) {
+      found[blk].reserve(8 * eblock);  // about 5 per point on even samplings
       for (size_t s = blk * eblock; s < std::min(n, (blk + 1) * eblock); ++s) {
         if (rep[s] != s || !(squared_norm(normals[s]) > 0)) continue;
         const Vec3 p = grid.sorted_point(uint32_t(s));
@@ -289,6 +290,7 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
           found[blk].push_back({uint32_t(s), *q, bits, (dot(ns, nt) < 0) != across});
         }
       }
+    }
   });
   std::vector<uint64_t> offset(eblocks + 1, 0);
   for (size_t blk = 0; blk < eblocks; ++blk) offset[blk + 1] = offset[blk] + found[blk].size();

@@ -109,10 +109,6 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     if (options.orient) bs.components_flipped = detail::orient_closed_components_outward(P, tris, bs.boundary, &vertex_normals);
     st.seconds_orient = seconds_since(t0);
     tracker.check();
-    std::vector<uint8_t> used(n, 0);
-    for (const Triangle& t : tris)
-      for (uint32_t v : t) used[v] = 1;
-    for (size_t i = 0; i < n; ++i) bs.unused_points += active[i] && !used[i];
     st.candidates = bs.candidates;
     st.rejected_conormal = bs.rejected_conormal;
     st.grown = bs.grown;

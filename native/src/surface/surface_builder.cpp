@@ -652,26 +652,30 @@ class Builder {
     // The surface's triangles in space order: each at its lowest vertex (its first corner,
     // as raw triangles are (i < j < k) and orienting swaps the other two), in candidate order
     // there. The repair and the vertex normals then read triangles near each other in memory.
-    std::vector<uint32_t> first(n + 1, 0);
-    detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
-      for (size_t v = b; v < e; ++v) {
-        const Corner* x = vc_.data() + vc_off_[v];
-        uint32_t count = 0;
-        for (uint32_t i = 0; i < acc_count_[v]; ++i) count += v < x[i].succ && v < x[i].pred;
-        first[v + 1] = count;
+    // Gathered per fixed block of points, then joined in block order.
+    const size_t block = 8192, nblocks = (n + block - 1) / block;
+    std::vector<std::vector<Triangle>> part(nblocks);
+    detail::parallel_blocks(nblocks, 1, [&](size_t bb, size_t be) {
+      std::vector<Corner> mine;
+      for (size_t blk = bb; blk < be; ++blk) {
+        part[blk].reserve(2 * block);
+        for (size_t v = blk * block; v < std::min(n, (blk + 1) * block); ++v) {
+          const Corner* x = vc_.data() + vc_off_[v];
+          mine.clear();
+          for (uint32_t i = 0; i < acc_count_[v]; ++i)
+            if (v < x[i].succ && v < x[i].pred) mine.push_back(x[i]);
+          std::sort(mine.begin(), mine.end(), [](const Corner& p, const Corner& q) { return p.c < q.c; });
+          for (const Corner& c : mine) part[blk].push_back({uint32_t(v), c.succ, c.pred});
+        }
       }
     });
-    std::partial_sum(first.begin(), first.end(), first.begin());
-    tris_.resize(first[n]);
-    detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
-      std::vector<Corner> mine;
-      for (size_t v = b; v < e; ++v) {
-        const Corner* x = vc_.data() + vc_off_[v];
-        mine.clear();
-        for (uint32_t i = 0; i < acc_count_[v]; ++i)
-          if (v < x[i].succ && v < x[i].pred) mine.push_back(x[i]);
-        std::sort(mine.begin(), mine.end(), [](const Corner& p, const Corner& q) { return p.c < q.c; });
-        for (size_t i = 0; i < mine.size(); ++i) tris_[first[v] + i] = {uint32_t(v), mine[i].succ, mine[i].pred};
+    std::vector<size_t> at(nblocks + 1, 0);
+    for (size_t blk = 0; blk < nblocks; ++blk) at[blk + 1] = at[blk] + part[blk].size();
+    tris_.resize(at[nblocks]);
+    detail::parallel_blocks(nblocks, 1, [&](size_t bb, size_t be) {
+      for (size_t blk = bb; blk < be; ++blk) {
+        std::copy(part[blk].begin(), part[blk].end(), tris_.begin() + ptrdiff_t(at[blk]));
+        std::vector<Triangle>().swap(part[blk]);
       }
     });
   }
@@ -1234,14 +1238,19 @@ class Builder {
 
   /// The surface's angle-weighted vertex normals; points in no triangle keep `fallback`. Per
   /// vertex in parallel, over its triangles in triangle order: the sums (so the bits) of a
-  /// serial pass over the final triangles, for any thread count.
-  std::vector<Vec3> vertex_normals(const std::vector<Vec3>& fallback) const {
+  /// serial pass over the final triangles, for any thread count. Counts the active points in
+  /// no triangle into `unused`.
+  std::vector<Vec3> vertex_normals(const std::vector<Vec3>& fallback, size_t& unused) const {
     std::vector<Vec3> out(P_.size());
+    std::atomic<size_t> none{0};
     detail::parallel_blocks(P_.size(), 4096, [&](size_t b, size_t e) {
+      size_t block_none = 0;
       for (size_t v = b; v < e; ++v) {
         Vec3 sum, widest;
         double weight = 0, widest_angle = 0;
+        bool any = false;
         for_each_tri(uint32_t(v), [&](uint32_t t) {
+          any = true;
           const Triangle& T = tris_[t];
           const int k = corner_of(T, uint32_t(v));
           const Vec3 f = face_normal(T);
@@ -1259,8 +1268,11 @@ class Builder {
         // triangle's: no used vertex is left with a zero or arbitrary normal.
         if (norm(sum) > 1e-6 * weight) out[v] = normalized(sum);
         else out[v] = squared_norm(fallback[v]) > 0 || !(widest_angle > 0) ? fallback[v] : widest;
+        block_none += active_[v] && !any;
       }
+      none.fetch_add(block_none, std::memory_order_relaxed);
     });
+    unused = none.load();
     return out;
   }
 
@@ -1306,7 +1318,7 @@ class Builder {
   uint32_t flat_from_ = 0;
   static constexpr float kFlatQuality = 0.866f;  // -cos(150 degrees)
   /// Growth blocks: about this many per cloud, of at least 2^kMinBlockShift vertices.
-  static constexpr size_t kBlocksPerCloud = 32;
+  static constexpr size_t kBlocksPerCloud = 16;
   static constexpr uint32_t kMinBlockShift = 14;
 
   // repair
@@ -1339,7 +1351,7 @@ std::vector<Triangle> build_surface(const std::vector<Vec3>& positions, const st
   stats.seconds_repair = since(t0);
   stats.boundary = b.boundary();
   tracker.check();
-  vertex_normals = b.vertex_normals(normals);
+  vertex_normals = b.vertex_normals(normals, stats.unused_points);
   return b.take();
 }
 
