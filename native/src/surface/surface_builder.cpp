@@ -215,24 +215,31 @@ class Builder {
   // ---- candidates ------------------------------------------------------------------------
 
   void add_candidates(const std::vector<Triangle>& raw) {
+    // Per raw triangle: kept or not, turned or not (to face along its normals), its quality.
+    // Eight bytes, not a copy of the triangle: the list is as long as the raw test's output.
     struct Oriented {
-      Triangle t;
       float quality;
-      bool ok;
+      uint8_t ok, turned;
     };
     std::vector<Oriented> o(raw.size());
+    auto oriented = [&](size_t i) {
+      Triangle t = raw[i];
+      if (o[i].turned) std::swap(t[1], t[2]);
+      return t;
+    };
     const double cosa = o_.cos_normal_angle;
     const size_t n = P_.size();
     vc_off_.assign(n + 1, 0);  // each vertex's corners, counted here
     detail::parallel_blocks(raw.size(), 4096, [&](size_t b, size_t e) {
       for (size_t i = b; i < e; ++i) {
         Triangle t = raw[i];
-        o[i].ok = false;
+        o[i].ok = o[i].turned = 0;
         if (!active_[t[0]] || !active_[t[1]] || !active_[t[2]]) continue;
         const Vec3 &na = N_[t[0]], &nb = N_[t[1]], &nc = N_[t[2]];
         if (!(squared_norm(na) > 0 && squared_norm(nb) > 0 && squared_norm(nc) > 0)) continue;
         Vec3 f = cross(P_[t[1]] - P_[t[0]], P_[t[2]] - P_[t[0]]);
-        if (dot(f, na + nb + nc) < 0) {
+        const bool turned = dot(f, na + nb + nc) < 0;
+        if (turned) {
           std::swap(t[1], t[2]);
           f = -f;
         }
@@ -240,9 +247,9 @@ class Builder {
         // Co-normality (seed 5.2.4): corners agree with each other and with the face.
         if (dot(na, nb) < cosa || dot(nb, nc) < cosa || dot(na, nc) < cosa) continue;
         if (dot(fu, na) < cosa || dot(fu, nb) < cosa || dot(fu, nc) < cosa) continue;
-        o[i].t = t;
         o[i].quality = float(-min_corner_cosine(P_[t[0]], P_[t[1]], P_[t[2]]));  // ~ the largest angle
-        o[i].ok = true;
+        o[i].ok = 1;
+        o[i].turned = turned;
         for (uint32_t v : t) std::atomic_ref<uint32_t>(vc_off_[v + 1]).fetch_add(1, std::memory_order_relaxed);
       }
     });
@@ -280,7 +287,7 @@ class Builder {
     cand_.resize(kept);
     state_.assign(kept, kOpen);
     detail::parallel_blocks(kept, 8192, [&](size_t b, size_t e) {
-      for (size_t c = b; c < e; ++c) cand_[c] = o[uint32_t(key[c])].t;
+      for (size_t c = b; c < e; ++c) cand_[c] = oriented(uint32_t(key[c]));
     });
     tracker_.check();
     // Vertex -> its corners, with their arcs. Counted (above) and placed in parallel: a corner's slot comes
@@ -301,7 +308,7 @@ class Builder {
     detail::parallel_blocks(o.size(), 8192, [&](size_t b, size_t e) {
       for (size_t i = b; i < e; ++i) {
         if (!o[i].ok) continue;
-        const Triangle& t = o[i].t;
+        const Triangle t = oriented(i);
         for (int k = 0; k < 3; ++k) {
           const uint32_t v = t[k], succ = t[(k + 1) % 3], pred = t[(k + 2) % 3];
           const uint32_t slot = std::atomic_ref<uint32_t>(fill[v]).fetch_add(1, std::memory_order_relaxed);
