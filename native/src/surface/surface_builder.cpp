@@ -383,7 +383,8 @@ class Builder {
   /// In a block's growth, the corners of candidates it does not take carry this bit.
   static constexpr uint32_t kOther = 0x80000000u;
 
-  uint32_t block_of(uint32_t v) const { return v >> block_shift_; }
+  /// Blocks are equal runs of points: v * blocks / n, by a multiply and a shift.
+  uint32_t block_of(uint32_t v) const { return uint32_t((uint64_t(v) * block_scale_) >> 32); }
 
   /// Does the growth of block `blk` take candidate c, with corners a, b, d? All three in the
   /// block; if it is flat, all three inner (see grow()).
@@ -516,7 +517,7 @@ class Builder {
     }
   }
 
-  /// Growth in two passes. First in blocks of 2^k points (sorted indices, so slabs of grid
+  /// Growth in two passes. First in blocks of points (runs of sorted indices, so slabs of grid
   /// cells), in parallel, each on the candidates within it: serial growth was the largest cost
   /// of the finishing stages (0.75 s of 2.1 s at 1M points). The block size depends on the
   /// point count only, so the surface is the same for any thread count, and a cloud of one
@@ -538,8 +539,8 @@ class Builder {
     tracker_.stage("extracting the surface", 0.7, 0.85, cand_.size());
     const size_t n = P_.size(), m = cand_.size();
     if (m >= kOther) throw Error(Status::LimitExceeded, "more than 2^31 candidate triangles");
-    block_shift_ = std::max<uint32_t>(kMinBlockShift, uint32_t(std::bit_width(n / kBlocksPerCloud)));
-    const size_t blocks = ((n - 1) >> block_shift_) + 1;
+    const size_t blocks = std::clamp<size_t>(n / kMinBlockPoints, 1, kMaxBlocks);
+    block_scale_ = ((uint64_t(blocks) << 32) - 1) / n;
     mark_inner_points();
     // Each block's candidates, in rank order, and the rest (the seams'), in rank order.
     // Counted per chunk of ranks, then placed, in parallel; the seams' list is one more block.
@@ -1319,14 +1320,14 @@ class Builder {
   std::vector<Corner, UninitAllocator<Corner>> vc_;
   std::vector<uint32_t> vc_off_;
   std::vector<uint32_t> acc_count_;
-  uint32_t block_shift_ = 0;     ///< vertex v is in block v >> block_shift_
+  uint64_t block_scale_ = 0;     ///< see block_of()
   std::vector<uint8_t> inner_;   ///< per vertex: no path of up to two candidate edges leaves its block
   /// Candidates ranked from here on are flat: largest angle over 150 degrees (see grow()).
   uint32_t flat_from_ = 0;
   static constexpr float kFlatQuality = 0.866f;  // -cos(150 degrees)
-  /// Growth blocks: about this many per cloud, of at least 2^kMinBlockShift vertices.
-  static constexpr size_t kBlocksPerCloud = 16;
-  static constexpr uint32_t kMinBlockShift = 14;
+  /// Growth blocks: as many as fit at least kMinBlockPoints points each, up to kMaxBlocks
+  /// (fewer blocks, fewer seams; 16 keep 16 threads busy).
+  static constexpr size_t kMinBlockPoints = 16384, kMaxBlocks = 16;
 
   // repair
   std::vector<Triangle> tris_;
@@ -1365,46 +1366,81 @@ std::vector<Triangle> build_surface(const std::vector<Vec3>& positions, const st
 size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<Triangle>& T,
                                         const std::vector<uint64_t>& boundary, std::vector<Vec3>* vertex_normals) {
   // Components by shared vertices (the same as by shared edges on a manifold without
-  // pinches); a component is open if it holds a boundary half-edge.
+  // pinches); a component is open if it holds a boundary half-edge. A concurrent union-find
+  // that always links the higher root under the lower: each component ends at its lowest
+  // point, whatever the threads did (a serial pass over 2M triangles took 40-50 ms).
   const size_t n = P.size();
   std::vector<uint32_t> parent(n);
   std::iota(parent.begin(), parent.end(), 0u);
-  auto find = [&](uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+  auto up = [&](uint32_t x) { return std::atomic_ref<uint32_t>(parent[x]).load(std::memory_order_relaxed); };
+  auto find = [&](uint32_t x) {  // halving the path: a parent's parent is an ancestor too
+    for (uint32_t p = up(x); p != x; p = up(x)) {
+      const uint32_t g = up(p);
+      if (g != p) std::atomic_ref<uint32_t>(parent[x]).store(g, std::memory_order_relaxed);
+      x = g;
+    }
     return x;
   };
-  auto unite = [&](uint32_t a, uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  };
-  for (const Triangle& t : T) {
-    unite(t[0], t[1]);
-    unite(t[1], t[2]);
-  }
+  detail::parallel_blocks(T.size(), 8192, [&](size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i)
+      for (int k = 1; k < 3; ++k) {
+        uint32_t a = T[i][0], c = T[i][k];
+        while (true) {
+          a = find(a);
+          c = find(c);
+          if (a == c) break;
+          if (a < c) std::swap(a, c);  // link the higher root a under c
+          uint32_t expected = a;
+          if (std::atomic_ref<uint32_t>(parent[a]).compare_exchange_strong(expected, c, std::memory_order_relaxed)) break;
+        }
+      }
+  });
+  std::vector<uint32_t> root(n);
+  detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+    for (size_t v = b; v < e; ++v) root[v] = find(uint32_t(v));
+  });
   std::vector<uint8_t> open(n, 0);
-  for (uint64_t e : boundary) open[find(uint32_t(e >> 32))] = 1;
+  for (uint64_t e : boundary) open[root[uint32_t(e >> 32)]] = 1;
+  // Signed volumes: partial sums per fixed chunk of triangles (in space order, so a chunk
+  // meets few components), added up in chunk order: the same sums for any thread count.
+  const size_t chunk = 16384, chunks = (T.size() + chunk - 1) / chunk;
+  std::vector<std::vector<std::pair<uint32_t, double>>> part(chunks);
+  detail::parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
+    for (size_t h = hb; h < he; ++h)
+      for (size_t i = h * chunk; i < std::min(T.size(), (h + 1) * chunk); ++i) {
+        const Triangle& t = T[i];
+        const uint32_t r = root[t[0]];
+        const Vec3 o = P[r];
+        const double v = dot(P[t[0]] - o, cross(P[t[1]] - o, P[t[2]] - o));
+        auto& pt = part[h];
+        auto it = std::find_if(pt.rbegin(), pt.rend(), [r](const auto& x) { return x.first == r; });
+        if (it != pt.rend()) it->second += v;
+        else pt.push_back({r, v});
+      }
+  });
   std::vector<double> vol(n, 0.0);
-  for (const Triangle& t : T) {
-    const uint32_t r = find(t[0]);
-    const Vec3 o = P[r];
-    vol[r] += dot(P[t[0]] - o, cross(P[t[1]] - o, P[t[2]] - o));
-  }
-  for (Triangle& t : T) {
-    const uint32_t r = find(t[0]);
-    if (!open[r] && vol[r] < 0) std::swap(t[1], t[2]);
-  }
-  size_t flipped = 0;
-  for (uint32_t v = 0; v < n; ++v) {
-    const uint32_t r = find(v);
-    if (open[r] || !(vol[r] < 0)) continue;
-    flipped += r == v;
-    // Reversing a triangle negates its normal exactly (the cross product's terms swap), so
-    // the vertex normals of a turned component are the negated ones, to the bit (0 - x, as a
-    // sum of negated terms gives +0 where they cancel).
-    if (vertex_normals) (*vertex_normals)[v] = Vec3{} - (*vertex_normals)[v];
-  }
-  return flipped;
+  for (const auto& pt : part)
+    for (const auto& [r, v] : pt) vol[r] += v;
+  auto turned = [&](uint32_t r) { return !open[r] && vol[r] < 0; };
+  detail::parallel_blocks(T.size(), 8192, [&](size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i)
+      if (turned(root[T[i][0]])) std::swap(T[i][1], T[i][2]);
+  });
+  std::atomic<size_t> flipped{0};
+  detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+    size_t count = 0;
+    for (size_t v = b; v < e; ++v) {
+      const uint32_t r = root[v];
+      if (!turned(r)) continue;
+      count += r == v;
+      // Reversing a triangle negates its normal exactly (the cross product's terms swap), so
+      // the vertex normals of a turned component are the negated ones, to the bit (0 - x, as
+      // a sum of negated terms gives +0 where they cancel).
+      if (vertex_normals) (*vertex_normals)[v] = Vec3{} - (*vertex_normals)[v];
+    }
+    flipped.fetch_add(count, std::memory_order_relaxed);
+  });
+  return flipped.load();
 }
 
 }  // namespace particlemesh::detail

@@ -103,7 +103,7 @@ TEST(ReconstructSurface, UnitSphereVerticesAreTheParticlesAndFacesPointOutward) 
 }
 
 TEST(ReconstructSurface, GrowthBlocksGiveTheSameSurfaceForAnyThreadCount) {
-  // Large enough for several growth blocks (16384 points each), jittered and shuffled: the
+  // Large enough for several growth blocks (4 of 17500 points), jittered and shuffled: the
   // blocks and the seams between them must not depend on the threads.
   PointCloud c = jittered(fibonacci_sphere(70000), 0.1 * 0.0134, 11);
   std::shuffle(c.positions.begin(), c.positions.end(), std::mt19937_64(3));
