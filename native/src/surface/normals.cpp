@@ -432,15 +432,14 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
         parent[child] = std::min(a, b);
         turn_of[child] = uint8_t(flip[from] ^ ta ^ flip[to] ^ tb ^ uint8_t(key & 1u));
       }
+      // The roots are the next labels; every old label points straight at its root (find
+      // only halves paths), so that the points relabel in one step. Old labels that are no
+      // roots are never looked at again.
       std::vector<uint32_t> next_labels;
       for (uint32_t c : labels) {
         uint8_t t;
-        if (find(c, t) == c) next_labels.push_back(c);
-      }
-      // Point every old label straight at its root (find only halves paths), then relabel.
-      for (uint32_t c : labels) {
-        uint8_t t;
         const uint32_t root = find(c, t);
+        if (root == c) next_labels.push_back(c);
         parent[c] = root;
         turn_of[c] = t;
       }
@@ -450,7 +449,6 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
           comp[v] = parent[comp[v]];
         }
       });
-      for (uint32_t c : labels) turn_of[c] = 0;  // now roots or pointed at by nothing
       labels.swap(next_labels);
     }
     // Keep the edges still between components, in their order (the same for any thread

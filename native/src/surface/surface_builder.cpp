@@ -144,39 +144,52 @@ class RankQueue {
   std::vector<std::vector<uint64_t>> levels_;  // [0] holds one bit per rank
 };
 
+/// A stable counting sort in parallel: item i of n goes to bucket bucket_of(i) < buckets, and
+/// place(i, pos) is called with its position in bucket order (the buckets in turn, the items
+/// of each in order). Counted and placed per fixed chunk of items, so the positions are the
+/// same for any thread count. Returns the buckets' starts (buckets + 1 entries). With
+/// `skip_single`, nothing is placed when one bucket holds every item.
+template <class BucketOf, class Place>
+std::vector<size_t> counting_place(size_t n, size_t buckets, BucketOf&& bucket_of, Place&& place,
+                                   bool skip_single = false) {
+  const size_t chunk = 65536, chunks = (n + chunk - 1) / chunk;
+  std::vector<size_t> at(chunks * buckets, 0);  // per chunk and bucket: its count, then its slot
+  detail::parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
+    for (size_t h = hb; h < he; ++h)
+      for (size_t i = h * chunk; i < std::min(n, (h + 1) * chunk); ++i) ++at[h * buckets + bucket_of(i)];
+  });
+  std::vector<size_t> start(buckets + 1, 0);
+  bool single = false;
+  for (size_t b = 0; b < buckets; ++b) {
+    start[b + 1] = start[b];
+    for (size_t h = 0; h < chunks; ++h) {
+      const size_t count = at[h * buckets + b];
+      at[h * buckets + b] = start[b + 1];
+      start[b + 1] += count;
+    }
+    single = single || start[b + 1] - start[b] == n;
+  }
+  if (skip_single && single) return start;
+  detail::parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
+    for (size_t h = hb; h < he; ++h)
+      for (size_t i = h * chunk; i < std::min(n, (h + 1) * chunk); ++i) place(i, at[h * buckets + bucket_of(i)]++);
+  });
+  return start;
+}
+
 /// Sorts keys whose low words already ascend by their high words, stably: three counting
-/// passes of 11 bits (a pass where every key has the same digit is skipped), each counted and
-/// placed in parallel over fixed chunks (so the same for any thread count). Linear, where a
+/// passes of 11 bits (a pass where every key has the same digit is skipped). Linear, where a
 /// comparison sort of the 2.5M candidates of 1M points took 80-120 ms; TBB and the standard
 /// library have no radix sort.
 void sort_by_high_word(std::vector<uint64_t>& key) {
-  const size_t n = key.size(), chunk = 65536, chunks = (n + chunk - 1) / chunk;
-  std::vector<uint64_t> tmp(n);
-  std::vector<uint32_t> at(chunks * 2048);  // per chunk and digit: its count, then its slot
+  std::vector<uint64_t> tmp(key.size());
   for (int shift = 32; shift < 64; shift += 11) {
-    auto digit = [shift](uint64_t k) { return (k >> shift) & 2047; };
-    std::fill(at.begin(), at.end(), 0);
-    detail::parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
-      for (size_t h = hb; h < he; ++h)
-        for (size_t i = h * chunk; i < std::min(n, (h + 1) * chunk); ++i) ++at[h * 2048 + digit(key[i])];
-    });
-    uint32_t total = 0;
-    bool one_digit = false;
-    for (size_t d = 0; d < 2048; ++d) {
-      const uint32_t before = total;
-      for (size_t h = 0; h < chunks; ++h) {
-        const uint32_t c = at[h * 2048 + d];
-        at[h * 2048 + d] = total;
-        total += c;
-      }
-      one_digit = one_digit || total - before == n;
-    }
-    if (one_digit) continue;
-    detail::parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
-      for (size_t h = hb; h < he; ++h)
-        for (size_t i = h * chunk; i < std::min(n, (h + 1) * chunk); ++i) tmp[at[h * 2048 + digit(key[i])]++] = key[i];
-    });
-    key.swap(tmp);
+    const std::vector<size_t> start = counting_place(
+        key.size(), 2048, [&](size_t i) { return (key[i] >> shift) & 2047; },
+        [&](size_t i, size_t pos) { tmp[pos] = key[i]; }, true);
+    const bool one_digit =
+        std::adjacent_find(start.begin(), start.end(), [&](size_t a, size_t b) { return b - a == key.size(); }) != start.end();
+    if (!one_digit) key.swap(tmp);  // else nothing was placed, and the order stands
   }
 }
 
@@ -230,7 +243,9 @@ class Builder {
     const double cosa = o_.cos_normal_angle;
     const size_t n = P_.size();
     vc_off_.assign(n + 1, 0);  // each vertex's corners, counted here
+    std::atomic<size_t> kept_sum{0};
     detail::parallel_blocks(raw.size(), 4096, [&](size_t b, size_t e) {
+      size_t block_kept = 0;
       for (size_t i = b; i < e; ++i) {
         Triangle t = raw[i];
         o[i].ok = o[i].turned = 0;
@@ -250,33 +265,21 @@ class Builder {
         o[i].quality = float(-min_corner_cosine(P_[t[0]], P_[t[1]], P_[t[2]]));  // ~ the largest angle
         o[i].ok = 1;
         o[i].turned = turned;
+        ++block_kept;
         for (uint32_t v : t) std::atomic_ref<uint32_t>(vc_off_[v + 1]).fetch_add(1, std::memory_order_relaxed);
       }
+      kept_sum.fetch_add(block_kept, std::memory_order_relaxed);
     });
     tracker_.check();
-    // Kept per chunk, for the keys below.
-    const size_t chunk = 65536, chunks = (o.size() + chunk - 1) / chunk;
-    std::vector<uint32_t> chunk_start(chunks + 1, 0);
-    detail::parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
-      for (size_t h = hb; h < he; ++h)
-        for (size_t i = h * chunk; i < std::min(o.size(), (h + 1) * chunk); ++i) chunk_start[h + 1] += o[i].ok;
-    });
-    std::partial_sum(chunk_start.begin(), chunk_start.end(), chunk_start.begin());
-    const size_t kept = chunk_start[chunks];
+    const size_t kept = kept_sum.load();
     stats_.rejected_conormal = raw.size() - kept;
     stats_.candidates = kept;
     // Best first: the smallest largest angle (the Delaunay diagonal of a quad beats the
     // overlapping obtuse triangle), then the raw order (sorted indices) - deterministic.
     // Sorted as (quality, index) keys: a float's bits, with the sign folded, order as the float.
     std::vector<uint64_t> key(kept);
-    detail::parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
-      for (size_t h = hb; h < he; ++h) {
-        uint32_t slot = chunk_start[h];
-        for (uint32_t i = uint32_t(h * chunk); i < std::min(o.size(), (h + 1) * chunk); ++i)
-          if (o[i].ok) {
-            key[slot++] = (uint64_t(sortable_bits(o[i].quality)) << 32) | i;
-          }
-      }
+    counting_place(o.size(), 2, [&](size_t i) { return o[i].ok ? 0 : 1; }, [&](size_t i, size_t pos) {
+      if (o[i].ok) key[pos] = (uint64_t(sortable_bits(o[i].quality)) << 32) | i;
     });
     sort_by_high_word(key);
     // The quality order puts the flat candidates last.
@@ -352,20 +355,18 @@ class Builder {
     return pinch ? kPinch : kOk;
   }
 
-  /// f(candidate, whether it holds b -> a, its third corner) for each candidate on the edge {a, b}.
+  /// f(candidate, whether it holds b -> a) for each candidate on the edge {a, b}.
   template <class F>
   void for_each_candidate_on_edge(uint32_t a, uint32_t b, F&& f) const {
     if (vc_off_[a + 1] - vc_off_[a] <= vc_off_[b + 1] - vc_off_[b]) {
       for (uint32_t i = vc_off_[a]; i < vc_off_[a + 1]; ++i) {
         const Corner& x = vc_[i];
-        if (x.succ == b) f(x.c, false, x.pred);
-        else if (x.pred == b) f(x.c, true, x.succ);
+        if (x.succ == b || x.pred == b) f(x.c, x.pred == b);
       }
     } else {
       for (uint32_t i = vc_off_[b]; i < vc_off_[b + 1]; ++i) {
         const Corner& x = vc_[i];
-        if (x.succ == a) f(x.c, true, x.pred);
-        else if (x.pred == a) f(x.c, false, x.succ);
+        if (x.succ == a || x.pred == a) f(x.c, x.succ == a);
       }
     }
   }
@@ -410,7 +411,7 @@ class Builder {
     // candidates it does not take to the seams pass (another block's thread may own them).
     for (int k = 0; k < 3; ++k) {
       const uint32_t a = C[k], b = C[(k + 1) % 3];
-      for_each_candidate_on_edge(a, b, [&](uint32_t t, bool b_to_a, uint32_t) {
+      for_each_candidate_on_edge(a, b, [&](uint32_t t, bool b_to_a) {
         if (r.block && (t & kOther)) return;
         if (r.state[t] != kOpen) return;
         if (!b_to_a) r.state[t] = kDead;  // T holds a -> b: can never be used
@@ -542,41 +543,21 @@ class Builder {
     const size_t blocks = std::clamp<size_t>(n / kMinBlockPoints, 1, kMaxBlocks);
     block_scale_ = ((uint64_t(blocks) << 32) - 1) / n;
     mark_inner_points();
-    // Each block's candidates, in rank order, and the rest (the seams'), in rank order.
-    // Counted per chunk of ranks, then placed, in parallel; the seams' list is one more block.
-    std::vector<uint32_t> block_start(blocks + 2, 0), ids(m);
+    // Each block's candidates, in rank order, and the rest (the seams'), in rank order: the
+    // seams' list is one more bucket.
+    std::vector<uint32_t> ids(m);
     std::vector<uint32_t> local(m, kOther);  // a candidate's position in its block's list
-    auto block_candidate = [&](uint32_t c) {
+    auto block_candidate = [&](size_t c) {
       const Triangle& C = cand_[c];
       const uint32_t b = block_of(C[0]);
-      return block_takes(b, c, C[0], C[1], C[2]) ? b : uint32_t(blocks);
+      return block_takes(b, uint32_t(c), C[0], C[1], C[2]) ? b : uint32_t(blocks);
     };
-    {
-      const size_t chunk = 65536, chunks = (m + chunk - 1) / chunk, lists = blocks + 1;
-      std::vector<uint32_t> at(chunks * lists, 0);  // per chunk and list: its count, then its start
-      detail::parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
-        for (size_t h = hb; h < he; ++h)
-          for (uint32_t c = uint32_t(h * chunk); c < std::min(m, (h + 1) * chunk); ++c) ++at[h * lists + block_candidate(c)];
-      });
-      uint32_t total = 0;
-      for (size_t b = 0; b < lists; ++b) {
-        block_start[b] = total;
-        for (size_t h = 0; h < chunks; ++h) {
-          const uint32_t count = at[h * lists + b];
-          at[h * lists + b] = total;
-          total += count;
-        }
-      }
-      block_start[lists] = total;
-      detail::parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
-        for (size_t h = hb; h < he; ++h)
-          for (uint32_t c = uint32_t(h * chunk); c < std::min(m, (h + 1) * chunk); ++c) {
-            const uint32_t b = block_candidate(c), pos = at[h * lists + b]++;
-            ids[pos] = c;
-            if (b < blocks) local[c] = pos - block_start[b];
-          }
-      });
-    }
+    const std::vector<size_t> block_start =
+        counting_place(m, blocks + 1, block_candidate, [&](size_t c, size_t pos) { ids[pos] = uint32_t(c); });
+    detail::parallel_blocks(blocks, 1, [&](size_t bb, size_t be) {
+      for (size_t b = bb; b < be; ++b)
+        for (size_t pos = block_start[b]; pos < block_start[b + 1]; ++pos) local[ids[pos]] = uint32_t(pos - block_start[b]);
+    });
     // The seams' candidates: the last list.
     const std::vector<uint32_t> seams(ids.begin() + block_start[blocks], ids.end());
     // The corner lists name the candidates by block positions (kOther for the seams').
@@ -654,7 +635,6 @@ class Builder {
     }
     stats_.grown += all.grown;
     stats_.seeds += all.seeds;
-    tracker_.check();
     std::vector<Triangle>().swap(cand_);
     std::vector<uint8_t>().swap(state_);
     // The surface's triangles in space order: each at its lowest vertex (its first corner,
