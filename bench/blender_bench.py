@@ -3,12 +3,14 @@
     blender --background --factory-startup -noaudio --python bench/blender_bench.py -- \
         --zip build/blender_addon/particlemesh-*-blender-addon.zip \
         [--triangles 1000000] [--particles 100000] [--frames 8] [--metaballs 1000 10000]
+        [--thin 2 3]
 
 1. A 1M-triangle result into a Blender mesh (the add-on's bulk foreach_set path), with and
    without the library's normals as custom split normals; beside Mesh.from_pydata.
 2. Live mode on a 100k-particle system: the cost of a frame change with the mesh regenerated
    from the evaluated particles (source read, triangulation, mesh write), beside the same
-   frame change with live mode off, and revisiting cached frames.
+   frame change with live mode off, and revisiting cached frames; also with the viewport
+   thinned (Thin Out: an even subset of the particles, the coarse preview while scrubbing).
 3. Blender's own particle meshers on the same particles for reference: Points to Volume ->
    Volume to Mesh (geometry nodes) and metaballs (element counts given; metaballs do not
    reach 100k in reasonable time).
@@ -34,6 +36,8 @@ parser.add_argument("--frames", type=int, default=8)
 parser.add_argument("--repeat", type=int, default=3)
 parser.add_argument("--metaballs", type=int, nargs="*", default=[1000, 10000])
 parser.add_argument("--skip", nargs="*", default=[], choices=["write", "live", "peers"])
+parser.add_argument("--thin", type=float, nargs="*", default=[2.0, 3.0],
+                    help="also run live triangulation with the viewport's Thin Out at these")
 args = parser.parse_args(argv)
 
 
@@ -196,19 +200,25 @@ def live_run(method, **props):
 
 if "live" not in args.skip:
     med = statistics.median
-    methods = ["TRIANGULATE"] + (["POLYGONIZE"] if pm.native.has_polygonize() else [])
-    runs = {m: live_run(m) for m in methods}
-    first = runs["TRIANGULATE"][1][0]
+    columns = {"triangulate": ("TRIANGULATE", {})}
+    for factor in args.thin:
+        columns[f"triangulate, Thin Out {factor:g}"] = ("TRIANGULATE", {"thin": factor})
+    if pm.native.has_polygonize():
+        columns["polygonize"] = ("POLYGONIZE", {})
+    methods = list(columns)
+    runs = {m: live_run(method, **props) for m, (method, props) in columns.items()}
+    first = runs["triangulate"][1][0]
     out()
     out(f"### Live mode, {first['particles']} particles, frames {frames[0]}..{frames[-1]}, "
         f"median per frame")
     out()
-    out("| what | " + " | ".join(m.lower() for m in methods) + " |")
+    out("| what | " + " | ".join(methods) + " |")
     out("|---|" + "---|" * len(methods))
 
     def row(label, fn):
         out(f"| {label} | " + " | ".join(fn(*runs[m]) for m in methods) + " |")
 
+    row("vertices (particles meshed)", lambda lc, rec, cc, cr: str(rec[0]["vertices"]))
     row("triangles", lambda lc, rec, cc, cr: str(rec[0]["triangles"]))
     row("frame change, live mode off (Blender's particle step only)", lambda *a: ms(med(baseline)))
     row("frame change, live mode on", lambda lc, rec, cc, cr: ms(med(lc)))

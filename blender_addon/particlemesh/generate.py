@@ -3,7 +3,7 @@ flat settings dict in, native.MeshData out. bpy-free, so it runs in a worker thr
 tests outside Blender.
 
 Settings keys (the operators' and the generated objects' property names):
-  triangulate: auto_spacing, spacing, max_edge_factor, raw, normal_angle (radians),
+  triangulate: auto_spacing, spacing, max_edge_factor, thin, raw, normal_angle (radians),
                fill_holes, fill_edge_factor, normal_source, repair, orient
   polygonize:  kernel, radius_mode, radius, radius_factor, threshold, auto_cell, cell_size
   both:        smooth ('NONE' | 'LOOP' | 'BUTTERFLY'), smooth_levels, threads
@@ -30,6 +30,12 @@ class Particles:
         self.sizes = sizes
         self.particle_size = particle_size
         self.label = label
+
+    def subset(self, indices):
+        """The particles at `indices` (their channels with them)."""
+        pick = (lambda a: None if a is None else a[indices])
+        return Particles(self.positions[indices], pick(self.normals), pick(self.velocities),
+                         pick(self.sizes), self.particle_size, self.label)
 
     def digest(self):
         return mesh_arrays.content_hash(self.positions, self.normals, self.velocities, self.sizes)
@@ -62,8 +68,27 @@ def _smooth(mesh, settings, progress):
     return out
 
 
+def thin(particles, settings):
+    """The particles thinned to no two closer than `thin` spacings (the spacing given, or the
+    estimated one), or the particles themselves when thin is 1. The subset is evenly spaced
+    again (every nearest-neighbour distance between one and two thinning distances), so the
+    triangulation always estimates its spacing afresh: a given spacing scaled by the factor
+    left holes where the subset's gaps reach twice the thinning distance."""
+    factor = float(settings.get("thin", 1.0))
+    if factor <= 1.0:
+        return particles, None
+    if settings.get("auto_spacing", True):
+        r0 = native.estimate_spacing(particles.positions, threads=int(settings.get("threads", 0)))
+    else:
+        r0 = float(settings["spacing"])
+    return particles.subset(native.thin(particles.positions, factor * r0)), factor * r0
+
+
 def triangulate(particles, settings, progress=None):
-    spacing = 0.0 if settings.get("auto_spacing", True) else float(settings["spacing"])
+    everything = len(particles.positions)
+    particles, thin_distance = thin(particles, settings)
+    auto = settings.get("auto_spacing", True) or thin_distance is not None
+    spacing = 0.0 if auto else float(settings["spacing"])
     raw = bool(settings.get("raw", False))
     mesh = native.triangulate(
         particles.positions, normals=particles.normals, spacing=spacing,
@@ -91,8 +116,11 @@ def triangulate(particles, settings, progress=None):
         # The finished surface's normals are angle-weighted face normals: exactly what
         # Blender computes itself for smooth shading, so they need not be custom normals.
         mesh.stats["normals_are_face_weighted"] = True
-    # Output vertex i is particle i: the particles' channels are the mesh's.
+    # Output vertex i is particle i (of the thinned subset): the particles' channels are the
+    # mesh's.
     mesh.attributes.update(_attributes(particles))
+    if thin_distance is not None:
+        mesh.stats.update(thinned_from=everything, thin_distance=thin_distance)
     return _smooth(mesh, settings, progress)
 
 

@@ -299,6 +299,8 @@ _OPTIONAL = {
     "pm_cloud_get_attribute_name": (c_int, [_cloud_p, c_size_t, POINTER(c_char_p)]),
     "pm_cloud_get_attribute_components": (c_int, [_cloud_p, c_char_p, POINTER(c_int32)]),
     "pm_cloud_copy_attribute": (c_int, [_cloud_p, c_char_p, _f32p, c_size_t]),
+    # An even subset of a cloud (the coarse viewport preview, issue 6).
+    "pm_cloud_thin": (c_int, [_cloud_p, c_double, POINTER(c_uint32), c_size_t, POINTER(c_size_t)]),
 }
 
 # The PCL bridge's C entry points (libparticlemesh_pcl).
@@ -520,6 +522,10 @@ def has_polygonize():
 
 def has_smooth():
     return load().has("pm_smooth")
+
+
+def has_thin():
+    return load().has("pm_cloud_thin")
 
 
 def has_mesh_attributes():
@@ -828,6 +834,24 @@ def estimate_spacing(positions, threads=0):
         out = c_double(0)
         _check(lib, lib.pm_estimate_spacing(cloud, int(threads), ctypes.byref(out)))
         return out.value
+    finally:
+        lib.pm_cloud_destroy(cloud)
+
+
+def thin(positions, min_distance):
+    """Indices (ascending, int64) of an even subset of the points: no two kept ones closer than
+    min_distance, every dropped one within min_distance of a kept one (pm_cloud_thin)."""
+    lib = load()
+    if not lib.has("pm_cloud_thin"):
+        raise NotAvailableError("pm_cloud_thin")
+    cloud = _new_cloud(lib, positions)
+    try:
+        count = c_size_t(0)
+        _check(lib, lib.pm_cloud_get_count(cloud, ctypes.byref(count)))
+        out = np.empty(count.value, dtype=np.uint32)
+        _check(lib, lib.pm_cloud_thin(cloud, float(min_distance), _ptr(out, c_uint32), out.size,
+                                      ctypes.byref(count)))
+        return out[:count.value].astype(np.int64)
     finally:
         lib.pm_cloud_destroy(cloud)
 

@@ -34,6 +34,13 @@ class TriangulateProps:
         update=_settings_changed,
         description="Longest triangle edge L as a multiple of the spacing (the seed's default "
                     "is 2); larger bridges bigger gaps")
+    thin: FloatProperty(
+        name="Thin Out", default=1.0, min=1.0, max=16.0, soft_max=4.0, precision=2, step=10,
+        update=_settings_changed,
+        description="Mesh an even subset of the particles, no two closer than this many "
+                    "particle spacings (1 = every particle; 2 keeps about a fifth of evenly "
+                    "spaced ones). On the Viewport settings it makes scrubbing a big system "
+                    "faster while renders use the Render settings")
     raw: BoolProperty(
         name="Raw Triangles", default=False, update=_settings_changed,
         description="Keep the seed's exact triangle set instead of the finished surface "

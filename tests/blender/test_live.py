@@ -121,6 +121,44 @@ def test_render_uses_the_render_settings(pm, clean_scene, tmp_path):
     assert record["mode"] == "VIEWPORT" and record["triangles"] == viewport_triangles
 
 
+def closed_and_consistent(tris):
+    """Every edge in exactly two triangles, once in each direction."""
+    directed = np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]])
+    pairs, counts = np.unique(directed, axis=0, return_counts=True)
+    reverse = {tuple(e) for e in pairs}
+    return counts.max() == 1 and all((b, a) in reverse for a, b in pairs)
+
+
+def test_viewport_thins_out_while_renders_use_every_particle(pm, clean_scene):
+    em = emitter(subdivisions=5, speed=1.0)  # 2562 particles
+    obj = live_object(pm)
+    state = obj.particlemesh
+    state.use_render_settings = True
+    state.viewport.thin = 2.0  # regenerates at once, coarser
+    for frame in (3, 6):
+        clean_scene.frame_set(frame)
+        record = pm.live.last_update[obj.name]
+        assert "error" not in record and record["cached"] is False, record
+        co, tris = mesh_arrays(obj.data)
+        assert 2562 / 8 < len(co) < 2562 / 3, len(co)
+        positions, _ = living_particles(em)
+        # Each vertex is one of the particles, and they are at least the thinning apart.
+        nearest = np.linalg.norm(co[:, None] - positions[None], axis=-1).min(axis=1)
+        assert nearest.max() < 1e-5
+        gaps = np.linalg.norm(co[:, None] - co[None], axis=-1) + np.eye(len(co)) * 1e9
+        spacing = np.sort(np.linalg.norm(positions[:, None] - positions[None], axis=-1), 1)[:, 1]
+        r0 = np.sort(spacing)[(len(spacing) - 1) // 2]  # the lower median, as the library
+        assert gaps.min() >= 2.0 * r0 * 0.999
+        assert closed_and_consistent(tris) and len(co) - len(tris) // 2 == 2  # a sphere
+    # The render settings keep every particle.
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    data, settings, _ = pm.live.compute(obj, depsgraph, mode="RENDER", use_cache=False)
+    assert settings["thin"] == 1.0 and data.vertex_count == 2562
+    # The thinning is part of the cache key: back to 1, the full mesh, not the cached preview.
+    state.viewport.thin = 1.0
+    assert len(obj.data.vertices) == 2562
+
+
 def test_bake_five_frames_and_step_through(pm, clean_scene, tmp_path):
     em = emitter(speed=1.0)
     obj = live_object(pm)

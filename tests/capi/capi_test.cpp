@@ -122,6 +122,37 @@ TEST(CApi, Float32InputAndNormals) {
   pm_cloud_destroy(cloud);
 }
 
+TEST(CApi, ThinKeepsAnEvenSubsetAndChecksItsArguments) {
+  const PointCloud c = fibonacci_sphere(5000);
+  pm_cloud* cloud = nullptr;
+  ASSERT_EQ(pm_cloud_create(&c.positions[0].x, nullptr, c.size(), &cloud), PM_OK);
+  double spacing = 0;
+  ASSERT_EQ(pm_estimate_spacing(cloud, 0, &spacing), PM_OK);
+  std::vector<uint32_t> idx(c.size(), 0xdeadbeefu);
+  size_t kept = 0;
+  ASSERT_EQ(pm_cloud_thin(cloud, 2 * spacing, idx.data(), idx.size(), &kept), PM_OK) << last();
+  EXPECT_GT(kept, c.size() / 12);
+  EXPECT_LT(kept, c.size() / 3);
+  for (size_t k = 1; k < kept; ++k) ASSERT_LT(idx[k - 1], idx[k]);
+  EXPECT_LT(idx[kept - 1], c.size());
+  EXPECT_EQ(idx[kept], 0xdeadbeefu);  // nothing written past the kept ones
+
+  size_t untouched = 12345;
+  EXPECT_EQ(pm_cloud_thin(cloud, 0.0, idx.data(), idx.size(), &untouched), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("min_distance"), std::string::npos) << last();
+  EXPECT_EQ(pm_cloud_thin(cloud, NAN, idx.data(), idx.size(), &untouched), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(pm_cloud_thin(cloud, spacing, idx.data(), idx.size() - 1, &untouched), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("capacity"), std::string::npos) << last();
+  EXPECT_EQ(pm_cloud_thin(cloud, spacing, nullptr, idx.size(), &untouched), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(pm_cloud_thin(nullptr, spacing, idx.data(), idx.size(), &untouched), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(pm_cloud_thin(cloud, spacing, idx.data(), idx.size(), nullptr), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(untouched, 12345u);
+  // A distance so small that the grid would span too many cells: an error, not a crash.
+  EXPECT_EQ(pm_cloud_thin(cloud, 1e-300, idx.data(), idx.size(), &untouched), PM_STATUS_LIMIT_EXCEEDED);
+  EXPECT_EQ(untouched, 12345u);
+  pm_cloud_destroy(cloud);
+}
+
 TEST(CApi, MisuseGivesStatusAndMessageAndLeavesOutputsAlone) {
   const double pts[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
   pm_cloud* sentinel = reinterpret_cast<pm_cloud*>(0x1);

@@ -371,6 +371,23 @@ def test_estimate_spacing(native):
     assert native.estimate_spacing(p) == pytest.approx(0.25)
 
 
+def test_thin_keeps_an_even_subset(native):
+    # A 0.25 grid thinned to 0.6: kept points at least 0.6 apart, every grid point within 0.6
+    # of a kept one, the first point always kept, indices ascending.
+    p = np.stack(np.meshgrid(np.arange(40), np.arange(40), [0.0]), -1).reshape(-1, 3) * 0.25
+    idx = native.thin(p, 0.6)
+    assert idx[0] == 0 and np.all(np.diff(idx) > 0) and idx[-1] < len(p)
+    kept = p[idx]
+    d = np.linalg.norm(kept[:, None] - kept[None], axis=-1)
+    np.fill_diagonal(d, np.inf)
+    assert d.min() >= 0.6
+    assert np.linalg.norm(p[:, None] - kept[None], axis=-1).min(axis=1).max() < 0.6
+    assert len(p) / 9 < len(idx) < len(p) / 4
+    with pytest.raises(native.ParticlemeshError, match="min_distance") as e:
+        native.thin(p, 0.0)
+    assert e.value.status == native.STATUS_INVALID_ARGUMENT
+
+
 # ---- functions other issues add ---------------------------------------------------------------
 
 def test_polygonize_when_available(native):

@@ -192,6 +192,28 @@ def test_generate_triangulate_finished_surface_and_velocity(pkg):
     assert (face_dots(p, kept.triangles) < 0).all()   # followed the given normals
 
 
+def test_generate_thin_meshes_an_even_subset_with_its_channels(pkg):
+    p = sphere(20000)
+    velocity = p * 3.0  # per particle, so a wrong subset shows
+    particles = pkg.generate.Particles(p, velocities=velocity)
+    full = pkg.generate.run("TRIANGULATE", particles, {})
+    for settings in ({"thin": 2.0}, {"thin": 2.0, "auto_spacing": False,
+                                     "spacing": full.stats["spacing"]}):
+        mesh = pkg.generate.run("TRIANGULATE", particles, settings)
+        assert mesh.stats["thinned_from"] == 20000
+        assert 20000 / 8 < mesh.vertex_count < 20000 / 3
+        # Its vertices are particles, each with its own velocity.
+        idx = pkg.native.thin(p, mesh.stats["thin_distance"])
+        np.testing.assert_array_equal(mesh.positions, p[idx])
+        np.testing.assert_array_equal(mesh.attributes["velocity"], velocity[idx])
+        # Still one closed sphere, facing out: V - E + F = 2 with E = 3F / 2.
+        report = pkg.native.mesh_report(mesh.positions, mesh.triangles)
+        assert report["boundary_edges"] == 0 and report["vertices_used"] == mesh.vertex_count
+        assert mesh.vertex_count - mesh.triangle_count // 2 == 2
+        assert (face_dots(mesh.positions, mesh.triangles) > 0).all()
+    assert "thinned_from" not in pkg.generate.run("TRIANGULATE", particles, {"thin": 1.0}).stats
+
+
 def test_generate_raw_is_wound_by_the_normals(pkg):
     p = sphere(2000)
     out = pkg.generate.run("TRIANGULATE", pkg.generate.Particles(p, normals=p), {"raw": True})

@@ -79,6 +79,15 @@ PM_EXPORT void pm_cloud_destroy(pm_cloud* cloud);
 /** Median nearest-neighbour distance of the distinct points (threads: 0 = all cores). */
 PM_EXPORT pm_status pm_estimate_spacing(const pm_cloud* cloud, int32_t threads, double* out_spacing);
 
+/** Thin the cloud (a coarser preview of a big particle set): the indices, ascending, of a
+ *  subset in which no two points are closer than min_distance (> 0, finite) and every dropped
+ *  point lies within min_distance of a kept one, so even particles stay even. Points are
+ *  taken greedily in input order: the result depends on the points only. out_indices must
+ *  have room for `capacity` >= the cloud's count entries; *out_count receives how many were
+ *  kept. */
+PM_EXPORT pm_status pm_cloud_thin(const pm_cloud* cloud, double min_distance, uint32_t* out_indices,
+                                  size_t capacity, size_t* out_count);
+
 /* ---- triangulation of surface particles --------------------------------------------- */
 
 /** Return the seed's exact triangle set (not a surface) instead of the finished surface. */

@@ -1,10 +1,12 @@
 // C ABI: point clouds.
+#include <algorithm>
 #include <memory>
 #include <string>
 
 #include "capi/firewall.h"
 #include "capi/handles.h"
 #include "particlemesh/io/mesh_io.h"
+#include "particlemesh/sample/thin.h"
 #include "particlemesh/surface/spacing.h"
 
 using namespace particlemesh;
@@ -108,6 +110,22 @@ pm_status pm_estimate_spacing(const pm_cloud* cloud, int32_t threads, double* ou
     require(out_spacing, "out_spacing");
     const auto& p = cloud->cloud.positions;
     *out_spacing = estimate_spacing(p.data(), p.size(), threads).spacing;
+  });
+}
+
+pm_status pm_cloud_thin(const pm_cloud* cloud, double min_distance, uint32_t* out_indices,
+                        size_t capacity, size_t* out_count) {
+  return guarded([&] {
+    require(cloud, "cloud");
+    require(out_indices, "out_indices");
+    require(out_count, "out_count");
+    const auto& p = cloud->cloud.positions;
+    if (capacity < p.size())
+      throw Error(Status::InvalidArgument, "capacity " + std::to_string(capacity) +
+                                               " is less than the cloud's " + std::to_string(p.size()) + " points");
+    const std::vector<uint32_t> kept = thin_points(p.data(), p.size(), min_distance);
+    std::copy(kept.begin(), kept.end(), out_indices);
+    *out_count = kept.size();
   });
 }
 

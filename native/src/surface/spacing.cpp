@@ -17,9 +17,11 @@ namespace detail {
 namespace {
 
 // A grid whose cells hold a few points each, so that a point's nearest neighbour is almost
-// always in the 27 cells around it. Starts from the spacing a surface sample of the bounding
-// box would have and corrects by the measured occupancy (which scales as h^2 on surfaces and
-// h^3 in volumes; the loop does not need to know which).
+// always in the 27 cells around it. Starts from twice the spacing a surface sample of the
+// bounding box would have (a sphere's points fill those cells about 4 to a cell: one grid,
+// where the spacing itself left ~1 per cell and cost a second build) and corrects by the
+// measured occupancy (which scales as h^2 on surfaces and h^3 in volumes; the loop does not
+// need to know which). The median it finds does not depend on the cell size.
 NeighborGrid occupancy_grid(const Vec3* points, size_t n, ProgressTracker& tracker) {
   Vec3 lo = points[0], hi = points[0];
   for (size_t i = 1; i < n; ++i) {
@@ -29,7 +31,7 @@ NeighborGrid occupancy_grid(const Vec3* points, size_t n, ProgressTracker& track
   const double diag = distance(lo, hi);
   if (!(diag > 0)) throw Error(Status::InvalidInput, "all points coincide: there is no spacing");
   const double finest = diag / double(NeighborGrid::kMaxCellsPerAxis / 2);
-  double h = std::max(diag / std::sqrt(double(n)), finest);
+  double h = std::max(2.0 * diag / std::sqrt(double(n)), finest);
   for (int it = 0;; ++it) {
     tracker.check();
     NeighborGrid grid(points, n, h);

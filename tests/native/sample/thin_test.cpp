@@ -1,0 +1,119 @@
+// Thinning (issue 6's coarse viewport preview): an even subset that still meshes as a surface.
+#include "particlemesh/sample/thin.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "particlemesh/core/error.h"
+#include "particlemesh/mesh/topology_report.h"
+#include "particlemesh/sample/shapes.h"
+#include "particlemesh/spatial/neighbor_grid.h"
+#include "particlemesh/surface/reconstruct.h"
+#include "particlemesh/surface/spacing.h"
+
+using namespace particlemesh;
+
+namespace {
+
+PointCloud jittered_sphere(size_t n, double sigma_in_spacings, uint64_t seed) {
+  PointCloud c = fibonacci_sphere(n);
+  const double r0 = estimate_spacing(c.positions.data(), c.size()).spacing;
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0.0, sigma_in_spacings * r0);
+  for (auto& p : c.positions) p += Vec3{g(rng), g(rng), g(rng)};
+  return c;
+}
+
+PointCloud subset(const PointCloud& c, const std::vector<uint32_t>& idx) {
+  PointCloud out;
+  for (uint32_t i : idx) {
+    out.positions.push_back(c.positions[i]);
+    if (c.has_normals()) out.normals.push_back(c.normals[i]);
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(ThinPoints, KeptPointsAreApartAndCoverEveryDroppedOne) {
+  const PointCloud c = jittered_sphere(20000, 0.1, 3);
+  const double r0 = estimate_spacing(c.positions.data(), c.size()).spacing;
+  const double rho = 2.5 * r0;
+  const std::vector<uint32_t> kept = thin_points(c.positions.data(), c.size(), rho);
+  ASSERT_FALSE(kept.empty());
+  EXPECT_EQ(kept.front(), 0u);  // greedy in input order: the first point always stays
+  EXPECT_TRUE(std::is_sorted(kept.begin(), kept.end()));
+  // About one point per disk of radius rho/2..rho on the sphere: far fewer, not too few.
+  EXPECT_LT(kept.size(), c.size() / 4);
+  EXPECT_GT(kept.size(), c.size() / 25);
+
+  // Kept points are at least rho apart; a dropped point has a kept point of lower index
+  // closer than rho (which is why it was dropped, and which covers it).
+  std::vector<Vec3> kp;
+  for (uint32_t i : kept) kp.push_back(c.positions[i]);
+  const NeighborGrid grid(kp.data(), kp.size(), rho);
+  std::vector<char> is_kept(c.size(), 0);
+  for (uint32_t i : kept) is_kept[i] = 1;
+  size_t too_close = 0, unexplained = 0;
+  for (uint32_t i = 0; i < c.size(); ++i) {
+    bool lower_close = false;
+    grid.for_each_within(c.positions[i], rho, [&](uint32_t s, double d2) {
+      const uint32_t k = kept[grid.original_index(s)];
+      if (k == i || d2 >= rho * rho) return;
+      if (is_kept[i]) ++too_close;
+      if (k < i) lower_close = true;
+    });
+    if (!is_kept[i] && !lower_close) ++unexplained;
+  }
+  EXPECT_EQ(too_close, 0u);
+  EXPECT_EQ(unexplained, 0u);
+
+  // Same points, same subset; duplicates of a kept point go.
+  EXPECT_EQ(thin_points(c.positions.data(), c.size(), rho), kept);
+  std::vector<Vec3> twice = c.positions;
+  twice.insert(twice.end(), c.positions.begin(), c.positions.end());
+  EXPECT_EQ(thin_points(twice.data(), twice.size(), rho), kept);
+}
+
+TEST(ThinPoints, ThinnedSphereStillMeshesAsOneClosedOutwardSphere) {
+  for (double factor : {1.5, 2.0, 3.0}) {
+    const PointCloud c = jittered_sphere(60000, 0.05, 11);
+    const double r0 = estimate_spacing(c.positions.data(), c.size()).spacing;
+    const PointCloud t = subset(c, thin_points(c.positions.data(), c.size(), factor * r0));
+    const SurfaceResult r = reconstruct_surface(t);  // spacing, normals: estimated
+    const TopologyReport rep = topology_report(r.mesh);
+    const std::string what = "thinned by " + std::to_string(factor) + " spacings";
+    EXPECT_EQ(rep.components, 1u) << what;
+    EXPECT_EQ(rep.closed_components, 1u) << what;
+    EXPECT_TRUE(rep.manifold) << what;
+    EXPECT_TRUE(rep.outward) << what;
+    EXPECT_EQ(rep.euler_characteristic, 2) << what;
+    EXPECT_EQ(rep.vertices_used, t.size()) << what;
+    for (const Vec3& p : r.mesh.positions) EXPECT_NEAR(norm(p), 1.0, 0.01) << what;
+  }
+}
+
+TEST(ThinPoints, BadArgumentsAreNamed) {
+  const PointCloud c = fibonacci_sphere(100);
+  for (double bad : {0.0, -1.0, double(NAN), double(INFINITY)}) {
+    try {
+      thin_points(c.positions.data(), c.size(), bad);
+      ADD_FAILURE() << "min_distance " << bad << " accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.status(), Status::InvalidArgument);
+      EXPECT_NE(std::string(e.what()).find("min_distance"), std::string::npos) << e.what();
+    }
+  }
+  std::vector<Vec3> p = c.positions;
+  p[7].y = NAN;
+  try {
+    thin_points(p.data(), p.size(), 0.1);
+    ADD_FAILURE() << "NaN accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.status(), Status::InvalidInput);
+    EXPECT_NE(std::string(e.what()).find("point 7"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(thin_points(nullptr, 0, 0.1).empty());
+}
