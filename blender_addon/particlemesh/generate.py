@@ -68,6 +68,10 @@ def _smooth(mesh, settings, progress):
     return out
 
 
+#: Particles sampled for the spacing that Thin Out is measured in.
+THIN_SPACING_SAMPLES = 8192
+
+
 def thin(particles, settings):
     """The particles thinned to no two closer than `thin` spacings (the spacing given, or the
     estimated one), or the particles themselves when thin is 1. The subset is evenly spaced
@@ -78,7 +82,10 @@ def thin(particles, settings):
     if factor <= 1.0:
         return particles, None
     if settings.get("auto_spacing", True):
-        r0 = native.estimate_spacing(particles.positions, threads=int(settings.get("threads", 0)))
+        # A sampled estimate: the thinning needs the spacing only roughly (within ~1 % here),
+        # and the exact one was a third of the preview's library time at 100k particles.
+        r0 = native.estimate_spacing(particles.positions, threads=int(settings.get("threads", 0)),
+                                     max_samples=THIN_SPACING_SAMPLES)
     else:
         r0 = float(settings["spacing"])
     return particles.subset(native.thin(particles.positions, factor * r0)), factor * r0

@@ -301,6 +301,7 @@ _OPTIONAL = {
     "pm_cloud_copy_attribute": (c_int, [_cloud_p, c_char_p, _f32p, c_size_t]),
     # An even subset of a cloud (the coarse viewport preview, issue 6).
     "pm_cloud_thin": (c_int, [_cloud_p, c_double, POINTER(c_uint32), c_size_t, POINTER(c_size_t)]),
+    "pm_estimate_spacing_sampled": (c_int, [_cloud_p, c_size_t, c_int32, POINTER(c_double)]),
 }
 
 # The PCL bridge's C entry points (libparticlemesh_pcl).
@@ -826,13 +827,21 @@ def _read_pcd(lib, path):
     return data
 
 
-def estimate_spacing(positions, threads=0):
-    """Median nearest-neighbour distance of the distinct points (the library's r0 estimate)."""
+def estimate_spacing(positions, threads=0, max_samples=None):
+    """Median nearest-neighbour distance of the distinct points (the library's r0 estimate),
+    or, with max_samples, of an evenly strided sample of at most that many (a quick one for
+    previews; pm_estimate_spacing_sampled)."""
     lib = load()
+    if max_samples is not None and not lib.has("pm_estimate_spacing_sampled"):
+        raise NotAvailableError("pm_estimate_spacing_sampled")
     cloud = _new_cloud(lib, positions)
     try:
         out = c_double(0)
-        _check(lib, lib.pm_estimate_spacing(cloud, int(threads), ctypes.byref(out)))
+        if max_samples is None:
+            _check(lib, lib.pm_estimate_spacing(cloud, int(threads), ctypes.byref(out)))
+        else:
+            _check(lib, lib.pm_estimate_spacing_sampled(cloud, int(max_samples), int(threads),
+                                                        ctypes.byref(out)))
         return out.value
     finally:
         lib.pm_cloud_destroy(cloud)

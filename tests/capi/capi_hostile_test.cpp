@@ -95,6 +95,8 @@ TEST(CApiHostile, EveryNullPointerIsNamed) {
       {"out", [&] { return pm_cloud_copy_normals_f32(h.cloud, nullptr, 256); }},
       {"cloud", [&] { return pm_estimate_spacing(nullptr, 0, &d); }},
       {"out_spacing", [&] { return pm_estimate_spacing(h.cloud, 0, nullptr); }},
+      {"cloud", [&] { return pm_estimate_spacing_sampled(nullptr, 100, 0, &d); }},
+      {"out_spacing", [&] { return pm_estimate_spacing_sampled(h.cloud, 100, 0, nullptr); }},
       {"cloud", [&] { return pm_cloud_thin(nullptr, 0.1, reinterpret_cast<uint32_t*>(ibuf), 512, &n); }},
       {"out_indices", [&] { return pm_cloud_thin(h.cloud, 0.1, nullptr, 512, &n); }},
       {"out_count", [&] { return pm_cloud_thin(h.cloud, 0.1, reinterpret_cast<uint32_t*>(ibuf), 512, nullptr); }},

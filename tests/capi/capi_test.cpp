@@ -128,6 +128,11 @@ TEST(CApi, ThinKeepsAnEvenSubsetAndChecksItsArguments) {
   ASSERT_EQ(pm_cloud_create(&c.positions[0].x, nullptr, c.size(), &cloud), PM_OK);
   double spacing = 0;
   ASSERT_EQ(pm_estimate_spacing(cloud, 0, &spacing), PM_OK);
+  double sampled = 0;
+  ASSERT_EQ(pm_estimate_spacing_sampled(cloud, 1000, 0, &sampled), PM_OK) << last();
+  EXPECT_NEAR(sampled, spacing, 0.01 * spacing);
+  EXPECT_EQ(pm_estimate_spacing_sampled(cloud, 0, 0, &sampled), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("max_samples"), std::string::npos) << last();
   std::vector<uint32_t> idx(c.size(), 0xdeadbeefu);
   size_t kept = 0;
   ASSERT_EQ(pm_cloud_thin(cloud, 2 * spacing, idx.data(), idx.size(), &kept), PM_OK) << last();

@@ -369,6 +369,9 @@ def test_read_xyz_with_normals(native, tmp_path):
 def test_estimate_spacing(native):
     p = np.stack(np.meshgrid(np.arange(20), np.arange(20), [0.0]), -1).reshape(-1, 3) * 0.25
     assert native.estimate_spacing(p) == pytest.approx(0.25)
+    assert native.estimate_spacing(p, max_samples=50) == pytest.approx(0.25)
+    with pytest.raises(native.ParticlemeshError, match="max_samples"):
+        native.estimate_spacing(p, max_samples=0)
 
 
 def test_thin_keeps_an_even_subset(native):

@@ -113,6 +113,16 @@ pm_status pm_estimate_spacing(const pm_cloud* cloud, int32_t threads, double* ou
   });
 }
 
+pm_status pm_estimate_spacing_sampled(const pm_cloud* cloud, size_t max_samples, int32_t threads,
+                                      double* out_spacing) {
+  return guarded([&] {
+    require(cloud, "cloud");
+    require(out_spacing, "out_spacing");
+    const auto& p = cloud->cloud.positions;
+    *out_spacing = estimate_spacing_sampled(p.data(), p.size(), max_samples, threads).spacing;
+  });
+}
+
 pm_status pm_cloud_thin(const pm_cloud* cloud, double min_distance, uint32_t* out_indices,
                         size_t capacity, size_t* out_count) {
   return guarded([&] {

@@ -1,18 +1,105 @@
-// Greedy Poisson-disk thinning over a grid of cell min_distance.
+// Greedy Poisson-disk thinning over a hash of the kept points' cells.
 //
 // Written here because no library on the list does it on our data: PCL's VoxelGrid and
 // UniformSampling keep one point per cell, and two kept points in neighbouring cells can be
 // arbitrarily close, which the triangulation's test turns into slivers and holes.
 #include "particlemesh/sample/thin.h"
 
+#include <array>
 #include <cmath>
 #include <string>
 
-#include "core/parallel.h"
 #include "particlemesh/core/error.h"
-#include "particlemesh/spatial/neighbor_grid.h"
 
 namespace particlemesh {
+
+namespace {
+
+// Cells of edge 4 d (d = min_distance) holding the kept points as linked lists. The points
+// closer than d to p lie in the cells that the box p +- d touches: 1 or 2 along each axis,
+// 3.4 lookups on average (cells of 2 d always need 8, and were a third slower). Only kept
+// points are stored, so the table stays small and no pass sorts all the points.
+class KeptCells {
+ public:
+  using Coord = std::array<int32_t, 3>;
+  static constexpr uint32_t kEnd = 0xffffffffu;
+
+  KeptCells() { rehash(1024); }
+
+  uint32_t head(const Coord& c) const {
+    const uint64_t key = pack(c);
+    for (uint64_t h = mix(key) & mask_;; h = (h + 1) & mask_) {
+      const Slot& s = slots_[h];
+      if (s.head == kEnd) return kEnd;
+      if (s.key == key) return s.head;
+    }
+  }
+  // Kept point k (in the order kept): its position, and the next kept point of its cell.
+  const Vec3& position(uint32_t k) const { return nodes_[k].p; }
+  uint32_t next(uint32_t k) const { return nodes_[k].next; }
+
+  void add(const Coord& c, const Vec3& p) {
+    const uint32_t i = uint32_t(nodes_.size());
+    nodes_.push_back({p, kEnd});
+    if (2 * (used_ + 1) > slots_.size()) rehash(2 * slots_.size());
+    const uint64_t key = pack(c);
+    for (uint64_t h = mix(key) & mask_;; h = (h + 1) & mask_) {
+      Slot& s = slots_[h];
+      if (s.head == kEnd) {
+        s = {key, i};
+        ++used_;
+        return;
+      }
+      if (s.key == key) {
+        nodes_[i].next = s.head;
+        s.head = i;
+        return;
+      }
+    }
+  }
+
+ private:
+  struct Slot {
+    uint64_t key = 0;  // the coordinate packed, 21 bits each: one comparison
+    uint32_t head = kEnd;
+  };
+  static uint64_t pack(const Coord& c) {
+    return (uint64_t(uint32_t(c[0])) << 42) | (uint64_t(uint32_t(c[1])) << 21) | uint64_t(uint32_t(c[2]));
+  }
+  static uint64_t mix(uint64_t h) {  // splitmix64 finaliser
+    h ^= h >> 30;
+    h *= 0xBF58476D1CE4E5B9ull;
+    h ^= h >> 27;
+    h *= 0x94D049BB133111EBull;
+    return h ^ (h >> 31);
+  }
+
+  void rehash(size_t size) {
+    std::vector<Slot> old(size);
+    old.swap(slots_);
+    mask_ = size - 1;
+    used_ = 0;
+    for (const Slot& s : old)
+      if (s.head != kEnd)
+        for (uint64_t h = mix(s.key) & mask_;; h = (h + 1) & mask_)
+          if (slots_[h].head == kEnd) {
+            slots_[h] = s;
+            ++used_;
+            break;
+          }
+  }
+
+  struct Node {
+    Vec3 p;  // a copy: the kept points packed together, not spread over the input
+    uint32_t next;
+  };
+  std::vector<Slot> slots_;
+  std::vector<Node> nodes_;
+  uint64_t mask_ = 0;
+  size_t used_ = 0;
+};
+
+}  // namespace
 
 std::vector<uint32_t> thin_points(const Vec3* points, size_t n, double min_distance) {
   if (!(min_distance > 0) || !std::isfinite(min_distance))
@@ -20,55 +107,49 @@ std::vector<uint32_t> thin_points(const Vec3* points, size_t n, double min_dista
                 "min_distance must be a positive finite distance, got " + std::to_string(min_distance));
   if (points == nullptr && n > 0) throw Error(Status::InvalidArgument, "points is NULL");
   if (n > size_t(UINT32_MAX) - 1) throw Error(Status::LimitExceeded, "more than 2^32 - 2 points");
-  for (size_t i = 0; i < n; ++i)
-    if (!std::isfinite(points[i].x) || !std::isfinite(points[i].y) || !std::isfinite(points[i].z))
-      throw Error(Status::InvalidInput, "point " + std::to_string(i) + " has a non-finite coordinate");
   std::vector<uint32_t> kept;
   if (n == 0) return kept;
+  Vec3 lo = points[0], hi = points[0];
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3& p = points[i];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      throw Error(Status::InvalidInput, "point " + std::to_string(i) + " has a non-finite coordinate");
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  const double cell = 4 * min_distance, inv = 1.0 / cell;
+  constexpr double kMaxCells = double((1 << 21) - 4);  // packed in 21 bits with the margins
+  for (int a = 0; a < 3; ++a)
+    if (!((hi[a] - lo[a]) * inv < kMaxCells))
+      throw Error(Status::LimitExceeded, "the points span " + std::to_string((hi[a] - lo[a]) * inv) +
+                                             " cells of size " + std::to_string(cell) + " along " +
+                                             std::string(1, "xyz"[a]) +
+                                             " (at most 2097148): the thinning distance is far too small");
+  // One cell of margin below the data, so that p - d never has a negative cell coordinate.
+  const Vec3 origin = lo - Vec3{cell, cell, cell};
+  // Truncation is floor here: every coordinate asked for is at least min_distance above origin.
+  const auto axis = [&](double v, int a) { return int32_t((v - origin[a]) * inv); };
 
-  // Cells of edge 2 min_distance: the points closer than min_distance to p lie in the 2 x 2 x 2
-  // cells that the box p +- min_distance touches, 8 lookups instead of the 27 of a grid of
-  // edge min_distance. Each cell's 27 neighbours are looked up once, not once per point.
-  const NeighborGrid grid(points, n, 2 * min_distance);
-  const uint32_t cells = uint32_t(grid.cell_count());
-  std::vector<uint32_t> cell_of(n);  // input index -> cell
-  std::vector<uint32_t> around(size_t(cells) * 27);  // (dx+1)*9 + (dy+1)*3 + (dz+1) -> cell
-  detail::parallel_blocks(cells, 1024, [&](size_t cb, size_t ce) {
-    for (uint32_t c = uint32_t(cb); c < uint32_t(ce); ++c) {
-      for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) cell_of[grid.original_index(s)] = c;
-      const auto cc = grid.cell_coord(c);
-      uint32_t* out = &around[size_t(c) * 27];
-      for (int dx = -1; dx <= 1; ++dx)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dz = -1; dz <= 1; ++dz) *out++ = grid.find_cell({cc[0] + dx, cc[1] + dy, cc[2] + dz});
-    }
-  });
-
-  // Kept points per cell as linked lists (a cell of this size holds a few dozen at most).
-  constexpr uint32_t kEnd = 0xffffffffu;
-  std::vector<uint32_t> head(cells, kEnd), next(n, kEnd);
+  KeptCells cells;
   const double r2 = min_distance * min_distance;
-  const Vec3 reach{min_distance, min_distance, min_distance};
   for (uint32_t i = 0; i < uint32_t(n); ++i) {
     const Vec3& p = points[i];
-    const uint32_t c = cell_of[i];
-    const auto cc = grid.cell_coord(c), lo = grid.coord_of(p - reach), hi = grid.coord_of(p + reach);
+    KeptCells::Coord from, to;
+    for (int a = 0; a < 3; ++a) {
+      from[a] = axis(p[a] - min_distance, a);
+      to[a] = axis(p[a] + min_distance, a);
+    }
     bool free = true;
-    for (int dx = lo[0] - cc[0]; free && dx <= hi[0] - cc[0]; ++dx)
-      for (int dy = lo[1] - cc[1]; free && dy <= hi[1] - cc[1]; ++dy)
-        for (int dz = lo[2] - cc[2]; free && dz <= hi[2] - cc[2]; ++dz) {
-          const uint32_t nc = around[size_t(c) * 27 + size_t((dx + 1) * 9 + (dy + 1) * 3 + (dz + 1))];
-          if (nc == NeighborGrid::kNoCell) continue;
-          for (uint32_t k = head[nc]; k != kEnd; k = next[k])
-            if (squared_distance(points[k], p) < r2) {
+    for (int32_t x = from[0]; free && x <= to[0]; ++x)
+      for (int32_t y = from[1]; free && y <= to[1]; ++y)
+        for (int32_t z = from[2]; free && z <= to[2]; ++z)
+          for (uint32_t k = cells.head({x, y, z}); k != KeptCells::kEnd; k = cells.next(k))
+            if (squared_distance(cells.position(k), p) < r2) {
               free = false;
               break;
             }
-          if (!free) break;
-        }
     if (!free) continue;
-    next[i] = head[c];
-    head[c] = i;
+    cells.add({axis(p.x, 0), axis(p.y, 1), axis(p.z, 2)}, p);
     kept.push_back(i);
   }
   return kept;

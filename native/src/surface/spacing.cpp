@@ -46,7 +46,7 @@ NeighborGrid occupancy_grid(const Vec3* points, size_t n, ProgressTracker& track
 }  // namespace
 
 SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTracker& tracker,
-                                      double begin, double end) {
+                                      double begin, double end, size_t stride) {
   if (n < 2) throw Error(Status::InvalidInput, "at least two points are needed to estimate the spacing");
   tracker.stage("estimating spacing", begin, begin + 0.2 * (end - begin));
   NeighborGrid grid = occupancy_grid(points, n, tracker);
@@ -58,9 +58,14 @@ SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTrac
     if (attempt > 0) grid = NeighborGrid(points, n, grid.cell_size() * 4.0);
     const double h = grid.cell_size();
     size_t duplicates = 0;
-    const std::vector<uint32_t> rep = find_duplicates(grid, &duplicates);
+    std::vector<uint32_t> rep;
+    if (stride == 1) rep = find_duplicates(grid, &duplicates);
     const size_t distinct = n - duplicates;
     if (distinct < 2) throw Error(Status::InvalidInput, "all points coincide: there is no spacing");
+    // The points whose distance counts: each distinct point once, or the sample.
+    const auto counted = [&](uint32_t s) {
+      return stride == 1 ? rep[s] == s : grid.original_index(s) % stride == 0;
+    };
     tracker.check();
 
     tracker.stage("estimating spacing", begin + 0.2 * (end - begin), end, grid.cell_count());
@@ -72,9 +77,15 @@ SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTrac
       if (tracker.cancelled()) return;
       uint32_t around[27];
       for (size_t c = cb; c < ce; ++c) {
+        bool any = false;
+        for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)) && !any; ++s) any = counted(s);
+        if (!any) {
+          tracker.tick(1);
+          continue;
+        }
         const int na = grid.neighbor_cells(uint32_t(c), around);
         for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) {
-          if (rep[s] != s) continue;
+          if (!counted(s)) continue;
           const Vec3 p = grid.sorted_point(s);
           double best = kInf;
           for (int a = 0; a < na; ++a)
@@ -106,9 +117,9 @@ SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTrac
     tracker.check();
 
     std::vector<double> values;
-    values.reserve(distinct);
+    values.reserve(distinct / stride + 1);
     for (size_t s = 0; s < n; ++s)
-      if (rep[s] == s) values.push_back(nn2[s]);
+      if (counted(uint32_t(s))) values.push_back(nn2[s]);
     const size_t mid = (values.size() - 1) / 2;  // the lower median: an actual NN distance
     std::nth_element(values.begin(), values.begin() + long(mid), values.end());
     if (values[mid] == kInf) continue;  // most points are isolated at this cell size: widen
@@ -137,6 +148,17 @@ SpacingEstimate estimate_spacing(const Vec3* points, size_t n, int threads,
     tracker.finish();
     return r;
   });
+}
+
+SpacingEstimate estimate_spacing_sampled(const Vec3* points, size_t n, size_t max_samples, int threads) {
+  if (points == nullptr && n > 0) throw Error(Status::InvalidArgument, "points is NULL");
+  if (max_samples == 0) throw Error(Status::InvalidArgument, "max_samples is 0: at least one point must be sampled");
+  for (size_t i = 0; i < n; ++i)
+    if (!is_finite(points[i]))
+      throw Error(Status::InvalidInput, "point " + std::to_string(i) + " has a non-finite coordinate");
+  const size_t stride = std::max<size_t>(1, (n + max_samples - 1) / max_samples);
+  detail::ProgressTracker tracker({});
+  return detail::with_threads(threads, [&] { return detail::estimate_spacing_impl(points, n, tracker, 0.0, 1.0, stride); });
 }
 
 }  // namespace particlemesh

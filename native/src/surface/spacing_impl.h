@@ -7,8 +7,9 @@
 namespace particlemesh::detail {
 
 /// Assumes finite coordinates. Runs in the caller's TBB arena; reports progress in
-/// [begin, end) of the overall fraction.
+/// [begin, end) of the overall fraction. With stride > 1 the median is taken over the points
+/// whose input index is a multiple of stride, and duplicates are not looked for.
 SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTracker& tracker,
-                                      double begin, double end);
+                                      double begin, double end, size_t stride = 1);
 
 }  // namespace particlemesh::detail

@@ -81,3 +81,34 @@ TEST(EstimateSpacing, RejectsDegenerateInput) {
   std::vector<Vec3> nan = {{0, 0, 0}, {1, std::nan(""), 0}};
   EXPECT_THROW(estimate_spacing(nan.data(), nan.size()), Error);
 }
+
+TEST(EstimateSpacing, SampledIsTheMedianOfTheStridedSample) {
+  // Exactly the brute-force median over points 0, k, 2k, ... (each one's nearest neighbour
+  // among all points), on a random cloud where a sample's median differs from the whole's.
+  const PointCloud c = test::random_cloud(3000, 5);
+  const size_t max_samples = 500, stride = 6;
+  std::vector<double> nn;
+  for (size_t i = 0; i < c.size(); i += stride) {
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t j = 0; j < c.size(); ++j)
+      if (j != i) best = std::min(best, squared_distance(c.positions[i], c.positions[j]));
+    nn.push_back(best);
+  }
+  std::sort(nn.begin(), nn.end());
+  const double expected = std::sqrt(nn[(nn.size() - 1) / 2]);
+  for (int threads : {1, 3})
+    EXPECT_DOUBLE_EQ(estimate_spacing_sampled(c.positions.data(), c.size(), max_samples, threads).spacing, expected);
+  // Enough samples for every point: the exact estimate.
+  EXPECT_EQ(estimate_spacing_sampled(c.positions.data(), c.size(), c.size()).spacing,
+            estimate_spacing(c.positions.data(), c.size()).spacing);
+}
+
+TEST(EstimateSpacing, SampledIsCloseOnEvenSurfaces) {
+  const PointCloud c = fibonacci_sphere(50000);
+  const double exact = estimate_spacing(c.positions.data(), c.size()).spacing;
+  EXPECT_NEAR(estimate_spacing_sampled(c.positions.data(), c.size(), 4096).spacing, exact, 0.01 * exact);
+  EXPECT_THROW(estimate_spacing_sampled(c.positions.data(), c.size(), 0), Error);
+  std::vector<Vec3> bad = c.positions;
+  bad[3].x = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(estimate_spacing_sampled(bad.data(), bad.size(), 100), Error);
+}
