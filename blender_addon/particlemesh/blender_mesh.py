@@ -13,6 +13,12 @@ _SET_LOOP_TOTAL = bpy.app.version < (4, 0, 0)
 #: The POINT attribute holding particle normals on point-cloud meshes.
 NORMAL_ATTRIBUTE = "point_normal"
 
+#: Blender declares loop vertex indices, loop starts and totals, edge and loop-triangle
+#: vertices as unsigned ints. foreach_get / foreach_set copy in bulk only when the buffer's
+#: format matches the property's ('I' here); any other walks the array item by item as a
+#: Python sequence: 600k loop indices took 30-50 ms as int32, 3-5 ms as uint32 (Blender 3.4).
+INDEX = np.uint32
+
 _ATTRIBUTE_TYPES = {1: ("FLOAT", "value"), 2: ("FLOAT2", "vector"), 3: ("FLOAT_VECTOR", "vector"),
                     4: ("FLOAT_COLOR", "color")}
 
@@ -38,11 +44,11 @@ def write(mesh, data, *, custom_normals=True, attributes=True):
         mesh.vertices.foreach_set("co", positions.ravel())
         if nt:
             mesh.loops.add(3 * nt)
-            mesh.loops.foreach_set("vertex_index", triangles.ravel())
+            mesh.loops.foreach_set("vertex_index", triangles.ravel().astype(INDEX))
             mesh.polygons.add(nt)
             mesh.polygons.foreach_set("loop_start", mesh_arrays.loop_starts(nt))
             if _SET_LOOP_TOTAL:
-                mesh.polygons.foreach_set("loop_total", np.full(nt, 3, dtype=np.int32))
+                mesh.polygons.foreach_set("loop_total", np.full(nt, 3, dtype=INDEX))
             mesh.polygons.foreach_set("use_smooth", np.ones(nt, dtype=bool))
     mesh.update(calc_edges=rebuild)
     if (custom_normals and data.normals is not None and nt
@@ -66,7 +72,7 @@ def _same_triangles(mesh, nv, triangles):
     nt = len(triangles)
     if nt == 0 or len(mesh.vertices) != nv or len(mesh.polygons) != nt or len(mesh.loops) != 3 * nt:
         return False
-    loops = np.empty(3 * nt, dtype=np.int32)
+    loops = np.empty(3 * nt, dtype=INDEX)
     mesh.loops.foreach_get("vertex_index", loops)
     return np.array_equal(loops, triangles.ravel())
 
@@ -131,18 +137,18 @@ def triangles(mesh):
     polys = len(mesh.polygons)
     if polys == 0:
         return np.zeros((0, 3), dtype=np.int32)
-    sizes = np.empty(polys, dtype=np.int32)
+    sizes = np.empty(polys, dtype=INDEX)
     mesh.polygons.foreach_get("loop_total", sizes)
     if np.all(sizes == 3):
-        loops = np.empty(len(mesh.loops), dtype=np.int32)
+        loops = np.empty(len(mesh.loops), dtype=INDEX)
         mesh.loops.foreach_get("vertex_index", loops)
-        starts = np.empty(polys, dtype=np.int32)
+        starts = np.empty(polys, dtype=INDEX)
         mesh.polygons.foreach_get("loop_start", starts)
-        return loops[starts[:, None] + np.arange(3)]
+        return loops[starts[:, None] + np.arange(3)].astype(np.int32)
     mesh.calc_loop_triangles()
-    out = np.empty(len(mesh.loop_triangles) * 3, dtype=np.int32)
+    out = np.empty(len(mesh.loop_triangles) * 3, dtype=INDEX)
     mesh.loop_triangles.foreach_get("vertices", out)
-    return out.reshape(-1, 3)
+    return out.reshape(-1, 3).astype(np.int32)
 
 
 def vertex_normals(mesh):

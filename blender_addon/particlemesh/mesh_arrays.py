@@ -66,7 +66,7 @@ def alive_mask(states, alive_values):
 
 
 def loop_starts(triangle_count):
-    return np.arange(0, 3 * triangle_count, 3, dtype=np.int32)
+    return np.arange(0, 3 * triangle_count, 3, dtype=np.uint32)
 
 
 def content_hash(*arrays):
