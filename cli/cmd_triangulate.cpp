@@ -9,6 +9,8 @@
 #include "particlemesh/core/error.h"
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
+#include "particlemesh/sample/thin.h"
+#include "particlemesh/surface/spacing.h"
 #include "particlemesh/surface/reconstruct.h"
 #include "particlemesh/surface/triangulate.h"
 #include "progress_line.h"
@@ -23,6 +25,7 @@ struct TriangulateArgs {
   std::string input, output, report;
   double spacing = 0;
   double max_edge_factor = 2.0;
+  double thin = 1.0;
   bool raw = false;
   bool no_orient = false;
   bool no_repair = false;
@@ -44,11 +47,24 @@ int run_triangulate(const TriangulateArgs& a) {
   const auto t0 = Clock::now();
   ProgressLine progress(a.quiet);
   const ParticleInput input = read_particles(a.input, a.input_options, a.threads);
-  const PointCloud& cloud = input.cloud;
   const double t_read = std::chrono::duration<double>(Clock::now() - t0).count();
 
+  // --thin: an even subset, no two particles closer than thin x r0 (r0 given or estimated).
+  // Its spacing is estimated afresh: the subset's gaps run from d to 2d.
+  PointCloud thinned;
+  double thin_distance = 0;
+  if (a.thin > 1) {
+    if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
+    const double r0 = a.spacing > 0           ? a.spacing
+                      : input.spacing_hint > 0 ? input.spacing_hint
+                                               : estimate_spacing(input.cloud.positions.data(), input.cloud.size(), a.threads).spacing;
+    thin_distance = a.thin * r0;
+    thinned = thin_cloud(input.cloud, thin_distance);
+  }
+  const PointCloud& cloud = a.thin > 1 ? thinned : input.cloud;
+
   SurfaceOptions opt;
-  opt.spacing = a.spacing > 0 ? a.spacing : input.spacing_hint;
+  opt.spacing = a.thin > 1 ? 0.0 : a.spacing > 0 ? a.spacing : input.spacing_hint;
   opt.max_edge_factor = a.max_edge_factor;
   opt.threads = a.threads;
   opt.max_neighbors = a.max_neighbors;
@@ -98,12 +114,17 @@ int run_triangulate(const TriangulateArgs& a) {
                      {"topology", to_json(report)},
                      {"seconds", {{"read", t_read}, {"triangulate", t_tri}, {"write", t_write}}}};
     if (!input.report.is_null()) j["input_cloud"] = input.report;
+    if (a.thin > 1)
+      j["thin"] = {{"factor", a.thin}, {"distance", thin_distance}, {"kept", cloud.size()}, {"of", input.cloud.size()}};
     write_json_file(j, a.report);
   }
   if (!a.quiet) {
     const auto& s = result.triangulation;
     std::printf("particlemesh triangulate: %s -> %s\n", a.input.c_str(), a.output.c_str());
     std::printf("%s", input.summary.c_str());
+    if (a.thin > 1)
+      std::printf("  thinned       %zu of %zu particles kept, none closer than %.6g (%g x r0)\n", cloud.size(),
+                  input.cloud.size(), thin_distance, a.thin);
     std::printf("  points        %zu%s\n", s.points,
                 s.duplicate_points ? (" (" + std::to_string(s.duplicate_points) + " exact duplicates set aside)").c_str() : "");
     std::printf("  spacing r0    %.6g (%s)\n", s.spacing, s.spacing_estimated ? "estimated: median nearest-neighbour distance" : "given");
@@ -140,6 +161,12 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
       ->check(CLI::PositiveNumber);
   app->add_option("--max-edge-factor", args->max_edge_factor, "Longest triangle edge L = factor x r0")
       ->check(CLI::Range(1e-6, 100.0))
+      ->capture_default_str();
+  app->add_option("--thin", args->thin,
+                  "Mesh an even subset of the particles, none closer than FACTOR x r0 (r0 from --spacing or "
+                  "estimated; the subset's own spacing is then estimated): a coarse preview, and evener input "
+                  "from unevenly sampled clouds. 1 = every particle")
+      ->check(CLI::Range(1.0, 1000.0))
       ->capture_default_str();
   app->add_flag("--raw", args->raw, "Return the seed's exact triangle set (not a surface: overlapping pairs on quads)");
   app->add_option("--normal-angle", args->normal_angle,

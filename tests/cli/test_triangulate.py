@@ -53,6 +53,32 @@ def test_explicit_spacing_and_factor(cli, tmp_path):
     assert (tmp_path / "s.ply").read_bytes().startswith(b"ply\nformat ascii")
 
 
+def test_thin_meshes_an_even_subset(cli, inspect, tmp_path):
+    pts = tmp_path / "s.ply"
+    cli("sample", "fibonacci", "--points", "20000", "-o", pts)
+    full, thin = tmp_path / "full.json", tmp_path / "thin.json"
+    cli("triangulate", pts, "-o", tmp_path / "full.ply", "--report", full, "-q")
+    proc = cli("triangulate", pts, "-o", tmp_path / "thin.ply", "--thin", "2", "--report", thin)
+    assert "thinned" in proc.stdout
+    r0 = json.loads(full.read_text())["triangulation"]["spacing"]
+    r = json.loads(thin.read_text())
+    assert r["thin"]["of"] == 20000 and 20000 / 8 < r["thin"]["kept"] < 20000 / 3
+    assert math.isclose(r["thin"]["distance"], 2 * r0)
+    # The subset's own spacing, estimated: at least the thinning distance.
+    assert r["triangulation"]["spacing_estimated"] and r["triangulation"]["spacing"] >= 2 * r0
+    mesh = inspect(tmp_path / "thin.ply")
+    assert mesh["vertices"] == r["thin"]["kept"] == mesh["vertices_used"]
+    assert mesh["closed"] and mesh["manifold"] and mesh["outward"] and mesh["components"] == 1
+    assert mesh["euler_characteristic"] == 2
+    # A given spacing sets the thinning distance; a factor below 1 is refused.
+    cli("triangulate", pts, "-o", tmp_path / "t2.ply", "--thin", "2", "--spacing", str(2 * r0),
+        "--report", thin, "-q")
+    assert math.isclose(json.loads(thin.read_text())["thin"]["distance"], 4 * r0)
+    proc = cli("triangulate", pts, "-o", tmp_path / "t3.ply", "--thin", "0.5", check=False)
+    assert proc.returncode == 2 and "--thin" in proc.stderr
+    assert not (tmp_path / "t3.ply").exists()
+
+
 def test_threads_do_not_change_output(cli, tmp_path):
     pts = tmp_path / "t.xyz"
     cli("sample", "torus", "--spacing", "0.06", "-o", pts)

@@ -155,4 +155,21 @@ std::vector<uint32_t> thin_points(const Vec3* points, size_t n, double min_dista
   return kept;
 }
 
+PointCloud thin_cloud(const PointCloud& cloud, double min_distance) {
+  const std::vector<uint32_t> kept = thin_points(cloud.positions.data(), cloud.size(), min_distance);
+  PointCloud out;
+  out.positions.reserve(kept.size());
+  for (uint32_t i : kept) out.positions.push_back(cloud.positions[i]);
+  if (cloud.has_normals())
+    for (uint32_t i : kept) out.normals.push_back(cloud.normals[i]);
+  for (const VertexAttribute& a : cloud.attributes) {
+    VertexAttribute& b = out.attributes.emplace_back(VertexAttribute{a.name, a.components, {}});
+    b.values.reserve(kept.size() * size_t(a.components));
+    for (uint32_t i : kept)
+      b.values.insert(b.values.end(), a.values.begin() + ptrdiff_t(i) * a.components,
+                      a.values.begin() + ptrdiff_t(i + 1) * a.components);
+  }
+  return out;
+}
+
 }  // namespace particlemesh

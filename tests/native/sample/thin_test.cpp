@@ -95,6 +95,28 @@ TEST(ThinPoints, ThinnedSphereStillMeshesAsOneClosedOutwardSphere) {
   }
 }
 
+TEST(ThinPoints, ThinCloudCarriesNormalsAndAttributes) {
+  PointCloud c = fibonacci_sphere(3000);
+  VertexAttribute id{"id", 2, {}};
+  for (size_t i = 0; i < c.size(); ++i) id.values.insert(id.values.end(), {float(i), -float(i)});
+  c.attributes.push_back(id);
+  const double r0 = estimate_spacing(c.positions.data(), c.size()).spacing;
+  const std::vector<uint32_t> kept = thin_points(c.positions.data(), c.size(), 2 * r0);
+  const PointCloud t = thin_cloud(c, 2 * r0);
+  ASSERT_EQ(t.size(), kept.size());
+  ASSERT_EQ(t.normals.size(), kept.size());
+  ASSERT_EQ(t.attributes.size(), 1u);
+  EXPECT_EQ(t.attributes[0].name, "id");
+  ASSERT_EQ(t.attributes[0].values.size(), 2 * kept.size());
+  for (size_t k = 0; k < kept.size(); ++k) {
+    EXPECT_EQ(t.positions[k], c.positions[kept[k]]);
+    EXPECT_EQ(t.normals[k], c.normals[kept[k]]);
+    EXPECT_EQ(t.attributes[0].values[2 * k], float(kept[k]));
+    EXPECT_EQ(t.attributes[0].values[2 * k + 1], -float(kept[k]));
+  }
+  validate_point_cloud(t);
+}
+
 TEST(ThinPoints, BadArgumentsAreNamed) {
   const PointCloud c = fibonacci_sphere(100);
   for (double bad : {0.0, -1.0, double(NAN), double(INFINITY)}) {

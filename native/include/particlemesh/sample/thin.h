@@ -7,6 +7,7 @@
 
 #include "particlemesh/core/export.h"
 #include "particlemesh/core/vec3.h"
+#include "particlemesh/mesh/point_cloud.h"
 
 namespace particlemesh {
 
@@ -23,5 +24,8 @@ namespace particlemesh {
 ///         Error(LimitExceeded) if min_distance is so small against the extent that the grid
 ///         would span more than 2^21 cells along an axis.
 PM_EXPORT std::vector<uint32_t> thin_points(const Vec3* points, size_t n, double min_distance);
+
+/// The cloud's points at thin_points' indices, with their normals and attributes.
+PM_EXPORT PointCloud thin_cloud(const PointCloud& cloud, double min_distance);
 
 }  // namespace particlemesh
