@@ -157,7 +157,8 @@ SpacingEstimate estimate_spacing_sampled(const Vec3* points, size_t n, size_t ma
     if (!is_finite(points[i]))
       throw Error(Status::InvalidInput, "point " + std::to_string(i) + " has a non-finite coordinate");
   const size_t stride = std::max<size_t>(1, (n + max_samples - 1) / max_samples);
-  detail::ProgressTracker tracker({});
+  const ProgressCallback none;  // the tracker keeps a reference: a temporary would dangle
+  detail::ProgressTracker tracker(none);
   return detail::with_threads(threads, [&] { return detail::estimate_spacing_impl(points, n, tracker, 0.0, 1.0, stride); });
 }
 
