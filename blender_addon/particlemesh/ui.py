@@ -69,6 +69,9 @@ class VIEW3D_PT_particlemesh_object(_Panel, bpy.types.Panel):
                 layout.label(text=f"frame {record['frame']} ({record['mode'].lower()}): "
                                   f"{1000 * record['seconds']:.0f} ms"
                                   + (", cached" if record.get("cached") else ""))
+                meshed, read = record.get("vertices"), record.get("particles")
+                if state.method == "TRIANGULATE" and meshed and read and meshed < read:
+                    layout.label(text=f"{meshed} of {read} particles meshed (Thin Out)")
         entries, size = live.cache_info(obj)
         row = layout.row()
         row.label(text=f"cache: {entries} frames, {size / 2**20:.1f} MB")

@@ -150,6 +150,9 @@ def test_viewport_thins_out_while_renders_use_every_particle(pm, clean_scene):
         r0 = np.sort(spacing)[(len(spacing) - 1) // 2]  # the lower median, as the library
         assert gaps.min() >= 2.0 * r0 * 0.999
         assert closed_and_consistent(tris) and len(co) - len(tris) // 2 == 2  # a sphere
+    # The panel says how many were meshed.
+    log = draw_panels(pm, bpy.context)
+    assert any(kind == "label" and "of 2562 particles meshed" in text for kind, text in log), log
     # The render settings keep every particle.
     depsgraph = bpy.context.evaluated_depsgraph_get()
     data, settings, _ = pm.live.compute(obj, depsgraph, mode="RENDER", use_cache=False)
