@@ -112,7 +112,7 @@ std::vector<uint32_t> thin_points(const Vec3* points, size_t n, double min_dista
   Vec3 lo = points[0], hi = points[0];
   for (size_t i = 0; i < n; ++i) {
     const Vec3& p = points[i];
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+    if (!is_finite(p))
       throw Error(Status::InvalidInput, "point " + std::to_string(i) + " has a non-finite coordinate");
     lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
     hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};

@@ -136,12 +136,20 @@ SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTrac
 
 }  // namespace detail
 
-SpacingEstimate estimate_spacing(const Vec3* points, size_t n, int threads,
-                                 const ProgressCallback& progress) {
+namespace {
+
+void check_points(const Vec3* points, size_t n) {
   if (points == nullptr && n > 0) throw Error(Status::InvalidArgument, "points is NULL");
   for (size_t i = 0; i < n; ++i)
     if (!is_finite(points[i]))
       throw Error(Status::InvalidInput, "point " + std::to_string(i) + " has a non-finite coordinate");
+}
+
+}  // namespace
+
+SpacingEstimate estimate_spacing(const Vec3* points, size_t n, int threads,
+                                 const ProgressCallback& progress) {
+  check_points(points, n);
   detail::ProgressTracker tracker(progress);
   return detail::with_threads(threads, [&] {
     auto r = detail::estimate_spacing_impl(points, n, tracker, 0.0, 1.0);
@@ -151,11 +159,8 @@ SpacingEstimate estimate_spacing(const Vec3* points, size_t n, int threads,
 }
 
 SpacingEstimate estimate_spacing_sampled(const Vec3* points, size_t n, size_t max_samples, int threads) {
-  if (points == nullptr && n > 0) throw Error(Status::InvalidArgument, "points is NULL");
   if (max_samples == 0) throw Error(Status::InvalidArgument, "max_samples is 0: at least one point must be sampled");
-  for (size_t i = 0; i < n; ++i)
-    if (!is_finite(points[i]))
-      throw Error(Status::InvalidInput, "point " + std::to_string(i) + " has a non-finite coordinate");
+  check_points(points, n);
   const size_t stride = std::max<size_t>(1, (n + max_samples - 1) / max_samples);
   const ProgressCallback none;  // the tracker keeps a reference: a temporary would dangle
   detail::ProgressTracker tracker(none);
