@@ -118,15 +118,17 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
       ->required();
   app->add_option("--radius", args->radius,
                   "Particle radius R (the field's support), world units (default: 2 x the median particle spacing)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->check(finite_number());
   app->add_option("--threshold", args->threshold,
                   "Iso level T of the summed field (default: half the field inside an evenly packed volume at "
                   "R = 2 spacings: 3.33 wyvill, 3.94 poly4, 2.58 poly6, 1.23 blinn)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->check(finite_number());
   app->add_option("--kernel", args->kernel, "Field kernel: wyvill (C1), poly4 (C1), poly6 (C2), blinn (C0)")
       ->check(CLI::IsMember({"wyvill", "poly4", "poly6", "blinn"}, CLI::ignore_case))
       ->capture_default_str();
-  app->add_option("--cell", args->cell, "Grid cell size h, world units (default: R / 4)")->check(CLI::PositiveNumber);
+  app->add_option("--cell", args->cell, "Grid cell size h, world units (default: R / 4)")->check(CLI::PositiveNumber)->check(finite_number());
   app->add_option("--threads", args->threads, "Worker threads, 0 = all cores (the output does not depend on it)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();

@@ -91,10 +91,12 @@ void add_render(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("-o,--output", args->output, "Output image (.png)")->required();
   app->add_option("--radius", args->radius,
                   "Particle radius R (the field's support), world units (default: 2 x the median particle spacing)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->check(finite_number());
   app->add_option("--threshold", args->threshold,
                   "Iso level T of the summed field (default: half the field inside an evenly packed volume)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->check(finite_number());
   app->add_option("--kernel", args->kernel, "Field kernel: wyvill (C1), poly4 (C1), poly6 (C2), blinn (C0)")
       ->check(CLI::IsMember({"wyvill", "poly4", "poly6", "blinn"}, CLI::ignore_case))
       ->capture_default_str();
@@ -103,9 +105,14 @@ void add_render(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("--camera", args->camera,
                   "Eye and target: EX EY EZ TX TY TZ (default: framing every particle from above, front, right)")
       ->expected(6)
-      ->delimiter(',');
-  app->add_option("--up", args->up, "Image up direction X Y Z")->expected(3)->delimiter(',')->capture_default_str();
-  app->add_option("--fov", args->fov, "Vertical field of view, degrees")->check(CLI::Range(1.0, 179.0))->capture_default_str();
+      ->delimiter(',')
+      ->check(finite_number());
+  app->add_option("--up", args->up, "Image up direction X Y Z")
+      ->expected(3)
+      ->delimiter(',')
+      ->check(finite_number())
+      ->capture_default_str();
+  app->add_option("--fov", args->fov, "Vertical field of view, degrees")->check(CLI::Range(1.0, 179.0))->check(finite_number())->capture_default_str();
   app->add_option("--shading", args->shading, "lambert (clay, key light) or normal (normal as colour)")
       ->check(CLI::IsMember({"lambert", "normal"}, CLI::ignore_case))
       ->capture_default_str();

@@ -28,6 +28,7 @@ void add_sample(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("-o,--output", args->output, "Output particles (.xyz or .ply)")->required();
   app->add_option("--spacing", args->spacing, "Poisson-disk spacing r0 (trefoil, torus, sphere)")
       ->check(CLI::Range(1e-4, 10.0))
+      ->check(finite_number())
       ->capture_default_str();
   app->add_option("--points", args->points, "Number of points (fibonacci)")->check(CLI::Range(size_t(4), size_t(100000000)))->capture_default_str();
   app->add_option("--seed", args->seed, "Random seed")->capture_default_str();

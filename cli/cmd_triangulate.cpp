@@ -158,20 +158,24 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("-o,--output", args->output, "Output mesh: .ply (binary; --ascii for text) or .obj")->required();
   app->add_option("--spacing", args->spacing,
                   "Particle spacing r0 in world units (default: estimated as the median nearest-neighbour distance)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->check(finite_number());
   app->add_option("--max-edge-factor", args->max_edge_factor, "Longest triangle edge L = factor x r0")
       ->check(CLI::Range(1e-6, 100.0))
+      ->check(finite_number())
       ->capture_default_str();
   app->add_option("--thin", args->thin,
                   "Mesh an even subset of the particles, none closer than FACTOR x r0 (r0 from --spacing or "
                   "estimated; the subset's own spacing is then estimated): a coarse preview, and evener input "
                   "from unevenly sampled clouds. 1 = every particle")
       ->check(CLI::Range(1.0, 1000.0))
+      ->check(finite_number())
       ->capture_default_str();
   app->add_flag("--raw", args->raw, "Return the seed's exact triangle set (not a surface: overlapping pairs on quads)");
   app->add_option("--normal-angle", args->normal_angle,
                   "Co-normality: drop triangles whose corner or face normals differ by more than this (degrees)")
       ->check(CLI::Range(1.0, 180.0))
+      ->check(finite_number())
       ->capture_default_str();
   app->add_option("--normals", args->normals,
                   "auto: plane-fit directions, facing as the input's normals say (if any); "
@@ -185,6 +189,7 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("--fill-edge-factor", args->fill_edge_factor,
                   "Fill triangles' edges at most this x L: wider openings are real and stay open")
       ->check(CLI::Range(0.1, 10.0))
+      ->check(finite_number())
       ->capture_default_str();
   app->add_flag("--no-orient", args->no_orient, "Do not turn closed components to face outward");
   app->add_option("--threads", args->threads, "Worker threads, 0 = all cores (the output does not depend on it)")

@@ -4,6 +4,7 @@
 
 #include <pcl/console/print.h>
 
+#include "commands.h"
 #include "particle_input.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh_pcl/conversions.h"
@@ -17,10 +18,12 @@ void add_particle_input_options(CLI::App& app, ParticleInputArgs& a) {
   auto* us = app.add_option("--uniform-sampling", a.uniform_sampling,
                             "Downsample with pcl::UniformSampling to this spacing (voxel edge, world units; also r0 unless --spacing)")
                  ->check(CLI::PositiveNumber)
+                 ->check(finite_number())
                  ->group(group);
   auto* vg = app.add_option("--voxel-grid", a.voxel_grid,
                             "Downsample with pcl::VoxelGrid to this spacing (the input point nearest each voxel's centroid; also r0 unless --spacing)")
                  ->check(CLI::PositiveNumber)
+                 ->check(finite_number())
                  ->group(group);
   us->excludes(vg);
   app.add_flag("--remove-outliers", a.remove_outliers,
@@ -32,6 +35,7 @@ void add_particle_input_options(CLI::App& app, ParticleInputArgs& a) {
       ->group(group);
   app.add_option("--outlier-std", a.outlier_std, "Outlier threshold: mean + this x stddev")
       ->check(CLI::Range(0.0, 1e6))
+      ->check(finite_number())
       ->capture_default_str()
       ->group(group);
   app.add_flag("--estimate-normals", a.estimate_normals,

@@ -125,6 +125,11 @@ def test_bad_inputs_give_one_line_errors(cli, tmp_path):
     _fails(cli, tmp_path, [tmp_path / "cut.ply"], "cut.ply")
     proc = cli("triangulate", good, "-o", tmp_path / "x.ply", "--spacing", "-1", check=False)
     assert proc.returncode == 2 and "spacing" in proc.stderr
+    # CLI11's range checks let NaN through: every float option also checks it is finite.
+    for option in ("--spacing", "--thin", "--max-edge-factor", "--normal-angle", "--fill-edge-factor"):
+        proc = cli("triangulate", good, "-o", tmp_path / "x.ply", option, "nan", check=False)
+        assert proc.returncode == 2 and option in proc.stderr and "not a finite number" in proc.stderr
+        assert not (tmp_path / "x.ply").exists()
     proc = cli("triangulate", good, "-o", tmp_path / "x.unknown", check=False)
     assert proc.returncode != 0 and "x.unknown" in proc.stderr
     proc = cli("triangulate", good, "-o", tmp_path / "nodir" / "x.ply", check=False)
