@@ -525,10 +525,6 @@ def has_smooth():
     return load().has("pm_smooth")
 
 
-def has_thin():
-    return load().has("pm_cloud_thin")
-
-
 def has_mesh_attributes():
     lib = load()
     return lib.has("pm_mesh_set_attribute") and lib.has("pm_mesh_copy_attribute") and lib.has(
