@@ -3,6 +3,7 @@ import json
 import math
 import os
 import signal
+import struct
 import subprocess
 import time
 from pathlib import Path
@@ -77,6 +78,34 @@ def test_thin_meshes_an_even_subset(cli, inspect, tmp_path):
     proc = cli("triangulate", pts, "-o", tmp_path / "t3.ply", "--thin", "0.5", check=False)
     assert proc.returncode == 2 and "--thin" in proc.stderr
     assert not (tmp_path / "t3.ply").exists()
+
+
+def test_georeferenced_coordinates_mesh_as_at_the_origin(cli, inspect, tmp_path):
+    """A scan at UTM-like coordinates, as a binary PLY of doubles: read exactly, meshed as the
+    same cloud at the origin, and written back with double positions (float32 steps are 0.5
+    there, wider than the spacing)."""
+    pts = tmp_path / "s.xyz"
+    cli("sample", "fibonacci", "--points", "5000", "-o", pts)
+    rows = [tuple(map(float, line.split()[:3])) for line in pts.read_text().splitlines() if line.strip()]
+    offset = (512345.678, 5412345.678, 250.5)
+    far = tmp_path / "far.ply"
+    with far.open("wb") as f:
+        f.write(b"ply\nformat binary_little_endian 1.0\nelement vertex %d\n" % len(rows))
+        f.write(b"property double x\nproperty double y\nproperty double z\nend_header\n")
+        for x, y, z in rows:
+            f.write(struct.pack("<3d", x + offset[0], y + offset[1], z + offset[2]))
+    cli("triangulate", pts, "-o", tmp_path / "near.ply", "-q")
+    cli("triangulate", far, "-o", tmp_path / "far_mesh.ply", "-q")
+    near, moved = inspect(tmp_path / "near.ply"), inspect(tmp_path / "far_mesh.ply")
+    assert moved["closed"] and moved["outward"] and moved["components"] == 1
+    assert moved["euler_characteristic"] == 2 and moved["vertices_used"] == len(rows)
+    assert moved["triangles"] == near["triangles"]
+    data = (tmp_path / "far_mesh.ply").read_bytes()
+    header = data[: data.index(b"end_header\n") + len(b"end_header\n")]
+    assert b"property double x" in header
+    assert b"property float x" in (tmp_path / "near.ply").read_bytes()[:200]
+    first = struct.unpack_from("<3d", data, len(header))
+    assert first == (rows[0][0] + offset[0], rows[0][1] + offset[1], rows[0][2] + offset[2])
 
 
 def test_threads_do_not_change_output(cli, tmp_path):

@@ -3,6 +3,7 @@
 #include <cctype>
 #include <charconv>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -78,10 +79,14 @@ class Reader {
   /// Read `n` raw bytes into `out` (false if the file ends first).
   bool bytes(void* out, size_t n) {
     auto* o = static_cast<unsigned char*>(out);
-    for (size_t i = 0; i < n; ++i) {
-      const int c = get();
-      if (c < 0) return false;
-      o[i] = static_cast<unsigned char>(c);
+    while (n > 0) {
+      if (pos_ == end_ && get() >= 0) --pos_;  // refill, and put the byte back
+      if (pos_ == end_) return false;
+      const size_t k = std::min(n, end_ - pos_);
+      std::memcpy(o, buf_.data() + pos_, k);
+      pos_ += k;
+      o += k;
+      n -= k;
     }
     return true;
   }
@@ -178,7 +183,23 @@ bool ply_integer_type(std::string_view t) {
   return ply_type_size(t) != 0 && t != "float" && t != "float32" && t != "double" && t != "float64";
 }
 
+enum class PlyScalar : uint8_t { Int8, Uint8, Int16, Uint16, Int32, Uint32, Float32, Float64 };
+
+PlyScalar ply_scalar(std::string_view t) {
+  if (t == "char" || t == "int8") return PlyScalar::Int8;
+  if (t == "uchar" || t == "uint8") return PlyScalar::Uint8;
+  if (t == "short" || t == "int16") return PlyScalar::Int16;
+  if (t == "ushort" || t == "uint16") return PlyScalar::Uint16;
+  if (t == "int" || t == "int32") return PlyScalar::Int32;
+  if (t == "uint" || t == "uint32") return PlyScalar::Uint32;
+  if (t == "float" || t == "float32") return PlyScalar::Float32;
+  return PlyScalar::Float64;
+}
+
 struct PlyProperty {
+  std::string name;  ///< a scalar's name (x, nx, red, ...)
+  std::string type;  ///< a scalar's type word
+  PlyScalar scalar = PlyScalar::Float32;  ///< ... decoded
   bool list = false;
   bool integer = false;  ///< the scalar or list item type is an integer type
   int size = 0;          ///< scalar size, or list item size
@@ -209,7 +230,37 @@ std::string plural(uint64_t n, const std::string& what) {
   return std::to_string(n) + " '" + what + "' element" + (n == 1 ? "" : "s");
 }
 
-void check_ply(const std::string& path) {
+/// A binary scalar (size bytes at raw, in the file's byte order) as a double.
+double ply_binary_value(const unsigned char* raw, PlyScalar type, int size, bool big_endian) {
+  unsigned char b[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+  for (int i = 0; i < size; ++i) b[i] = raw[big_endian ? size - 1 - i : i];  // little-endian host
+  auto as = [&](auto v) {
+    std::memcpy(&v, b, sizeof v);
+    return double(v);
+  };
+  switch (type) {
+    case PlyScalar::Int8: return as(int8_t{});
+    case PlyScalar::Uint8: return as(uint8_t{});
+    case PlyScalar::Int16: return as(int16_t{});
+    case PlyScalar::Uint16: return as(uint16_t{});
+    case PlyScalar::Int32: return as(int32_t{});
+    case PlyScalar::Uint32: return as(uint32_t{});
+    case PlyScalar::Float32: return as(float{});
+    case PlyScalar::Float64: break;
+  }
+  return as(double{});
+}
+
+/// A number token (already checked by numeric_token) as a double.
+double ply_ascii_value(const std::string& t) {
+  const char* b = t.data() + (!t.empty() && t[0] == '+' ? 1 : 0);
+  double v = 0;
+  const auto r = std::from_chars(b, t.data() + t.size(), v);
+  if (r.ec == std::errc::result_out_of_range) return std::strtod(t.c_str(), nullptr);  // +-inf or 0, as OpenMesh
+  return v;
+}
+
+void check_ply(const std::string& path, ExactVertices* exact) {
   uint64_t file_size = 0;
   const std::string head = read_prefix(path, kMaxHeader, &file_size);
   // OpenMesh takes "PLY" in any case and after any whitespace (it reads a word), and then loops
@@ -292,6 +343,9 @@ void check_ply(const std::string& path) {
         if (p.count_size == 0 || p.size == 0 || p.count_size == 8)
           fail(path, "bad PLY header line '" + std::string(line.substr(0, 80)) + "' (unknown list types)");
       } else if (w.size() == 3) {
+        p.type = std::string(w[1]);
+        p.scalar = ply_scalar(w[1]);
+        p.name = std::string(w[2].substr(0, 40));
         p.size = ply_type_size(w[1]);
         p.integer = ply_integer_type(w[1]);
         if (p.size == 0) fail(path, "bad PLY header line '" + std::string(line.substr(0, 80)) + "' (unknown type)");
@@ -307,13 +361,57 @@ void check_ply(const std::string& path) {
   }
   if (format == Format::None) fail(path, "bad PLY header: no format line");
 
+  // The vertex element's x y z and nx ny nz, read exactly unless all are float32 (see
+  // ExactVertices): slot[k] is the property index of the k-th of them, or -1.
+  const PlyElement* vertex = nullptr;
+  int slot[6] = {-1, -1, -1, -1, -1, -1};
+  bool exact_positions = false, exact_normals = false;
+  if (exact) {
+    *exact = ExactVertices{};
+    for (const PlyElement& e : elements)
+      if (e.name == "vertex") {
+        vertex = &e;
+        break;
+      }
+    if (vertex) {
+      static const char* const kNames[6] = {"x", "y", "z", "nx", "ny", "nz"};
+      for (int k = 0; k < 6; ++k)
+        for (size_t i = 0; i < vertex->properties.size(); ++i)
+          if (!vertex->properties[i].list && vertex->properties[i].name == kNames[k]) {
+            slot[k] = int(i);
+            break;
+          }
+      auto not_float32 = [&](int k) {
+        return slot[k] >= 0 && vertex->properties[size_t(slot[k])].type != "float" &&
+               vertex->properties[size_t(slot[k])].type != "float32";
+      };
+      exact_positions = not_float32(0) || not_float32(1) || not_float32(2);
+      exact_normals = slot[3] >= 0 && slot[4] >= 0 && slot[5] >= 0 && (not_float32(3) || not_float32(4) || not_float32(5));
+    }
+  }
+  // Where a vertex property goes: 0-2 a position's coordinate, 3-5 a normal's, -1 nowhere.
+  auto target = [&](const PlyElement& e, size_t property) {
+    if (&e != vertex) return -1;
+    for (int k = 0; k < 6; ++k)
+      if (slot[k] == int(property) && (k < 3 ? exact_positions : exact_normals)) return k;
+    return -1;
+  };
+  // Grown as the data is read: an ASCII file's count is only known to hold at its end.
+  auto store = [&](uint64_t i, int k, double v) {
+    std::vector<Vec3>& list = k < 3 ? exact->positions : exact->normals;
+    if (list.size() <= i) list.resize(size_t(i) + 1);
+    Vec3& q = list[size_t(i)];
+    (k % 3 == 0 ? q.x : k % 3 == 1 ? q.y : q.z) = v;
+  };
+
   const uint64_t available = file_size - data_offset;
   if (format == Format::Ascii) {
     Reader r(path, data_offset);
     std::string tok;
     for (const PlyElement& e : elements) {
       for (uint64_t i = 0; i < e.count; ++i) {
-        for (const PlyProperty& p : e.properties) {
+        for (size_t pi = 0; pi < e.properties.size(); ++pi) {
+          const PlyProperty& p = e.properties[pi];
           auto value = [&](const std::string& t) {
             if (!numeric_token(t, p.integer))
               fail(path, "'" + e.name + "' element " + std::to_string(i) + ": '" + t + "' is not " +
@@ -322,6 +420,7 @@ void check_ply(const std::string& path) {
           if (!p.list) {
             if (r.token(tok)) {
               value(tok);
+              if (const int k = target(e, pi); k >= 0) store(i, k, ply_ascii_value(tok));
               continue;
             }
           } else if (r.token(tok)) {
@@ -356,16 +455,24 @@ void check_ply(const std::string& path) {
       fail(path, "truncated: the header promises " + plural(e.count, e.name) + " (at least " +
                      std::to_string(mul_add(e.count, fixed, 0)) + " bytes), the file holds " +
                      std::to_string(available - std::min(used, available)) + " bytes for them");
-    if (!has_list) {
+    const bool collect = &e == vertex && (exact_positions || exact_normals);
+    if (!has_list && !collect) {
       if (!r.skip_bytes(mul_add(e.count, fixed, 0))) fail(path, "truncated data in the '" + e.name + "' elements");
       used = least;
       continue;
     }
     for (uint64_t i = 0; i < e.count; ++i) {
       bool complete = true;
-      for (const PlyProperty& p : e.properties) {
+      for (size_t pi = 0; pi < e.properties.size(); ++pi) {
+        const PlyProperty& p = e.properties[pi];
         if (!p.list) {
-          complete = r.skip_bytes(uint64_t(p.size));
+          if (const int k = collect ? target(e, pi) : -1; k >= 0) {
+            unsigned char raw[8];
+            complete = r.bytes(raw, size_t(p.size));
+            if (complete) store(i, k, ply_binary_value(raw, p.scalar, p.size, format == Format::BinaryBE));
+          } else {
+            complete = r.skip_bytes(uint64_t(p.size));
+          }
           if (!complete) break;
           used += uint64_t(p.size);
           continue;
@@ -403,7 +510,7 @@ void check_ply(const std::string& path) {
 // a read succeeded: a file that ends early, or a token that is not a number, leaves the stream
 // failed and the loops running on stale values (a corner count of 4e9 pushes 4e9 handles;
 // found by fuzzing). So the file is walked here the way the reader walks it, before it runs.
-void check_off(const std::string& path) {
+void check_off(const std::string& path, ExactVertices* exact) {
   uint64_t file_size = 0;
   const std::string head = read_prefix(path, 4096, &file_size);
   // The first line holds the keyword ([ST][C][N][4][n]OFF, optionally BINARY).
@@ -449,10 +556,13 @@ void check_off(const std::string& path) {
                    std::to_string(counts[1]) + " faces, the file ends in " + where);
   };
   for (uint64_t v = 0; v < counts[0]; ++v) {
+    double c[3] = {0, 0, 0};
     for (int i = 0; i < (normals ? 6 : 3); ++i) {
       if (!r.token(tok)) truncated("vertex " + std::to_string(v));
       if (!numeric_token(tok, false)) fail(path, "vertex " + std::to_string(v) + ": '" + tok + "' is not a number");
+      if (i < 3) c[i] = ply_ascii_value(tok);
     }
+    if (exact) exact->positions.push_back({c[0], c[1], c[2]});  // as written (see ExactVertices)
     if (!r.at_line_start()) r.skip_line();  // colours, texture coordinates: the rest of the line
   }
   for (uint64_t f = 0; f < counts[1]; ++f) {
@@ -481,13 +591,23 @@ bool obj_index(std::string_view s, bool may_be_empty) {
 // index is missing ("f /1 2 3", "f //4 ..."), and reads an uninitialized index for one that is
 // not a number ("f x 2 3"). Every corner must be v, v/vt, v//vn or v/vt/vn with integers;
 // vertex indices out of range are caught after reading (the importer checks them).
-void check_obj(const std::string& path) {
+void check_obj(const std::string& path, ExactVertices* exact) {
   std::ifstream in(path, std::ios::binary);
   std::string line;
   uint64_t number = 0;
+  bool exact_ok = exact != nullptr;  // every v line so far has three numbers
   while (std::getline(in, line)) {
     ++number;
     const auto w = split_words(line);
+    if (exact_ok && !w.empty() && w[0] == "v") {
+      // OpenMesh's OBJ reader keeps float32 too: the positions as written (see ExactVertices).
+      double c[3] = {0, 0, 0};
+      for (size_t k = 0; k < 3 && exact_ok; ++k) {
+        exact_ok = k + 1 < w.size() && numeric_token(w[k + 1], false);
+        if (exact_ok) c[k] = ply_ascii_value(std::string(w[k + 1]));
+      }
+      if (exact_ok) exact->positions.push_back({c[0], c[1], c[2]});
+    }
     if (w.empty() || w[0] != "f") continue;
     for (size_t i = 1; i < w.size(); ++i) {
       const std::string_view corner = w[i];
@@ -503,6 +623,7 @@ void check_obj(const std::string& path) {
                        "' is not v, v/vt, v//vn or v/vt/vn with integer indices");
     }
   }
+  if (exact && !exact_ok) exact->positions.clear();  // then OpenMesh's, whatever it made of them
 }
 
 // ---- STL ----------------------------------------------------------------------------
@@ -525,11 +646,12 @@ void check_stl(const std::string& path) {
 
 }  // namespace
 
-void check_mesh_file_header(const std::string& path, const std::string& ext) {
-  if (ext == ".ply") check_ply(path);
-  else if (ext == ".off") check_off(path);
+void check_mesh_file_header(const std::string& path, const std::string& ext, ExactVertices* exact) {
+  if (exact) *exact = ExactVertices{};
+  if (ext == ".ply") check_ply(path, exact);
+  else if (ext == ".off") check_off(path, exact);
   else if (ext == ".stl") check_stl(path);
-  else if (ext == ".obj") check_obj(path);
+  else if (ext == ".obj") check_obj(path, exact);
 }
 
 }  // namespace particlemesh::detail

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -82,6 +83,13 @@ void require_readable(const std::string& path) {
   if (fs::file_size(path, ec) == 0) throw Error(Status::FormatError, "'" + path + "' is empty");
 }
 
+/// Puts the coordinates (and normals) the header check read exactly in place of OpenMesh's
+/// float32 ones (see detail::ExactVertices).
+void use_exact_vertices(detail::FlatImporter& imp, detail::ExactVertices& exact) {
+  if (!exact.positions.empty() && exact.positions.size() == imp.positions.size()) imp.positions = std::move(exact.positions);
+  if (!exact.normals.empty() && exact.normals.size() == imp.normals.size()) imp.normals = std::move(exact.normals);
+}
+
 detail::FlatImporter read_with_openmesh(const std::string& path, bool want_normals) {
   detail::FlatImporter importer;
   OpenMesh::IO::Options opt;
@@ -119,6 +127,72 @@ void check_extension_known(const std::string& path, std::initializer_list<const 
               "'" + path + "': unsupported file type '" + ext + "' (supported: " + list + ")");
 }
 
+/// Whether positions go to the file as float64: when float32 would round some coordinate by
+/// more than a millionth of the mesh's size, i.e. the mesh lies farther from the origin than
+/// about 16 times its size (georeferenced scans). Otherwise float32, as every tool reads.
+bool needs_double_positions(const std::vector<Vec3>& positions) {
+  if (positions.empty()) return false;
+  Vec3 lo = positions[0], hi = positions[0];
+  double largest = 0;
+  for (const Vec3& p : positions) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+  }
+  const double size = norm(hi - lo);
+  return largest * 0x1p-24 > 1e-6 * size;  // float32 rounds by up to 2^-24 of the value
+}
+
+/// Writes a mesh with float64 positions (see needs_double_positions): OpenMesh's writers
+/// write positions as float32 only. The layout is theirs otherwise (PLY: one vertex element,
+/// float32 normals, faces as uchar-counted int lists; OBJ: v, vn, f a//a).
+void write_double_positions(std::ostream& out, const TriMesh& mesh, MeshFormat format, bool normals) {
+  const auto& P = mesh.positions;
+  const auto& N = mesh.normals;
+  char line[160];
+  auto put = [&](int length) { out.write(line, std::streamsize(length)); };
+  if (format == MeshFormat::Obj) {
+    out << "# " << P.size() << " vertices, " << mesh.triangles.size() << " faces\n";
+    for (const Vec3& p : P) put(std::snprintf(line, sizeof line, "v %.17g %.17g %.17g\n", p.x, p.y, p.z));
+    if (normals)
+      for (const Vec3& n : N) put(std::snprintf(line, sizeof line, "vn %.9g %.9g %.9g\n", n.x, n.y, n.z));
+    for (const Triangle& t : mesh.triangles)
+      put(normals ? std::snprintf(line, sizeof line, "f %u//%u %u//%u %u//%u\n", t[0] + 1, t[0] + 1, t[1] + 1,
+                                  t[1] + 1, t[2] + 1, t[2] + 1)
+                  : std::snprintf(line, sizeof line, "f %u %u %u\n", t[0] + 1, t[1] + 1, t[2] + 1));
+    return;
+  }
+  const bool binary = format == MeshFormat::PlyBinary;
+  out << "ply\nformat " << (binary ? "binary_little_endian" : "ascii") << " 1.0\nelement vertex " << P.size()
+      << "\nproperty double x\nproperty double y\nproperty double z\n";
+  if (normals) out << "property float nx\nproperty float ny\nproperty float nz\n";
+  out << "element face " << mesh.triangles.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
+  for (size_t i = 0; i < P.size(); ++i) {
+    if (binary) {  // a little-endian host (x86-64, aarch64), as the header says
+      const double p[3] = {P[i].x, P[i].y, P[i].z};
+      out.write(reinterpret_cast<const char*>(p), sizeof p);
+      if (normals) {
+        const float n[3] = {float(N[i].x), float(N[i].y), float(N[i].z)};
+        out.write(reinterpret_cast<const char*>(n), sizeof n);
+      }
+    } else {
+      put(std::snprintf(line, sizeof line, "%.17g %.17g %.17g", P[i].x, P[i].y, P[i].z));
+      if (normals) put(std::snprintf(line, sizeof line, " %.9g %.9g %.9g", N[i].x, N[i].y, N[i].z));
+      out << '\n';
+    }
+  }
+  for (const Triangle& t : mesh.triangles) {
+    if (binary) {
+      char face[13];
+      face[0] = 3;
+      std::memcpy(face + 1, t.data(), 12);
+      out.write(face, sizeof face);
+    } else {
+      put(std::snprintf(line, sizeof line, "3 %u %u %u\n", t[0], t[1], t[2]));
+    }
+  }
+}
+
 }  // namespace
 
 void write_mesh(const TriMesh& mesh, const std::string& path, const WriteMeshOptions& options) {
@@ -138,6 +212,7 @@ void write_mesh(const TriMesh& mesh, const std::string& path, const WriteMeshOpt
                                                  " beyond its " + std::to_string(mesh.positions.size()) + " vertices");
   const bool normals = options.write_normals && !mesh.normals.empty() && mesh.normals.size() == mesh.positions.size();
 
+  const bool doubles = needs_double_positions(mesh.positions);
   detail::AtomicFile file(path);
   detail::FlatExporter exporter(mesh.positions, mesh.normals, mesh.triangles, normals);
   OpenMesh::IO::Options opt;
@@ -154,7 +229,14 @@ void write_mesh(const TriMesh& mesh, const std::string& path, const WriteMeshOpt
     bool ok = false;
     errno = 0;
     try {
-      ok = OpenMesh::IO::IOManager().write(out, format == MeshFormat::Obj ? "obj" : "ply", exporter, opt, 6);
+      if (doubles) {
+        write_double_positions(out, mesh, format, normals);
+        ok = true;
+      } else {
+        // Text (OBJ, ASCII PLY) with the 9 digits that give a float32 back (OpenMesh's
+        // default of 6 moved a coordinate by up to 16 ulps).
+        ok = OpenMesh::IO::IOManager().write(out, format == MeshFormat::Obj ? "obj" : "ply", exporter, opt, 9);
+      }
     } catch (const std::exception& e) {
       throw Error(Status::IoError, "cannot write '" + path + "': " + e.what());
     }
@@ -175,8 +257,10 @@ void write_mesh(const TriMesh& mesh, const std::string& path, const WriteMeshOpt
 TriMesh read_mesh(const std::string& path) {
   check_extension_known(path, {".ply", ".obj", ".off", ".stl"});
   require_readable(path);
-  detail::check_mesh_file_header(path, lower_extension(path));
+  detail::ExactVertices exact;
+  detail::check_mesh_file_header(path, lower_extension(path), &exact);
   detail::FlatImporter imp = read_with_openmesh(path, true);
+  use_exact_vertices(imp, exact);
   TriMesh mesh;
   mesh.positions = std::move(imp.positions);
   mesh.normals = std::move(imp.normals);
@@ -196,8 +280,10 @@ PointCloud read_point_cloud(const std::string& path) {
   if (lower_extension(path) == ".xyz") {
     cloud = detail::read_xyz(path);
   } else {
-    detail::check_mesh_file_header(path, ".ply");
+    detail::ExactVertices exact;
+    detail::check_mesh_file_header(path, ".ply", &exact);
     detail::FlatImporter imp = read_with_openmesh(path, true);
+    use_exact_vertices(imp, exact);
     cloud.positions = std::move(imp.positions);
     cloud.normals = std::move(imp.normals);
     if (!imp.colors.empty()) cloud.attributes.push_back({"color", 3, std::move(imp.colors)});

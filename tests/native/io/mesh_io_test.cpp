@@ -2,12 +2,17 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
 #include "particlemesh/core/error.h"
 #include "particlemesh/io/atomic_write.h"
+#include "particlemesh/mesh/topology_report.h"
 #include "particlemesh/sample/shapes.h"
+#include "particlemesh/surface/reconstruct.h"
 #include "particlemesh/surface/triangulate.h"
 #include "support/test_support.h"
 
@@ -154,4 +159,98 @@ TEST(MeshIO, FailedWritesLeaveNothingBehind) {
   in >> s;
   EXPECT_EQ(s, "new");
   EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
+}
+
+namespace {
+/// A PLY of points whose x y z (and nx ny nz) have PLY type `type` (double, int, ...), in
+/// `format` (ascii, binary_little_endian, binary_big_endian).
+template <class T>
+void write_typed_ply(const fs::path& p, const std::vector<Vec3>& points, const std::vector<Vec3>& normals,
+                     const std::string& type, const std::string& format) {
+  std::ofstream out(p, std::ios::binary);
+  out << "ply\nformat " << format << " 1.0\nelement vertex " << points.size()
+      << "\nproperty " << type << " x\nproperty " << type << " y\nproperty " << type << " z\n";
+  if (!normals.empty()) out << "property " << type << " nx\nproperty " << type << " ny\nproperty " << type << " nz\n";
+  out << "end_header\n";
+  auto put = [&](double v) {
+    const T t = T(v);
+    if (format == "ascii") {
+      char s[40];
+      std::snprintf(s, sizeof s, "%.17g ", double(t));
+      out << s;
+      return;
+    }
+    char b[sizeof(T)];
+    std::memcpy(b, &t, sizeof t);
+    if (format == "binary_big_endian") std::reverse(b, b + sizeof b);
+    out.write(b, sizeof b);
+  };
+  for (size_t i = 0; i < points.size(); ++i) {
+    for (double v : {points[i].x, points[i].y, points[i].z}) put(v);
+    if (!normals.empty())
+      for (double v : {normals[i].x, normals[i].y, normals[i].z}) put(v);
+    if (format == "ascii") out << "\n";
+  }
+}
+}  // namespace
+
+// OpenMesh's readers keep float32: a georeferenced scan (coordinates ~5e6, float32 steps of
+// 0.5) came out on a lattice coarser than its spacing, and binary integer coordinates as 0.
+TEST(MeshIO, CoordinatesKeepTheirPrecision) {
+  const auto dir = test::scratch_dir("precision");
+  const Vec3 offset{512345.678, 5412345.678, 250.5};
+  PointCloud sphere = fibonacci_sphere(4000, 5.0);  // spacing ~0.28
+  PointCloud far = sphere;
+  for (Vec3& p : far.positions) p = p + offset;
+  for (const char* format : {"ascii", "binary_little_endian", "binary_big_endian"}) {
+    const fs::path path = dir / (std::string(format) + ".ply");
+    write_typed_ply<double>(path, far.positions, far.normals, "double", format);
+    const PointCloud back = read_point_cloud(path.string());
+    EXPECT_EQ(back.positions, far.positions) << format;
+    EXPECT_EQ(back.normals, far.normals) << format;
+  }
+  // Integer coordinates (binary: OpenMesh read them as 0), small ones exactly.
+  const std::vector<Vec3> grid = {{1, 2, 3}, {-30000, 7, 1}, {4, 5, 6}};
+  for (const char* format : {"ascii", "binary_little_endian", "binary_big_endian"}) {
+    const fs::path path = dir / (std::string(format) + "_int.ply");
+    write_typed_ply<int32_t>(path, grid, {}, "int", format);
+    EXPECT_EQ(read_point_cloud(path.string()).positions, grid) << format;
+    write_typed_ply<int16_t>(path, grid, {}, "short", format);
+    EXPECT_EQ(read_point_cloud(path.string()).positions, grid) << format;
+  }
+  // float32 files read as before.
+  write_typed_ply<float>(dir / "f.ply", grid, {}, "float", "binary_little_endian");
+  EXPECT_EQ(read_point_cloud((dir / "f.ply").string()).positions, grid);
+
+  // The far cloud meshes as the sphere it is, every point used (from float32 coordinates its
+  // points collapsed onto 0.5-unit steps: duplicates, no sphere).
+  const SurfaceResult r = reconstruct_surface(read_point_cloud((dir / "binary_little_endian.ply").string()));
+  const TopologyReport t = topology_report(r.mesh);
+  EXPECT_TRUE(t.closed);
+  EXPECT_EQ(t.components, 1u);
+  EXPECT_EQ(t.euler_characteristic, 2);
+  EXPECT_EQ(t.vertices_used, 4000u);
+  EXPECT_TRUE(t.outward);
+
+  // Written back: float64 positions where float32 would round them (PLY, OBJ, ASCII PLY),
+  // read back exactly; a mesh near the origin stays float32.
+  for (const char* name : {"far.ply", "far.obj"}) {
+    const std::string path = (dir / name).string();
+    write_mesh(r.mesh, path);
+    const TriMesh back = read_mesh(path);
+    EXPECT_EQ(back.positions, r.mesh.positions) << name;
+    EXPECT_EQ(back.triangles, r.mesh.triangles) << name;
+  }
+  write_mesh(r.mesh, (dir / "far_ascii.ply").string(), {MeshFormat::PlyAscii, true});
+  EXPECT_EQ(read_mesh((dir / "far_ascii.ply").string()).positions, r.mesh.positions);
+  auto header_says = [&](const std::string& path, const std::string& line) {
+    std::ifstream in(path);
+    for (std::string l; std::getline(in, l) && l != "end_header";)
+      if (l == line) return true;
+    return false;
+  };
+  EXPECT_TRUE(header_says((dir / "far.ply").string(), "property double x"));
+  const SurfaceResult near = reconstruct_surface(sphere);
+  write_mesh(near.mesh, (dir / "near.ply").string());
+  EXPECT_TRUE(header_says((dir / "near.ply").string(), "property float x"));
 }
