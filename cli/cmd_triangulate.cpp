@@ -42,6 +42,19 @@ struct TriangulateArgs {
   SmoothChainArgs smooth;  // --smooth loop|butterfly --levels K
 };
 
+/// When over 5 % of the particles are in no triangle of the surface, their spacing varies more
+/// than one longest edge L allows (mesh vertices, scans): say what helps. Empty otherwise.
+std::string uneven_spacing_hint(const SurfaceResult& r, double thin) {
+  const size_t points = r.triangulation.points, unused = r.surface.unused_points;
+  if (points == 0 || unused * 20 <= points) return {};
+  char s[320];
+  std::snprintf(s, sizeof s,
+                "%.0f%% of the particles are in no triangle: they are unevenly spaced for L; try --thin %g "
+                "(an even subset) or a larger --max-edge-factor",
+                100.0 * double(unused) / double(points), thin > 1 ? thin + 1 : 2.0);
+  return s;
+}
+
 int run_triangulate(const TriangulateArgs& a) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
@@ -116,6 +129,7 @@ int run_triangulate(const TriangulateArgs& a) {
     if (!input.report.is_null()) j["input_cloud"] = input.report;
     if (a.thin > 1)
       j["thin"] = {{"factor", a.thin}, {"distance", thin_distance}, {"kept", cloud.size()}, {"of", input.cloud.size()}};
+    if (const std::string h = a.raw ? std::string() : uneven_spacing_hint(result, a.thin); !h.empty()) j["hint"] = h;
     write_json_file(j, a.report);
   }
   if (!a.quiet) {
@@ -140,6 +154,7 @@ int run_triangulate(const TriangulateArgs& a) {
                   f.holes_filled, f.hole_triangles, f.pinches_resolved, f.holes_left,
                   f.holes_left ? (" (largest " + std::to_string(f.largest_hole_left) + " edges)").c_str() : "");
       if (f.unused_points) std::printf("  unused        %zu particles in no triangle\n", f.unused_points);
+      if (const std::string h = uneven_spacing_hint(result, a.thin); !h.empty()) std::printf("  hint          %s\n", h.c_str());
     }
     std::printf("%s", describe(report).c_str());
     std::printf("  time          %.2f s (read %.2f, triangulate %.2f, write %.2f)\n",

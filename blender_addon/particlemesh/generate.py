@@ -131,6 +131,17 @@ def triangulate(particles, settings, progress=None):
     return _smooth(mesh, settings, progress)
 
 
+def uneven_spacing_warning(stats):
+    """A warning when over 5 % of the particles are in no triangle of the finished surface:
+    their spacing varies more than one longest edge L allows (mesh vertices, scans), which
+    Thin Out (an even subset) or a larger edge factor helps. None otherwise."""
+    points, unused = stats.get("points", 0), stats.get("unused_points", 0)
+    if stats.get("raw") or not points or unused * 20 <= points:
+        return None
+    return (f"{unused} of {points} particles are in no triangle: they are unevenly spaced "
+            "for the longest edge; try Thin Out 2 or a larger Max Edge Factor")
+
+
 def polygonize_radii(particles, settings):
     """(radius, radii): one radius for all (0 = the library's default from the spacing), or
     per-particle radii from the particles' sizes."""

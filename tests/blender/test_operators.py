@@ -649,6 +649,26 @@ def run_modal(driver, context, first=None):
     raise AssertionError("the job never finished")
 
 
+def test_unevenly_spaced_particles_warn(pm, clean_scene):
+    """A sphere sampled 2.6x sparser on its upper half: its sparse particles fall out of the
+    surface, and the operator warns with what helps (Thin Out); an even sphere does not."""
+    co, sparse = fibonacci_sphere(20000), fibonacci_sphere(3000)
+    uneven = np.concatenate([co[co[:, 2] < 0], sparse[sparse[:, 2] >= 0]])
+    data = pm.generate.run("TRIANGULATE", pm.generate.Particles(uneven), {"auto_spacing": True})
+    assert data.stats["unused_points"] * 20 > len(uneven)
+    warning = pm.generate.uneven_spacing_warning(data.stats)
+    assert warning and "Thin Out" in warning and f"of {len(uneven)} particles" in warning
+    even = pm.generate.run("TRIANGULATE", pm.generate.Particles(co), {"auto_spacing": True})
+    assert pm.generate.uneven_spacing_warning(even.stats) is None
+    # Thin Out 2, as the warning says, meshes every kept particle: one closed sphere.
+    thinned = pm.generate.run("TRIANGULATE", pm.generate.Particles(uneven), {"auto_spacing": True, "thin": 2.0})
+    assert pm.generate.uneven_spacing_warning(thinned.stats) is None
+    rep = pm.native.mesh_report(thinned.positions, thinned.triangles)
+    assert rep["closed"] and rep["components"] == 1 and rep["vertices_used"] == thinned.vertex_count
+    make_active(point_cloud_object("uneven", uneven))
+    assert bpy.ops.particlemesh.triangulate() == {"FINISHED"}  # a warning, not a failure
+
+
 def test_modal_job_finishes_and_shows_progress(pm):
     finished = []
     particles = pm.generate.Particles(fibonacci_sphere(20000))

@@ -108,6 +108,30 @@ def test_georeferenced_coordinates_mesh_as_at_the_origin(cli, inspect, tmp_path)
     assert first == (rows[0][0] + offset[0], rows[0][1] + offset[1], rows[0][2] + offset[2])
 
 
+def test_unevenly_spaced_particles_get_a_hint(cli, tmp_path):
+    """A sphere sampled 2.6x sparser on its upper half: the sparse particles are farther apart
+    than L = 2 r0 of the dense half, fall out of the surface, and the summary and the report
+    say what helps (and --thin 2 does: one closed sphere); an even sphere gets no hint."""
+    pts, sparse = tmp_path / "s.xyz", tmp_path / "sparse.xyz"
+    cli("sample", "fibonacci", "--points", "20000", "-o", pts)
+    cli("sample", "fibonacci", "--points", "3000", "-o", sparse)
+    rows = lambda p: [line for line in p.read_text().splitlines() if line.strip()]  # noqa: E731
+    uneven = ([r for r in rows(pts) if float(r.split()[2]) < 0]
+              + [r for r in rows(sparse) if float(r.split()[2]) >= 0])
+    (tmp_path / "uneven.xyz").write_text("\n".join(uneven) + "\n")
+    rep = tmp_path / "r.json"
+    proc = cli("triangulate", tmp_path / "uneven.xyz", "-o", tmp_path / "u.ply", "--report", rep)
+    r = json.loads(rep.read_text())
+    assert r["surface"]["unused_points"] * 20 > len(uneven)
+    assert "--thin 2" in r["hint"] and "--max-edge-factor" in r["hint"]
+    assert "hint" in proc.stdout and "--thin 2" in proc.stdout
+    proc = cli("triangulate", tmp_path / "uneven.xyz", "-o", tmp_path / "t.ply", "--thin", "2", "--report", rep)
+    r = json.loads(rep.read_text())
+    assert "hint" not in r and r["topology"]["closed"] and r["topology"]["components"] == 1
+    proc = cli("triangulate", pts, "-o", tmp_path / "e.ply", "--report", rep)
+    assert "hint" not in proc.stdout and "hint" not in json.loads(rep.read_text())
+
+
 def test_threads_do_not_change_output(cli, tmp_path):
     pts = tmp_path / "t.xyz"
     cli("sample", "torus", "--spacing", "0.06", "-o", pts)
