@@ -4,7 +4,7 @@ Python), as io_mesh_ply does."""
 import bpy
 import numpy as np
 
-from . import mesh_arrays
+from . import mesh_arrays, native
 
 # Blender 4.0 made MeshPolygon.loop_total read-only (sizes follow from loop_start);
 # 4.1 removed Mesh.use_auto_smooth (custom normals no longer need it).
@@ -36,6 +36,7 @@ def write(mesh, data, *, custom_normals=True, attributes=True):
     triangles = np.ascontiguousarray(data.triangles, dtype=np.int32)
     nv, nt = len(positions), len(triangles)
     rebuild = not _same_triangles(mesh, nv, triangles)
+    calc_edges = rebuild
     if not rebuild:
         mesh.vertices.foreach_set("co", positions.ravel())
     else:
@@ -50,7 +51,15 @@ def write(mesh, data, *, custom_normals=True, attributes=True):
             if _SET_LOOP_TOTAL:
                 mesh.polygons.foreach_set("loop_total", np.full(nt, 3, dtype=INDEX))
             mesh.polygons.foreach_set("use_smooth", np.ones(nt, dtype=bool))
-    mesh.update(calc_edges=rebuild)
+            if native.has_triangle_edges():
+                # The library numbers the edges (a few ms); Blender's own edge pass, which
+                # update(calc_edges=True) runs, took 75 of the 90 ms of writing 200k triangles.
+                edges, corner_edges = native.triangle_edges(triangles, nv)
+                mesh.edges.add(len(edges))
+                mesh.edges.foreach_set("vertices", edges.ravel())
+                mesh.loops.foreach_set("edge_index", corner_edges)
+                calc_edges = False
+    mesh.update(calc_edges=calc_edges)
     if (custom_normals and data.normals is not None and nt
             and not data.stats.get("normals_are_face_weighted", False)):
         if hasattr(mesh, "use_auto_smooth"):

@@ -302,6 +302,9 @@ _OPTIONAL = {
     # An even subset of a cloud (the coarse viewport preview, issue 6).
     "pm_cloud_thin": (c_int, [_cloud_p, c_double, POINTER(c_uint32), c_size_t, POINTER(c_size_t)]),
     "pm_estimate_spacing_sampled": (c_int, [_cloud_p, c_size_t, c_int32, POINTER(c_double)]),
+    # A triangle list's edges, for Blender's edge list (the mesh write, issue 6).
+    "pm_triangle_edges": (c_int, [POINTER(c_uint32), c_size_t, c_size_t, c_int32, POINTER(c_uint32),
+                                  c_size_t, POINTER(c_uint32), POINTER(c_size_t)]),
 }
 
 # The PCL bridge's C entry points (libparticlemesh_pcl).
@@ -859,6 +862,31 @@ def thin(positions, min_distance):
         return out[:count.value].astype(np.int64)
     finally:
         lib.pm_cloud_destroy(cloud)
+
+
+def has_triangle_edges():
+    return load().has("pm_triangle_edges")
+
+
+def triangle_edges(triangles, vertex_count, threads=0):
+    """The edges of a triangle list (pm_triangle_edges): (E, 2) uint32, each edge once as
+    (a, b) with a < b, ordered; and (3 T,) uint32, per triangle corner the edge to the next
+    corner. What Blender's loops and edges need, without its own edge pass."""
+    lib = load()
+    if not lib.has("pm_triangle_edges"):
+        raise NotAvailableError("pm_triangle_edges")
+    tris = np.ascontiguousarray(triangles, dtype=np.uint32)
+    if tris.ndim != 2 or tris.shape[1] != 3:
+        raise ParticlemeshError(f"triangles must have shape (T, 3), got {tris.shape}",
+                                STATUS_INVALID_ARGUMENT)
+    nt = len(tris)
+    edges = np.empty((3 * nt, 2), dtype=np.uint32)
+    corners = np.empty(3 * nt, dtype=np.uint32)
+    count = c_size_t(0)
+    _check(lib, lib.pm_triangle_edges(_ptr(tris, c_uint32), nt, int(vertex_count), int(threads),
+                                      _ptr(edges, c_uint32), len(edges), _ptr(corners, c_uint32),
+                                      ctypes.byref(count)))
+    return edges[:count.value], corners
 
 
 def triangulate(positions, normals=None, spacing=0.0, max_edge_factor=2.0, threads=0,

@@ -398,7 +398,8 @@ def test_index_buffers_have_the_format_blender_copies_in_bulk(pm):
     slower); a mesh written and read back keeps its triangles."""
     rna = bpy.types
     for owner, name in ((rna.MeshLoop, "vertex_index"), (rna.MeshPolygon, "loop_start"),
-                        (rna.MeshPolygon, "loop_total"), (rna.MeshLoopTriangle, "vertices")):
+                        (rna.MeshPolygon, "loop_total"), (rna.MeshLoopTriangle, "vertices"),
+                        (rna.MeshEdge, "vertices"), (rna.MeshLoop, "edge_index")):
         prop = owner.bl_rna.properties[name]
         assert prop.type == "INT" and prop.subtype == "UNSIGNED", (owner, name, prop.subtype)
     assert np.dtype(pm.blender_mesh.INDEX).char == "I"
@@ -408,6 +409,19 @@ def test_index_buffers_have_the_format_blender_copies_in_bulk(pm):
     got = pm.blender_mesh.triangles(mesh)
     assert got.dtype == np.int32
     np.testing.assert_array_equal(got, data.triangles)
+    # The edges come from the library (pm_triangle_edges), not Blender's edge pass: a valid
+    # mesh (validate() finds nothing to fix), each edge once, every loop on its edge.
+    assert pm.native.has_triangle_edges()
+    assert len(mesh.edges) == 3 * len(data.triangles) // 2
+    ev = np.empty(2 * len(mesh.edges), dtype=np.uint32)
+    mesh.edges.foreach_get("vertices", ev)
+    loop_edge = np.empty(len(mesh.loops), dtype=np.uint32)
+    mesh.loops.foreach_get("edge_index", loop_edge)
+    t = data.triangles
+    a, b = t.ravel(), np.roll(t, -1, axis=1).ravel()
+    np.testing.assert_array_equal(np.sort(ev.reshape(-1, 2)[loop_edge], axis=1),
+                                  np.stack([np.minimum(a, b), np.maximum(a, b)], 1))
+    assert mesh.validate(verbose=False) is False
     bpy.data.meshes.remove(mesh)
 
 

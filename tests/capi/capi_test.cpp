@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cmath>
 #include <string>
 #include <vector>
@@ -156,6 +158,31 @@ TEST(CApi, ThinKeepsAnEvenSubsetAndChecksItsArguments) {
   EXPECT_EQ(pm_cloud_thin(cloud, 1e-300, idx.data(), idx.size(), &untouched), PM_STATUS_LIMIT_EXCEEDED);
   EXPECT_EQ(untouched, 12345u);
   pm_cloud_destroy(cloud);
+}
+
+TEST(CApi, TriangleEdgesNumberEachEdgeOnceAndEveryCorner) {
+  // Two triangles sharing the edge (1, 2), and a third on (2, 3) only.
+  const uint32_t tris[] = {0, 1, 2, 2, 1, 3, 3, 4, 2};
+  std::vector<uint32_t> edges(2 * 9, 0xdeadbeefu), corners(9, 0xdeadbeefu);
+  size_t count = 0;
+  ASSERT_EQ(pm_triangle_edges(tris, 3, 5, 0, edges.data(), 9, corners.data(), &count), PM_OK) << last();
+  ASSERT_EQ(count, 7u);
+  const std::vector<uint32_t> want = {0, 1, 0, 2, 1, 2, 1, 3, 2, 3, 2, 4, 3, 4};  // ordered, a < b
+  EXPECT_EQ(std::vector<uint32_t>(edges.begin(), edges.begin() + 14), want);
+  EXPECT_EQ(edges[14], 0xdeadbeefu);  // nothing past the count
+  for (size_t c = 0; c < 9; ++c) {
+    const uint32_t a = tris[c], b = tris[c % 3 == 2 ? c - 2 : c + 1];
+    EXPECT_EQ(edges[2 * corners[c]], std::min(a, b));
+    EXPECT_EQ(edges[2 * corners[c] + 1], std::max(a, b));
+  }
+  // Too little room: the count needed, and an error; an index beyond the vertices is named.
+  EXPECT_EQ(pm_triangle_edges(tris, 3, 5, 0, edges.data(), 6, corners.data(), &count), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(count, 7u);
+  EXPECT_NE(last().find("edge_capacity 6"), std::string::npos) << last();
+  EXPECT_EQ(pm_triangle_edges(tris, 3, 4, 0, edges.data(), 9, corners.data(), &count), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("triangle 2 has vertex index 4"), std::string::npos) << last();
+  EXPECT_EQ(pm_triangle_edges(nullptr, 0, 0, 0, nullptr, 0, nullptr, &count), PM_OK) << last();
+  EXPECT_EQ(count, 0u);
 }
 
 TEST(CApi, MisuseGivesStatusAndMessageAndLeavesOutputsAlone) {

@@ -391,6 +391,24 @@ def test_thin_keeps_an_even_subset(native):
     assert e.value.status == native.STATUS_INVALID_ARGUMENT
 
 
+def test_triangle_edges_number_every_corner(native):
+    # A closed surface: E = 3T / 2, each edge once (a < b, ordered), every corner's edge joins
+    # that corner to the next.
+    data = native.triangulate(fibonacci_sphere(2000))
+    tris = data.triangles
+    edges, corners = native.triangle_edges(tris, data.vertex_count)
+    assert edges.dtype == np.uint32 and corners.dtype == np.uint32
+    assert 2 * len(edges) == 3 * len(tris)
+    assert np.all(edges[:, 0] < edges[:, 1])
+    key = edges[:, 0].astype(np.int64) * data.vertex_count + edges[:, 1]
+    assert np.all(np.diff(key) > 0)
+    a, b = tris.ravel(), np.roll(tris, -1, axis=1).ravel()
+    np.testing.assert_array_equal(edges[corners], np.stack([np.minimum(a, b), np.maximum(a, b)], 1))
+    with pytest.raises(native.ParticlemeshError, match="vertex index 2000") as e:
+        native.triangle_edges(np.array([[0, 1, 2000]]), 2000)
+    assert e.value.status == native.STATUS_INVALID_ARGUMENT
+
+
 # ---- functions other issues add ---------------------------------------------------------------
 
 def test_polygonize_when_available(native):

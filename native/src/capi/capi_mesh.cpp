@@ -1,11 +1,14 @@
 // C ABI: meshes and topology reports.
+#include <algorithm>
 #include <climits>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "capi/firewall.h"
 #include "capi/handles.h"
 #include "particlemesh/io/mesh_io.h"
+#include "particlemesh/mesh/edges.h"
 #include "particlemesh/mesh/topology_report.h"
 
 using namespace particlemesh;
@@ -151,6 +154,32 @@ pm_status pm_mesh_copy_triangles(const pm_mesh* mesh, int32_t* out, size_t capac
 }
 
 void pm_mesh_destroy(pm_mesh* mesh) { delete mesh; }
+
+pm_status pm_triangle_edges(const uint32_t* triangles, size_t triangle_count, size_t vertex_count, int32_t threads,
+                            uint32_t* out_edges, size_t edge_capacity, uint32_t* out_corner_edges,
+                            size_t* out_edge_count) {
+  return guarded([&] {
+    require(out_edge_count, "out_edge_count");
+    if (triangle_count > 0) {
+      require(triangles, "triangles");
+      require(out_edges, "out_edges");
+      require(out_corner_edges, "out_corner_edges");
+    }
+    if (triangle_count >= (size_t(1) << 30)) throw Error(Status::LimitExceeded, "more than 2^30 triangles");
+    std::vector<Triangle> tris(triangle_count);
+    for (size_t t = 0; t < triangle_count; ++t) tris[t] = {triangles[3 * t], triangles[3 * t + 1], triangles[3 * t + 2]};
+    const MeshEdges e = mesh_edges(tris, vertex_count, threads);
+    *out_edge_count = e.edges.size();
+    if (edge_capacity < e.edges.size())
+      throw Error(Status::InvalidArgument, "edge_capacity " + std::to_string(edge_capacity) + " is less than the " +
+                                               std::to_string(e.edges.size()) + " edges");
+    for (size_t i = 0; i < e.edges.size(); ++i) {
+      out_edges[2 * i] = e.edges[i][0];
+      out_edges[2 * i + 1] = e.edges[i][1];
+    }
+    std::copy(e.corner_edges.begin(), e.corner_edges.end(), out_corner_edges);
+  });
+}
 
 pm_status pm_mesh_report(const pm_mesh* mesh, pm_topology_report* out_report) {
   return guarded([&] {

@@ -1,0 +1,69 @@
+#include "particlemesh/mesh/edges.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <set>
+#include <utility>
+
+#include "particlemesh/core/error.h"
+#include "particlemesh/sample/shapes.h"
+#include "particlemesh/surface/triangulate.h"
+
+using namespace particlemesh;
+
+namespace {
+std::pair<uint32_t, uint32_t> key(uint32_t a, uint32_t b) { return {std::min(a, b), std::max(a, b)}; }
+
+/// The edges as a brute-force set, and a check of every corner's edge against it.
+void expect_edges_of(const std::vector<Triangle>& tris, const MeshEdges& e) {
+  std::set<std::pair<uint32_t, uint32_t>> want;
+  for (const Triangle& t : tris)
+    for (int k = 0; k < 3; ++k) want.insert(key(t[k], t[(k + 1) % 3]));
+  ASSERT_EQ(e.edges.size(), want.size());
+  size_t i = 0;
+  for (const auto& [a, b] : want) {  // each once, a < b, ordered by a then b
+    EXPECT_EQ(e.edges[i][0], a);
+    EXPECT_EQ(e.edges[i][1], b);
+    ++i;
+  }
+  ASSERT_EQ(e.corner_edges.size(), 3 * tris.size());
+  for (size_t t = 0; t < tris.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const auto& edge = e.edges.at(e.corner_edges[3 * t + size_t(k)]);
+      EXPECT_EQ(std::make_pair(edge[0], edge[1]), key(tris[t][k], tris[t][(k + 1) % 3]));
+    }
+}
+}  // namespace
+
+TEST(MeshEdges, ClosedSurfaceHasThreeHalvesAsManyEdgesAsTriangles) {
+  const TriMesh m = icosphere_mesh(4);
+  const MeshEdges e = mesh_edges(m.triangles, m.positions.size());
+  EXPECT_EQ(2 * e.edges.size(), 3 * m.triangles.size());
+  expect_edges_of(m.triangles, e);
+}
+
+TEST(MeshEdges, NonManifoldTrianglesAndAnyThreadCount) {
+  // The seed's raw triangles: overlapping pairs, edges of three and more triangles.
+  const TriangulateResult raw = triangulate_raw(fibonacci_sphere(3000));
+  const MeshEdges one = mesh_edges(raw.mesh.triangles, raw.mesh.positions.size(), 1);
+  expect_edges_of(raw.mesh.triangles, one);
+  const MeshEdges all = mesh_edges(raw.mesh.triangles, raw.mesh.positions.size(), 0);
+  EXPECT_EQ(all.edges, one.edges);
+  EXPECT_EQ(all.corner_edges, one.corner_edges);
+  EXPECT_TRUE(mesh_edges({}, 5).edges.empty());
+}
+
+TEST(MeshEdges, BadTrianglesAreNamed) {
+  auto message = [](const std::vector<Triangle>& t, size_t n) {
+    try {
+      mesh_edges(t, n);
+    } catch (const Error& e) {
+      EXPECT_EQ(e.status(), Status::InvalidArgument);
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message({{0, 1, 2}, {1, 2, 7}}, 5).find("triangle 1 has vertex index 7"), std::string::npos);
+  EXPECT_NE(message({{0, 1, 1}}, 5).find("triangle 0 repeats a vertex"), std::string::npos);
+}
