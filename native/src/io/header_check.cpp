@@ -387,6 +387,9 @@ void check_ply(const std::string& path, ExactVertices* exact) {
       };
       exact_positions = not_float32(0) || not_float32(1) || not_float32(2);
       exact_normals = slot[3] >= 0 && slot[4] >= 0 && slot[5] >= 0 && (not_float32(3) || not_float32(4) || not_float32(5));
+      for (int k = 0; k < 6; ++k)
+        exact->integer_types |= slot[k] >= 0 && vertex->properties[size_t(slot[k])].scalar != PlyScalar::Float32 &&
+                                vertex->properties[size_t(slot[k])].scalar != PlyScalar::Float64;
     }
   }
   // Where a vertex property goes: 0-2 a position's coordinate, 3-5 a normal's, -1 nowhere.

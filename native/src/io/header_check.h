@@ -22,6 +22,7 @@ namespace particlemesh::detail {
 struct ExactVertices {
   std::vector<Vec3> positions;  ///< x y z (absent ones 0), one per vertex
   std::vector<Vec3> normals;    ///< nx ny nz, when the file has all three and one is not float32
+  bool integer_types = false;   ///< a PLY x y z or nx ny nz has an integer type
 };
 
 /// PLY: every element the header declares must be present (ASCII: token by token, list

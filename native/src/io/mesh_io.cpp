@@ -11,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <mutex>
 #include <sstream>
 #include <system_error>
@@ -90,7 +91,26 @@ void use_exact_vertices(detail::FlatImporter& imp, detail::ExactVertices& exact)
   if (!exact.normals.empty() && exact.normals.size() == imp.normals.size()) imp.normals = std::move(exact.normals);
 }
 
-detail::FlatImporter read_with_openmesh(const std::string& path, bool want_normals) {
+/// OpenMesh's PLY reader writes a line to std::cerr for every integer-typed coordinate it
+/// cannot convert (three per vertex), whose values the header check has read exactly (see
+/// detail::ExactVertices). While it reads such a file, std::cerr goes nowhere.
+class SilenceCerr {
+ public:
+  explicit SilenceCerr(bool on) : saved_(on ? std::cerr.rdbuf(nullptr) : nullptr), on_(on) {}
+  ~SilenceCerr() {
+    if (!on_) return;
+    std::cerr.rdbuf(saved_);
+    std::cerr.clear();
+  }
+  SilenceCerr(const SilenceCerr&) = delete;
+  SilenceCerr& operator=(const SilenceCerr&) = delete;
+
+ private:
+  std::streambuf* saved_;
+  bool on_;
+};
+
+detail::FlatImporter read_with_openmesh(const std::string& path, bool want_normals, bool quiet_cerr = false) {
   detail::FlatImporter importer;
   OpenMesh::IO::Options opt;
   if (want_normals) opt += OpenMesh::IO::Options::VertexNormal;
@@ -99,6 +119,7 @@ detail::FlatImporter read_with_openmesh(const std::string& path, bool want_norma
   CaptureOpenMeshErrors capture;
   bool ok = false;
   try {
+    SilenceCerr quiet(quiet_cerr);
     ok = OpenMesh::IO::IOManager().read(path, importer, opt);
   } catch (const std::exception& e) {
     throw Error(Status::FormatError, "'" + path + "': " + e.what());
@@ -259,7 +280,7 @@ TriMesh read_mesh(const std::string& path) {
   require_readable(path);
   detail::ExactVertices exact;
   detail::check_mesh_file_header(path, lower_extension(path), &exact);
-  detail::FlatImporter imp = read_with_openmesh(path, true);
+  detail::FlatImporter imp = read_with_openmesh(path, true, exact.integer_types);
   use_exact_vertices(imp, exact);
   TriMesh mesh;
   mesh.positions = std::move(imp.positions);
@@ -282,7 +303,7 @@ PointCloud read_point_cloud(const std::string& path) {
   } else {
     detail::ExactVertices exact;
     detail::check_mesh_file_header(path, ".ply", &exact);
-    detail::FlatImporter imp = read_with_openmesh(path, true);
+    detail::FlatImporter imp = read_with_openmesh(path, true, exact.integer_types);
     use_exact_vertices(imp, exact);
     cloud.positions = std::move(imp.positions);
     cloud.normals = std::move(imp.normals);
