@@ -197,9 +197,8 @@ PlyScalar ply_scalar(std::string_view t) {
 }
 
 struct PlyProperty {
-  std::string name;  ///< a scalar's name (x, nx, red, ...)
-  std::string type;  ///< a scalar's type word
-  PlyScalar scalar = PlyScalar::Float32;  ///< ... decoded
+  std::string name;                       ///< a scalar's name (x, nx, red, ...)
+  PlyScalar scalar = PlyScalar::Float32;  ///< a scalar's type
   bool list = false;
   bool integer = false;  ///< the scalar or list item type is an integer type
   int size = 0;          ///< scalar size, or list item size
@@ -343,7 +342,6 @@ void check_ply(const std::string& path, ExactVertices* exact) {
         if (p.count_size == 0 || p.size == 0 || p.count_size == 8)
           fail(path, "bad PLY header line '" + std::string(line.substr(0, 80)) + "' (unknown list types)");
       } else if (w.size() == 3) {
-        p.type = std::string(w[1]);
         p.scalar = ply_scalar(w[1]);
         p.name = std::string(w[2].substr(0, 40));
         p.size = ply_type_size(w[1]);
@@ -382,8 +380,7 @@ void check_ply(const std::string& path, ExactVertices* exact) {
             break;
           }
       auto not_float32 = [&](int k) {
-        return slot[k] >= 0 && vertex->properties[size_t(slot[k])].type != "float" &&
-               vertex->properties[size_t(slot[k])].type != "float32";
+        return slot[k] >= 0 && vertex->properties[size_t(slot[k])].scalar != PlyScalar::Float32;
       };
       exact_positions = not_float32(0) || not_float32(1) || not_float32(2);
       exact_normals = slot[3] >= 0 && slot[4] >= 0 && slot[5] >= 0 && (not_float32(3) || not_float32(4) || not_float32(5));
