@@ -476,7 +476,10 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   // ---- 1. candidate blocks: the blocks each particle-grid cell's supports reach ------------
   tracker.stage("finding blocks", begin, begin + 0.05 * (1 - begin), ncells);
   auto cell_block_range = [&](uint32_t c, int64_t* blo, int64_t* bhi) {
-    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+    // Infinite sentinels: a finite one (1e300) stayed the minimum for particles near DBL_MAX,
+    // below the grid origin, and the block index overflowed int64 (found by fuzzing).
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    double lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
     for (uint32_t s = pgrid.cell_begin(c); s < pgrid.cell_end(c); ++s) {
       const double r = field.uniform_radius() ? R : 1.0 / std::sqrt(field.sorted_inverse_squared_radii()[s]);
       for (int a = 0; a < 3; ++a) {
