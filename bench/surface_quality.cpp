@@ -84,6 +84,16 @@ int main(int argc, char** argv) {
                      a.normals.insert(a.normals.end(), b.normals.begin(), b.normals.end());
                      return a;
                    }, 2, 0, 0});
+  // Sharp creases and corners (machined parts): a box (90 degrees), a cone (a 63-degree rim
+  // and an apex), prisms whose sides meet at 75 / 52.5 / 52.5 and 60 degrees.
+  auto add_sharp = [&](const std::string& name, std::function<TriMesh()> mesh, double r0) {
+    cases.push_back({name, [mesh, r0] { return poisson_disk_sample(mesh(), r0, 3); }, 1, 0, 0});
+    cases.push_back({name + "+jitter", [mesh, r0] { return jitter(poisson_disk_sample(mesh(), r0, 3), 0.1 * r0, 5); }, 1, 0, 0});
+  };
+  add_sharp("box", [] { return box_mesh({1, 1, 1}); }, 0.02);
+  add_sharp("cone", [] { return cone_mesh(0.5, 1.0, 256); }, 0.02);
+  add_sharp("prism-75", [] { return prism_mesh(75); }, 0.02);
+  add_sharp("prism-60", [] { return prism_mesh(60); }, 0.02);
   add_mesh("spot", "meshes/spot.obj", 0.45, 0, 0);
   add_mesh("bunny-coarse", "meshes/bunny_coarse.ply", 0.3, 0, 0);
   add_mesh("rocker-arm", "meshes/rocker_arm.obj", 1.0, 1, 0);

@@ -32,7 +32,7 @@ struct TriangulateArgs {
   std::string normals = "auto";
   size_t fill_holes = 100;
   double fill_edge_factor = 1.5;
-  double normal_angle = 90.0;
+  double normal_angle = 120.0;
   bool ascii = false;
   bool quiet = false;
   int threads = 0;
@@ -188,7 +188,7 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
       ->capture_default_str();
   app->add_flag("--raw", args->raw, "Return the seed's exact triangle set (not a surface: overlapping pairs on quads)");
   app->add_option("--normal-angle", args->normal_angle,
-                  "Co-normality: drop triangles whose corner or face normals differ by more than this (degrees)")
+                  "Co-normality: drop triangles whose corner normals differ by more than this, or whose face normal differs from a corner's by more than min(this, 90) (degrees)")
       ->check(CLI::Range(1.0, 180.0))
       ->check(finite_number())
       ->capture_default_str();

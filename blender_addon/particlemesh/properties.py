@@ -55,10 +55,11 @@ class TriangulateProps:
                ("ESTIMATE", "Estimate", "Plane fits and a spanning tree only, ignoring any "
                                         "normals the particles have")])
     normal_angle: FloatProperty(
-        name="Normal Angle", default=math.radians(90.0), min=0.0, max=math.pi,
+        name="Normal Angle", default=math.radians(120.0), min=0.0, max=math.pi,
         subtype="ANGLE", update=_settings_changed,
         description="Co-normality limit: a triangle whose corner normals differ by more than "
-                    "this is not surface (separates sheets facing each other)")
+                    "this is not surface (separates sheets facing each other; above 90 degrees "
+                    "the surface turns sharp creases)")
     repair: BoolProperty(
         name="Repair", default=True, update=_settings_changed,
         description="Fill narrow holes and resolve pinched vertices")

@@ -336,7 +336,7 @@ TEST(ParticleTriangulation, ParametersAndThreads) {
   EXPECT_EQ(pt.getMaximumNearestNeighbors(), 256u);
   EXPECT_FALSE(pt.getRemoveOutliers() || pt.getEstimateNormals());
   EXPECT_EQ(pt.getDownsampling(), particlemesh_pcl::Downsampling::None);
-  EXPECT_EQ(pt.getNormalAngle(), 90.0);
+  EXPECT_EQ(pt.getNormalAngle(), particlemesh::SurfaceOptions{}.normal_angle);  // the library's default (120)
   EXPECT_EQ(pt.getMaximumHoleSize(), 100u);
   EXPECT_FALSE(pt.getRawTriangulation());
 

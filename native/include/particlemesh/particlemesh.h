@@ -117,7 +117,7 @@ typedef struct pm_triangulate_options {
   pm_progress_fn progress;  /**< may be NULL */
   void* progress_user_data;
   /* -- finishing stages (ignored with PM_TRIANGULATE_RAW) -- */
-  double normal_angle;      /**< co-normality limit in degrees (default 90) */
+  double normal_angle;      /**< co-normality limit in degrees (default 120) */
   uint32_t fill_holes;      /**< fill boundary loops of up to this many edges (default 100, 0 = none) */
   double fill_edge_factor;  /**< fill edges at most this x L: wider openings stay open (default 1.5) */
   int32_t normals;          /**< PM_NORMALS_* (default PM_NORMALS_AUTO) */

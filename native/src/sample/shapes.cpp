@@ -112,6 +112,50 @@ TriMesh trefoil_tube_mesh(double scale, double tube_radius, int nu, int nv) {
   return tube_mesh(curve, deriv, tube_radius, nu, nv);
 }
 
+TriMesh box_mesh(Vec3 size) {
+  if (!(size.x > 0 && size.y > 0 && size.z > 0) || !is_finite(size))
+    throw Error(Status::InvalidArgument, "box size must be finite and > 0 along every axis");
+  TriMesh m;
+  for (int i = 0; i < 8; ++i) m.positions.push_back({i & 1 ? size.x : 0, i & 2 ? size.y : 0, i & 4 ? size.z : 0});
+  // Corner i has x from bit 0, y from bit 1, z from bit 2; each face's quad winds outward.
+  add_quad(m.triangles, 0, 2, 3, 1);  // z = 0
+  add_quad(m.triangles, 4, 5, 7, 6);  // z = size.z
+  add_quad(m.triangles, 0, 1, 5, 4);  // y = 0
+  add_quad(m.triangles, 2, 6, 7, 3);  // y = size.y
+  add_quad(m.triangles, 0, 4, 6, 2);  // x = 0
+  add_quad(m.triangles, 1, 3, 7, 5);  // x = size.x
+  return m;
+}
+
+TriMesh cone_mesh(double r, double h, int nu) {
+  if (!(r > 0 && h > 0) || !std::isfinite(r) || !std::isfinite(h) || nu < 3)
+    throw Error(Status::InvalidArgument, "cone needs a finite radius and height > 0 and at least 3 sectors");
+  TriMesh m;
+  m.positions = {{0, 0, h}, {0, 0, 0}};  // apex, centre of the base
+  for (int i = 0; i < nu; ++i) m.positions.push_back({r * std::cos(2 * kPi * i / nu), r * std::sin(2 * kPi * i / nu), 0});
+  for (int i = 0; i < nu; ++i) {
+    const uint32_t p = 2 + uint32_t(i), q = 2 + uint32_t((i + 1) % nu);
+    m.triangles.push_back({p, q, 0});
+    m.triangles.push_back({1, q, p});
+  }
+  return m;
+}
+
+TriMesh prism_mesh(double apex_deg, double height) {
+  if (!(apex_deg > 0 && apex_deg < 180) || !(height > 0) || !std::isfinite(height))
+    throw Error(Status::InvalidArgument, "prism needs an apex angle in (0, 180) degrees and a finite height > 0");
+  const double a = apex_deg * kPi / 360;
+  const Vec3 A{0, 0, 0}, B{std::cos(a), std::sin(a), 0}, C{std::cos(a), -std::sin(a), 0}, Z{0, 0, height};
+  TriMesh m;
+  m.positions = {A, B, C, A + Z, B + Z, C + Z};
+  add_quad(m.triangles, 0, 2, 5, 3);  // side A-C
+  add_quad(m.triangles, 2, 1, 4, 5);  // side C-B
+  add_quad(m.triangles, 1, 0, 3, 4);  // side B-A
+  m.triangles.push_back({0, 1, 2});
+  m.triangles.push_back({3, 5, 4});
+  return m;
+}
+
 TriMesh icosphere_mesh(int levels, double radius) {
   if (levels < 0 || levels > 9) throw Error(Status::InvalidArgument, "icosphere levels must be in [0, 9]");
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;

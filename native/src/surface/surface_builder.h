@@ -28,7 +28,7 @@
 namespace particlemesh::detail {
 
 struct BuilderOptions {
-  double cos_normal_angle = 0.0;  ///< co-normality: corner normals and face normal agree within
+  double cos_normal_angle = -0.5;  ///< co-normality: corner normals and face normal agree within
   double max_edge = 0;            ///< L of the raw test
   size_t small_hole = 6;          ///< loops up to this many edges are filled before unpinching
   size_t max_hole = 100;          ///< loops up to this many edges may be filled (0 = none)

@@ -42,7 +42,7 @@ namespace particlemesh_pcl
     double max_edge_factor = 2.0;    ///< L = factor * r0 (the seed's default: 2)
     int threads = 0;                 ///< 0 = all cores; never changes the output
     std::size_t max_neighbors = 256; ///< see particlemesh::TriangulateOptions::max_neighbors
-    double normal_angle = 90.0;      ///< co-normality limit, degrees (SurfaceOptions::normal_angle)
+    double normal_angle = 120.0;     ///< co-normality limit, degrees (SurfaceOptions::normal_angle)
     std::size_t fill_holes = 100;    ///< largest boundary loop filled, edges (SurfaceOptions::fill_holes)
     bool raw = false;                ///< the seed's exact triangle set instead of the surface
   };

@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
+#include "particlemesh/core/error.h"
+
 #include "particlemesh/mesh/topology_report.h"
 #include "particlemesh/surface/spacing.h"
 #include "support/test_support.h"
@@ -18,6 +22,29 @@ TEST(Shapes, MeshesAreClosedOutwardWithTheRightGenus) {
   const TopologyReport ico = topology_report(icosphere_mesh(2));
   EXPECT_TRUE(ico.closed && ico.outward);
   EXPECT_EQ(ico.euler_characteristic, 2);
+}
+
+TEST(Shapes, SharpShapesAreClosedOutwardWithTheirVolume) {
+  struct Shape {
+    const char* name;
+    TriMesh mesh;
+    double volume;
+  };
+  const double pi = 3.14159265358979323846;
+  const Shape shapes[] = {
+      {"box", box_mesh({1, 2, 3}), 6.0},
+      {"cone", cone_mesh(0.5, 1.0, 4096), pi * 0.25 / 3},
+      {"prism", prism_mesh(60, 2.0), 0.5 * std::sin(pi / 3) * 2.0},
+  };
+  for (const Shape& s : shapes) {
+    const TopologyReport t = topology_report(s.mesh);
+    EXPECT_TRUE(t.closed && t.outward && t.consistently_oriented) << s.name;
+    EXPECT_EQ(t.euler_characteristic, 2) << s.name;
+    EXPECT_NEAR(t.per_component[0].signed_volume, s.volume, 1e-6 * s.volume + 1e-9) << s.name;
+  }
+  EXPECT_THROW(box_mesh({1, 0, 1}), Error);
+  EXPECT_THROW(cone_mesh(1, 1, 2), Error);
+  EXPECT_THROW(prism_mesh(180), Error);
 }
 
 TEST(Shapes, PoissonDiskSampleIsEvenAndOnTheSurface) {

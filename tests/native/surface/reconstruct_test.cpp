@@ -222,6 +222,50 @@ TEST(ReconstructSurface, JitteredSamplingsStayManifoldAndOriented) {
   }
 }
 
+// Sharp creases: at the old co-normality default (90 degrees) the sides of every crease
+// sharper than ~75 degrees disagreed too much to be joined, and a slit the length of the
+// crease was left open (115 edges around this cone's rim, 111 along the prism's 52.5-degree
+// crease); the holes where creases meet a cap needed a fill folding more than 137 degrees.
+TEST(ReconstructSurface, SharpCreasesAndCornersClose) {
+  const PointCloud cone = poisson_disk_sample(cone_mesh(0.5, 1.0, 256), 0.03, 3);
+  expect_closed_surfaces(cone, reconstruct_surface(cone), 1, 0, "cone");
+  const PointCloud prism = poisson_disk_sample(prism_mesh(75), 0.02, 3);
+  expect_closed_surfaces(prism, reconstruct_surface(prism), 1, 0, "prism, 75-degree apex");
+  // Facing sheets stay apart at any co-normality angle the sides of a crease need.
+  SurfaceOptions wide;
+  wide.normal_angle = 150;
+  PointCloud two = poisson_disk_sample(icosphere_mesh(5), 0.05, 1);
+  const PointCloud b = poisson_disk_sample(icosphere_mesh(5), 0.05, 2);
+  for (const Vec3& p : b.positions) two.positions.push_back(p + Vec3{2.06, 0, 0});  // gap 0.06 < L
+  two.normals.insert(two.normals.end(), b.normals.begin(), b.normals.end());
+  expect_closed_surfaces(two, reconstruct_surface(two, wide), 2, 0, "two spheres, normal angle 150");
+}
+
+// Jittered resamplings of real models: holes whose surroundings jitter tilted so that no
+// fill folded less than 137 degrees were left open (a 4-edge loop on the rocker arm, 24-27
+// edges on the coarse bunny); they close with the sharper folds allowed inside large
+// components.
+TEST(ReconstructSurface, JitteredResampledModelsClose) {
+  PM_REQUIRE_DATA(rocker, "meshes/rocker_arm.obj");
+  PM_REQUIRE_DATA(coarse, "meshes/bunny_coarse.ply");
+  struct Model {
+    std::string path;
+    double r0_over_edge;
+    int genus;
+  };
+  for (const Model& m : {Model{rocker, 0.4, 1}, Model{coarse, 0.6, 0}, Model{coarse, 0.8, 0}}) {
+    const TriMesh mesh = read_mesh(m.path);
+    const double r0 = m.r0_over_edge * mean_edge(mesh);
+    const PointCloud c = jittered(poisson_disk_sample(mesh, r0, 11), 0.1 * r0, 5);
+    const SurfaceResult r = reconstruct_surface(c);
+    const TopologyReport t = topology_report(r.mesh);
+    const std::string what = m.path + " at " + std::to_string(m.r0_over_edge) + " x its mean edge";
+    EXPECT_TRUE(t.closed && t.consistently_oriented && t.outward) << what << ": " << t.boundary_loops << " loops";
+    EXPECT_EQ(t.euler_characteristic, 2 - 2 * m.genus) << what;
+    EXPECT_EQ(r.surface.unused_points, 0u) << what;
+  }
+}
+
 TEST(ReconstructSurface, SpheresCloserThanLStayTwoClosedSurfaces) {
   PointCloud a = poisson_disk_sample(icosphere_mesh(5), 0.05, 1);
   const size_t na = a.size();

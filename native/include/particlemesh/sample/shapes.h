@@ -26,6 +26,17 @@ PM_EXPORT TriMesh torus_mesh(double R, double r, int nu, int nv);
 /// knot and nv around the tube, outward winding.
 PM_EXPORT TriMesh trefoil_tube_mesh(double scale, double tube_radius, int nu, int nv);
 
+/// Shapes with sharp creases and corners (the edges of machined parts), for sampling:
+/// a closed axis-aligned box from the origin to `size` (90-degree creases);
+PM_EXPORT TriMesh box_mesh(Vec3 size);
+/// a closed cone, base radius r on z = 0, apex at height h, nu sectors (its rim is a crease
+/// of atan2(h, r) inside: 63 degrees at h = 2r);
+PM_EXPORT TriMesh cone_mesh(double r, double h, int nu);
+/// a closed triangular prism along z of the given height whose cross-section has two unit
+/// legs meeting at `apex_deg` (creases of apex_deg and (180 - apex_deg) / 2 along it, 90 at
+/// its ends).
+PM_EXPORT TriMesh prism_mesh(double apex_deg, double height = 1.0);
+
 /// An icosphere: the icosahedron subdivided `levels` times, vertices on the sphere.
 PM_EXPORT TriMesh icosphere_mesh(int levels, double radius = 1.0);
 

@@ -7,9 +7,9 @@
 //  2. Normals: local PCA oriented over a minimum spanning tree of the neighbour graph (after
 //     Hoppe et al. 1992); when the cloud has normals they decide the orientation (see
 //     SurfaceOptions::normals).
-//  3. Co-normality: a triangle whose corner normals, or whose face normal and a corner normal,
-//     differ by more than `normal_angle` is not surface (sheets with opposite normals, folds,
-//     the faces of tetrahedral bridges).
+//  3. Co-normality: a triangle whose corner normals differ by more than `normal_angle`, or
+//     whose face normal and a corner normal differ by more than min(normal_angle, 90), is not
+//     surface (sheets with opposite normals, folds, the faces of tetrahedral bridges).
 //  4. Manifold extraction: candidates oriented by the normals, each directed edge used once,
 //     a tangent-plane wedge rule at every vertex, best-first growth from a front
 //     (quality = the smallest largest angle, then the raw order), new seeds only when the front
@@ -31,9 +31,13 @@
 namespace particlemesh {
 
 struct SurfaceOptions : TriangulateOptions {
-  /// Co-normality limit in degrees (seed 5.2.4). 90 drops triangles whose normals disagree
-  /// in sign, which is what separates sheets facing each other.
-  double normal_angle = 90.0;
+  /// Co-normality limit in degrees (seed 5.2.4): corner normals may differ by at most this,
+  /// and the face normal from each corner's by at most this and never more than 90. Sheets
+  /// facing each other (normals ~180 degrees apart) are separated at any setting; the default
+  /// 120 also lets the surface turn sharp creases (a wedge of 60 degrees or more: its sides'
+  /// normals are 180 - 60 apart). 90 was the default until the crease sweep (issue 3 notes):
+  /// it left a slit along every crease sharper than about 75 degrees.
+  double normal_angle = 120.0;
   /// Where the surface's normals come from:
   ///  - Auto (default): local plane fits (PCA over the particles within L) give the tangent
   ///    planes, which vary smoothly at the sampling scale even where the input's normals are
