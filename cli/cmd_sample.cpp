@@ -21,12 +21,16 @@ void add_sample(CLI::App& root, std::vector<Command>& commands) {
   };
   auto args = std::make_shared<Args>();
   CLI::App* app = root.add_subcommand(
-      "sample", "Write evenly spaced particles on a shape: trefoil (knotted tube), torus, sphere (Poisson disk), fibonacci");
-  app->add_option("shape", args->shape, "trefoil | torus | sphere | fibonacci")
-      ->check(CLI::IsMember({"trefoil", "torus", "sphere", "fibonacci"}))
+      "sample",
+      "Write evenly spaced particles on a shape: trefoil (knotted tube), torus, sphere (Poisson disk), fibonacci; "
+      "box, cone, prism (sharp creases and corners, as on machined parts)");
+  app->add_option("shape", args->shape,
+                  "trefoil | torus | sphere | fibonacci | box (unit cube) | cone (radius 0.5, height 1: a 63-degree "
+                  "rim) | prism (unit legs meeting at 60 degrees, height 1)")
+      ->check(CLI::IsMember({"trefoil", "torus", "sphere", "fibonacci", "box", "cone", "prism"}))
       ->capture_default_str();
   app->add_option("-o,--output", args->output, "Output particles (.xyz or .ply)")->required();
-  app->add_option("--spacing", args->spacing, "Poisson-disk spacing r0 (trefoil, torus, sphere)")
+  app->add_option("--spacing", args->spacing, "Poisson-disk spacing r0 (every shape but fibonacci)")
       ->check(CLI::Range(1e-4, 10.0))
       ->check(finite_number())
       ->capture_default_str();
@@ -41,6 +45,9 @@ void add_sample(CLI::App& root, std::vector<Command>& commands) {
                           TriMesh surface;
                           if (args->shape == "trefoil") surface = trefoil_tube_mesh(1.0, 0.35, 720, 64);
                           else if (args->shape == "torus") surface = torus_mesh(1.0, 0.4, 360, 144);
+                          else if (args->shape == "box") surface = box_mesh({1, 1, 1});
+                          else if (args->shape == "cone") surface = cone_mesh(0.5, 1.0, 256);
+                          else if (args->shape == "prism") surface = prism_mesh(60);
                           else surface = icosphere_mesh(6, 1.0);
                           cloud = poisson_disk_sample(surface, args->spacing, args->seed);
                         }

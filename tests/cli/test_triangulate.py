@@ -33,6 +33,28 @@ def test_sample_then_triangulate_knot(cli, inspect, tmp_path):
     assert r["surface"]["unused_points"] == 0
 
 
+def test_sharp_shapes_close_and_the_old_normal_angle_leaves_a_slit(cli, inspect, tmp_path):
+    # Machined-part creases: the cone's rim is a 63-degree crease, the prism's edges 60
+    # degrees; bare points (.xyz), so the normals are estimated.
+    for shape in ("box", "cone", "prism"):
+        pts = tmp_path / f"{shape}.xyz"
+        cli("sample", shape, "-o", pts, "--spacing", "0.03", "--seed", "3")
+        n = sum(1 for line in pts.read_text().splitlines() if line.strip())
+        out = tmp_path / f"{shape}.ply"
+        cli("triangulate", pts, "-o", out, "-q")
+        mesh = inspect(out)
+        assert mesh["closed"] and mesh["manifold"] and mesh["outward"], shape
+        assert mesh["components"] == 1 and mesh["euler_characteristic"] == 2, shape
+        assert mesh["vertices_used"] == n, shape
+    # At 90 degrees (the default before) the cone's two faces are not joined along the rim.
+    out = tmp_path / "cone90.ply"
+    report = tmp_path / "cone90.json"
+    cli("triangulate", tmp_path / "cone.xyz", "-o", out, "-q", "--normal-angle", "90", "--report", report)
+    r = json.loads(report.read_text())
+    assert not inspect(out)["closed"]
+    assert r["surface"]["largest_hole_left"] > 100  # the slit runs around the rim
+
+
 def test_raw_counts_match_reference_on_bunny(cli, inspect, data_dir, tmp_path):
     out = tmp_path / "bunny.obj"
     cli("triangulate", data_dir / "points/bunny_poisson.ply", "-o", out, "--raw", "--threads", "1")
