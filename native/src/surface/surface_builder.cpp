@@ -950,28 +950,38 @@ class Builder {
     for (auto& L : trace_loops())
       if (L.size() <= max_size) loops.push_back(std::move(L));
     if (loops.empty()) return 0;
-    // Triangles per component (triangles sharing a vertex are connected), by union-find.
-    std::vector<uint32_t> parent(P_.size());
-    std::iota(parent.begin(), parent.end(), 0u);
+    std::vector<uint32_t> piece, count;
+    surface_pieces(piece, count);
+    size_t filled = 0;
+    for (const auto& L : loops) {
+      const uint64_t m = L.size();
+      if (count[piece[L[0]]] > m * m && fill_loop(L, kMaxCreaseDihedral)) ++filled;
+    }
+    return filled;
+  }
+
+  /// The pieces of the surface (triangles sharing a vertex are connected), by union-find:
+  /// each vertex's piece, named by the piece's lowest vertex, and each piece's triangles,
+  /// counted at that vertex.
+  void surface_pieces(std::vector<uint32_t>& piece, std::vector<uint32_t>& triangles) const {
+    const size_t n = P_.size();
+    piece.resize(n);
+    std::iota(piece.begin(), piece.end(), 0u);
     auto find = [&](uint32_t x) {
-      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      while (piece[x] != x) x = piece[x] = piece[piece[x]];
       return x;
     };
     for (uint32_t t = 0; t < tris_.size(); ++t) {
       if (!alive_[t]) continue;
-      const uint32_t a = find(tris_[t][0]), b = find(tris_[t][1]), c = find(tris_[t][2]);
-      parent[b] = a;
-      parent[find(c)] = a;
+      for (int k = 1; k < 3; ++k) {
+        const uint32_t a = find(tris_[t][0]), b = find(tris_[t][k]);
+        if (a != b) piece[std::max(a, b)] = std::min(a, b);
+      }
     }
-    std::vector<uint64_t> count(P_.size(), 0);
+    for (uint32_t v = 0; v < n; ++v) piece[v] = find(v);
+    triangles.assign(n, 0);
     for (uint32_t t = 0; t < tris_.size(); ++t)
-      if (alive_[t]) ++count[find(tris_[t][0])];
-    size_t filled = 0;
-    for (const auto& L : loops) {
-      const uint64_t m = L.size();
-      if (count[find(L[0])] > m * m && fill_loop(L, kMaxCreaseDihedral)) ++filled;
-    }
-    return filled;
+      if (alive_[t]) ++triangles[piece[tris_[t][0]]];
   }
 
   /// At vertices whose triangles form more than one fan, keep the largest fan. Such a vertex
@@ -1175,30 +1185,16 @@ class Builder {
   /// own and stays: a fragment is only dissolved if a raw triangle joins it to another piece.
   size_t drop_fragments(const std::vector<Triangle>& raw) {
     const size_t n = P_.size();
-    std::vector<uint32_t> parent(n);
-    std::iota(parent.begin(), parent.end(), 0u);
-    auto find = [&](uint32_t x) {
-      while (parent[x] != x) x = parent[x] = parent[parent[x]];
-      return x;
-    };
-    for (uint32_t t = 0; t < tris_.size(); ++t) {
-      if (!alive_[t]) continue;
-      for (int k = 1; k < 3; ++k) {
-        const uint32_t a = find(tris_[t][0]), b = find(tris_[t][k]);
-        if (a != b) parent[std::max(a, b)] = std::min(a, b);
-      }
-    }
-    std::vector<uint32_t> count(n, 0);
-    for (uint32_t t = 0; t < tris_.size(); ++t)
-      if (alive_[t]) ++count[find(tris_[t][0])];
+    std::vector<uint32_t> piece, count;
+    surface_pieces(piece, count);
     std::vector<uint8_t> small(n, 0), touching(n, 0);
     bool any = false;
     for (uint32_t v = 0; v < n; ++v)
-      if (find(v) == v && count[v] > 0 && count[v] <= kMaxFragment) small[v] = any = true;
+      if (piece[v] == v && count[v] > 0 && count[v] <= kMaxFragment) small[v] = any = true;
     if (!any) return 0;
     // A raw triangle with corners in a small piece and in another (used) piece joins them.
     for (const Triangle& t : raw) {
-      const uint32_t r0 = find(t[0]), r1 = find(t[1]), r2 = find(t[2]);
+      const uint32_t r0 = piece[t[0]], r1 = piece[t[1]], r2 = piece[t[2]];
       for (uint32_t a : {r0, r1, r2})
         if (small[a])
           for (uint32_t b : {r0, r1, r2})
@@ -1207,7 +1203,7 @@ class Builder {
     size_t dropped = 0;
     for (uint32_t t = 0; t < tris_.size(); ++t) {
       if (!alive_[t]) continue;
-      const uint32_t r = find(tris_[t][0]);
+      const uint32_t r = piece[tris_[t][0]];
       if (small[r] && touching[r]) {
         kill_triangle(t);
         ++dropped;

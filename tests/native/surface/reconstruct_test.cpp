@@ -26,6 +26,13 @@ double mean_edge(const TriMesh& m) {
   return s / double(m.triangles.size());
 }
 
+// A model of ../shared/data resampled at r0 = r0_over_edge x its mean edge, and its genus.
+struct ResampledModel {
+  std::string path;
+  double r0_over_edge;
+  int genus;
+};
+
 PointCloud jittered(PointCloud c, double sigma, uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> g(0.0, sigma);
@@ -154,12 +161,7 @@ TEST(ReconstructSurface, ResampledRealModels) {
   PM_REQUIRE_DATA(spot, "meshes/spot.obj");
   PM_REQUIRE_DATA(rocker, "meshes/rocker_arm.obj");
   PM_REQUIRE_DATA(coarse, "meshes/bunny_coarse.ply");
-  struct Model {
-    std::string path;
-    double r0_over_edge;
-    int genus;
-  };
-  for (const Model& m : {Model{spot, 0.45, 0}, Model{rocker, 1.0, 1}, Model{coarse, 0.3, 0}}) {
+  for (const ResampledModel& m : {ResampledModel{spot, 0.45, 0}, ResampledModel{rocker, 1.0, 1}, ResampledModel{coarse, 0.3, 0}}) {
     const TriMesh mesh = read_mesh(m.path);
     const PointCloud c = poisson_disk_sample(mesh, m.r0_over_edge * mean_edge(mesh), 7);
     for (Source src : {Source::Auto, Source::Estimate}) {
@@ -248,12 +250,7 @@ TEST(ReconstructSurface, SharpCreasesAndCornersClose) {
 TEST(ReconstructSurface, JitteredResampledModelsClose) {
   PM_REQUIRE_DATA(rocker, "meshes/rocker_arm.obj");
   PM_REQUIRE_DATA(coarse, "meshes/bunny_coarse.ply");
-  struct Model {
-    std::string path;
-    double r0_over_edge;
-    int genus;
-  };
-  for (const Model& m : {Model{rocker, 0.4, 1}, Model{coarse, 0.6, 0}, Model{coarse, 0.8, 0}}) {
+  for (const ResampledModel& m : {ResampledModel{rocker, 0.4, 1}, ResampledModel{coarse, 0.6, 0}, ResampledModel{coarse, 0.8, 0}}) {
     const TriMesh mesh = read_mesh(m.path);
     const double r0 = m.r0_over_edge * mean_edge(mesh);
     const PointCloud c = jittered(poisson_disk_sample(mesh, r0, 11), 0.1 * r0, 5);
