@@ -21,6 +21,12 @@ namespace detail {
 namespace {
 // Above this ratio of the two smallest variances a neighbourhood is too thick for one plane.
 constexpr double kMaxFlatness = 0.2;
+// Two planes at a thick point whose normals are more than ~37 degrees apart make a crease.
+constexpr double kCreaseCos = 0.8;
+// A face of a crease reaches the other plane: its nearest point off that plane lies within
+// this fraction of the radius of it. A sheet across a gap (1.2 spacings or more, 0.6 of the
+// radius) does not.
+constexpr double kCreaseReach = 0.5;
 // Above this fraction of same-sheet neighbours facing opposite ways, reference normals are
 // not a consistent orientation and only vote per piece.
 constexpr double kMaxReferenceDisagreement = 0.01;
@@ -76,6 +82,23 @@ Vec3 pca_normal(const Moments& m, double* flatness) {
   return normalized(Vec3{v.x(), v.y(), v.z()});
 }
 
+/// A plane fitted to the offsets within `band` of the plane through the point with normal n.
+struct Plane {
+  Vec3 normal, centroid;
+  int count = 0;
+};
+Plane fit_plane(const std::vector<Vec3>& near, const Vec3& n, double band) {
+  Moments m;
+  for (const Vec3& d : near)
+    if (std::abs(dot(d, n)) <= band) m.add(d);
+  Plane p;
+  p.count = m.count;
+  if (m.count < 3) return p;
+  p.normal = pca_normal(m, nullptr);
+  p.centroid = Vec3{m.x, m.y, m.z} * (1.0 / m.count);
+  return p;
+}
+
 }  // namespace
 
 std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
@@ -85,6 +108,7 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
   std::vector<Vec3> normals(n);
   const double r2 = radius * radius;
   const double band = 0.25 * radius;
+  const double crease_band = 0.75 * band;
   // 1. Every point's plane. Points that already lie close to one plane keep it (noise and the
   //    steps of a depth scan or a lattice do not call for more); a thick neighbourhood may be
   //    two sheets, and is looked at again below.
@@ -132,15 +156,14 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
     parallel_blocks(redo.size(), 256, [&](size_t b, size_t e) {
       if (tracker.cancelled()) return;
       std::vector<Vec3> near, tried;
+      std::vector<std::pair<double, size_t>> scores;  // per tried plane: weighted and plain inliers
       for (size_t i = b; i < e; ++i) {
         const uint32_t s = redo[i];
         gather_near(grid, lists, s, r2, near);
         // Inliers count more the closer they are: next to the point its own sheet dominates
         // even where another sheet ends nearby (the free ends of a folded sheet).
-        double best = 0;
-        size_t best_count = 0;
-        Vec3 best_n;
         tried.clear();
+        scores.clear();
         for (uint32_t j = tri_off[i]; j < tri_off[i + 1]; ++j) {
           const Triangle& t = (*triangles)[tri_ids[j]];
           const Vec3 a = grid.sorted_point(t[0]);
@@ -158,18 +181,64 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
               score += (w * w) * (w * w);
               ++count;
             }
-          if (score > best) {
-            best = score;
-            best_count = count;
-            best_n = tn;
+          scores.push_back({score, count});
+        }
+        const auto best_plane = [&](const Vec3* other) {
+          int best = -1;
+          for (int c = 0; c < int(tried.size()); ++c) {
+            if (other && (scores[c].second < 3 || std::abs(dot(tried[c], *other)) > kCreaseCos)) continue;
+            if (best < 0 || scores[c].first > scores[best].first) best = c;
           }
+          return best;
+        };
+        const int a = best_plane(nullptr);
+        if (a < 0 || !(scores[a].first > 0) || scores[a].second < 3) continue;
+        const Plane A = fit_plane(near, tried[a], band);
+        normals[s] = A.normal;
+        // A crease: a second plane, at a clear angle to the first, through the point too.
+        const int b = best_plane(&A.normal);
+        if (b < 0) continue;
+        const Plane B = fit_plane(near, tried[b], band);
+        if (B.count < 3 || std::abs(dot(A.normal, B.normal)) > kCreaseCos) continue;
+        // The point's distance to each fitted plane (it is the origin of the offsets).
+        const double da = std::abs(dot(A.centroid, A.normal)), db = std::abs(dot(B.centroid, B.normal));
+        if (da > crease_band || db > crease_band) {
+          if (db < da) normals[s] = B.normal;  // the point lies on the second face, not the first
+          continue;
         }
-        if (best_count >= 3) {
-          Moments m;
-          for (const Vec3& d : near)
-            if (std::abs(dot(d, best_n)) <= band) m.add(d);
-          normals[s] = pca_normal(m, nullptr);
+        // On both planes. A crease ends each face there: each face's own points (off the other
+        // plane) lie on one side of the other plane, and its nearest reaches close to it.
+        // Facing sheets and the plane of the triangles bridging them are no crease (the
+        // point's own sheet goes on past that plane on both sides), nor is a sheet that ends
+        // beside another across a gap (the other sheet keeps the gap's distance).
+        struct Face {
+          Vec3 sum;           // of its own points' offsets
+          int side[2] = {0, 0};
+          double nearest = INFINITY;  // own point closest to the other plane
+          void add(const Vec3& d, double h) {
+            sum = sum + d;
+            ++side[h > 0];
+            nearest = std::min(nearest, std::abs(h));
+          }
+          bool ends_at_crease(double reach) const {
+            const int all = side[0] + side[1];
+            return all >= 2 && std::min(side[0], side[1]) * 10 <= all && nearest <= reach;
+          }
+        } fa, fb;
+        for (const Vec3& d : near) {
+          const double ha = dot(d, A.normal), hb = dot(d, B.normal);
+          const bool in_a = std::abs(ha) <= band, in_b = std::abs(hb) <= band;
+          if (in_a && !in_b) fa.add(d, hb);
+          if (in_b && !in_a) fb.add(d, ha);
         }
+        if (!fa.ends_at_crease(kCreaseReach * radius) || !fb.ends_at_crease(kCreaseReach * radius)) continue;
+        // The bisector is within 90 degrees of both faces' normals, so the triangles of both
+        // faces pass the corner test there. Each plane's normal is first turned away from the
+        // other face's points, so that the two agree in sense (both out of a convex crease).
+        const Vec3 na = dot(A.normal, fb.sum) > 0 ? -A.normal : A.normal;
+        const Vec3 nb = dot(B.normal, fa.sum) > 0 ? -B.normal : B.normal;
+        const Vec3 mid = na + nb;
+        if (squared_norm(mid) > 1e-6) normals[s] = normalized(mid);
       }
     });
     tracker.check();
