@@ -57,6 +57,14 @@ inline PointCloud random_cloud(size_t n, uint64_t seed, double size = 1.0) {
   return c;
 }
 
+/// The cloud with Gaussian noise of deviation sigma added to every coordinate (fixed seed).
+inline PointCloud jittered(PointCloud c, double sigma, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0.0, sigma);
+  for (auto& p : c.positions) p += Vec3{g(rng), g(rng), g(rng)};
+  return c;
+}
+
 /// Undirected edge -> number of triangles using it.
 inline std::map<std::pair<uint32_t, uint32_t>, int> edge_counts(const std::vector<Triangle>& tris) {
   std::map<std::pair<uint32_t, uint32_t>, int> e;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <numeric>
+#include <optional>
 
 #include <Eigen/Eigenvalues>
 
@@ -99,6 +100,45 @@ Plane fit_plane(const std::vector<Vec3>& near, const Vec3& n, double band) {
   return p;
 }
 
+/// The normal of a point on two fitted planes A and B (the offsets `near` are from the point),
+/// or nullopt when they make no crease there. A crease ends each face at the point: each
+/// face's own points (off the other plane) lie on one side of the other plane, and its nearest
+/// reaches within `reach` of it. Facing sheets and the plane of the triangles bridging them
+/// are no crease (the point's own sheet goes on past that plane on both sides), nor is a sheet
+/// that ends beside another across a gap (the other sheet keeps the gap's distance).
+std::optional<Vec3> crease_normal(const std::vector<Vec3>& near, const Plane& A, const Plane& B, double band,
+                                  double reach) {
+  struct Face {
+    Vec3 sum;  // of its own points' offsets
+    int side[2] = {0, 0};
+    double nearest = INFINITY;  // own point closest to the other plane
+    void add(const Vec3& d, double h) {
+      sum = sum + d;
+      ++side[h > 0];
+      nearest = std::min(nearest, std::abs(h));
+    }
+    bool ends_at_crease(double reach) const {
+      const int all = side[0] + side[1];
+      return all >= 2 && std::min(side[0], side[1]) * 10 <= all && nearest <= reach;
+    }
+  } fa, fb;
+  for (const Vec3& d : near) {
+    const double ha = dot(d, A.normal), hb = dot(d, B.normal);
+    const bool in_a = std::abs(ha) <= band, in_b = std::abs(hb) <= band;
+    if (in_a && !in_b) fa.add(d, hb);
+    if (in_b && !in_a) fb.add(d, ha);
+  }
+  if (!fa.ends_at_crease(reach) || !fb.ends_at_crease(reach)) return std::nullopt;
+  // The bisector is within 90 degrees of both faces' normals, so the triangles of both faces
+  // pass the corner test there. Each plane's normal is first turned away from the other
+  // face's points, so that the two agree in sense (both out of a convex crease).
+  const Vec3 na = dot(A.normal, fb.sum) > 0 ? -A.normal : A.normal;
+  const Vec3 nb = dot(B.normal, fa.sum) > 0 ? -B.normal : B.normal;
+  const Vec3 mid = na + nb;
+  if (!(squared_norm(mid) > 1e-6)) return std::nullopt;
+  return normalized(mid);
+}
+
 }  // namespace
 
 std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
@@ -155,24 +195,27 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
     tracker.check();
     parallel_blocks(redo.size(), 256, [&](size_t b, size_t e) {
       if (tracker.cancelled()) return;
-      std::vector<Vec3> near, tried;
-      std::vector<std::pair<double, size_t>> scores;  // per tried plane: weighted and plain inliers
+      std::vector<Vec3> near;
+      struct Candidate {
+        Vec3 normal;
+        double score;  // inliers weighted by closeness
+        size_t count;  // inliers
+      };
+      std::vector<Candidate> tried;
       for (size_t i = b; i < e; ++i) {
         const uint32_t s = redo[i];
         gather_near(grid, lists, s, r2, near);
         // Inliers count more the closer they are: next to the point its own sheet dominates
         // even where another sheet ends nearby (the free ends of a folded sheet).
         tried.clear();
-        scores.clear();
         for (uint32_t j = tri_off[i]; j < tri_off[i + 1]; ++j) {
           const Triangle& t = (*triangles)[tri_ids[j]];
           const Vec3 a = grid.sorted_point(t[0]);
           const Vec3 tn = normalized(cross(grid.sorted_point(t[1]) - a, grid.sorted_point(t[2]) - a));
           // Planes within ~8 degrees of one already scored would score about the same.
           bool seen = false;
-          for (const Vec3& x : tried) seen |= std::abs(dot(x, tn)) > 0.99;
+          for (const Candidate& x : tried) seen |= std::abs(dot(x.normal, tn)) > 0.99;
           if (seen) continue;
-          tried.push_back(tn);
           double score = 0;
           size_t count = 0;
           for (const Vec3& d : near)
@@ -181,24 +224,24 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
               score += (w * w) * (w * w);
               ++count;
             }
-          scores.push_back({score, count});
+          tried.push_back({tn, score, count});
         }
         const auto best_plane = [&](const Vec3* other) {
           int best = -1;
           for (int c = 0; c < int(tried.size()); ++c) {
-            if (other && (scores[c].second < 3 || std::abs(dot(tried[c], *other)) > kCreaseCos)) continue;
-            if (best < 0 || scores[c].first > scores[best].first) best = c;
+            if (other && (tried[c].count < 3 || std::abs(dot(tried[c].normal, *other)) > kCreaseCos)) continue;
+            if (best < 0 || tried[c].score > tried[best].score) best = c;
           }
           return best;
         };
-        const int a = best_plane(nullptr);
-        if (a < 0 || !(scores[a].first > 0) || scores[a].second < 3) continue;
-        const Plane A = fit_plane(near, tried[a], band);
+        const int first = best_plane(nullptr);
+        if (first < 0 || !(tried[first].score > 0) || tried[first].count < 3) continue;
+        const Plane A = fit_plane(near, tried[first].normal, band);
         normals[s] = A.normal;
         // A crease: a second plane, at a clear angle to the first, through the point too.
-        const int b = best_plane(&A.normal);
-        if (b < 0) continue;
-        const Plane B = fit_plane(near, tried[b], band);
+        const int second = best_plane(&A.normal);
+        if (second < 0) continue;
+        const Plane B = fit_plane(near, tried[second].normal, band);
         if (B.count < 3 || std::abs(dot(A.normal, B.normal)) > kCreaseCos) continue;
         // The point's distance to each fitted plane (it is the origin of the offsets).
         const double da = std::abs(dot(A.centroid, A.normal)), db = std::abs(dot(B.centroid, B.normal));
@@ -206,39 +249,7 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
           if (db < da) normals[s] = B.normal;  // the point lies on the second face, not the first
           continue;
         }
-        // On both planes. A crease ends each face there: each face's own points (off the other
-        // plane) lie on one side of the other plane, and its nearest reaches close to it.
-        // Facing sheets and the plane of the triangles bridging them are no crease (the
-        // point's own sheet goes on past that plane on both sides), nor is a sheet that ends
-        // beside another across a gap (the other sheet keeps the gap's distance).
-        struct Face {
-          Vec3 sum;           // of its own points' offsets
-          int side[2] = {0, 0};
-          double nearest = INFINITY;  // own point closest to the other plane
-          void add(const Vec3& d, double h) {
-            sum = sum + d;
-            ++side[h > 0];
-            nearest = std::min(nearest, std::abs(h));
-          }
-          bool ends_at_crease(double reach) const {
-            const int all = side[0] + side[1];
-            return all >= 2 && std::min(side[0], side[1]) * 10 <= all && nearest <= reach;
-          }
-        } fa, fb;
-        for (const Vec3& d : near) {
-          const double ha = dot(d, A.normal), hb = dot(d, B.normal);
-          const bool in_a = std::abs(ha) <= band, in_b = std::abs(hb) <= band;
-          if (in_a && !in_b) fa.add(d, hb);
-          if (in_b && !in_a) fb.add(d, ha);
-        }
-        if (!fa.ends_at_crease(kCreaseReach * radius) || !fb.ends_at_crease(kCreaseReach * radius)) continue;
-        // The bisector is within 90 degrees of both faces' normals, so the triangles of both
-        // faces pass the corner test there. Each plane's normal is first turned away from the
-        // other face's points, so that the two agree in sense (both out of a convex crease).
-        const Vec3 na = dot(A.normal, fb.sum) > 0 ? -A.normal : A.normal;
-        const Vec3 nb = dot(B.normal, fa.sum) > 0 ? -B.normal : B.normal;
-        const Vec3 mid = na + nb;
-        if (squared_norm(mid) > 1e-6) normals[s] = normalized(mid);
+        if (const auto n = crease_normal(near, A, B, band, kCreaseReach * radius)) normals[s] = *n;
       }
     });
     tracker.check();

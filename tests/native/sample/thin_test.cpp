@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <random>
 
 #include "particlemesh/core/error.h"
 #include "particlemesh/mesh/topology_report.h"
@@ -12,6 +11,7 @@
 #include "particlemesh/spatial/neighbor_grid.h"
 #include "particlemesh/surface/reconstruct.h"
 #include "particlemesh/surface/spacing.h"
+#include "support/test_support.h"
 
 using namespace particlemesh;
 
@@ -20,10 +20,7 @@ namespace {
 PointCloud jittered_sphere(size_t n, double sigma_in_spacings, uint64_t seed) {
   PointCloud c = fibonacci_sphere(n);
   const double r0 = estimate_spacing(c.positions.data(), c.size()).spacing;
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g(0.0, sigma_in_spacings * r0);
-  for (auto& p : c.positions) p += Vec3{g(rng), g(rng), g(rng)};
-  return c;
+  return test::jittered(std::move(c), sigma_in_spacings * r0, seed);
 }
 
 PointCloud subset(const PointCloud& c, const std::vector<uint32_t>& idx) {

@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <random>
 
 #include "particlemesh/core/error.h"
 #include "particlemesh/sample/shapes.h"
@@ -51,10 +50,7 @@ TEST(EstimateNormals, CreasePointsFaceBothSides) {
   // (a fifth of the rim points or more here, none before; the rest keep one face).
   const double r0 = 0.02;
   for (uint64_t seed : {1, 2}) {
-    PointCloud c = poisson_disk_sample(cone_mesh(0.5, 1.0, 256), r0, 3);
-    std::mt19937_64 rng(seed);
-    std::normal_distribution<double> g(0.0, 0.05 * r0);
-    for (auto& p : c.positions) p += Vec3{g(rng), g(rng), g(rng)};
+    PointCloud c = test::jittered(poisson_disk_sample(cone_mesh(0.5, 1.0, 256), r0, 3), 0.05 * r0, seed);
     c.normals.clear();
     const std::vector<Vec3> n = estimate_normals(c);
     size_t rim = 0, both = 0, faces = 0, own = 0;

@@ -17,6 +17,7 @@
 
 using namespace particlemesh;
 using Source = SurfaceOptions::NormalSource;
+using test::jittered;
 
 namespace {
 
@@ -32,13 +33,6 @@ struct ResampledModel {
   double r0_over_edge;
   int genus;
 };
-
-PointCloud jittered(PointCloud c, double sigma, uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g(0.0, sigma);
-  for (auto& p : c.positions) p += Vec3{g(rng), g(rng), g(rng)};
-  return c;
-}
 
 // One closed, consistently and outward oriented 2-manifold of the given genus per object,
 // using every input particle.
