@@ -1,11 +1,11 @@
 #include "particlemesh/spatial/neighbor_grid.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <string>
-
-#include <tbb/parallel_sort.h>
+#include <utility>
 
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
@@ -21,6 +21,47 @@ uint64_t mix(uint64_t h) {  // splitmix64 finaliser
   h *= 0x94D049BB133111EBull;
   h ^= h >> 31;
   return h;
+}
+
+struct Entry {
+  uint64_t key;  // the cell's coordinates packed, 21 bits each (NeighborGrid::pack)
+  uint32_t index;
+};
+
+// By key, then by point index: the order a comparison sort by (key, index) gives, at a
+// fraction of its cost (a third of a 100k-point grid build went to tbb::parallel_sort). LSD
+// radix over the key's used bits only (no coordinate exceeds `top` along its axis: often
+// 20-30 bits in all, 2-3 passes of 11 bits); each pass is stable and the entries start in
+// index order, so equal keys stay in index order.
+void sort_by_key(std::vector<Entry>& entries, const std::array<int32_t, 3>& top) {
+  const size_t n = entries.size();
+  int bits[3];
+  for (int a = 0; a < 3; ++a) bits[a] = int(std::bit_width(uint32_t(top[a])));
+  const int total = bits[0] + bits[1] + bits[2];
+  // The key with the unused high bits of each field squeezed out: same order, fewer digits.
+  constexpr uint64_t kField = (uint64_t(1) << 21) - 1;
+  std::vector<uint64_t> compacted(n), compacted_other(n);
+  for (size_t i = 0; i < n; ++i) {
+    const uint64_t k = entries[i].key;
+    compacted[i] = ((k >> 42) << (bits[1] + bits[2])) | (((k >> 21) & kField) << bits[2]) | (k & kField);
+  }
+  constexpr int kDigit = 11;
+  constexpr uint64_t kDigitMask = (uint64_t(1) << kDigit) - 1;
+  std::vector<Entry> other(n);
+  std::vector<uint32_t> start(size_t(1) << kDigit);
+  for (int shift = 0; shift < total; shift += kDigit) {
+    std::fill(start.begin(), start.end(), 0u);
+    for (size_t i = 0; i < n; ++i) ++start[(compacted[i] >> shift) & kDigitMask];
+    uint32_t sum = 0;
+    for (uint32_t& c : start) sum += std::exchange(c, sum);
+    for (size_t i = 0; i < n; ++i) {
+      const uint32_t to = start[(compacted[i] >> shift) & kDigitMask]++;
+      other[to] = entries[i];
+      compacted_other[to] = compacted[i];
+    }
+    entries.swap(other);
+    compacted.swap(compacted_other);
+  }
 }
 
 }  // namespace
@@ -52,16 +93,11 @@ NeighborGrid::NeighborGrid(const Vec3* points, size_t n, double cell_size) {
                       " (at most 2097148): remove far outliers or use a larger spacing");
   }
 
-  struct Entry {
-    uint64_t key;
-    uint32_t index;
-    bool operator<(const Entry& o) const { return key != o.key ? key < o.key : index < o.index; }
-  };
   std::vector<Entry> entries(n);
   detail::parallel_blocks(n, 4096, [&](size_t b, size_t e) {
     for (size_t i = b; i < e; ++i) entries[i] = {pack(coord_of(points[i])), uint32_t(i)};
   });
-  tbb::parallel_sort(entries.begin(), entries.end());
+  sort_by_key(entries, n == 0 ? CellCoord{0, 0, 0} : coord_of(hi));
 
   sorted_points_.resize(n);
   original_index_.resize(n);

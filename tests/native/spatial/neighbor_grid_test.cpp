@@ -46,6 +46,30 @@ TEST(NeighborGrid, SortedLayoutIsAPermutationGroupedByCell) {
   EXPECT_EQ(grid.find_cell({-5, -5, -5}), NeighborGrid::kNoCell);
 }
 
+// The layout is the order of a sort by (cell, input index), whatever the extent: here 300
+// cells spread over 10^6 cells along every axis (keys of ~60 bits, every bit deciding some
+// order), 10 points near each, given in an order unrelated to their cells.
+TEST(NeighborGrid, CellsInCoordinateOrderAndPointsInInputOrderOverAWideExtent) {
+  const PointCloud centres = test::random_cloud(300, 11, 2.5e5);
+  const PointCloud offsets = test::random_cloud(3000, 12, 0.2);
+  std::vector<Vec3> points;
+  for (size_t i = 0; i < 3000; ++i) points.push_back(centres.positions[(i * 7) % 300] + offsets.positions[i]);
+  NeighborGrid grid(points.data(), points.size(), 0.25);
+  ASSERT_LT(grid.cell_count(), 1500u);  // several points to a cell
+  for (uint32_t cell = 0; cell < grid.cell_count(); ++cell) {
+    if (cell > 0) {
+      EXPECT_LT(grid.cell_coord(cell - 1), grid.cell_coord(cell));
+    }
+    for (uint32_t s = grid.cell_begin(cell); s < grid.cell_end(cell); ++s) {
+      EXPECT_EQ(grid.coord_of(grid.sorted_point(s)), grid.cell_coord(cell));
+      if (s > grid.cell_begin(cell)) {
+        EXPECT_LT(grid.original_index(s - 1), grid.original_index(s));
+      }
+    }
+  }
+  EXPECT_GT(grid.cell_coord(uint32_t(grid.cell_count() - 1))[0], 900000);
+}
+
 TEST(NeighborGrid, RejectsBadCellSizeAndAbsurdExtent) {
   const PointCloud c = test::random_cloud(10, 1);
   EXPECT_THROW(NeighborGrid(c.positions.data(), c.size(), 0.0), Error);
