@@ -92,10 +92,11 @@ def settings_for(obj, mode):
     return properties.snapshot(group, state.method)
 
 
-def compute(obj, depsgraph, mode=None, use_cache=True, progress=None, timings=None):
+def compute(obj, depsgraph, mode=None, use_cache=True, progress=None, timings=None, budget=0):
     """Mesh data of generated object `obj` for the depsgraph's frame (from the cache when it
     was made before). Returns (MeshData, settings, cached). `timings` (a dict), if given,
-    receives the seconds spent reading the source and meshing."""
+    receives the seconds spent reading the source and meshing. `budget` > 0: triangulate at
+    most about that many particles (live mode's Viewport Budget)."""
     state = obj.particlemesh
     mode = mode or depsgraph.mode
     source = state.source
@@ -105,6 +106,8 @@ def compute(obj, depsgraph, mode=None, use_cache=True, progress=None, timings=No
     t0 = time.perf_counter()
     particles = sources.read(source, depsgraph, state.source_kind, state.particle_system,
                              need_sizes=(state.method == "POLYGONIZE"))
+    if budget > 0 and state.method == "TRIANGULATE":
+        settings["viewport_budget"] = budget
     # frame_current_final includes the subframe (motion blur steps evaluate between frames).
     key = (depsgraph.scene.frame_current_final, mode, state.method, state.source_kind,
            properties_key(settings), particles.digest())
@@ -140,12 +143,15 @@ def update_object(obj, depsgraph, mode=None):
     start = time.perf_counter()
     mode = mode or depsgraph.mode
     record = {"frame": depsgraph.scene.frame_current, "mode": mode}
+    budget = obj.particlemesh.viewport_budget if mode != "RENDER" else 0
     try:
-        data, settings, cached = compute(obj, depsgraph, mode, timings=record)
+        data, settings, cached = compute(obj, depsgraph, mode, timings=record, budget=budget)
         t = time.perf_counter()
         apply(obj, data, settings)
         record["write"] = time.perf_counter() - t
         record.update(cached=cached, vertices=data.vertex_count, triangles=data.triangle_count)
+        if "thin_factor" in data.stats:
+            record["thin"] = data.stats["thin_factor"]
     except (native.ParticlemeshError, sources.SourceError) as e:
         record["error"] = str(e)
         print(f"particlemesh: {obj.name} at frame {record['frame']}: {e}")

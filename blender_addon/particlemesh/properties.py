@@ -208,6 +208,13 @@ class PARTICLEMESH_PG_object(bpy.types.PropertyGroup):
         name="Separate Render Settings", default=False, update=_settings_changed,
         description="Use the Render settings (e.g. finer, smoothed) when rendering and the "
                     "Viewport settings while scrubbing")
+    viewport_budget: IntProperty(
+        name="Viewport Budget", default=8000, min=0, soft_min=1000, soft_max=1000000,
+        update=_settings_changed,
+        description="Live mode in the viewport triangulates an even subset of at most about "
+                    "this many particles: a bigger system is thinned out (Thin Out raised as "
+                    "far as needed) so that frames change at interactive rates. Renders, "
+                    "Update Now and Bake mesh every particle. 0 = no budget")
     viewport: PointerProperty(type=PARTICLEMESH_PG_generator)
     render: PointerProperty(type=PARTICLEMESH_PG_generator)
     baked: BoolProperty(name="Baked", default=False,

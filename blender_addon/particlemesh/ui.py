@@ -57,6 +57,10 @@ class VIEW3D_PT_particlemesh_object(_Panel, bpy.types.Panel):
         row = layout.row()
         row.enabled = not state.baked
         row.prop(state, "live")
+        if state.method == "TRIANGULATE":
+            row = layout.row()
+            row.active = state.live and not state.baked
+            row.prop(state, "viewport_budget")
         layout.operator("particlemesh.update", icon="FILE_REFRESH")
         record = live.last_update.get(obj.name_full)
         if record:
@@ -71,7 +75,9 @@ class VIEW3D_PT_particlemesh_object(_Panel, bpy.types.Panel):
                                   + (", cached" if record.get("cached") else ""))
                 meshed, read = record.get("vertices"), record.get("particles")
                 if state.method == "TRIANGULATE" and meshed and read and meshed < read:
-                    layout.label(text=f"{meshed} of {read} particles meshed (Thin Out)")
+                    factor = record.get("thin")
+                    how = f"Thin Out {factor:.2f}" if factor else "Thin Out"
+                    layout.label(text=f"{meshed} of {read} particles meshed ({how})")
         entries, size = live.cache_info(obj)
         row = layout.row()
         row.label(text=f"cache: {entries} frames, {size / 2**20:.1f} MB")

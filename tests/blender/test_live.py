@@ -162,6 +162,44 @@ def test_viewport_thins_out_while_renders_use_every_particle(pm, clean_scene):
     assert len(obj.data.vertices) == 2562
 
 
+def test_viewport_budget_previews_a_big_system_while_renders_mesh_it_whole(pm, clean_scene):
+    """Live mode in the viewport meshes an even subset of at most about Viewport Budget
+    particles (a closed sphere still); renders, Update Now and budget 0 mesh every particle."""
+    em = emitter(subdivisions=5, speed=1.0)  # 2562 particles
+    obj = live_object(pm)
+    state = obj.particlemesh
+    assert state.viewport_budget == 8000  # the documented default: over 2562, so no thinning
+    assert len(obj.data.vertices) == 2562  # the operator meshes every particle
+    state.viewport_budget = 600  # regenerates at once
+    for frame in (3, 6):
+        clean_scene.frame_set(frame)
+        record = pm.live.last_update[obj.name]
+        assert "error" not in record and record["mode"] == "VIEWPORT", record
+        co, tris = mesh_arrays(obj.data)
+        assert 600 / 2 <= len(co) <= 600 * pm.generate.BUDGET_SLACK, len(co)
+        assert record["thin"] > 1.0
+        positions, _ = living_particles(em)
+        nearest = np.linalg.norm(co[:, None] - positions[None], axis=-1).min(axis=1)
+        assert nearest.max() < 1e-5  # each vertex is one of the particles
+        assert closed_and_consistent(tris) and len(co) - len(tris) // 2 == 2  # a sphere
+    log = draw_panels(pm, bpy.context)
+    assert ("prop", "viewport_budget") in log
+    assert any(kind == "label" and "of 2562 particles meshed (Thin Out" in text
+               for kind, text in log), log
+    # Renders and Update Now mesh every particle (the budget is for live scrubbing only).
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    data, settings, _ = pm.live.compute(obj, depsgraph, mode="RENDER", use_cache=False)
+    assert data.vertex_count == 2562 and "viewport_budget" not in settings
+    assert bpy.ops.particlemesh.update() == {"FINISHED"}
+    assert len(obj.data.vertices) == 2562
+    # The budget is part of the cache key: scrubbing back shows the cached preview ...
+    clean_scene.frame_set(3)
+    assert pm.live.last_update[obj.name]["cached"] and len(obj.data.vertices) < 2562
+    # ... and with no budget the viewport meshes every particle too.
+    state.viewport_budget = 0
+    assert len(obj.data.vertices) == 2562
+
+
 def test_bake_five_frames_and_step_through(pm, clean_scene, tmp_path):
     em = emitter(speed=1.0)
     obj = live_object(pm)

@@ -214,6 +214,40 @@ def test_generate_thin_meshes_an_even_subset_with_its_channels(pkg):
     assert "thinned_from" not in pkg.generate.run("TRIANGULATE", particles, {"thin": 1.0}).stats
 
 
+def test_viewport_budget_thins_a_bigger_system_to_about_the_budget(pkg):
+    """Live mode's viewport budget: a system over it is thinned (an even subset, still one
+    closed sphere) to at most about the budget; one under it, or budget 0, is meshed whole."""
+    p = sphere(20000)
+    particles = pkg.generate.Particles(p)
+    for budget in (1000, 4000):
+        mesh = pkg.generate.run("TRIANGULATE", particles, {"viewport_budget": budget})
+        assert budget / 2 <= mesh.vertex_count <= pkg.generate.BUDGET_SLACK * budget
+        assert mesh.stats["thinned_from"] == 20000
+        assert mesh.stats["thin_factor"] > 1.0
+        report = pkg.native.mesh_report(mesh.positions, mesh.triangles)
+        assert report["boundary_edges"] == 0 and report["vertices_used"] == mesh.vertex_count
+        assert mesh.vertex_count - mesh.triangle_count // 2 == 2
+    # A Thin Out coarser than the budget needs stays.
+    coarse = pkg.generate.run("TRIANGULATE", particles, {"viewport_budget": 4000, "thin": 4.0})
+    assert coarse.stats["thin_factor"] == 4.0 and coarse.vertex_count < 2000
+    for settings in ({"viewport_budget": 20000}, {"viewport_budget": 0}):
+        whole = pkg.generate.run("TRIANGULATE", particles, settings)
+        assert whole.vertex_count == 20000 and "thinned_from" not in whole.stats
+
+
+def test_viewport_budget_corrects_for_unevenly_spaced_particles(pkg):
+    """Where part of the cloud is sparser than its median spacing (a scan's far side), the
+    thinning by the even-spacing factor keeps far more than the budget; the measured count
+    corrects the factor."""
+    dense, sparse = sphere(15000), sphere(5000) * 3.0 + np.float32([10, 0, 0])
+    p = np.concatenate([dense, sparse])
+    r0 = pkg.native.estimate_spacing(p, max_samples=pkg.generate.THIN_SPACING_SAMPLES)
+    first = len(pkg.native.thin(p, pkg.generate.budget_thin(len(p), 2000) * r0))
+    assert first > 2 * 2000  # the sparse sphere keeps nearly all of its particles
+    mesh = pkg.generate.run("TRIANGULATE", pkg.generate.Particles(p), {"viewport_budget": 2000})
+    assert mesh.vertex_count <= pkg.generate.BUDGET_SLACK * 2000
+
+
 def test_generate_raw_is_wound_by_the_normals(pkg):
     p = sphere(2000)
     out = pkg.generate.run("TRIANGULATE", pkg.generate.Particles(p, normals=p), {"raw": True})
