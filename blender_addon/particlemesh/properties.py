@@ -214,7 +214,7 @@ class PARTICLEMESH_PG_object(bpy.types.PropertyGroup):
         description="Live mode in the viewport triangulates an even subset of at most about "
                     "this many particles: a bigger system is thinned out (Thin Out raised as "
                     "far as needed) so that frames change at interactive rates. Renders, "
-                    "Update Now and Bake mesh every particle. 0 = no budget")
+                    "Update Now and Bake ignore it. 0 = no budget")
     viewport: PointerProperty(type=PARTICLEMESH_PG_generator)
     render: PointerProperty(type=PARTICLEMESH_PG_generator)
     baked: BoolProperty(name="Baked", default=False,
