@@ -12,9 +12,11 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
                                    ProgressTracker& tracker) {
   const size_t n = grid.point_count();
   const double r2 = radius * radius;
-  // Fixed chunks of cells; each fills its own buffer, and buffers are joined in chunk order.
+  // Chunks of cells; each fills its own buffer, and buffers are joined in chunk order (so
+  // the lists do not depend on the chunking). At least ~16 chunks: a 7k-point preview has
+  // ~2k cells, which one chunk of 2048 left to a single thread.
   const size_t cells = grid.cell_count();
-  const size_t chunk_cells = 2048;
+  const size_t chunk_cells = std::clamp<size_t>(cells / 16, 64, 2048);
   const size_t chunks = (cells + chunk_cells - 1) / chunk_cells;
   std::vector<std::vector<uint32_t>> chunk_index(chunks);
   std::vector<uint32_t> count(n, 0);
