@@ -173,6 +173,18 @@ def uneven_spacing_warning(stats):
             "for the longest edge; try Thin Out 2 or a larger Max Edge Factor")
 
 
+def volume_particles_warning(stats):
+    """A warning when the co-normality test dropped over a third of the seed's triangles and
+    loops were left open: the particles probably fill a volume (a fluid simulation's), which
+    Polygonize meshes. Surfaces drop at most ~15 % (noisy scans), SPH frames 48-76 % (the
+    CLI's hint, cli/cmd_triangulate.cpp, says more). None otherwise."""
+    kept, dropped = stats.get("kept", 0), stats.get("rejected_conormal", 0)
+    if stats.get("raw") or not kept or dropped * 20 <= kept * 7 or not stats.get("holes_left"):
+        return None
+    return (f"{100 * dropped / kept:.0f}% of the seed's triangles join particles facing opposite "
+            "ways: if the particles fill a volume (a fluid simulation's), use Polygonize")
+
+
 def polygonize_radii(particles, settings):
     """(radius, radii): one radius for all (0 = the library's default from the spacing), or
     per-particle radii from the particles' sizes."""

@@ -161,6 +161,7 @@ class TriangulateStats(Structure):
         ("normals_estimated", c_int32),
         # appended (issue 9)
         ("triplets", c_uint64),
+        ("rejected_conormal", c_uint64),
     ]
 
 

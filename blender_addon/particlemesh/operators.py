@@ -174,9 +174,11 @@ class _Generate(SourceProps, CommonProps, SmoothProps, _ModalJob):
             detail = ""
         self.report({"INFO"}, f"{obj.name}: {data.vertex_count} vertices, "
                               f"{data.triangle_count} triangles{detail}")
-        warning = generate.uneven_spacing_warning(stats) if self.method == "TRIANGULATE" else None
-        if warning:
-            self.report({"WARNING"}, f"{obj.name}: {warning}")
+        if self.method == "TRIANGULATE":
+            for warning in (generate.volume_particles_warning(stats),
+                            generate.uneven_spacing_warning(stats)):
+                if warning:
+                    self.report({"WARNING"}, f"{obj.name}: {warning}")
 
     def draw(self, context):
         layout = self.layout

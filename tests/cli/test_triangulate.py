@@ -161,6 +161,39 @@ def test_unevenly_spaced_particles_get_a_hint(cli, tmp_path):
     assert "hint" not in proc.stdout and "hint" not in json.loads(rep.read_text())
 
 
+def test_volume_particles_get_a_hint_to_polygonize(cli, tmp_path):
+    """Particles filling a block (a jittered lattice: what a fluid simulation gives) are no
+    surface sample: most seed triangles join particles facing opposite ways, the surface does
+    not close, and the summary and report point to polygonize. Surface samples (a sphere, a
+    box) get no such hint."""
+    import random
+    rng = random.Random(5)
+    rows = ["%.6f %.6f %.6f" % (i + rng.gauss(0, 0.1), j + rng.gauss(0, 0.1), k + rng.gauss(0, 0.1))
+            for i in range(14) for j in range(14) for k in range(14)]
+    (tmp_path / "block.xyz").write_text("\n".join(rows) + "\n")
+    rep = tmp_path / "r.json"
+    proc = cli("triangulate", tmp_path / "block.xyz", "-o", tmp_path / "b.ply", "--report", rep)
+    r = json.loads(rep.read_text())
+    assert r["surface"]["rejected_conormal"] * 20 > r["triangulation"]["kept"] * 7
+    assert "particlemesh polygonize" in r["hint"]
+    assert "hint" in proc.stdout and "polygonize" in proc.stdout
+    # Polygonize does mesh them: one closed surface.
+    cli("polygonize", tmp_path / "block.xyz", "-o", tmp_path / "p.ply", "--report", rep)
+    assert json.loads(rep.read_text())["topology"]["closed"]
+    for shape in ("sphere", "box"):
+        pts = tmp_path / f"{shape}.xyz"
+        cli("sample", shape, "--spacing", "0.05", "-o", pts)
+        proc = cli("triangulate", pts, "-o", tmp_path / f"{shape}.ply", "--report", rep)
+        assert "polygonize" not in proc.stdout and "hint" not in json.loads(rep.read_text())
+
+
+def test_sph_frames_get_the_polygonize_hint(cli, tmp_path, data_dir):
+    for frame in sorted((data_dir / "particles").glob("*.ply")):
+        rep = tmp_path / "r.json"
+        cli("triangulate", frame, "-o", tmp_path / "o.ply", "--report", rep)
+        assert "particlemesh polygonize" in json.loads(rep.read_text()).get("hint", ""), frame
+
+
 def test_threads_do_not_change_output(cli, tmp_path):
     pts = tmp_path / "t.xyz"
     cli("sample", "torus", "--spacing", "0.06", "-o", pts)

@@ -248,6 +248,22 @@ def test_viewport_budget_corrects_for_unevenly_spaced_particles(pkg):
     assert mesh.vertex_count <= pkg.generate.BUDGET_SLACK * 2000
 
 
+def test_volume_particles_warn_to_polygonize(pkg):
+    """Particles filling a block (a jittered lattice, as a fluid simulation gives) are no
+    surface sample: most seed triangles are dropped by co-normality, loops stay open, and the
+    warning says Polygonize; a sphere's surface particles get no such warning."""
+    rng = np.random.default_rng(5)
+    grid = np.stack(np.meshgrid(*[np.arange(14.0)] * 3, indexing="ij"), -1).reshape(-1, 3)
+    block = (grid + rng.normal(0, 0.1, grid.shape)).astype(np.float32)
+    data = pkg.generate.run("TRIANGULATE", pkg.generate.Particles(block), {})
+    assert data.stats["rejected_conormal"] * 20 > data.stats["kept"] * 7
+    warning = pkg.generate.volume_particles_warning(data.stats)
+    assert warning and "Polygonize" in warning
+    surface = pkg.generate.run("TRIANGULATE", pkg.generate.Particles(sphere(5000)), {})
+    assert pkg.generate.volume_particles_warning(surface.stats) is None
+    assert surface.stats["rejected_conormal"] * 20 < surface.stats["kept"]
+
+
 def test_generate_raw_is_wound_by_the_normals(pkg):
     p = sphere(2000)
     out = pkg.generate.run("TRIANGULATE", pkg.generate.Particles(p, normals=p), {"raw": True})

@@ -145,6 +145,9 @@ typedef struct pm_triangulate_stats {
   int32_t normals_estimated;
   /* -- appended (issue 9) -- */
   uint64_t triplets;        /**< candidate triplets the test examined (see max_triplets_per_point) */
+  /* -- appended -- */
+  uint64_t rejected_conormal; /**< seed triangles dropped by co-normality (over a third, with loops
+                                   left open: the particles probably fill a volume) */
 } pm_triangulate_stats;
 
 PM_EXPORT void pm_triangulate_options_init(pm_triangulate_options* options);

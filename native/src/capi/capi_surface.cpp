@@ -102,6 +102,7 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
       s.unused_points = r.surface.unused_points;
       s.normals_estimated = r.surface.normals_estimated;
       s.triplets = r.triangulation.triplets;
+      s.rejected_conormal = r.surface.rejected_conormal;
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();
