@@ -3,6 +3,9 @@
 #include <cstdint>
 #include <cstdio>
 #include <memory>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "commands.h"
 #include "particle_input.h"
@@ -73,11 +76,11 @@ std::string volume_particles_hint(const SurfaceResult& r) {
   return s;
 }
 
-/// Every hint that applies, most important first, joined by " / " (empty if none).
-std::string surface_hints(const SurfaceResult& r, double thin) {
-  std::string out;
-  for (const std::string& h : {volume_particles_hint(r), uneven_spacing_hint(r, thin)})
-    if (!h.empty()) out += (out.empty() ? "" : " / ") + h;
+/// Every hint that applies, most important first.
+std::vector<std::string> surface_hints(const SurfaceResult& r, double thin) {
+  std::vector<std::string> out;
+  for (std::string h : {volume_particles_hint(r), uneven_spacing_hint(r, thin)})
+    if (!h.empty()) out.push_back(std::move(h));
   return out;
 }
 
@@ -155,7 +158,11 @@ int run_triangulate(const TriangulateArgs& a) {
     if (!input.report.is_null()) j["input_cloud"] = input.report;
     if (a.thin > 1)
       j["thin"] = {{"factor", a.thin}, {"distance", thin_distance}, {"kept", cloud.size()}, {"of", input.cloud.size()}};
-    if (const std::string h = a.raw ? std::string() : surface_hints(result, a.thin); !h.empty()) j["hint"] = h;
+    if (!a.raw) {
+      std::string joined;  // one string, as the report has always had
+      for (const std::string& h : surface_hints(result, a.thin)) joined += (joined.empty() ? "" : " / ") + h;
+      if (!joined.empty()) j["hint"] = joined;
+    }
     write_json_file(j, a.report);
   }
   if (!a.quiet) {
@@ -180,8 +187,7 @@ int run_triangulate(const TriangulateArgs& a) {
                   f.holes_filled, f.hole_triangles, f.pinches_resolved, f.holes_left,
                   f.holes_left ? (" (largest " + std::to_string(f.largest_hole_left) + " edges)").c_str() : "");
       if (f.unused_points) std::printf("  unused        %zu particles in no triangle\n", f.unused_points);
-      for (const std::string& h : {volume_particles_hint(result), uneven_spacing_hint(result, a.thin)})
-        if (!h.empty()) std::printf("  hint          %s\n", h.c_str());
+      for (const std::string& h : surface_hints(result, a.thin)) std::printf("  hint          %s\n", h.c_str());
     }
     std::printf("%s", describe(report).c_str());
     std::printf("  time          %.2f s (read %.2f, triangulate %.2f, write %.2f)\n",

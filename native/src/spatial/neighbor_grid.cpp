@@ -5,8 +5,8 @@
 #include <cmath>
 #include <limits>
 #include <string>
-#include <utility>
 
+#include "core/counting_sort.h"
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
 
@@ -34,33 +34,21 @@ struct Entry {
 // 20-30 bits in all, 2-3 passes of 11 bits); each pass is stable and the entries start in
 // index order, so equal keys stay in index order.
 void sort_by_key(std::vector<Entry>& entries, const std::array<int32_t, 3>& top) {
-  const size_t n = entries.size();
   int bits[3];
   for (int a = 0; a < 3; ++a) bits[a] = int(std::bit_width(uint32_t(top[a])));
-  const int total = bits[0] + bits[1] + bits[2];
   // The key with the unused high bits of each field squeezed out: same order, fewer digits.
   constexpr uint64_t kField = (uint64_t(1) << 21) - 1;
-  std::vector<uint64_t> compacted(n), compacted_other(n);
-  for (size_t i = 0; i < n; ++i) {
-    const uint64_t k = entries[i].key;
-    compacted[i] = ((k >> 42) << (bits[1] + bits[2])) | (((k >> 21) & kField) << bits[2]) | (k & kField);
-  }
+  const auto compact = [&](uint64_t k) {
+    return ((k >> 42) << (bits[1] + bits[2])) | (((k >> 21) & kField) << bits[2]) | (k & kField);
+  };
   constexpr int kDigit = 11;
   constexpr uint64_t kDigitMask = (uint64_t(1) << kDigit) - 1;
-  std::vector<Entry> other(n);
-  std::vector<uint32_t> start(size_t(1) << kDigit);
-  for (int shift = 0; shift < total; shift += kDigit) {
-    std::fill(start.begin(), start.end(), 0u);
-    for (size_t i = 0; i < n; ++i) ++start[(compacted[i] >> shift) & kDigitMask];
-    uint32_t sum = 0;
-    for (uint32_t& c : start) sum += std::exchange(c, sum);
-    for (size_t i = 0; i < n; ++i) {
-      const uint32_t to = start[(compacted[i] >> shift) & kDigitMask]++;
-      other[to] = entries[i];
-      compacted_other[to] = compacted[i];
-    }
-    entries.swap(other);
-    compacted.swap(compacted_other);
+  std::vector<Entry> other(entries.size());
+  for (int shift = 0; shift < bits[0] + bits[1] + bits[2]; shift += kDigit) {
+    const std::vector<size_t> start = detail::counting_place(
+        entries.size(), kDigitMask + 1, [&](size_t i) { return (compact(entries[i].key) >> shift) & kDigitMask; },
+        [&](size_t i, size_t pos) { other[pos] = entries[i]; }, true);
+    if (!detail::one_bucket(start, entries.size())) entries.swap(other);
   }
 }
 

@@ -15,6 +15,7 @@
 #include <unordered_set>
 
 
+#include "core/counting_sort.h"
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/spatial/neighbor_grid.h"
@@ -144,39 +145,6 @@ class RankQueue {
   std::vector<std::vector<uint64_t>> levels_;  // [0] holds one bit per rank
 };
 
-/// A stable counting sort in parallel: item i of n goes to bucket bucket_of(i) < buckets, and
-/// place(i, pos) is called with its position in bucket order (the buckets in turn, the items
-/// of each in order). Counted and placed per fixed chunk of items, so the positions are the
-/// same for any thread count. Returns the buckets' starts (buckets + 1 entries). With
-/// `skip_single`, nothing is placed when one bucket holds every item.
-template <class BucketOf, class Place>
-std::vector<size_t> counting_place(size_t n, size_t buckets, BucketOf&& bucket_of, Place&& place,
-                                   bool skip_single = false) {
-  const size_t chunk = 65536, chunks = (n + chunk - 1) / chunk;
-  std::vector<size_t> at(chunks * buckets, 0);  // per chunk and bucket: its count, then its slot
-  detail::parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
-    for (size_t h = hb; h < he; ++h)
-      for (size_t i = h * chunk; i < std::min(n, (h + 1) * chunk); ++i) ++at[h * buckets + bucket_of(i)];
-  });
-  std::vector<size_t> start(buckets + 1, 0);
-  bool single = false;
-  for (size_t b = 0; b < buckets; ++b) {
-    start[b + 1] = start[b];
-    for (size_t h = 0; h < chunks; ++h) {
-      const size_t count = at[h * buckets + b];
-      at[h * buckets + b] = start[b + 1];
-      start[b + 1] += count;
-    }
-    single = single || start[b + 1] - start[b] == n;
-  }
-  if (skip_single && single) return start;
-  detail::parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
-    for (size_t h = hb; h < he; ++h)
-      for (size_t i = h * chunk; i < std::min(n, (h + 1) * chunk); ++i) place(i, at[h * buckets + bucket_of(i)]++);
-  });
-  return start;
-}
-
 /// Sorts keys whose low words already ascend by their high words, stably: three counting
 /// passes of 11 bits (a pass where every key has the same digit is skipped). Linear, where a
 /// comparison sort of the 2.5M candidates of 1M points took 80-120 ms; TBB and the standard
@@ -187,9 +155,7 @@ void sort_by_high_word(std::vector<uint64_t>& key) {
     const std::vector<size_t> start = counting_place(
         key.size(), 2048, [&](size_t i) { return (key[i] >> shift) & 2047; },
         [&](size_t i, size_t pos) { tmp[pos] = key[i]; }, true);
-    const bool one_digit =
-        std::adjacent_find(start.begin(), start.end(), [&](size_t a, size_t b) { return b - a == key.size(); }) != start.end();
-    if (!one_digit) key.swap(tmp);  // else nothing was placed, and the order stands
+    if (!one_bucket(start, key.size())) key.swap(tmp);  // else nothing was placed, and the order stands
   }
 }
 
