@@ -60,7 +60,7 @@ scene = bpy.context.scene
 for obj in list(bpy.data.objects):
     bpy.data.objects.remove(obj)
 
-out(f"particlemesh {pm.native.version()} in Blender {bpy.app.version_string}, "
+out(f"particlemesh {pm.particlemesh.version()} in Blender {bpy.app.version_string}, "
     f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.2f} at start")
 
 
@@ -85,7 +85,7 @@ def torus(triangles):
     d = i * nv + (j + 1) % nv
     tris = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3),
                            np.stack([a, c, d], -1).reshape(-1, 3)]).astype(np.int32)
-    return pm.native.MeshData(positions, tris, normals.reshape(-1, 3).astype(np.float32))
+    return pm.particlemesh.Mesh(positions, tris, normals.reshape(-1, 3).astype(np.float32))
 
 
 def time_write(data, custom_normals):
@@ -117,7 +117,7 @@ if "write" not in args.skip:
         f"| {best:.2f} s | {med:.2f} s |")
     mesh = bpy.data.meshes.new("pydata")
     t = time.perf_counter()
-    mesh.from_pydata(data.positions, [], data.triangles)
+    mesh.from_pydata(data.vertices, [], data.triangles)
     mesh.update()
     out(f"| peer: `Mesh.from_pydata` (numpy arrays in) + `update()` | {time.perf_counter() - t:.2f} s | - |")
     bpy.data.meshes.remove(mesh)
@@ -139,7 +139,7 @@ def make_emitter(count):
     library so that Blender has vertex normals) each emit one particle at frame 1, flying
     outward (no gravity): evenly spaced surface particles at every frame."""
     p = fibonacci_sphere(count)
-    data = pm.native.triangulate(p, normals=p)
+    data = pm.particlemesh.triangulate(p, normals=p)
     data.triangles, _ = pm.mesh_arrays.orient_by_normals(data.triangles, p, p)
     data.normals = None
     mesh = pm.blender_mesh.write(bpy.data.meshes.new("emitter"), data)
@@ -208,8 +208,7 @@ if "live" not in args.skip:
                "triangulate, default Viewport Budget": ("TRIANGULATE", {"budget": None})}
     for factor in args.thin:
         columns[f"triangulate, Thin Out {factor:g}"] = ("TRIANGULATE", {"thin": factor})
-    if pm.native.has_polygonize():
-        columns["polygonize"] = ("POLYGONIZE", {})
+    columns["polygonize"] = ("POLYGONIZE", {})
     methods = list(columns)
     runs = {m: live_run(method, **props) for m, (method, props) in columns.items()}
     first = runs["triangulate"][1][0]
@@ -306,7 +305,7 @@ if "peers" not in args.skip:
     scene.frame_set(frames[-1])
     particles = particles_now()
     points = particles.positions
-    spacing = pm.native.estimate_spacing(points)
+    spacing = pm.particlemesh.estimate_spacing(points)
     # The library's polygonize defaults: R = 2 x spacing, cell = R / 4.
     radius, voxel = 2.0 * spacing, 0.5 * spacing
     out()
@@ -316,21 +315,20 @@ if "peers" not in args.skip:
     out("| method | per frame | faces |")
     out("|---|---|---|")
     t = time.perf_counter()
-    tri = pm.native.triangulate(points)
+    tri = pm.particlemesh.triangulate(points)
     out(f"| particlemesh triangulation (library call only) | {ms(time.perf_counter() - t)} "
         f"| {tri.triangle_count} |")
-    if pm.native.has_polygonize():
-        t = time.perf_counter()
-        poly = pm.native.polygonize(points, radius=radius, cell_size=voxel)
-        out(f"| particlemesh polygonize (library call only) | {ms(time.perf_counter() - t)} "
-            f"| {poly.triangle_count} |")
+    t = time.perf_counter()
+    poly = pm.particlemesh.polygonize(points, radius=radius, cell=voxel)
+    out(f"| particlemesh polygonize (library call only) | {ms(time.perf_counter() - t)} "
+        f"| {poly.triangle_count} |")
     seconds, faces = points_to_volume(points, radius, voxel)
     out(f"| Points to Volume -> Volume to Mesh (geometry nodes) | {ms(seconds)} | {faces} |")
     rng = np.random.default_rng(1)
     for count in args.metaballs:
         subset = points[rng.choice(len(points), size=min(count, len(points)), replace=False)]
         # Same density as the full set: scale the radius with the subset's own spacing.
-        sub_spacing = pm.native.estimate_spacing(subset)
+        sub_spacing = pm.particlemesh.estimate_spacing(subset)
         seconds, faces = metaballs(subset, 2.0 * sub_spacing, 0.5 * sub_spacing)
         out(f"| metaballs, {len(subset)} elements (radius 2 x their spacing) "
             f"| {ms(seconds)} | {faces} |")

@@ -43,10 +43,10 @@ try:
 
     # The mesh, through the add-on: library reader, faces wound to agree with the normals,
     # bulk foreach_set, custom normals.
-    data = pm.native.read_mesh(args.mesh)
+    data = pm.particlemesh.read_mesh(args.mesh)
     if data.normals is not None:
         data.triangles, _ = pm.mesh_arrays.orient_by_normals(data.triangles, data.normals,
-                                                             data.positions)
+                                                             data.vertices)
     name = bpy.path.display_name_from_filepath(args.mesh)
     mesh = pm.blender_mesh.write(bpy.data.meshes.new(name), data)
     obj = bpy.data.objects.new(name, mesh)
@@ -60,7 +60,7 @@ try:
     mesh.materials.append(material)
 
     # Frame the object: camera on a diagonal, looking at the bounding box centre.
-    lo, hi = data.positions.min(axis=0), data.positions.max(axis=0)
+    lo, hi = data.vertices.min(axis=0), data.vertices.max(axis=0)
     centre = Vector(((lo + hi) / 2).tolist())
     radius = float(np.linalg.norm(hi - lo)) / 2
     scene = bpy.context.scene
@@ -91,7 +91,7 @@ try:
     scene.render.image_settings.file_format = "PNG"
     scene.render.filepath = os.path.abspath(args.out)
     bpy.ops.render.render(write_still=True)
-    print(f"blender_demo: {len(data.positions)} vertices, {len(data.triangles)} triangles "
+    print(f"blender_demo: {len(data.vertices)} vertices, {len(data.triangles)} triangles "
           f"rendered to {args.out} in {time.perf_counter() - start:.1f} s")
 finally:
     if "particlemesh" in bpy.context.preferences.addons:

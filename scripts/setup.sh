@@ -15,6 +15,8 @@ PACKAGES=(
   libpng-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-numpy python3-pytest
+  patchelf  # RUNPATH $ORIGIN on the libraries the Python package and the add-on zip carry
+  python3-pip python3-setuptools python3-wheel  # `pip install build/python` (offline) and its test
   blender
   libpcl-dev
   clang llvm libclang-rt-14-dev  # the sanitizer build and libFuzzer (scripts/sanitize.sh, fuzz.sh)

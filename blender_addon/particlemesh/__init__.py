@@ -5,10 +5,11 @@ Installs as a zip on Blender 3.4+ (Preferences > Add-ons > Install) and as a Ble
 extension (blender_manifest.toml). Relative imports only, and __package__ for our own name,
 so it works under either package name (`particlemesh` or `bl_ext.<repo>.particlemesh`).
 
-Modules: native (ctypes binding, bpy-free; lib/libparticlemesh.so, and for .pcd files the
-PCL bridge lib/libparticlemesh_pcl.so, loaded on the first .pcd), generate / mesh_arrays / jobs (bpy-free work),
-sources (particles out of Blender), blender_mesh (bulk mesh IO), properties, operators, live
-(frame handler, cache), bake, ui."""
+Modules: particlemesh (the particlemesh Python package, the same as outside Blender, with
+particlemesh/lib/: libparticlemesh.so and the libraries it needs, and for .pcd files the PCL
+bridge libparticlemesh_pcl.so, loaded on the first .pcd), generate / mesh_arrays / jobs
+(bpy-free work), sources (particles out of Blender), blender_mesh (bulk mesh IO), properties,
+operators, live (frame handler, cache), bake, ui."""
 
 bl_info = {
     "name": "particlemesh",
@@ -23,14 +24,14 @@ bl_info = {
 
 if "bpy" in locals():  # Reload Scripts (F3 > Reload Scripts) re-imports the modules.
     import importlib
-    for _name in ("native", "mesh_arrays", "jobs", "generate", "blender_mesh", "sources",
+    for _name in ("particlemesh", "mesh_arrays", "jobs", "generate", "blender_mesh", "sources",
                   "properties", "live", "bake", "operators", "ui"):
         if _name in locals():
             importlib.reload(locals()[_name])
 
 import bpy  # noqa: E402
 
-from . import native, mesh_arrays, jobs, generate, blender_mesh, sources  # noqa: E402,F401
+from . import particlemesh, mesh_arrays, jobs, generate, blender_mesh, sources  # noqa: E402,F401
 from . import properties, live, bake, operators, ui  # noqa: E402
 
 _modules = (properties, operators, ui, live)

@@ -5,7 +5,8 @@ import os
 
 import bpy
 
-from . import blender_mesh, live, native
+from . import blender_mesh, live
+from . import particlemesh as pm
 
 
 def baked_mesh_name(obj, frame):
@@ -39,7 +40,7 @@ def bake_frame(context, obj, frame, mode, directory=""):
     item.mesh = mesh
     if directory:
         os.makedirs(bpy.path.abspath(directory), exist_ok=True)
-        native.write_mesh(data, ply_path(directory, obj, frame))
+        pm.write_mesh(data, ply_path(directory, obj, frame))
     return mesh
 
 

@@ -4,7 +4,8 @@ Python), as io_mesh_ply does."""
 import bpy
 import numpy as np
 
-from . import mesh_arrays, native
+from . import mesh_arrays
+from . import particlemesh as pm
 
 # Blender 4.0 made MeshPolygon.loop_total read-only (sizes follow from loop_start);
 # 4.1 removed Mesh.use_auto_smooth (custom normals no longer need it).
@@ -24,7 +25,7 @@ _ATTRIBUTE_TYPES = {1: ("FLOAT", "value"), 2: ("FLOAT2", "vector"), 3: ("FLOAT_V
 
 
 def write(mesh, data, *, custom_normals=True, attributes=True):
-    """Replace the geometry of `mesh` with native.MeshData `data`, in place.
+    """Replace the geometry of `mesh` with the particlemesh.Mesh `data`, in place.
 
     Materials stay (clear_geometry keeps them), faces are smooth shaded, the library's
     normals become custom split normals (unless they are the angle-weighted face normals
@@ -32,7 +33,7 @@ def write(mesh, data, *, custom_normals=True, attributes=True):
     channels (velocity, colour...) become POINT attributes named as in data.attributes. When
     the mesh already has exactly these triangles (live mode on a stable topology), only the
     vertices move."""
-    positions = np.ascontiguousarray(data.positions, dtype=np.float32)
+    positions = np.ascontiguousarray(data.vertices, dtype=np.float32)
     triangles = np.ascontiguousarray(data.triangles, dtype=np.int32)
     nv, nt = len(positions), len(triangles)
     rebuild = not _same_triangles(mesh, nv, triangles)
@@ -51,14 +52,13 @@ def write(mesh, data, *, custom_normals=True, attributes=True):
             if _SET_LOOP_TOTAL:
                 mesh.polygons.foreach_set("loop_total", np.full(nt, 3, dtype=INDEX))
             mesh.polygons.foreach_set("use_smooth", np.ones(nt, dtype=bool))
-            if native.has_triangle_edges():
-                # The library numbers the edges (a few ms); Blender's own edge pass, which
-                # update(calc_edges=True) runs, took 75 of the 90 ms of writing 200k triangles.
-                edges, corner_edges = native.triangle_edges(triangles, nv)
-                mesh.edges.add(len(edges))
-                mesh.edges.foreach_set("vertices", edges.ravel())
-                mesh.loops.foreach_set("edge_index", corner_edges)
-                calc_edges = False
+            # The library numbers the edges (a few ms); Blender's own edge pass, which
+            # update(calc_edges=True) runs, took 75 of the 90 ms of writing 200k triangles.
+            edges, corner_edges = pm.triangle_edges(triangles, nv)
+            mesh.edges.add(len(edges))
+            mesh.edges.foreach_set("vertices", edges.ravel())
+            mesh.loops.foreach_set("edge_index", corner_edges)
+            calc_edges = False
     mesh.update(calc_edges=calc_edges)
     if (custom_normals and data.normals is not None and nt
             and not data.stats.get("normals_are_face_weighted", False)):

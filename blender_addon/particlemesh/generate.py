@@ -1,5 +1,5 @@
 """The meshing pipelines behind the operators and live mode: particles (numpy arrays) and a
-flat settings dict in, native.MeshData out. bpy-free, so it runs in a worker thread and in
+flat settings dict in, a particlemesh.Mesh out. bpy-free, so it runs in a worker thread and in
 tests outside Blender.
 
 Settings keys (the operators' and the generated objects' property names):
@@ -14,7 +14,8 @@ import math
 
 import numpy as np
 
-from . import mesh_arrays, native
+from . import mesh_arrays
+from . import particlemesh as pm
 
 
 class Particles:
@@ -42,11 +43,27 @@ class Particles:
         return mesh_arrays.content_hash(self.positions, self.normals, self.velocities, self.sizes)
 
 
-class EmptyResult(native.ParticlemeshError):
+class EmptyResult(pm.Error):
     """The library succeeded but produced no triangles (a parameter far off the data)."""
 
     def __init__(self, message):
-        super().__init__(message, native.STATUS_INVALID_ARGUMENT)
+        super().__init__(message, pm.STATUS_INVALID_ARGUMENT)
+
+
+def library_status():
+    """(True, the library's version) if it loads, else (False, why not)."""
+    try:
+        return True, pm.version()
+    except pm.Error as e:
+        return False, str(e)
+
+
+def pcd_status():
+    """(True, the PCL bridge's path) if .pcd files can be read, else (False, why not)."""
+    try:
+        return True, pm.pcl_bridge_path()
+    except pm.Error as e:
+        return False, str(e)
 
 
 def _attributes(particles):
@@ -61,9 +78,8 @@ def _smooth(mesh, settings, progress):
     levels = int(settings.get("smooth_levels", 1))
     if scheme == "NONE" or levels <= 0:
         return mesh
-    out = native.smooth(mesh.positions, mesh.triangles, scheme=native.SCHEMES[scheme],
-                        levels=levels, normals=mesh.normals, attributes=mesh.attributes,
-                        threads=int(settings.get("threads", 0)), progress=progress)
+    out = pm.smooth(mesh, scheme=scheme, levels=levels, threads=int(settings.get("threads", 0)),
+                    progress=progress)
     out.stats = dict(mesh.stats, smooth_levels=levels)
     out.stats.pop("normals_are_face_weighted", None)  # Loop / butterfly normals are their own
     return out
@@ -94,11 +110,11 @@ def thin(particles, settings):
     if settings.get("auto_spacing", True):
         # A sampled estimate: the thinning needs the spacing only roughly (within ~1 % here),
         # and the exact one was a third of the preview's library time at 100k particles.
-        r0 = native.estimate_spacing(particles.positions, threads=int(settings.get("threads", 0)),
-                                     max_samples=THIN_SPACING_SAMPLES)
+        r0 = pm.estimate_spacing(particles.positions, threads=int(settings.get("threads", 0)),
+                                 max_samples=THIN_SPACING_SAMPLES)
     else:
         r0 = float(settings["spacing"])
-    kept = native.thin(particles.positions, factor * r0)
+    kept = pm.thin(particles.positions, factor * r0)
     for _ in range(3):
         if not over_budget or len(kept) <= BUDGET_SLACK * budget:
             break
@@ -106,7 +122,7 @@ def thin(particles, settings):
         # sparser than the median spacing (a scan's far side) keep up to ~1.6x more at the
         # same factor (bench/RESULTS.md): correct by the measured count.
         factor *= math.sqrt(len(kept) / budget)
-        kept = native.thin(particles.positions, factor * r0)
+        kept = pm.thin(particles.positions, factor * r0)
     return particles.subset(kept), factor * r0, factor
 
 
@@ -127,17 +143,18 @@ def triangulate(particles, settings, progress=None):
     auto = settings.get("auto_spacing", True) or thin_distance is not None
     spacing = 0.0 if auto else float(settings["spacing"])
     raw = bool(settings.get("raw", False))
-    mesh = native.triangulate(
+    mesh = pm.triangulate(
         particles.positions, normals=particles.normals, spacing=spacing,
-        max_edge_factor=float(settings.get("max_edge_factor", 2.0)),
+        max_edge_factor=settings.get("max_edge_factor"),
         threads=int(settings.get("threads", 0)), raw=raw,
         normal_angle=(math.degrees(settings["normal_angle"]) if "normal_angle" in settings
                       else None),
         fill_holes=settings.get("fill_holes"),
         fill_edge_factor=settings.get("fill_edge_factor"),
         normal_source=settings.get("normal_source"),
-        repair=bool(settings.get("repair", True)), orient=bool(settings.get("orient", True)),
+        repair=settings.get("repair"), orient=settings.get("orient"),
         progress=progress)
+    mesh.stats["raw"] = raw
     if mesh.triangle_count == 0:
         raise EmptyResult(
             f"no triangles: with spacing {mesh.stats['spacing']:.6g} the longest edge is "
@@ -148,7 +165,7 @@ def triangulate(particles, settings, progress=None):
         # with the particles' normals where there are some.
         if mesh.normals is not None:
             mesh.triangles, _ = mesh_arrays.orient_by_normals(mesh.triangles, mesh.normals,
-                                                              mesh.positions)
+                                                              mesh.vertices)
     else:
         # The finished surface's normals are angle-weighted face normals: exactly what
         # Blender computes itself for smooth shading, so they need not be custom normals.
@@ -211,17 +228,17 @@ def polygonize_threshold(settings, from_sizes):
     if threshold > 0 or not from_sizes:
         return threshold
     factor = float(settings.get("radius_factor", 2.0))
-    kernel = native.KERNELS[settings.get("kernel", "WYVILL")]
-    return 0.5 * native.lattice_field(kernel, factor, 2.0)
+    return 0.5 * pm.lattice_field(settings.get("kernel", "WYVILL"), factor, 2.0)
 
 
 def polygonize(particles, settings, progress=None):
     radius, radii = polygonize_radii(particles, settings)
     from_sizes = settings.get("radius_mode") == "PARTICLE_SIZE" and (radius > 0 or radii is not None)
-    mesh = native.polygonize(
-        particles.positions, radii=radii, kernel=native.KERNELS[settings.get("kernel", "WYVILL")],
+    # 0 is the library's "automatic" for radius, threshold and cell.
+    mesh = pm.polygonize(
+        particles.positions, radii=radii, kernel=settings.get("kernel"),
         radius=radius, threshold=polygonize_threshold(settings, from_sizes),
-        cell_size=0.0 if settings.get("auto_cell", True) else float(settings["cell_size"]),
+        cell=0.0 if settings.get("auto_cell", True) else float(settings["cell_size"]),
         threads=int(settings.get("threads", 0)), attributes=_attributes(particles),
         progress=progress)
     if mesh.triangle_count == 0:
@@ -234,4 +251,9 @@ METHODS = {"TRIANGULATE": triangulate, "POLYGONIZE": polygonize}
 
 
 def run(method, particles, settings, progress=None):
-    return METHODS[method](particles, settings, progress=progress)
+    mesh = METHODS[method](particles, settings, progress=progress)
+    # Blender stores float32: convert once here (it also halves the live cache's memory).
+    mesh.vertices = mesh.vertices.astype(np.float32)
+    if mesh.normals is not None:
+        mesh.normals = mesh.normals.astype(np.float32)
+    return mesh

@@ -5,18 +5,18 @@ everything that touches Blender data happens on the main thread before and after
 
 import threading
 
-from . import native
+from . import particlemesh as pm
 
 
 class Job:
-    """Runs fn(*args, progress=<native.Progress>, **kwargs) in a daemon thread.
+    """Runs fn(*args, progress=<particlemesh.Progress>, **kwargs) in a daemon thread.
 
     The main thread polls `done`, shows `progress.stage` / `progress.fraction`, may call
     `cancel()` (the library stops at its next progress report and the job ends with a
-    native.CancelledError in `error`), and takes `result` or `error` once done."""
+    particlemesh.CancelledError in `error`), and takes `result` or `error` once done."""
 
     def __init__(self, fn, *args, **kwargs):
-        self.progress = native.Progress()
+        self.progress = pm.Progress()
         self.result = None
         self.error = None
         self._fn = fn

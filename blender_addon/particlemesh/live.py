@@ -12,11 +12,12 @@ from collections import OrderedDict, deque
 import bpy
 from bpy.app.handlers import persistent
 
-from . import blender_mesh, generate, native, properties, sources
+from . import blender_mesh, generate, properties, sources
+from . import particlemesh as pm
 
 
 class _Cache:
-    """Meshes already made, per object: (frame, mode, settings, particle digest) -> MeshData,
+    """Meshes already made, per object: (frame, mode, settings, particle digest) -> Mesh,
     least recently used first out, bounded by the preference's megabytes."""
 
     def __init__(self):
@@ -39,12 +40,12 @@ class _Cache:
             return
         old = self.entries.pop(key, None)
         if old is not None:
-            self.bytes -= old.nbytes()
+            self.bytes -= old.nbytes
         self.entries[key] = data
-        self.bytes += data.nbytes()
+        self.bytes += data.nbytes
         while self.bytes > limit and self.entries:
             _, dropped = self.entries.popitem(last=False)
-            self.bytes -= dropped.nbytes()
+            self.bytes -= dropped.nbytes
 
     def clear(self):
         self.entries.clear()
@@ -94,7 +95,7 @@ def settings_for(obj, mode):
 
 def compute(obj, depsgraph, mode=None, use_cache=True, progress=None, timings=None, budget=0):
     """Mesh data of generated object `obj` for the depsgraph's frame (from the cache when it
-    was made before). Returns (MeshData, settings, cached). `timings` (a dict), if given,
+    was made before). Returns (particlemesh.Mesh, settings, cached). `timings` (a dict), if given,
     receives the seconds spent reading the source and meshing. `budget` > 0: triangulate at
     most about that many particles (live mode's Viewport Budget)."""
     state = obj.particlemesh
@@ -152,7 +153,7 @@ def update_object(obj, depsgraph, mode=None):
         record.update(cached=cached, vertices=data.vertex_count, triangles=data.triangle_count)
         if "thin_factor" in data.stats:
             record["thin"] = data.stats["thin_factor"]
-    except (native.ParticlemeshError, sources.SourceError) as e:
+    except (pm.Error, sources.SourceError) as e:
         record["error"] = str(e)
         print(f"particlemesh: {obj.name} at frame {record['frame']}: {e}")
     record["seconds"] = time.perf_counter() - start

@@ -13,7 +13,8 @@ import bpy
 from bpy.props import BoolProperty, CollectionProperty, EnumProperty, IntProperty, StringProperty
 from bpy_extras.io_utils import ImportHelper
 
-from . import bake, blender_mesh, generate, jobs, live, native, properties, sources
+from . import bake, blender_mesh, generate, jobs, live, properties, sources
+from . import particlemesh as pm
 from .properties import CommonProps, PolygonizeProps, SmoothProps, SourceProps, TriangulateProps
 
 # Events a running job lets through, so the view can still be navigated.
@@ -23,9 +24,9 @@ _NAVIGATION = {"MIDDLEMOUSE", "WHEELUPMOUSE", "WHEELDOWNMOUSE", "MOUSEMOVE", "IN
 
 def report_failure(operator, error):
     """Turn any exception into a report and {'CANCELLED'}."""
-    if isinstance(error, native.CancelledError):
+    if isinstance(error, pm.CancelledError):
         operator.report({"WARNING"}, "particlemesh: cancelled")
-    elif isinstance(error, (native.ParticlemeshError, sources.SourceError)):
+    elif isinstance(error, (pm.Error, sources.SourceError)):
         operator.report({"ERROR"}, str(error))
     else:  # a bug: keep the details on the console for a report, tell the user in one line
         traceback.print_exception(type(error), error, error.__traceback__)
@@ -112,7 +113,7 @@ class _Generate(SourceProps, CommonProps, SmoothProps, _ModalJob):
         return particles
 
     def check_available(self):
-        native.load()
+        pm.version()  # LibraryNotFoundError saying where it looked
 
     def execute(self, context):
         try:
@@ -243,10 +244,6 @@ class PARTICLEMESH_OT_polygonize(PolygonizeProps, _Generate, bpy.types.Operator)
     bl_label = "Polygonize Particles"
     method = "POLYGONIZE"
 
-    def check_available(self):
-        if not native.has_polygonize():
-            raise native.NotAvailableError("pm_polygonize")
-
 
 class PARTICLEMESH_OT_smooth(_ModalJob, bpy.types.Operator):
     """Subdivide the active mesh object in place: Loop (smooth, approximating) or modified butterfly (interpolating)"""
@@ -270,24 +267,21 @@ class PARTICLEMESH_OT_smooth(_ModalJob, bpy.types.Operator):
         return obj is not None and context.mode == "OBJECT"
 
     def _prepare(self, context):
-        if not native.has_smooth():
-            raise native.NotAvailableError("pm_smooth")
         obj = context.active_object
         sources.check_object(obj)
         mesh = obj.data
         triangles = blender_mesh.triangles(mesh)
         if len(triangles) == 0:
             raise sources.SourceError(f"'{obj.name}' has no faces to smooth")
-        positions = blender_mesh.positions(mesh)
-        attributes = blender_mesh.float_point_attributes(mesh)
+        source = pm.Mesh(blender_mesh.positions(mesh), triangles,
+                         attributes=blender_mesh.float_point_attributes(mesh))
         self._target = obj.name
-        return (positions, triangles), dict(scheme=native.SCHEMES[self.scheme],
-                                            levels=self.levels, attributes=attributes)
+        return source, dict(scheme=self.scheme, levels=self.levels)
 
     def execute(self, context):
         try:
-            (positions, triangles), kwargs = self._prepare(context)
-            self.job_finished(context, native.smooth(positions, triangles, **kwargs))
+            source, kwargs = self._prepare(context)
+            self.job_finished(context, pm.smooth(source, **kwargs))
         except Exception as e:  # noqa: BLE001
             return report_failure(self, e)
         return {"FINISHED"}
@@ -296,10 +290,10 @@ class PARTICLEMESH_OT_smooth(_ModalJob, bpy.types.Operator):
         if not _interactive(context):
             return self.execute(context)
         try:
-            (positions, triangles), kwargs = self._prepare(context)
+            source, kwargs = self._prepare(context)
         except Exception as e:  # noqa: BLE001
             return report_failure(self, e)
-        return self.start_job(context, jobs.Job(native.smooth, positions, triangles, **kwargs))
+        return self.start_job(context, jobs.Job(pm.smooth, source, **kwargs))
 
     def job_finished(self, context, data):
         obj = bpy.data.objects.get(self._target)
@@ -328,8 +322,8 @@ class PARTICLEMESH_OT_import_cloud(bpy.types.Operator, ImportHelper):
         made, failures, notes = [], [], []
         for path in paths:
             try:
-                cloud = native.read_cloud(path)
-            except native.ParticlemeshError as e:
+                cloud = pm.read_points(path)
+            except pm.Error as e:
                 failures.append(str(e))
                 continue
             except Exception as e:  # noqa: BLE001
@@ -399,7 +393,7 @@ class PARTICLEMESH_OT_bake(bpy.types.Operator):
 
     def _begin(self, context):
         self._check()
-        native.load()
+        pm.version()
         obj = context.active_object
         self._target = obj.name
         self._frame = context.scene.frame_current

@@ -235,13 +235,13 @@ class PARTICLEMESH_AP_preferences(bpy.types.AddonPreferences):
                     "(0 = no cache)")
 
     def draw(self, context):
-        from . import native
-        ok, info = native.available()
+        from . import generate
+        ok, info = generate.library_status()
         col = self.layout.column()
         col.label(text=f"particlemesh library {info}" if ok else info,
                   icon="CHECKMARK" if ok else "ERROR")
         if ok:
-            pcd, where = native.has_pcd()
+            pcd, where = generate.pcd_status()
             col.label(text="PCD import: PCL bridge loaded" if pcd else where,
                       icon="CHECKMARK" if pcd else "INFO")
         col.prop(self, "cache_megabytes")

@@ -2,7 +2,7 @@
 
 import bpy
 
-from . import live, native
+from . import generate, live
 from .operators import draw_method_settings
 
 
@@ -17,7 +17,7 @@ class VIEW3D_PT_particlemesh(_Panel, bpy.types.Panel):
 
     def draw(self, context):
         layout = self.layout
-        ok, info = native.available()
+        ok, info = generate.library_status()
         if not ok:
             box = layout.box()
             box.alert = True
@@ -26,15 +26,9 @@ class VIEW3D_PT_particlemesh(_Panel, bpy.types.Panel):
         col = layout.column(align=True)
         col.enabled = ok
         col.operator("particlemesh.triangulate", icon="MESH_ICOSPHERE")
-        row = col.row(align=True)
-        row.operator("particlemesh.polygonize", icon="META_BALL")
-        row.active = ok and native.has_polygonize()
-        row = col.row(align=True)
-        row.operator("particlemesh.smooth", icon="MOD_SUBSURF")
-        row.active = ok and native.has_smooth()
+        col.operator("particlemesh.polygonize", icon="META_BALL")
+        col.operator("particlemesh.smooth", icon="MOD_SUBSURF")
         layout.operator("particlemesh.import_cloud", icon="IMPORT")
-        if ok and not (native.has_polygonize() and native.has_smooth()):
-            layout.label(text="Some tools need a newer particlemesh library", icon="INFO")
 
 
 class VIEW3D_PT_particlemesh_object(_Panel, bpy.types.Panel):

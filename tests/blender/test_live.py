@@ -223,9 +223,9 @@ def test_bake_five_frames_and_step_through(pm, clean_scene, tmp_path):
         positions, _ = living_particles(em)
         co, tris = mesh_arrays(obj.data)
         np.testing.assert_allclose(co, positions, atol=1e-5)
-        on_disk = pm.native.read_mesh(folder / f"{obj.name}_{frame:05d}.ply")
+        on_disk = pm.particlemesh.read_mesh(folder / f"{obj.name}_{frame:05d}.ply")
         assert on_disk.triangle_count == len(tris)
-        np.testing.assert_allclose(on_disk.positions, co, atol=1e-6)
+        np.testing.assert_allclose(on_disk.vertices, co, atol=1e-6)
     clean_scene.frame_set(9)  # past the range: the last baked frame stays
     assert obj.data == meshes[5]
     # Free the bake: the live mesh comes back, the baked meshes go.

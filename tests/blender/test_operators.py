@@ -39,10 +39,12 @@ def ply_vertex_count(path):
 # ---- package ----------------------------------------------------------------------------------
 
 def test_installed_from_the_zip_with_its_own_library(pm):
-    lib = pm.native.load()
     installed = Path(pm.__file__).resolve().parent
-    assert Path(lib.path).resolve().parent == installed / "lib"
-    assert lib.abi_version == pm.native.ABI_VERSION
+    # The add-on's binding is the particlemesh package, carried in particlemesh/particlemesh/
+    # with its library and the libraries that needs (a zip that runs on any Linux Blender).
+    assert Path(pm.particlemesh.__file__).resolve().parent == installed / "particlemesh"
+    assert Path(pm.particlemesh.library_path()).resolve().parent == installed / "particlemesh" / "lib"
+    assert (installed / "particlemesh" / "lib" / "libtbb.so.12").is_file()
     manifest = tomllib.loads((installed / "blender_manifest.toml").read_text())
     assert manifest["version"] == ".".join(map(str, pm.bl_info["version"]))
     assert manifest["id"] == pm.__package__ == "particlemesh"
@@ -79,7 +81,7 @@ def test_triangulate_scan_from_shared_data(pm, data_dir):
     src_co, _ = mesh_arrays(source.data)
     np.testing.assert_array_equal(co, src_co)  # vertex i is particle i
     # The same triangles as the library gives for these particles, directly.
-    direct = pm.native.triangulate(src_co, normals=normals)
+    direct = pm.particlemesh.triangulate(src_co, normals=normals)
     assert len(tris) == direct.triangle_count
     assert 2 * 8747 * 0.95 < len(tris) < 2 * 8747 * 1.35
     # Poisson-disk r0 = 0.02: every edge within the default 2 x estimated spacing, hole-filling
@@ -89,7 +91,7 @@ def test_triangulate_scan_from_shared_data(pm, data_dir):
     edges = np.linalg.norm(co[tris] - co[np.roll(tris, 1, axis=1)], axis=2)
     assert edges.max() <= 1.5 * 2 * spacing * (1 + 1e-5)
     # The finished surface: closed, manifold, outward, genus 0 (F = 2V - 4).
-    rep = pm.native.mesh_report(co, tris)
+    rep = pm.particlemesh.topology(pm.particlemesh.Mesh(co, tris))
     assert rep["closed"] and rep["manifold"] and rep["consistently_oriented"] and rep["outward"]
     assert rep["euler_characteristic"] == 2 and rep["vertices_used"] == 8747
     assert len(tris) == 2 * 8747 - 4
@@ -116,27 +118,27 @@ def test_raw_triangles_use_the_scan_normals(pm, data_dir):
     assert bpy.ops.particlemesh.triangulate(raw=True) == {"FINISHED"}
     mesh = bpy.context.active_object.data
     co, tris = mesh_arrays(mesh)
-    assert len(tris) == pm.native.triangulate(co, raw=True).triangle_count
+    assert len(tris) == pm.particlemesh.triangulate(co, raw=True).triangle_count
     assert mesh.has_custom_normals  # the scan's normals, as custom split normals
     assert (np.einsum("ij,ij->i", face_normals(co, tris), normals[tris].sum(axis=1)) > 0).all()
     assert not mesh.validate(verbose=False)
 
 
 def test_property_defaults_are_the_library_defaults(pm):
-    import ctypes
-    lib = pm.native.load()
-    opt = pm.native.TriangulateOptions()
-    lib.pm_triangulate_options_init(ctypes.byref(opt))
+    opt = pm.particlemesh.defaults("triangulate")
     props = pm.properties.PARTICLEMESH_PG_generator.bl_rna.properties
-    assert props["max_edge_factor"].default == pytest.approx(opt.max_edge_factor)
-    assert np.degrees(props["normal_angle"].default) == pytest.approx(opt.normal_angle)
-    assert props["fill_holes"].default == opt.fill_holes
-    assert props["fill_edge_factor"].default == pytest.approx(opt.fill_edge_factor)
-    assert pm.native.NORMAL_SOURCES[props["normal_source"].default] == opt.normals
-    assert props["auto_spacing"].default and opt.spacing == 0
-    assert props["threads"].default == opt.threads == 0
-    assert not props["raw"].default and not opt.flags
+    assert props["max_edge_factor"].default == pytest.approx(opt["max_edge_factor"])
+    assert np.degrees(props["normal_angle"].default) == pytest.approx(opt["normal_angle"])
+    assert props["fill_holes"].default == opt["fill_holes"]
+    assert props["fill_edge_factor"].default == pytest.approx(opt["fill_edge_factor"])
+    assert props["normal_source"].default.lower() == opt["normal_source"]
+    assert props["auto_spacing"].default and opt["spacing"] == 0
+    assert props["threads"].default == opt["threads"] == 0
+    assert not props["raw"].default
     assert props["repair"].default and props["orient"].default
+    poly = pm.particlemesh.defaults("polygonize")
+    props = pm.properties.PARTICLEMESH_PG_generator.bl_rna.properties
+    assert props["kernel"].default.lower() == poly["kernel"]
 
 
 def test_options_reach_the_library(pm):
@@ -145,7 +147,7 @@ def test_options_reach_the_library(pm):
     assert bpy.ops.particlemesh.triangulate(auto_spacing=False, spacing=0.08,
                                             max_edge_factor=1.5) == {"FINISHED"}
     co, tris = mesh_arrays(bpy.context.active_object.data)
-    assert len(tris) == pm.native.triangulate(p, spacing=0.08, max_edge_factor=1.5).triangle_count
+    assert len(tris) == pm.particlemesh.triangulate(p, spacing=0.08, max_edge_factor=1.5).triangle_count
     edges = np.linalg.norm(co[tris] - co[np.roll(tris, 1, axis=1)], axis=2)
     assert edges.max() <= 1.5 * 0.12 * (1 + 1e-5)  # hole filling may reach 1.5 L
     s = bpy.context.active_object.particlemesh.viewport
@@ -154,7 +156,7 @@ def test_options_reach_the_library(pm):
     assert bpy.ops.particlemesh.triangulate(fill_holes=0, normal_angle=0.5) == {"FINISHED"}
     s = bpy.context.active_object.particlemesh.viewport
     assert s.fill_holes == 0 and s.normal_angle == pytest.approx(0.5)
-    direct = pm.native.triangulate(p, fill_holes=0, normal_angle=np.degrees(0.5))
+    direct = pm.particlemesh.triangulate(p, fill_holes=0, normal_angle=np.degrees(0.5))
     assert len(bpy.context.active_object.data.polygons) == direct.triangle_count
     assert source.name in bpy.data.objects
 
@@ -192,7 +194,7 @@ def test_triangulate_particle_system_with_velocity(pm, clean_scene):
     np.testing.assert_allclose(velocity, velocities, atol=1e-6)
     np.testing.assert_allclose(np.linalg.norm(velocity, axis=1), 2.0, rtol=0.05)
     # An evenly spaced sphere: a closed outward genus-0 surface through every particle.
-    rep = pm.native.mesh_report(co, tris)
+    rep = pm.particlemesh.topology(pm.particlemesh.Mesh(co, tris))
     assert rep["vertices_used"] == 642 and rep["components"] == 1
     assert rep["closed"] and rep["outward"] and len(tris) == 2 * 642 - 4
     assert not result.data.validate(verbose=False)
@@ -272,8 +274,9 @@ def test_import_every_pcd(pm, data_dir):
     """Every .pcd of the shared data through File > Import (the PCL bridge shipped in the
     zip): point counts after dropping NaN points, normals where the file has them."""
     installed = Path(pm.__file__).resolve().parent
-    assert (installed / "lib" / "libparticlemesh_pcl.so").is_file()
-    assert Path(pm.native.load_pcl().path).resolve().parent == installed / "lib"
+    lib_dir = installed / "particlemesh" / "lib"
+    assert (lib_dir / "libparticlemesh_pcl.so").is_file()
+    assert Path(pm.particlemesh.pcl_bridge_path()).resolve().parent == lib_dir
     files = sorted((data_dir / "pcd").glob("*.pcd"))
     assert len(files) == 7
     # DATA.md: bunny/bun0 397 points, milk 13704, colored_cloud 1000, the Kinect frame
@@ -404,14 +407,13 @@ def test_index_buffers_have_the_format_blender_copies_in_bulk(pm):
         assert prop.type == "INT" and prop.subtype == "UNSIGNED", (owner, name, prop.subtype)
     assert np.dtype(pm.blender_mesh.INDEX).char == "I"
     p = fibonacci_sphere(400)
-    data = pm.native.triangulate(p)
+    data = pm.particlemesh.triangulate(p)
     mesh = pm.blender_mesh.write(bpy.data.meshes.new("indices"), data)
     got = pm.blender_mesh.triangles(mesh)
     assert got.dtype == np.int32
     np.testing.assert_array_equal(got, data.triangles)
     # The edges come from the library (pm_triangle_edges), not Blender's edge pass: a valid
     # mesh (validate() finds nothing to fix), each edge once, every loop on its edge.
-    assert pm.native.has_triangle_edges()
     assert len(mesh.edges) == 3 * len(data.triangles) // 2
     ev = np.empty(2 * len(mesh.edges), dtype=np.uint32)
     mesh.edges.foreach_get("vertices", ev)
@@ -435,11 +437,6 @@ def icosphere_object():
 def test_smooth_loop_multiplies_faces_by_four(pm):
     obj = icosphere_object()
     faces = len(obj.data.polygons)
-    if not pm.native.has_smooth():
-        with pytest.raises(RuntimeError, match="needs a newer particlemesh library"):
-            bpy.ops.particlemesh.smooth()
-        assert len(obj.data.polygons) == faces
-        pytest.xfail("pm_smooth is not in this library yet (issue 4)")
     material = bpy.data.materials.new("Kept")
     obj.data.materials.append(material)
     for levels in (1, 2):
@@ -450,7 +447,7 @@ def test_smooth_loop_multiplies_faces_by_four(pm):
         assert list(obj.data.materials) == [material]
         assert not obj.data.validate(verbose=False)
         co, tris = mesh_arrays(obj.data)
-        rep = pm.native.mesh_report(co, tris)
+        rep = pm.particlemesh.topology(pm.particlemesh.Mesh(co, tris))
         assert rep["closed"] and rep["euler_characteristic"] == 2 and rep["outward"]
         # Loop shrinks toward the limit surface, which lies inside the control hull.
         assert np.linalg.norm(co, axis=1).max() <= 1.0 + 1e-5
@@ -467,9 +464,6 @@ def lattice(n, spacing=0.1):
 def test_polygonize_volume_particles(pm, clean_scene):
     p = lattice(8)
     source = point_cloud_object("block", p)
-    if not pm.native.has_polygonize():
-        expect_error("needs a newer particlemesh library", op=bpy.ops.particlemesh.polygonize)
-        pytest.xfail("pm_polygonize is not in this library yet (issue 7)")
     assert bpy.ops.particlemesh.polygonize() == {"FINISHED"}
     result = bpy.context.active_object
     assert result is not source and result.name == "block_polygonize"
@@ -477,9 +471,9 @@ def test_polygonize_volume_particles(pm, clean_scene):
     assert state.method == "POLYGONIZE" and state.source == source
     mesh = result.data
     co, tris = mesh_arrays(mesh)
-    direct = pm.native.polygonize(p)
+    direct = pm.particlemesh.polygonize(p)
     assert len(tris) == direct.triangle_count and len(co) == direct.vertex_count
-    rep = pm.native.mesh_report(co, tris)
+    rep = pm.particlemesh.topology(pm.particlemesh.Mesh(co, tris))
     assert rep["closed"] and rep["manifold"] and rep["outward"] and rep["components"] == 1
     assert rep["euler_characteristic"] == 2
     # The surface wraps the block: its box holds the particles' box, and nothing is far off.
@@ -493,7 +487,7 @@ def test_polygonize_volume_particles(pm, clean_scene):
     assert bpy.ops.particlemesh.polygonize(kernel="POLY6", radius_mode="FIXED", radius=0.25,
                                            auto_cell=False, cell_size=0.04) == {"FINISHED"}
     co2, tris2 = mesh_arrays(bpy.context.active_object.data)
-    direct = pm.native.polygonize(p, kernel=pm.native.KERNEL_POLY6, radius=0.25, cell_size=0.04)
+    direct = pm.particlemesh.polygonize(p, kernel="poly6", radius=0.25, cell=0.04)
     assert len(tris2) == direct.triangle_count != len(tris)
     # Nothing reaches the threshold: an error, no object.
     bpy.context.view_layer.objects.active = source
@@ -505,14 +499,11 @@ def test_polygonize_particle_system_with_sizes(pm, clean_scene):
     settings = em.particle_systems[0].settings
     settings.particle_size = 0.1
     clean_scene.frame_set(2)
-    if not pm.native.has_polygonize():
-        expect_error("needs a newer particlemesh library", op=bpy.ops.particlemesh.polygonize)
-        pytest.xfail("pm_polygonize is not in this library yet (issue 7)")
     assert bpy.ops.particlemesh.polygonize(radius_mode="PARTICLE_SIZE", radius_factor=2.0,
                                            live=True) == {"FINISHED"}
     result = bpy.context.active_object
     co, tris = mesh_arrays(result.data)
-    rep = pm.native.mesh_report(co, tris)
+    rep = pm.particlemesh.topology(pm.particlemesh.Mesh(co, tris))
     assert rep["closed"] and rep["manifold"] and len(tris) > 1000
     # A shell of particles of radius about 1: the surface lies within 2 x 0.1 of it.
     positions, _ = living_particles(em)
@@ -601,7 +592,7 @@ def test_worker_job_cancels(pm):
     job.cancel()
     job.start()
     assert job.wait(120)
-    assert isinstance(job.error, pm.native.CancelledError)
+    assert isinstance(job.error, pm.particlemesh.CancelledError)
     job = pm.jobs.Job(pm.generate.run, "TRIANGULATE", pm.generate.Particles(fibonacci_sphere(5000)),
                       {"auto_spacing": True}).start()
     assert job.wait(120) and job.error is None
@@ -677,7 +668,7 @@ def test_unevenly_spaced_particles_warn(pm, clean_scene):
     # Thin Out 2, as the warning says, meshes every kept particle: one closed sphere.
     thinned = pm.generate.run("TRIANGULATE", pm.generate.Particles(uneven), {"auto_spacing": True, "thin": 2.0})
     assert pm.generate.uneven_spacing_warning(thinned.stats) is None
-    rep = pm.native.mesh_report(thinned.positions, thinned.triangles)
+    rep = pm.particlemesh.topology(thinned)
     assert rep["closed"] and rep["components"] == 1 and rep["vertices_used"] == thinned.vertex_count
     make_active(point_cloud_object("uneven", uneven))
     assert bpy.ops.particlemesh.triangulate() == {"FINISHED"}  # a warning, not a failure
@@ -724,16 +715,9 @@ def test_modal_job_error_is_reported(pm):
 def test_triangulate_with_loop_smoothing(pm, clean_scene):
     em = emitter(speed=1.0)
     clean_scene.frame_set(2)
-    if not pm.native.has_smooth():
-        expect_error("needs a newer particlemesh library", smooth="LOOP")
-        pytest.xfail("pm_smooth is not in this library yet (issue 4)")
     positions, velocities = living_particles(em)
-    plain = pm.native.triangulate(positions)
-    if not pm.native.mesh_report(plain.positions, plain.triangles)["manifold"]:
-        # Loop subdivision needs a 2-manifold; the raw seed triangles are not one.
-        expect_error("manifold|edge|vertex", smooth="LOOP")
-        pytest.xfail("pm_triangulate returns the raw seed triangles (not a manifold) until the "
-                     "finished surface of issue 3 is in the C ABI")
+    plain = pm.particlemesh.triangulate(positions)
+    assert pm.particlemesh.topology(plain)["manifold"]
     assert bpy.ops.particlemesh.triangulate(smooth="LOOP", smooth_levels=1) == {"FINISHED"}
     mesh = bpy.context.active_object.data
     assert len(mesh.polygons) == 4 * plain.triangle_count

@@ -41,5 +41,5 @@ def test_disable_and_enable_cleanly(clean_scene):
         bpy.ops.preferences.addon_disable(module=ADDON)
         bpy.ops.preferences.addon_enable(module=ADDON)
     assert handler_names(bpy.app.handlers.frame_change_post).count("on_frame_change_post") == 1
-    assert np.isfinite(sys.modules[ADDON].native.triangulate(np.eye(3, dtype=np.float32) +
-                                                             [[0, 0, 0]]).positions).all()
+    assert np.isfinite(sys.modules[ADDON].particlemesh.triangulate(np.eye(3, dtype=np.float32) +
+                                                                   [[0, 0, 0]]).vertices).all()

@@ -124,6 +124,42 @@ TEST(CApi, Float32InputAndNormals) {
   pm_cloud_destroy(cloud);
 }
 
+TEST(CApi, FullPrecisionReadBack) {
+  // Georeferenced coordinates (UTM) differ from their float32 rounding by decimetres: the
+  // double read-back gives exactly what went in, for a cloud's positions and normals and for
+  // a mesh's normals.
+  const double p[] = {500000.123456789, 4649776.987654321, 213.000000001, 500001.5, 4649777.25, 213.75,
+                      500000.75, 4649778.125, 214.0625};
+  const double n[] = {0.1, 0.2, 0.9746794344808963, 0, 0, 1, 0.6, 0.0, 0.8};
+  pm_cloud* cloud = nullptr;
+  ASSERT_EQ(pm_cloud_create(p, n, 3, &cloud), PM_OK) << last();
+  std::vector<double> back(9), normals(9);
+  ASSERT_EQ(pm_cloud_copy_positions(cloud, back.data(), 3), PM_OK) << last();
+  ASSERT_EQ(pm_cloud_copy_normals(cloud, normals.data(), 3), PM_OK) << last();
+  EXPECT_EQ(back, std::vector<double>(p, p + 9));
+  EXPECT_EQ(normals, std::vector<double>(n, n + 9));
+  EXPECT_EQ(pm_cloud_copy_positions(cloud, back.data(), 2), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("capacity 2"), std::string::npos) << last();
+  pm_cloud_destroy(cloud);
+  ASSERT_EQ(pm_cloud_create(p, nullptr, 3, &cloud), PM_OK);
+  EXPECT_EQ(pm_cloud_copy_normals(cloud, normals.data(), 3), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("no normals"), std::string::npos) << last();
+  pm_cloud_destroy(cloud);
+
+  const int32_t tri[] = {0, 1, 2};
+  pm_mesh* mesh = nullptr;
+  ASSERT_EQ(pm_mesh_create(p, 3, tri, 1, n, &mesh), PM_OK) << last();
+  std::fill(normals.begin(), normals.end(), 0.0);
+  ASSERT_EQ(pm_mesh_copy_normals(mesh, normals.data(), 3), PM_OK) << last();
+  EXPECT_EQ(normals, std::vector<double>(n, n + 9));
+  EXPECT_EQ(pm_mesh_copy_normals(mesh, normals.data(), 1), PM_STATUS_INVALID_ARGUMENT);
+  pm_mesh_destroy(mesh);
+  ASSERT_EQ(pm_mesh_create(p, 3, tri, 1, nullptr, &mesh), PM_OK);
+  EXPECT_EQ(pm_mesh_copy_normals(mesh, normals.data(), 3), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("no normals"), std::string::npos) << last();
+  pm_mesh_destroy(mesh);
+}
+
 TEST(CApi, ThinKeepsAnEvenSubsetAndChecksItsArguments) {
   const PointCloud c = fibonacci_sphere(5000);
   pm_cloud* cloud = nullptr;

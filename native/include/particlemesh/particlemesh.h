@@ -74,6 +74,9 @@ PM_EXPORT pm_status pm_cloud_has_normals(const pm_cloud* cloud, int32_t* out_has
 /** Copy positions / normals into `out` (capacity in points: 3*capacity floats). */
 PM_EXPORT pm_status pm_cloud_copy_positions_f32(const pm_cloud* cloud, float* out, size_t capacity);
 PM_EXPORT pm_status pm_cloud_copy_normals_f32(const pm_cloud* cloud, float* out, size_t capacity);
+/** The same in full precision (capacity in points: 3*capacity doubles). */
+PM_EXPORT pm_status pm_cloud_copy_positions(const pm_cloud* cloud, double* out, size_t capacity);
+PM_EXPORT pm_status pm_cloud_copy_normals(const pm_cloud* cloud, double* out, size_t capacity);
 PM_EXPORT void pm_cloud_destroy(pm_cloud* cloud);
 
 /** Median nearest-neighbour distance of the distinct points (threads: 0 = all cores). */
@@ -175,6 +178,7 @@ PM_EXPORT pm_status pm_mesh_has_normals(const pm_mesh* mesh, int32_t* out_has_no
 PM_EXPORT pm_status pm_mesh_copy_positions(const pm_mesh* mesh, double* out, size_t capacity);
 PM_EXPORT pm_status pm_mesh_copy_positions_f32(const pm_mesh* mesh, float* out, size_t capacity);
 PM_EXPORT pm_status pm_mesh_copy_normals_f32(const pm_mesh* mesh, float* out, size_t capacity);
+PM_EXPORT pm_status pm_mesh_copy_normals(const pm_mesh* mesh, double* out, size_t capacity);
 PM_EXPORT pm_status pm_mesh_copy_triangles(const pm_mesh* mesh, int32_t* out, size_t capacity);
 PM_EXPORT void pm_mesh_destroy(pm_mesh* mesh);
 

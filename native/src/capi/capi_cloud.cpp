@@ -39,6 +39,24 @@ pm_status create_cloud(const T* positions, const T* normals, size_t count, pm_cl
   });
 }
 
+template <class T>
+pm_status copy_vectors(const pm_cloud* cloud, T* out, size_t capacity, bool normals) {
+  return guarded([&] {
+    require(cloud, "cloud");
+    require(out, "out");
+    const auto& v = normals ? cloud->cloud.normals : cloud->cloud.positions;
+    if (normals && v.empty()) throw Error(Status::InvalidArgument, "the cloud has no normals");
+    if (capacity < v.size())
+      throw Error(Status::InvalidArgument, "capacity " + std::to_string(capacity) + " is less than the " +
+                                               std::to_string(v.size()) + " points");
+    for (size_t i = 0; i < v.size(); ++i) {
+      out[3 * i] = T(v[i].x);
+      out[3 * i + 1] = T(v[i].y);
+      out[3 * i + 2] = T(v[i].z);
+    }
+  });
+}
+
 }  // namespace
 
 extern "C" {
@@ -77,28 +95,19 @@ pm_status pm_cloud_has_normals(const pm_cloud* cloud, int32_t* out_has_normals) 
   });
 }
 
-static pm_status copy_vectors(const pm_cloud* cloud, float* out, size_t capacity, bool normals) {
-  return guarded([&] {
-    require(cloud, "cloud");
-    require(out, "out");
-    const auto& v = normals ? cloud->cloud.normals : cloud->cloud.positions;
-    if (normals && v.empty()) throw Error(Status::InvalidArgument, "the cloud has no normals");
-    if (capacity < v.size())
-      throw Error(Status::InvalidArgument, "capacity " + std::to_string(capacity) + " is less than the " +
-                                               std::to_string(v.size()) + " points");
-    for (size_t i = 0; i < v.size(); ++i) {
-      out[3 * i] = float(v[i].x);
-      out[3 * i + 1] = float(v[i].y);
-      out[3 * i + 2] = float(v[i].z);
-    }
-  });
-}
-
 pm_status pm_cloud_copy_positions_f32(const pm_cloud* cloud, float* out, size_t capacity) {
   return copy_vectors(cloud, out, capacity, false);
 }
 
 pm_status pm_cloud_copy_normals_f32(const pm_cloud* cloud, float* out, size_t capacity) {
+  return copy_vectors(cloud, out, capacity, true);
+}
+
+pm_status pm_cloud_copy_positions(const pm_cloud* cloud, double* out, size_t capacity) {
+  return copy_vectors(cloud, out, capacity, false);
+}
+
+pm_status pm_cloud_copy_normals(const pm_cloud* cloud, double* out, size_t capacity) {
   return copy_vectors(cloud, out, capacity, true);
 }
 

@@ -140,6 +140,21 @@ pm_status pm_mesh_copy_normals_f32(const pm_mesh* mesh, float* out, size_t capac
   });
 }
 
+pm_status pm_mesh_copy_normals(const pm_mesh* mesh, double* out, size_t capacity) {
+  return guarded([&] {
+    require(mesh, "mesh");
+    require(out, "out");
+    const auto& n = mesh->mesh.normals;
+    if (n.empty()) throw Error(Status::InvalidArgument, "the mesh has no normals");
+    check_capacity(capacity, n.size(), "vertices");
+    for (size_t i = 0; i < n.size(); ++i) {
+      out[3 * i] = n[i].x;
+      out[3 * i + 1] = n[i].y;
+      out[3 * i + 2] = n[i].z;
+    }
+  });
+}
+
 pm_status pm_mesh_copy_triangles(const pm_mesh* mesh, int32_t* out, size_t capacity) {
   return guarded([&] {
     require(mesh, "mesh");

@@ -1,22 +1,25 @@
 """The add-on package outside Blender: a valid Blender 4.2 extension manifest that agrees with
-bl_info, relative imports only, bpy-free modules that really are, the built zip's layout and
-its library; and the bpy-free pipeline modules (generate, jobs, mesh_arrays)."""
+bl_info, relative imports only, bpy-free modules that really are; the built zip: its layout
+(the Python package as the one source of its binding), libraries that need nothing beyond the
+C/C++ runtime, their licences, the glibc they need; and the bpy-free pipeline modules
+(generate, jobs, mesh_arrays) as the zip ships them."""
 import ast
-import importlib
 import os
 import re
+import shutil
+import subprocess
 import sys
 import tomllib
-import types
 import zipfile
 
 import numpy as np
 import pytest
 
-from conftest import NATIVE_PY, ROOT
+from conftest import ROOT
 
 PACKAGE = ROOT / "blender_addon" / "particlemesh"
-BPY_FREE = ("native", "mesh_arrays", "jobs", "generate")
+PYTHON_PACKAGE = ROOT / "python" / "particlemesh"
+BPY_FREE = ("mesh_arrays", "jobs", "generate")
 
 
 def parse(name):
@@ -68,8 +71,9 @@ def test_manifest_agrees_with_bl_info_and_the_project():
 
 
 def test_relative_imports_only():
-    """An extension is imported as bl_ext.<repo>.particlemesh: no absolute self-imports."""
-    for path in PACKAGE.glob("*.py"):
+    """An extension is imported as bl_ext.<repo>.particlemesh, and carries the Python package
+    as its particlemesh.particlemesh: no absolute self-imports in either."""
+    for path in [*PACKAGE.glob("*.py"), *PYTHON_PACKAGE.glob("*.py")]:
         for node in ast.walk(ast.parse(path.read_text())):
             if isinstance(node, ast.Import):
                 assert not any(a.name.split(".")[0] == "particlemesh" for a in node.names), path
@@ -79,8 +83,10 @@ def test_relative_imports_only():
 
 
 def test_bpy_free_modules_do_not_import_bpy():
-    for name in BPY_FREE:
-        for node in ast.walk(parse(name)):
+    trees = [parse(name) for name in BPY_FREE]
+    trees += [ast.parse(p.read_text()) for p in PYTHON_PACKAGE.glob("*.py")]
+    for name, tree in zip([*BPY_FREE, *PYTHON_PACKAGE.glob("*.py")], trees):
+        for node in ast.walk(tree):
             names = []
             if isinstance(node, ast.Import):
                 names = [a.name for a in node.names]
@@ -91,80 +97,131 @@ def test_bpy_free_modules_do_not_import_bpy():
 
 # ---- the zip ----------------------------------------------------------------------------------
 
-@pytest.fixture(scope="module")
-def addon_zip():
-    path = os.environ.get("PM_ADDON_ZIP")
-    if not path or not os.path.isfile(path):
-        pytest.skip("PM_ADDON_ZIP is not set to the built add-on zip")
-    return path
-
-
-def test_zip_layout(addon_zip):
+def test_zip_layout_carries_the_python_package_as_is(addon_zip):
     with zipfile.ZipFile(addon_zip) as z:
         names = set(z.namelist())
+        # One source: the add-on's binding is the Python package, byte for byte.
+        for path in PYTHON_PACKAGE.glob("*.py"):
+            assert z.read(f"particlemesh/particlemesh/{path.name}") == path.read_bytes(), path.name
     sources = {f"particlemesh/{p.name}" for p in PACKAGE.glob("*.py")}
-    assert sources <= names
+    assert sources <= names and "particlemesh/native.py" not in names
     assert "particlemesh/blender_manifest.toml" in names
-    assert "particlemesh/lib/libparticlemesh.so" in names
+    assert "particlemesh/particlemesh/lib/libparticlemesh.so" in names
+    package = {n for n in names if n.startswith("particlemesh/particlemesh/") and n.endswith(".py")}
+    assert package == {f"particlemesh/particlemesh/{p.name}" for p in PYTHON_PACKAGE.glob("*.py")}
     # One top-level folder: Blender 3.4 unpacks it into addons/, 4.2 finds the manifest in it.
     assert {n.split("/")[0] for n in names} == {"particlemesh"}
     assert not any("__pycache__" in n or n.endswith(".pyc") for n in names)
 
 
-def test_zip_library_loads_and_matches(addon_zip, native, tmp_path):
-    with zipfile.ZipFile(addon_zip) as z:
-        z.extractall(tmp_path)
-    lib = native.load(str(tmp_path / "particlemesh/lib/libparticlemesh.so"))
-    assert lib.abi_version == native.ABI_VERSION
-    assert lib.version == native.load().version
+#: What every Linux has, and Blender loads itself: the only libraries the zip may need from the
+#: system (the PCL bridge, for .pcd files only, also needs PCL).
+SYSTEM_RUNTIME = re.compile(r"^(libc\.so\.6|libm\.so\.6|libstdc\+\+\.so\.6|libgcc_s\.so\.1|"
+                            r"ld-linux-x86-64\.so\.2|libpthread\.so\.0|libdl\.so\.2|"
+                            r"librt\.so\.1|libz\.so\.1)$")
 
 
-def test_zip_pcl_bridge_reads_pcd_from_the_unpacked_zip(addon_zip, data_dir, tmp_path):
-    """The zip's libparticlemesh_pcl.so, unpacked alone, in a fresh process with no override:
-    native.py finds it next to libparticlemesh and it binds to that library (its soname),
-    not to the build tree (its RUNPATH is $ORIGIN)."""
-    import subprocess
-    with zipfile.ZipFile(addon_zip) as z:
-        assert "particlemesh/lib/libparticlemesh_pcl.so" in z.namelist()
-        z.extractall(tmp_path)
-    lib_dir = tmp_path / "particlemesh" / "lib"
+def dynamic_section(path):
+    out = subprocess.run(["readelf", "-d", str(path)], capture_output=True, text=True,
+                         check=True).stdout
+    needed = re.findall(r"\(NEEDED\)\s+Shared library: \[(.*?)\]", out)
+    runpath = re.findall(r"\((?:RUNPATH|RPATH)\)\s+Library r(?:un)?path: \[(.*?)\]", out)
+    soname = re.findall(r"\(SONAME\)\s+Library soname: \[(.*?)\]", out)
+    return needed, runpath, soname
+
+
+def test_zip_libraries_need_only_the_c_runtime_or_each_other(unpacked_addon):
+    """Every NEEDED entry of every library in the zip is the C/C++ runtime or another library
+    in the zip (found through RUNPATH $ORIGIN); only the PCL bridge may need PCL."""
+    lib_dir = unpacked_addon / "particlemesh" / "lib"
+    libraries = sorted(p for p in lib_dir.iterdir() if p.is_file() and ".so" in p.name)
+    names = {p.name for p in libraries}
+    assert {"libparticlemesh.so", "libtbb.so.12", "libOpenMeshCore.so.9.0", "libosdCPU.so.3.5.0",
+            "libpng16.so.16", "libgomp.so.1"} <= names, names
+    for path in libraries:
+        needed, runpath, _ = dynamic_section(path)
+        assert runpath == ["$ORIGIN"], (path.name, runpath)
+        if path.name == "libparticlemesh_pcl.so":
+            assert "libparticlemesh.so.0.1" in needed
+            continue
+        foreign = [n for n in needed if not SYSTEM_RUNTIME.match(n) and n not in names]
+        assert not foreign, f"{path.name} needs {foreign} from the system"
+    # The core library's own name is its soname's target here: the bridge asks for the
+    # soname, which the loader matches with the loaded libparticlemesh.so.
+    assert dynamic_section(lib_dir / "libparticlemesh.so")[2] == ["libparticlemesh.so.0.1"]
+
+
+def test_zip_carries_the_licence_of_every_bundled_library(unpacked_addon):
+    lib_dir = unpacked_addon / "particlemesh" / "lib"
+    readme = (lib_dir / "licenses" / "README").read_text()
+    for path in lib_dir.iterdir():
+        if path.is_file() and ".so" in path.name and not path.name.startswith("libparticlemesh"):
+            line = re.search(rf"^  {re.escape(path.name)}: Debian package (\S+) \S+, "
+                             r"licenses/(\S+)$", readme, re.M)
+            assert line, f"no licence entry for {path.name}"
+            text = (lib_dir / "licenses" / line.group(2)).read_text()
+            assert "Copyright" in text or "copyright" in text, path.name
+
+
+def glibc_versions(path, prefix):
+    out = subprocess.run(["objdump", "-T", str(path)], capture_output=True, text=True,
+                         check=True).stdout
+    return {tuple(map(int, v.split("."))) for v in re.findall(rf"\b{prefix}_([0-9.]+)\b", out)}
+
+
+def test_zip_needs_glibc_2_34_and_the_libstdcxx_of_gcc_11(unpacked_addon):
+    """What the README states, from the symbol versions the zip's libraries require: glibc
+    2.34 (Debian 12, Ubuntu 22.04, RHEL 9; libtbb and libgomp ask for it) and the libstdc++ of
+    GCC 11 or newer (GLIBCXX_3.4.29, CXXABI_1.3.13)."""
+    lib_dir = unpacked_addon / "particlemesh" / "lib"
+    found = {"GLIBC": set(), "GLIBCXX": set(), "CXXABI": set()}
+    for path in lib_dir.iterdir():
+        if path.is_file() and ".so" in path.name and path.name != "libparticlemesh_pcl.so":
+            for prefix, versions in found.items():
+                versions |= glibc_versions(path, prefix)
+    assert max(found["GLIBC"]) == (2, 34)
+    assert max(found["GLIBCXX"]) == (3, 4, 29)
+    assert max(found["CXXABI"]) == (1, 3, 13)
+
+
+def test_zip_libraries_are_the_ones_loaded(unpacked_addon, data_dir):
+    """In a fresh process with no override, the zip's package loads its own libparticlemesh,
+    and every library it needs beyond the runtime comes from the zip's lib/ (RUNPATH
+    $ORIGIN), not the system's; the PCL bridge beside it reads a .pcd."""
+    lib_dir = unpacked_addon / "particlemesh" / "lib"
     code = (
-        "import importlib.util, sys\n"
-        f"spec = importlib.util.spec_from_file_location('n', {str(tmp_path / 'particlemesh' / 'native.py')!r})\n"
-        "n = importlib.util.module_from_spec(spec); spec.loader.exec_module(n)\n"
-        f"c = n.read_cloud({str(data_dir / 'pcd' / 'colored_cloud.pcd')!r})\n"
-        "print(n.load().path); print(n.load_pcl().path); print(len(c.positions), sorted(c.attributes))\n")
+        "import sys, importlib\n"
+        f"sys.path.insert(0, {str(unpacked_addon)!r})\n"
+        "pm = importlib.import_module('particlemesh')\n"
+        "assert pm.__file__.startswith(sys.path[0]), pm.__file__\n"
+        f"c = pm.read_points({str(data_dir / 'pcd' / 'colored_cloud.pcd')!r})\n"
+        "import numpy as np\n"
+        "i = np.arange(2000) + 0.5; phi = np.arccos(1 - 2 * i / 2000); t = np.pi * (1 + 5 ** 0.5) * i\n"
+        "s = np.stack([np.cos(t) * np.sin(phi), np.sin(t) * np.sin(phi), np.cos(phi)], 1)\n"
+        "assert pm.topology(pm.smooth(pm.triangulate(s)))['closed']\n"
+        "print(pm.library_path()); print(pm.pcl_bridge_path()); print(len(c.positions))\n"
+        "print(open('/proc/self/maps').read())\n")
     env = {k: v for k, v in os.environ.items()
-           if k not in ("PARTICLEMESH_LIBRARY", "PARTICLEMESH_PCL_LIBRARY", "LD_LIBRARY_PATH")}
+           if k not in ("PARTICLEMESH_LIBRARY", "PARTICLEMESH_PCL_LIBRARY", "LD_LIBRARY_PATH",
+                        "PYTHONPATH")}
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
-                         timeout=120)
+                         timeout=120, cwd=unpacked_addon.parent)
     assert out.returncode == 0, out.stderr
-    core, bridge, summary = out.stdout.strip().splitlines()
+    core, bridge, count, maps = out.stdout.split("\n", 3)
     assert os.path.dirname(core) == str(lib_dir) and os.path.dirname(bridge) == str(lib_dir)
-    assert summary == "1000 ['color']"
-    import shutil
-    if shutil.which("readelf"):
-        dynamic = subprocess.run(["readelf", "-d", str(lib_dir / "libparticlemesh_pcl.so")],
-                                 capture_output=True, text=True, check=True).stdout
-        runpath = [line for line in dynamic.splitlines() if "RUNPATH" in line or "RPATH" in line]
-        assert runpath and all("[$ORIGIN]" in line for line in runpath), runpath
+    assert count == "1000"
+    for name in ("libtbb.so.12", "libOpenMeshCore.so.9.0", "libosdCPU.so.3.5.0", "libpng16.so.16",
+                 "libgomp.so.1"):
+        mapped = {line.split()[-1] for line in maps.splitlines() if name.split(".so")[0] + ".so" in line}
+        assert mapped == {str(lib_dir / name)}, (name, mapped)
 
 
 # ---- bpy-free modules of the package ----------------------------------------------------------
 
 @pytest.fixture(scope="module")
-def pkg(native):
-    """The package's bpy-free modules, imported under a stand-in package (its __init__ needs
-    bpy), so their relative imports resolve."""
-    name = "pm_addon_bpy_free"
-    package = types.ModuleType(name)
-    package.__path__ = [str(PACKAGE)]
-    sys.modules[name] = package
-    try:
-        return types.SimpleNamespace(**{m: importlib.import_module(f"{name}.{m}") for m in BPY_FREE})
-    finally:
-        for key in [k for k in sys.modules if k == name or k.startswith(name + ".")]:
-            del sys.modules[key]
+def pkg(addon):
+    """The zip's bpy-free modules (conftest.addon), and its copy of the package as pkg.pm."""
+    return addon
 
 
 def sphere(n):
@@ -203,14 +260,14 @@ def test_generate_thin_meshes_an_even_subset_with_its_channels(pkg):
         assert mesh.stats["thinned_from"] == 20000
         assert 20000 / 8 < mesh.vertex_count < 20000 / 3
         # Its vertices are particles, each with its own velocity.
-        idx = pkg.native.thin(p, mesh.stats["thin_distance"])
-        np.testing.assert_array_equal(mesh.positions, p[idx])
+        idx = pkg.pm.thin(p, mesh.stats["thin_distance"])
+        np.testing.assert_array_equal(mesh.vertices, p[idx])
         np.testing.assert_array_equal(mesh.attributes["velocity"], velocity[idx])
         # Still one closed sphere, facing out: V - E + F = 2 with E = 3F / 2.
-        report = pkg.native.mesh_report(mesh.positions, mesh.triangles)
+        report = pkg.pm.topology(mesh)
         assert report["boundary_edges"] == 0 and report["vertices_used"] == mesh.vertex_count
         assert mesh.vertex_count - mesh.triangle_count // 2 == 2
-        assert (face_dots(mesh.positions, mesh.triangles) > 0).all()
+        assert (face_dots(mesh.vertices, mesh.triangles) > 0).all()
     assert "thinned_from" not in pkg.generate.run("TRIANGULATE", particles, {"thin": 1.0}).stats
 
 
@@ -224,7 +281,7 @@ def test_viewport_budget_thins_a_bigger_system_to_about_the_budget(pkg):
         assert budget / 2 <= mesh.vertex_count <= pkg.generate.BUDGET_SLACK * budget
         assert mesh.stats["thinned_from"] == 20000
         assert mesh.stats["thin_factor"] > 1.0
-        report = pkg.native.mesh_report(mesh.positions, mesh.triangles)
+        report = pkg.pm.topology(mesh)
         assert report["boundary_edges"] == 0 and report["vertices_used"] == mesh.vertex_count
         assert mesh.vertex_count - mesh.triangle_count // 2 == 2
     # A Thin Out coarser than the budget needs stays.
@@ -241,8 +298,8 @@ def test_viewport_budget_corrects_for_unevenly_spaced_particles(pkg):
     corrects the factor."""
     dense, sparse = sphere(15000), sphere(5000) * 3.0 + np.float32([10, 0, 0])
     p = np.concatenate([dense, sparse])
-    r0 = pkg.native.estimate_spacing(p, max_samples=pkg.generate.THIN_SPACING_SAMPLES)
-    first = len(pkg.native.thin(p, pkg.generate.budget_thin(len(p), 2000) * r0))
+    r0 = pkg.pm.estimate_spacing(p, max_samples=pkg.generate.THIN_SPACING_SAMPLES)
+    first = len(pkg.pm.thin(p, pkg.generate.budget_thin(len(p), 2000) * r0))
     assert first > 2 * 2000  # the sparse sphere keeps nearly all of its particles
     mesh = pkg.generate.run("TRIANGULATE", pkg.generate.Particles(p), {"viewport_budget": 2000})
     assert mesh.vertex_count <= pkg.generate.BUDGET_SLACK * 2000
@@ -286,7 +343,7 @@ def test_generate_settings_keys_match_the_properties():
 
 def test_generate_reports_an_empty_result(pkg):
     particles = pkg.generate.Particles(sphere(500))
-    with pytest.raises(pkg.native.ParticlemeshError, match="no triangles"):
+    with pytest.raises(pkg.pm.Error, match="no triangles"):
         pkg.generate.run("TRIANGULATE", particles, {"auto_spacing": False, "spacing": 1e-4})
 
 
@@ -306,27 +363,25 @@ def test_polygonize_threshold_from_particle_sizes(pkg):
     spacing (touching balls), so an isolated particle becomes a ball of about its size and a
     sparse sheet of particles still has a surface, where the library's R = 2 spacings default
     (3.33 for Wyvill) would give none."""
-    if not pkg.native.has_polygonize():
-        pytest.skip("pm_polygonize is not in this library (issue 7)")
     threshold = pkg.generate.polygonize_threshold
     sizes = {"radius_mode": "PARTICLE_SIZE", "radius_factor": 2.0, "kernel": "WYVILL"}
     assert threshold(sizes, True) == pytest.approx(0.5)  # only the particle itself within 2 s
     assert threshold({**sizes, "radius_factor": 4.0}, True) == pytest.approx(
-        0.5 * pkg.native.lattice_field(pkg.native.KERNEL_WYVILL, 2.0, 1.0))
+        0.5 * pkg.pm.lattice_field("wyvill", 2.0, 1.0))
     assert threshold({**sizes, "threshold": 1.5}, True) == 1.5     # an explicit level stays
     assert threshold({"radius_mode": "AUTO"}, False) == 0.0        # the library's default
     assert threshold({**sizes}, False) == 0.0                       # no sizes: as AUTO
     one = pkg.generate.Particles(np.zeros((1, 3), np.float32), sizes=np.float32([0.1]))
     ball = pkg.generate.run("POLYGONIZE", one, sizes)
-    r = np.linalg.norm(ball.positions, axis=1)
+    r = np.linalg.norm(ball.vertices, axis=1)
     assert ball.triangle_count > 100 and abs(r.mean() - 0.1) < 0.01 and r.std() < 0.005
     # A sheet of particles 1.46 sizes apart (a 642-vertex icosphere of radius 1, size 0.1).
     p = sphere(642)
     shell = pkg.generate.Particles(p, sizes=np.full(642, 0.1, np.float32))
     mesh = pkg.generate.run("POLYGONIZE", shell, sizes)
     assert mesh.triangle_count > 1000
-    assert (np.abs(np.linalg.norm(mesh.positions, axis=1) - 1.0) < 0.2).all()
-    with pytest.raises(pkg.native.ParticlemeshError, match="no surface"):
+    assert (np.abs(np.linalg.norm(mesh.vertices, axis=1) - 1.0) < 0.2).all()
+    with pytest.raises(pkg.pm.Error, match="no surface"):
         pkg.generate.run("POLYGONIZE", shell, {**sizes, "threshold": 3.33})
 
 
@@ -336,7 +391,7 @@ def test_job_runs_and_cancels(pkg):
     job.cancel()
     job.start()
     assert job.wait(60)
-    assert isinstance(job.error, pkg.native.CancelledError) and job.result is None
+    assert isinstance(job.error, pkg.pm.CancelledError) and job.result is None
     job = pkg.jobs.Job(pkg.generate.run, "TRIANGULATE", pkg.generate.Particles(sphere(3000)), {})
     assert job.start().wait(60) and job.error is None and job.result.triangle_count > 5000
     assert job.progress.fraction > 0 and job.progress.stage

@@ -1,0 +1,360 @@
+"""particlemesh: particles to surfaces, on numpy arrays.
+
+    import particlemesh as pm
+    points = pm.read_points("scan.ply")              # .positions (N, 3) float64, .normals
+    mesh = pm.triangulate(points.positions, points.normals)
+    print(pm.topology(mesh)["closed"], mesh.stats["spacing"])
+    pm.write_mesh(pm.smooth(mesh, levels=2), "smooth.ply")
+
+Surface particles (evenly spaced samples of a surface) are triangulated with Tonnesen's
+smallest-sphere test into a finished, oriented surface (`triangulate`); volume particles
+(a fluid simulation's) become the iso-surface of a summed kernel field (`polygonize`); any
+triangle mesh is refined by Loop or modified-butterfly subdivision (`smooth`).
+
+Options are keyword arguments named as the fields of the C ABI's options structs
+(particlemesh.h), with the library's own defaults (`defaults("triangulate")` lists them).
+Failures raise `Error` with the library's message. The long calls release the GIL, report
+progress to `progress=callback(stage, fraction)` (return False to cancel), and stop on Ctrl-C
+(KeyboardInterrupt) or `Progress.cancel()` from another thread.
+
+This package is a ctypes binding of the C library libparticlemesh, which it finds in its own
+lib/ folder, at $PARTICLEMESH_LIBRARY, or on the system's library path. It never imports bpy:
+the Blender add-on carries this same package."""
+
+import ctypes
+from ctypes import c_double, c_size_t, c_uint32
+
+import numpy as np
+
+from . import _abi, _library, _options
+from ._data import (Mesh, Points, new_cloud, new_mesh, path_bytes, per_point, ptr,
+                    read_cloud_handle, read_mesh_handle, struct_dict)
+from ._errors import CancelledError, Error, LibraryNotFoundError, PclBridgeNotFoundError
+from ._progress import Hook, Progress
+
+__all__ = [
+    "read_points", "read_mesh", "write_mesh", "triangulate", "polygonize", "smooth", "topology",
+    "estimate_spacing", "thin", "triangle_edges", "lattice_field", "defaults", "version",
+    "library_path", "pcl_bridge_path", "Mesh", "Points", "Progress", "Error", "CancelledError",
+    "LibraryNotFoundError", "PclBridgeNotFoundError",
+]
+
+#: pm_status values (Error.status).
+STATUS_INVALID_ARGUMENT = _abi.PM_STATUS_INVALID_ARGUMENT
+STATUS_INVALID_INPUT = _abi.PM_STATUS_INVALID_INPUT
+STATUS_IO_ERROR = _abi.PM_STATUS_IO_ERROR
+STATUS_FORMAT_ERROR = _abi.PM_STATUS_FORMAT_ERROR
+STATUS_OUT_OF_MEMORY = _abi.PM_STATUS_OUT_OF_MEMORY
+STATUS_CANCELLED = _abi.PM_STATUS_CANCELLED
+STATUS_LIMIT_EXCEEDED = _abi.PM_STATUS_LIMIT_EXCEEDED
+STATUS_INTERNAL = _abi.PM_STATUS_INTERNAL
+
+#: The names enum options take, e.g. KERNELS["poly6"] == 2.
+NORMAL_SOURCES = _options.enum_names("PM_NORMALS_")
+KERNELS = _options.enum_names("PM_KERNEL_")
+SCHEMES = _options.enum_names("PM_SMOOTH_")
+
+
+# ---- the library ----------------------------------------------------------------------------
+
+def version():
+    """The native library's version ("0.1.0"); LibraryNotFoundError when it does not load."""
+    return _library.load().version
+
+
+def library_path():
+    """The file libparticlemesh was loaded from."""
+    return _library.load().path
+
+
+def pcl_bridge_path():
+    """The file the PCL bridge (needed for .pcd only) was loaded from;
+    PclBridgeNotFoundError saying why when it is absent or does not load."""
+    return _library.load_pcl().path
+
+
+def defaults(function):
+    """{keyword: the library's default} of the options of "triangulate", "polygonize" or
+    "smooth", read from its pm_*_options_init (enum options by name)."""
+    try:
+        spec = _options.SPECS[function]
+    except KeyError:
+        raise ValueError(f"no options for {function!r}; one of "
+                         f"{', '.join(_options.SPECS)}") from None
+    return spec.defaults(_library.load())
+
+
+# ---- files ----------------------------------------------------------------------------------
+
+def read_points(path):
+    """Particles from a file: .ply (any numeric vertex properties, normals, vertex colours as
+    the "color" attribute) and .xyz through the library; .pcd (ascii, binary, compressed)
+    through the PCL bridge, which drops points with a NaN coordinate and counts them in
+    `info`. Coordinates keep their full precision. Returns Points."""
+    lib = _library.load()
+    if str(path).lower().endswith(".pcd"):
+        bridge = _library.load_pcl()
+        handle = _abi.pm_cloud_p()
+        info = _abi.pm_pcl_read_info(struct_size=ctypes.sizeof(_abi.pm_pcl_read_info))
+        status = bridge.pm_pcl_read_cloud(path_bytes(path), ctypes.byref(handle),
+                                          ctypes.byref(info))
+        if status != _abi.PM_OK:
+            message = bridge.pm_pcl_last_error_message().decode(errors="replace")
+            raise Error(message or lib.pm_status_string(status).decode(), status)
+        details = struct_dict(info)
+        for flag in ("has_normals", "has_color", "has_intensity"):
+            details[flag] = bool(details[flag])
+        details["format"] = "pcd"
+    else:
+        handle = _abi.pm_cloud_p()
+        lib.check(lib.pm_cloud_read(path_bytes(path), ctypes.byref(handle)))
+        details = None
+    try:
+        return read_cloud_handle(lib, handle, details)
+    finally:
+        lib.pm_cloud_destroy(handle)
+
+
+def read_mesh(path):
+    """A triangle mesh from .ply, .obj, .off or .stl (polygons are fanned into triangles).
+    Returns Mesh."""
+    lib = _library.load()
+    handle = _abi.pm_mesh_p()
+    lib.check(lib.pm_mesh_read(path_bytes(path), ctypes.byref(handle)))
+    try:
+        return read_mesh_handle(lib, handle)
+    finally:
+        lib.pm_mesh_destroy(handle)
+
+
+def write_mesh(mesh, path):
+    """Write a Mesh as .ply (binary, float32 unless far from the origin) or .obj, with its
+    normals, atomically: under a temporary name, renamed when complete."""
+    lib = _library.load()
+    handle = new_mesh(lib, mesh, with_attributes=False)
+    try:
+        lib.check(lib.pm_mesh_write(handle, path_bytes(path)))
+    finally:
+        lib.pm_mesh_destroy(handle)
+
+
+# ---- meshing --------------------------------------------------------------------------------
+
+def _points_args(positions, normals, attributes):
+    """Points, or arrays: (positions, normals, attributes)."""
+    if isinstance(positions, Points):
+        p = positions
+        return (p.positions, p.normals if normals is None else normals,
+                p.attributes if attributes is None else attributes)
+    return positions, normals, attributes
+
+
+def triangulate(positions, normals=None, *, attributes=None, raw=None, repair=None, orient=None,
+                progress=None, **options):
+    """Triangulate surface particles: by default the finished surface (a consistently oriented
+    2-manifold whose closed parts face outward, with per-vertex normals); raw=True gives the
+    smallest-sphere test's exact triangle set instead. repair=False skips hole filling and
+    unpinching, orient=False keeps closed parts as the normals face.
+
+    positions: (N, 3) or Points (its normals and attributes come with it); normals: (N, 3) or
+    None; attributes: {name: (N, C)} carried to the vertices. Vertex i of the result is
+    particle i. Options (pm_triangulate_options, defaults from the library): spacing (0 =
+    estimate), max_edge_factor, threads, max_neighbors, normal_angle, fill_holes,
+    fill_edge_factor, normal_source ("auto", "input", "estimate"; the C field `normals`),
+    max_triplets_per_point. Returns Mesh; mesh.stats holds pm_triangulate_stats."""
+    lib = _library.load()
+    positions, normals, attributes = _points_args(positions, normals, attributes)
+    opt = _options.TRIANGULATE.build(lib, options)
+    for value, flag, when in ((raw, _abi.PM_TRIANGULATE_RAW, True),
+                              (repair, _abi.PM_TRIANGULATE_NO_REPAIR, False),
+                              (orient, _abi.PM_TRIANGULATE_NO_ORIENT, False)):
+        if value is not None:
+            opt.flags = (opt.flags | flag) if bool(value) == when else (opt.flags & ~flag)
+    stats = _abi.pm_triangulate_stats(struct_size=ctypes.sizeof(_abi.pm_triangulate_stats))
+    cloud = new_cloud(lib, positions, normals, attributes)
+    try:
+        mesh = _abi.pm_mesh_p()
+        with Hook(progress) as hook:
+            opt.progress = hook.c_function
+            hook.finish(lib, lib.pm_triangulate(cloud, ctypes.byref(opt), ctypes.byref(mesh),
+                                                ctypes.byref(stats)))
+    finally:
+        lib.pm_cloud_destroy(cloud)
+    try:
+        return read_mesh_handle(lib, mesh, struct_dict(stats))
+    finally:
+        lib.pm_mesh_destroy(mesh)
+
+
+def polygonize(positions, radius=None, threshold=None, kernel=None, cell=None, *, radii=None,
+               strengths=None, attributes=None, progress=None, **options):
+    """The iso-surface F(x) = threshold of volume particles, F(x) = sum_i w_i g(|x - p_i|^2 /
+    R_i^2), by marching cubes on a sparse grid: a closed, outward mesh with normals from the
+    field's gradient (no vertex when the field stays below the threshold).
+
+    positions: (N, 3) or Points; radius R (None = 2 x the median spacing) or radii, one per
+    particle; strengths w_i (None = 1); threshold T (None = half the field inside evenly
+    packed particles); kernel "wyvill", "poly4", "poly6" or "blinn"; cell the grid cell (the C
+    field cell_size; None = R / 4); attributes {name: (N, C)} interpolated onto the vertices.
+    Other options (pm_polygonize_options): threads, max_grid_bytes. Returns Mesh; mesh.stats
+    holds pm_polygonize_stats."""
+    lib = _library.load()
+    positions, _, attributes = _points_args(positions, None, attributes)
+    if cell is not None:
+        if options.get("cell_size") is not None:
+            raise TypeError("polygonize() got both cell and cell_size (the same option)")
+        options["cell_size"] = cell
+    options.update(radius=radius, threshold=threshold, kernel=kernel)
+    opt = _options.POLYGONIZE.build(lib, options)
+    stats = _abi.pm_polygonize_stats(struct_size=ctypes.sizeof(_abi.pm_polygonize_stats))
+    cloud = new_cloud(lib, positions, None, attributes)
+    try:
+        count = c_size_t(0)
+        lib.check(lib.pm_cloud_get_count(cloud, ctypes.byref(count)))
+        r = per_point(radii, "radii", count.value)
+        s = per_point(strengths, "strengths", count.value)
+        mesh = _abi.pm_mesh_p()
+        with Hook(progress) as hook:
+            opt.progress = hook.c_function
+            hook.finish(lib, lib.pm_polygonize_ex(cloud, ptr(r, c_double), ptr(s, c_double),
+                                                  ctypes.byref(opt), ctypes.byref(mesh),
+                                                  ctypes.byref(stats)))
+    finally:
+        lib.pm_cloud_destroy(cloud)
+    try:
+        return read_mesh_handle(lib, mesh, struct_dict(stats))
+    finally:
+        lib.pm_mesh_destroy(mesh)
+
+
+def smooth(mesh, scheme=None, levels=None, *, crease_edges=None, crease_sharpness=None,
+           progress=None, **options):
+    """Subdivide a triangle mesh into a smooth one: scheme "loop" (approximating, through
+    OpenSubdiv; with limit=True, the default, every vertex at its exact limit position with
+    the exact limit normal) or "butterfly" (interpolating, through OpenMesh: the original
+    vertices stay). Each of `levels` splits every triangle into four. Normals and every
+    attribute are carried through.
+
+    crease_edges: (K, 2) vertex pairs that stay sharp (Loop), crease_sharpness: K values
+    (None = infinitely sharp). Other options (pm_smooth_options): limit, boundary
+    ("edge-and-corner", "edge-only"), crease_method ("uniform", "chaikin"), threads,
+    max_triangles. The mesh must be a 2-manifold. Returns Mesh."""
+    lib = _library.load()
+    options.update(scheme=scheme, levels=levels)
+    opt = _options.SMOOTH.build(lib, options)
+    edges = sharpness = None
+    if crease_edges is not None:
+        edges = np.asarray(crease_edges)
+        if edges.size == 0:
+            edges = edges.reshape(0, 2)
+        if edges.ndim != 2 or edges.shape[1] != 2 or edges.dtype.kind not in "iu":
+            raise Error(f"crease_edges must be (K, 2) vertex indices, got {edges.shape} "
+                        f"{edges.dtype}", _abi.PM_STATUS_INVALID_ARGUMENT)
+        edges = np.ascontiguousarray(edges, dtype=np.int32)
+        opt.crease_count = len(edges)
+        opt.crease_edges = ptr(edges, ctypes.c_int32)
+        if crease_sharpness is not None:
+            sharpness = per_point(crease_sharpness, "crease_sharpness", len(edges), np.float32)
+            opt.crease_sharpness = ptr(sharpness, ctypes.c_float)
+    elif crease_sharpness is not None:
+        raise Error("crease_sharpness needs crease_edges", _abi.PM_STATUS_INVALID_ARGUMENT)
+    source = new_mesh(lib, mesh)
+    try:
+        out = _abi.pm_mesh_p()
+        with Hook(progress) as hook:
+            opt.progress = hook.c_function
+            hook.finish(lib, lib.pm_smooth(source, ctypes.byref(opt), ctypes.byref(out)))
+    finally:
+        lib.pm_mesh_destroy(source)
+    try:
+        return read_mesh_handle(lib, out)
+    finally:
+        lib.pm_mesh_destroy(out)
+
+
+def topology(mesh):
+    """The library's topology report of a mesh as a dict: vertices, triangles, vertices_used,
+    edges, boundary_edges, manifold_edges, nonmanifold_edges, nonmanifold_vertices,
+    degenerate_triangles, duplicate_triangles, orientation_conflicts, boundary_loops,
+    components, closed_components, euler_characteristic, and the booleans manifold, closed,
+    consistently_oriented, outward (closed parts enclose positive volume)."""
+    lib = _library.load()
+    handle = new_mesh(lib, mesh, with_attributes=False)
+    try:
+        report = _abi.pm_topology_report(struct_size=ctypes.sizeof(_abi.pm_topology_report))
+        lib.check(lib.pm_mesh_report(handle, ctypes.byref(report)))
+    finally:
+        lib.pm_mesh_destroy(handle)
+    out = struct_dict(report)
+    for flag in ("manifold", "closed", "consistently_oriented", "outward"):
+        out[flag] = bool(out[flag])
+    return out
+
+
+# ---- helpers --------------------------------------------------------------------------------
+
+def estimate_spacing(positions, max_samples=None, threads=0):
+    """The median nearest-neighbour distance of the distinct points (what triangulate takes
+    for spacing=0), or with max_samples that of an evenly strided sample of at most that many
+    points (within about 1 % on even particles, for previews)."""
+    lib = _library.load()
+    cloud = new_cloud(lib, positions)
+    try:
+        out = c_double(0)
+        if max_samples is None:
+            lib.check(lib.pm_estimate_spacing(cloud, int(threads), ctypes.byref(out)))
+        else:
+            lib.check(lib.pm_estimate_spacing_sampled(cloud, int(max_samples), int(threads),
+                                                      ctypes.byref(out)))
+        return out.value
+    finally:
+        lib.pm_cloud_destroy(cloud)
+
+
+def thin(positions, min_distance):
+    """Indices (ascending, int64) of an even subset of the points: no two kept points closer
+    than min_distance, every dropped one within min_distance of a kept one."""
+    lib = _library.load()
+    cloud = new_cloud(lib, positions)
+    try:
+        count = c_size_t(0)
+        lib.check(lib.pm_cloud_get_count(cloud, ctypes.byref(count)))
+        out = np.empty(count.value, dtype=np.uint32)
+        lib.check(lib.pm_cloud_thin(cloud, float(min_distance), ptr(out, c_uint32), out.size,
+                                    ctypes.byref(count)))
+        return out[:count.value].astype(np.int64)
+    finally:
+        lib.pm_cloud_destroy(cloud)
+
+
+def triangle_edges(triangles, vertex_count, threads=0):
+    """The edges of a triangle list: (E, 2) uint32, each edge once as (a, b) with a < b,
+    ordered; and (3 T,) uint32, per triangle corner the edge to the next corner (what hosts
+    that store edges, such as Blender, need)."""
+    lib = _library.load()
+    tris = np.asarray(triangles)
+    if tris.ndim != 2 or tris.shape[1] != 3:
+        raise Error(f"triangles must have shape (T, 3), got {tris.shape}",
+                    _abi.PM_STATUS_INVALID_ARGUMENT)
+    tris = np.ascontiguousarray(tris, dtype=np.uint32)
+    nt = len(tris)
+    edges = np.empty((3 * nt, 2), dtype=np.uint32)
+    corners = np.empty(3 * nt, dtype=np.uint32)
+    count = c_size_t(0)
+    lib.check(lib.pm_triangle_edges(ptr(tris, c_uint32), nt, int(vertex_count), int(threads),
+                                    ptr(edges, c_uint32), len(edges), ptr(corners, c_uint32),
+                                    ctypes.byref(count)))
+    return edges[:count.value], corners
+
+
+def lattice_field(kernel, radius, spacing):
+    """The field deep inside a simple cubic lattice of unit-strength particles with this
+    spacing and radius: polygonize's default threshold is half of it, and an iso level given
+    as a fraction of the rest density is that fraction of lattice_field(kernel, R, rest
+    spacing)."""
+    lib = _library.load()
+    k = _options.POLYGONIZE.convert("kernel", "kernel", kernel)
+    out = c_double(0)
+    lib.check(lib.pm_lattice_field(k, float(radius), float(spacing), ctypes.byref(out)))
+    return out.value
+

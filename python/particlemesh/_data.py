@@ -1,0 +1,260 @@
+"""Meshes and particles as numpy arrays, and their way in and out of the library's handles
+(pm_cloud, pm_mesh): one copy each way, no per-point Python."""
+
+import ctypes
+import os
+from ctypes import POINTER, c_char_p, c_double, c_float, c_int32, c_size_t
+
+import numpy as np
+
+from . import _abi
+from ._errors import Error
+
+
+def _invalid(message):
+    return Error(message, _abi.PM_STATUS_INVALID_ARGUMENT)
+
+
+def vec3(array, name, dtype=np.float64):
+    """A C-contiguous (N, 3) array of `dtype` from (N, 3) or flat (3N,) input; a copy only
+    when needed."""
+    a = np.asarray(array)
+    if a.ndim == 1:
+        if a.size % 3:
+            raise _invalid(f"{name} has {a.size} values, not a multiple of 3")
+        a = a.reshape(-1, 3)
+    if a.ndim != 2 or a.shape[1] != 3:
+        raise _invalid(f"{name} must have shape (N, 3), got {a.shape}")
+    if a.dtype.kind not in "fiu":
+        raise _invalid(f"{name} must hold numbers, not {a.dtype}")
+    return np.ascontiguousarray(a, dtype=dtype)
+
+
+def per_point(array, name, count, dtype=np.float64):
+    """A C-contiguous (count,) array (one value per point), or None."""
+    if array is None:
+        return None
+    a = np.ascontiguousarray(np.asarray(array, dtype=dtype).reshape(-1))
+    if len(a) != count:
+        raise _invalid(f"{name} has {len(a)} values for {count} points")
+    return a
+
+
+def channels(values, name, count):
+    """An attribute as C-contiguous (count, C) float32."""
+    a = np.asarray(values, dtype=np.float32)
+    if a.ndim == 1:
+        a = a.reshape(-1, 1)
+    if a.ndim != 2 or a.shape[0] != count:
+        raise _invalid(f"attribute '{name}' has shape {a.shape}; it needs {count} rows "
+                       "(one per point, up to 4096 components)")
+    return np.ascontiguousarray(a)
+
+
+def ptr(array, ctype):
+    return array.ctypes.data_as(POINTER(ctype)) if array is not None else None
+
+
+class Points:
+    """Particles: `positions` (N, 3) float64, `normals` (N, 3) float64 or None, `attributes`
+    {name: (N, C) float32} (a PLY file's vertex colours: "color", (N, 3) in [0, 1]; a .pcd's
+    rgb as "color" and intensity as "intensity"), `info` (dict; for .pcd files what was read
+    and dropped, e.g. invalid_points)."""
+
+    __slots__ = ("positions", "normals", "attributes", "info")
+
+    def __init__(self, positions, normals=None, attributes=None, info=None):
+        self.positions = positions
+        self.normals = normals
+        self.attributes = attributes if attributes is not None else {}
+        self.info = info if info is not None else {}
+
+    def __len__(self):
+        return len(self.positions)
+
+    def __repr__(self):
+        extra = ", normals" if self.normals is not None else ""
+        if self.attributes:
+            extra += ", attributes " + ", ".join(self.attributes)
+        return f"<particlemesh.Points {len(self.positions)} points{extra}>"
+
+
+class Mesh:
+    """A triangle mesh: `vertices` (V, 3) float64, `triangles` (T, 3) int32 vertex indices
+    (counter-clockwise seen from outside where the mesh is oriented), `normals` (V, 3) float64
+    or None, `attributes` {name: (V, C) float32} per-vertex channels, `stats` (dict: what the
+    call that made it measured; empty for a mesh made or read here)."""
+
+    __slots__ = ("vertices", "triangles", "normals", "attributes", "stats")
+
+    def __init__(self, vertices, triangles, normals=None, attributes=None, stats=None):
+        self.vertices = vertices
+        self.triangles = triangles
+        self.normals = normals
+        self.attributes = attributes if attributes is not None else {}
+        self.stats = stats if stats is not None else {}
+
+    @property
+    def vertex_count(self):
+        return len(self.vertices)
+
+    @property
+    def triangle_count(self):
+        return len(self.triangles)
+
+    @property
+    def nbytes(self):
+        """Bytes held by the arrays."""
+        arrays = [self.vertices, self.triangles, self.normals, *self.attributes.values()]
+        return sum(np.asarray(a).nbytes for a in arrays if a is not None)
+
+    def __repr__(self):
+        extra = ", normals" if self.normals is not None else ""
+        if self.attributes:
+            extra += ", attributes " + ", ".join(self.attributes)
+        return (f"<particlemesh.Mesh {self.vertex_count} vertices, {self.triangle_count} "
+                f"triangles{extra}>")
+
+
+# ---- handles in -----------------------------------------------------------------------------
+
+def new_cloud(lib, positions, normals=None, attributes=None):
+    """A pm_cloud handle from numpy arrays (float32 input crosses as float32, anything else as
+    float64). The caller destroys it."""
+    a = np.asarray(positions)
+    single = a.dtype == np.float32 and (normals is None or np.asarray(normals).dtype == np.float32)
+    dtype, ctype = (np.float32, c_float) if single else (np.float64, c_double)
+    p = vec3(a, "positions", dtype)
+    n = vec3(normals, "normals", dtype) if normals is not None else None
+    if n is not None and len(n) != len(p):
+        raise _invalid(f"normals has {len(n)} rows but positions has {len(p)}")
+    create = lib.pm_cloud_create_f32 if single else lib.pm_cloud_create
+    handle = _abi.pm_cloud_p()
+    lib.check(create(ptr(p, ctype), ptr(n, ctype), len(p), ctypes.byref(handle)))
+    try:
+        for name, values in (attributes or {}).items():
+            v = channels(values, name, len(p))
+            lib.check(lib.pm_cloud_set_attribute(handle, name.encode(), v.shape[1],
+                                                 ptr(v, c_float), len(p)))
+    except BaseException:
+        lib.pm_cloud_destroy(handle)
+        raise
+    return handle
+
+
+def mesh_parts(mesh):
+    """(vertices, triangles, normals, attributes) of a Mesh or anything with .vertices and
+    .triangles."""
+    try:
+        vertices, triangles = mesh.vertices, mesh.triangles
+    except AttributeError:
+        raise TypeError("expected a particlemesh.Mesh (an object with .vertices and .triangles), "
+                        f"not {type(mesh).__name__!r}") from None
+    return vertices, triangles, getattr(mesh, "normals", None), getattr(mesh, "attributes", None)
+
+
+def new_mesh(lib, mesh, with_attributes=True):
+    """A pm_mesh handle from a Mesh. The caller destroys it."""
+    vertices, triangles, normals, attributes = mesh_parts(mesh)
+    v = vec3(vertices, "vertices")
+    t = np.asarray(triangles)
+    if t.ndim == 1 and t.size % 3 == 0:
+        t = t.reshape(-1, 3)
+    if t.ndim != 2 or t.shape[1] != 3:
+        raise _invalid(f"triangles must have shape (T, 3), got {t.shape}")
+    if t.dtype.kind not in "iu":
+        raise _invalid(f"triangles must hold integer vertex indices, not {t.dtype}")
+    limits = np.iinfo(np.int32)
+    if t.size and (t.min() < limits.min or t.max() > limits.max):
+        i = int(np.argmax(((t < limits.min) | (t > limits.max)).any(axis=1)))
+        raise _invalid(f"triangles[{i}] has a vertex index out of range: {t[i].tolist()}")
+    t = np.ascontiguousarray(t, dtype=np.int32)
+    n = vec3(normals, "normals") if normals is not None else None
+    handle = _abi.pm_mesh_p()
+    lib.check(lib.pm_mesh_create(ptr(v, c_double), len(v), ptr(t, c_int32), len(t),
+                                 ptr(n, c_double), ctypes.byref(handle)))
+    try:
+        for name, values in ((attributes or {}).items() if with_attributes else ()):
+            a = channels(values, name, len(v))
+            lib.check(lib.pm_mesh_set_attribute(handle, name.encode(), a.shape[1],
+                                                ptr(a, c_float), len(v)))
+    except BaseException:
+        lib.pm_mesh_destroy(handle)
+        raise
+    return handle
+
+
+# ---- handles out ----------------------------------------------------------------------------
+
+def _attributes(lib, handle, count, kind):
+    """Every per-point channel of a cloud or mesh handle: {name: (count, C) float32}."""
+    get_count = getattr(lib, f"pm_{kind}_get_attribute_count")
+    get_name = getattr(lib, f"pm_{kind}_get_attribute_name")
+    get_components = getattr(lib, f"pm_{kind}_get_attribute_components")
+    copy = getattr(lib, f"pm_{kind}_copy_attribute")
+    n = c_size_t(0)
+    lib.check(get_count(handle, ctypes.byref(n)))
+    out = {}
+    for i in range(n.value):
+        name = c_char_p()
+        lib.check(get_name(handle, i, ctypes.byref(name)))
+        key = name.value
+        components = c_int32(0)
+        lib.check(get_components(handle, key, ctypes.byref(components)))
+        values = np.empty((count, components.value), dtype=np.float32)
+        if count:
+            lib.check(copy(handle, key, ptr(values, c_float), count))
+        out[key.decode(errors="replace")] = values
+    return out
+
+
+def read_mesh_handle(lib, handle, stats=None):
+    """A Mesh with copies of everything the pm_mesh handle holds."""
+    nv, nt = c_size_t(0), c_size_t(0)
+    lib.check(lib.pm_mesh_get_counts(handle, ctypes.byref(nv), ctypes.byref(nt)))
+    nv, nt = nv.value, nt.value
+    vertices = np.empty((nv, 3), dtype=np.float64)
+    triangles = np.empty((nt, 3), dtype=np.int32)
+    if nv:
+        lib.check(lib.pm_mesh_copy_positions(handle, ptr(vertices, c_double), nv))
+    if nt:
+        lib.check(lib.pm_mesh_copy_triangles(handle, ptr(triangles, c_int32), nt))
+    has = c_int32(0)
+    lib.check(lib.pm_mesh_has_normals(handle, ctypes.byref(has)))
+    normals = None
+    if has.value and nv:
+        normals = np.empty((nv, 3), dtype=np.float64)
+        lib.check(lib.pm_mesh_copy_normals(handle, ptr(normals, c_double), nv))
+    return Mesh(vertices, triangles, normals, _attributes(lib, handle, nv, "mesh"), stats)
+
+
+def read_cloud_handle(lib, handle, info=None):
+    """Points with copies of everything the pm_cloud handle holds."""
+    count = c_size_t(0)
+    lib.check(lib.pm_cloud_get_count(handle, ctypes.byref(count)))
+    n = count.value
+    positions = np.empty((n, 3), dtype=np.float64)
+    if n:
+        lib.check(lib.pm_cloud_copy_positions(handle, ptr(positions, c_double), n))
+    has = c_int32(0)
+    lib.check(lib.pm_cloud_has_normals(handle, ctypes.byref(has)))
+    normals = None
+    if has.value and n:
+        normals = np.empty((n, 3), dtype=np.float64)
+        lib.check(lib.pm_cloud_copy_normals(handle, ptr(normals, c_double), n))
+    return Points(positions, normals, _attributes(lib, handle, n, "cloud"), info)
+
+
+def struct_dict(struct, skip=("struct_size",)):
+    """A ctypes Structure's fields as a dict (arrays as tuples)."""
+    out = {}
+    for name, _ in struct._fields_:
+        if name in skip:
+            continue
+        value = getattr(struct, name)
+        out[name] = tuple(value) if isinstance(value, ctypes.Array) else value
+    return out
+
+
+def path_bytes(path):
+    return os.fsencode(path)

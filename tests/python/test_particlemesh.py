@@ -1,0 +1,575 @@
+"""The particlemesh Python package: numpy in and out, the library's options as keywords with
+its own defaults, errors as particlemesh.Error with the library's message, progress and
+cancellation, handles freed on every path."""
+import threading
+
+import numpy as np
+import pytest
+
+
+def fibonacci_sphere(n, radius=1.0, dtype=np.float64):
+    i = np.arange(n, dtype=np.float64) + 0.5
+    phi = np.arccos(1.0 - 2.0 * i / n)
+    theta = np.pi * (1.0 + 5.0 ** 0.5) * i
+    p = np.stack([np.cos(theta) * np.sin(phi), np.sin(theta) * np.sin(phi), np.cos(phi)], 1)
+    return (radius * p).astype(dtype)
+
+
+def edge_lengths(vertices, triangles):
+    t = triangles
+    return np.concatenate([np.linalg.norm(vertices[t[:, a]] - vertices[t[:, b]], axis=1)
+                           for a, b in ((0, 1), (1, 2), (2, 0))])
+
+
+def tetrahedron():
+    p = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]], np.float64)
+    t = np.array([[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]], np.int32)
+    return p, t
+
+
+# ---- loading ----------------------------------------------------------------------------------
+
+def test_the_package_loads_the_library_in_its_own_lib_folder(pm, pm_library):
+    lib = pm_library.load()
+    assert pm.library_path() == lib.path
+    assert lib.path.startswith(pm_library.LIB_DIR)
+    assert pm.version() == lib.version and pm.version().count(".") == 2
+
+
+def test_abi_mismatch_is_refused(pm, pm_abi, pm_library, monkeypatch):
+    monkeypatch.setattr(pm_abi, "PM_ABI_VERSION", 999)
+    with pytest.raises(pm.LibraryNotFoundError, match="ABI version 1; this package needs version 999"):
+        pm_library.load(pm.library_path())
+
+
+def test_missing_library_gives_a_clear_message(pm, pm_library, monkeypatch, tmp_path):
+    monkeypatch.setattr(pm_library, "_library", None)
+    monkeypatch.setenv("PARTICLEMESH_LIBRARY", str(tmp_path / "libparticlemesh.so"))
+    with pytest.raises(pm.LibraryNotFoundError, match="libparticlemesh.so does not exist"):
+        pm.triangulate(fibonacci_sphere(100))
+    bogus = tmp_path / "bogus.so"
+    bogus.write_text("not a library")
+    monkeypatch.setenv("PARTICLEMESH_LIBRARY", str(bogus))
+    with pytest.raises(pm.LibraryNotFoundError, match="cannot load the particlemesh library"):
+        pm.version()
+    # Nothing anywhere: the message says where it looked and how to point at the library.
+    monkeypatch.delenv("PARTICLEMESH_LIBRARY")
+    monkeypatch.setattr(pm_library, "LIB_DIR", str(tmp_path))
+    monkeypatch.setattr(pm_library.ctypes.util, "find_library", lambda name: None)
+    with pytest.raises(pm.LibraryNotFoundError) as e:
+        pm.version()
+    assert str(tmp_path) in str(e.value) and "PARTICLEMESH_LIBRARY" in str(e.value)
+    assert isinstance(e.value, pm.Error) and isinstance(e.value, Exception)
+
+
+def test_a_library_missing_a_function_is_refused(pm, pm_abi, pm_library, monkeypatch):
+    """No optional symbols: the package and its library ship together, so a library without
+    every function of particlemesh.h is the wrong one, and says so."""
+    monkeypatch.setitem(pm_abi.FUNCTIONS, "pm_no_such_function", (None, []))
+    with pytest.raises(pm.LibraryNotFoundError, match="missing pm_no_such_function"):
+        pm_library.load(pm.library_path())
+
+
+# ---- triangulation ----------------------------------------------------------------------------
+
+def test_triangulate_a_sphere_into_a_closed_outward_surface(pm):
+    p = fibonacci_sphere(3000)
+    mesh = pm.triangulate(p)
+    assert isinstance(mesh, pm.Mesh)
+    assert mesh.vertices.dtype == np.float64 and mesh.vertices.shape == (3000, 3)
+    assert mesh.triangles.dtype == np.int32 and mesh.triangles.shape[1] == 3
+    np.testing.assert_array_equal(mesh.vertices, p)  # vertex i is particle i
+    s = mesh.stats
+    assert s["points"] == 3000 and s["spacing_estimated"] == 1
+    assert s["max_edge"] == pytest.approx(pm.defaults("triangulate")["max_edge_factor"] * s["spacing"])
+    assert s["unused_points"] == 0 and s["holes_left"] == 0
+    rep = pm.topology(mesh)
+    assert rep["closed"] and rep["manifold"] and rep["consistently_oriented"] and rep["outward"]
+    assert rep["euler_characteristic"] == 2 and rep["components"] == 1
+    assert mesh.triangle_count == 2 * 3000 - 4
+    assert mesh.normals.dtype == np.float64
+    np.testing.assert_allclose(np.linalg.norm(mesh.normals, axis=1), 1.0, atol=1e-9)
+    assert (np.einsum("ij,ij->i", mesh.normals, p) > 0.99).all()
+
+
+def test_raw_is_the_seeds_triangle_set(pm):
+    p = fibonacci_sphere(3000)
+    raw = pm.triangulate(p, raw=True)
+    assert raw.stats["kept"] == raw.triangle_count and raw.stats["holes_filled"] == 0
+    assert edge_lengths(raw.vertices, raw.triangles).max() <= raw.stats["max_edge"] * (1 + 1e-9)
+    assert (np.sort(raw.triangles, axis=1) == raw.triangles).all()  # canonical, not oriented
+    assert raw.triangle_count > pm.triangulate(p, raw=False).triangle_count
+
+
+def test_options_are_the_c_fields_with_the_librarys_defaults(pm):
+    d = pm.defaults("triangulate")
+    assert list(d)[:9] == ["spacing", "max_edge_factor", "threads", "max_neighbors",
+                           "normal_angle", "fill_holes", "fill_edge_factor", "normal_source",
+                           "max_triplets_per_point"]  # the struct's order; appended fields follow
+    assert (d["spacing"], d["max_edge_factor"], d["normal_source"]) == (0.0, 2.0, "auto")
+    assert pm.defaults("polygonize")["kernel"] == "wyvill"
+    assert pm.defaults("smooth")["scheme"] == "loop" and pm.defaults("smooth")["levels"] == 1
+    with pytest.raises(ValueError, match="no options for 'render'"):
+        pm.defaults("render")
+    p = fibonacci_sphere(2000)
+    mesh = pm.triangulate(p, spacing=0.1, max_edge_factor=1.5, raw=True)
+    assert mesh.stats["spacing"] == pytest.approx(0.1) and not mesh.stats["spacing_estimated"]
+    assert mesh.stats["max_edge"] == pytest.approx(0.15)
+    assert edge_lengths(mesh.vertices, mesh.triangles).max() <= 0.15 * (1 + 1e-9)
+    # None is the library's default, exactly as leaving the keyword out.
+    a = pm.triangulate(p, spacing=None, normal_angle=None)
+    np.testing.assert_array_equal(a.triangles, pm.triangulate(p).triangles)
+
+
+def test_bad_keywords_and_values_are_named(pm):
+    p = fibonacci_sphere(500)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'spacingg'"):
+        pm.triangulate(p, spacingg=0.1)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'flags'"):
+        pm.triangulate(p, flags=1)  # raw=, repair=, orient= set it
+    with pytest.raises(TypeError, match="spacing must be a number"):
+        pm.triangulate(p, spacing="0.1")
+    with pytest.raises(TypeError, match="threads must be an integer"):
+        pm.triangulate(p, threads=1.5)
+    with pytest.raises(pm.Error, match=r"fill_holes is -1; it must be 0\.\.4294967295") as e:
+        pm.triangulate(p, fill_holes=-1)  # ctypes alone would wrap it to 4294967295
+    assert e.value.status == pm.STATUS_INVALID_ARGUMENT
+    with pytest.raises(pm.Error, match="normal_source is 'outward'; it must be one of auto, input, estimate"):
+        pm.triangulate(p, normal_source="outward")
+    with pytest.raises(pm.Error, match="kernel is 7"):
+        pm.polygonize(p, kernel=7)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'level'"):
+        pm.smooth(pm.Mesh(*tetrahedron()), level=2)
+    with pytest.raises(TypeError, match="both cell and cell_size"):
+        pm.polygonize(p, cell=0.1, cell_size=0.1)
+
+
+def test_finishing_options_reach_the_library(pm, data_dir):
+    cloud = pm.read_points(data_dir / "points/spot_poisson.ply")
+    full = pm.triangulate(cloud)  # Points: positions and normals together
+    rep = pm.topology(full)
+    assert rep["closed"] and rep["manifold"] and rep["outward"] and rep["euler_characteristic"] == 2
+    assert full.stats["holes_filled"] > 0 and full.stats["holes_left"] == 0
+    no_fill = pm.triangulate(cloud.positions, cloud.normals, fill_holes=0)
+    assert no_fill.stats["holes_filled"] == 0 and no_fill.stats["holes_left"] > 0
+    no_repair = pm.triangulate(cloud, repair=False)
+    assert no_repair.stats["holes_filled"] == 0 and no_repair.triangle_count < full.triangle_count
+    strict = pm.triangulate(cloud, normal_angle=30.0)
+    assert strict.triangle_count != full.triangle_count
+    assert pm.triangulate(cloud, orient=False, normal_source="ESTIMATE").triangle_count > 0
+    with pytest.raises(pm.Error) as e:
+        pm.triangulate(cloud, normal_angle=-5.0)
+    assert e.value.status == pm.STATUS_INVALID_ARGUMENT and "normal_angle" in str(e.value)
+
+
+def test_threads_do_not_change_the_result(pm):
+    p = fibonacci_sphere(4000)
+    np.testing.assert_array_equal(pm.triangulate(p, threads=1).triangles,
+                                  pm.triangulate(p, threads=2).triangles)
+
+
+def test_input_arrays_of_any_layout(pm):
+    p = fibonacci_sphere(1000)
+    ref = pm.triangulate(p).triangles
+    p32 = p.astype(np.float32)
+    m32 = pm.triangulate(p32)  # crosses as float32, comes back as the same values in float64
+    np.testing.assert_array_equal(m32.vertices, p32.astype(np.float64))
+    np.testing.assert_array_equal(pm.triangulate(p.ravel()).triangles, ref)  # flat x y z ...
+    np.testing.assert_array_equal(pm.triangulate(np.asfortranarray(p)).triangles, ref)
+    np.testing.assert_array_equal(pm.triangulate(p.tolist()).triangles, ref)
+    np.testing.assert_array_equal(pm.triangulate(pm.Points(p)).triangles, ref)
+    with pytest.raises(pm.Error, match="shape"):
+        pm.triangulate(p[:, :2])
+    with pytest.raises(pm.Error, match="multiple of 3"):
+        pm.triangulate(p.ravel()[:-1])
+    with pytest.raises(pm.Error, match="normals has 999 rows but positions has 1000"):
+        pm.triangulate(p, p[:-1])
+
+
+def test_normals_and_attributes_pass_through(pm):
+    p = fibonacci_sphere(1500)
+    raw = pm.triangulate(p, normals=p, raw=True)
+    np.testing.assert_allclose(raw.normals, p, atol=1e-12)  # raw: the particles' own normals
+    assert pm.triangulate(p, raw=True).normals is None
+    inward = pm.triangulate(p, normals=-p, normal_source="input", orient=False)
+    rep = pm.topology(inward)
+    assert rep["closed"] and not rep["outward"]
+    speed = (p * 3).astype(np.float32)
+    mesh = pm.triangulate(p, attributes={"velocity": speed, "radius": np.ones(1500)})
+    np.testing.assert_array_equal(mesh.attributes["velocity"], speed)
+    assert mesh.attributes["radius"].shape == (1500, 1)
+    with pytest.raises(pm.Error, match="attribute 'velocity' has shape"):
+        pm.triangulate(p, attributes={"velocity": speed[:10]})
+
+
+def test_real_scan_from_shared_data(pm, data_dir):
+    cloud = pm.read_points(data_dir / "points/spot_poisson.ply")
+    assert cloud.positions.shape == (8747, 3) and cloud.positions.dtype == np.float64
+    assert cloud.normals.shape == (8747, 3)
+    np.testing.assert_allclose(np.linalg.norm(cloud.normals, axis=1), 1.0, atol=1e-4)
+    mesh = pm.triangulate(cloud.positions)
+    assert 0.02 <= mesh.stats["spacing"] < 0.025  # Poisson-disk r0 = 0.02
+    rep = pm.topology(mesh)
+    assert rep["vertices_used"] == 8747 and rep["components"] == 1 and rep["closed"]
+    assert mesh.triangle_count == 2 * 8747 - 4  # the cow is genus 0
+
+
+# ---- errors -----------------------------------------------------------------------------------
+
+def test_nan_names_the_index(pm):
+    p = fibonacci_sphere(100)
+    p[42, 1] = np.nan
+    with pytest.raises(pm.Error) as e:
+        pm.triangulate(p)
+    assert e.value.status == pm.STATUS_INVALID_INPUT and e.value.status_name == "invalid input"
+    assert "positions[42].y" in str(e.value) and "NaN" in str(e.value)
+
+
+def test_empty_tiny_absurd_and_too_dense(pm):
+    with pytest.raises(pm.Error, match="empty") as e:
+        pm.triangulate(np.zeros((0, 3)))
+    assert e.value.status == pm.STATUS_INVALID_INPUT
+    with pytest.raises(pm.Error):
+        pm.triangulate(np.zeros((1, 3)))
+    for kwargs in ({"max_edge_factor": -1.0}, {"max_edge_factor": float("nan")},
+                   {"spacing": -0.5}, {"spacing": float("inf")}):
+        with pytest.raises(pm.Error) as e:
+            pm.triangulate(fibonacci_sphere(200), **kwargs)
+        assert e.value.status == pm.STATUS_INVALID_ARGUMENT and str(e.value), kwargs
+    with pytest.raises(pm.Error) as e:
+        pm.triangulate(fibonacci_sphere(3000), spacing=1.0)
+    assert e.value.status == pm.STATUS_LIMIT_EXCEEDED
+
+
+def test_missing_and_malformed_files(pm, tmp_path):
+    with pytest.raises(pm.Error) as e:
+        pm.read_points(tmp_path / "nope.ply")
+    assert e.value.status == pm.STATUS_IO_ERROR and "nope.ply" in str(e.value)
+    bad = tmp_path / "bad.ply"
+    bad.write_text("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n1\n")
+    with pytest.raises(pm.Error, match="bad.ply"):
+        pm.read_points(bad)
+    with pytest.raises(pm.Error, match="nope.obj"):
+        pm.read_mesh(tmp_path / "nope.obj")
+
+
+# ---- progress, cancellation, the GIL ----------------------------------------------------------
+
+def test_progress_reports_stages(pm):
+    seen = []
+    pm.triangulate(fibonacci_sphere(20000), progress=lambda stage, f: seen.append((stage, f)))
+    assert seen, "no progress reported"
+    fractions = [f for _, f in seen]
+    assert all(0.0 <= f <= 1.0 for f in fractions) and fractions == sorted(fractions)
+    assert all(stage for stage, _ in seen)
+    progress = pm.Progress()
+    pm.polygonize(fibonacci_sphere(5000), progress=progress)
+    assert progress.stage and progress.fraction > 0 and not progress.cancelled
+
+
+def test_callback_returning_false_cancels(pm):
+    with pytest.raises(pm.CancelledError) as e:
+        pm.triangulate(fibonacci_sphere(20000), progress=lambda stage, f: False)
+    assert e.value.status == pm.STATUS_CANCELLED
+    with pytest.raises(pm.CancelledError):
+        pm.smooth(pm.triangulate(fibonacci_sphere(20000)), levels=2, progress=lambda s, f: False)
+    with pytest.raises(TypeError, match="progress must be"):
+        pm.triangulate(fibonacci_sphere(200), progress=42)
+
+
+def test_cancel_from_another_thread(pm):
+    """How Blender's modal operator stops a worker: Esc calls cancel() on the UI thread."""
+    progress = pm.Progress()
+    started = threading.Event()
+    progress.callback = lambda stage, f: started.set()
+    result = {}
+
+    def work():
+        try:
+            pm.triangulate(fibonacci_sphere(400000), progress=progress)
+            result["finished"] = True
+        except pm.CancelledError as e:
+            result["cancelled"] = e
+
+    t = threading.Thread(target=work)
+    t.start()
+    assert started.wait(60)
+    progress.cancel()
+    t.join(60)
+    assert not t.is_alive() and "cancelled" in result and progress.cancelled
+
+
+def test_an_exception_in_the_callback_cancels_and_is_raised(pm):
+    def boom(stage, f):
+        raise RuntimeError("bug in the host")
+
+    with pytest.raises(RuntimeError, match="bug in the host"):
+        pm.triangulate(fibonacci_sphere(20000), progress=boom)
+    assert pm.triangulate(fibonacci_sphere(500)).triangle_count > 0  # and all is well after
+
+
+def test_the_gil_is_released_during_a_call(pm):
+    """Another Python thread keeps running while the library works: it counts many times
+    between the call's first and last progress report (with the GIL held it could not count
+    at all while the library computes)."""
+    ticks = []
+    stop = threading.Event()
+
+    def count():
+        while not stop.is_set():
+            ticks.append(1)
+
+    reports = []
+
+    def on_progress(stage, f):
+        reports.append(len(ticks))
+
+    t = threading.Thread(target=count)
+    t.start()
+    try:
+        pm.triangulate(fibonacci_sphere(300000), progress=on_progress)
+    finally:
+        stop.set()
+        t.join()
+    assert len(reports) >= 2
+    assert reports[-1] - reports[0] > 1000, reports
+
+
+# ---- handles ----------------------------------------------------------------------------------
+
+class _Counting:
+    def __init__(self, fn, counter, key):
+        self.fn, self.counter, self.key = fn, counter, key
+
+    def __call__(self, *args):
+        self.counter[self.key] += 1
+        return self.fn(*args)
+
+
+def test_handles_are_freed_on_every_path(pm, pm_library, monkeypatch):
+    lib = pm_library.load()
+    count = {"cloud+": 0, "cloud-": 0, "mesh+": 0, "mesh-": 0}
+    for name, key in (("pm_cloud_create", "cloud+"), ("pm_cloud_create_f32", "cloud+"),
+                      ("pm_cloud_destroy", "cloud-"), ("pm_triangulate", "mesh+"),
+                      ("pm_mesh_create", "mesh+"), ("pm_smooth", "mesh+"),
+                      ("pm_mesh_destroy", "mesh-")):
+        monkeypatch.setattr(lib, name, _Counting(getattr(lib.cdll, name), count, key))
+    p = fibonacci_sphere(20000)
+    mesh = pm.triangulate(p)                                    # cloud, mesh
+    with pytest.raises(pm.Error):
+        pm.triangulate(p, max_edge_factor=-1)                   # cloud; fails inside
+    with pytest.raises(pm.CancelledError):
+        pm.triangulate(p, progress=lambda s, f: False)          # cloud; cancelled
+    with pytest.raises(pm.Error):
+        pm.triangulate(p, attributes={"bad": np.full(20000, np.nan)})  # cloud; attribute fails
+    pm.topology(mesh)                                           # mesh
+    with pytest.raises(pm.Error):
+        pm.topology(pm.Mesh(mesh.vertices, mesh.triangles + 10 ** 6))  # create fails: none
+    pm.smooth(pm.Mesh(*tetrahedron()))                          # mesh in, mesh out
+    assert count["cloud+"] == 4 and count["cloud-"] == 4
+    assert count["mesh-"] == 4  # triangulate, topology, smooth's input and output
+    monkeypatch.undo()
+
+
+# ---- meshes and files -------------------------------------------------------------------------
+
+def test_topology_of_a_closed_outward_tetrahedron(pm):
+    p, t = tetrahedron()
+    rep = pm.topology(pm.Mesh(p, t))
+    assert rep["closed"] and rep["manifold"] and rep["consistently_oriented"] and rep["outward"]
+    assert rep["euler_characteristic"] == 2 and rep["edges"] == 6
+    assert not pm.topology(pm.Mesh(p, t[:, ::-1]))["outward"]
+    with pytest.raises(TypeError, match="particlemesh.Mesh"):
+        pm.topology((p, t))
+    with pytest.raises(pm.Error, match="triangles must hold integer"):
+        pm.topology(pm.Mesh(p, t.astype(float)))
+
+
+def test_mesh_write_read_roundtrip(pm, tmp_path):
+    p, t = tetrahedron()
+    n = p / np.linalg.norm(p, axis=1, keepdims=True)
+    for ext in ("ply", "obj"):
+        path = tmp_path / f"tet.{ext}"
+        pm.write_mesh(pm.Mesh(p, t, n), path)
+        back = pm.read_mesh(str(path))
+        np.testing.assert_allclose(back.vertices, p)
+        np.testing.assert_array_equal(back.triangles, t)
+        np.testing.assert_allclose(back.normals, n, atol=1e-6)
+    with pytest.raises(pm.Error) as e:
+        pm.write_mesh(pm.Mesh(p, t), tmp_path / "tet.xyz")
+    assert "xyz" in str(e.value)
+
+
+def test_points_keep_their_full_precision(pm, tmp_path):
+    """Georeferenced coordinates (UTM) come back as read, not rounded to float32."""
+    path = tmp_path / "utm.xyz"
+    path.write_text("# comment\n500000.123456789 4649776.987654321 213.000000001 0 0 1\n"
+                    "500001.5 4649777.25 213.75 0 0 1\n500000.75 4649778.125 214.0625 0 0 1\n")
+    points = pm.read_points(path)
+    np.testing.assert_array_equal(points.positions[0], [500000.123456789, 4649776.987654321,
+                                                        213.000000001])
+    np.testing.assert_array_equal(points.normals, [[0, 0, 1]] * 3)
+    assert len(points) == 3 and points.attributes == {} and points.info == {}
+
+
+def test_ply_vertex_colours_are_read_back(pm, tmp_path):
+    p = fibonacci_sphere(20, dtype=np.float32)
+    rgb = np.random.default_rng(3).integers(0, 256, size=(20, 3), dtype=np.uint8)
+    rec = np.zeros(20, dtype=[("p", "<f4", 3), ("c", "u1", 3)])
+    rec["p"], rec["c"] = p, rgb
+    path = tmp_path / "coloured.ply"
+    path.write_bytes(b"ply\nformat binary_little_endian 1.0\nelement vertex 20\n"
+                     b"property float x\nproperty float y\nproperty float z\n"
+                     b"property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n"
+                     + rec.tobytes())
+    cloud = pm.read_points(path)
+    np.testing.assert_array_equal(cloud.positions, p)
+    assert cloud.normals is None
+    np.testing.assert_allclose(cloud.attributes["color"], rgb / 255.0, atol=1e-6)
+
+
+def test_estimate_spacing_and_thin(pm):
+    p = np.stack(np.meshgrid(np.arange(40), np.arange(40), [0.0]), -1).reshape(-1, 3) * 0.25
+    assert pm.estimate_spacing(p) == pytest.approx(0.25)
+    assert pm.estimate_spacing(p, max_samples=50) == pytest.approx(0.25)
+    with pytest.raises(pm.Error, match="max_samples"):
+        pm.estimate_spacing(p, max_samples=0)
+    idx = pm.thin(p, 0.6)
+    assert idx.dtype == np.int64 and idx[0] == 0 and np.all(np.diff(idx) > 0)
+    kept = p[idx]
+    d = np.linalg.norm(kept[:, None] - kept[None], axis=-1)
+    np.fill_diagonal(d, np.inf)
+    assert d.min() >= 0.6
+    assert np.linalg.norm(p[:, None] - kept[None], axis=-1).min(axis=1).max() < 0.6
+    with pytest.raises(pm.Error, match="min_distance") as e:
+        pm.thin(p, 0.0)
+    assert e.value.status == pm.STATUS_INVALID_ARGUMENT
+
+
+def test_triangle_edges_number_every_corner(pm):
+    mesh = pm.triangulate(fibonacci_sphere(2000))
+    tris = mesh.triangles
+    edges, corners = pm.triangle_edges(tris, mesh.vertex_count)
+    assert edges.dtype == np.uint32 and corners.dtype == np.uint32
+    assert 2 * len(edges) == 3 * len(tris) and np.all(edges[:, 0] < edges[:, 1])
+    a, b = tris.ravel(), np.roll(tris, -1, axis=1).ravel()
+    np.testing.assert_array_equal(edges[corners], np.stack([np.minimum(a, b), np.maximum(a, b)], 1))
+    with pytest.raises(pm.Error, match="vertex index 2000"):
+        pm.triangle_edges(np.array([[0, 1, 2000]]), 2000)
+
+
+# ---- polygonize and smooth ----------------------------------------------------------------------
+
+def test_polygonize_one_particle_is_a_sphere(pm):
+    mesh = pm.polygonize(np.zeros((1, 3)), radius=1.0, threshold=0.5, cell=0.05)
+    rep = pm.topology(mesh)
+    assert rep["closed"] and rep["manifold"] and rep["euler_characteristic"] == 2 and rep["outward"]
+    r = np.linalg.norm(mesh.vertices, axis=1)
+    assert r.std() < 0.05 * r.mean()
+    assert mesh.stats["radius"] == 1.0 and mesh.stats["threshold"] == 0.5
+    assert mesh.stats["cell_size"] == 0.05 and mesh.stats["triangles"] == mesh.triangle_count
+    # The same with the C field's own name, and each kernel by name.
+    same = pm.polygonize(np.zeros((1, 3)), radius=1.0, threshold=0.5, cell_size=0.05)
+    np.testing.assert_array_equal(same.triangles, mesh.triangles)
+    radii = {}
+    for kernel in pm.KERNELS:
+        m = pm.polygonize(np.zeros((1, 3)), radius=1.0, threshold=0.5, kernel=kernel, cell=0.05)
+        radii[kernel] = np.linalg.norm(m.vertices, axis=1).mean()
+    assert len(set(np.round(list(radii.values()), 3))) == 4  # four different kernels
+
+
+def test_polygonize_radii_strengths_and_defaults(pm):
+    p = np.array([[0.0, 0, 0], [5.0, 0, 0]])
+    mesh = pm.polygonize(p, radii=[1.0, 2.0], strengths=[1.0, 1.0], threshold=0.5, cell=0.05)
+    left = mesh.vertices[mesh.vertices[:, 0] < 2.5]
+    right = mesh.vertices[mesh.vertices[:, 0] >= 2.5]
+    r_left = np.linalg.norm(left - p[0], axis=1).mean()
+    r_right = np.linalg.norm(right - p[1], axis=1).mean()
+    assert r_right == pytest.approx(2 * r_left, rel=0.02)  # the field scales with R
+    with pytest.raises(pm.Error, match="radii has 1 values for 2 points"):
+        pm.polygonize(p, radii=[1.0])
+    cloud = fibonacci_sphere(3000)
+    auto = pm.polygonize(cloud)
+    assert auto.stats["radius"] == pytest.approx(2 * auto.stats["spacing"])
+    assert auto.stats["cell_size"] == pytest.approx(auto.stats["radius"] / 4)
+    assert pm.topology(auto)["closed"]
+
+
+def test_lattice_field(pm):
+    # Half the lattice field at R = 2 spacings is the default threshold (3.33 for Wyvill).
+    assert 0.5 * pm.lattice_field("wyvill", 2.0, 1.0) == pytest.approx(3.33, abs=0.01)
+    assert pm.lattice_field("poly6", 2.0, 1.0) == pm.lattice_field(pm.KERNELS["poly6"], 2.0, 1.0)
+
+
+def test_smooth_loop_butterfly_creases_attributes(pm):
+    p, t = tetrahedron()
+    heat = np.arange(4, dtype=np.float32)
+    for levels in (1, 2):
+        out = pm.smooth(pm.Mesh(p, t, attributes={"heat": heat}), levels=levels)
+        assert out.triangle_count == 4 * 4 ** levels
+        assert pm.topology(out)["closed"] and out.normals is not None
+        assert out.attributes["heat"].shape == (out.vertex_count, 1)
+        assert heat.min() <= out.attributes["heat"].min() <= out.attributes["heat"].max() <= heat.max()
+    bf = pm.smooth(pm.Mesh(p, t), scheme="butterfly")
+    np.testing.assert_allclose(bf.vertices[:4], p, atol=1e-12)  # interpolating
+    loop = pm.smooth(pm.Mesh(p, t), limit=False)
+    creased = pm.smooth(pm.Mesh(p, t), limit=False, crease_edges=[[0, 1]])
+    assert not np.allclose(loop.vertices, creased.vertices)
+    soft = pm.smooth(pm.Mesh(p, t), limit=False, crease_edges=[[0, 1]], crease_sharpness=[0.0])
+    np.testing.assert_allclose(soft.vertices, loop.vertices, atol=1e-12)
+    with pytest.raises(pm.Error, match="crease_edges must be"):
+        pm.smooth(pm.Mesh(p, t), crease_edges=[0, 1])
+    with pytest.raises(pm.Error, match=r"levels"):
+        pm.smooth(pm.Mesh(p, t), levels=11)
+
+
+# ---- .pcd through the PCL bridge ----------------------------------------------------------------
+
+@pytest.fixture
+def bridge(pm):
+    import os
+    if os.environ.get("PM_WITH_PCL") != "1":
+        pytest.skip("the build has no PCL bridge (PM_WITH_PCL=OFF)")
+    return pm.pcl_bridge_path()
+
+
+def test_read_pcd_with_normals_and_colours(pm, pm_library, bridge, data_dir):
+    assert bridge.startswith(pm_library.LIB_DIR)
+    cloud = pm.read_points(data_dir / "pcd/colored_cloud.pcd")
+    assert cloud.positions.shape == (1000, 3) and cloud.normals.shape == (1000, 3)
+    colour = cloud.attributes["color"]
+    assert colour.shape == (1000, 3) and colour.min() >= 0.0 and colour.max() <= 1.0
+    np.testing.assert_allclose(colour * 255.0, np.round(colour * 255.0), atol=1e-3)
+    assert cloud.info["format"] == "pcd" and cloud.info["has_color"] and cloud.info["has_normals"]
+    assert (cloud.info["width"], cloud.info["height"]) == (1, 1000)
+
+
+def test_read_pcd_drops_nan_points_and_says_so(pm, bridge, data_dir):
+    cloud = pm.read_points(data_dir / "pcd/kinect_frame_20121214T142255.814212_binary.pcd")
+    assert len(cloud.positions) == 307200 - 35625 and np.isfinite(cloud.positions).all()
+    assert cloud.info["invalid_points"] == 35625 and cloud.normals is None
+
+
+def test_read_malformed_pcd_names_the_file(pm, bridge, tmp_path):
+    bad = tmp_path / "bad header.pcd"
+    bad.write_text("VERSION 0.7\nFIELDS x y\nSIZE 4 4\nTYPE F F\nWIDTH 1\nPOINTS 1\nDATA ascii\n0 0\n")
+    with pytest.raises(pm.Error, match="missing field 'z'") as e:
+        pm.read_points(bad)
+    assert e.value.status == pm.STATUS_FORMAT_ERROR and str(bad) in str(e.value)
+
+
+def test_missing_pcl_bridge_gives_a_clear_message(pm, pm_library, monkeypatch, tmp_path, data_dir):
+    monkeypatch.setattr(pm_library, "_bridges", {})
+    monkeypatch.setattr(pm_library, "pcl_candidate_paths", lambda core: ([], [str(tmp_path)]))
+    with pytest.raises(pm.PclBridgeNotFoundError,
+                       match=r"reading \.pcd needs the PCL bridge library libparticlemesh_pcl") as e:
+        pm.read_points(data_dir / "pcd/bun0.pcd")
+    assert str(tmp_path) in str(e.value) and "PARTICLEMESH_PCL_LIBRARY" in str(e.value)
+    assert len(pm.read_points(data_dir / "points/spot_poisson.ply").positions) == 8747
+    monkeypatch.undo()
+    monkeypatch.setattr(pm_library, "_bridges", {})
+    bogus = tmp_path / "bogus.so"
+    bogus.write_text("not a library")
+    monkeypatch.setenv("PARTICLEMESH_PCL_LIBRARY", str(bogus))
+    with pytest.raises(pm.PclBridgeNotFoundError, match="does not load"):
+        pm.read_points(data_dir / "pcd/bun0.pcd")
