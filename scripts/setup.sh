@@ -16,6 +16,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-numpy python3-pytest
   patchelf  # RUNPATH $ORIGIN on the libraries the Python package and the add-on zip carry
+  debootstrap  # scripts/test_addon_portable.sh: the add-on zip in a bare Debian 12
   python3-pip python3-setuptools python3-wheel  # `pip install build/python` (offline) and its test
   blender
   libpcl-dev
