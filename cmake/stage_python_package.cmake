@@ -20,8 +20,9 @@ set(pkg "${DEST}/particlemesh")
 set(lib "${pkg}/lib")
 file(REMOVE_RECURSE "${DEST}")
 file(MAKE_DIRECTORY "${lib}/licenses")
-file(GLOB sources "${SOURCE_DIR}/particlemesh/*.py")
-file(COPY ${sources} DESTINATION "${pkg}")
+# Every .py, subpackages included.
+file(COPY "${SOURCE_DIR}/particlemesh" DESTINATION "${DEST}" FILES_MATCHING PATTERN "*.py"
+     PATTERN "__pycache__" EXCLUDE)
 file(GLOB project_files "${PROJECT_FILES_DIR}/*")
 file(COPY ${project_files} DESTINATION "${DEST}")
 

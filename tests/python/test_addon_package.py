@@ -73,7 +73,7 @@ def test_manifest_agrees_with_bl_info_and_the_project():
 def test_relative_imports_only():
     """An extension is imported as bl_ext.<repo>.particlemesh, and carries the Python package
     as its particlemesh.particlemesh: no absolute self-imports in either."""
-    for path in [*PACKAGE.glob("*.py"), *PYTHON_PACKAGE.glob("*.py")]:
+    for path in [*PACKAGE.glob("*.py"), *PYTHON_PACKAGE.rglob("*.py")]:
         for node in ast.walk(ast.parse(path.read_text())):
             if isinstance(node, ast.Import):
                 assert not any(a.name.split(".")[0] == "particlemesh" for a in node.names), path
@@ -84,8 +84,8 @@ def test_relative_imports_only():
 
 def test_bpy_free_modules_do_not_import_bpy():
     trees = [parse(name) for name in BPY_FREE]
-    trees += [ast.parse(p.read_text()) for p in PYTHON_PACKAGE.glob("*.py")]
-    for name, tree in zip([*BPY_FREE, *PYTHON_PACKAGE.glob("*.py")], trees):
+    trees += [ast.parse(p.read_text()) for p in PYTHON_PACKAGE.rglob("*.py")]
+    for name, tree in zip([*BPY_FREE, *PYTHON_PACKAGE.rglob("*.py")], trees):
         for node in ast.walk(tree):
             names = []
             if isinstance(node, ast.Import):
@@ -101,14 +101,16 @@ def test_zip_layout_carries_the_python_package_as_is(addon_zip):
     with zipfile.ZipFile(addon_zip) as z:
         names = set(z.namelist())
         # One source: the add-on's binding is the Python package, byte for byte.
-        for path in PYTHON_PACKAGE.glob("*.py"):
-            assert z.read(f"particlemesh/particlemesh/{path.name}") == path.read_bytes(), path.name
+        for path in PYTHON_PACKAGE.rglob("*.py"):
+            name = path.relative_to(PYTHON_PACKAGE).as_posix()
+            assert z.read(f"particlemesh/particlemesh/{name}") == path.read_bytes(), name
     sources = {f"particlemesh/{p.name}" for p in PACKAGE.glob("*.py")}
     assert sources <= names and "particlemesh/native.py" not in names
     assert "particlemesh/blender_manifest.toml" in names
     assert "particlemesh/particlemesh/lib/libparticlemesh.so" in names
     package = {n for n in names if n.startswith("particlemesh/particlemesh/") and n.endswith(".py")}
-    assert package == {f"particlemesh/particlemesh/{p.name}" for p in PYTHON_PACKAGE.glob("*.py")}
+    assert package == {f"particlemesh/particlemesh/{p.relative_to(PYTHON_PACKAGE).as_posix()}"
+                       for p in PYTHON_PACKAGE.rglob("*.py")}
     # One top-level folder: Blender 3.4 unpacks it into addons/, 4.2 finds the manifest in it.
     assert {n.split("/")[0] for n in names} == {"particlemesh"}
     assert not any("__pycache__" in n or n.endswith(".pyc") for n in names)
