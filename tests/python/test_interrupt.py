@@ -52,14 +52,18 @@ def test_sigint_during_a_call_raises_keyboardinterrupt_promptly(pm, mode):
         time.sleep(0.3)  # well inside the call: 1.5M points take several seconds
         sent = time.perf_counter()
         child.send_signal(signal.SIGINT)
+        first = child.stdout.readline()  # "interrupted ..." as soon as the call has stopped
+        latency = time.perf_counter() - sent
         out, err = child.communicate(timeout=60)
-        exited = time.perf_counter() - sent
+        out = first + out
     finally:
         if child.poll() is None:
             child.kill()
     assert "finished" not in out, "the call ran to its end despite Ctrl-C"
-    assert "interrupted" in out and "again ok" in out, (out, err)
+    assert first.startswith("interrupted") and "again ok" in out, (out, err)
     assert err.rstrip().endswith("KeyboardInterrupt"), err
     # An uncaught KeyboardInterrupt: Python prints it, then ends by SIGINT as Ctrl-C does.
     assert child.returncode == -signal.SIGINT
-    assert exited < 2.0, f"exited {exited:.2f} s after SIGINT"
+    # 14-20 ms measured (the library reports progress about every 50 ms); 2 s leaves room for a
+    # loaded machine.
+    assert latency < 2.0, f"the call stopped {latency:.2f} s after SIGINT"

@@ -573,3 +573,14 @@ def test_missing_pcl_bridge_gives_a_clear_message(pm, pm_library, monkeypatch, t
     monkeypatch.setenv("PARTICLEMESH_PCL_LIBRARY", str(bogus))
     with pytest.raises(pm.PclBridgeNotFoundError, match="does not load"):
         pm.read_points(data_dir / "pcd/bun0.pcd")
+
+
+def test_every_option_is_documented(pm):
+    """docs/python.md has a table row for every keyword of every options struct (a field
+    appended to the C struct needs its row)."""
+    from conftest import ROOT
+    doc = (ROOT / "docs" / "python.md").read_text()
+    for function in ("triangulate", "polygonize", "smooth"):
+        section = doc.split(f"### `{function}(")[1].split("\n### ")[0]
+        for keyword in pm.defaults(function):
+            assert f"| `{keyword}`" in section, f"docs/python.md: {function}() option {keyword}"
