@@ -8,9 +8,10 @@ Two measures, printed as Markdown:
     doing the same through the C ABI (cloud from arrays, the call with default options and a
     progress callback, vertices / triangles / normals copied out in double precision),
     interleaved in rounds so that both see the same machine load; the median of each;
-  - the Python side alone: the time a Python call spends outside the library's main call
-    (pm_triangulate / pm_polygonize_ex timed from inside the binding), i.e. what the binding
-    adds, immune to the load on the machine."""
+  - around the main call: the time spent outside pm_triangulate / pm_polygonize_ex (making
+    the cloud, copying the mesh out; timed from inside the binding, and inside the C program),
+    in Python and in C; their difference is what the binding adds, and it hardly depends on
+    the load on the machine, which the end-to-end times do."""
 import argparse
 import os
 import platform
@@ -35,7 +36,7 @@ def fibonacci_sphere(n):
 def c_times(program, path, repetitions, what):
     out = subprocess.run([program, path, str(repetitions), what], capture_output=True,
                          text=True, check=True).stdout
-    return [float(line.split()[1]) for line in out.splitlines()]
+    return [(float(line.split()[1]), float(line.split()[2])) for line in out.splitlines()]
 
 
 class Timed:
@@ -66,9 +67,10 @@ def main():
           f"{platform.python_version()}, {os.cpu_count()} CPUs, load average "
           f"{os.getloadavg()[0]:.2f}")
     print()
-    print(f"| call ({args.points} points) | C ABI (median) | Python (median) | end to end | "
-          "Python side alone (median) | share |")
-    print("|---|---|---|---|---|---|")
+    print(f"| call ({args.points} points) | C ABI | Python | end to end | around the call, C "
+          "| around the call, Python | the binding adds |")
+    print("|---|---|---|---|---|---|---|")
+    notes = []
     with tempfile.NamedTemporaryFile(suffix=".f64") as f:
         f.write(points.astype("<f8").tobytes())
         f.flush()
@@ -80,19 +82,31 @@ def main():
                 call()  # warm up both sides (page cache, TBB's threads)
                 c_times(program, f.name, 1, what)
                 inside.seconds.clear()
-                for _ in range(args.rounds):
-                    c += c_times(program, f.name, args.repetitions, what)
+                for round_ in range(args.rounds):  # C first, then Python first, in turn
+                    if round_ % 2 == 0:
+                        c += c_times(program, f.name, args.repetitions, what)
                     for _ in range(args.repetitions):
                         start = time.perf_counter()
                         call()
                         py.append(time.perf_counter() - start)
+                    if round_ % 2 == 1:
+                        c += c_times(program, f.name, args.repetitions, what)
             finally:
                 setattr(lib, entry, inside.fn)
-            c_med, py_med = statistics.median(c), statistics.median(py)
-            side = statistics.median([t - i for t, i in zip(py, inside.seconds)])
+            c_med = statistics.median(total for total, _ in c)
+            py_med = statistics.median(py)
+            c_side = statistics.median(total - main for total, main in c)
+            py_side = statistics.median([t - i for t, i in zip(py, inside.seconds)])
             print(f"| {what} | {1e3 * c_med:.1f} ms | {1e3 * py_med:.1f} ms | "
-                  f"{100 * (py_med / c_med - 1):+.1f} % | {1e3 * side:.2f} ms | "
-                  f"{100 * side / c_med:.1f} % |")
+                  f"{100 * (py_med / c_med - 1):+.1f} % | {1e3 * c_side:.1f} ms | "
+                  f"{1e3 * py_side:.1f} ms | {1e3 * (py_side - c_side):.1f} ms = "
+                  f"{100 * (py_side - c_side) / c_med:.1f} % |")
+            notes.append(f"{what}: the library call itself, median "
+                         f"{1e3 * statistics.median(m for _, m in c):.1f} ms from C, "
+                         f"{1e3 * statistics.median(inside.seconds):.1f} ms from Python")
+    print()
+    for note in notes:
+        print(f"- {note}")
 
 
 if __name__ == "__main__":
