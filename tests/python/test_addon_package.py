@@ -6,7 +6,6 @@ C/C++ runtime, their licences, the glibc they need; and the bpy-free pipeline mo
 import ast
 import os
 import re
-import shutil
 import subprocess
 import sys
 import tomllib
