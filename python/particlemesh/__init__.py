@@ -172,17 +172,16 @@ def triangulate(positions, normals=None, *, attributes=None, raw=None, repair=No
             opt.flags = (opt.flags | flag) if bool(value) == when else (opt.flags & ~flag)
     stats = _abi.pm_triangulate_stats(struct_size=ctypes.sizeof(_abi.pm_triangulate_stats))
     cloud = new_cloud(lib, positions, normals, attributes)
+    mesh = _abi.pm_mesh_p()  # NULL unless the call succeeds; destroying NULL is a no-op
     try:
-        mesh = _abi.pm_mesh_p()
         with Hook(progress) as hook:
             opt.progress = hook.c_function
-            hook.finish(lib, lib.pm_triangulate(cloud, ctypes.byref(opt), ctypes.byref(mesh),
-                                                ctypes.byref(stats)))
-    finally:
-        lib.pm_cloud_destroy(cloud)
-    try:
+            status = lib.pm_triangulate(cloud, ctypes.byref(opt), ctypes.byref(mesh),
+                                        ctypes.byref(stats))
+        hook.finish(lib, status)
         return read_mesh_handle(lib, mesh, struct_dict(stats))
     finally:
+        lib.pm_cloud_destroy(cloud)
         lib.pm_mesh_destroy(mesh)
 
 
@@ -208,22 +207,21 @@ def polygonize(positions, radius=None, threshold=None, kernel=None, cell=None, *
     opt = _options.POLYGONIZE.build(lib, options)
     stats = _abi.pm_polygonize_stats(struct_size=ctypes.sizeof(_abi.pm_polygonize_stats))
     cloud = new_cloud(lib, positions, None, attributes)
+    mesh = _abi.pm_mesh_p()
     try:
         count = c_size_t(0)
         lib.check(lib.pm_cloud_get_count(cloud, ctypes.byref(count)))
         r = per_point(radii, "radii", count.value)
         s = per_point(strengths, "strengths", count.value)
-        mesh = _abi.pm_mesh_p()
         with Hook(progress) as hook:
             opt.progress = hook.c_function
-            hook.finish(lib, lib.pm_polygonize_ex(cloud, ptr(r, c_double), ptr(s, c_double),
-                                                  ctypes.byref(opt), ctypes.byref(mesh),
-                                                  ctypes.byref(stats)))
-    finally:
-        lib.pm_cloud_destroy(cloud)
-    try:
+            status = lib.pm_polygonize_ex(cloud, ptr(r, c_double), ptr(s, c_double),
+                                          ctypes.byref(opt), ctypes.byref(mesh),
+                                          ctypes.byref(stats))
+        hook.finish(lib, status)
         return read_mesh_handle(lib, mesh, struct_dict(stats))
     finally:
+        lib.pm_cloud_destroy(cloud)
         lib.pm_mesh_destroy(mesh)
 
 
@@ -259,16 +257,15 @@ def smooth(mesh, scheme=None, levels=None, *, crease_edges=None, crease_sharpnes
     elif crease_sharpness is not None:
         raise Error("crease_sharpness needs crease_edges", _abi.PM_STATUS_INVALID_ARGUMENT)
     source = new_mesh(lib, mesh)
+    out = _abi.pm_mesh_p()
     try:
-        out = _abi.pm_mesh_p()
         with Hook(progress) as hook:
             opt.progress = hook.c_function
-            hook.finish(lib, lib.pm_smooth(source, ctypes.byref(opt), ctypes.byref(out)))
-    finally:
-        lib.pm_mesh_destroy(source)
-    try:
+            status = lib.pm_smooth(source, ctypes.byref(opt), ctypes.byref(out))
+        hook.finish(lib, status)
         return read_mesh_handle(lib, out)
     finally:
+        lib.pm_mesh_destroy(source)
         lib.pm_mesh_destroy(out)
 
 

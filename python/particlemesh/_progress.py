@@ -65,10 +65,11 @@ class Hook:
 
         with Hook(progress) as hook:
             options.progress = hook.c_function
-            hook.finish(lib, lib.pm_triangulate(...))
+            status = lib.pm_triangulate(...)
+        hook.finish(lib, status)  # the caller frees the outputs if this raises
 
-    finish() raises KeyboardInterrupt after Ctrl-C, the callback's own exception, or the
-    library's error (CancelledError when cancelled)."""
+    finish() raises KeyboardInterrupt after Ctrl-C (even when the call had finished), the
+    callback's own exception, or the library's error (CancelledError when cancelled)."""
 
     def __init__(self, progress):
         self.progress = as_progress(progress)

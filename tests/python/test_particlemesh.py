@@ -1,6 +1,7 @@
 """The particlemesh Python package: numpy in and out, the library's options as keywords with
 its own defaults, errors as particlemesh.Error with the library's message, progress and
 cancellation, handles freed on every path."""
+import signal
 import threading
 
 import numpy as np
@@ -337,23 +338,39 @@ def test_the_gil_is_released_during_a_call(pm):
 
 # ---- handles ----------------------------------------------------------------------------------
 
-class _Counting:
-    def __init__(self, fn, counter, key):
-        self.fn, self.counter, self.key = fn, counter, key
+class _Made:
+    """Records the handles a pm_*_create / call made (its out-pointer argument, on success)."""
+
+    def __init__(self, fn, handles, out_index):
+        self.fn, self.handles, self.out_index = fn, handles, out_index
 
     def __call__(self, *args):
-        self.counter[self.key] += 1
-        return self.fn(*args)
+        status = self.fn(*args)
+        if status == 0:
+            self.handles.append(args[self.out_index]._obj.value)
+        return status
+
+
+class _Freed:
+    def __init__(self, fn, handles):
+        self.fn, self.handles = fn, handles
+
+    def __call__(self, handle):
+        if handle.value is not None:
+            self.handles.append(handle.value)
+        return self.fn(handle)
 
 
 def test_handles_are_freed_on_every_path(pm, pm_library, monkeypatch):
+    """Every handle the library made is destroyed exactly once, whatever happens after."""
     lib = pm_library.load()
-    count = {"cloud+": 0, "cloud-": 0, "mesh+": 0, "mesh-": 0}
-    for name, key in (("pm_cloud_create", "cloud+"), ("pm_cloud_create_f32", "cloud+"),
-                      ("pm_cloud_destroy", "cloud-"), ("pm_triangulate", "mesh+"),
-                      ("pm_mesh_create", "mesh+"), ("pm_smooth", "mesh+"),
-                      ("pm_mesh_destroy", "mesh-")):
-        monkeypatch.setattr(lib, name, _Counting(getattr(lib.cdll, name), count, key))
+    made, freed = [], []
+    for name, out_index in (("pm_cloud_create", 3), ("pm_cloud_create_f32", 3),
+                            ("pm_triangulate", 2), ("pm_mesh_create", 5), ("pm_smooth", 2),
+                            ("pm_polygonize_ex", 4)):
+        monkeypatch.setattr(lib, name, _Made(getattr(lib.cdll, name), made, out_index))
+    for name in ("pm_cloud_destroy", "pm_mesh_destroy"):
+        monkeypatch.setattr(lib, name, _Freed(getattr(lib.cdll, name), freed))
     p = fibonacci_sphere(20000)
     mesh = pm.triangulate(p)                                    # cloud, mesh
     with pytest.raises(pm.Error):
@@ -366,9 +383,31 @@ def test_handles_are_freed_on_every_path(pm, pm_library, monkeypatch):
     with pytest.raises(pm.Error):
         pm.topology(pm.Mesh(mesh.vertices, mesh.triangles + 10 ** 6))  # create fails: none
     pm.smooth(pm.Mesh(*tetrahedron()))                          # mesh in, mesh out
-    assert count["cloud+"] == 4 and count["cloud-"] == 4
-    assert count["mesh-"] == 4  # triangulate, topology, smooth's input and output
+    with pytest.raises(pm.Error):
+        pm.polygonize(p[:100], radii=np.ones(99))                # cloud; radii refused
+    def copy_fails(*args, **kwargs):
+        raise KeyboardInterrupt  # Ctrl-C while the mesh is copied out
+
+    monkeypatch.setattr(pm, "read_mesh_handle", copy_fails)
+    with pytest.raises(KeyboardInterrupt):
+        pm.polygonize(p[:500])                                   # cloud, mesh; copy interrupted
     monkeypatch.undo()
+    for name, out_index in (("pm_cloud_create", 3), ("pm_polygonize_ex", 4)):
+        monkeypatch.setattr(lib, name, _Made(getattr(lib.cdll, name), made, out_index))
+    finished = lib.pm_polygonize_ex
+
+    def then_ctrl_c(*args):  # Ctrl-C just after the library finished
+        status = finished(*args)
+        signal.raise_signal(signal.SIGINT)
+        return status
+
+    monkeypatch.setattr(lib, "pm_polygonize_ex", then_ctrl_c)
+    for name in ("pm_cloud_destroy", "pm_mesh_destroy"):
+        monkeypatch.setattr(lib, name, _Freed(getattr(lib.cdll, name), freed))
+    with pytest.raises(KeyboardInterrupt):
+        pm.polygonize(p[:500])                                   # cloud, mesh; then Ctrl-C
+    monkeypatch.undo()
+    assert len(made) == 13 and sorted(made) == sorted(freed)  # (addresses may be reused)
 
 
 # ---- meshes and files -------------------------------------------------------------------------
