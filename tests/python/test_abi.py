@@ -4,6 +4,7 @@ every field's name, order, offset, size and type, every constant's value, and ev
 function's argument and result types. A mismatch fails; nothing here skips."""
 import ctypes
 import os
+import re
 import subprocess
 from ctypes import (POINTER, c_char_p, c_double, c_float, c_int, c_int32, c_int64, c_size_t,
                     c_uint32, c_uint64, c_void_p)
@@ -94,6 +95,15 @@ def test_every_constant_has_the_headers_value(pm_abi, headers, layout):
         assert getattr(pm_abi, name) == layout[("constant", name)], name
     assert ctypes.sizeof(c_int) == layout[("type", "pm_status")]
     assert ctypes.sizeof(pm_abi.pm_progress_fn) == layout[("type", "pm_progress_fn")]
+
+
+def test_the_header_reader_finds_every_exported_function():
+    """Every PM_EXPORT / PM_PCL_EXPORT prototype is read (the reader cannot miss one
+    silently)."""
+    for path in c_header.HEADERS:
+        text = c_header._strip_comments(path.read_text())
+        exported = len(re.findall(r"^\s*PM_(?:PCL_)?EXPORT\s", text, re.M))
+        assert exported == len(c_header.Header(path).functions) > 0, path.name
 
 
 def test_every_function_has_the_headers_signature(pm_abi, headers):
