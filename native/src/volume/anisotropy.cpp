@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <string>
 
 #include <Eigen/Eigenvalues>
@@ -22,6 +23,77 @@ std::string num(double v) {
   std::snprintf(buf, sizeof buf, "%.17g", v);
   return buf;
 }
+
+typedef float Float4 __attribute__((vector_size(4 * sizeof(float))));
+typedef int32_t Int4 __attribute__((vector_size(4 * sizeof(int32_t))));
+
+inline Float4 sqrt4(Float4 v) {
+#if defined(__SSE__)
+  return __builtin_ia32_sqrtps(v);
+#else
+  for (int k = 0; k < 4; ++k) v[k] = std::sqrt(v[k]);  // correctly rounded either way
+  return v;
+#endif
+}
+
+// The PCA's weighted sums over a particle's neighbours, 4 points at a time: W = sum w,
+// S = sum w d, Q = sum w d d^T with d = q - p and Yu and Turk's w = 1 - (|d| / r)^3 within r
+// (0 beyond), and the count within r.
+class WeightedSums {
+ public:
+  explicit WeightedSums(double r) : r2_(float(r * r)), inv_r_(float(1.0 / r)) {}
+
+  /// The particle's position in the frame of the points added next.
+  void at(const Vec3& p) {
+    px_ = float(p.x);
+    py_ = float(p.y);
+    pz_ = float(p.z);
+  }
+
+  void add(const float* x, const float* y, const float* z) {
+    Float4 dx, dy, dz;
+    std::memcpy(&dx, x, sizeof dx);
+    std::memcpy(&dy, y, sizeof dy);
+    std::memcpy(&dz, z, sizeof dz);
+    dx -= px_;
+    dy -= py_;
+    dz -= pz_;
+    const Float4 d2 = dx * dx + dy * dy + dz * dz;
+    const Int4 in = d2 <= r2_;
+    const Float4 t = sqrt4(d2) * inv_r_;
+    Float4 w = 1.0f - t * t * t;
+    w = (Float4)((Int4)w & in & (w > 0.0f));
+    count_ -= in;  // true is -1
+    w_ += w;
+    const Float4 wx = w * dx, wy = w * dy, wz = w * dz;
+    sx_ += wx;
+    sy_ += wy;
+    sz_ += wz;
+    xx_ += wx * dx;
+    yy_ += wy * dy;
+    zz_ += wz * dz;
+    xy_ += wx * dy;
+    xz_ += wx * dz;
+    yz_ += wy * dz;
+  }
+
+  /// The sums (lanes added in order, in double) and the count.
+  uint32_t total(double* W, double* S, double* Q) const {
+    auto sum = [](const Float4& v) { return double(v[0]) + double(v[1]) + double(v[2]) + double(v[3]); };
+    *W = sum(w_);
+    S[0] = sum(sx_);
+    S[1] = sum(sy_);
+    S[2] = sum(sz_);
+    const Float4* q[6] = {&xx_, &yy_, &zz_, &xy_, &xz_, &yz_};
+    for (int k = 0; k < 6; ++k) Q[k] = sum(*q[k]);
+    return uint32_t(count_[0] + count_[1] + count_[2] + count_[3]);
+  }
+
+ private:
+  float px_ = 0, py_ = 0, pz_ = 0, r2_, inv_r_;
+  Float4 w_{}, sx_{}, sy_{}, sz_{}, xx_{}, yy_{}, zz_{}, xy_{}, xz_{}, yz_{};
+  Int4 count_{};
+};
 
 std::array<double, 6> sphere_metric(double r) {
   const double k = 1.0 / (r * r);
@@ -118,70 +190,64 @@ std::vector<KernelEllipsoid> anisotropic_kernels_impl(const Vec3* positions, siz
   const size_t ncells = grid.cell_count();
   const int32_t K = int32_t(std::ceil(reach / grid.cell_size()));
   tracker.stage("anisotropic kernels", begin, end, ncells);
-  // Cell by cell: the points of the (2K + 1)^3 cells around a cell are gathered once into a
-  // contiguous buffer for all of its particles (no hash lookups per particle). The buffer
-  // holds them in increasing sorted index, so each particle's sums run over its neighbours in
-  // the order a per-particle query (for_each_within) would give: fixed, whatever the threads.
+  // The points as float arrays, cell by cell, each cell's relative to its first point and
+  // padded to a multiple of 4 with points far away (offsets of a few radii lose nothing that
+  // matters to a covariance in float), with the box of the cell's points.
+  std::vector<uint32_t> start(ncells + 1, 0);
+  for (size_t c = 0; c < ncells; ++c) start[c + 1] = start[c] + ((grid.cell_end(uint32_t(c)) - grid.cell_begin(uint32_t(c)) + 3) & ~3u);
+  std::vector<float> X(start[ncells]), Y(start[ncells]), Z(start[ncells]);
+  std::vector<Vec3> box_lo(ncells), box_hi(ncells);
+  detail::parallel_blocks(ncells, 256, [&](size_t cb, size_t ce) {
+    for (size_t c = cb; c < ce; ++c) {
+      const uint32_t b = grid.cell_begin(uint32_t(c)), e = grid.cell_end(uint32_t(c));
+      const Vec3 ref = P[b];
+      Vec3 lo{}, hi{};
+      for (uint32_t k = b; k < e; ++k) {
+        const Vec3 q = P[k] - ref;
+        lo = {std::min(lo.x, q.x), std::min(lo.y, q.y), std::min(lo.z, q.z)};
+        hi = {std::max(hi.x, q.x), std::max(hi.y, q.y), std::max(hi.z, q.z)};
+        X[start[c] + k - b] = float(q.x);
+        Y[start[c] + k - b] = float(q.y);
+        Z[start[c] + k - b] = float(q.z);
+      }
+      for (uint32_t k = start[c] + (e - b); k < start[c + 1]; ++k) X[k] = Y[k] = Z[k] = 1e15f;
+      box_lo[c] = lo;
+      box_hi[c] = hi;
+    }
+  });
+  tracker.check();
+  // Each particle sums its weights over the cells within reach, 4 points at a time (SSE / NEON
+  // through the compiler's vector types), skipping the cells its ball misses. Cells come in
+  // increasing order and the lanes are added in a fixed order at the end, so the sums do not
+  // depend on the thread count.
   detail::parallel_blocks(ncells, 16, [&](size_t cb, size_t ce) {
     if (tracker.cancelled()) return;
-    struct NearCell {
-      uint32_t begin, end;  // range in `near`
-      Vec3 lo, hi;          // the box of the cell's points
-    };
-    std::vector<Vec3> near;
-    std::vector<NearCell> cells;
-    std::vector<Vec3> within;  // one particle's neighbours (offsets), in order
+    std::vector<uint32_t> near;
     for (size_t c = cb; c < ce; ++c) {
       const NeighborGrid::CellCoord cc = grid.cell_coord(uint32_t(c));
       near.clear();
-      cells.clear();
-      grid.for_each_cell_in({cc[0] - K, cc[1] - K, cc[2] - K}, {cc[0] + K, cc[1] + K, cc[2] + K}, [&](uint32_t d) {
-        NearCell nc{uint32_t(near.size()), uint32_t(near.size() + grid.cell_end(d) - grid.cell_begin(d)),
-                    P[grid.cell_begin(d)], P[grid.cell_begin(d)]};
-        for (uint32_t k = grid.cell_begin(d); k < grid.cell_end(d); ++k) {
-          nc.lo = {std::min(nc.lo.x, P[k].x), std::min(nc.lo.y, P[k].y), std::min(nc.lo.z, P[k].z)};
-          nc.hi = {std::max(nc.hi.x, P[k].x), std::max(nc.hi.y, P[k].y), std::max(nc.hi.z, P[k].z)};
-        }
-        cells.push_back(nc);
-        near.insert(near.end(), P.begin() + grid.cell_begin(d), P.begin() + grid.cell_end(d));
-      });
+      grid.for_each_cell_in({cc[0] - K, cc[1] - K, cc[2] - K}, {cc[0] + K, cc[1] + K, cc[2] + K},
+                            [&](uint32_t d) { near.push_back(d); });
       for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) {
         const uint32_t i = grid.original_index(s);
         const Vec3 p = P[s];
         const double R = radii ? radii[i] : radius;
         const double r = o.neighbor_radius * R, r2 = r * r;
-        // Pass 1: the neighbours within r, skipping the cells the ball misses.
-        within.clear();
-        for (const NearCell& nc : cells) {
+        WeightedSums acc(r);
+        for (const uint32_t d : near) {
+          const Vec3 pd = p - P[grid.cell_begin(d)];  // the particle in the cell's frame
           double gap2 = 0;
           for (int a = 0; a < 3; ++a) {
-            const double g = std::max({nc.lo[a] - p[a], p[a] - nc.hi[a], 0.0});
+            const double g = std::max({box_lo[d][a] - pd[a], pd[a] - box_hi[d][a], 0.0});
             gap2 += g * g;
           }
-          if (gap2 > r2) continue;
-          for (uint32_t k = nc.begin; k < nc.end; ++k) {
-            const Vec3 d = near[k] - p;  // offsets from p: no cancellation far from the origin
-            if (squared_norm(d) <= r2) within.push_back(d);
-          }
+          if (gap2 > r2) continue;  // the ball misses the cell
+          acc.at(pd);
+          for (uint32_t k = start[d]; k < start[d + 1]; k += 4) acc.add(&X[k], &Y[k], &Z[k]);
         }
-        // Pass 2: the weighted sums (a branch-free loop over the neighbours).
-        const double inv_r = 1.0 / r;
-        double W = 0, sx = 0, sy = 0, sz = 0, cxx = 0, cyy = 0, czz = 0, cxy = 0, cxz = 0, cyz = 0;
-        for (const Vec3& d : within) {
-          const double t = std::sqrt(squared_norm(d)) * inv_r;
-          const double w = std::max(1.0 - t * t * t, 0.0);
-          W += w;
-          sx += w * d.x;
-          sy += w * d.y;
-          sz += w * d.z;
-          cxx += w * d.x * d.x;
-          cyy += w * d.y * d.y;
-          czz += w * d.z * d.z;
-          cxy += w * d.x * d.y;
-          cxz += w * d.x * d.z;
-          cyz += w * d.y * d.z;
-        }
-        out[i] = kernel_from_sums(p, R, r, W, {sx, sy, sz}, {cxx, cyy, czz, cxy, cxz, cyz}, uint32_t(within.size()), o);
+        double W, S[3], Q[6];
+        const uint32_t count = acc.total(&W, S, Q);
+        out[i] = kernel_from_sums(p, R, r, W, {S[0], S[1], S[2]}, {Q[0], Q[1], Q[2], Q[3], Q[4], Q[5]}, count, o);
       }
     }
     tracker.tick(ce - cb);

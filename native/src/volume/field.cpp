@@ -308,7 +308,10 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
   f.support_lo_ = lo;
   f.support_hi_ = hi;
 
-  f.grid_ = NeighborGrid(C, n, f.reach_);  // the centres are kept once, in grid order
+  // The centres are kept once, in grid order. Anisotropic kernels: cells of the largest radius
+  // (most kernels reach about that far) looked up in a dense table (below), not of the longest
+  // reach, whose cells hold several times the particles an evaluation needs to look at.
+  f.grid_ = NeighborGrid(C, n, f.max_radius_);
   f.sorted_index_.resize(n);
   for (uint32_t s = 0; s < n; ++s) f.sorted_index_[f.grid_.original_index(s)] = s;
   if (aniso) {
@@ -340,6 +343,28 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
         if (double(h) < bhi[a]) h = std::nextafter(h, kInfF);
         f.cell_support_[6 * size_t(c) + size_t(a)] = l;
         f.cell_support_[6 * size_t(c) + 3 + size_t(a)] = h;
+      }
+    }
+    // The dense cell table, when the occupied cells' box has at most 8 times as many cells
+    // (plus a million: small clouds always get one).
+    NeighborGrid::CellCoord clo{INT32_MAX, INT32_MAX, INT32_MAX}, chi{INT32_MIN, INT32_MIN, INT32_MIN};
+    for (uint32_t c = 0; c < f.grid_.cell_count(); ++c) {
+      const NeighborGrid::CellCoord cc = f.grid_.cell_coord(c);
+      for (size_t a = 0; a < 3; ++a) {
+        clo[a] = std::min(clo[a], cc[a]);
+        chi[a] = std::max(chi[a], cc[a]);
+      }
+    }
+    const double box = double(chi[0] - clo[0] + 1) * double(chi[1] - clo[1] + 1) * double(chi[2] - clo[2] + 1);
+    if (box <= 8.0 * double(f.grid_.cell_count()) + 1e6) {
+      f.dense_lo_ = clo;
+      for (size_t a = 0; a < 3; ++a) f.dense_size_[a] = chi[a] - clo[a] + 1;
+      f.dense_cells_.assign(size_t(box), NeighborGrid::kNoCell);
+      for (uint32_t c = 0; c < f.grid_.cell_count(); ++c) {
+        const NeighborGrid::CellCoord cc = f.grid_.cell_coord(c);
+        f.dense_cells_[(size_t(cc[0] - clo[0]) * size_t(f.dense_size_[1]) + size_t(cc[1] - clo[1])) *
+                           size_t(f.dense_size_[2]) +
+                       size_t(cc[2] - clo[2])] = c;
       }
     }
     if (need_threshold) calibrate_anisotropic_threshold(f, kernels, tracker);

@@ -88,7 +88,9 @@ void expect_watertight(const TriMesh& m, bool outward = true) {
   EXPECT_EQ(r.nonmanifold_vertices, 0u);
   EXPECT_EQ(r.degenerate_triangles, 0u);
   EXPECT_EQ(r.vertices_used, r.vertices);
-  if (outward) EXPECT_TRUE(r.outward);
+  if (outward) {
+    EXPECT_TRUE(r.outward);
+  }
 }
 
 // The smallest share, over the pieces of at least `min_triangles` triangles, of a piece's area
@@ -170,9 +172,10 @@ TEST(AnisotropicKernels, SpheresInsideALatticePancakesOnASheet) {
   ASSERT_EQ(lattice[centre], (Vec3{0, 0, 0}));
   EXPECT_TRUE(k[centre].anisotropic);
   EXPECT_EQ(k[centre].neighbors, 256u);  // lattice points within 4 of the origin, less itself
-  EXPECT_NEAR(k[centre].mean_offset, 0, 1e-12);
-  EXPECT_NEAR(distance(k[centre].centre, lattice[centre]), 0, 1e-12);
-  for (double a : semi_axes(k[centre].metric)) EXPECT_NEAR(a, R, 1e-9);
+  // (The sums run in float: to ~1e-7 relative.)
+  EXPECT_NEAR(k[centre].mean_offset, 0, 1e-7);
+  EXPECT_EQ(k[centre].centre, lattice[centre]);  // no smoothing by default
+  for (double a : semi_axes(k[centre].metric)) EXPECT_NEAR(a, R, 1e-6);
 
   std::vector<Vec3> sheet;
   for (int y = -8; y <= 8; ++y)
@@ -181,7 +184,8 @@ TEST(AnisotropicKernels, SpheresInsideALatticePancakesOnASheet) {
   const KernelEllipsoid& mid = ks[sheet.size() / 2];
   ASSERT_TRUE(mid.anisotropic);
   const auto ax = semi_axes(mid.metric);
-  // (Eigen's closed-form eigensolver is accurate to ~1e-8 relative on a repeated eigenvalue.)
+  // (The sums run in float, and Eigen's closed-form eigensolver is accurate to ~1e-8 on a
+  // repeated eigenvalue: the axes to ~1e-7 relative.)
   EXPECT_NEAR(ax[0], ax[1], 1e-6);
   EXPECT_NEAR(ax[0] / ax[2], o.max_stretch, 1e-6);  // no spread across: clamped to k_r
   EXPECT_NEAR(ax[0] * ax[1] * ax[2], R * R * R, 1e-6);
@@ -196,7 +200,7 @@ TEST(AnisotropicKernels, SpheresInsideALatticePancakesOnASheet) {
   EXPECT_NEAR(ax10[0] / ax10[2], 10, 1e-6);
   AnisotropyOptions round = o;
   round.max_stretch = 1;
-  for (double a : semi_axes(anisotropic_kernels(sheet, R, {}, round)[sheet.size() / 2].metric)) EXPECT_NEAR(a, R, 1e-9);
+  for (double a : semi_axes(anisotropic_kernels(sheet, R, {}, round)[sheet.size() / 2].metric)) EXPECT_NEAR(a, R, 1e-6);
 }
 
 // A flat face: the outer layer's kernels are squeezed across the face, the bulk's are not.
@@ -216,12 +220,12 @@ TEST(AnisotropicKernels, SqueezedAcrossAFace) {
   const KernelEllipsoid top = at(0), deep = at(-5);
   const double across = 1 / std::sqrt(top.metric[2]);  // the semi-axis along z
   const auto ax = semi_axes(top.metric);
-  EXPECT_NEAR(across, ax[2], 1e-9);
+  EXPECT_NEAR(across, ax[2], 1e-6);
   EXPECT_LT(across, 0.55 * 2.0);
   EXPECT_GT(ax[0], 1.3 * 2.0);
   EXPECT_GT(top.mean_offset, 0.2);
-  EXPECT_LT(deep.mean_offset, 1e-12);
-  for (double a : semi_axes(deep.metric)) EXPECT_NEAR(a, 2.0, 1e-9);
+  EXPECT_LT(deep.mean_offset, 1e-7);
+  for (double a : semi_axes(deep.metric)) EXPECT_NEAR(a, 2.0, 1e-6);
 }
 
 TEST(AnisotropicKernels, FewNeighboursKeepTheSphereAndSmoothingMovesTheCentre) {
@@ -233,15 +237,15 @@ TEST(AnisotropicKernels, FewNeighboursKeepTheSphereAndSmoothingMovesTheCentre) {
   const auto k = anisotropic_kernels(line, 1.5, {}, o);
   for (const auto& e : k) {
     EXPECT_FALSE(e.anisotropic);
-    for (double a : semi_axes(e.metric)) EXPECT_NEAR(a, 1.5, 1e-12);
+    for (double a : semi_axes(e.metric)) EXPECT_NEAR(a, 1.5, 1e-12);  // exactly the sphere
   }
   EXPECT_EQ(k[0].neighbors, 3u);  // within 2 x 1.5 = 3
   o.min_neighbors = 2;
   const auto k2 = anisotropic_kernels(line, 1.5, {}, o);
   EXPECT_TRUE(k2[2].anisotropic);
   const auto ax = semi_axes(k2[2].metric);  // a cigar along x
-  EXPECT_NEAR(ax[0] / ax[2], o.max_stretch, 1e-9);
-  EXPECT_NEAR(1 / std::sqrt(k2[2].metric[0]), ax[0], 1e-9);
+  EXPECT_NEAR(ax[0] / ax[2], o.max_stretch, 1e-6);
+  EXPECT_NEAR(1 / std::sqrt(k2[2].metric[0]), ax[0], 1e-6);
   // No smoothing by default; with lambda the end particle moves toward its neighbours' mean.
   EXPECT_EQ(k2[0].centre, line[0]);
   o.smoothing = 0.5;
@@ -249,8 +253,8 @@ TEST(AnisotropicKernels, FewNeighboursKeepTheSphereAndSmoothingMovesTheCentre) {
   // Weights 1 - (d / 3)^3 of the neighbours at 0, 1, 2, 3 of particle 0.
   const double w1 = 1 - 1.0 / 27, w2 = 1 - 8.0 / 27;
   const double mean = (w1 * 1 + w2 * 2) / (1 + w1 + w2);
-  EXPECT_NEAR(k3[0].centre.x, 0.5 * mean, 1e-12);
-  EXPECT_NEAR(k3[2].centre.x, 2.0, 1e-12);  // the middle one is balanced
+  EXPECT_NEAR(k3[0].centre.x, 0.5 * mean, 1e-6);
+  EXPECT_NEAR(k3[2].centre.x, 2.0, 1e-6);  // the middle one is balanced
 }
 
 TEST(AnisotropicKernels, SameForAnyThreadCountAndClearErrors) {
@@ -369,7 +373,7 @@ TEST(AnisotropicField, DefaultThresholdIsCalibratedOnTheParticles) {
   double v = 0;
   for (int i = 0; i < 8; ++i)
     for (int j = 0; j < 8; ++j) v += f.value({7 + (i + 0.5) / 8, 7 + (j + 0.5) / 8, 15.5}) / 64;
-  EXPECT_NEAR(v, face, 1e-9 * face);
+  EXPECT_NEAR(v, face, 1e-6 * face);  // (the block's PCA sums in float, the lattice's in double)
   double lo = 15.0, hi = 17.0;  // F > T at 15 (the outer layer), F = 0 < T at 17
   ASSERT_GT(f.value({7.5, 7.5, lo}), f.threshold());
   for (int it = 0; it < 60; ++it) (f.value({7.5, 7.5, 0.5 * (lo + hi)}) >= f.threshold() ? lo : hi) = 0.5 * (lo + hi);

@@ -327,7 +327,9 @@ TEST_P(RandomConfig, AgreesWithDenseSamplingAndBisection) {
     }
   }
   const ParticleField field(p, fp);
-  if (cfg.anisotropic) ASSERT_GT(field.anisotropic_count(), size_t(n / 2));
+  if (cfg.anisotropic) {
+    ASSERT_GT(field.anisotropic_count(), size_t(n / 2));
+  }
   const RayCaster caster(field);
   int total = 0;
   for (int r = 0; r < 30; ++r) {
@@ -457,7 +459,9 @@ TEST(RayCaster, AgreesWithThePolygonizedMesh) {
     FieldParams fp = params(k, 1.0, 0.5);
     fp.anisotropy = po.anisotropy;
     const ParticleField field(c.positions, fp);
-    if (aniso) ASSERT_EQ(field.anisotropic_count(), c.size());
+    if (aniso) {
+      ASSERT_EQ(field.anisotropic_count(), c.size());
+    }
     const RayCaster caster(field);
     const double err = 0.1 * po.cell_size;
     int compared = 0;

@@ -198,12 +198,14 @@ class PM_EXPORT ParticleField {
   }
 
   /// With anisotropic kernels: f(sorted index, x - c) for every particle whose ellipsoid's
-  /// bounding box contains x, in grid order. Cells whose kernels' boxes all miss x are
-  /// skipped whole (most of the 27 around x: the cells are as wide as the longest kernel).
+  /// bounding box contains x, in grid order. The grid's cells are as wide as the largest
+  /// radius; the cells within the longest kernel's reach of x are looked up in a dense table
+  /// when the occupied cells' box is small enough (else through the grid's hash), and a cell
+  /// whose kernels' boxes all miss x is skipped whole.
   template <class F>
   void for_each_ellipsoid_near(const Vec3& x, F&& f) const {
     const Vec3 r{reach_, reach_, reach_};
-    grid_.for_each_cell_in(grid_.coord_of(x - r), grid_.coord_of(x + r), [&](uint32_t c) {
+    auto visit = [&](uint32_t c) {
       const float* b = &cell_support_[6 * size_t(c)];
       if (x.x < b[0] || x.y < b[1] || x.z < b[2] || x.x > b[3] || x.y > b[4] || x.z > b[5]) return;
       for (uint32_t s = grid_.cell_begin(c); s < grid_.cell_end(c); ++s) {
@@ -212,7 +214,26 @@ class PM_EXPORT ParticleField {
         if (std::abs(d.x) > e[0] || std::abs(d.y) > e[1] || std::abs(d.z) > e[2]) continue;
         f(s, d);
       }
-    });
+    };
+    NeighborGrid::CellCoord lo = grid_.coord_of(x - r), hi = grid_.coord_of(x + r);
+    if (dense_cells_.empty()) {
+      grid_.for_each_cell_in(lo, hi, visit);
+      return;
+    }
+    // The same cells in the same (lexicographic) order, from the table.
+    for (int a = 0; a < 3; ++a) {
+      lo[size_t(a)] = std::max(lo[size_t(a)], dense_lo_[size_t(a)]);
+      hi[size_t(a)] = std::min(hi[size_t(a)], dense_lo_[size_t(a)] + dense_size_[size_t(a)] - 1);
+    }
+    for (int32_t cx = lo[0]; cx <= hi[0]; ++cx)
+      for (int32_t cy = lo[1]; cy <= hi[1]; ++cy) {
+        const uint32_t* row = &dense_cells_[(size_t(cx - dense_lo_[0]) * size_t(dense_size_[1]) +
+                                             size_t(cy - dense_lo_[1])) * size_t(dense_size_[2])];
+        for (int32_t cz = lo[2]; cz <= hi[2]; ++cz) {
+          const uint32_t c = row[cz - dense_lo_[2]];
+          if (c != NeighborGrid::kNoCell) visit(c);
+        }
+      }
   }
 
   /// The grid over the kernel centres (cell = max_reach()), for callers with their own
@@ -240,6 +261,8 @@ class PM_EXPORT ParticleField {
   std::vector<double> sorted_metric_;  // anisotropic: 6 per particle, grid order
   std::vector<float> sorted_extent_;   // anisotropic: 3 per particle, grid order
   std::vector<float> cell_support_;    // anisotropic: 6 per grid cell
+  std::vector<uint32_t> dense_cells_;  // anisotropic: cell index per coordinate in the box (or empty)
+  NeighborGrid::CellCoord dense_lo_{}, dense_size_{};
   size_t anisotropic_count_ = 0;
   bool uniform_ = true;
   double inv_r2_ = 0;
