@@ -42,6 +42,7 @@ nlohmann::json stats_json(const PolygonizeStats& s) {
           {"cell_size_defaulted", s.cell_size_defaulted},
           {"anisotropic", s.anisotropic},
           {"anisotropic_particles", s.anisotropic_particles},
+          {"calibration_ratio", s.calibration_ratio},
           {"min_component_volume", s.min_component_volume},
           {"components_removed", s.components_removed},
           {"smoothing_iterations", s.smoothing_iterations},
@@ -110,8 +111,12 @@ int run_polygonize(const PolygonizeArgs& a) {
     if (s.spacing > 0) std::printf("  spacing       %.6g (median nearest-neighbour distance)\n", s.spacing);
     std::printf("  kernel        %s (C%d at R)\n", kernel_name(s.kernel), kernel_continuity(s.kernel));
     std::printf("  radius R      %.6g (%s)\n", s.radius, s.radius_defaulted ? "default: 2 x spacing" : "given");
-    std::printf("  threshold T   %.6g (%s)\n", s.threshold,
-                s.threshold_defaulted ? "default: half the field inside a packed volume at R = 2 spacings" : "given");
+    if (s.threshold_defaulted && s.anisotropic)
+      std::printf("  threshold T   %.6g (default: a packed face half a spacing out, calibrated at R = %.3g spacings)\n",
+                  s.threshold, s.calibration_ratio);
+    else
+      std::printf("  threshold T   %.6g (%s)\n", s.threshold,
+                  s.threshold_defaulted ? "default: half the field inside a packed volume at R = 2 spacings" : "given");
     std::printf("  cell h        %.6g (%s)\n", s.cell_size, s.cell_size_defaulted ? "default: R / 4" : "given");
     if (s.anisotropic)
       std::printf("  anisotropic   %zu of %zu particles got an ellipsoid (the others: too few neighbours)\n",

@@ -72,8 +72,12 @@ int run_render(const RenderArgs& a) {
       std::printf("  anisotropic   %zu of %zu particles got an ellipsoid (the others: too few neighbours)\n",
                   f.anisotropic_count(), f.size());
     std::printf("  radius R      %.6g (%s)\n", f.params().radius, f.radius_defaulted() ? "default: 2 x spacing" : "given");
-    std::printf("  threshold T   %.6g (%s)\n", f.threshold(),
-                f.threshold_defaulted() ? "default: half the field inside a packed volume" : "given");
+    if (f.threshold_defaulted() && f.anisotropic())
+      std::printf("  threshold T   %.6g (default: a packed face half a spacing out, calibrated at R = %.3g spacings)\n",
+                  f.threshold(), f.calibration_ratio());
+    else
+      std::printf("  threshold T   %.6g (%s)\n", f.threshold(),
+                  f.threshold_defaulted() ? "default: half the field inside a packed volume" : "given");
     std::printf("  camera        eye %.6g %.6g %.6g  target %.6g %.6g %.6g  fov %.4g%s\n", c.eye.x, c.eye.y, c.eye.z,
                 c.target.x, c.target.y, c.target.z, c.fov_degrees, a.camera.empty() ? " (default framing)" : "");
     std::printf("  image         %d x %d, %s shading, %llu of %llu pixels on the surface\n", a.width, a.height,

@@ -190,6 +190,17 @@ class PolygonizeOptions(Structure):
         ("max_grid_bytes", c_uint64),
         ("progress", PROGRESS_FN),
         ("progress_user_data", c_void_p),
+        # Appended: anisotropic kernels, dropping small pieces, Taubin smoothing.
+        ("anisotropic", c_int32),
+        ("aniso_neighbor_radius", c_double),
+        ("aniso_max_stretch", c_double),
+        ("aniso_min_neighbors", c_int32),
+        ("aniso_smoothing", c_double),
+        ("min_component_volume", c_double),
+        ("min_component_particles", c_double),
+        ("taubin_iterations", c_int32),
+        ("taubin_lambda", c_double),
+        ("taubin_mu", c_double),
     ]
 
 
@@ -205,6 +216,10 @@ class PolygonizeStats(Structure):
         ("grid_bytes", c_uint64),
         ("vertices", c_uint64),
         ("triangles", c_uint64),
+        ("anisotropic", c_int32),
+        ("anisotropic_particles", c_uint64),
+        ("components_removed", c_uint64),
+        ("calibration_ratio", c_double),
     ]
 
 
@@ -939,10 +954,14 @@ def triangulate(positions, normals=None, spacing=0.0, max_edge_factor=2.0, threa
 
 
 def polygonize(positions, radii=None, strengths=None, kernel=KERNEL_WYVILL, radius=0.0,
-               threshold=0.0, cell_size=0.0, threads=0, attributes=None, progress=None):
+               threshold=0.0, cell_size=0.0, threads=0, attributes=None, progress=None,
+               anisotropic=False, min_component_particles=0.0, taubin_iterations=0):
     """Iso-surface of volume particles (pm_polygonize). Zero radius/threshold/cell_size mean
     the library's defaults. `attributes` {name: (N, C)} are carried to the mesh's vertices
-    when the library supports attribute channels."""
+    when the library supports attribute channels. `anisotropic`: Yu and Turk's anisotropic
+    kernels (default parameters; the default threshold is then calibrated on the particles);
+    `min_component_particles`: drop pieces enclosing less than that many particles' volume;
+    `taubin_iterations`: volume-keeping smoothing of the mesh."""
     lib = load()
     if not lib.has("pm_polygonize"):
         raise NotAvailableError("pm_polygonize")
@@ -956,6 +975,9 @@ def polygonize(positions, radii=None, strengths=None, kernel=KERNEL_WYVILL, radi
     if cell_size > 0:
         opt.cell_size = float(cell_size)
     opt.threads = int(threads)
+    opt.anisotropic = 1 if anisotropic else 0
+    opt.min_component_particles = float(min_component_particles)
+    opt.taubin_iterations = int(taubin_iterations)
     opt.progress = _progress_fn(progress)
     p = _vec3(positions, "positions")
     r = s = None

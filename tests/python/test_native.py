@@ -426,6 +426,38 @@ def test_polygonize_when_available(native):
     assert r.std() < 0.05 * r.mean()
 
 
+def test_polygonize_anisotropic(native):
+    """The appended option fields reach the library: anisotropic kernels flatten a jittered
+    block's top and keep its volume (the default threshold is calibrated on the particles),
+    small pieces go, Taubin smoothing keeps the triangles."""
+    if not native.has_polygonize():
+        pytest.skip("pm_polygonize is not in this library")
+    rng = np.random.default_rng(4)
+    g = np.stack(np.meshgrid(np.arange(12), np.arange(8), np.arange(12), indexing="ij"), -1).reshape(-1, 3)
+    block = (g + rng.uniform(-0.15, 0.15, g.shape)).astype(np.float64)
+    iso = native.polygonize(block)
+    an = native.polygonize(block, anisotropic=True)
+    assert not iso.stats["anisotropic"] and an.stats["anisotropic"] == 1
+    assert an.stats["anisotropic_particles"] == len(block)
+    assert 1.5 < an.stats["calibration_ratio"] < 2.0
+    rep = native.mesh_report(an.positions, an.triangles)
+    assert rep["closed"] and rep["manifold"] and rep["components"] == 1
+
+    def volume(m):
+        a, b, c = (m.positions[m.triangles[:, k]].astype(np.float64) for k in range(3))
+        return np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6
+
+    assert abs(volume(an) / len(block) - 1) < 0.05
+    assert abs(volume(an) / len(block) - 1) < abs(volume(iso) / len(block) - 1)
+    # A far pair of particles at a low threshold is a small piece; min_component_particles drops it.
+    pair = np.vstack([block, [[40, 0, 0], [40.5, 0, 0]]])
+    kept = native.polygonize(pair, threshold=0.8)
+    dropped = native.polygonize(pair, threshold=0.8, min_component_particles=20, taubin_iterations=3)
+    assert native.mesh_report(kept.positions, kept.triangles)["components"] == 2
+    assert native.mesh_report(dropped.positions, dropped.triangles)["components"] == 1
+    assert dropped.stats["components_removed"] == 1
+
+
 def test_smooth_when_available(native):
     p, t = tetrahedron()
     if not native.has_smooth():

@@ -316,6 +316,8 @@ typedef struct pm_polygonize_stats {
   int32_t anisotropic;            /**< 1 when anisotropic kernels were used */
   uint64_t anisotropic_particles; /**< particles that got an ellipsoid (the rest kept spheres) */
   uint64_t components_removed;    /**< pieces dropped by min_component_volume / _particles */
+  double calibration_ratio;       /**< anisotropic default threshold: the R / spacing it was
+                                       calibrated for (else 0) */
 } pm_polygonize_stats;
 
 PM_EXPORT void pm_polygonize_options_init(pm_polygonize_options* options);

@@ -113,6 +113,7 @@ pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii, const dou
       s.anisotropic = r.stats.anisotropic ? 1 : 0;
       s.anisotropic_particles = r.stats.anisotropic_particles;
       s.components_removed = r.stats.components_removed;
+      s.calibration_ratio = r.stats.calibration_ratio;
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();

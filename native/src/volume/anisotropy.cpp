@@ -185,7 +185,14 @@ std::vector<KernelEllipsoid> anisotropic_kernels_impl(const Vec3* positions, siz
   const double reach = o.neighbor_radius * rmax;
   // Cells of half the query radius: a query scans 5^3 cells, about a quarter of whose volume
   // is inside the ball (cells of the full radius scan 27 cells, a seventh inside).
-  const NeighborGrid grid(positions, n, 0.5 * reach);
+  NeighborGrid grid;
+  try {
+    grid = NeighborGrid(positions, n, 0.5 * reach);
+  } catch (const Error& e) {
+    if (e.status() != Status::LimitExceeded) throw;
+    throw Error(Status::LimitExceeded, "the anisotropic kernels' neighbourhood (neighbor_radius x R = " + num(reach) +
+                                           ") is too small for the particles' extent: " + e.what());
+  }
   const auto& P = grid.sorted_points();
   const size_t ncells = grid.cell_count();
   const int32_t K = int32_t(std::ceil(reach / grid.cell_size()));

@@ -438,6 +438,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   st.threshold_defaulted = field.threshold_defaulted();
   st.anisotropic = field.anisotropic();
   st.anisotropic_particles = field.anisotropic_count();
+  st.calibration_ratio = field.calibration_ratio();
   if (!(options.cell_size >= 0) || !std::isfinite(options.cell_size))
     throw Error(Status::InvalidArgument,
                 "cell_size is " + num(options.cell_size) + " (must be a finite length > 0, or 0 for the default)");

@@ -104,6 +104,9 @@ struct PolygonizeStats {
   bool cell_size_defaulted = false;
   bool anisotropic = false;          ///< anisotropic kernels were used
   size_t anisotropic_particles = 0;  ///< particles that got an ellipsoid (the rest kept spheres)
+  /// With anisotropic kernels and the default threshold: the radius / spacing ratio it was
+  /// calibrated for (FieldParams::threshold), else 0.
+  double calibration_ratio = 0;
   double min_component_volume = 0;   ///< the volume limit applied to pieces (0: none)
   size_t components_removed = 0;     ///< pieces dropped by it
   int32_t smoothing_iterations = 0;  ///< Taubin iterations applied to the mesh
