@@ -12,8 +12,9 @@ namespace particlemesh::cli {
 inline void add_anisotropy_options(CLI::App& app, AnisotropyOptions& a) {
   app.add_flag("--anisotropic", a.enabled,
                "Anisotropic kernels (Yu and Turk 2013): each particle's kernel becomes an ellipsoid of its "
-               "sphere's volume, stretched along the surface and squeezed across it by a PCA of its neighbours, "
-               "around a smoothed centre: flat faces without bumps, thin sheets that stay whole");
+               "sphere's volume, stretched along the surface and squeezed across it by a PCA of its neighbours: "
+               "flat faces without bumps, thin sheets that stay whole. The default threshold is then calibrated "
+               "on the particles so that a packed face lies half a spacing out (the volume is kept)");
   app.add_option("--aniso-radius", a.neighbor_radius,
                  "With --anisotropic: radius of the neighbourhood each kernel's PCA looks at, as a multiple of R "
                  "(0 < F <= 10; default 2)")
@@ -30,7 +31,8 @@ inline void add_anisotropy_options(CLI::App& app, AnisotropyOptions& a) {
       ->check(CLI::Range(0, 100000));
   app.add_option("--aniso-smoothing", a.smoothing,
                  "With --anisotropic: how far each kernel centre moves toward its neighbours' weighted mean, "
-                 "lambda (0..1; default 0.9)")
+                 "lambda (0..1; default 0: off; Yu and Turk's 0.9 pulls a face's outer layer in by about a "
+                 "spacing)")
       ->check(CLI::Range(0.0, 1.0))
       ->check(finite_number());
 }
