@@ -345,6 +345,36 @@ TEST(AnisotropicField, GradientIsTheDerivativeAndContributorsMatch) {
   }
 }
 
+// Two clusters far apart: the field's dense cell table would be too big, so cells are found
+// through the grid's hash instead; the values are the same sums.
+TEST(AnisotropicField, FarApartClustersUseTheHashedCells) {
+  PointCloud c = jittered_block(6, 6, 6, 1.0, 0.15, 8);
+  const size_t n = c.size();
+  for (size_t i = 0; i < n; ++i) c.positions.push_back(c.positions[i] + Vec3{3000, 2000, 4000});
+  FieldParams p;
+  p.radius = 2.0;
+  p.threshold = 1.0;
+  p.anisotropy.enabled = true;
+  const ParticleField f(c, p);
+  for (const Vec3 off : {Vec3{0, 0, 0}, Vec3{3000, 2000, 4000}})
+    for (int t = 0; t < 50; ++t) {
+      const Vec3 x = off + Vec3{0.13 * t - 1, 0.07 * t, 5 - 0.11 * t};
+      double ref = 0;
+      for (size_t i = 0; i < f.size(); ++i) {
+        const auto m = f.metric(i);
+        const Vec3 d = x - f.position(i);
+        ref += kernel_value(Kernel::Wyvill, m[0] * d.x * d.x + m[1] * d.y * d.y + m[2] * d.z * d.z +
+                                                2 * (m[3] * d.x * d.y + m[4] * d.x * d.z + m[5] * d.y * d.z));
+      }
+      EXPECT_NEAR(f.value(x), ref, 1e-12 * (1 + ref));
+    }
+  // Both clusters mesh alike (the second is the first moved).
+  PolygonizeOptions o = anisotropic();
+  o.radius = 2.0;
+  const PolygonizeResult r = polygonize(c, o);
+  EXPECT_EQ(topology_report(r.mesh).components, 2u);
+}
+
 // The calibrated default threshold: on a regular lattice's face the field at half a spacing
 // outside is lattice_face_field at ratio R / s (here exactly 2).
 TEST(AnisotropicField, DefaultThresholdIsCalibratedOnTheParticles) {
