@@ -302,6 +302,24 @@ TEST(AnisotropicKernels, SameForAnyThreadCountAndClearErrors) {
   status([&] { anisotropic_kernels(c.positions, -1.0, {}, o); }, "radius is -1");
 }
 
+// The kernels are a stage of their own in the progress, and cancelling there stops the call.
+TEST(AnisotropicKernels, ReportProgressAndCancel) {
+  const PointCloud c = jittered_block(20, 20, 20, 1.0, 0.15, 3);
+  PolygonizeOptions o = anisotropic();
+  bool seen = false;
+  o.progress = [&](std::string_view stage, double) {
+    if (stage == "anisotropic kernels") seen = true;
+    return !seen;
+  };
+  try {
+    polygonize(c, o);
+    ADD_FAILURE() << "not cancelled";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.status(), Status::Cancelled);
+  }
+  EXPECT_TRUE(seen);
+}
+
 // ---- the field -------------------------------------------------------------------------------
 
 TEST(AnisotropicField, GradientIsTheDerivativeAndContributorsMatch) {
