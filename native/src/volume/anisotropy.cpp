@@ -105,14 +105,16 @@ std::array<double, 6> sphere_metric(double r) {
 namespace detail {
 
 KernelEllipsoid kernel_from_sums(const Vec3& p, double R, double r, double W, const Vec3& S,
-                                 const std::array<double, 6>& Q, uint32_t count, const AnisotropyOptions& o) {
+                                 const std::array<double, 6>& Q, uint32_t count, const AnisotropyOptions& o,
+                                 double unit) {
   KernelEllipsoid k;
-  // W >= 1: the particle itself is among its neighbours, at distance 0.
+  // W >= 1: the particle itself is among its neighbours, at distance 0. m and C are in units
+  // of `unit`; the semi-axes below depend only on the ratios of C's eigenvalues.
   const Vec3 m = S / W;
-  k.centre = p + m * o.smoothing;
+  k.centre = p + m * (unit * o.smoothing);
   k.metric = sphere_metric(R);
   k.neighbors = count - 1;
-  k.mean_offset = norm(m) / r;
+  k.mean_offset = norm(m) * (unit / r);
   if (count < uint32_t(o.min_neighbors) + 1) return k;
   Eigen::Matrix3d C;
   C(0, 0) = Q[0] / W - m.x * m.x;
@@ -126,7 +128,7 @@ KernelEllipsoid kernel_from_sums(const Vec3& p, double R, double r, double W, co
   const Eigen::Vector3d lam = eig.eigenvalues();  // increasing
   const double s1 = lam(2);
   // All neighbours on one spot (duplicates), or a spread below rounding: keep the sphere.
-  if (!(s1 > 1e-12 * r * r) || !std::isfinite(s1)) return k;
+  if (!(s1 > 1e-12 * (r / unit) * (r / unit)) || !std::isfinite(s1)) return k;
   double sig[3];
   for (int a = 0; a < 3; ++a) sig[a] = std::max(lam(a), s1 / o.max_stretch);
   const double scale = R / std::cbrt(sig[0] * sig[1] * sig[2]);
@@ -197,9 +199,11 @@ std::vector<KernelEllipsoid> anisotropic_kernels_impl(const Vec3* positions, siz
   const size_t ncells = grid.cell_count();
   const int32_t K = int32_t(std::ceil(reach / grid.cell_size()));
   tracker.stage("anisotropic kernels", begin, end, ncells);
-  // The points as float arrays, cell by cell, each cell's relative to its first point and
+  // The points as float arrays, cell by cell, each cell's relative to its first point, in units
+  // of the largest neighbourhood radius (so that float holds any radius the field accepts),
   // padded to a multiple of 4 with points far away (offsets of a few radii lose nothing that
-  // matters to a covariance in float), with the box of the cell's points.
+  // matters to a covariance in float), with the box of the cell's points (same units).
+  const double unit = reach, inv_unit = 1.0 / reach;
   std::vector<uint32_t> start(ncells + 1, 0);
   for (size_t c = 0; c < ncells; ++c) start[c + 1] = start[c] + ((grid.cell_end(uint32_t(c)) - grid.cell_begin(uint32_t(c)) + 3) & ~3u);
   std::vector<float> X(start[ncells]), Y(start[ncells]), Z(start[ncells]);
@@ -210,7 +214,7 @@ std::vector<KernelEllipsoid> anisotropic_kernels_impl(const Vec3* positions, siz
       const Vec3 ref = P[b];
       Vec3 lo{}, hi{};
       for (uint32_t k = b; k < e; ++k) {
-        const Vec3 q = P[k] - ref;
+        const Vec3 q = (P[k] - ref) * inv_unit;
         lo = {std::min(lo.x, q.x), std::min(lo.y, q.y), std::min(lo.z, q.z)};
         hi = {std::max(hi.x, q.x), std::max(hi.y, q.y), std::max(hi.z, q.z)};
         X[start[c] + k - b] = float(q.x);
@@ -239,10 +243,10 @@ std::vector<KernelEllipsoid> anisotropic_kernels_impl(const Vec3* positions, siz
         const uint32_t i = grid.original_index(s);
         const Vec3 p = P[s];
         const double R = radii ? radii[i] : radius;
-        const double r = o.neighbor_radius * R, r2 = r * r;
-        WeightedSums acc(r);
+        const double r = o.neighbor_radius * R, r2 = (r * inv_unit) * (r * inv_unit);
+        WeightedSums acc(r * inv_unit);
         for (const uint32_t d : near) {
-          const Vec3 pd = p - P[grid.cell_begin(d)];  // the particle in the cell's frame
+          const Vec3 pd = (p - P[grid.cell_begin(d)]) * inv_unit;  // the particle in the cell's frame
           double gap2 = 0;
           for (int a = 0; a < 3; ++a) {
             const double g = std::max({box_lo[d][a] - pd[a], pd[a] - box_hi[d][a], 0.0});
@@ -254,7 +258,8 @@ std::vector<KernelEllipsoid> anisotropic_kernels_impl(const Vec3* positions, siz
         }
         double W, S[3], Q[6];
         const uint32_t count = acc.total(&W, S, Q);
-        out[i] = kernel_from_sums(p, R, r, W, {S[0], S[1], S[2]}, {Q[0], Q[1], Q[2], Q[3], Q[4], Q[5]}, count, o);
+        out[i] = kernel_from_sums(p, R, r, W, {S[0], S[1], S[2]}, {Q[0], Q[1], Q[2], Q[3], Q[4], Q[5]}, count, o,
+                                  unit);
       }
     }
     tracker.tick(ce - cb);

@@ -16,9 +16,11 @@ std::vector<KernelEllipsoid> anisotropic_kernels_impl(const Vec3* positions, siz
 
 /// The kernel of a particle at p (radius R, neighbourhood radius r) from the weighted sums over
 /// its `count` neighbours within r (itself included), d = p_j - p, w = 1 - (|d| / r)^3:
-/// W = sum w, S = sum w d, Q = sum w d d^T as {xx, yy, zz, xy, xz, yz}.
+/// W = sum w, S = sum w d, Q = sum w d d^T as {xx, yy, zz, xy, xz, yz}, with d measured in
+/// units of `unit` (world length units per unit).
 KernelEllipsoid kernel_from_sums(const Vec3& p, double R, double r, double W, const Vec3& S,
-                                 const std::array<double, 6>& Q, uint32_t count, const AnisotropyOptions& options);
+                                 const std::array<double, 6>& Q, uint32_t count, const AnisotropyOptions& options,
+                                 double unit = 1.0);
 
 /// s = d^T M d for M stored as {xx, yy, zz, xy, xz, yz}.
 inline double metric_norm2(const double* m, const Vec3& d) {

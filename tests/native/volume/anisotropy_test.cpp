@@ -302,6 +302,27 @@ TEST(AnisotropicKernels, SameForAnyThreadCountAndClearErrors) {
   status([&] { anisotropic_kernels(c.positions, -1.0, {}, o); }, "radius is -1");
 }
 
+// Scale: the same particles 1e-20 and 1e20 times as large give the same ellipsoids, scaled
+// (the sums run in float, in units of the neighbourhood: no overflow, no underflow).
+TEST(AnisotropicKernels, SameShapesAtAnyScale) {
+  const PointCloud c = jittered_block(8, 5, 8, 1.0, 0.15, 9);
+  AnisotropyOptions o;
+  o.enabled = true;
+  o.smoothing = 0.5;
+  const auto ref = anisotropic_kernels(c.positions, 1.8, {}, o);
+  for (double scale : {1e-20, 1e20}) {
+    std::vector<Vec3> p;
+    for (const Vec3& x : c.positions) p.push_back(x * scale);
+    const auto k = anisotropic_kernels(p, 1.8 * scale, {}, o);
+    for (size_t i = 0; i < k.size(); i += 7) {
+      ASSERT_EQ(k[i].anisotropic, ref[i].anisotropic);
+      const auto a = semi_axes(k[i].metric), b = semi_axes(ref[i].metric);
+      for (int j = 0; j < 3; ++j) EXPECT_NEAR(a[size_t(j)] / scale, b[size_t(j)], 1e-5 * b[size_t(j)]) << scale;
+      EXPECT_NEAR(distance(k[i].centre / scale, ref[i].centre), 0.0, 1e-6);
+    }
+  }
+}
+
 // The kernels are a stage of their own in the progress, and cancelling there stops the call.
 TEST(AnisotropicKernels, ReportProgressAndCancel) {
   const PointCloud c = jittered_block(20, 20, 20, 1.0, 0.15, 3);
