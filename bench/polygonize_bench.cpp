@@ -4,6 +4,12 @@
 //
 //   build/bench/polygonize_bench [--sizes 10000,100000,1000000] [--threads N] [--reps R]
 //                                [--no-openvdb] [--sph DIR]
+//   build/bench/polygonize_bench --anisotropic [--sizes ...] [--frames A.ply,B.ply] [--reps R]
+//
+// --anisotropic: anisotropic kernels beside spherical ones instead of OpenVDB: the library's
+// defaults both ways (PolygonizeOptions{} and the same with anisotropy.enabled), on the blocks
+// and on the given particle files (.ply; bench/bgeo_to_ply.py converts Houdini .bgeo frames),
+// each pair measured interleaved, with the ratio of the times.
 //
 // Input: a dam-break-like block: k x 2k x k particles on a simple cubic lattice of spacing
 // s = 0.02 with every coordinate jittered by up to +-5 % of s (fixed seed), k = cbrt(N / 2).
@@ -49,6 +55,7 @@ namespace {
 
 struct Measure {
   double seconds = 0;
+  double cpu_seconds = 0;  // user + system time of the call, all threads (--anisotropic only)
   double peak_mib = 0;
   uint64_t vertices = 0, triangles = 0;
   int closed = -1;  // 1 / 0 when checked, -1 when not
@@ -149,6 +156,81 @@ std::vector<size_t> parse_sizes(const std::string& s) {
   return out;
 }
 
+double cpu_seconds() {
+  rusage ru{};
+  getrusage(RUSAGE_SELF, &ru);
+  return double(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) + 1e-6 * double(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
+}
+
+// Spherical and anisotropic kernels at the library's defaults on the same particles, measured
+// interleaved (iso, aniso, iso, aniso, ...) so that a change in the machine's load hits both.
+Measure polygonize_defaults(const PointCloud& c, bool anisotropic, int threads, PolygonizeStats* stats) {
+  return in_child(threads, [&](Measure& m) {
+    PolygonizeOptions o;
+    o.threads = threads;
+    o.anisotropy.enabled = anisotropic;
+    const double cpu0 = cpu_seconds();
+    const auto t0 = std::chrono::steady_clock::now();
+    const PolygonizeResult r = polygonize(c, o);
+    m.seconds = now_since(t0);
+    m.cpu_seconds = cpu_seconds() - cpu0;
+    m.vertices = r.mesh.positions.size();
+    m.triangles = r.mesh.triangles.size();
+    if (c.size() <= 200000) m.closed = topology_report(r.mesh).closed;
+    if (stats) *stats = r.stats;  // (in the child: only the timing split below is printed from it)
+    std::printf("|   %s: setup %.3f s, sampling %.3f s, meshing %.3f s\n", anisotropic ? "anisotropic" : "spherical  ",
+                r.stats.seconds_setup, r.stats.seconds_sampling, r.stats.seconds_meshing);
+    std::fflush(stdout);
+  });
+}
+
+void compare(const char* input, const PointCloud& c, int threads, int reps) {
+  Measure iso, an;
+  double iso_cpu = 1e300, an_cpu = 1e300;
+  for (int r = 0; r < reps; ++r) {
+    const Measure a = polygonize_defaults(c, false, threads, nullptr);
+    const Measure b = polygonize_defaults(c, true, threads, nullptr);
+    if (a.ok && (!iso.ok || a.seconds < iso.seconds)) iso = a;
+    if (b.ok && (!an.ok || b.seconds < an.seconds)) an = b;
+    if (a.ok) iso_cpu = std::min(iso_cpu, a.cpu_seconds);
+    if (b.ok) an_cpu = std::min(an_cpu, b.cpu_seconds);
+  }
+  row(input, c.size(), "polygonize, spherical (default)", iso);
+  row(input, c.size(), "polygonize --anisotropic", an);
+  if (iso.ok && an.ok)
+    std::printf("|   -> anisotropic / spherical: wall %.2fx (%.3f / %.3f s), CPU %.2fx (%.3f / %.3f s)\n",
+                an.seconds / iso.seconds, an.seconds, iso.seconds, an_cpu / iso_cpu, an_cpu, iso_cpu);
+  std::fflush(stdout);
+}
+
+int anisotropic_bench(const std::vector<size_t>& sizes, const std::vector<std::string>& frames, int threads, int reps) {
+  std::printf("polygonize_bench --anisotropic: %ld hardware threads, using %s, best of %d\n",
+              sysconf(_SC_NPROCESSORS_ONLN), threads > 0 ? (std::to_string(threads) + " threads").c_str() : "all",
+              reps);
+  std::printf("| %-28s | %9s | %-34s | %8s | %8s | %9s | %9s | %-6s |\n", "input", "particles", "method", "time s",
+              "peak MiB", "vertices", "triangles", "closed");
+  std::fflush(stdout);  // before the children fork: they would print the buffer again
+  for (const std::string& f : frames) {
+    PointCloud c;
+    try {
+      c = read_point_cloud(f);
+    } catch (const std::exception& e) {
+      std::printf("| %s: %s\n", f.c_str(), e.what());
+      continue;
+    }
+    touch(c);
+    std::string name = f.substr(f.find_last_of('/') + 1);
+    name = name.substr(0, name.find("_particles"));
+    compare(name.c_str(), c, threads, reps);
+  }
+  for (size_t n : sizes) {
+    const PointCloud c = dam_block(n, 0.02);
+    touch(c);
+    compare("dam-break block", c, threads, reps);
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -156,6 +238,8 @@ int main(int argc, char** argv) {
   int threads = 0, reps = 3;
   bool vdb = peer::openvdb_available();
   std::string sph;
+  bool aniso = false;
+  std::vector<std::string> frames;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -170,12 +254,20 @@ int main(int argc, char** argv) {
     else if (a == "--reps") reps = std::max(1, std::stoi(next()));
     else if (a == "--no-openvdb") vdb = false;
     else if (a == "--sph") sph = next();
-    else {
+    else if (a == "--anisotropic") aniso = true;
+    else if (a == "--frames") {
+      std::stringstream ss(next());
+      std::string item;
+      while (std::getline(ss, item, ',')) frames.push_back(item);
+    } else {
       std::fprintf(stderr,
-                   "usage: polygonize_bench [--sizes N,N,...] [--threads N] [--reps R] [--no-openvdb] [--sph DIR]\n");
+                   "usage: polygonize_bench [--sizes N,N,...] [--threads N] [--reps R] [--no-openvdb] [--sph DIR]\n"
+                   "       polygonize_bench --anisotropic [--sizes N,N,...] [--frames A.ply,B.ply] [--threads N] "
+                   "[--reps R]\n");
       return 2;
     }
   }
+  if (aniso) return anisotropic_bench(sizes, frames, threads, reps);
   std::printf("polygonize_bench: %ld hardware threads, using %s, best of %d\n", sysconf(_SC_NPROCESSORS_ONLN),
               threads > 0 ? (std::to_string(threads) + " threads").c_str() : "all", reps);
   if (!peer::openvdb_available()) std::printf("(built without OpenVDB: peer column absent)\n");

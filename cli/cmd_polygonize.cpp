@@ -11,6 +11,7 @@
 #include "particle_input.h"
 #include "progress_line.h"
 #include "report_json.h"
+#include "volume_options.h"
 
 namespace particlemesh::cli {
 
@@ -22,6 +23,10 @@ struct PolygonizeArgs {
   double max_grid_mib = double(kDefaultMaxGridBytes >> 20);
   int threads = 0;
   bool ascii = false, quiet = false;
+  AnisotropyOptions anisotropy;
+  double min_component_volume = 0, min_component_particles = 0;
+  int taubin = 0;
+  double taubin_lambda = TaubinOptions{}.lambda, taubin_mu = TaubinOptions{}.mu;
 };
 
 nlohmann::json stats_json(const PolygonizeStats& s) {
@@ -35,6 +40,12 @@ nlohmann::json stats_json(const PolygonizeStats& s) {
           {"radius_defaulted", s.radius_defaulted},
           {"threshold_defaulted", s.threshold_defaulted},
           {"cell_size_defaulted", s.cell_size_defaulted},
+          {"anisotropic", s.anisotropic},
+          {"anisotropic_particles", s.anisotropic_particles},
+          {"calibration_ratio", s.calibration_ratio},
+          {"min_component_volume", s.min_component_volume},
+          {"components_removed", s.components_removed},
+          {"smoothing_iterations", s.smoothing_iterations},
           {"candidate_blocks", s.candidate_blocks},
           {"sampled_blocks", s.sampled_blocks},
           {"surface_blocks", s.surface_blocks},
@@ -44,7 +55,8 @@ nlohmann::json stats_json(const PolygonizeStats& s) {
           {"vertices", s.vertices},
           {"triangles", s.triangles},
           {"field_evaluations", s.field_evaluations},
-          {"seconds", {{"setup", s.seconds_setup}, {"sampling", s.seconds_sampling}, {"meshing", s.seconds_meshing}}}};
+          {"seconds", {{"setup", s.seconds_setup}, {"sampling", s.seconds_sampling}, {"meshing", s.seconds_meshing},
+                       {"finishing", s.seconds_finishing}}}};
 }
 
 int run_polygonize(const PolygonizeArgs& a) {
@@ -62,6 +74,12 @@ int run_polygonize(const PolygonizeArgs& a) {
   opt.cell_size = a.cell;
   opt.threads = a.threads;
   opt.max_grid_bytes = uint64_t(a.max_grid_mib * double(1 << 20));
+  opt.anisotropy = a.anisotropy;
+  opt.min_component_volume = a.min_component_volume;
+  opt.min_component_particles = a.min_component_particles;
+  opt.surface_smoothing.iterations = a.taubin;
+  opt.surface_smoothing.lambda = a.taubin_lambda;
+  opt.surface_smoothing.mu = a.taubin_mu;
   opt.progress = progress.callback();
   const auto t1 = Clock::now();
   set_phase(Phase::Computing);
@@ -93,9 +111,22 @@ int run_polygonize(const PolygonizeArgs& a) {
     if (s.spacing > 0) std::printf("  spacing       %.6g (median nearest-neighbour distance)\n", s.spacing);
     std::printf("  kernel        %s (C%d at R)\n", kernel_name(s.kernel), kernel_continuity(s.kernel));
     std::printf("  radius R      %.6g (%s)\n", s.radius, s.radius_defaulted ? "default: 2 x spacing" : "given");
-    std::printf("  threshold T   %.6g (%s)\n", s.threshold,
-                s.threshold_defaulted ? "default: half the field inside a packed volume at R = 2 spacings" : "given");
+    if (s.threshold_defaulted && s.anisotropic)
+      std::printf("  threshold T   %.6g (default: a packed face half a spacing out, calibrated at R = %.3g spacings)\n",
+                  s.threshold, s.calibration_ratio);
+    else
+      std::printf("  threshold T   %.6g (%s)\n", s.threshold,
+                  s.threshold_defaulted ? "default: half the field inside a packed volume at R = 2 spacings" : "given");
     std::printf("  cell h        %.6g (%s)\n", s.cell_size, s.cell_size_defaulted ? "default: R / 4" : "given");
+    if (s.anisotropic)
+      std::printf("  anisotropic   %zu of %zu particles got an ellipsoid (the others: too few neighbours)\n",
+                  s.anisotropic_particles, s.particles);
+    if (s.min_component_volume > 0)
+      std::printf("  small pieces  %zu dropped (enclosing less than %.6g)\n", s.components_removed,
+                  s.min_component_volume);
+    if (s.smoothing_iterations > 0)
+      std::printf("  smoothing     %d Taubin iterations (lambda %.3g, mu %.3g)\n", s.smoothing_iterations,
+                  a.taubin_lambda, a.taubin_mu);
     std::printf("  grid          %zu blocks of 8^3 sampled (%.1f MiB), %zu with surface\n", s.sampled_blocks,
                 double(s.grid_bytes) / double(1 << 20), s.surface_blocks);
     std::printf("%s", describe(report).c_str());
@@ -135,6 +166,29 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("--max-grid-mib", args->max_grid_mib,
                   "Fail before the sparse grid would need more memory than this, MiB (0 = no limit)")
       ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  add_anisotropy_options(*app, args->anisotropy);
+  app->add_option("--min-component-volume", args->min_component_volume,
+                  "Drop the pieces of the surface that enclose less than this volume, world units cubed "
+                  "(splashes, droplets; default 0: keep all)")
+      ->check(CLI::NonNegativeNumber)
+      ->check(finite_number());
+  app->add_option("--min-component-particles", args->min_component_particles,
+                  "Drop the pieces that enclose less than N particles' worth of volume, N x spacing^3 "
+                  "(default 0: keep all)")
+      ->check(CLI::NonNegativeNumber)
+      ->check(finite_number());
+  app->add_option("--taubin", args->taubin,
+                  "Smooth the mesh with N iterations of Taubin's volume-keeping lambda|mu filter (default 0: off; "
+                  "10 takes out bumps a few cells across)")
+      ->check(CLI::Range(0, 10000));
+  app->add_option("--taubin-lambda", args->taubin_lambda, "With --taubin: the shrinking step, 0 < lambda <= 1")
+      ->check(CLI::Range(1e-9, 1.0))
+      ->check(finite_number())
+      ->capture_default_str();
+  app->add_option("--taubin-mu", args->taubin_mu, "With --taubin: the inflating step, -1 <= mu < -lambda")
+      ->check(CLI::Range(-1.0, -1e-9))
+      ->check(finite_number())
       ->capture_default_str();
   app->add_option("--report", args->report, "Also write statistics and the topology report as JSON");
   app->add_flag("--ascii", args->ascii, "Write ASCII PLY instead of binary");

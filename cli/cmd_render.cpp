@@ -9,6 +9,7 @@
 #include "particlemesh/volume/render.h"
 #include "particle_input.h"
 #include "progress_line.h"
+#include "volume_options.h"
 
 namespace particlemesh::cli {
 
@@ -20,6 +21,7 @@ struct RenderArgs {
   int width = 640, height = 480, threads = 0;
   std::vector<double> camera, up{0, 1, 0};
   bool quiet = false;
+  AnisotropyOptions anisotropy;
 };
 
 int run_render(const RenderArgs& a) {
@@ -34,6 +36,7 @@ int run_render(const RenderArgs& a) {
   p.kernel = kernel_from_name(a.kernel);
   p.radius = a.radius;
   p.threshold = a.threshold;
+  p.anisotropy = a.anisotropy;
   const auto t1 = Clock::now();
   RayCaster caster(ParticleField(cloud, p, a.threads, progress.callback()));
   const double t_build = std::chrono::duration<double>(Clock::now() - t1).count();
@@ -64,10 +67,17 @@ int run_render(const RenderArgs& a) {
     std::printf("particlemesh render: %s -> %s\n", a.input.c_str(), a.output.c_str());
     std::printf("  particles     %zu\n", f.size());
     if (!input.summary.empty()) std::printf("%s", input.summary.c_str());
-    std::printf("  kernel        %s\n", kernel_name(f.kernel()));
+    std::printf("  kernel        %s%s\n", kernel_name(f.kernel()), f.anisotropic() ? ", anisotropic" : "");
+    if (f.anisotropic())
+      std::printf("  anisotropic   %zu of %zu particles got an ellipsoid (the others: too few neighbours)\n",
+                  f.anisotropic_count(), f.size());
     std::printf("  radius R      %.6g (%s)\n", f.params().radius, f.radius_defaulted() ? "default: 2 x spacing" : "given");
-    std::printf("  threshold T   %.6g (%s)\n", f.threshold(),
-                f.threshold_defaulted() ? "default: half the field inside a packed volume" : "given");
+    if (f.threshold_defaulted() && f.anisotropic())
+      std::printf("  threshold T   %.6g (default: a packed face half a spacing out, calibrated at R = %.3g spacings)\n",
+                  f.threshold(), f.calibration_ratio());
+    else
+      std::printf("  threshold T   %.6g (%s)\n", f.threshold(),
+                  f.threshold_defaulted() ? "default: half the field inside a packed volume" : "given");
     std::printf("  camera        eye %.6g %.6g %.6g  target %.6g %.6g %.6g  fov %.4g%s\n", c.eye.x, c.eye.y, c.eye.z,
                 c.target.x, c.target.y, c.target.z, c.fov_degrees, a.camera.empty() ? " (default framing)" : "");
     std::printf("  image         %d x %d, %s shading, %llu of %llu pixels on the surface\n", a.width, a.height,
@@ -100,6 +110,7 @@ void add_render(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("--kernel", args->kernel, "Field kernel: wyvill (C1), poly4 (C1), poly6 (C2), blinn (C0)")
       ->check(CLI::IsMember({"wyvill", "poly4", "poly6", "blinn"}, CLI::ignore_case))
       ->capture_default_str();
+  add_anisotropy_options(*app, args->anisotropy);
   app->add_option("--width", args->width, "Image width, pixels")->check(CLI::Range(1, 16384))->capture_default_str();
   app->add_option("--height", args->height, "Image height, pixels")->check(CLI::Range(1, 16384))->capture_default_str();
   app->add_option("--camera", args->camera,

@@ -6,7 +6,8 @@ Settings keys (the operators' and the generated objects' property names):
   triangulate: auto_spacing, spacing, max_edge_factor, thin, raw, normal_angle (radians),
                fill_holes, fill_edge_factor, normal_source, repair, orient; viewport_budget
                (live mode adds it in the viewport: thin out bigger systems to about that many)
-  polygonize:  kernel, radius_mode, radius, radius_factor, threshold, auto_cell, cell_size
+  polygonize:  kernel, anisotropic, radius_mode, radius, radius_factor, threshold, auto_cell,
+               cell_size
   both:        smooth ('NONE' | 'LOOP' | 'BUTTERFLY'), smooth_levels, threads
 """
 
@@ -223,9 +224,11 @@ def polygonize_threshold(settings, from_sizes):
     (radius) s packed touching are 2 s apart, and T is half the field inside such a packing,
     0.5 x lattice_field(kernel, factor x s, 2 s), which depends on the kernel and the factor
     only (at the default factor 2 it is 0.5: an isolated particle becomes a ball of about its
-    size, touching ones merge)."""
+    size, touching ones merge). With anisotropic kernels 0 is kept: the library calibrates its
+    threshold on the particles themselves (the median radius stands for their sizes)."""
     threshold = float(settings.get("threshold", 0.0))
-    if threshold > 0 or not from_sizes:
+    if threshold > 0 or not from_sizes or settings.get("anisotropic", False):
+        # Anisotropic kernels: 0 lets the library calibrate the threshold on the particles.
         return threshold
     factor = float(settings.get("radius_factor", 2.0))
     return 0.5 * pm.lattice_field(settings.get("kernel", "WYVILL"), factor, 2.0)
@@ -240,7 +243,7 @@ def polygonize(particles, settings, progress=None):
         radius=radius, threshold=polygonize_threshold(settings, from_sizes),
         cell=0.0 if settings.get("auto_cell", True) else float(settings["cell_size"]),
         threads=int(settings.get("threads", 0)), attributes=_attributes(particles),
-        progress=progress)
+        progress=progress, anisotropic=bool(settings.get("anisotropic", False)))
     if mesh.triangle_count == 0:
         raise EmptyResult("no surface: the summed field stays below the threshold everywhere "
                           "(raise the radius or lower the threshold)")

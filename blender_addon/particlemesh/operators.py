@@ -213,6 +213,7 @@ def draw_method_settings(layout, props, method):
         sub.prop(props, "orient")
     else:
         col.prop(props, "kernel")
+        col.prop(props, "anisotropic")
         col.prop(props, "radius_mode")
         if props.radius_mode == "FIXED":
             col.prop(props, "radius")

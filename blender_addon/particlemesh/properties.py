@@ -84,6 +84,11 @@ class PolygonizeProps:
                ("POLY4", "(1 - r\u00b2)\u00b2", "Quartic bump, C1"),
                ("POLY6", "(1 - r\u00b2)\u00b3", "Sextic bump, C2"),
                ("BLINN", "Blinn", "Blinn's exponential, truncated")])
+    anisotropic: BoolProperty(
+        name="Anisotropic Kernels", default=False, update=_settings_changed,
+        description="Stretch each particle's field along the fluid's surface and squeeze it "
+                    "across (Yu and Turk): flat faces without bumps, thin sheets that stay "
+                    "whole, the volume kept. Costs about twice the time")
     radius_mode: EnumProperty(
         name="Radius", default="AUTO", update=_settings_changed,
         description="Where each particle's field radius R comes from",

@@ -151,6 +151,16 @@ class pm_polygonize_options(Structure):
         ("max_grid_bytes", c_uint64),
         ("progress", pm_progress_fn),
         ("progress_user_data", c_void_p),
+        ("anisotropic", c_int32),
+        ("aniso_neighbor_radius", c_double),
+        ("aniso_max_stretch", c_double),
+        ("aniso_min_neighbors", c_int32),
+        ("aniso_smoothing", c_double),
+        ("min_component_volume", c_double),
+        ("min_component_particles", c_double),
+        ("taubin_iterations", c_int32),
+        ("taubin_lambda", c_double),
+        ("taubin_mu", c_double),
     ]
 
 
@@ -166,6 +176,10 @@ class pm_polygonize_stats(Structure):
         ("grid_bytes", c_uint64),
         ("vertices", c_uint64),
         ("triangles", c_uint64),
+        ("anisotropic", c_int32),
+        ("anisotropic_particles", c_uint64),
+        ("components_removed", c_uint64),
+        ("calibration_ratio", c_double),
     ]
 
 
@@ -178,6 +192,11 @@ class pm_field_options(Structure):
         ("threads", c_int32),
         ("progress", pm_progress_fn),
         ("progress_user_data", c_void_p),
+        ("anisotropic", c_int32),
+        ("aniso_neighbor_radius", c_double),
+        ("aniso_max_stretch", c_double),
+        ("aniso_min_neighbors", c_int32),
+        ("aniso_smoothing", c_double),
     ]
 
 

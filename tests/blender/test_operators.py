@@ -489,6 +489,19 @@ def test_polygonize_volume_particles(pm, clean_scene):
     co2, tris2 = mesh_arrays(bpy.context.active_object.data)
     direct = pm.particlemesh.polygonize(p, kernel="poly6", radius=0.25, cell=0.04)
     assert len(tris2) == direct.triangle_count != len(tris)
+    # Anisotropic kernels: the same mesh as the binding gives, stored on the generated object
+    # (so live mode regenerates it with them), and a different one from the spherical kernels'.
+    bpy.context.view_layer.objects.active = source
+    assert bpy.ops.particlemesh.polygonize(anisotropic=True) == {"FINISHED"}
+    result = bpy.context.active_object
+    assert result.particlemesh.viewport.anisotropic and result.particlemesh.render.anisotropic
+    co3, tris3 = mesh_arrays(result.data)
+    direct = pm.particlemesh.polygonize(p, anisotropic=True)
+    assert direct.stats["anisotropic"] == 1
+    assert len(tris3) == direct.triangle_count != len(tris)
+    np.testing.assert_allclose(co3, direct.vertices, atol=1e-6)
+    rep = pm.particlemesh.topology(pm.particlemesh.Mesh(co3, tris3))
+    assert rep["closed"] and rep["manifold"] and rep["components"] == 1
     # Nothing reaches the threshold: an error, no object.
     bpy.context.view_layer.objects.active = source
     expect_error("no surface|threshold", op=bpy.ops.particlemesh.polygonize, threshold=1000.0)

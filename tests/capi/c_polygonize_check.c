@@ -41,6 +41,21 @@ int main(void) {
     if ((dx * normals[3 * i] + dy * normals[3 * i + 1] + dz * normals[3 * i + 2]) / r < 0.999) return 8;
   }
   if (pm_lattice_field(PM_KERNEL_WYVILL, 0.1, 0.05, &lattice) != PM_OK || !(lattice > 1)) return 9;
+  /* Anisotropic kernels (appended fields): one particle has no neighbours and keeps its
+   * sphere; the statistics say how many particles got an ellipsoid. */
+  pm_mesh_destroy(mesh);
+  mesh = NULL;
+  opt.anisotropic = 1;
+  opt.taubin_iterations = 2;
+  if (pm_polygonize_ex(cloud, NULL, &strength, &opt, &mesh, &stats) != PM_OK) {
+    fprintf(stderr, "%s\n", pm_last_error_message());
+    return 11;
+  }
+  if (stats.anisotropic != 1 || stats.anisotropic_particles != 0 || stats.triangles != nt) return 12;
+  opt.aniso_max_stretch = 0.5;
+  if (pm_polygonize(cloud, NULL, NULL, &opt, &mesh) != PM_STATUS_INVALID_ARGUMENT) return 13;
+  opt.anisotropic = 0;
+  opt.aniso_max_stretch = 4;
   opt.kernel = 42;
   if (pm_polygonize(cloud, NULL, NULL, &opt, &mesh) != PM_STATUS_INVALID_ARGUMENT) return 10;
   free(positions);

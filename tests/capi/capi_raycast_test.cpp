@@ -122,6 +122,66 @@ TEST(CapiRaycast, BatchesMatchTheCppApi) {
   pm_ray_hits_destroy(all);
 }
 
+// pm_field_options' appended anisotropy fields: the same ellipsoidal field as the C++ API,
+// off by default and for callers with the older, shorter struct.
+TEST(CapiRaycast, AnisotropicField) {
+  const PointCloud c = test::random_cloud(600, 5, 2.0);
+  std::vector<double> pos;
+  for (const Vec3& p : c.positions) pos.insert(pos.end(), {p.x, p.y, p.z});
+  pm_cloud* cloud = nullptr;
+  ASSERT_EQ(pm_cloud_create(pos.data(), nullptr, c.size(), &cloud), PM_OK);
+  pm_field_options o;
+  pm_field_options_init(&o);
+  EXPECT_EQ(o.anisotropic, 0);
+  EXPECT_EQ(o.aniso_max_stretch, AnisotropyOptions{}.max_stretch);
+  o.radius = 0.4;
+  o.anisotropic = 1;
+  o.aniso_smoothing = 0.25;
+  pm_field* f = nullptr;
+  ASSERT_EQ(pm_field_create(cloud, nullptr, nullptr, &o, &f), PM_OK) << last();
+  double T = 0;
+  ASSERT_EQ(pm_field_get_params(f, nullptr, &T), PM_OK);
+  FieldParams fp;
+  fp.radius = 0.4;
+  fp.anisotropy.enabled = true;
+  fp.anisotropy.smoothing = 0.25;
+  const RayCaster caster(ParticleField(c, fp));
+  EXPECT_GT(caster.field().anisotropic_count(), c.size() / 2);
+  EXPECT_EQ(T, caster.field().threshold());
+  std::vector<double> ro, rd;
+  const size_t n = 200;
+  rays(n, &ro, &rd);
+  std::vector<double> t(n);
+  size_t hits = 0;
+  ASSERT_EQ(pm_raycast_first(f, ro.data(), rd.data(), n, nullptr, t.data(), nullptr, nullptr, nullptr, &hits), PM_OK);
+  EXPECT_GT(hits, n / 4);
+  for (size_t i = 0; i < n; ++i) {
+    const auto h = caster.first_hit({ro[3 * i], ro[3 * i + 1], ro[3 * i + 2]}, {rd[3 * i], rd[3 * i + 1], rd[3 * i + 2]});
+    EXPECT_EQ(t[i], h ? h->t : INFINITY) << i;
+  }
+  pm_field_destroy(f);
+  // The older struct: spherical kernels.
+  o.struct_size = uint32_t(offsetof(pm_field_options, progress_user_data) + sizeof(void*));
+  o.threshold = 1.0;
+  ASSERT_EQ(pm_field_create(cloud, nullptr, nullptr, &o, &f), PM_OK) << last();
+  fp.anisotropy.enabled = false;
+  fp.threshold = 1.0;
+  const RayCaster iso(ParticleField(c, fp));
+  ASSERT_EQ(pm_raycast_first(f, ro.data(), rd.data(), n, nullptr, t.data(), nullptr, nullptr, nullptr, &hits), PM_OK);
+  for (size_t i = 0; i < n; ++i) {
+    const auto h = iso.first_hit({ro[3 * i], ro[3 * i + 1], ro[3 * i + 2]}, {rd[3 * i], rd[3 * i + 1], rd[3 * i + 2]});
+    EXPECT_EQ(t[i], h ? h->t : INFINITY) << i;
+  }
+  pm_field_destroy(f);
+  o.struct_size = sizeof(o);
+  o.aniso_min_neighbors = -1;
+  f = reinterpret_cast<pm_field*>(0x1);
+  EXPECT_EQ(pm_field_create(cloud, nullptr, nullptr, &o, &f), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("min_neighbors"), std::string::npos) << last();
+  EXPECT_EQ(f, reinterpret_cast<pm_field*>(0x1));
+  pm_cloud_destroy(cloud);
+}
+
 TEST(CapiRaycast, CsgOfAFieldWithItself) {
   std::vector<double> pos = {0, 0, 0, 0.8, 0, 0, 0.3, 0.5, 0};
   Field f(pos, PM_KERNEL_WYVILL, 1.0, 0.7);

@@ -104,6 +104,95 @@ TEST(CApiPolygonize, MatchesTheCppApi) {
   pm_mesh_destroy(mesh);
 }
 
+// The appended fields: anisotropic kernels, dropping small pieces, Taubin smoothing. Their
+// defaults are the C++ defaults (all off); a caller with the struct as it was before them
+// (struct_size up to progress_user_data) gets those defaults; a bad value is named.
+TEST(CApiPolygonize, AnisotropicKernelsPiecesAndSmoothing) {
+  const PointCloud c = test::random_cloud(3000, 7, 1.4);
+  Cloud cloud(c);
+  pm_polygonize_options opt;
+  pm_polygonize_options_init(&opt);
+  const PolygonizeOptions d;
+  EXPECT_EQ(opt.anisotropic, 0);
+  EXPECT_EQ(opt.aniso_neighbor_radius, d.anisotropy.neighbor_radius);
+  EXPECT_EQ(opt.aniso_max_stretch, d.anisotropy.max_stretch);
+  EXPECT_EQ(opt.aniso_min_neighbors, d.anisotropy.min_neighbors);
+  EXPECT_EQ(opt.aniso_smoothing, d.anisotropy.smoothing);
+  EXPECT_EQ(opt.min_component_volume, 0.0);
+  EXPECT_EQ(opt.min_component_particles, 0.0);
+  EXPECT_EQ(opt.taubin_iterations, 0);
+  EXPECT_EQ(opt.taubin_lambda, d.surface_smoothing.lambda);
+  EXPECT_EQ(opt.taubin_mu, d.surface_smoothing.mu);
+  opt.anisotropic = 1;
+  opt.aniso_max_stretch = 3;
+  opt.aniso_min_neighbors = 20;
+  opt.aniso_smoothing = 0.2;
+  opt.min_component_particles = 5;
+  opt.taubin_iterations = 3;
+  pm_mesh* mesh = nullptr;
+  pm_polygonize_stats stats{};
+  stats.struct_size = sizeof(stats);
+  ASSERT_EQ(pm_polygonize_ex(cloud.handle, nullptr, nullptr, &opt, &mesh, &stats), PM_OK) << last();
+  PolygonizeOptions o;
+  o.anisotropy.enabled = true;
+  o.anisotropy.max_stretch = 3;
+  o.anisotropy.min_neighbors = 20;
+  o.anisotropy.smoothing = 0.2;
+  o.min_component_particles = 5;
+  o.surface_smoothing.iterations = 3;
+  const PolygonizeResult ref = polygonize(c, o);
+  const TriMesh got = read_back(mesh);
+  EXPECT_TRUE(got.positions == ref.mesh.positions);
+  EXPECT_TRUE(got.triangles == ref.mesh.triangles);
+  EXPECT_EQ(stats.anisotropic, 1);
+  EXPECT_EQ(stats.anisotropic_particles, ref.stats.anisotropic_particles);
+  EXPECT_GT(stats.anisotropic_particles, c.size() / 2);
+  EXPECT_EQ(stats.components_removed, ref.stats.components_removed);
+  EXPECT_EQ(stats.threshold, ref.stats.threshold);
+  pm_mesh_destroy(mesh);
+
+  // The struct as callers built before these fields knew it: all of them at their defaults.
+  opt.struct_size = uint32_t(offsetof(pm_polygonize_options, progress_user_data) + sizeof(void*));
+  ASSERT_EQ(pm_polygonize_ex(cloud.handle, nullptr, nullptr, &opt, &mesh, &stats), PM_OK) << last();
+  EXPECT_EQ(stats.anisotropic, 0);
+  EXPECT_TRUE(read_back(mesh).triangles == polygonize(c).mesh.triangles);
+  pm_mesh_destroy(mesh);
+  // And an old stats struct: the appended statistics are left alone.
+  pm_polygonize_stats old{};
+  old.struct_size = uint32_t(offsetof(pm_polygonize_stats, anisotropic));
+  old.anisotropic = 77;
+  opt.struct_size = sizeof(opt);
+  ASSERT_EQ(pm_polygonize_ex(cloud.handle, nullptr, nullptr, &opt, &mesh, &old), PM_OK) << last();
+  EXPECT_EQ(old.anisotropic, 77);
+  EXPECT_EQ(old.triangles, ref.stats.triangles);
+  pm_mesh_destroy(mesh);
+
+  struct Bad {
+    void (*set)(pm_polygonize_options&);
+    const char* named;
+  };
+  const Bad bad[] = {
+      {[](pm_polygonize_options& x) { x.aniso_max_stretch = 0.5; }, "max_stretch"},
+      {[](pm_polygonize_options& x) { x.aniso_neighbor_radius = -1; }, "neighbor_radius"},
+      {[](pm_polygonize_options& x) { x.aniso_smoothing = NAN; }, "smoothing"},
+      {[](pm_polygonize_options& x) { x.aniso_min_neighbors = -3; }, "min_neighbors"},
+      {[](pm_polygonize_options& x) { x.min_component_volume = -1; }, "min_component_volume"},
+      {[](pm_polygonize_options& x) { x.min_component_particles = INFINITY; }, "min_component_particles"},
+      {[](pm_polygonize_options& x) { x.taubin_iterations = -1; }, "iterations"},
+      {[](pm_polygonize_options& x) { x.taubin_mu = 0.2; }, "mu"},
+  };
+  for (const Bad& b : bad) {
+    pm_polygonize_options x;
+    pm_polygonize_options_init(&x);
+    x.anisotropic = 1;
+    b.set(x);
+    pm_mesh* untouched = reinterpret_cast<pm_mesh*>(0x1);
+    EXPECT_EQ(pm_polygonize(cloud.handle, nullptr, nullptr, &x, &untouched), PM_STATUS_INVALID_ARGUMENT) << b.named;
+    EXPECT_NE(last().find(b.named), std::string::npos) << last();
+    EXPECT_EQ(untouched, reinterpret_cast<pm_mesh*>(0x1));
+  }
+}
+
 TEST(CApiPolygonize, DefaultsRadiiAndStrengths) {
   const PointCloud c = test::random_cloud(2000, 3, 1.26);
   Cloud cloud(c);

@@ -100,3 +100,22 @@ def test_errors_are_one_line_and_leave_no_file(cli, tmp_path):
                "--height", "8", check=False)
     assert proc.returncode == 1
     assert not out.exists()
+
+
+def test_anisotropic_render(cli, data_dir, tmp_path):
+    frame = data_dir / "particles" / "double_dam_break_frame_26_4732_particles.ply"
+    a, b, iso = tmp_path / "a.png", tmp_path / "b.png", tmp_path / "iso.png"
+    common = ["--width", "96", "--height", "72", "-q"]
+    cli("render", frame, "-o", a, "--anisotropic", "--threads", "1", *common)
+    cli("render", frame, "-o", b, "--anisotropic", "--threads", "2", *common)
+    assert a.read_bytes() == b.read_bytes()
+    cli("render", frame, "-o", iso, *common)
+    assert a.read_bytes() != iso.read_bytes()
+    w, h, rows = read_png(a)
+    background = rows[0][:3]
+    lit = sum(row[x:x + 3] != background for row in rows for x in range(0, 3 * w, 3))
+    assert lit > 0.05 * w * h
+    proc = cli("render", frame, "-o", a, "--anisotropic", *common[:-1])
+    assert "anisotropic" in proc.stdout and "got an ellipsoid" in proc.stdout
+    proc = cli("render", frame, "-o", a, "--anisotropic", "--aniso-max-stretch", "200", *common, check=False)
+    assert proc.returncode == 2

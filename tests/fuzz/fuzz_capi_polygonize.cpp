@@ -1,7 +1,8 @@
 // Fuzz target: pm_polygonize_ex (issue 7) fed arbitrary arrays and parameter structs:
 // particles (NaN/Inf, duplicates, far apart), per-particle radii and strengths (<= 0, NaN,
 // huge), every option field (kernel, radius, threshold, cell size, threads, the grid budget,
-// struct_size), stats structs of any declared size, a progress callback that may cancel.
+// struct_size, anisotropic kernels, dropping pieces, Taubin smoothing), stats structs of any
+// declared size, a progress callback that may cancel.
 // Checks: statuses and messages, outputs untouched on failure, a returned mesh is closed,
 // 2-manifold, indexes its own finite vertices, has normals, and its grid kept to the budget.
 //
@@ -86,6 +87,23 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   stats.struct_size = sizeof(stats);
   if (size_mode & 16) stats.struct_size = uint32_t(in.range(0, sizeof(stats)));
   stats.grid_bytes = 12345;
+  // The appended fields, from bytes after everything above (older inputs keep their meaning):
+  // anisotropic kernels with parameters in and out of range, dropping pieces, smoothing.
+  const uint8_t extra = in.take<uint8_t>();
+  if (extra & 1) {
+    opt.anisotropic = 1;
+    if (extra & 2) opt.aniso_neighbor_radius = in.flag() ? 0.5 + double(in.take<uint8_t>()) / 64.0 : in.number(1.0);
+    if (extra & 4) opt.aniso_max_stretch = in.flag() ? 1.0 + double(in.take<uint8_t>()) / 16.0 : in.number(4.0);
+    if (extra & 8) opt.aniso_min_neighbors = int32_t(in.range(0, 40)) - 2;
+    if (extra & 16) opt.aniso_smoothing = in.flag() ? double(in.take<uint8_t>()) / 255.0 : in.number(0.25);
+  }
+  if (extra & 32) opt.min_component_volume = in.number(1.0 / 64);
+  if (extra & 64) opt.min_component_particles = in.number(1.0);
+  if (extra & 128) {
+    opt.taubin_iterations = int32_t(in.range(0, 12)) - 1;
+    if (in.flag()) opt.taubin_lambda = in.number(0.25);
+    if (in.flag()) opt.taubin_mu = in.number(0.25);
+  }
 
   pm_mesh* mesh = reinterpret_cast<pm_mesh*>(0x2);
   s = pm_polygonize_ex(cloud, radii.empty() ? nullptr : radii.data(), strengths.empty() ? nullptr : strengths.data(),

@@ -1,5 +1,6 @@
 // Fuzz target: the ray casting C ABI (issue 8) fed arbitrary arrays and parameter structs:
-// pm_field_create (particles, radii, strengths, every option field, struct_size), then
+// pm_field_create (particles, radii, strengths, every option field including anisotropic
+// kernels, struct_size), then
 // batches of rays with any origins and directions (zero, NaN, Inf, huge) through
 // pm_raycast_first (any output NULL), pm_raycast_all and pm_raycast_csg (any op), with fuzzed
 // t ranges, struct sizes and a progress callback that may cancel; pm_field_values.
@@ -90,6 +91,15 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     fo.progress = progress;
     fo.progress_user_data = &field_cancel;
     field_cancel.cancel_at = int(in.range(0, 4));
+  }
+  // Anisotropic kernels (the last free bit of `which`: inputs without it keep their meaning).
+  const uint8_t extra = (which & 128) ? in.take<uint8_t>() | 1 : 0;
+  if (extra & 1) {
+    fo.anisotropic = 1;
+    if (extra & 2) fo.aniso_neighbor_radius = in.flag() ? 0.5 + double(in.take<uint8_t>()) / 64.0 : in.number(1.0);
+    if (extra & 4) fo.aniso_max_stretch = in.flag() ? 1.0 + double(in.take<uint8_t>()) / 16.0 : in.number(4.0);
+    if (extra & 8) fo.aniso_min_neighbors = int32_t(in.range(0, 40)) - 2;
+    if (extra & 16) fo.aniso_smoothing = in.flag() ? double(in.take<uint8_t>()) / 255.0 : in.number(0.25);
   }
   pm_field* field = reinterpret_cast<pm_field*>(0x2);
   s = pm_field_create(cloud, radii.empty() ? nullptr : radii.data(), strengths.empty() ? nullptr : strengths.data(),

@@ -197,6 +197,11 @@ void capi_seeds() {
         for (int i = 0; i < 27; ++i) s += bytes({1});  // strengths 1
       s += bytes({0, 0});
       put("capi_polygonize", "lattice_" + std::to_string(mode), s);
+      // The same with anisotropic kernels (the byte after the options: anisotropic, fuzzed
+      // min_neighbors 4) and, for mode 2, small pieces dropped and Taubin smoothing.
+      s += bytes({mode == 2 ? 1 | 8 | 64 | 128 : 1 | 8, 6});
+      if (mode == 2) s += bytes({0, 1, 4, 0, 0});  // min_component_particles 1, 3 Taubin iterations
+      put("capi_polygonize", "lattice_anisotropic_" + std::to_string(mode), s);
     }
     std::string cancel = bytes({0, 7});
     for (int i = 0; i < 8; ++i) cancel += bytes({0, 4 * (i & 1), 0, 2 * ((i >> 1) & 1), 0, 4 * (i >> 2)});
@@ -218,6 +223,12 @@ void capi_seeds() {
     std::string k = s;
     k[0] = 3;
     put("capi_raycast", "cube_radii_strengths", k);
+    // Anisotropic kernels: the field options byte's last bit, then their byte (min_neighbors 4).
+    std::string a = s;
+    const size_t at = 2 + 8 * 6;  // mode, n - 1, 8 positions of 3 two-byte numbers
+    a[at] = char(128);
+    a.insert(at + 1, bytes({1 | 8, 6}));
+    put("capi_raycast", "cube_anisotropic", a);
   }
 }
 

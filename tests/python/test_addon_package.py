@@ -384,6 +384,24 @@ def test_polygonize_threshold_from_particle_sizes(pkg):
     assert (np.abs(np.linalg.norm(mesh.vertices, axis=1) - 1.0) < 0.2).all()
     with pytest.raises(pkg.pm.Error, match="no surface"):
         pkg.generate.run("POLYGONIZE", shell, {**sizes, "threshold": 3.33})
+    # Anisotropic kernels: the library calibrates the threshold itself.
+    assert threshold({**sizes, "anisotropic": True}, True) == 0.0
+    assert threshold({**sizes, "anisotropic": True, "threshold": 1.5}, True) == 1.5
+
+
+def test_polygonize_anisotropic_setting(pkg):
+    """The add-on's Anisotropic Kernels setting reaches the library: a one-particle sheet stays
+    one surface with it, while the default spherical kernels leave little of it."""
+    rng = np.random.default_rng(2)
+    x, z = np.meshgrid(np.arange(40.0), np.arange(40.0))
+    sheet = np.stack([x.ravel(), np.zeros(x.size), z.ravel()], 1) + rng.uniform(-0.15, 0.15, (x.size, 3))
+    particles = pkg.generate.Particles(sheet.astype(np.float32))
+    an = pkg.generate.run("POLYGONIZE", particles, {"anisotropic": True})
+    rep = pkg.pm.topology(an)
+    assert rep["closed"] and rep["components"] == 1
+    assert an.stats["anisotropic"] == 1
+    iso = pkg.generate.run("POLYGONIZE", particles, {})
+    assert iso.triangle_count < 0.5 * an.triangle_count
 
 
 def test_job_runs_and_cancels(pkg):

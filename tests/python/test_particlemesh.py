@@ -534,6 +534,36 @@ def test_polygonize_radii_strengths_and_defaults(pm):
     assert pm.topology(auto)["closed"]
 
 
+def test_polygonize_anisotropic_and_finishing(pm):
+    """The appended option fields reach the library: anisotropic kernels keep a jittered
+    block's volume (the default threshold is calibrated on the particles), small pieces go,
+    Taubin smoothing keeps the surface closed."""
+    rng = np.random.default_rng(4)
+    g = np.stack(np.meshgrid(np.arange(12), np.arange(8), np.arange(12), indexing="ij"), -1).reshape(-1, 3)
+    block = (g + rng.uniform(-0.15, 0.15, g.shape)).astype(np.float64)
+    iso = pm.polygonize(block)
+    an = pm.polygonize(block, anisotropic=True)
+    assert not iso.stats["anisotropic"] and an.stats["anisotropic"] == 1
+    assert an.stats["anisotropic_particles"] == len(block)
+    assert 1.5 < an.stats["calibration_ratio"] < 2.0
+    rep = pm.topology(an)
+    assert rep["closed"] and rep["manifold"] and rep["components"] == 1
+
+    def volume(m):
+        a, b, c = (m.vertices[m.triangles[:, k]] for k in range(3))
+        return np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6
+
+    assert abs(volume(an) / len(block) - 1) < 0.05
+    assert abs(volume(an) / len(block) - 1) < abs(volume(iso) / len(block) - 1)
+    # A far pair of particles at a low threshold is a small piece; min_component_particles drops it.
+    pair = np.vstack([block, [[40, 0, 0], [40.5, 0, 0]]])
+    kept = pm.polygonize(pair, threshold=0.8)
+    dropped = pm.polygonize(pair, threshold=0.8, min_component_particles=20, taubin_iterations=3)
+    assert pm.topology(kept)["components"] == 2
+    assert pm.topology(dropped)["components"] == 1 and pm.topology(dropped)["closed"]
+    assert dropped.stats["components_removed"] == 1
+
+
 def test_lattice_field(pm):
     # Half the lattice field at R = 2 spacings is the default threshold (3.33 for Wyvill).
     assert 0.5 * pm.lattice_field("wyvill", 2.0, 1.0) == pytest.approx(3.33, abs=0.01)

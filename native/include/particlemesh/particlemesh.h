@@ -291,6 +291,18 @@ typedef struct pm_polygonize_options {
                                  would need more (default 4 GiB); 0 = no limit */
   pm_progress_fn progress;  /**< may be NULL */
   void* progress_user_data;
+  /* Appended (a caller built against an older header gets the defaults below): */
+  int32_t anisotropic;            /**< non-zero: anisotropic kernels (Yu and Turk 2013, see
+                                       particlemesh/volume/anisotropy.h); default 0 */
+  double aniso_neighbor_radius;   /**< PCA neighbourhood radius, x R, in (0, 10] (default 2) */
+  double aniso_max_stretch;       /**< k_r: longest / shortest axis at most, [1, 100] (default 4) */
+  int32_t aniso_min_neighbors;    /**< N_eps: fewer neighbours keep a sphere (default 25) */
+  double aniso_smoothing;         /**< lambda: kernel-centre smoothing, [0, 1] (default 0: off) */
+  double min_component_volume;    /**< drop pieces enclosing less volume (world units^3); 0 = keep all */
+  double min_component_particles; /**< drop pieces enclosing less than N x spacing^3; 0 = keep all */
+  int32_t taubin_iterations;      /**< Taubin lambda|mu smoothing of the mesh; 0 = off (default) */
+  double taubin_lambda;           /**< in (0, 1] (default 0.5) */
+  double taubin_mu;               /**< in [-1, -lambda) (default -0.53) */
 } pm_polygonize_options;
 
 typedef struct pm_polygonize_stats {
@@ -304,6 +316,12 @@ typedef struct pm_polygonize_stats {
   uint64_t grid_bytes;      /**< memory of the sparse grid */
   uint64_t vertices;
   uint64_t triangles;
+  /* Appended: */
+  int32_t anisotropic;            /**< 1 when anisotropic kernels were used */
+  uint64_t anisotropic_particles; /**< particles that got an ellipsoid (the rest kept spheres) */
+  uint64_t components_removed;    /**< pieces dropped by min_component_volume / _particles */
+  double calibration_ratio;       /**< anisotropic default threshold: the R / spacing it was
+                                       calibrated for (else 0) */
 } pm_polygonize_stats;
 
 PM_EXPORT void pm_polygonize_options_init(pm_polygonize_options* options);
@@ -343,6 +361,12 @@ typedef struct pm_field_options {
   int32_t threads;          /**< 0 = all cores (for the spacing estimate) */
   pm_progress_fn progress;  /**< may be NULL */
   void* progress_user_data;
+  /* Appended, as in pm_polygonize_options: */
+  int32_t anisotropic;            /**< non-zero: anisotropic kernels; default 0 */
+  double aniso_neighbor_radius;   /**< default 2 */
+  double aniso_max_stretch;       /**< default 4 */
+  int32_t aniso_min_neighbors;    /**< default 25 */
+  double aniso_smoothing;         /**< default 0 (off) */
 } pm_field_options;
 
 PM_EXPORT void pm_field_options_init(pm_field_options* options);

@@ -69,6 +69,11 @@ void pm_field_options_init(pm_field_options* options) {
   options->threads = 0;
   options->progress = nullptr;
   options->progress_user_data = nullptr;
+  options->anisotropic = d.anisotropy.enabled ? 1 : 0;
+  options->aniso_neighbor_radius = d.anisotropy.neighbor_radius;
+  options->aniso_max_stretch = d.anisotropy.max_stretch;
+  options->aniso_min_neighbors = d.anisotropy.min_neighbors;
+  options->aniso_smoothing = d.anisotropy.smoothing;
 }
 
 pm_status pm_field_create(const pm_cloud* cloud, const double* radii, const double* strengths,
@@ -87,6 +92,11 @@ pm_status pm_field_create(const pm_cloud* cloud, const double* radii, const doub
     validate_kernel(p.kernel);
     p.radius = o.radius;
     p.threshold = o.threshold;
+    p.anisotropy.enabled = o.anisotropic != 0;
+    p.anisotropy.neighbor_radius = o.aniso_neighbor_radius;
+    p.anisotropy.max_stretch = o.aniso_max_stretch;
+    p.anisotropy.min_neighbors = o.aniso_min_neighbors;
+    p.anisotropy.smoothing = o.aniso_smoothing;
     const size_t n = cloud->cloud.size();
     if (radii) p.radii.assign(radii, radii + n);
     if (strengths) p.strengths.assign(strengths, strengths + n);

@@ -49,6 +49,16 @@ void pm_polygonize_options_init(pm_polygonize_options* options) {
   options->max_grid_bytes = d.max_grid_bytes;
   options->progress = nullptr;
   options->progress_user_data = nullptr;
+  options->anisotropic = d.anisotropy.enabled ? 1 : 0;
+  options->aniso_neighbor_radius = d.anisotropy.neighbor_radius;
+  options->aniso_max_stretch = d.anisotropy.max_stretch;
+  options->aniso_min_neighbors = d.anisotropy.min_neighbors;
+  options->aniso_smoothing = d.anisotropy.smoothing;
+  options->min_component_volume = d.min_component_volume;
+  options->min_component_particles = d.min_component_particles;
+  options->taubin_iterations = d.surface_smoothing.iterations;
+  options->taubin_lambda = d.surface_smoothing.lambda;
+  options->taubin_mu = d.surface_smoothing.mu;
 }
 
 pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii, const double* strengths,
@@ -72,6 +82,16 @@ pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii, const dou
     opt.threads = o.threads;
     opt.max_grid_bytes = o.max_grid_bytes;
     opt.progress = wrap_progress(o.progress, o.progress_user_data);
+    opt.anisotropy.enabled = o.anisotropic != 0;
+    opt.anisotropy.neighbor_radius = o.aniso_neighbor_radius;
+    opt.anisotropy.max_stretch = o.aniso_max_stretch;
+    opt.anisotropy.min_neighbors = o.aniso_min_neighbors;
+    opt.anisotropy.smoothing = o.aniso_smoothing;
+    opt.min_component_volume = o.min_component_volume;
+    opt.min_component_particles = o.min_component_particles;
+    opt.surface_smoothing.iterations = o.taubin_iterations;
+    opt.surface_smoothing.lambda = o.taubin_lambda;
+    opt.surface_smoothing.mu = o.taubin_mu;
     const size_t n = cloud->cloud.size();
     if (radii) opt.radii.assign(radii, radii + n);
     if (strengths) opt.strengths.assign(strengths, strengths + n);
@@ -90,6 +110,10 @@ pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii, const dou
       s.grid_bytes = r.stats.grid_bytes;
       s.vertices = r.stats.vertices;
       s.triangles = r.stats.triangles;
+      s.anisotropic = r.stats.anisotropic ? 1 : 0;
+      s.anisotropic_particles = r.stats.anisotropic_particles;
+      s.components_removed = r.stats.components_removed;
+      s.calibration_ratio = r.stats.calibration_ratio;
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();

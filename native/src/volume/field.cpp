@@ -9,11 +9,16 @@
 #include "core/progress_tracker.h"
 #include "particlemesh/core/error.h"
 #include "surface/spacing_impl.h"
+#include "volume/anisotropy_impl.h"
 #include "volume/field_impl.h"
 
 namespace particlemesh {
 
 namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// See calibrate_anisotropic_threshold.
+constexpr double kMinFaceFraction = 0.1;
 
 std::string num(double v) {
   if (std::isnan(v)) return "NaN";
@@ -68,7 +73,123 @@ double lattice_field(Kernel kernel, double radius, double spacing) {
   return sum;
 }
 
+double lattice_face_field(Kernel kernel, double radius, const AnisotropyOptions& a) {
+  validate_kernel(kernel);
+  if (!(radius > 0 && radius <= kMaxCalibrationRatio))
+    throw Error(Status::InvalidArgument, "lattice_face_field: radius is " + num(radius) + " spacings (must be in (0, " +
+                                             num(kMaxCalibrationRatio) + "])");
+  if (a.enabled) validate_anisotropy(a);
+  // By the lattice's symmetry every particle of a layer has the same kernel: one per layer,
+  // down to the deepest layer whose kernels can reach the face.
+  const double stretch = a.enabled ? std::pow(a.max_stretch, 2.0 / 3.0) : 1.0;
+  const int layers = int(std::ceil(radius * stretch + 0.5)) + 1;
+  std::vector<KernelEllipsoid> layer(static_cast<size_t>(layers));
+  for (int k = 0; k < layers; ++k) {
+    KernelEllipsoid& ke = layer[size_t(k)];
+    const Vec3 p{0.0, 0.0, -double(k)};
+    if (!a.enabled) {
+      ke.centre = p;
+      const double m = 1.0 / (radius * radius);
+      ke.metric = {m, m, m, 0.0, 0.0, 0.0};
+      continue;
+    }
+    // The same weighted sums as anisotropic_kernels, over the lattice points within r.
+    const double r = a.neighbor_radius * radius;
+    const int m = int(std::floor(r));
+    double W = 0;
+    Vec3 S{};
+    std::array<double, 6> Q{};
+    uint32_t count = 0;
+    for (int z = -m; z <= m; ++z) {
+      if (z - k > 0) continue;  // above the outer layer: no particle
+      for (int y = -m; y <= m; ++y)
+        for (int x = -m; x <= m; ++x) {
+          const Vec3 d{double(x), double(y), double(z)};
+          const double d2 = squared_norm(d);
+          if (!(d2 <= r * r)) continue;
+          const double t = std::sqrt(d2) / r;
+          const double w = std::max(1.0 - t * t * t, 0.0);
+          ++count;
+          W += w;
+          S += d * w;
+          Q[0] += w * d.x * d.x;
+          Q[1] += w * d.y * d.y;
+          Q[2] += w * d.z * d.z;
+          Q[3] += w * d.x * d.y;
+          Q[4] += w * d.x * d.z;
+          Q[5] += w * d.y * d.z;
+        }
+    }
+    ke = detail::kernel_from_sums(p, radius, r, W, S, Q, count, a);
+  }
+  // The average over the face's unit cell, 8 x 8 points.
+  constexpr int kSamples = 8;
+  double sum = 0;
+  for (int u = 0; u < kSamples; ++u)
+    for (int v = 0; v < kSamples; ++v) {
+      const Vec3 x{(u + 0.5) / kSamples, (v + 0.5) / kSamples, 0.5};
+      for (const KernelEllipsoid& ke : layer) {
+        const Vec3 e = ellipsoid_half_extent(ke.metric);
+        const Vec3 c0 = ke.centre;  // the layer's kernel centre above lattice point (0, 0)
+        if (x.z - c0.z > e.z) continue;
+        for (int j = int(std::floor(x.y - c0.y - e.y)); j <= int(std::ceil(x.y - c0.y + e.y)); ++j)
+          for (int i = int(std::floor(x.x - c0.x - e.x)); i <= int(std::ceil(x.x - c0.x + e.x)); ++i) {
+            const Vec3 d = x - (c0 + Vec3{double(i), double(j), 0.0});
+            sum += kernel_value(kernel, detail::metric_norm2(ke.metric.data(), d));
+          }
+      }
+    }
+  return sum / (kSamples * kSamples);
+}
+
 namespace detail {
+
+// The default threshold of anisotropic kernels: the level at which the face of a packed block
+// of the particles' own density lies half a spacing outside its outermost particles (see
+// FieldParams::threshold). The density is read from the field itself: the median of F at
+// the centres of bulk particles (those whose neighbours' weighted mean is within 0.15 r_i:
+// 0.32 r_i on a flat face) is the lattice field of an effective ratio R / s, and the
+// threshold is the face field of a half-infinite lattice at that ratio with the same kernels.
+void FieldBuilder::calibrate_anisotropic_threshold(ParticleField& f, const std::vector<KernelEllipsoid>& kernels,
+                                                   ProgressTracker& tracker) {
+  const size_t n = kernels.size();
+  const FieldParams& p = f.params_;
+  const double w = p.strengths.empty() ? 1.0 : median(p.strengths);
+  std::vector<uint32_t> bulk;
+  for (size_t i = 0; i < n; ++i)
+    if (kernels[i].mean_offset < 0.15 && kernels[i].neighbors >= uint32_t(p.anisotropy.min_neighbors))
+      bulk.push_back(uint32_t(i));
+  double ratio = kDefaultRadiusFactor;
+  if (bulk.size() >= 32) {
+    // At most ~4096 of them, evenly by input index: the median is as good, the cost bounded.
+    const size_t stride = (bulk.size() + 4095) / 4096;
+    std::vector<double> level((bulk.size() + stride - 1) / stride);
+    detail::parallel_blocks(level.size(), 64, [&](size_t b, size_t e) {
+      for (size_t k = b; k < e; ++k) level[k] = f.value(f.position(bulk[k * stride]));
+    });
+    tracker.check();
+    const double rest = median(level) / w;
+    // lattice_field(kernel, x, 1) grows with x (from 1: the particle alone, below one spacing).
+    double lo = 1.0, hi = kMaxCalibrationRatio;
+    if (!(rest > lattice_field(p.kernel, lo, 1.0))) hi = lo;
+    else if (rest >= lattice_field(p.kernel, hi, 1.0)) lo = hi;
+    for (int it = 0; it < 50 && hi - lo > 1e-6; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (lattice_field(p.kernel, mid, 1.0) < rest ? lo : hi) = mid;
+    }
+    ratio = 0.5 * (lo + hi);
+  }
+  f.calibration_ratio_ = ratio;
+  // Strong centre smoothing (lambda of 0.3 or more) pulls the outer layer in so far that the
+  // field at the face vanishes and no threshold keeps the volume: then the surface is put
+  // where the field has fallen to kMinFaceFraction of the bulk level.
+  const double interior = lattice_field(p.kernel, ratio, 1.0);
+  const double t = w * std::max(lattice_face_field(p.kernel, ratio, p.anisotropy), kMinFaceFraction * interior);
+  if (!(t > 0) || !std::isfinite(t))
+    throw Error(Status::InvalidArgument, "the default threshold of the anisotropic kernels from the median strength " +
+                                             num(w) + " is " + num(t) + ": give a threshold");
+  f.params_.threshold = t;
+}
 
 ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldParams& params,
                                   ProgressTracker& tracker, double begin, double end) {
@@ -110,12 +231,17 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
     throw Error(Status::InvalidArgument,
                 "threshold is " + num(params.threshold) + " (must be finite and > 0, or 0 for the default)");
 
+  const bool aniso = params.anisotropy.enabled;
+  if (aniso) validate_anisotropy(params.anisotropy);
+
   f.params_ = params;
   const bool need_radius = params.radii.empty() && params.radius == 0;
   const bool need_threshold = params.threshold == 0;
+  // Progress: the spacing estimate, then the anisotropic kernels (the longer of the two).
+  const double mid = aniso ? begin + 0.25 * (end - begin) : end;
   if (need_radius) {
     try {
-      f.spacing_ = estimate_spacing_impl(positions, n, tracker, begin, end).spacing;
+      f.spacing_ = estimate_spacing_impl(positions, n, tracker, begin, mid).spacing;
     } catch (const Error& e) {
       if (e.status() == Status::Cancelled) throw;
       throw Error(e.status(), std::string("the default radius needs the particle spacing, which cannot be "
@@ -147,20 +273,102 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
   f.inv_r2_ = 1.0 / (f.params_.radius * f.params_.radius);
   if (!std::isfinite(f.inv_r2_) || !std::isfinite(f.max_radius_ * f.max_radius_))
     throw Error(Status::InvalidArgument, "radius " + num(f.max_radius_) + " is out of the usable range");
+  f.reach_ = f.max_radius_;
 
-  Vec3 lo = positions[0], hi = positions[0];
+  // Kernel centres and, with anisotropic kernels, their ellipsoids (input order).
+  std::vector<KernelEllipsoid> kernels;
+  std::vector<Vec3> centres;
+  std::vector<Vec3> extents;
+  if (aniso) {
+    kernels = anisotropic_kernels_impl(positions, n, f.params_.radius,
+                                       params.radii.empty() ? nullptr : params.radii.data(), params.anisotropy,
+                                       tracker, mid, end);
+    centres.resize(n);
+    extents.resize(n);
+    f.reach_ = 0;
+    for (size_t i = 0; i < n; ++i) {
+      centres[i] = kernels[i].centre;
+      extents[i] = ellipsoid_half_extent(kernels[i].metric);
+      f.reach_ = std::max({f.reach_, extents[i].x, extents[i].y, extents[i].z});
+      f.anisotropic_count_ += kernels[i].anisotropic;
+    }
+    if (!std::isfinite(f.reach_ * f.reach_))
+      throw Error(Status::InvalidArgument, "radius " + num(f.max_radius_) + " is out of the usable range");
+  }
+  const Vec3* C = aniso ? centres.data() : positions;
+
+  Vec3 lo = C[0], hi = C[0];
   for (size_t i = 0; i < n; ++i) {
     const double r = f.radius(i);
-    const Vec3& p = positions[i];
-    lo = {std::min(lo.x, p.x - r), std::min(lo.y, p.y - r), std::min(lo.z, p.z - r)};
-    hi = {std::max(hi.x, p.x + r), std::max(hi.y, p.y + r), std::max(hi.z, p.z + r)};
+    const Vec3 e = aniso ? extents[i] : Vec3{r, r, r};
+    const Vec3& p = C[i];
+    lo = {std::min(lo.x, p.x - e.x), std::min(lo.y, p.y - e.y), std::min(lo.z, p.z - e.z)};
+    hi = {std::max(hi.x, p.x + e.x), std::max(hi.y, p.y + e.y), std::max(hi.z, p.z + e.z)};
   }
   f.support_lo_ = lo;
   f.support_hi_ = hi;
 
-  f.grid_ = NeighborGrid(positions, n, f.max_radius_);  // the particles are kept once, in grid order
+  // The centres are kept once, in grid order. Anisotropic kernels: cells of the largest radius
+  // (most kernels reach about that far) looked up in a dense table (below), not of the longest
+  // reach, whose cells hold several times the particles an evaluation needs to look at.
+  f.grid_ = NeighborGrid(C, n, f.max_radius_);
   f.sorted_index_.resize(n);
   for (uint32_t s = 0; s < n; ++s) f.sorted_index_[f.grid_.original_index(s)] = s;
+  if (aniso) {
+    f.sorted_metric_.resize(6 * size_t(n));
+    f.sorted_extent_.resize(3 * size_t(n));
+    for (uint32_t s = 0; s < n; ++s) {
+      const size_t i = f.grid_.original_index(s);
+      std::copy(kernels[i].metric.begin(), kernels[i].metric.end(), f.sorted_metric_.begin() + 6 * ptrdiff_t(s));
+      for (int a = 0; a < 3; ++a) {
+        // Rounded up, so that a test against the float box never drops a contributor.
+        float e = float(extents[i][a]);
+        if (double(e) < extents[i][a]) e = std::nextafter(e, std::numeric_limits<float>::infinity());
+        f.sorted_extent_[3 * size_t(s) + size_t(a)] = e;
+      }
+    }
+    constexpr float kInfF = std::numeric_limits<float>::infinity();
+    f.cell_support_.resize(6 * f.grid_.cell_count());
+    for (uint32_t c = 0; c < f.grid_.cell_count(); ++c) {
+      double blo[3] = {kInf, kInf, kInf}, bhi[3] = {-kInf, -kInf, -kInf};
+      for (uint32_t s = f.grid_.cell_begin(c); s < f.grid_.cell_end(c); ++s)
+        for (int a = 0; a < 3; ++a) {
+          const double e = double(f.sorted_extent_[3 * size_t(s) + size_t(a)]);
+          blo[a] = std::min(blo[a], f.grid_.sorted_point(s)[a] - e);
+          bhi[a] = std::max(bhi[a], f.grid_.sorted_point(s)[a] + e);
+        }
+      for (int a = 0; a < 3; ++a) {
+        float l = float(blo[a]), h = float(bhi[a]);
+        if (double(l) > blo[a]) l = std::nextafter(l, -kInfF);
+        if (double(h) < bhi[a]) h = std::nextafter(h, kInfF);
+        f.cell_support_[6 * size_t(c) + size_t(a)] = l;
+        f.cell_support_[6 * size_t(c) + 3 + size_t(a)] = h;
+      }
+    }
+    // The dense cell table, when the occupied cells' box has at most 8 times as many cells
+    // (plus a million: small clouds always get one).
+    NeighborGrid::CellCoord clo{INT32_MAX, INT32_MAX, INT32_MAX}, chi{INT32_MIN, INT32_MIN, INT32_MIN};
+    for (uint32_t c = 0; c < f.grid_.cell_count(); ++c) {
+      const NeighborGrid::CellCoord cc = f.grid_.cell_coord(c);
+      for (size_t a = 0; a < 3; ++a) {
+        clo[a] = std::min(clo[a], cc[a]);
+        chi[a] = std::max(chi[a], cc[a]);
+      }
+    }
+    const double box = double(chi[0] - clo[0] + 1) * double(chi[1] - clo[1] + 1) * double(chi[2] - clo[2] + 1);
+    if (box <= 8.0 * double(f.grid_.cell_count()) + 1e6) {
+      f.dense_lo_ = clo;
+      for (size_t a = 0; a < 3; ++a) f.dense_size_[a] = chi[a] - clo[a] + 1;
+      f.dense_cells_.assign(size_t(box), NeighborGrid::kNoCell);
+      for (uint32_t c = 0; c < f.grid_.cell_count(); ++c) {
+        const NeighborGrid::CellCoord cc = f.grid_.cell_coord(c);
+        f.dense_cells_[(size_t(cc[0] - clo[0]) * size_t(f.dense_size_[1]) + size_t(cc[1] - clo[1])) *
+                           size_t(f.dense_size_[2]) +
+                       size_t(cc[2] - clo[2])] = c;
+      }
+    }
+    if (need_threshold) calibrate_anisotropic_threshold(f, kernels, tracker);
+  }
   if (!f.uniform_) {
     f.sorted_inv_r2_.resize(n);
     for (uint32_t s = 0; s < n; ++s) {
@@ -195,6 +403,16 @@ ParticleField::ParticleField(const PointCloud& cloud, const FieldParams& params,
   tracker.finish();
 }
 
+std::array<double, 6> ParticleField::metric(size_t i) const {
+  if (sorted_metric_.empty()) {
+    const double r = radius(i), k = 1.0 / (r * r);
+    return {k, k, k, 0.0, 0.0, 0.0};
+  }
+  std::array<double, 6> m;
+  std::copy_n(sorted_metric_.begin() + 6 * ptrdiff_t(sorted_index_[i]), 6, m.begin());
+  return m;
+}
+
 double ParticleField::value_and_gradient(const Vec3& x, Vec3* gradient) const {
   double v = 0;
   Vec3 g{};
@@ -204,6 +422,20 @@ double ParticleField::value_and_gradient(const Vec3& x, Vec3* gradient) const {
   }
   const auto& P = grid_.sorted_points();
   const bool unit = sorted_strength_.empty();
+  if (!sorted_metric_.empty()) {
+    detail::dispatch_kernel(params_.kernel, [&]<Kernel K>() {
+      for_each_ellipsoid_near(x, [&](uint32_t s, const Vec3& d) {
+        const double* m = &sorted_metric_[6 * size_t(s)];
+        const double q = detail::metric_norm2(m, d);
+        if (!(q < 1.0)) return;
+        const double w = unit ? 1.0 : sorted_strength_[s];
+        v += w * detail::kernel_value_t<K>(q);
+        if (gradient) g += detail::metric_apply(m, d) * (2.0 * w * detail::kernel_derivative_t<K>(q));
+      });
+    });
+    if (gradient) *gradient = g;
+    return v;
+  }
   detail::dispatch_kernel(params_.kernel, [&]<Kernel K>() {
     grid_.for_each_within(x, max_radius_, [&](uint32_t s, double d2) {
       const double inv_r2 = uniform_ ? inv_r2_ : sorted_inv_r2_[s];

@@ -12,6 +12,8 @@ struct FieldBuilder {
   /// [begin, end) of the overall fraction (only when the spacing has to be estimated).
   static ParticleField build(const Vec3* positions, size_t n, const FieldParams& params,
                              ProgressTracker& tracker, double begin, double end);
+  static void calibrate_anisotropic_threshold(ParticleField& f, const std::vector<KernelEllipsoid>& kernels,
+                                              ProgressTracker& tracker);
 };
 
 /// g(s) and dg/ds for a kernel known at compile time (s >= 0; 0 outside the support).

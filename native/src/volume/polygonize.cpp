@@ -17,8 +17,10 @@
 #include "core/parallel.h"
 #include "core/progress_tracker.h"
 #include "particlemesh/core/error.h"
+#include "volume/anisotropic_sampling.h"
 #include "volume/field_impl.h"
 #include "volume/mc_table.h"
+#include "volume/polygonize_finish.h"
 
 namespace particlemesh {
 
@@ -45,7 +47,7 @@ std::string bytes_text(double b) {
 //
 // Nodes sit at origin + h (i, j, k). A block holds the 8 x 8 x 8 nodes [8b, 8b + 8) on each
 // axis; block coordinates are packed 21 bits per axis (z highest), so key order is z, y, x.
-constexpr int kB = 8;
+constexpr int kB = detail::kSampleBlock;
 constexpr int kBN = kB * kB * kB;        // nodes per block
 constexpr int kL = kB + 1;               // the local gather spans one more node per axis
 constexpr int kLN = kL * kL * kL;
@@ -288,6 +290,8 @@ bool block_reached(const ParticleField& field, const Grid& g, uint64_t key) {
     lo[a] = o[a] + double(b[a] * kB) * h;
     hi[a] = lo[a] + double(kB - 1) * h;
   }
+  if (field.anisotropic())
+    return detail::anisotropic_support_meets_box(field, {lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]});
   const NeighborGrid::CellCoord clo = grid.coord_of({lo[0] - rmax, lo[1] - rmax, lo[2] - rmax});
   const NeighborGrid::CellCoord chi = grid.coord_of({hi[0] + rmax, hi[1] + rmax, hi[2] + rmax});
   bool reached = false;
@@ -432,6 +436,9 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   st.spacing = field.spacing();
   st.radius_defaulted = field.radius_defaulted();
   st.threshold_defaulted = field.threshold_defaulted();
+  st.anisotropic = field.anisotropic();
+  st.anisotropic_particles = field.anisotropic_count();
+  st.calibration_ratio = field.calibration_ratio();
   if (!(options.cell_size >= 0) || !std::isfinite(options.cell_size))
     throw Error(Status::InvalidArgument,
                 "cell_size is " + num(options.cell_size) + " (must be a finite length > 0, or 0 for the default)");
@@ -483,8 +490,10 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
     for (uint32_t s = pgrid.cell_begin(c); s < pgrid.cell_end(c); ++s) {
       const double r = field.uniform_radius() ? R : 1.0 / std::sqrt(field.sorted_inverse_squared_radii()[s]);
       for (int a = 0; a < 3; ++a) {
-        lo[a] = std::min(lo[a], P[s][a] - r);
-        hi[a] = std::max(hi[a], P[s][a] + r);
+        // The support's half extent: the radius, or the ellipsoid's along this axis.
+        const double e = field.anisotropic() ? double(field.sorted_half_extents()[3 * size_t(s) + size_t(a)]) : r;
+        lo[a] = std::min(lo[a], P[s][a] - e);
+        hi[a] = std::max(hi[a], P[s][a] + e);
       }
     }
     for (int a = 0; a < 3; ++a) {
@@ -570,13 +579,27 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   const size_t ns = g.sampled_keys.size();
   tracker.stage("sampling the field", begin + 0.1 * (1 - begin), begin + 0.6 * (1 - begin), ns);
   g.values.resize(ns * kBN);
-  detail::dispatch_kernel(field.kernel(), [&]<Kernel K>() {
+  if (field.anisotropic()) {
     detail::parallel_blocks(ns, 4, [&](size_t bb, size_t be) {
       if (tracker.cancelled()) return;
-      for (size_t i = bb; i < be; ++i) sample_block<K>(field, g, g.sampled_keys[i], g.values.data() + i * kBN);
+      for (size_t i = bb; i < be; ++i) {
+        int64_t b[3];
+        unpack(g.sampled_keys[i], b);
+        const Vec3 first{g.origin.x + double(b[0] * kB) * h, g.origin.y + double(b[1] * kB) * h,
+                         g.origin.z + double(b[2] * kB) * h};
+        detail::sample_block_anisotropic(field, first, h, g.values.data() + i * kBN);
+      }
       tracker.tick(be - bb);
     });
-  });
+  } else {
+    detail::dispatch_kernel(field.kernel(), [&]<Kernel K>() {
+      detail::parallel_blocks(ns, 4, [&](size_t bb, size_t be) {
+        if (tracker.cancelled()) return;
+        for (size_t i = bb; i < be; ++i) sample_block<K>(field, g, g.sampled_keys[i], g.values.data() + i * kBN);
+        tracker.tick(be - bb);
+      });
+    });
+  }
   tracker.check();
   st.seconds_sampling = seconds_since(t0);
 
@@ -785,8 +808,11 @@ PolygonizeResult polygonize(const ParticleField& field, const PolygonizeOptions&
   detail::ProgressTracker tracker(options.progress);
   const auto t0 = Clock::now();
   if (field.size() == 0) throw Error(Status::InvalidInput, "the field has no particles");
+  detail::validate_finishing(options);
   PolygonizeResult r = detail::with_threads(options.threads, [&] {
-    return polygonize_field(field, options, tracker, 0.0, PolygonizeStats{}, t0);
+    PolygonizeResult res = polygonize_field(field, options, tracker, 0.0, PolygonizeStats{}, t0);
+    detail::finish_polygonized(res, options, field, nullptr, 0, tracker);
+    return res;
   });
   tracker.finish();
   return r;
@@ -795,6 +821,7 @@ PolygonizeResult polygonize(const ParticleField& field, const PolygonizeOptions&
 PolygonizeResult polygonize(const PointCloud& cloud, const PolygonizeOptions& options) {
   detail::ProgressTracker tracker(options.progress);
   const auto t0 = Clock::now();
+  detail::validate_finishing(options);
   PolygonizeResult r = detail::with_threads(options.threads, [&] {
     FieldParams params;
     params.kernel = options.kernel;
@@ -802,10 +829,15 @@ PolygonizeResult polygonize(const PointCloud& cloud, const PolygonizeOptions& op
     params.threshold = options.threshold;
     params.radii = options.radii;
     params.strengths = options.strengths;
-    tracker.stage("estimating spacing", 0.0, 0.1);
+    params.anisotropy = options.anisotropy;
+    // The anisotropic kernels cost about as much as the sampling: give them their share.
+    const double field_end = options.anisotropy.enabled ? 0.3 : 0.1;
+    tracker.stage("estimating spacing", 0.0, field_end);
     const ParticleField field =
-        detail::FieldBuilder::build(cloud.positions.data(), cloud.positions.size(), params, tracker, 0.0, 0.1);
-    return polygonize_field(field, options, tracker, 0.1, PolygonizeStats{}, t0);
+        detail::FieldBuilder::build(cloud.positions.data(), cloud.positions.size(), params, tracker, 0.0, field_end);
+    PolygonizeResult res = polygonize_field(field, options, tracker, field_end, PolygonizeStats{}, t0);
+    detail::finish_polygonized(res, options, field, cloud.positions.data(), cloud.positions.size(), tracker);
+    return res;
   });
   tracker.finish();
   return r;

@@ -7,6 +7,7 @@
 #include "core/parallel.h"
 #include "core/progress_tracker.h"
 #include "particlemesh/core/error.h"
+#include "volume/anisotropy_impl.h"
 #include "volume/ray_roots.h"
 
 namespace particlemesh {
@@ -32,11 +33,13 @@ struct Node {
 };
 
 // A particle whose support the ray is in, with the ray's closest approach to its centre:
-// s(t) = (e2 + (t - tstar)^2) / R^2 (unit direction), so an interval's polynomial needs no
-// vector arithmetic.
+// s(t) = (e2 + (t - tstar)^2) ir2 (unit direction), so an interval's polynomial needs no
+// vector arithmetic. A sphere: ir2 = 1 / R^2 and e2 the squared distance of the centre from
+// the line. An ellipsoid (s = d^T M d): ir2 = dn^T M dn, the same form with tstar where s is
+// smallest along the line and e2 = that smallest s / ir2.
 struct Active {
   uint32_t k;
-  double tstar, e2;
+  double tstar, e2, ir2;
 };
 
 struct Event {
@@ -95,8 +98,10 @@ struct RayCaster::Impl {
   double threshold = 0;
   double eps_f = 0;              // tangent tolerance in units of F
   double r_min = 0;
-  std::vector<Vec3> pos;         // particles in hierarchy order
+  bool aniso = false;            // ellipsoidal kernels (metric per particle)
+  std::vector<Vec3> pos;         // kernel centres in hierarchy order
   std::vector<double> r2, inv_r2, w;
+  std::vector<double> metric;    // anisotropic: 6 per particle, hierarchy order
   std::vector<Node> nodes;
 
   void build();
@@ -172,6 +177,12 @@ struct RayCaster::Impl {
       for (const Active& a : active) {
         const uint32_t k = a.k;
         const Vec3 q = hit.position - im.pos[k];
+        if (im.aniso) {
+          const double* m = &im.metric[6 * size_t(k)];
+          const double dg = kernel_derivative(im.kernel, detail::metric_norm2(m, q));
+          g += detail::metric_apply(m, q) * (2.0 * im.w[k] * dg);
+          continue;
+        }
         const double s = squared_norm(q) * im.inv_r2[k];
         const double dg = kernel_derivative(im.kernel, s);
         g += q * (2.0 * im.w[k] * im.inv_r2[k] * dg);
@@ -213,11 +224,26 @@ void RayCaster::Impl::build() {
   idx.reserve(n);
   double wmax = 0;
   r_min = kInf;
+  aniso = field.anisotropic();
   for (size_t i = 0; i < n; ++i) {
     if (field.strength(i) == 0) continue;
     idx.push_back(uint32_t(i));
     wmax = std::max(wmax, std::abs(field.strength(i)));
     r_min = std::min(r_min, field.radius(i));
+  }
+  // An ellipsoid's shortest semi-axis is at least R max_stretch^(-2/3) (anisotropy.h).
+  if (aniso) r_min *= std::pow(field.params().anisotropy.max_stretch, -2.0 / 3.0);
+  // Half extents of the supports by input index (spheres: the radius).
+  std::vector<Vec3> ext(n);
+  for (uint32_t k = 0; k < uint32_t(n); ++k) {
+    const uint32_t i = field.grid().original_index(k);
+    if (aniso) {
+      const float* e = &field.sorted_half_extents()[3 * size_t(k)];
+      ext[i] = {double(e[0]), double(e[1]), double(e[2])};
+    } else {
+      const double r = field.radius(i);
+      ext[i] = {r, r, r};
+    }
   }
   eps_f = kTangentTolerance * (threshold + wmax);
   // Centres by input index, read through the field's grid (which holds them in grid order).
@@ -243,10 +269,9 @@ void RayCaster::Impl::build() {
     }
     for (uint32_t k = task.begin; k < task.end; ++k) {
       const uint32_t i = idx[k];
-      const double r = field.radius(i);
       for (int a = 0; a < 3; ++a) {
-        nd.lo[a] = std::min(nd.lo[a], P[i][a] - r);
-        nd.hi[a] = std::max(nd.hi[a], P[i][a] + r);
+        nd.lo[a] = std::min(nd.lo[a], P[i][a] - ext[i][a]);
+        nd.hi[a] = std::max(nd.hi[a], P[i][a] + ext[i][a]);
         clo[a] = std::min(clo[a], P[i][a]);
         chi[a] = std::max(chi[a], P[i][a]);
       }
@@ -282,6 +307,7 @@ void RayCaster::Impl::build() {
   r2.resize(idx.size());
   inv_r2.resize(idx.size());
   w.resize(idx.size());
+  if (aniso) metric.resize(6 * idx.size());
   for (size_t k = 0; k < idx.size(); ++k) {
     const size_t i = idx[k];
     pos[k] = P[i];
@@ -289,6 +315,10 @@ void RayCaster::Impl::build() {
     r2[k] = r * r;
     inv_r2[k] = 1.0 / (r * r);
     w[k] = field.strength(i);
+    if (aniso) {
+      const std::array<double, 6> m = field.metric(i);
+      std::copy(m.begin(), m.end(), metric.begin() + 6 * ptrdiff_t(k));
+    }
   }
 }
 
@@ -302,7 +332,7 @@ void interval_polynomial(const RayCaster::Impl& im, double ta, double L, const s
   for (int j = 0; j <= 2 * Deg; ++j) c[j] = 0;
   const double d1 = im.d[1], d2 = im.d[2], d3 = Deg >= 3 ? im.d[3] : 0.0;
   for (const Active& a : active) {
-    const double ir2 = im.inv_r2[a.k], wk = im.w[a.k];
+    const double ir2 = a.ir2, wk = im.w[a.k];
     const double delta = ta - a.tstar;  // from the closest approach to the interval's start
     const double A = 1.0 - (a.e2 + delta * delta) * ir2;
     const double B = -2.0 * L * delta * ir2;
@@ -348,7 +378,7 @@ void RayCaster::Impl::Query::interval(double ta, double tb, const std::vector<Ac
       if (wk <= 0) continue;
       const double d0 = ta - a.tstar, d1 = tb - a.tstar;
       const double dmin = (d0 <= 0 && d1 >= 0) ? 0.0 : std::min(std::abs(d0), std::abs(d1));
-      ub += wk * kernel_value(im.kernel, (a.e2 + dmin * dmin) * im.inv_r2[a.k]);
+      ub += wk * kernel_value(im.kernel, (a.e2 + dmin * dmin) * a.ir2);
     }
     if (ub < im.threshold) {
       if (!started && ta <= tlo) starts_inside = false;
@@ -404,13 +434,23 @@ void RayCaster::Impl::Query::interval(double ta, double tb, const std::vector<Ac
 void RayCaster::Impl::Query::interval_blinn(double ta, double tb, const std::vector<Active>& active) {
   ++stats.intervals_solved;
   double lip = 0;
-  for (const Active& a : active) lip += std::abs(im.w[a.k]) * kBlinnSlope * std::sqrt(im.inv_r2[a.k]);
+  // Along the ray |d/dt g(s)| = |g'(s)| 2 ir2 |t - tstar| <= |g'(s)| 2 sqrt(s ir2): the bound
+  // of a sphere of radius 1 / sqrt(ir2).
+  for (const Active& a : active) lip += std::abs(im.w[a.k]) * kBlinnSlope * std::sqrt(a.ir2);
   auto f = [&](double t, double* df) {
     const Vec3 x = o + dn * t;
     double v = 0, dv = 0;
     for (const Active& a : active) {
       const uint32_t k = a.k;
       const Vec3 q = x - im.pos[k];
+      if (im.aniso) {
+        const double* m = &im.metric[6 * size_t(k)];
+        const double s = detail::metric_norm2(m, q);
+        if (!(s < 1.0)) continue;
+        v += im.w[k] * kernel_value(Kernel::Blinn, s);
+        if (df) dv += im.w[k] * kernel_derivative(Kernel::Blinn, s) * 2.0 * dot(detail::metric_apply(m, q), dn);
+        continue;
+      }
       const double s = squared_norm(q) * im.inv_r2[k];
       if (!(s < 1.0)) continue;
       v += im.w[k] * kernel_value(Kernel::Blinn, s);
@@ -530,16 +570,30 @@ void RayCaster::Impl::Query::run(Scratch& sc) {
     }
     for (uint32_t k = nd.first; k < nd.first + nd.count; ++k) {
       const Vec3 q = o - im.pos[k];
-      const double b = dot(q, dn);
-      const Vec3 e = q - dn * b;  // from the centre to the closest point of the line
-      const double e2 = squared_norm(e);
-      const double h2 = im.r2[k] - e2;
+      Active a;
+      double h2;
+      if (im.aniso) {
+        // s(t) = (q + t dn)^T M (q + t dn) = ir2 (t - tstar)^2 + smin.
+        const double* m = &im.metric[6 * size_t(k)];
+        const Vec3 Md = detail::metric_apply(m, dn);
+        const double ir2 = dot(dn, Md);
+        const double tstar = -dot(q, Md) / ir2;
+        // The smallest s from the closest point itself (no cancellation for a far origin).
+        const double smin = detail::metric_norm2(m, q + dn * tstar);
+        a = Active{k, tstar, smin / ir2, ir2};
+        h2 = (1.0 - smin) / ir2;
+      } else {
+        const double b = dot(q, dn);
+        const Vec3 e = q - dn * b;  // from the centre to the closest point of the line
+        const double e2 = squared_norm(e);
+        a = Active{k, -b, e2, im.inv_r2[k]};
+        h2 = im.r2[k] - e2;
+      }
       if (!(h2 > 0)) continue;
       const double hh = std::sqrt(h2);
-      const double t_in = -b - hh, t_out = -b + hh;
+      const double t_in = a.tstar - hh, t_out = a.tstar + hh;
       if (t_out <= tlo || t_in >= thi) continue;
       ++stats.spheres_entered;
-      const Active a{k, -b, e2};
       eheap.push_back({std::max(t_in, tlo), a, false});
       std::push_heap(eheap.begin(), eheap.end(), event_cmp);
       eheap.push_back({std::min(t_out, thi), a, true});

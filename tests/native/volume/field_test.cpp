@@ -76,7 +76,7 @@ TEST(ParticleField, ValueAndGradientMatchBruteForce) {
 
 TEST(ParticleField, GradientMatchesFiniteDifferences) {
   const PointCloud c = test::random_cloud(200, 5);
-  const ParticleField f(c, FieldParams{Kernel::Poly6, 0.2, 1.0, {}, {}});
+  const ParticleField f(c, FieldParams{Kernel::Poly6, 0.2, 1.0, {}, {}, {}});
   std::mt19937_64 rng(2);
   std::uniform_real_distribution<double> u(0.1, 0.9);
   for (int q = 0; q < 100; ++q) {
@@ -135,14 +135,14 @@ TEST(ParticleField, LatticeFieldCountsTheLatticeSupport) {
 TEST(ParticleField, DefaultsComeFromTheSpacing) {
   const PointCloud c = square_lattice(20, 20, 0.1);
   const double spacing = estimate_spacing(c.positions.data(), c.size()).spacing;
-  const ParticleField f(c, FieldParams{Kernel::Poly6, 0, 0, {}, {}});
+  const ParticleField f(c, FieldParams{Kernel::Poly6, 0, 0, {}, {}, {}});
   EXPECT_TRUE(f.radius_defaulted());
   EXPECT_TRUE(f.threshold_defaulted());
   EXPECT_DOUBLE_EQ(f.spacing(), spacing);
   EXPECT_DOUBLE_EQ(f.params().radius, kDefaultRadiusFactor * spacing);
   EXPECT_DOUBLE_EQ(f.threshold(), kDefaultThresholdFraction * lattice_field(Kernel::Poly6, 2 * spacing, spacing));
   // Given values are kept and no spacing is estimated.
-  const ParticleField g(c, FieldParams{Kernel::Poly6, 0.3, 0.7, {}, {}});
+  const ParticleField g(c, FieldParams{Kernel::Poly6, 0.3, 0.7, {}, {}, {}});
   EXPECT_FALSE(g.radius_defaulted());
   EXPECT_FALSE(g.threshold_defaulted());
   EXPECT_EQ(g.spacing(), 0.0);
@@ -174,34 +174,34 @@ TEST(ParticleField, BadInputGivesClearErrors) {
   auto build = [&](FieldParams p, PointCloud cloud) { return [p, cloud] { ParticleField f(cloud, p); }; };
   PointCloud nan = c;
   nan.positions[3].y = std::nan("");
-  Error e = error_of(build(FieldParams{Kernel::Wyvill, 1, 1, {}, {}}, nan));
+  Error e = error_of(build(FieldParams{Kernel::Wyvill, 1, 1, {}, {}, {}}, nan));
   EXPECT_EQ(e.status(), Status::InvalidInput);
   EXPECT_NE(std::string(e.what()).find("positions[3].y is NaN"), std::string::npos) << e.what();
 
-  EXPECT_EQ(error_of(build(FieldParams{Kernel::Wyvill, 1, 1, {}, {}}, PointCloud{})).status(), Status::InvalidInput);
+  EXPECT_EQ(error_of(build(FieldParams{Kernel::Wyvill, 1, 1, {}, {}, {}}, PointCloud{})).status(), Status::InvalidInput);
   for (double r : {-1.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
-    e = error_of(build(FieldParams{Kernel::Wyvill, r, 1, {}, {}}, c));
+    e = error_of(build(FieldParams{Kernel::Wyvill, r, 1, {}, {}, {}}, c));
     EXPECT_EQ(e.status(), Status::InvalidArgument);
     EXPECT_NE(std::string(e.what()).find("radius"), std::string::npos);
   }
   for (double t : {-1.0, std::nan("")}) {
-    e = error_of(build(FieldParams{Kernel::Wyvill, 1, t, {}, {}}, c));
+    e = error_of(build(FieldParams{Kernel::Wyvill, 1, t, {}, {}, {}}, c));
     EXPECT_EQ(e.status(), Status::InvalidArgument);
     EXPECT_NE(std::string(e.what()).find("threshold"), std::string::npos);
   }
-  FieldParams p{Kernel::Wyvill, 1, 1, std::vector<double>(10, 0.1), {}};
+  FieldParams p{Kernel::Wyvill, 1, 1, std::vector<double>(10, 0.1), {}, {}};
   p.radii[7] = 0;
   e = error_of(build(p, c));
   EXPECT_EQ(e.status(), Status::InvalidArgument);
   EXPECT_NE(std::string(e.what()).find("radii[7] is 0"), std::string::npos) << e.what();
   p.radii.resize(9, 0.1);
   EXPECT_NE(std::string(error_of(build(p, c)).what()).find("radii has 9 values for 10"), std::string::npos);
-  FieldParams q{Kernel::Wyvill, 1, 1, {}, std::vector<double>(10, 1.0)};
+  FieldParams q{Kernel::Wyvill, 1, 1, {}, std::vector<double>(10, 1.0), {}};
   q.strengths[2] = std::nan("");
   EXPECT_NE(std::string(error_of(build(q, c)).what()).find("strengths[2] is NaN"), std::string::npos);
   // The default threshold from a subnormal median strength underflowed to T = 0 (found by
   // fuzzing); from a huge one (1e100, the largest accepted) it is fine.
-  FieldParams z{Kernel::Wyvill, 1, 0, {}, std::vector<double>(10, 4.9e-324)};
+  FieldParams z{Kernel::Wyvill, 1, 0, {}, std::vector<double>(10, 4.9e-324), {}};
   e = error_of(build(z, c));
   EXPECT_EQ(e.status(), Status::InvalidArgument);
   EXPECT_NE(std::string(e.what()).find("give a threshold"), std::string::npos) << e.what();
@@ -213,13 +213,13 @@ TEST(ParticleField, BadInputGivesClearErrors) {
   EXPECT_EQ(e.status(), Status::InvalidArgument);
   EXPECT_NE(std::string(e.what()).find("strengths[4] is"), std::string::npos) << e.what();
   EXPECT_NE(std::string(e.what()).find("at most 1e100"), std::string::npos) << e.what();
-  EXPECT_EQ(error_of(build(FieldParams{static_cast<Kernel>(9), 1, 1, {}, {}}, c)).status(), Status::InvalidArgument);
+  EXPECT_EQ(error_of(build(FieldParams{static_cast<Kernel>(9), 1, 1, {}, {}, {}}, c)).status(), Status::InvalidArgument);
   // A default needs the spacing: one particle cannot give it.
   PointCloud one;
   one.positions.push_back({0, 0, 0});
-  e = error_of(build(FieldParams{Kernel::Wyvill, 0, 1, {}, {}}, one));
+  e = error_of(build(FieldParams{Kernel::Wyvill, 0, 1, {}, {}, {}}, one));
   EXPECT_EQ(e.status(), Status::InvalidInput);
   EXPECT_NE(std::string(e.what()).find("give a radius"), std::string::npos) << e.what();
-  EXPECT_NO_THROW(build(FieldParams{Kernel::Wyvill, 1, 0.5, {}, {}}, one)());
-  EXPECT_NO_THROW(build(FieldParams{Kernel::Wyvill, 1, 0, {}, {}}, one)());  // default T needs no spacing
+  EXPECT_NO_THROW(build(FieldParams{Kernel::Wyvill, 1, 0.5, {}, {}, {}}, one)());
+  EXPECT_NO_THROW(build(FieldParams{Kernel::Wyvill, 1, 0, {}, {}, {}}, one)());  // default T needs no spacing
 }

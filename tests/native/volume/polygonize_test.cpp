@@ -275,7 +275,7 @@ TEST_P(RandomCloud, WatertightManifoldOutwardOnTheSurface) {
   ASSERT_GT(r.mesh.triangles.size(), n / 10);
   const TopologyReport rep = expect_watertight(r.mesh);
   EXPECT_EQ(rep.closed_components, rep.components);
-  const ParticleField f(c, FieldParams{Kernel::Wyvill, r.stats.radius, r.stats.threshold, {}, {}});
+  const ParticleField f(c, FieldParams{Kernel::Wyvill, r.stats.radius, r.stats.threshold, {}, {}, {}});
   // Every resolved component faces outward (-grad F). Marching cubes folds a few triangles
   // where the surface bends within a cell (features at the resolution limit, frequent in
   // uniform random clouds): at most 0.5 % of the area, and blobs of a few triangles around a
@@ -387,7 +387,7 @@ TEST(Polygonize, NegativeStrengthCarvesACavity) {
   ASSERT_EQ(rep.components, 2u);
   EXPECT_GT(rep.per_component[0].signed_volume, 0);  // the outer sphere (larger)
   EXPECT_LT(rep.per_component[1].signed_volume, 0);  // the cavity, facing inward
-  const ParticleField f(c, FieldParams{Kernel::Poly6, 0, 0.3, {1.0, 0.5}, {1.0, -0.8}});
+  const ParticleField f(c, FieldParams{Kernel::Poly6, 0, 0.3, {1.0, 0.5}, {1.0, -0.8}, {}});
   EXPECT_EQ(outward_fraction(r.mesh, f), 1.0);
   EXPECT_EQ(worst_component_outward_fraction(r.mesh, f, 1), 1.0);
   // Radial profile: both surfaces where the 1D field crosses 0.3.
@@ -422,7 +422,7 @@ TEST(Polygonize, FieldOverloadGivesTheSameMesh) {
   o.radius = 0.15;
   o.threshold = 0.9;
   const PolygonizeResult a = polygonize(c, o);
-  const ParticleField f(c, FieldParams{Kernel::Poly4, 0.15, 0.9, {}, {}});
+  const ParticleField f(c, FieldParams{Kernel::Poly4, 0.15, 0.9, {}, {}, {}});
   const PolygonizeResult b = polygonize(f, PolygonizeOptions{});
   EXPECT_TRUE(a.mesh.positions == b.mesh.positions);
   EXPECT_TRUE(a.mesh.triangles == b.mesh.triangles);
@@ -586,7 +586,7 @@ TEST(Polygonize, OutputFeedsTheSmoothingStage) {
   EXPECT_EQ(after.components, before.components);
   EXPECT_EQ(after.euler_characteristic, before.euler_characteristic);
   EXPECT_EQ(after.outward, before.outward);
-  const ParticleField f(c, FieldParams{Kernel::Wyvill, r.stats.radius, r.stats.threshold, {}, {}});
+  const ParticleField f(c, FieldParams{Kernel::Wyvill, r.stats.radius, r.stats.threshold, {}, {}, {}});
   double worst = 0, sum = 0;
   for (const Vec3& p : s.mesh.positions) {
     Vec3 g;

@@ -275,6 +275,7 @@ struct Config {
   Kernel kernel;
   bool varied;  // per-particle radii and strengths (some negative)
   uint64_t seed;
+  bool anisotropic = false;  // ellipsoidal kernels (Yu and Turk), with smoothed centres
 };
 
 class RandomConfig : public ::testing::TestWithParam<Config> {};
@@ -310,6 +311,14 @@ TEST_P(RandomConfig, AgreesWithDenseSamplingAndBisection) {
   const int n = 40;
   std::vector<Vec3> p;
   FieldParams fp = params(cfg.kernel, 1.0, 0.45);
+  if (cfg.anisotropic) {
+    // Few neighbours in a random cloud: let most particles get an ellipsoid, some stretched
+    // to the limit, and move the centres.
+    fp.anisotropy.enabled = true;
+    fp.anisotropy.min_neighbors = 4;
+    fp.anisotropy.max_stretch = 6;
+    fp.anisotropy.smoothing = 0.4;
+  }
   for (int i = 0; i < n; ++i) {
     p.push_back({3 * u(rng), 3 * u(rng), 3 * u(rng)});
     if (cfg.varied) {
@@ -318,6 +327,9 @@ TEST_P(RandomConfig, AgreesWithDenseSamplingAndBisection) {
     }
   }
   const ParticleField field(p, fp);
+  if (cfg.anisotropic) {
+    ASSERT_GT(field.anisotropic_count(), size_t(n / 2));
+  }
   const RayCaster caster(field);
   int total = 0;
   for (int r = 0; r < 30; ++r) {
@@ -354,10 +366,12 @@ INSTANTIATE_TEST_SUITE_P(Seeds, RandomConfig,
                          ::testing::Values(Config{Kernel::Wyvill, false, 1}, Config{Kernel::Poly4, false, 2},
                                            Config{Kernel::Poly6, false, 3}, Config{Kernel::Blinn, false, 4},
                                            Config{Kernel::Wyvill, true, 5}, Config{Kernel::Poly4, true, 6},
-                                           Config{Kernel::Poly6, true, 7}, Config{Kernel::Blinn, true, 8}),
+                                           Config{Kernel::Poly6, true, 7}, Config{Kernel::Blinn, true, 8},
+                                           Config{Kernel::Wyvill, false, 9, true}, Config{Kernel::Poly4, false, 10, true},
+                                           Config{Kernel::Poly6, true, 11, true}, Config{Kernel::Blinn, true, 12, true}),
                          [](const auto& info) {
                            return std::string(kernel_name(info.param.kernel)) + (info.param.varied ? "_varied_" : "_") +
-                                  std::to_string(info.param.seed);
+                                  (info.param.anisotropic ? "anisotropic_" : "") + std::to_string(info.param.seed);
                          });
 
 // Rays through saddles and necks: sweep a family of parallel rays across a random cluster in
@@ -423,18 +437,31 @@ TEST(RayCaster, AgreesWithThePolygonizedMesh) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   PointCloud c;
   for (int i = 0; i < 8; ++i) c.positions.push_back({1.2 * u(rng), 1.2 * u(rng), 1.2 * u(rng)});
-  for (Kernel k : {Kernel::Wyvill, Kernel::Poly4, Kernel::Poly6, Kernel::Blinn}) {
+  for (int variant = 0; variant < 5; ++variant) {
+    // The four kernels, then Wyvill's with anisotropic kernels (stretched, smoothed centres).
+    const Kernel k = variant < 4 ? kAll[variant] : Kernel::Wyvill;
+    const bool aniso = variant == 4;
     PolygonizeOptions po;
     po.kernel = k;
     po.radius = 1.0;
     po.threshold = 0.5;
+    if (aniso) {
+      po.anisotropy.enabled = true;
+      po.anisotropy.min_neighbors = 3;
+      po.anisotropy.smoothing = 0.3;
+    }
     // Blinn's exponential (k = 6.9) is much narrower than the polynomials at the same R: its
     // necks between the blobs curve more tightly, so it needs a finer grid for the cells to
     // stay below a quarter of the radius of curvature.
     po.cell_size = k == Kernel::Blinn ? 1.0 / 64 : 1.0 / 32;
     const PolygonizeResult mesh = polygonize(c, po);
     ASSERT_TRUE(topology_report(mesh.mesh).closed);
-    const ParticleField field(c.positions, params(k, 1.0, 0.5));
+    FieldParams fp = params(k, 1.0, 0.5);
+    fp.anisotropy = po.anisotropy;
+    const ParticleField field(c.positions, fp);
+    if (aniso) {
+      ASSERT_EQ(field.anisotropic_count(), c.size());
+    }
     const RayCaster caster(field);
     const double err = 0.1 * po.cell_size;
     int compared = 0;

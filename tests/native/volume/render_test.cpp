@@ -64,6 +64,28 @@ TEST(Render, DoesNotDependOnTheThreadCount) {
   EXPECT_EQ(render(c, a).image.rgb, render(c, b).image.rgb);
 }
 
+// Anisotropic kernels render through the same caster: the same image for any thread count,
+// and a different one from the spherical kernels' (flatter, smoother).
+TEST(Render, AnisotropicKernelsDoNotDependOnTheThreadCount) {
+  FieldParams p;
+  p.radius = 0.8;
+  p.threshold = 0.5;
+  p.anisotropy.enabled = true;
+  p.anisotropy.min_neighbors = 5;
+  const RayCaster c(ParticleField(read_point_cloud(kData + "/render_scene.xyz"), p));
+  EXPECT_GT(c.field().anisotropic_count(), 0u);
+  RenderOptions a = small(), b = small();
+  a.threads = 1;
+  b.threads = 2;
+  a.shading = b.shading = Shading::Normal;
+  const RenderResult ra = render(c, a);
+  EXPECT_EQ(ra.image.rgb, render(c, b).image.rgb);
+  EXPECT_GT(ra.hits, ra.rays / 20);
+  p.anisotropy.enabled = false;
+  EXPECT_NE(render(RayCaster(ParticleField(read_point_cloud(kData + "/render_scene.xyz"), p)), a).image.rgb,
+            ra.image.rgb);
+}
+
 TEST(Render, DefaultCameraFramesEveryParticle) {
   // A blob far from the origin, elongated: all of it is in the picture, not touching the
   // border, whatever the aspect.

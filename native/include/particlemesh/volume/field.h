@@ -7,13 +7,21 @@
 // threshold T must be positive, so the surface lies inside the union of the supports of the
 // positive-strength particles and is closed.
 //
+// With anisotropic kernels (FieldParams::anisotropy, anisotropy.h) the sphere becomes an
+// ellipsoid of the same volume around a smoothed centre c_i:
+//
+//     F(x) = sum_i  w_i * g((x - c_i)^T M_i (x - c_i))
+//
 // ParticleField holds the particles with every parameter resolved (defaults filled in) and a
-// uniform grid of cell max_i R_i over them, so that one evaluation of F or its gradient
+// uniform grid over the kernel centres of cell the largest reach of a kernel (max_i R_i, or
+// the longest semi-axis of any ellipsoid), so that one evaluation of F or its gradient
 // touches only the particles in the few cells around x (about 30 particles at the default
 // radius on evenly spaced input), independent of N. Radii that differ by a large factor make
 // the cells, and so every evaluation, correspondingly larger.
 #pragma once
 
+#include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -23,6 +31,7 @@
 #include "particlemesh/core/vec3.h"
 #include "particlemesh/mesh/point_cloud.h"
 #include "particlemesh/spatial/neighbor_grid.h"
+#include "particlemesh/volume/anisotropy.h"
 #include "particlemesh/volume/kernel.h"
 
 namespace particlemesh {
@@ -58,6 +67,21 @@ inline constexpr double kMaxStrength = 1e100;
 ///         radius / spacing <= 1000.
 PM_EXPORT double lattice_field(Kernel kernel, double radius, double spacing);
 
+/// The largest radius / spacing ratio the anisotropic threshold calibration assumes.
+inline constexpr double kMaxCalibrationRatio = 8.0;
+
+/// The field on the face of a half-infinite simple cubic lattice of unit-strength particles
+/// (spacing 1, the particles at integer points with z <= 0), on the plane z = 1/2 half a
+/// spacing outside its outer layer, averaged over that plane; kernels of the given radius (in
+/// spacings), made anisotropic as `anisotropy` says when it is enabled (each layer's kernels
+/// from the same neighbour PCA as anisotropic_kernels, on the lattice itself). A threshold of
+/// this value puts a flat face of such packed particles where the volume they stand for ends.
+/// Spherical kernels: about half of lattice_field (0.486 of it for Wyvill at radius 2).
+/// Cost: O(layers x (neighbor_radius x radius)^3), microseconds at the defaults.
+/// @throws Error(InvalidArgument) a radius outside (0, kMaxCalibrationRatio], bad anisotropy
+///         options or kernel.
+PM_EXPORT double lattice_face_field(Kernel kernel, double radius, const AnisotropyOptions& anisotropy = {});
+
 /// The field's parameters. Zero radius / threshold ask for the defaults above; the default
 /// radius needs the particle spacing and therefore at least two distinct particles.
 struct FieldParams {
@@ -65,14 +89,24 @@ struct FieldParams {
   /// R for every particle, world units (not relative). 0 = kDefaultRadiusFactor x the median
   /// spacing. Ignored when `radii` is given.
   double radius = 0;
-  /// T > 0, in the units of F (sums of kernel values times strengths). 0 = the default
-  /// (kDefaultThresholdFraction x median strength x lattice_field(kernel, 2, 1)).
+  /// T > 0, in the units of F (sums of kernel values times strengths). 0 = the default:
+  /// spherical kernels: kDefaultThresholdFraction x median strength x lattice_field(kernel,
+  /// 2, 1). Anisotropic kernels: calibrated on the particles themselves so that a flat face of
+  /// packed particles lies half a spacing outside its outermost ones, keeping the volume they
+  /// stand for: the median of F at the bulk particles (those with neighbours all around) is
+  /// taken as lattice_field(kernel, x, 1) of an effective radius / spacing ratio x, and T =
+  /// median strength x lattice_face_field(kernel, x, anisotropy) (x = 2 when fewer than 32
+  /// particles are in the bulk: a sheet, a stream, a spray).
   double threshold = 0;
   /// Empty, or one radius R_i > 0 per particle (world units).
   std::vector<double> radii;
   /// Empty (every strength 1), or one finite strength w_i per particle, |w_i| <= kMaxStrength
   /// (1e100). Negative strengths subtract; particles of zero strength contribute nothing.
   std::vector<double> strengths;
+  /// Anisotropic kernels (anisotropy.h; off by default): each particle's kernel becomes an
+  /// ellipsoid of the volume of its sphere, centred on its smoothed centre, and F sums
+  /// w_i g((x - c_i)^T M_i (x - c_i)).
+  AnisotropyOptions anisotropy;
 };
 
 /// The summed field of a set of particles, with its threshold, ready to evaluate.
@@ -106,45 +140,116 @@ class PM_EXPORT ParticleField {
   /// The median particle spacing when the default radius needed it, else 0.
   double spacing() const { return spacing_; }
   bool radius_defaulted() const { return radius_defaulted_; }
+  /// With anisotropic kernels and the default threshold: the radius / spacing ratio the
+  /// threshold was calibrated for (see FieldParams::threshold). 0 otherwise.
+  double calibration_ratio() const { return calibration_ratio_; }
   bool threshold_defaulted() const { return threshold_defaulted_; }
 
   size_t size() const { return grid_.point_count(); }
-  /// Centre of particle i (input order). The particles are kept once, in grid order.
+  /// Centre of particle i's kernel (input order): the particle's position, or its smoothed
+  /// centre with anisotropic kernels. The centres are kept once, in grid order.
   const Vec3& position(size_t i) const { return grid_.sorted_point(sorted_index_[i]); }
   double radius(size_t i) const { return params_.radii.empty() ? params_.radius : params_.radii[i]; }
   double strength(size_t i) const { return params_.strengths.empty() ? 1.0 : params_.strengths[i]; }
   double max_radius() const { return max_radius_; }
+  /// The farthest any kernel reaches from its centre: max_radius(), or with anisotropic
+  /// kernels the longest semi-axis of any of them (at most max_stretch^(2/3) x max_radius()).
+  double max_reach() const { return reach_; }
+
+  /// Anisotropic kernels in use (params().anisotropy.enabled).
+  bool anisotropic() const { return params_.anisotropy.enabled; }
+  /// With anisotropic kernels: how many particles got an ellipsoid (the others, with fewer
+  /// than min_neighbors neighbours, kept their sphere). 0 otherwise.
+  size_t anisotropic_count() const { return anisotropic_count_; }
+  /// The matrix M of particle i's kernel, {xx, yy, zz, xy, xz, yz}: I / R_i^2 for a sphere.
+  std::array<double, 6> metric(size_t i) const;
   /// Smallest axis-aligned box holding every particle's support (centre +- R_i).
   Vec3 support_min() const { return support_lo_; }
   Vec3 support_max() const { return support_hi_; }
 
   /// F(x).
   double value(const Vec3& x) const;
-  /// grad F(x) = sum_i w_i 2 g'(s_i) (x - p_i) / R_i^2.
+  /// grad F(x) = sum_i w_i 2 g'(s_i) M_i (x - c_i)  (M_i = I / R_i^2 for spheres).
   Vec3 gradient(const Vec3& x) const;
   /// F(x), and grad F(x) into *gradient, in one pass.
   double value_and_gradient(const Vec3& x, Vec3* gradient) const;
   /// value(x) >= threshold().
   bool inside(const Vec3& x) const { return value(x) >= params_.threshold; }
 
-  /// Call f(i, s) for every particle i whose support contains x (s = |x - p_i|^2 / R_i^2 < 1),
-  /// in a fixed order (by grid cell, then by index) that does not depend on threads.
+  /// Call f(i, s) for every particle i whose support contains x (s = |x - p_i|^2 / R_i^2 < 1,
+  /// or (x - c_i)^T M_i (x - c_i) < 1 with anisotropic kernels), in a fixed order (by grid
+  /// cell, then by index) that does not depend on threads.
   template <class F>
   void for_each_contributor(const Vec3& x, F&& f) const {
     if (size() == 0) return;
-    grid_.for_each_within(x, max_radius_, [&](uint32_t sorted, double d2) {
-      const double inv_r2 = uniform_ ? inv_r2_ : sorted_inv_r2_[sorted];
-      const double s = d2 * inv_r2;
+    if (!sorted_metric_.empty()) {
+      for_each_ellipsoid_near(x, [&](uint32_t sorted, const Vec3& d) {
+        const double* m = &sorted_metric_[6 * size_t(sorted)];
+        const double s = m[0] * d.x * d.x + m[1] * d.y * d.y + m[2] * d.z * d.z +
+                         2.0 * (m[3] * d.x * d.y + m[4] * d.x * d.z + m[5] * d.y * d.z);
+        if (s < 1.0) f(size_t(grid_.original_index(sorted)), s);
+      });
+      return;
+    }
+    grid_.for_each_within(x, reach_, [&](uint32_t sorted, double d2) {
+      const double s = d2 * (uniform_ ? inv_r2_ : sorted_inv_r2_[sorted]);
       if (s < 1.0) f(size_t(grid_.original_index(sorted)), s);
     });
   }
 
-  /// The grid over the particles (cell = max_radius()), for callers with their own traversal.
+  /// With anisotropic kernels: f(sorted index, x - c) for every particle whose ellipsoid's
+  /// bounding box contains x, in grid order. The grid's cells are as wide as the largest
+  /// radius; the cells within the longest kernel's reach of x are looked up in a dense table
+  /// when the occupied cells' box is small enough (else through the grid's hash), and a cell
+  /// whose kernels' boxes all miss x is skipped whole.
+  template <class F>
+  void for_each_ellipsoid_near(const Vec3& x, F&& f) const {
+    const Vec3 r{reach_, reach_, reach_};
+    auto visit = [&](uint32_t c) {
+      const float* b = &cell_support_[6 * size_t(c)];
+      if (x.x < b[0] || x.y < b[1] || x.z < b[2] || x.x > b[3] || x.y > b[4] || x.z > b[5]) return;
+      for (uint32_t s = grid_.cell_begin(c); s < grid_.cell_end(c); ++s) {
+        const Vec3 d = x - grid_.sorted_point(s);
+        const float* e = &sorted_extent_[3 * size_t(s)];
+        if (std::abs(d.x) > e[0] || std::abs(d.y) > e[1] || std::abs(d.z) > e[2]) continue;
+        f(s, d);
+      }
+    };
+    NeighborGrid::CellCoord lo = grid_.coord_of(x - r), hi = grid_.coord_of(x + r);
+    if (dense_cells_.empty()) {
+      grid_.for_each_cell_in(lo, hi, visit);
+      return;
+    }
+    // The same cells in the same (lexicographic) order, from the table.
+    for (int a = 0; a < 3; ++a) {
+      lo[size_t(a)] = std::max(lo[size_t(a)], dense_lo_[size_t(a)]);
+      hi[size_t(a)] = std::min(hi[size_t(a)], dense_lo_[size_t(a)] + dense_size_[size_t(a)] - 1);
+    }
+    for (int32_t cx = lo[0]; cx <= hi[0]; ++cx)
+      for (int32_t cy = lo[1]; cy <= hi[1]; ++cy) {
+        const uint32_t* row = &dense_cells_[(size_t(cx - dense_lo_[0]) * size_t(dense_size_[1]) +
+                                             size_t(cy - dense_lo_[1])) * size_t(dense_size_[2])];
+        for (int32_t cz = lo[2]; cz <= hi[2]; ++cz) {
+          const uint32_t c = row[cz - dense_lo_[2]];
+          if (c != NeighborGrid::kNoCell) visit(c);
+        }
+      }
+  }
+
+  /// The grid over the kernel centres (cell = max_reach()), for callers with their own
+  /// traversal.
   const NeighborGrid& grid() const { return grid_; }
   /// Per sorted grid index: 1 / R^2 and strength (empty when uniform / all 1).
   const std::vector<double>& sorted_inverse_squared_radii() const { return sorted_inv_r2_; }
   const std::vector<double>& sorted_strengths() const { return sorted_strength_; }
   bool uniform_radius() const { return uniform_; }
+  /// With anisotropic kernels, per sorted grid index: the 6 entries of M (as metric()) and the
+  /// half extents of the ellipsoid along x, y, z (rounded up to float). Empty otherwise.
+  const std::vector<double>& sorted_metrics() const { return sorted_metric_; }
+  const std::vector<float>& sorted_half_extents() const { return sorted_extent_; }
+  /// With anisotropic kernels, per grid cell: the box holding its kernels' boxes, {lo x y z,
+  /// hi x y z} (rounded outward to float). Empty otherwise.
+  const std::vector<float>& cell_support_boxes() const { return cell_support_; }
 
  private:
   friend struct detail::FieldBuilder;
@@ -153,10 +258,18 @@ class PM_EXPORT ParticleField {
   std::vector<uint32_t> sorted_index_;  // input index -> grid (sorted) index
   std::vector<double> sorted_inv_r2_;
   std::vector<double> sorted_strength_;
+  std::vector<double> sorted_metric_;  // anisotropic: 6 per particle, grid order
+  std::vector<float> sorted_extent_;   // anisotropic: 3 per particle, grid order
+  std::vector<float> cell_support_;    // anisotropic: 6 per grid cell
+  std::vector<uint32_t> dense_cells_;  // anisotropic: cell index per coordinate in the box (or empty)
+  NeighborGrid::CellCoord dense_lo_{}, dense_size_{};
+  size_t anisotropic_count_ = 0;
   bool uniform_ = true;
   double inv_r2_ = 0;
   double max_radius_ = 0;
+  double reach_ = 0;
   double spacing_ = 0;
+  double calibration_ratio_ = 0;
   bool radius_defaulted_ = false;
   bool threshold_defaulted_ = false;
   Vec3 support_lo_, support_hi_;

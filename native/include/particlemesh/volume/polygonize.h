@@ -41,6 +41,7 @@
 #include "particlemesh/core/progress.h"
 #include "particlemesh/mesh/point_cloud.h"
 #include "particlemesh/mesh/tri_mesh.h"
+#include "particlemesh/smooth/taubin.h"
 #include "particlemesh/volume/field.h"
 #include "particlemesh/volume/kernel.h"
 
@@ -70,6 +71,18 @@ struct PolygonizeOptions {
   std::vector<double> radii;
   /// Empty (all 1), or one strength per particle (finite).
   std::vector<double> strengths;
+  /// Anisotropic kernels (anisotropy.h): off unless anisotropy.enabled.
+  AnisotropyOptions anisotropy;
+  /// Drop the pieces of the surface that enclose less than this volume (world units cubed;
+  /// splashes, lone droplets). 0 = keep every piece.
+  double min_component_volume = 0;
+  /// Drop the pieces that enclose less than this many particles' worth of volume, N s^3 with s
+  /// the median particle spacing (estimated when the default radius did not already need it).
+  /// 0 = keep every piece. With min_component_volume, the larger of the two limits applies.
+  double min_component_particles = 0;
+  /// Volume-keeping smoothing of the mesh, after dropping pieces (smooth/taubin.h): Taubin's
+  /// lambda|mu filter; off (0 iterations) by default. Its threads follow `threads`.
+  TaubinOptions surface_smoothing{.iterations = 0};
   /// Worker threads, 0 = all cores. The output does not depend on it.
   int threads = 0;
   /// Fail with LimitExceeded, before allocating, if the sampled grid (blocks of samples and
@@ -89,6 +102,14 @@ struct PolygonizeStats {
   bool radius_defaulted = false;
   bool threshold_defaulted = false;
   bool cell_size_defaulted = false;
+  bool anisotropic = false;          ///< anisotropic kernels were used
+  size_t anisotropic_particles = 0;  ///< particles that got an ellipsoid (the rest kept spheres)
+  /// With anisotropic kernels and the default threshold: the radius / spacing ratio it was
+  /// calibrated for (FieldParams::threshold), else 0.
+  double calibration_ratio = 0;
+  double min_component_volume = 0;   ///< the volume limit applied to pieces (0: none)
+  size_t components_removed = 0;     ///< pieces dropped by it
+  int32_t smoothing_iterations = 0;  ///< Taubin iterations applied to the mesh
   size_t candidate_blocks = 0;  ///< blocks near some particle, before the exact support test
   size_t sampled_blocks = 0;    ///< blocks of 8^3 nodes that some support reaches (sampled)
   size_t surface_blocks = 0;    ///< blocks with an inside/outside change (meshed)
@@ -101,6 +122,7 @@ struct PolygonizeStats {
   double seconds_setup = 0;     ///< spacing estimate, field grid, block search
   double seconds_sampling = 0;  ///< summing the particles into the blocks
   double seconds_meshing = 0;   ///< classification, vertices (refinement), triangles
+  double seconds_finishing = 0; ///< dropping small pieces and smoothing the mesh
 };
 
 struct PolygonizeResult {
@@ -114,8 +136,9 @@ struct PolygonizeResult {
 /// Cost: O(N (R/h)^3) to sample (each particle touches the nodes in its support) and O(surface
 /// cells) to mesh; memory proportional to the occupied volume / (8h)^3 blocks plus the mesh.
 /// @throws Error(InvalidInput) empty cloud, non-finite coordinate;
-///         Error(InvalidArgument) kernel, radius, threshold, cell size, radii or strengths
-///         out of range (the message names the option or the index);
+///         Error(InvalidArgument) kernel, radius, threshold, cell size, radii, strengths,
+///         anisotropy, component or smoothing options out of range (the message names the
+///         option or the index);
 ///         Error(LimitExceeded) the grid would exceed max_grid_bytes (checked before the
 ///         allocation, the message says how much it would need), or the particles span more
 ///         than 2^24 cells along an axis, or the mesh would exceed 2^32 - 1 vertices;

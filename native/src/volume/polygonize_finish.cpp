@@ -1,0 +1,78 @@
+#include "volume/polygonize_finish.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "particlemesh/core/error.h"
+#include "particlemesh/mesh/components.h"
+#include "particlemesh/smooth/taubin.h"
+#include "surface/spacing_impl.h"
+
+namespace particlemesh::detail {
+
+namespace {
+
+std::string num(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+}  // namespace
+
+void validate_finishing(const PolygonizeOptions& o) {
+  if (!(o.min_component_volume >= 0) || !std::isfinite(o.min_component_volume))
+    throw Error(Status::InvalidArgument, "min_component_volume is " + num(o.min_component_volume) +
+                                             " (must be a finite volume >= 0; 0 keeps every piece)");
+  if (!(o.min_component_particles >= 0) || !std::isfinite(o.min_component_particles))
+    throw Error(Status::InvalidArgument, "min_component_particles is " + num(o.min_component_particles) +
+                                             " (must be finite and >= 0; 0 keeps every piece)");
+  validate_taubin(o.surface_smoothing);
+}
+
+void finish_polygonized(PolygonizeResult& r, const PolygonizeOptions& o, const ParticleField& field,
+                        const Vec3* positions, size_t n, ProgressTracker& tracker) {
+  const auto t0 = std::chrono::steady_clock::now();
+  double limit = o.min_component_volume;
+  if (o.min_component_particles > 0) {
+    double s = field.spacing();
+    if (!(s > 0)) {
+      std::vector<Vec3> centres;
+      if (positions == nullptr) {
+        centres.resize(field.size());
+        for (size_t i = 0; i < field.size(); ++i) centres[i] = field.position(i);
+        positions = centres.data();
+        n = centres.size();
+      }
+      try {
+        s = estimate_spacing_impl(positions, n, tracker, 1.0, 1.0).spacing;
+      } catch (const Error& e) {
+        if (e.status() == Status::Cancelled) throw;
+        throw Error(e.status(), std::string("min_component_particles needs the particle spacing, which cannot be "
+                                            "estimated: ") + e.what() + " (give min_component_volume instead)");
+      }
+    }
+    limit = std::max(limit, o.min_component_particles * s * s * s);
+  }
+  r.stats.min_component_volume = limit;
+  if (limit > 0) {
+    tracker.stage("dropping small pieces", 1.0, 1.0);
+    r.stats.components_removed = remove_small_components(r.mesh, limit);
+  }
+  tracker.check();
+  if (o.surface_smoothing.iterations > 0) {
+    tracker.stage("smoothing the surface", 1.0, 1.0);
+    TaubinOptions t = o.surface_smoothing;
+    t.threads = o.threads;
+    taubin_smooth(r.mesh, t);
+    r.stats.smoothing_iterations = t.iterations;
+  }
+  r.stats.vertices = r.mesh.positions.size();
+  r.stats.triangles = r.mesh.triangles.size();
+  r.stats.seconds_finishing = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace particlemesh::detail
