@@ -151,7 +151,16 @@ class pm_polygonize_options(Structure):
         ("max_grid_bytes", c_uint64),
         ("progress", pm_progress_fn),
         ("progress_user_data", c_void_p),
+        ("flags", c_uint32),
+        ("domain_min", c_double * 3),
+        ("domain_max_radius", c_double),
+        ("cell_min", c_int64 * 3),
+        ("cell_max", c_int64 * 3),
     ]
+
+
+PM_POLYGONIZE_DOMAIN_MIN = 0x1
+PM_POLYGONIZE_CELL_RANGE = 0x2
 
 
 class pm_polygonize_stats(Structure):
@@ -166,6 +175,7 @@ class pm_polygonize_stats(Structure):
         ("grid_bytes", c_uint64),
         ("vertices", c_uint64),
         ("triangles", c_uint64),
+        ("origin", c_double * 3),
     ]
 
 

@@ -49,6 +49,8 @@ void pm_polygonize_options_init(pm_polygonize_options* options) {
   options->max_grid_bytes = d.max_grid_bytes;
   options->progress = nullptr;
   options->progress_user_data = nullptr;
+  options->flags = 0;
+  options->domain_max_radius = d.domain_max_radius;
 }
 
 pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii, const double* strengths,
@@ -72,6 +74,18 @@ pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii, const dou
     opt.threads = o.threads;
     opt.max_grid_bytes = o.max_grid_bytes;
     opt.progress = wrap_progress(o.progress, o.progress_user_data);
+    if (o.flags & ~uint32_t(PM_POLYGONIZE_DOMAIN_MIN | PM_POLYGONIZE_CELL_RANGE))
+      throw Error(Status::InvalidArgument, "options->flags has unknown bits: " + std::to_string(o.flags));
+    if (o.flags & PM_POLYGONIZE_DOMAIN_MIN) opt.domain_min = Vec3{o.domain_min[0], o.domain_min[1], o.domain_min[2]};
+    opt.domain_max_radius = o.domain_max_radius;
+    if (o.flags & PM_POLYGONIZE_CELL_RANGE) {
+      PolygonizeOptions::CellRange range;
+      for (int a = 0; a < 3; ++a) {
+        range.min[a] = o.cell_min[a];
+        range.max[a] = o.cell_max[a];
+      }
+      opt.cells = range;
+    }
     const size_t n = cloud->cloud.size();
     if (radii) opt.radii.assign(radii, radii + n);
     if (strengths) opt.strengths.assign(strengths, strengths + n);
@@ -90,6 +104,7 @@ pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii, const dou
       s.grid_bytes = r.stats.grid_bytes;
       s.vertices = r.stats.vertices;
       s.triangles = r.stats.triangles;
+      for (int a = 0; a < 3; ++a) s.origin[a] = r.stats.origin[a];
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();

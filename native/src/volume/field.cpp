@@ -144,6 +144,13 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
 
   f.uniform_ = params.radii.empty();
   f.max_radius_ = f.uniform_ ? f.params_.radius : *std::max_element(params.radii.begin(), params.radii.end());
+  if (params.domain_max_radius != 0) {
+    if (!(params.domain_max_radius >= f.max_radius_) || !std::isfinite(params.domain_max_radius))
+      throw Error(Status::InvalidArgument, "domain_max_radius is " + num(params.domain_max_radius) +
+                                               " (must be finite and at least the largest radius, " +
+                                               num(f.max_radius_) + ", or 0)");
+    f.max_radius_ = params.domain_max_radius;
+  }
   f.inv_r2_ = 1.0 / (f.params_.radius * f.params_.radius);
   if (!std::isfinite(f.inv_r2_) || !std::isfinite(f.max_radius_ * f.max_radius_))
     throw Error(Status::InvalidArgument, "radius " + num(f.max_radius_) + " is out of the usable range");
@@ -158,7 +165,26 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
   f.support_lo_ = lo;
   f.support_hi_ = hi;
 
-  f.grid_ = NeighborGrid(positions, n, f.max_radius_);  // the particles are kept once, in grid order
+  // The particles are kept once, in grid order.
+  if (params.domain_min) {
+    const Vec3& d = *params.domain_min;
+    for (int a = 0; a < 3; ++a) {
+      if (!std::isfinite(d[a]))
+        throw Error(Status::InvalidArgument, std::string("domain_min.") + "xyz"[a] + " is " + num(d[a]));
+      for (size_t i = 0; i < n; ++i)
+        if (positions[i][a] < d[a])
+          throw Error(Status::InvalidArgument, std::string("domain_min.") + "xyz"[a] + " is " + num(d[a]) +
+                                                   ", above positions[" + std::to_string(i) + "]." + "xyz"[a] + " = " +
+                                                   num(positions[i][a]) + " (it must be at or below every particle)");
+    }
+    f.lower_ = d;
+    f.grid_ = NeighborGrid(positions, n, f.max_radius_, d);
+  } else {
+    Vec3 m = positions[0];
+    for (size_t i = 1; i < n; ++i) m = {std::min(m.x, positions[i].x), std::min(m.y, positions[i].y), std::min(m.z, positions[i].z)};
+    f.lower_ = m;
+    f.grid_ = NeighborGrid(positions, n, f.max_radius_);
+  }
   f.sorted_index_.resize(n);
   for (uint32_t s = 0; s < n; ++s) f.sorted_index_[f.grid_.original_index(s)] = s;
   if (!f.uniform_) {
