@@ -71,7 +71,8 @@ double lattice_field(Kernel kernel, double radius, double spacing) {
 namespace detail {
 
 ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldParams& params,
-                                  ProgressTracker& tracker, double begin, double end) {
+                                  ProgressTracker& tracker, double begin, double end,
+                                  const FieldDomain& domain) {
   ParticleField f;
   validate_kernel(params.kernel);
   if (n == 0) throw Error(Status::InvalidInput, "there are no particles");
@@ -144,12 +145,12 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
 
   f.uniform_ = params.radii.empty();
   f.max_radius_ = f.uniform_ ? f.params_.radius : *std::max_element(params.radii.begin(), params.radii.end());
-  if (params.domain_max_radius != 0) {
-    if (!(params.domain_max_radius >= f.max_radius_) || !std::isfinite(params.domain_max_radius))
-      throw Error(Status::InvalidArgument, "domain_max_radius is " + num(params.domain_max_radius) +
+  if (domain.max_radius != 0) {
+    if (!(domain.max_radius >= f.max_radius_) || !std::isfinite(domain.max_radius))
+      throw Error(Status::InvalidArgument, "domain_max_radius is " + num(domain.max_radius) +
                                                " (must be finite and at least the largest radius, " +
                                                num(f.max_radius_) + ", or 0)");
-    f.max_radius_ = params.domain_max_radius;
+    f.max_radius_ = domain.max_radius;
   }
   f.inv_r2_ = 1.0 / (f.params_.radius * f.params_.radius);
   if (!std::isfinite(f.inv_r2_) || !std::isfinite(f.max_radius_ * f.max_radius_))
@@ -166,8 +167,8 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
   f.support_hi_ = hi;
 
   // The particles are kept once, in grid order.
-  if (params.domain_min) {
-    const Vec3& d = *params.domain_min;
+  if (domain.min) {
+    const Vec3& d = *domain.min;
     for (int a = 0; a < 3; ++a) {
       if (!std::isfinite(d[a]))
         throw Error(Status::InvalidArgument, std::string("domain_min.") + "xyz"[a] + " is " + num(d[a]));

@@ -855,11 +855,10 @@ PolygonizeResult polygonize(const PointCloud& cloud, const PolygonizeOptions& op
     params.threshold = options.threshold;
     params.radii = options.radii;
     params.strengths = options.strengths;
-    params.domain_min = options.domain_min;
-    params.domain_max_radius = options.domain_max_radius;
     tracker.stage("estimating spacing", 0.0, 0.1);
-    const ParticleField field =
-        detail::FieldBuilder::build(cloud.positions.data(), cloud.positions.size(), params, tracker, 0.0, 0.1);
+    const ParticleField field = detail::FieldBuilder::build(cloud.positions.data(), cloud.positions.size(), params,
+                                                            tracker, 0.0, 0.1,
+                                                            {options.domain_min, options.domain_max_radius});
     return polygonize_field(field, options, tracker, 0.1, PolygonizeStats{}, t0);
   });
   tracker.finish();

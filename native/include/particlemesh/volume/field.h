@@ -16,7 +16,6 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <optional>
 #include <vector>
 
 #include "particlemesh/core/export.h"
@@ -74,15 +73,6 @@ struct FieldParams {
   /// Empty (every strength 1), or one finite strength w_i per particle, |w_i| <= kMaxStrength
   /// (1e100). Negative strengths subtract; particles of zero strength contribute nothing.
   std::vector<double> strengths;
-  /// Empty, or the lower corner of the whole cloud these particles belong to (at or below
-  /// every particle on every axis): the particle grid, and the polygonization lattice built
-  /// on the field, are then anchored to it instead of to these particles' own smallest
-  /// coordinates, so that subsets of one cloud (tiles with their halos) sum the field in the
-  /// same order as the whole cloud and polygonize on the same lattice.
-  std::optional<Vec3> domain_min;
-  /// 0, or the whole cloud's largest radius (at least every R_i here): sizes the particle
-  /// grid as for the whole cloud when these particles are a subset of it.
-  double domain_max_radius = 0;
 };
 
 /// The summed field of a set of particles, with its threshold, ready to evaluate.
@@ -127,8 +117,9 @@ class PM_EXPORT ParticleField {
   /// Smallest axis-aligned box holding every particle's support (centre +- R_i).
   Vec3 support_min() const { return support_lo_; }
   Vec3 support_max() const { return support_hi_; }
-  /// The corner the particle grid is anchored to: params().domain_min when given, else the
-  /// particles' smallest coordinates.
+  /// The corner the particle grid (cells of max_radius(), from lower_corner() - max_radius())
+  /// is anchored to: the particles' smallest coordinates, or the whole cloud's when these
+  /// particles are a tile of it (PolygonizeOptions::domain_min).
   Vec3 lower_corner() const { return lower_; }
 
   /// F(x).
