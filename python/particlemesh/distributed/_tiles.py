@@ -62,6 +62,12 @@ class Cuts:
             hi[a] = c[index[a]] if index[a] < len(c) else np.inf
         return lo, hi
 
+    def unflat(self, flat):
+        """(i, j, k) of a flat tile number."""
+        k = flat % self.shape[2]
+        j = (flat // self.shape[2]) % self.shape[1]
+        return (flat // (self.shape[2] * self.shape[1]), j, k)
+
     def owner(self, positions):
         """Flat tile number (x slowest) of each point."""
         p = np.asarray(positions, dtype=np.float64).reshape(-1, 3)

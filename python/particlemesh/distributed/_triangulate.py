@@ -1,2 +1,466 @@
-def triangulate_tiled(*a, **k):
-    raise NotImplementedError
+"""One cloud of surface particles triangulated in tiles (triangulate_tiled).
+
+Each tile runs the library's whole chain (the smallest-sphere test, normals, manifold
+extraction, repair) on its particles and a halo of `halo` x L around them, wide enough that
+every triangle touching the tile, with its smallest-sphere test, is decided as on one machine,
+and that the extraction sees enough of the surface around. Each particle belongs to one tile
+(its box); the stitched surface takes, around every particle, the triangles its own tile chose
+(a triangle with corners in several tiles is kept when each of those tiles chose it). Where
+two tiles' extractions chose differently near a seam (about 1 % of the triangles there, in
+small patches), this leaves small holes, which are closed as the library closes its own small
+holes (the triangulation of the loop with the smallest largest angle, edges within
+fill_edge_factor x L). Tiles orient their pieces independently: pieces that share seam
+triangles are turned to agree, and each closed component is then turned outward.
+
+Only the seams cross to the driver first; the tiles' bulk triangles stay on the workers until
+the orientation is known, then come back once. Why not the one-machine finishing on the
+driver: at 2M particles the finishing (normals, extraction, repair) is 59 % of the time and
+the raw test 36 % (bench/RESULTS.md), so distributing the test alone cannot go 2x faster, and
+the driver would need the whole cloud's working memory."""
+
+import time
+
+import numpy as np
+
+from .. import _abi, _library, _options
+from .._errors import Error
+from ._dask import check_client, distributed
+from ._merge import canonical_triangles
+from ._seams import UnionFind, boundary_loops, even_permutation, fill_loop, vertex_normals
+from ._tiles import Cuts, Source, invalid, load, nbytes, tile_indices, tile_shape
+
+#: Halo width in units of L (the longest edge): the raw test needs L + 2L/sqrt(3) (2.2 L); the
+#: extraction's choices near the seam agree better with more context (measured on a sphere in
+#: 4 tiles: boundary edges left to close 74 at 3 L, 53 at 6 L, 36 at 12 L).
+DEFAULT_HALO = 6.0
+# Vertices within this many L of a tile's inner faces have their whole star sent to the driver.
+_NEAR = 3.0
+
+
+def _components(n, triangles):
+    """Connected components of the vertices through the triangles' edges (SciPy): labels."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    if len(triangles) == 0:
+        return np.arange(n)
+    e = triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    graph = coo_matrix((np.ones(len(e), dtype=np.int8), (e[:, 0], e[:, 1])), shape=(n, n))
+    return connected_components(graph, directed=False)[1]
+
+
+def _signed_volumes(positions, triangles, labels, count):
+    """Per label: the signed volume the triangles enclose with the origin (det / 6)."""
+    if len(triangles) == 0:
+        return np.zeros(count)
+    p = positions[triangles]
+    det = np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])) / 6.0
+    return np.bincount(labels, weights=det, minlength=count)
+
+
+def triangulate_tile(payload, tile, cuts, options, near):
+    """On a worker: the library's whole chain on a tile and its halo, kept on the worker; the
+    driver asks for the seams (seam_part) and then the rest (finish_tile)."""
+    import particlemesh as pm
+
+    t0 = time.perf_counter()
+    particles = load(payload)
+    pos = particles["positions"]
+    n = len(pos)
+    core = cuts.owner(pos) == tile
+    if n < 3 or not core.any():
+        tri = np.zeros((0, 3), dtype=np.int64)
+        normals = particles["normals"] if particles["normals"] is not None else np.zeros((n, 3))
+    else:
+        mesh = pm.triangulate(pos, particles["normals"], **options)
+        tri = mesh.triangles.astype(np.int64)
+        normals = mesh.normals
+    label = _components(n, tri)
+    tri_label = label[tri[:, 0]] if len(tri) else np.zeros(0, dtype=np.int64)
+    core_corner = core[tri] if len(tri) else np.zeros((0, 3), dtype=bool)
+    touching = core_corner.any(axis=1)
+    interior = core_corner.all(axis=1)
+    lo, hi = cuts.box(cuts.unflat(tile))
+    dist = np.full(n, np.inf)
+    for a in range(3):
+        if np.isfinite(lo[a]):
+            dist = np.minimum(dist, pos[:, a] - lo[a])
+        if np.isfinite(hi[a]):
+            dist = np.minimum(dist, hi[a] - pos[:, a])
+    near_v = core & (dist <= near)
+    # Real openings (boundary edges of the tile's surface at its own particles; the halo's
+    # cut edge is farther out) mark their piece open.
+    ncomp = int(label.max()) + 1 if n else 0
+    open_piece = np.zeros(ncomp, dtype=bool)
+    if len(tri):
+        he = tri[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+        key = he[:, 0] * n + he[:, 1]
+        rev = he[:, 1] * n + he[:, 0]
+        boundary = ~np.isin(key, rev)
+        at_core = boundary & (core[he[:, 0]] | core[he[:, 1]])
+        open_piece[np.unique(label[he[at_core, 0]])] = True
+    used = np.zeros(n, dtype=bool)
+    used[tri[touching].ravel()] = True
+    return {
+        "n": n, "positions": pos, "normals": normals, "attributes": particles["attributes"],
+        "ids": particles["ids"], "core": core, "label": label, "tri": tri, "tri_label": tri_label,
+        "touching": touching, "interior": interior, "near": near_v, "open_piece": open_piece,
+        "volume": _signed_volumes(pos, tri[interior], tri_label[interior], ncomp),
+        "pieces": ncomp, "unused_core": int((core & ~used).sum()),
+        "particles": n, "seconds": time.perf_counter() - t0,
+    }
+
+
+def seam_part(result):
+    """On a worker: what the driver needs of a tile to stitch it: the triangles that reach
+    another tile (seam) and those around the tile's particles near its faces (band), over a
+    table of their vertices (own core rank or -1, position, owner tile, piece, normal), and
+    per piece its volume, openness and highest particle."""
+    tri, core, label = result["tri"], result["core"], result["label"]
+    seam = result["touching"] & ~result["interior"]
+    band = result["interior"] & result["near"][tri].any(axis=1) if len(tri) else seam
+    parts = np.concatenate([np.flatnonzero(seam), np.flatnonzero(band & ~seam)])
+    local = tri[parts]
+    verts, inverse = np.unique(local.ravel(), return_inverse=True)
+    rank = np.cumsum(core) - 1
+    pos = result["positions"]
+    ids = result["ids"]
+    v_id = np.full(len(verts), -1, dtype=np.int64)
+    if ids is not None:
+        v_id[core[verts]] = ids[verts[core[verts]]]
+    # Per piece: its highest own particle (for facing up when it stays open) and that
+    # particle's normal's z.
+    own = np.flatnonzero(core)
+    top_z = np.full(result["pieces"], -np.inf)
+    top_nz = np.zeros(result["pieces"])
+    if len(own):
+        order = np.lexsort((pos[own, 2], result["label"][own]))
+        lab = result["label"][own[order]]
+        last = np.flatnonzero(np.append(lab[1:] != lab[:-1], True))
+        top = own[order[last]]
+        top_z[result["label"][top]] = pos[top, 2]
+        top_nz[result["label"][top]] = result["normals"][top, 2]
+    return {
+        "tri": inverse.reshape(-1, 3), "seam_count": int(seam.sum()),
+        "tri_piece": result["tri_label"][parts],
+        "v_rank": np.where(core[verts], rank[verts], -1), "v_id": v_id, "v_pos": pos[verts],
+        "v_near": result["near"][verts],
+        "v_piece": label[verts], "v_normal": result["normals"][verts],
+        "pieces": result["pieces"], "volume": result["volume"], "open": result["open_piece"],
+        "top_z": top_z, "top_nz": top_nz, "core_count": int(core.sum()),
+        "has_ids": ids is not None,
+        "unused_core": result["unused_core"], "particles": result["particles"],
+        "seconds": result["seconds"],
+    }
+
+
+def finish_tile(result, flip, first_id, with_points):
+    """On a worker: the tile's own triangles (every corner its own) in final vertex ids, each
+    piece turned as the driver decided (flip: +1/-1 per piece), and its particles' normals
+    likewise; with_points: also their positions and attributes (a loader's tile)."""
+    core, tri, label = result["core"], result["tri"], result["label"]
+    ids = result["ids"]
+    final = (ids[core] if ids is not None else first_id + np.arange(int(core.sum()))).astype(np.int64)
+    to_final = np.full(result["n"], -1, dtype=np.int64)
+    to_final[core] = final
+    own = tri[result["interior"]]
+    turn = flip[result["tri_label"][result["interior"]]] < 0
+    own = np.where(turn[:, None], own[:, [0, 2, 1]], own)
+    out = {"ids": final, "triangles": to_final[own],
+           "normals": result["normals"][core] * flip[label[core]][:, None]}
+    if with_points:
+        out["positions"] = result["positions"][core]
+        out["attributes"] = {k: np.asarray(v)[core] for k, v in result["attributes"].items()}
+    return out
+
+
+def _spacing_of_tile(payload):
+    """On a worker (a loader without spacing=): the tile's spacing estimate and particles."""
+    import particlemesh as pm
+
+    p = load(payload)["positions"]
+    if len(p) < 2:
+        return 0.0, 0
+    return pm.estimate_spacing(p, max_samples=200_000), len(p)
+
+
+def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attributes=None,
+                      bounds=None, halo=DEFAULT_HALO, progress=None, **options):
+    """particlemesh.triangulate of one cloud, cut into tiles that Dask triangulates in parallel
+    and stitched into one surface.
+
+    particles: (N, 3) positions or Points (normals, attributes as in triangulate), or a loader
+    loader(lo, hi) returning the particles in that box (an (N, 3) array, Points, or a dict with
+    positions, normals, attributes, ids) in the cloud's order, with bounds=(lo, hi) the cloud's
+    box. tiles=(nx, ny, nz): the box cut evenly. halo: the width around each tile, in units of
+    the longest edge L (at least 3). Options are triangulate's (spacing, max_edge_factor,
+    normal_angle, fill_holes, fill_edge_factor, normal_source, threads, ...; raw=True is not
+    distributed). spacing defaults to the whole cloud's estimate (with a loader, the median of
+    the tiles' estimates: give spacing= for the one-machine value).
+
+    Returns a Mesh: vertex i is particle i (with a loader: the tiles' particles in tile order,
+    x slowest, each tile's in the loader's order, or at the loader's ids), triangles
+    canonical, normals angle-weighted from the surface. It is a consistently oriented
+    2-manifold wherever the one-machine result is, closed components facing outward, every
+    particle used that the tiles use; near the seams some triangles differ from the
+    one-machine choice. mesh.stats: spacing, max_edge, tiles, halo, seam triangles, holes
+    filled and left, pieces turned, unused particles, bytes moved, seconds."""
+    dd = distributed()
+    check_client(client)
+    lib = _library.load()
+    t0 = time.perf_counter()
+    shape = tile_shape(tiles)
+    if options.get("raw"):
+        raise invalid("triangulate_tiled makes the finished surface; raw=True is not distributed")
+    options.pop("raw", None)
+    _options.TRIANGULATE.build(lib, {k: v for k, v in options.items()
+                                     if k not in ("repair", "orient")})
+    if not halo >= 3:
+        raise invalid(f"halo is {halo}: at least 3 (units of L) so that every triangle at a "
+                      "tile's particles, and its smallest-sphere test, is the one-machine one")
+    source = Source(particles, normals=normals, attributes=attributes, bounds=bounds)
+    import particlemesh as pm
+    defaults = pm.defaults("triangulate")
+    factor = float(options.get("max_edge_factor") or defaults["max_edge_factor"])
+    fill_factor = float(options.get("fill_edge_factor") or defaults["fill_edge_factor"])
+    fill_holes = options.get("fill_holes")
+    fill_holes = defaults["fill_holes"] if fill_holes is None else int(fill_holes)
+    cuts = Cuts(source.lo, source.hi, shape)
+    indices = tile_indices(shape)
+
+    spacing = options.get("spacing") or 0.0
+    if not spacing:
+        if source.loader is None:
+            spacing = pm.estimate_spacing(source.particles["positions"])
+        else:
+            futures = [client.submit(_spacing_of_tile, source.payload(*cuts.box(i)), pure=False)
+                       for i in indices]
+            est = [r for r in client.gather(futures) if r[1] > 0]
+            if not est:
+                raise Error("the loader returned no particles", _abi.PM_STATUS_INVALID_INPUT)
+            est.sort()
+            weights = np.cumsum([c for _, c in est])
+            spacing = est[int(np.searchsorted(weights, weights[-1] / 2))][0]
+    L = factor * spacing
+    tile_options = dict(options, spacing=spacing)
+    t_setup = time.perf_counter() - t0
+
+    # ---- the tiles, each its whole chain; only the seams come back now -------------------
+    sent = 0
+    results, summaries = [], []
+    for flat, index in enumerate(indices):
+        lo, hi = cuts.box(index)
+        payload = source.payload(lo - halo * L, hi + halo * L)
+        sent += nbytes(payload)
+        data = client.scatter([payload], hash=False)[0] if "particles" in payload else payload
+        future = client.submit(triangulate_tile, data, flat, cuts, tile_options, _NEAR * L,
+                               pure=False)
+        results.append(future)
+        summaries.append(client.submit(seam_part, future, pure=False))
+    parts = [None] * len(summaries)
+    where = {f.key: i for i, f in enumerate(summaries)}
+    finished = 0
+    for future in dd.as_completed(summaries):
+        parts[where[future.key]] = future.result()
+        finished += 1
+        if progress is not None:
+            progress(finished, 2 * len(summaries))
+    received = sum(nbytes(p) for p in parts)
+    t_tiles = time.perf_counter() - t0 - t_setup
+
+    # ---- final vertex ids --------------------------------------------------------------------
+    counts = [p["core_count"] for p in parts]
+    first_id = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+    total = int(sum(counts))
+    if source.count is not None and total != source.count:
+        raise Error(f"the tiles own {total} particles, not {source.count}", _abi.PM_STATUS_INTERNAL)
+    own_ids = {}  # (tile, position bytes) -> final id, for the seam and band vertices
+    vid = []      # per tile: final id of each table vertex (-1: unresolved)
+    for t, p in enumerate(parts):
+        ids = np.full(len(p["v_rank"]), -1, dtype=np.int64)
+        mine = p["v_rank"] >= 0
+        ranks = p["v_rank"][mine]
+        ids[mine] = p["v_id"][mine] if p["has_ids"] else first_id[t] + ranks
+        for i in np.flatnonzero(mine):
+            own_ids[(t, p["v_pos"][i].tobytes())] = int(ids[i])
+        vid.append(ids)
+    positions = {}
+    vertex_piece = {}  # own table vertices: their tile's piece
+    near = set()       # own vertices near an inner face: their whole star is in the tables
+    piece_base = np.concatenate([[0], np.cumsum([p["pieces"] for p in parts])[:-1]]).astype(int)
+    for t, p in enumerate(parts):
+        owners = cuts.owner(p["v_pos"]) if len(p["v_pos"]) else np.zeros(0, dtype=np.int64)
+        for i in np.flatnonzero(vid[t] < 0):
+            vid[t][i] = own_ids.get((int(owners[i]), p["v_pos"][i].tobytes()), -1)
+        for i, v in enumerate(vid[t]):
+            if v >= 0:
+                positions[int(v)] = p["v_pos"][i]
+                if p["v_rank"][i] >= 0:
+                    vertex_piece[int(v)] = piece_base[t] + int(p["v_piece"][i])
+                    if p["v_near"][i]:
+                        near.add(int(v))
+
+    # ---- the pieces' orientations: seam triangles two tiles chose, compared -----------------
+    n_pieces = int(sum(p["pieces"] for p in parts))
+    copies = {}  # sorted corners -> [(tile, piece, even winding)]
+    band = []    # (final corners, piece) of tiles' own triangles near their faces
+    for t, p in enumerate(parts):
+        for k, (tri, piece) in enumerate(zip(p["tri"], p["tri_piece"])):
+            corners = tuple(int(c) for c in vid[t][tri])
+            gpiece = piece_base[t] + int(piece)
+            if k >= p["seam_count"]:
+                band.append((corners, gpiece))
+                continue
+            if min(corners) < 0:
+                continue  # a corner the owning tile does not know: no such triangle there
+            copies.setdefault(tuple(sorted(corners)), []).append(
+                (t, gpiece, even_permutation(corners)))
+    votes = {}
+    for found in copies.values():
+        for i in range(len(found)):
+            for j in range(i + 1, len(found)):
+                a, b = found[i], found[j]
+                pair = (min(a[1], b[1]), max(a[1], b[1]))
+                v = votes.setdefault(pair, [0, 0])
+                v[int(a[2] != b[2])] += 1
+    orient = UnionFind(n_pieces)
+    for (a, b), (same, opposite) in sorted(votes.items(), key=lambda kv: -sum(kv[1])):
+        orient.union(a, b, int(opposite > same))
+    flip = np.array([orient.parity_of(i) for i in range(n_pieces)], dtype=np.int64)
+
+    # ---- the seam triangles every owner chose, the same way round ----------------------------
+    owner_of = {}
+    for key in copies:
+        for v in key:
+            if v not in owner_of:
+                owner_of[v] = int(cuts.owner(positions[v])[0])
+    stitched = []  # (corners wound as the pieces face once turned to agree, piece)
+    rejected = 0
+    for key, found in copies.items():
+        owners = {owner_of[v] for v in key}
+        tiles_with = {t for t, _, _ in found}
+        windings = {bool(even) ^ bool(flip[piece]) for _, piece, even in found}
+        if owners <= tiles_with and len(windings) == 1:
+            even = windings.pop()
+            tri = key if even else (key[0], key[2], key[1])
+            piece = next(pc for t, pc, _ in found if t == owner_of[key[0]])
+            stitched.append((tri, piece))
+        else:
+            rejected += 1
+    local = [(c if not flip[pc] else (c[0], c[2], c[1])) for c, pc in band] + [c for c, _ in stitched]
+
+    # ---- close the holes where tiles disagreed -----------------------------------------------
+    edges = {frozenset(e) for a, b, c in local for e in ((a, b), (b, c), (c, a))}
+    loops = boundary_loops(local, lambda v: v in near)
+    fills, unfilled = [], []
+    for loop in loops:
+        tris = fill_loop(loop, positions.__getitem__, fill_factor * L,
+                         lambda a, b: frozenset((a, b)) in edges) if len(loop) <= fill_holes else None
+        if tris is None:
+            unfilled.append(loop)
+            continue
+        fills += tris
+        for a, b, c in tris:
+            edges.update(frozenset(e) for e in ((a, b), (b, c), (c, a)))
+
+    # ---- components, outward ------------------------------------------------------------------
+    joined = UnionFind(n_pieces)
+    for tri in [c for c, _ in stitched] + fills:
+        ps = [vertex_piece[v] for v in tri if v in vertex_piece]
+        for q in ps[1:]:
+            joined.union(ps[0], q)
+    root = np.array([joined.find(i) for i in range(n_pieces)])
+    sign = np.where(flip == 1, -1.0, 1.0)
+    volume = np.zeros(n_pieces)
+    is_open = np.zeros(n_pieces, dtype=bool)
+    top_z = np.full(n_pieces, -np.inf)
+    top_nz = np.zeros(n_pieces)
+    for t, p in enumerate(parts):
+        sl = slice(piece_base[t], piece_base[t] + p["pieces"])
+        volume[sl] = p["volume"] * sign[sl]
+        is_open[sl] = p["open"]
+        top_z[sl], top_nz[sl] = p["top_z"], p["top_nz"] * sign[sl]
+    for tri in [c for c, _ in stitched] + fills:  # wound as the turned pieces
+        a, b, c = (np.asarray(positions[v]) for v in tri)
+        volume[vertex_piece[tri[0]]] += float(np.dot(a, np.cross(b, c))) / 6.0
+    for loop in unfilled:
+        for v in loop:
+            is_open[vertex_piece[v]] = True
+    comp_volume = np.bincount(root, weights=volume, minlength=n_pieces)
+    comp_open = np.bincount(root, weights=is_open.astype(float), minlength=n_pieces) > 0
+    best = {}
+    for i in range(n_pieces):
+        r = root[i]
+        if r not in best or top_z[i] > top_z[best[r]]:
+            best[r] = i
+    turn = np.zeros(n_pieces, dtype=bool)
+    for r in set(root.tolist()):
+        if comp_open[r]:
+            turn[r] = top_nz[best[r]] < 0  # an open surface faces up at its highest particle
+        else:
+            turn[r] = comp_volume[r] < 0   # a closed one encloses positive volume
+    final_turn = turn[root]
+    piece_sign = sign * np.where(final_turn, -1.0, 1.0)
+    turned_pieces = int((piece_sign < 0).sum())
+
+    # ---- the tiles' own triangles, now turned, come back once --------------------------------
+    with_points = source.loader is not None
+    finals = [client.submit(finish_tile, r, piece_sign[piece_base[t]:piece_base[t] + parts[t]["pieces"]],
+                            int(first_id[t]), with_points, pure=False)
+              for t, r in enumerate(results)]
+    done = [None] * len(finals)
+    where = {f.key: i for i, f in enumerate(finals)}
+    for future in dd.as_completed(finals):
+        done[where[future.key]] = future.result()
+        finished += 1
+        if progress is not None:
+            progress(finished, 2 * len(summaries))
+    received += sum(nbytes(d) for d in done)
+    for r in results:
+        r.release()
+
+    if with_points:
+        order = np.concatenate([d["ids"] for d in done])
+        if not np.array_equal(np.sort(order), np.arange(total)):
+            raise invalid("the loader's ids are not 0..N-1, each once")
+        vertices = np.empty((total, 3))
+        names = set.intersection(*(set(d["attributes"]) for d in done)) if done else set()
+        attrs = {}
+        for d in done:
+            vertices[d["ids"]] = d["positions"]
+        for name in names:
+            first = done[0]["attributes"][name]
+            a = np.empty((total,) + first.shape[1:], dtype=first.dtype)
+            for d in done:
+                a[d["ids"]] = d["attributes"][name]
+            attrs[name] = a
+    else:
+        vertices = source.particles["positions"]
+        attrs = {k: np.asarray(v) for k, v in source.particles["attributes"].items()}
+    vnormals = np.zeros((total, 3))
+    for d in done:
+        vnormals[d["ids"]] = d["normals"]
+
+    def turned(c, yes):
+        return (c[0], c[2], c[1]) if yes else c
+    around = [turned(c, piece_sign[pc] < 0) for c, pc in band]
+    extra = [turned(c, final_turn[pc]) for c, pc in stitched]
+    extra += [turned(c, final_turn[vertex_piece[c[0]]]) for c in fills]
+    around += extra
+    for v, nrm in vertex_normals(around, positions.__getitem__, near).items():
+        vnormals[v] = nrm
+    triangles = np.concatenate([d["triangles"] for d in done] + [np.asarray(extra, dtype=np.int64).reshape(-1, 3)])
+    used = np.zeros(total, dtype=bool)
+    used[triangles.ravel()] = True
+    mesh = pm.Mesh(vertices, canonical_triangles(triangles), vnormals, attrs)
+    mesh.stats = {
+        "spacing": spacing, "max_edge": L, "tiles": shape, "halo": halo,
+        "tile_particles": [p["particles"] for p in parts],
+        "tile_seconds": [p["seconds"] for p in parts],
+        "seam_triangles": len(copies), "seam_rejected": rejected, "pieces": n_pieces,
+        "pieces_turned": turned_pieces, "holes_filled": len(loops) - len(unfilled),
+        "fill_triangles": len(fills), "holes_left": len(unfilled),
+        "unused_points": int((~used).sum()), "bytes_sent": sent, "bytes_received": received,
+        "seconds_tiles": t_tiles, "seconds": time.perf_counter() - t0,
+    }
+    return mesh
