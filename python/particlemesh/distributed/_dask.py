@@ -22,17 +22,16 @@ def check_client(client):
     return client
 
 
-def gather_in_order(client, futures, progress=None, label=""):
-    """The results of `futures`, in their order, raising the first task's error (with the
-    task's own exception type and message). progress(label, finished, total) as they end."""
+def gather_in_order(futures, report=None):
+    """The futures' results in their order, raising the first task's error (its own type and
+    message); report(finished) as they end."""
     dd = distributed()
-    results = [None] * len(futures)
-    index = {f.key: i for i, f in enumerate(futures)}
+    out = [None] * len(futures)
+    where = {f.key: i for i, f in enumerate(futures)}
     finished = 0
     for future in dd.as_completed(futures):
-        i = index[future.key]
-        results[i] = future.result()  # re-raises the task's exception
+        out[where[future.key]] = future.result()
         finished += 1
-        if progress is not None:
-            progress(label, finished, len(futures))
-    return results
+        if report is not None:
+            report(finished)
+    return out

@@ -9,12 +9,13 @@ vertices on their seams are the same bit for bit; merging them on their coordina
 one-machine mesh exactly (see native/include/particlemesh/volume/polygonize.h)."""
 
 import time
+import uuid
 
 import numpy as np
 
 from .. import _abi, _library, _options
 from .._errors import Error
-from ._dask import check_client, distributed
+from ._dask import check_client, distributed, gather_in_order
 from ._merge import merge_by_position
 from ._tiles import Source, invalid, load, nbytes, tile_indices, tile_shape
 
@@ -146,24 +147,16 @@ def polygonize_tiled(client, particles, tiles=(2, 2, 1), *, bounds=None, radius=
             hi[a] = np.inf if i == shape[a] - 1 else origin[a] + cmax[a] * h + halo
         tasks.append((index, (cmin, cmax), source.payload(lo, hi)))
 
-    sent = 0
-    futures = []
-    for index, cells, payload in tasks:
-        sent += nbytes(payload)
-        # Scattered as one object (a dict would be scattered under its keys' names).
-        data = client.scatter([payload], hash=False)[0] if "particles" in payload else payload
-        futures.append(client.submit(polygonize_tile, data, cells, lower, R_max, tile_options,
-                                     key=f"particlemesh-polygonize-tile-{index}-{id(tasks):x}",
-                                     pure=False))
-    dd = distributed()
-    results = [None] * len(futures)
-    where = {f.key: i for i, f in enumerate(futures)}
-    finished = 0
-    for future in dd.as_completed(futures):
-        results[where[future.key]] = future.result()
-        finished += 1
-        if progress is not None:
-            progress(finished, len(futures))
+    payloads = [t[2] for t in tasks]
+    sent = nbytes(payloads)
+    if source.loader is None:  # the arrays go to the workers once, one tile each
+        payloads = client.scatter(payloads, hash=False)
+    token = uuid.uuid4().hex[:8]
+    n = len(tasks)
+    futures = client.map(polygonize_tile, payloads, [t[1] for t in tasks], [lower] * n,
+                         [R_max] * n, [tile_options] * n,
+                         key=[f"particlemesh-polygonize-{i}-{token}" for i in range(n)], pure=False)
+    results = gather_in_order(futures, (lambda done: progress(done, n)) if progress else None)
     for r in results:
         if "origin" in r and not np.array_equal(np.asarray(r["origin"]), origin):
             raise Error(f"a tile's lattice origin {list(r['origin'])} is not {origin.tolist()} "

@@ -19,14 +19,15 @@ the raw test 36 % (bench/RESULTS.md), so distributing the test alone cannot go 2
 the driver would need the whole cloud's working memory."""
 
 import time
+import uuid
 
 import numpy as np
 
 from .. import _abi, _library, _options
 from .._errors import Error
-from ._dask import check_client, distributed
+from ._dask import check_client, distributed, gather_in_order
 from ._merge import canonical_triangles
-from ._seams import UnionFind, boundary_loops, even_permutation, fill_loop, vertex_normals
+from ._seams import Stitch
 from ._tiles import Cuts, Source, invalid, load, nbytes, tile_indices, tile_shape
 
 #: Halo width in units of L (the longest edge): the raw test needs L + 2L/sqrt(3) (2.2 L); the
@@ -205,7 +206,7 @@ def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attri
     particle used that the tiles use; near the seams some triangles differ from the
     one-machine choice. mesh.stats: spacing, max_edge, tiles, halo, seam triangles, holes
     filled and left, pieces turned, unused particles, bytes moved, seconds."""
-    dd = distributed()
+    distributed()
     check_client(client)
     lib = _library.load()
     t0 = time.perf_counter()
@@ -233,8 +234,8 @@ def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attri
         if source.loader is None:
             spacing = pm.estimate_spacing(source.particles["positions"])
         else:
-            futures = [client.submit(_spacing_of_tile, source.payload(*cuts.box(i)), pure=False)
-                       for i in indices]
+            futures = client.map(_spacing_of_tile, [source.payload(*cuts.box(i)) for i in indices],
+                                 pure=False)
             est = [r for r in client.gather(futures) if r[1] > 0]
             if not est:
                 raise Error("the loader returned no particles", _abi.PM_STATUS_INVALID_INPUT)
@@ -246,190 +247,63 @@ def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attri
     t_setup = time.perf_counter() - t0
 
     # ---- the tiles, each its whole chain; only the seams come back now -------------------
-    sent = 0
-    results, summaries = [], []
-    for flat, index in enumerate(indices):
+    payloads = []
+    for index in indices:
         lo, hi = cuts.box(index)
-        payload = source.payload(lo - halo * L, hi + halo * L)
-        sent += nbytes(payload)
-        data = client.scatter([payload], hash=False)[0] if "particles" in payload else payload
-        future = client.submit(triangulate_tile, data, flat, cuts, tile_options, _NEAR * L,
-                               pure=False)
-        results.append(future)
-        summaries.append(client.submit(seam_part, future, pure=False))
-    parts = [None] * len(summaries)
-    where = {f.key: i for i, f in enumerate(summaries)}
-    finished = 0
-    for future in dd.as_completed(summaries):
-        parts[where[future.key]] = future.result()
-        finished += 1
-        if progress is not None:
-            progress(finished, 2 * len(summaries))
-    received = sum(nbytes(p) for p in parts)
+        payloads.append(source.payload(lo - halo * L, hi + halo * L))
+    sent = nbytes(payloads)
+    if source.loader is None:  # the arrays go to the workers once, one tile each
+        payloads = client.scatter(payloads, hash=False)
+    token = uuid.uuid4().hex[:8]
+    n = len(indices)
+    results = client.map(triangulate_tile, payloads, range(n), [cuts] * n, [tile_options] * n,
+                         [_NEAR * L] * n, key=[f"particlemesh-tile-{i}-{token}" for i in range(n)],
+                         pure=False)
+    summaries = client.map(seam_part, results, key=[f"particlemesh-seams-{i}-{token}" for i in range(n)],
+                           pure=False)
+    report = (lambda done: progress(done, 2 * n)) if progress is not None else None
+    parts = gather_in_order(summaries, report)
+    received = nbytes(parts)
     t_tiles = time.perf_counter() - t0 - t_setup
 
-    # ---- final vertex ids --------------------------------------------------------------------
+    # ---- the seams ----------------------------------------------------------------------------
     counts = [p["core_count"] for p in parts]
     first_id = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
     total = int(sum(counts))
     if source.count is not None and total != source.count:
         raise Error(f"the tiles own {total} particles, not {source.count}", _abi.PM_STATUS_INTERNAL)
-    own_ids = {}  # (tile, position bytes) -> final id, for the seam and band vertices
-    vid = []      # per tile: final id of each table vertex (-1: unresolved)
-    for t, p in enumerate(parts):
-        ids = np.full(len(p["v_rank"]), -1, dtype=np.int64)
-        mine = p["v_rank"] >= 0
-        ranks = p["v_rank"][mine]
-        ids[mine] = p["v_id"][mine] if p["has_ids"] else first_id[t] + ranks
-        for i in np.flatnonzero(mine):
-            own_ids[(t, p["v_pos"][i].tobytes())] = int(ids[i])
-        vid.append(ids)
-    positions = {}
-    vertex_piece = {}  # own table vertices: their tile's piece
-    near = set()       # own vertices near an inner face: their whole star is in the tables
-    piece_base = np.concatenate([[0], np.cumsum([p["pieces"] for p in parts])[:-1]]).astype(int)
-    for t, p in enumerate(parts):
-        owners = cuts.owner(p["v_pos"]) if len(p["v_pos"]) else np.zeros(0, dtype=np.int64)
-        for i in np.flatnonzero(vid[t] < 0):
-            vid[t][i] = own_ids.get((int(owners[i]), p["v_pos"][i].tobytes()), -1)
-        for i, v in enumerate(vid[t]):
-            if v >= 0:
-                positions[int(v)] = p["v_pos"][i]
-                if p["v_rank"][i] >= 0:
-                    vertex_piece[int(v)] = piece_base[t] + int(p["v_piece"][i])
-                    if p["v_near"][i]:
-                        near.add(int(v))
-
-    # ---- the pieces' orientations: seam triangles two tiles chose, compared -----------------
-    n_pieces = int(sum(p["pieces"] for p in parts))
-    copies = {}  # sorted corners -> [(tile, piece, even winding)]
-    band = []    # (final corners, piece) of tiles' own triangles near their faces
-    for t, p in enumerate(parts):
-        for k, (tri, piece) in enumerate(zip(p["tri"], p["tri_piece"])):
-            corners = tuple(int(c) for c in vid[t][tri])
-            gpiece = piece_base[t] + int(piece)
-            if k >= p["seam_count"]:
-                band.append((corners, gpiece))
-                continue
-            if min(corners) < 0:
-                continue  # a corner the owning tile does not know: no such triangle there
-            copies.setdefault(tuple(sorted(corners)), []).append(
-                (t, gpiece, even_permutation(corners)))
-    votes = {}
-    for found in copies.values():
-        for i in range(len(found)):
-            for j in range(i + 1, len(found)):
-                a, b = found[i], found[j]
-                pair = (min(a[1], b[1]), max(a[1], b[1]))
-                v = votes.setdefault(pair, [0, 0])
-                v[int(a[2] != b[2])] += 1
-    orient = UnionFind(n_pieces)
-    for (a, b), (same, opposite) in sorted(votes.items(), key=lambda kv: -sum(kv[1])):
-        orient.union(a, b, int(opposite > same))
-    flip = np.array([orient.parity_of(i) for i in range(n_pieces)], dtype=np.int64)
-
-    # ---- the seam triangles every owner chose, the same way round ----------------------------
-    owner_of = {}
-    for key in copies:
-        for v in key:
-            if v not in owner_of:
-                owner_of[v] = int(cuts.owner(positions[v])[0])
-    stitched = []  # (corners wound as the pieces face once turned to agree, piece)
-    rejected = 0
-    for key, found in copies.items():
-        owners = {owner_of[v] for v in key}
-        tiles_with = {t for t, _, _ in found}
-        windings = {bool(even) ^ bool(flip[piece]) for _, piece, even in found}
-        if owners <= tiles_with and len(windings) == 1:
-            even = windings.pop()
-            tri = key if even else (key[0], key[2], key[1])
-            piece = next(pc for t, pc, _ in found if t == owner_of[key[0]])
-            stitched.append((tri, piece))
-        else:
-            rejected += 1
-    local = [(c if not flip[pc] else (c[0], c[2], c[1])) for c, pc in band] + [c for c, _ in stitched]
-
-    # ---- close the holes where tiles disagreed -----------------------------------------------
-    edges = {frozenset(e) for a, b, c in local for e in ((a, b), (b, c), (c, a))}
-    loops = boundary_loops(local, lambda v: v in near)
-    fills, unfilled = [], []
-    for loop in loops:
-        tris = fill_loop(loop, positions.__getitem__, fill_factor * L,
-                         lambda a, b: frozenset((a, b)) in edges) if len(loop) <= fill_holes else None
-        if tris is None:
-            unfilled.append(loop)
-            continue
-        fills += tris
-        for a, b, c in tris:
-            edges.update(frozenset(e) for e in ((a, b), (b, c), (c, a)))
-
-    # ---- components, outward ------------------------------------------------------------------
-    joined = UnionFind(n_pieces)
-    for tri in [c for c, _ in stitched] + fills:
-        ps = [vertex_piece[v] for v in tri if v in vertex_piece]
-        for q in ps[1:]:
-            joined.union(ps[0], q)
-    root = np.array([joined.find(i) for i in range(n_pieces)])
-    sign = np.where(flip == 1, -1.0, 1.0)
-    volume = np.zeros(n_pieces)
-    is_open = np.zeros(n_pieces, dtype=bool)
-    top_z = np.full(n_pieces, -np.inf)
-    top_nz = np.zeros(n_pieces)
-    for t, p in enumerate(parts):
-        sl = slice(piece_base[t], piece_base[t] + p["pieces"])
-        volume[sl] = p["volume"] * sign[sl]
-        is_open[sl] = p["open"]
-        top_z[sl], top_nz[sl] = p["top_z"], p["top_nz"] * sign[sl]
-    for tri in [c for c, _ in stitched] + fills:  # wound as the turned pieces
-        a, b, c = (np.asarray(positions[v]) for v in tri)
-        volume[vertex_piece[tri[0]]] += float(np.dot(a, np.cross(b, c))) / 6.0
-    for loop in unfilled:
-        for v in loop:
-            is_open[vertex_piece[v]] = True
-    comp_volume = np.bincount(root, weights=volume, minlength=n_pieces)
-    comp_open = np.bincount(root, weights=is_open.astype(float), minlength=n_pieces) > 0
-    best = {}
-    for i in range(n_pieces):
-        r = root[i]
-        if r not in best or top_z[i] > top_z[best[r]]:
-            best[r] = i
-    turn = np.zeros(n_pieces, dtype=bool)
-    for r in set(root.tolist()):
-        if comp_open[r]:
-            turn[r] = top_nz[best[r]] < 0  # an open surface faces up at its highest particle
-        else:
-            turn[r] = comp_volume[r] < 0   # a closed one encloses positive volume
-    final_turn = turn[root]
-    piece_sign = sign * np.where(final_turn, -1.0, 1.0)
-    turned_pieces = int((piece_sign < 0).sum())
+    seams = Stitch(parts, cuts, first_id)
+    seams.orient_pieces()
+    seams.choose()
+    seams.close_holes(fill_factor * L, fill_holes)
+    volume = np.concatenate([p["volume"] for p in parts])
+    is_open = np.concatenate([p["open"] for p in parts])
+    top_z = np.concatenate([p["top_z"] for p in parts])
+    top_nz = np.concatenate([p["top_nz"] for p in parts])
+    sign = seams.outward(volume, is_open, top_z, top_nz)
+    t_seams = time.perf_counter() - t0 - t_setup - t_tiles
 
     # ---- the tiles' own triangles, now turned, come back once --------------------------------
     with_points = source.loader is not None
-    finals = [client.submit(finish_tile, r, piece_sign[piece_base[t]:piece_base[t] + parts[t]["pieces"]],
-                            int(first_id[t]), with_points, pure=False)
-              for t, r in enumerate(results)]
-    done = [None] * len(finals)
-    where = {f.key: i for i, f in enumerate(finals)}
-    for future in dd.as_completed(finals):
-        done[where[future.key]] = future.result()
-        finished += 1
-        if progress is not None:
-            progress(finished, 2 * len(summaries))
-    received += sum(nbytes(d) for d in done)
-    for r in results:
-        r.release()
+    base = seams.piece_base
+    finals = client.map(finish_tile, results,
+                        [sign[base[t]:base[t] + parts[t]["pieces"]] for t in range(n)],
+                        first_id.tolist(), [with_points] * n,
+                        key=[f"particlemesh-finish-{i}-{token}" for i in range(n)], pure=False)
+    report = (lambda done: progress(n + done, 2 * n)) if progress is not None else None
+    done = gather_in_order(finals, report)
+    received += nbytes(done)
 
     if with_points:
         order = np.concatenate([d["ids"] for d in done])
-        if not np.array_equal(np.sort(order), np.arange(total)):
-            raise invalid("the loader's ids are not 0..N-1, each once")
+        if len(order) != total or not np.array_equal(np.sort(order), np.arange(total)):
+            raise invalid("the loader's ids are not 0..N-1, each particle once")
         vertices = np.empty((total, 3))
-        names = set.intersection(*(set(d["attributes"]) for d in done)) if done else set()
-        attrs = {}
         for d in done:
             vertices[d["ids"]] = d["positions"]
-        for name in names:
-            first = done[0]["attributes"][name]
+        attrs = {}
+        for name in set.intersection(*(set(d["attributes"]) for d in done)):
+            first = np.asarray(done[0]["attributes"][name])
             a = np.empty((total,) + first.shape[1:], dtype=first.dtype)
             for d in done:
                 a[d["ids"]] = d["attributes"][name]
@@ -440,16 +314,9 @@ def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attri
     vnormals = np.zeros((total, 3))
     for d in done:
         vnormals[d["ids"]] = d["normals"]
-
-    def turned(c, yes):
-        return (c[0], c[2], c[1]) if yes else c
-    around = [turned(c, piece_sign[pc] < 0) for c, pc in band]
-    extra = [turned(c, final_turn[pc]) for c, pc in stitched]
-    extra += [turned(c, final_turn[vertex_piece[c[0]]]) for c in fills]
-    around += extra
-    for v, nrm in vertex_normals(around, positions.__getitem__, near).items():
-        vnormals[v] = nrm
-    triangles = np.concatenate([d["triangles"] for d in done] + [np.asarray(extra, dtype=np.int64).reshape(-1, 3)])
+    ids, nrm = seams.normals()
+    vnormals[ids] = nrm
+    triangles = np.concatenate([d["triangles"] for d in done] + [seams.triangles()])
     used = np.zeros(total, dtype=bool)
     used[triangles.ravel()] = True
     mesh = pm.Mesh(vertices, canonical_triangles(triangles), vnormals, attrs)
@@ -457,10 +324,12 @@ def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attri
         "spacing": spacing, "max_edge": L, "tiles": shape, "halo": halo,
         "tile_particles": [p["particles"] for p in parts],
         "tile_seconds": [p["seconds"] for p in parts],
-        "seam_triangles": len(copies), "seam_rejected": rejected, "pieces": n_pieces,
-        "pieces_turned": turned_pieces, "holes_filled": len(loops) - len(unfilled),
-        "fill_triangles": len(fills), "holes_left": len(unfilled),
-        "unused_points": int((~used).sum()), "bytes_sent": sent, "bytes_received": received,
-        "seconds_tiles": t_tiles, "seconds": time.perf_counter() - t0,
+        "seam_triangles": len(seams.copies), "seam_rejected": seams.rejected,
+        "pieces": seams.n_pieces, "pieces_turned": int((sign < 0).sum()),
+        "holes_filled": len(seams.loops) - len(seams.left), "fill_triangles": len(seams.fills),
+        "holes_left": len(seams.left), "unused_points": int((~used).sum()),
+        "bytes_sent": sent, "bytes_received": received, "seconds_tiles": t_tiles,
+        "seconds_seams": t_seams, "seconds": time.perf_counter() - t0,
     }
     return mesh
+
