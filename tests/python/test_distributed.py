@@ -262,11 +262,15 @@ def check_surface(pm, tiled, one):
 
 
 def test_triangulate_tiled_is_manifold_closed_and_uses_every_particle(pm, pmd, client, torus):
-    sphere = fibonacci_sphere(12000)
-    for points, tiles in ((sphere, (2, 2, 1)), (sphere, (1, 1, 3)),
-                          (pm.read_points(torus).positions, (3, 2, 1))):
-        one = pm.triangulate(points)
-        tiled = pmd.triangulate_tiled(client, points, tiles=tiles)
+    sphere, ring = fibonacci_sphere(12000), pm.read_points(torus).positions
+    # The sphere's normals face out above z = 0 and in below: they orient the two halves'
+    # tiles opposite ways (the stitching turns them to agree, the sphere faces outward as on
+    # one machine). The torus's tiles choose differently at the seams (holes to close).
+    flipped = sphere * np.where(sphere[:, 2] >= 0, 1.0, -1.0)[:, None]
+    for points, normals, tiles in ((sphere, flipped, (2, 1, 2)), (ring, None, (1, 1, 3)),
+                                   (ring, None, (3, 2, 1))):
+        one = pm.triangulate(points, normals)
+        tiled = pmd.triangulate_tiled(client, points, tiles=tiles, normals=normals)
         check_surface(pm, tiled, one)
         assert tiled.stats["seam_triangles"] > 0 and tiled.stats["pieces"] >= np.prod(tiles)
         assert same_arrays(tiled.vertices, points)  # vertex i is particle i
