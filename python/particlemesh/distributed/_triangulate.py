@@ -95,9 +95,10 @@ def triangulate_tile(payload, tile, cuts, options, near):
     open_piece = np.zeros(ncomp, dtype=bool)
     if len(tri):
         he = tri[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-        key = he[:, 0] * n + he[:, 1]
+        key = np.sort(he[:, 0] * n + he[:, 1])
         rev = he[:, 1] * n + he[:, 0]
-        boundary = ~np.isin(key, rev)
+        at = np.minimum(np.searchsorted(key, rev), len(key) - 1)
+        boundary = key[at] != rev  # no triangle holds the edge the other way
         at_core = boundary & (core[he[:, 0]] | core[he[:, 1]])
         open_piece[np.unique(label[he[at_core, 0]])] = True
     used = np.zeros(n, dtype=bool)
