@@ -77,6 +77,12 @@ def test_import_particlemesh_needs_no_dask(pm):
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "polygonize_tiled"
+    # Without Dask, a call says what to install.
+    code = ("import sys; sys.modules['distributed'] = None; import particlemesh.distributed as d\n"
+            "try:\n    d.map_frames(None, 'triangulate', 'a_{}.xyz', 'b_{}.ply')\n"
+            "except ImportError as e:\n    print(e)")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert out.returncode == 0 and "python3-distributed" in out.stdout, out.stdout + out.stderr
 
 
 # ---- frames ----------------------------------------------------------------------------------
@@ -280,6 +286,18 @@ def test_triangulate_tiled_is_manifold_closed_and_uses_every_particle(pm, pmd, c
         assert common > 0.97, common
         # Normals agree with the one-machine surface's.
         assert np.median(np.einsum("ij,ij->i", tiled.normals, one.normals)) > 0.99
+
+
+def test_triangulate_tiled_keeps_an_open_surface_open_and_facing_as_one_machine(pm, pmd, client):
+    s = fibonacci_sphere(16000)
+    band = s[np.abs(s[:, 2]) < 0.5]  # two boundary loops, a real opening each
+    one = pm.triangulate(band)
+    tiled = pmd.triangulate_tiled(client, band, tiles=(2, 1, 2))
+    top, ref = pm.topology(tiled), pm.topology(one)
+    for key in ("closed", "manifold", "consistently_oriented", "boundary_loops", "vertices_used"):
+        assert top[key] == ref[key], key
+    assert not top["closed"] and top["boundary_loops"] == 2
+    assert np.median(np.einsum("ij,ij->i", tiled.normals, one.normals)) > 0.99
 
 
 def test_triangulate_tiled_from_a_loader(pm, pmd, client, torus):

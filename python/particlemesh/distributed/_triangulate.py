@@ -45,8 +45,10 @@ def _components(n, triangles):
 
     if len(triangles) == 0:
         return np.arange(n)
-    e = triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-    graph = coo_matrix((np.ones(len(e), dtype=np.int8), (e[:, 0], e[:, 1])), shape=(n, n))
+    # Two edges of each triangle connect its three corners.
+    rows = np.concatenate([triangles[:, 0], triangles[:, 1]])
+    cols = np.concatenate([triangles[:, 1], triangles[:, 2]])
+    graph = coo_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)), shape=(n, n))
     return connected_components(graph, directed=False)[1]
 
 
@@ -54,8 +56,10 @@ def _signed_volumes(positions, triangles, labels, count):
     """Per label: the signed volume the triangles enclose with the origin (det / 6)."""
     if len(triangles) == 0:
         return np.zeros(count)
-    p = positions[triangles]
-    det = np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])) / 6.0
+    a, b, c = (positions[triangles[:, k]] for k in range(3))
+    det = (a[:, 0] * (b[:, 1] * c[:, 2] - b[:, 2] * c[:, 1]) +
+           a[:, 1] * (b[:, 2] * c[:, 0] - b[:, 0] * c[:, 2]) +
+           a[:, 2] * (b[:, 0] * c[:, 1] - b[:, 1] * c[:, 0])) / 6.0
     return np.bincount(labels, weights=det, minlength=count)
 
 
@@ -94,13 +98,17 @@ def triangulate_tile(payload, tile, cuts, options, near):
     ncomp = int(label.max()) + 1 if n else 0
     open_piece = np.zeros(ncomp, dtype=bool)
     if len(tri):
-        he = tri[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-        key = np.sort(he[:, 0] * n + he[:, 1])
-        rev = he[:, 1] * n + he[:, 0]
-        at = np.minimum(np.searchsorted(key, rev), len(key) - 1)
-        boundary = key[at] != rev  # no triangle holds the edge the other way
-        at_core = boundary & (core[he[:, 0]] | core[he[:, 1]])
-        open_piece[np.unique(label[he[at_core, 0]])] = True
+        # Edges of one triangle only (the surface is a manifold: each edge has one or two).
+        u = np.concatenate([tri[:, 0], tri[:, 1], tri[:, 2]])
+        v = np.concatenate([tri[:, 1], tri[:, 2], tri[:, 0]])
+        key = np.sort(np.minimum(u, v) * n + np.maximum(u, v))
+        once = np.ones(len(key), dtype=bool)
+        same = key[1:] == key[:-1]
+        once[1:] &= ~same
+        once[:-1] &= ~same
+        a, b = key[once] // n, key[once] % n
+        at_core = core[a] | core[b]
+        open_piece[np.unique(label[a[at_core]])] = True
     used = np.zeros(n, dtype=bool)
     used[tri[touching].ravel()] = True
     return {
