@@ -57,6 +57,11 @@ def digest(mesh):
     return h.hexdigest()[:16]
 
 
+def cpu_seconds():
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
 def peak_mib():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
@@ -69,10 +74,11 @@ def one_process(side, threads, radius):
     t = time.perf_counter()
     p = block(np.full(3, -np.inf), np.full(3, np.inf))
     t_gen = time.perf_counter() - t
-    t = time.perf_counter()
+    t, c = time.perf_counter(), cpu_seconds()
     mesh = pm.polygonize(p, radius=radius, threads=threads)
-    t_mesh = time.perf_counter() - t
+    t_mesh, c_mesh = time.perf_counter() - t, cpu_seconds() - c
     print(json.dumps({"particles": len(p), "seconds_generate": t_gen, "seconds": t_mesh,
+                      "cpu_seconds": c_mesh,
                       "peak_mib": peak_mib(), "vertices": mesh.vertex_count,
                       "triangles": mesh.triangle_count, "digest": digest(mesh)}))
 
@@ -109,9 +115,10 @@ def one_process_triangulate(n, threads):
     import particlemesh as pm
 
     p = sphere(n)
-    t = time.perf_counter()
+    t, c = time.perf_counter(), cpu_seconds()
     mesh = pm.triangulate(p, threads=threads)
-    print(json.dumps({"particles": n, "seconds": time.perf_counter() - t, "peak_mib": peak_mib(),
+    print(json.dumps({"particles": n, "seconds": time.perf_counter() - t,
+                      "cpu_seconds": cpu_seconds() - c, "peak_mib": peak_mib(),
                       "triangles": mesh.triangle_count, "closed": pm.topology(mesh)["closed"]}))
 
 
@@ -150,8 +157,9 @@ def main():
           f"load {os.getloadavg()[0]:.1f}; particlemesh {pm.version()}", flush=True)
     base = child(["--one-process", str(side), "--threads", str(args.workers)])
     print(f"one process ({args.workers} threads): {base['particles']} particles, "
-          f"{base['seconds']:.1f} s, peak {base['peak_mib']:.0f} MiB, {base['vertices']} vertices "
-          f"(generating: {base['seconds_generate']:.1f} s)", flush=True)
+          f"{base['seconds']:.1f} s (cpu {base['cpu_seconds']:.1f} s), peak {base['peak_mib']:.0f} MiB, "
+          f"{base['vertices']} vertices (generating the block: {base['seconds_generate']:.1f} s)",
+          flush=True)
 
     cluster = LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True,
                            host="127.0.0.1", dashboard_address=None, memory_limit=0)
@@ -163,31 +171,41 @@ def main():
     rows = []
     for count in [int(c) for c in args.tiles.split(",")]:
         idle = max(client.run(reset_peak).values())  # the high-water marks start over
+        cpu = sum(client.run(cpu_seconds).values())
         t = time.perf_counter()
         mesh = polygonize_tiled(client, block, tiles=shapes[count], bounds=bounds,
                                 radius=radius, threads=1)
         seconds = time.perf_counter() - t
+        cpu = sum(client.run(cpu_seconds).values()) - cpu
         peaks = sorted(client.run(worker_peak).values())
         same = digest(mesh) == base["digest"]
         rows.append((count, seconds, peaks, idle, mesh.stats, same))
-        print(f"tiles {count:3d} {shapes[count]}: {seconds:6.1f} s, worker peaks "
+        print(f"tiles {count:3d} {shapes[count]}: {seconds:6.1f} s (workers' cpu {cpu:.1f} s), worker peaks "
               f"{', '.join(f'{p:.0f}' for p in peaks)} MiB (idle {idle:.0f}), largest tile "
               f"{max(mesh.stats['tile_particles'])} particles, received "
               f"{mesh.stats['bytes_received'] / 2**20:.0f} MiB, identical: {same}", flush=True)
 
+    half = [c for c, _, peaks, _, _, _ in rows if max(peaks) <= base["peak_mib"] / 2]
+    print(f"a worker's peak is at most half the one process's ({base['peak_mib'] / 2:.0f} MiB) from "
+          f"{min(half) if half else 'more than ' + str(max(r[0] for r in rows))} tiles on", flush=True)
+
     if args.triangulate:
         tri = child(["--one-process-triangulate", str(args.triangulate), "--threads", str(args.workers)])
-        print(f"triangulate, one process: {tri['particles']} particles, {tri['seconds']:.1f} s, "
+        print(f"triangulate, one process: {tri['particles']} particles, {tri['seconds']:.1f} s "
+              f"(cpu {tri['cpu_seconds']:.1f} s), "
               f"peak {tri['peak_mib']:.0f} MiB", flush=True)
         p = sphere(args.triangulate)
         for count in [int(c) for c in args.triangulate_tiles.split(",")]:
             client.run(reset_peak)
+            cpu = sum(client.run(cpu_seconds).values())
             t = time.perf_counter()
             mesh = triangulate_tiled(client, p, tiles=shapes[count], threads=1)
             seconds = time.perf_counter() - t
+            cpu = sum(client.run(cpu_seconds).values()) - cpu
             peaks = sorted(client.run(worker_peak).values())
             top = pm.topology(mesh)
-            print(f"triangulate tiles {count}: {seconds:.1f} s (tiles {mesh.stats['seconds_tiles']:.1f} s, "
+            print(f"triangulate tiles {count}: {seconds:.1f} s (workers' cpu {cpu:.1f} s; tiles "
+                  f"{mesh.stats['seconds_tiles']:.1f} s, "
                   f"seams {mesh.stats['seconds_seams']:.2f} s), worker peaks "
                   f"{', '.join(f'{q:.0f}' for q in peaks)} MiB, closed {top['closed']}, "
                   f"holes filled {mesh.stats['holes_filled']}", flush=True)
