@@ -41,6 +41,9 @@ def polygonize_tile(payload, cells, domain_min, domain_max_radius, options):
         return {"vertices": empty, "triangles": np.zeros((0, 3), dtype=np.int32),
                 "normals": empty, "attributes": {}, "particles": 0,
                 "seconds": time.perf_counter() - t0}
+    if particles["strengths"] is not None and "threshold" not in options:
+        raise invalid("the loader returns strengths: give threshold= (the default threshold "
+                      "is from the median strength of the whole cloud)")
     mesh = pm.polygonize(particles["positions"], radii=particles["radii"],
                          strengths=particles["strengths"], attributes=particles["attributes"],
                          domain_min=domain_min, domain_max_radius=domain_max_radius,
