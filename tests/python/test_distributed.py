@@ -312,6 +312,41 @@ def test_triangulate_tiled_from_a_loader(pm, pmd, client, torus):
     assert sorted(map(tuple, tiled.vertices)) == sorted(map(tuple, pts.positions))
 
 
+def test_a_cluster_started_as_the_docs_say(pm, pmd, tmp_path):
+    """`dask scheduler` and `dask worker` (docs/distributed.md), the package on the worker's
+    PYTHONPATH: a frame and a tiled call run there."""
+    dask = Path(sys.executable).parent / "dask"
+    assert dask.is_file(), f"{dask}: the dask command (python3-distributed) is missing"
+    env = dict(os.environ, PYTHONPATH=str(Path(pm.__file__).parents[1]))
+    sched = tmp_path / "scheduler.json"
+    procs = [subprocess.Popen([str(dask), "scheduler", "--host", "127.0.0.1", "--port", "0",
+                               "--dashboard-address", ":0", "--scheduler-file", str(sched)],
+                              env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    try:
+        procs.append(subprocess.Popen([str(dask), "worker", "--scheduler-file", str(sched),
+                                       "--nworkers", "1", "--nthreads", "1", "--memory-limit", "0",
+                                       "--local-directory", str(tmp_path / "w")],
+                                      env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        import time
+        deadline = time.monotonic() + 60
+        while not sched.exists() and time.monotonic() < deadline:
+            time.sleep(0.2)
+        with Client(scheduler_file=str(sched), timeout=60) as c:
+            c.wait_for_workers(1, timeout=60)
+            np.savetxt(tmp_path / "f_1.xyz", blob(2000, 1))
+            s = pmd.map_frames(c, "polygonize", tmp_path / "f_{}.xyz", tmp_path / "f_{}.ply",
+                               radius=0.25)
+            assert s.ok and (tmp_path / "f_1.ply").stat().st_size > 0, str(s)
+            p = blob(8000, 2)
+            tiled = pmd.polygonize_tiled(c, p, tiles=(2, 1, 1), radius=0.2)
+            assert_identical(tiled, pmd.canonical_mesh(pm.polygonize(p, radius=0.2)))
+    finally:
+        for proc in reversed(procs):
+            proc.terminate()
+        for proc in procs:
+            proc.wait(timeout=30)
+
+
 def test_tiled_calls_refuse_bad_arguments(pm, pmd, client):
     p = fibonacci_sphere(500)
     with pytest.raises(pm.Error, match="tiles"):

@@ -13,10 +13,10 @@ fill_edge_factor x L). Tiles orient their pieces independently: pieces that shar
 triangles are turned to agree, and each closed component is then turned outward.
 
 Only the seams cross to the driver first; the tiles' bulk triangles stay on the workers until
-the orientation is known, then come back once. Why not the one-machine finishing on the
-driver: at 2M particles the finishing (normals, extraction, repair) is 59 % of the time and
-the raw test 36 % (bench/RESULTS.md), so distributing the test alone cannot go 2x faster, and
-the driver would need the whole cloud's working memory."""
+the orientation is known, then come back once. Why not the raw test alone in the tiles and the
+one-machine finishing on the driver: the finishing (normals, extraction, repair) is 45-60 % of
+the one-machine time (bench/RESULTS.md), so that could not go faster than 1.7-2.2x on any
+number of workers, and the driver would need the whole cloud's finishing working set."""
 
 import time
 import uuid
