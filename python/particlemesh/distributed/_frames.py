@@ -9,6 +9,7 @@ import uuid
 from dataclasses import dataclass, field
 
 from .. import _library, _options
+from .. import polygonize, read_points, triangulate, write_mesh
 from ._dask import check_client, distributed
 
 #: What a frame can be meshed with, and the particlemesh function each runs.
@@ -93,15 +94,13 @@ def mesh_file(command, input_path, output_path, options):
     """One frame, on a worker: read the particles, mesh them, write the mesh atomically through
     the library (the bytes the command-line tool writes for the same file and options).
     Returns what the summary lists."""
-    import particlemesh as pm  # the worker's own copy of the package
-
     t0 = time.perf_counter()
-    points = pm.read_points(input_path)
-    mesh = getattr(pm, command)(points, **options)
+    points = read_points(input_path)
+    mesh = {"triangulate": triangulate, "polygonize": polygonize}[command](points, **options)
     folder = os.path.dirname(output_path)
     if folder:
         os.makedirs(folder, exist_ok=True)
-    pm.write_mesh(mesh, output_path)
+    write_mesh(mesh, output_path)
     return {"vertices": mesh.vertex_count, "triangles": mesh.triangle_count,
             "seconds": time.perf_counter() - t0}
 

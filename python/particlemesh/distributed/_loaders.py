@@ -3,6 +3,8 @@ piece by piece on the worker that needs them, so the cloud never sits in one pro
 
 import numpy as np
 
+from .. import read_points
+
 from ._tiles import in_box, invalid
 
 
@@ -24,15 +26,13 @@ class files_loader:
                 raise invalid(f"files_loader: {len(self.bounds)} bounds for {len(self.paths)} files")
 
     def __call__(self, lo, hi):
-        import particlemesh as pm
-
         parts = []
         for i, path in enumerate(self.paths):
             if self.bounds is not None:
                 flo, fhi = self.bounds[i]
                 if (flo > hi).any() or (fhi < lo).any():
                     continue
-            points = pm.read_points(path)
+            points = read_points(path)
             index = in_box(points.positions, lo, hi)
             parts.append((points, index))
         if not parts:

@@ -14,6 +14,7 @@ import uuid
 import numpy as np
 
 from .. import _abi, _library, _options
+from .. import estimate_spacing, lattice_field, polygonize
 from .._errors import Error
 from ._dask import check_client, distributed, gather_in_order
 from ._merge import merge_by_position
@@ -32,8 +33,6 @@ def _median(values):
 
 def polygonize_tile(payload, cells, domain_min, domain_max_radius, options):
     """On a worker: one tile's mesh (its cells only) and what it measured."""
-    import particlemesh as pm
-
     t0 = time.perf_counter()
     particles = load(payload)
     if len(particles["positions"]) == 0:
@@ -44,7 +43,7 @@ def polygonize_tile(payload, cells, domain_min, domain_max_radius, options):
     if particles["strengths"] is not None and "threshold" not in options:
         raise invalid("the loader returns strengths: give threshold= (the default threshold "
                       "is from the median strength of the whole cloud)")
-    mesh = pm.polygonize(particles["positions"], radii=particles["radii"],
+    mesh = polygonize(particles["positions"], radii=particles["radii"],
                          strengths=particles["strengths"], attributes=particles["attributes"],
                          domain_min=domain_min, domain_max_radius=domain_max_radius,
                          cells=cells, **options)
@@ -93,7 +92,6 @@ def polygonize_tiled(client, particles, tiles=(2, 2, 1), *, bounds=None, radius=
 
     # The parameters the library would resolve from the whole cloud, resolved here once:
     # R (the radius, or the median of the radii), R_max (the largest radius), h (the cell).
-    import particlemesh as pm
     tile_options = {k: v for k, v in {**options, "threshold": threshold, "kernel": kernel}.items()
                     if v is not None}
     if source.loader is None:
@@ -105,7 +103,7 @@ def polygonize_tiled(client, particles, tiles=(2, 2, 1), *, bounds=None, radius=
             R = _median(r)
             R_max = max(float(r.max()), float(domain_max_radius))
         else:
-            R = float(radius) if radius else 2.0 * pm.estimate_spacing(p["positions"])
+            R = float(radius) if radius else 2.0 * estimate_spacing(p["positions"])
             R_max = max(R, float(domain_max_radius))
             tile_options["radius"] = R
         if not threshold and p["strengths"] is not None:
@@ -114,7 +112,7 @@ def polygonize_tiled(client, particles, tiles=(2, 2, 1), *, bounds=None, radius=
                 raise invalid("the default threshold needs a positive median strength: give a "
                               "threshold")
             k = _options.POLYGONIZE.convert("kernel", "kernel", kernel or "wyvill")
-            tile_options["threshold"] = 0.5 * w * pm.lattice_field(k, 2.0, 1.0)
+            tile_options["threshold"] = 0.5 * w * lattice_field(k, 2.0, 1.0)
     else:
         if not (radius or domain_max_radius):
             raise invalid("with a loader, give radius= (and with per-particle radii "

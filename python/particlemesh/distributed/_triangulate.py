@@ -24,6 +24,8 @@ import uuid
 import numpy as np
 
 from .. import _abi, _library, _options
+from .. import Mesh, estimate_spacing, triangulate
+from .. import defaults as library_defaults
 from .._errors import Error
 from ._dask import check_client, distributed, gather_in_order
 from ._merge import canonical_triangles
@@ -66,8 +68,6 @@ def _signed_volumes(positions, triangles, labels, count):
 def triangulate_tile(payload, tile, cuts, options, near):
     """On a worker: the library's whole chain on a tile and its halo, kept on the worker; the
     driver asks for the seams (seam_part) and then the rest (finish_tile)."""
-    import particlemesh as pm
-
     t0 = time.perf_counter()
     particles = load(payload)
     pos = particles["positions"]
@@ -77,7 +77,7 @@ def triangulate_tile(payload, tile, cuts, options, near):
         tri = np.zeros((0, 3), dtype=np.int64)
         normals = particles["normals"] if particles["normals"] is not None else np.zeros((n, 3))
     else:
-        mesh = pm.triangulate(pos, particles["normals"], **options)
+        mesh = triangulate(pos, particles["normals"], **options)
         tri = mesh.triangles.astype(np.int64)
         normals = mesh.normals
     label = _components(n, tri)
@@ -186,12 +186,10 @@ def finish_tile(result, flip, first_id, with_points):
 
 def _spacing_of_tile(payload):
     """On a worker (a loader without spacing=): the tile's spacing estimate and particles."""
-    import particlemesh as pm
-
     p = load(payload)["positions"]
     if len(p) < 2:
         return 0.0, 0
-    return pm.estimate_spacing(p, max_samples=200_000), len(p)
+    return estimate_spacing(p, max_samples=200_000), len(p)
 
 
 def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attributes=None,
@@ -229,8 +227,7 @@ def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attri
         raise invalid(f"halo is {halo}: at least 3 (units of L) so that every triangle at a "
                       "tile's particles, and its smallest-sphere test, is the one-machine one")
     source = Source(particles, normals=normals, attributes=attributes, bounds=bounds)
-    import particlemesh as pm
-    defaults = pm.defaults("triangulate")
+    defaults = library_defaults("triangulate")
     factor = float(options.get("max_edge_factor") or defaults["max_edge_factor"])
     fill_factor = float(options.get("fill_edge_factor") or defaults["fill_edge_factor"])
     fill_holes = options.get("fill_holes")
@@ -241,7 +238,7 @@ def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attri
     spacing = options.get("spacing") or 0.0
     if not spacing:
         if source.loader is None:
-            spacing = pm.estimate_spacing(source.particles["positions"])
+            spacing = estimate_spacing(source.particles["positions"])
         else:
             futures = client.map(_spacing_of_tile, [source.payload(*cuts.box(i)) for i in indices],
                                  pure=False)
@@ -328,7 +325,7 @@ def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attri
     triangles = np.concatenate([d["triangles"] for d in done] + [seams.triangles()])
     used = np.zeros(total, dtype=bool)
     used[triangles.ravel()] = True
-    mesh = pm.Mesh(vertices, canonical_triangles(triangles), vnormals, attrs)
+    mesh = Mesh(vertices, canonical_triangles(triangles), vnormals, attrs)
     mesh.stats = {
         "spacing": spacing, "max_edge": L, "tiles": shape, "halo": halo,
         "tile_particles": [p["particles"] for p in parts],
