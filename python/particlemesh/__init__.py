@@ -185,8 +185,38 @@ def triangulate(positions, normals=None, *, attributes=None, raw=None, repair=No
         lib.pm_mesh_destroy(mesh)
 
 
+def _tile_options(opt, domain_min, cells):
+    """Write polygonize's tile arguments (domain_min=, cells=) into the options struct."""
+    if domain_min is not None:
+        d = np.asarray(domain_min, dtype=np.float64).reshape(-1)
+        if d.size != 3:
+            raise Error(f"domain_min must be 3 numbers (x, y, z), got {d.size}",
+                        _abi.PM_STATUS_INVALID_ARGUMENT)
+        opt.flags |= _abi.PM_POLYGONIZE_DOMAIN_MIN
+        opt.domain_min[:] = [float(v) for v in d]
+    if cells is not None:
+        try:
+            low, high = (np.asarray(c) for c in cells)
+        except (TypeError, ValueError):
+            raise Error("cells must be ((i0, j0, k0), (i1, j1, k1))",
+                        _abi.PM_STATUS_INVALID_ARGUMENT) from None
+        for name, c in (("cells[0]", low), ("cells[1]", high)):
+            if c.shape != (3,) or c.dtype.kind not in "iu":
+                raise Error(f"{name} must be 3 integers, got {c.tolist()!r}",
+                            _abi.PM_STATUS_INVALID_ARGUMENT)
+        limits = np.iinfo(np.int64)
+        for c in (low, high):
+            if any(not limits.min <= int(v) <= limits.max for v in c):
+                raise Error(f"cells {c.tolist()} out of the int64 range",
+                            _abi.PM_STATUS_INVALID_ARGUMENT)
+        opt.flags |= _abi.PM_POLYGONIZE_CELL_RANGE
+        opt.cell_min[:] = [int(v) for v in low]
+        opt.cell_max[:] = [int(v) for v in high]
+
+
 def polygonize(positions, radius=None, threshold=None, kernel=None, cell=None, *, radii=None,
-               strengths=None, attributes=None, progress=None, **options):
+               strengths=None, attributes=None, domain_min=None, cells=None, progress=None,
+               **options):
     """The iso-surface F(x) = threshold of volume particles, F(x) = sum_i w_i g(|x - p_i|^2 /
     R_i^2), by marching cubes on a sparse grid: a closed, outward mesh with normals from the
     field's gradient (no vertex when the field stays below the threshold).
@@ -195,8 +225,13 @@ def polygonize(positions, radius=None, threshold=None, kernel=None, cell=None, *
     particle; strengths w_i (None = 1); threshold T (None = half the field inside evenly
     packed particles); kernel "wyvill", "poly4", "poly6" or "blinn"; cell the grid cell (the C
     field cell_size; None = R / 4); attributes {name: (N, C)} interpolated onto the vertices.
-    Other options (pm_polygonize_options): threads, max_grid_bytes. Returns Mesh; mesh.stats
-    holds pm_polygonize_stats."""
+    Other options (pm_polygonize_options): threads, max_grid_bytes, domain_max_radius.
+
+    A tile of a larger cloud (what particlemesh.distributed.polygonize_tiled runs):
+    domain_min=(x, y, z), the whole cloud's lower corner, anchors the lattice and the particle
+    grid as for the whole cloud; domain_max_radius its largest radius; cells=((i0, j0, k0),
+    (i1, j1, k1)) meshes only the lattice cells in that range (stats["origin"] is the
+    lattice's node 0). Returns Mesh; mesh.stats holds pm_polygonize_stats."""
     lib = _library.load()
     positions, _, attributes = _points_args(positions, None, attributes)
     if cell is not None:
@@ -205,6 +240,7 @@ def polygonize(positions, radius=None, threshold=None, kernel=None, cell=None, *
         options["cell_size"] = cell
     options.update(radius=radius, threshold=threshold, kernel=kernel)
     opt = _options.POLYGONIZE.build(lib, options)
+    _tile_options(opt, domain_min, cells)
     stats = _abi.pm_polygonize_stats(struct_size=ctypes.sizeof(_abi.pm_polygonize_stats))
     cloud = new_cloud(lib, positions, None, attributes)
     mesh = _abi.pm_mesh_p()

@@ -161,7 +161,16 @@ class pm_polygonize_options(Structure):
         ("taubin_iterations", c_int32),
         ("taubin_lambda", c_double),
         ("taubin_mu", c_double),
+        ("flags", c_uint32),
+        ("domain_min", c_double * 3),
+        ("domain_max_radius", c_double),
+        ("cell_min", c_int64 * 3),
+        ("cell_max", c_int64 * 3),
     ]
+
+
+PM_POLYGONIZE_DOMAIN_MIN = 0x1
+PM_POLYGONIZE_CELL_RANGE = 0x2
 
 
 class pm_polygonize_stats(Structure):
@@ -180,6 +189,7 @@ class pm_polygonize_stats(Structure):
         ("anisotropic_particles", c_uint64),
         ("components_removed", c_uint64),
         ("calibration_ratio", c_double),
+        ("origin", c_double * 3),
     ]
 
 

@@ -134,6 +134,7 @@ TRIANGULATE = OptionsSpec(
 
 POLYGONIZE = OptionsSpec(
     "polygonize", _abi.pm_polygonize_options, "pm_polygonize_options_init",
+    internal=("flags", "domain_min", "cell_min", "cell_max"),  # domain_min=, cells=
     enums={"kernel": enum_names("PM_KERNEL_")})
 
 SMOOTH = OptionsSpec(

@@ -303,7 +303,26 @@ typedef struct pm_polygonize_options {
   int32_t taubin_iterations;      /**< Taubin lambda|mu smoothing of the mesh; 0 = off (default) */
   double taubin_lambda;           /**< in (0, 1] (default 0.5) */
   double taubin_mu;               /**< in [-1, -lambda) (default -0.53) */
+  /* -- appended: one tile of a cloud polygonized in tiles (particlemesh.distributed). The
+   *    lattice's node (i, j, k) lies at origin + h (i, j, k), origin = (lower - R_max) - 9 h per
+   *    axis, lower = the particles' smallest coordinates, R_max = the largest radius (see
+   *    particlemesh/volume/polygonize.h). A tile given its cloud's domain_min and
+   *    domain_max_radius, its cell range and every particle within R_max of those cells (in
+   *    their order in the cloud) yields exactly the cloud's triangles in those cells. -- */
+  uint32_t flags;           /**< PM_POLYGONIZE_DOMAIN_MIN | PM_POLYGONIZE_CELL_RANGE (default 0) */
+  double domain_min[3];     /**< with PM_POLYGONIZE_DOMAIN_MIN: the whole cloud's lower corner,
+                                 used as `lower` (at or below every particle) */
+  double domain_max_radius; /**< 0, or the whole cloud's largest radius, used as R_max (at least
+                                 every radius given) */
+  int64_t cell_min[3];      /**< with PM_POLYGONIZE_CELL_RANGE: only the cells with
+                                 cell_min <= (i, j, k) < cell_max are meshed */
+  int64_t cell_max[3];
 } pm_polygonize_options;
+
+/** pm_polygonize_options.flags: anchor the lattice and the particle grid at domain_min. */
+#define PM_POLYGONIZE_DOMAIN_MIN 0x1u
+/** pm_polygonize_options.flags: mesh only the cells in [cell_min, cell_max). */
+#define PM_POLYGONIZE_CELL_RANGE 0x2u
 
 typedef struct pm_polygonize_stats {
   uint32_t struct_size;     /**< set by the caller to sizeof(pm_polygonize_stats) */
@@ -322,6 +341,8 @@ typedef struct pm_polygonize_stats {
   uint64_t components_removed;    /**< pieces dropped by min_component_volume / _particles */
   double calibration_ratio;       /**< anisotropic default threshold: the R / spacing it was
                                        calibrated for (else 0) */
+  /* -- appended -- */
+  double origin[3];         /**< the lattice's node (0, 0, 0) */
 } pm_polygonize_stats;
 
 PM_EXPORT void pm_polygonize_options_init(pm_polygonize_options* options);

@@ -59,6 +59,8 @@ void pm_polygonize_options_init(pm_polygonize_options* options) {
   options->taubin_iterations = d.surface_smoothing.iterations;
   options->taubin_lambda = d.surface_smoothing.lambda;
   options->taubin_mu = d.surface_smoothing.mu;
+  options->flags = 0;
+  options->domain_max_radius = d.domain_max_radius;
 }
 
 pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii, const double* strengths,
@@ -92,6 +94,18 @@ pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii, const dou
     opt.surface_smoothing.iterations = o.taubin_iterations;
     opt.surface_smoothing.lambda = o.taubin_lambda;
     opt.surface_smoothing.mu = o.taubin_mu;
+    if (o.flags & ~uint32_t(PM_POLYGONIZE_DOMAIN_MIN | PM_POLYGONIZE_CELL_RANGE))
+      throw Error(Status::InvalidArgument, "options->flags has unknown bits: " + std::to_string(o.flags));
+    if (o.flags & PM_POLYGONIZE_DOMAIN_MIN) opt.domain_min = Vec3{o.domain_min[0], o.domain_min[1], o.domain_min[2]};
+    opt.domain_max_radius = o.domain_max_radius;
+    if (o.flags & PM_POLYGONIZE_CELL_RANGE) {
+      PolygonizeOptions::CellRange range;
+      for (int a = 0; a < 3; ++a) {
+        range.min[a] = o.cell_min[a];
+        range.max[a] = o.cell_max[a];
+      }
+      opt.cells = range;
+    }
     const size_t n = cloud->cloud.size();
     if (radii) opt.radii.assign(radii, radii + n);
     if (strengths) opt.strengths.assign(strengths, strengths + n);
@@ -114,6 +128,7 @@ pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii, const dou
       s.anisotropic_particles = r.stats.anisotropic_particles;
       s.components_removed = r.stats.components_removed;
       s.calibration_ratio = r.stats.calibration_ratio;
+      for (int a = 0; a < 3; ++a) s.origin[a] = r.stats.origin[a];
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();

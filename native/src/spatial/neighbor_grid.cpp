@@ -54,7 +54,13 @@ void sort_by_key(std::vector<Entry>& entries, const std::array<int32_t, 3>& top)
 
 }  // namespace
 
-NeighborGrid::NeighborGrid(const Vec3* points, size_t n, double cell_size) {
+NeighborGrid::NeighborGrid(const Vec3* points, size_t n, double cell_size) { build(points, n, cell_size, nullptr); }
+
+NeighborGrid::NeighborGrid(const Vec3* points, size_t n, double cell_size, const Vec3& lower) {
+  build(points, n, cell_size, &lower);
+}
+
+void NeighborGrid::build(const Vec3* points, size_t n, double cell_size, const Vec3* lower) {
   if (!(cell_size > 0) || !std::isfinite(cell_size))
     throw Error(Status::InvalidArgument, "grid cell size must be positive and finite");
   if (n >= size_t(std::numeric_limits<uint32_t>::max()))
@@ -70,6 +76,16 @@ NeighborGrid::NeighborGrid(const Vec3* points, size_t n, double cell_size) {
     hi = {std::max(hi.x, points[i].x), std::max(hi.y, points[i].y), std::max(hi.z, points[i].z)};
   }
   if (n == 0) lo = hi = Vec3{};
+  if (lower) {
+    for (int a = 0; a < 3; ++a) {
+      if (!std::isfinite((*lower)[a]))
+        throw Error(Status::InvalidArgument, std::string("the grid's lower corner is not finite along ") + "xyz"[a]);
+      if (n > 0 && lo[a] < (*lower)[a])
+        throw Error(Status::InvalidArgument, std::string("a point lies below the grid's lower corner along ") + "xyz"[a]);
+    }
+    lo = *lower;
+    if (n == 0) hi = lo;
+  }
   // The origin sits one cell below the data so that the cells around any point exist.
   origin_ = lo - Vec3{cell_size, cell_size, cell_size};
   for (int a = 0; a < 3; ++a) {

@@ -192,7 +192,8 @@ void FieldBuilder::calibrate_anisotropic_threshold(ParticleField& f, const std::
 }
 
 ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldParams& params,
-                                  ProgressTracker& tracker, double begin, double end) {
+                                  ProgressTracker& tracker, double begin, double end,
+                                  const FieldDomain& domain) {
   ParticleField f;
   validate_kernel(params.kernel);
   if (n == 0) throw Error(Status::InvalidInput, "there are no particles");
@@ -270,6 +271,13 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
 
   f.uniform_ = params.radii.empty();
   f.max_radius_ = f.uniform_ ? f.params_.radius : *std::max_element(params.radii.begin(), params.radii.end());
+  if (domain.max_radius != 0) {
+    if (!(domain.max_radius >= f.max_radius_) || !std::isfinite(domain.max_radius))
+      throw Error(Status::InvalidArgument, "domain_max_radius is " + num(domain.max_radius) +
+                                               " (must be finite and at least the largest radius, " +
+                                               num(f.max_radius_) + ", or 0)");
+    f.max_radius_ = domain.max_radius;
+  }
   f.inv_r2_ = 1.0 / (f.params_.radius * f.params_.radius);
   if (!std::isfinite(f.inv_r2_) || !std::isfinite(f.max_radius_ * f.max_radius_))
     throw Error(Status::InvalidArgument, "radius " + num(f.max_radius_) + " is out of the usable range");
@@ -311,7 +319,28 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
   // The centres are kept once, in grid order. Anisotropic kernels: cells of the largest radius
   // (most kernels reach about that far) looked up in a dense table (below), not of the longest
   // reach, whose cells hold several times the particles an evaluation needs to look at.
-  f.grid_ = NeighborGrid(C, n, f.max_radius_);
+  // The grid's corner is the given domain's (every tile of a cloud then shares the cloud's
+  // cells and summation order) or the centres' smallest coordinates.
+  if (domain.min) {
+    const Vec3& d = *domain.min;
+    for (int a = 0; a < 3; ++a) {
+      if (!std::isfinite(d[a]))
+        throw Error(Status::InvalidArgument, std::string("domain_min.") + "xyz"[a] + " is " + num(d[a]));
+      for (size_t i = 0; i < n; ++i)
+        if (positions[i][a] < d[a] || C[i][a] < d[a])
+          throw Error(Status::InvalidArgument, std::string("domain_min.") + "xyz"[a] + " is " + num(d[a]) +
+                                                   ", above positions[" + std::to_string(i) + "]." + "xyz"[a] + " = " +
+                                                   num(std::min(positions[i][a], C[i][a])) +
+                                                   " (it must be at or below every particle)");
+    }
+    f.lower_ = d;
+    f.grid_ = NeighborGrid(C, n, f.max_radius_, d);
+  } else {
+    Vec3 m = C[0];
+    for (size_t i = 1; i < n; ++i) m = {std::min(m.x, C[i].x), std::min(m.y, C[i].y), std::min(m.z, C[i].z)};
+    f.lower_ = m;
+    f.grid_ = NeighborGrid(C, n, f.max_radius_);
+  }
   f.sorted_index_.resize(n);
   for (uint32_t s = 0; s < n; ++s) f.sorted_index_[f.grid_.original_index(s)] = s;
   if (aniso) {

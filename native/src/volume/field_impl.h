@@ -2,16 +2,26 @@
 // the kernel evaluated without a run-time switch in hot loops.
 #pragma once
 
+#include <optional>
+
 #include "core/progress_tracker.h"
 #include "particlemesh/volume/field.h"
 
 namespace particlemesh::detail {
 
+/// A tile's field anchored as its whole cloud's (see PolygonizeOptions::domain_min): the
+/// cloud's lower corner (at or below every particle) and largest radius (0: these particles').
+struct FieldDomain {
+  std::optional<Vec3> min;
+  double max_radius = 0;
+};
+
 struct FieldBuilder {
   /// Resolve, validate and build. Runs in the caller's TBB arena; reports progress in
   /// [begin, end) of the overall fraction (only when the spacing has to be estimated).
   static ParticleField build(const Vec3* positions, size_t n, const FieldParams& params,
-                             ProgressTracker& tracker, double begin, double end);
+                             ProgressTracker& tracker, double begin, double end,
+                             const FieldDomain& domain = {});
   static void calibrate_anisotropic_threshold(ParticleField& f, const std::vector<KernelEllipsoid>& kernels,
                                               ProgressTracker& tracker);
 };

@@ -460,8 +460,14 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   Grid g;
   g.h = h;
   // One block plus one cell of margin below the supports, so that every block that can hold
-  // a crossing, and its lower neighbours, have non-negative coordinates.
-  g.origin = field.support_min() - Vec3{1, 1, 1} * (double(kB + 1) * h);
+  // a crossing, and its lower neighbours, have non-negative coordinates. Anchored to the lower
+  // corner (the whole cloud's for a tile) and the largest radius, not to these particles'
+  // supports, so that the tiles of a cloud share its lattice (polygonize.h, "The lattice").
+  // Anisotropic kernels are not cut into tiles (each ellipsoid depends on its neighbours):
+  // their lattice hangs below their ellipsoids' box.
+  g.origin = field.anisotropic() ? field.support_min() - Vec3{1, 1, 1} * (double(kB + 1) * h)
+                                 : (field.lower_corner() - Vec3{rmax, rmax, rmax}) - Vec3{1, 1, 1} * (double(kB + 1) * h);
+  st.origin = g.origin;
   {
     double box_nodes = 1;
     for (int a = 0; a < 3; ++a) {
@@ -472,9 +478,53 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
                         std::string(1, "xyz"[a]) + " (at most " + std::to_string((kMaxBlocksPerAxis - 4) * kB) +
                         "): use a larger cell size or remove far outliers");
       box_nodes *= std::floor(extent) + 1;
+      // A tile far above its domain's corner: its blocks' coordinates must still fit a key.
+      const double top = (field.support_max()[a] - g.origin[a]) / h;
+      if (!(top < double(kMaxBlocksPerAxis - 4) * kB))
+        throw Error(Status::LimitExceeded,
+                    "the particles lie " + num(top) + " cells of size " + num(h) + " above the lattice's origin along " +
+                        std::string(1, "xyz"[a]) + " (at most " + std::to_string((kMaxBlocksPerAxis - 4) * kB) +
+                        "): use a larger cell size or a domain_min closer to the particles");
     }
     st.bounding_box_nodes = box_nodes < 1.8e19 ? uint64_t(box_nodes) : std::numeric_limits<uint64_t>::max();
   }
+
+  // A tile (options.cells): only its cells are meshed, with the nodes and edges they use.
+  const bool ranged = options.cells.has_value();
+  int64_t cmin[3] = {0, 0, 0}, cmax[3] = {0, 0, 0};
+  if (ranged) {
+    // Clamped far outside any lattice (block keys have 21 bits per axis): no overflow below.
+    constexpr int64_t kFar = int64_t(1) << 40;
+    for (int a = 0; a < 3; ++a) {
+      if (!(options.cells->min[a] < options.cells->max[a]))
+        throw Error(Status::InvalidArgument, std::string("cell range is empty along ") + "xyz"[a] + " (cell_min " +
+                                                 std::to_string(options.cells->min[a]) + " >= cell_max " +
+                                                 std::to_string(options.cells->max[a]) + ")");
+      cmin[a] = std::clamp(options.cells->min[a], -kFar, kFar);
+      cmax[a] = std::clamp(options.cells->max[a], -kFar, kFar);
+    }
+  }
+  // Does block `key` hold a node of the range's cells (nodes cmin..cmax)?
+  auto block_in_range = [&](uint64_t key) {
+    int64_t b[3];
+    unpack(key, b);
+    for (int a = 0; a < 3; ++a)
+      if (b[a] * kB > cmax[a] || b[a] * kB + (kB - 1) < cmin[a]) return false;
+    return true;
+  };
+  auto cell_in_range = [&](const int64_t* b, int x, int y, int z) {
+    const int64_t c[3] = {b[0] * kB + x, b[1] * kB + y, b[2] * kB + z};
+    for (int a = 0; a < 3; ++a)
+      if (c[a] < cmin[a] || c[a] >= cmax[a]) return false;
+    return true;
+  };
+  // Is the edge from node (x, y, z) of block b along `axis` an edge of a cell in the range?
+  auto edge_in_range = [&](const int64_t* b, int x, int y, int z, int axis) {
+    const int64_t c[3] = {b[0] * kB + x, b[1] * kB + y, b[2] * kB + z};
+    for (int a = 0; a < 3; ++a)
+      if (c[a] < cmin[a] || c[a] > (a == axis ? cmax[a] - 1 : cmax[a])) return false;
+    return true;
+  };
 
   const NeighborGrid& pgrid = field.grid();
   const auto& P = pgrid.sorted_points();
@@ -532,6 +582,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   tracker.check();
   tbb::parallel_sort(cand.begin(), cand.end());
   cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+  if (ranged) cand.erase(std::remove_if(cand.begin(), cand.end(), [&](uint64_t k) { return !block_in_range(k); }), cand.end());
   st.candidate_blocks = cand.size();
 
   // ---- 2. the blocks some support really reaches ----------------------------------------------
@@ -558,6 +609,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
     }
     tbb::parallel_sort(keys.begin(), keys.end());
     keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    if (ranged) keys.erase(std::remove_if(keys.begin(), keys.end(), [&](uint64_t k) { return !block_in_range(k); }), keys.end());
     g.mesh_keys = std::move(keys);
   }
   st.sampled_blocks = g.sampled_keys.size();
@@ -627,6 +679,8 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
       std::unique_ptr<float[]> local(new float[kLN]);
       for (size_t i = bb; i < be; ++i) {
         MeshBlock& mb = g.mesh[i];
+        int64_t b[3];
+        unpack(g.mesh_keys[i], b);
         gather(g, mb, local.get());
         bool any_in = false, any_out = false;
         for (int k = 0; k < kLN; ++k) {
@@ -643,7 +697,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
                 const int li = x + kB * (y + kB * z);
                 const int steps[3] = {1, kL, kL * kL};
                 for (int a = 0; a < 3; ++a) {
-                  if ((double(local[l + steps[a]]) >= T) != in) {
+                  if ((double(local[l + steps[a]]) >= T) != in && (!ranged || edge_in_range(b, x, y, z, a))) {
                     const int bit = 3 * li + a;
                     mb.mask[bit >> 6] |= uint64_t(1) << (bit & 63);
                   }
@@ -663,6 +717,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
           for (int z = 0; z < kB; ++z)
             for (int y = 0; y < kB; ++y)
               for (int x = 0; x < kB; ++x) {
+                if (ranged && !cell_in_range(b, x, y, z)) continue;
                 const int cs = cell_case(local.get(), x, y, z, T, table, cv, &d);
                 if (cs == 0 || cs == 255) continue;
                 centers += uint32_t(table.center_count(cs, d));
@@ -734,6 +789,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
       for (int z = 0; z < kB; ++z)
         for (int y = 0; y < kB; ++y)
           for (int x = 0; x < kB; ++x) {
+            if (ranged && !cell_in_range(b, x, y, z)) continue;
             float cv[8];
             unsigned decisions;
             const int cs = cell_case(local.get(), x, y, z, T, table, cv, &decisions);
@@ -834,7 +890,8 @@ PolygonizeResult polygonize(const PointCloud& cloud, const PolygonizeOptions& op
     const double field_end = options.anisotropy.enabled ? 0.3 : 0.1;
     tracker.stage("estimating spacing", 0.0, field_end);
     const ParticleField field =
-        detail::FieldBuilder::build(cloud.positions.data(), cloud.positions.size(), params, tracker, 0.0, field_end);
+        detail::FieldBuilder::build(cloud.positions.data(), cloud.positions.size(), params, tracker, 0.0, field_end,
+                                    {options.domain_min, options.domain_max_radius});
     PolygonizeResult res = polygonize_field(field, options, tracker, field_end, PolygonizeStats{}, t0);
     detail::finish_polygonized(res, options, field, cloud.positions.data(), cloud.positions.size(), tracker);
     return res;

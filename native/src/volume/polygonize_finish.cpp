@@ -31,6 +31,11 @@ void validate_finishing(const PolygonizeOptions& o) {
     throw Error(Status::InvalidArgument, "min_component_particles is " + num(o.min_component_particles) +
                                              " (must be finite and >= 0; 0 keeps every piece)");
   validate_taubin(o.surface_smoothing);
+  // Dropping pieces and smoothing need the whole surface; a tile holds only part of it.
+  if (o.cells && (o.min_component_volume > 0 || o.min_component_particles > 0 || o.surface_smoothing.iterations > 0))
+    throw Error(Status::InvalidArgument,
+                "a cell range (one tile of a cloud) cannot drop small pieces or smooth the mesh: "
+                "min_component_volume, min_component_particles and taubin_iterations need the whole surface");
 }
 
 void finish_polygonized(PolygonizeResult& r, const PolygonizeOptions& o, const ParticleField& field,

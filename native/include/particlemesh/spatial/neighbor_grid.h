@@ -32,6 +32,15 @@ class PM_EXPORT NeighborGrid {
   ///         (a sign of far outliers; the message says so).
   NeighborGrid(const Vec3* points, size_t n, double cell_size);
 
+  /// The same with the cells anchored at `lower` instead of at the points' smallest
+  /// coordinates (`lower` must be at or below every point on every axis): grids over any
+  /// subsets of one cloud built with the same `lower` and cell size then have the same cells,
+  /// in the same order, so sums over a cell range visit the points alike (the tiles of a
+  /// cloud polygonized apart, see PolygonizeOptions::domain_min).
+  /// @throws Error(InvalidArgument) a point below `lower` or `lower` not finite;
+  ///         Error(LimitExceeded) as above, measured from `lower`.
+  NeighborGrid(const Vec3* points, size_t n, double cell_size, const Vec3& lower);
+
   double cell_size() const { return cell_size_; }
   size_t point_count() const { return sorted_points_.size(); }
   size_t cell_count() const { return cell_keys_.size(); }
@@ -118,6 +127,7 @@ class PM_EXPORT NeighborGrid {
     return {int32_t(k >> 42), int32_t((k >> 21) & 0x1fffff), int32_t(k & 0x1fffff)};
   }
   uint32_t find_key(uint64_t key) const;
+  void build(const Vec3* points, size_t n, double cell_size, const Vec3* lower);
 
   double cell_size_ = 0;
   double inv_cell_ = 0;

@@ -166,6 +166,10 @@ class PM_EXPORT ParticleField {
   /// Smallest axis-aligned box holding every particle's support (centre +- R_i).
   Vec3 support_min() const { return support_lo_; }
   Vec3 support_max() const { return support_hi_; }
+  /// The corner the particle grid (cells of max_radius(), from lower_corner() - max_radius())
+  /// is anchored to: the particles' smallest coordinates, or the whole cloud's when these
+  /// particles are a tile of it (PolygonizeOptions::domain_min).
+  Vec3 lower_corner() const { return lower_; }
 
   /// F(x).
   double value(const Vec3& x) const;
@@ -273,6 +277,7 @@ class PM_EXPORT ParticleField {
   bool radius_defaulted_ = false;
   bool threshold_defaulted_ = false;
   Vec3 support_lo_, support_hi_;
+  Vec3 lower_;
 };
 
 }  // namespace particlemesh

@@ -31,10 +31,22 @@
 //
 // Vertices are clamped to at least 1e-3 h from grid nodes (so no two coincide). The output is
 // byte-identical for any thread count.
+//
+// The lattice: node (i, j, k) lies at origin + h (i, j, k), cell (i, j, k) spans the nodes
+// (i..i+1, j..j+1, k..k+1), with origin = (lower - R_max) - 9 h on each axis (computed in that
+// order), lower = the particles' smallest coordinates (or domain_min), R_max = the largest
+// radius (or domain_max_radius). Every node's sample sums its particles in the order of the
+// particle grid (cells of R_max anchored at lower - R_max, then input order). Tiles of one
+// cloud therefore polygonize exactly as the whole cloud when each is given the whole cloud's
+// domain_min and domain_max_radius, the particles within reach of its cells (R_max) in their
+// order in the whole cloud, and its cell range: the tiles' meshes share the vertices on their
+// seams bit for bit, and together they are the whole cloud's mesh (particlemesh.distributed).
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "particlemesh/core/export.h"
@@ -89,6 +101,20 @@ struct PolygonizeOptions {
   /// their bookkeeping) would need more than this many bytes. 0 = no limit.
   uint64_t max_grid_bytes = kDefaultMaxGridBytes;
   ProgressCallback progress;
+  /// Empty, or the lower corner of the whole cloud these particles are a tile of (at or below
+  /// every particle): the lattice and the particle grid are anchored to it (see the top).
+  std::optional<Vec3> domain_min;
+  /// 0, or the whole cloud's largest radius (at least every radius here; see the top).
+  double domain_max_radius = 0;
+  /// Polygonize only the lattice cells with cell_min <= (i, j, k) < cell_max on every axis
+  /// (cell indices as at the top). The result holds the triangles of those cells and the
+  /// vertices they use (on the range's faces too), in the order the whole lattice would give
+  /// them; the field still sees every particle given, so pass the particles within R_max of
+  /// the range. Empty: every cell.
+  struct CellRange {
+    std::array<int64_t, 3> min{}, max{};
+  };
+  std::optional<CellRange> cells;
 };
 
 struct PolygonizeStats {
@@ -123,6 +149,7 @@ struct PolygonizeStats {
   double seconds_sampling = 0;  ///< summing the particles into the blocks
   double seconds_meshing = 0;   ///< classification, vertices (refinement), triangles
   double seconds_finishing = 0; ///< dropping small pieces and smoothing the mesh
+  Vec3 origin;                  ///< the lattice's node (0, 0, 0) (see the top)
 };
 
 struct PolygonizeResult {
@@ -146,7 +173,8 @@ struct PolygonizeResult {
 PM_EXPORT PolygonizeResult polygonize(const PointCloud& cloud, const PolygonizeOptions& options = {});
 
 /// The same on a field built beforehand (reusing its parameters and particle grid); the
-/// kernel, radius, threshold, radii and strengths of `options` are ignored.
+/// kernel, radius, threshold, radii, strengths, domain_min and domain_max_radius of `options`
+/// are ignored (the field's own apply).
 PM_EXPORT PolygonizeResult polygonize(const ParticleField& field, const PolygonizeOptions& options = {});
 
 }  // namespace particlemesh
