@@ -11,6 +11,7 @@
 #include "particle_input.h"
 #include "progress_line.h"
 #include "report_json.h"
+#include "run_outputs.h"
 
 namespace particlemesh::cli {
 
@@ -49,6 +50,10 @@ nlohmann::json stats_json(const PolygonizeStats& s) {
 
 int run_polygonize(const PolygonizeArgs& a) {
   using Clock = std::chrono::steady_clock;
+  WriteMeshOptions wo;
+  if (a.ascii) wo.format = MeshFormat::PlyAscii;
+  RunOutputs outputs({{"-o", a.output, OutputKind::Mesh, wo.format}, {"--report", a.report, OutputKind::Text}},
+                     {a.input});
   const auto t0 = Clock::now();
   ProgressLine progress(a.quiet);
   const ParticleInput input = read_particles(a.input, ParticleInputArgs{}, a.threads);
@@ -71,9 +76,10 @@ int run_polygonize(const PolygonizeArgs& a) {
   progress.clear();
   if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
 
-  WriteMeshOptions wo;
-  if (a.ascii) wo.format = MeshFormat::PlyAscii;
-  const double t_write = write_outputs([&] { write_mesh(result.mesh, a.output, wo); }, {a.output});
+  set_phase(Phase::Writing);
+  const auto t2 = Clock::now();
+  write_mesh(result.mesh, outputs.open("-o"), wo);
+  const double t_write = std::chrono::duration<double>(Clock::now() - t2).count();
 
   const TopologyReport report = topology_report(result.mesh);
   if (!a.report.empty()) {
@@ -83,8 +89,9 @@ int run_polygonize(const PolygonizeArgs& a) {
                      {"polygonize", stats_json(result.stats)},
                      {"topology", to_json(report)},
                      {"seconds", {{"read", t_read}, {"polygonize", t_poly}, {"write", t_write}}}};
-    write_json_file(j, a.report);
+    outputs.open("--report").write(json_text(j));
   }
+  outputs.commit_all();
   if (!a.quiet) {
     const auto& s = result.stats;
     std::printf("particlemesh polygonize: %s -> %s\n", a.input.c_str(), a.output.c_str());

@@ -9,6 +9,7 @@
 #include "particlemesh/volume/render.h"
 #include "particle_input.h"
 #include "progress_line.h"
+#include "run_outputs.h"
 
 namespace particlemesh::cli {
 
@@ -24,6 +25,7 @@ struct RenderArgs {
 
 int run_render(const RenderArgs& a) {
   using Clock = std::chrono::steady_clock;
+  RunOutputs outputs({{"-o", a.output, OutputKind::Png}}, {a.input});
   const auto t0 = Clock::now();
   ProgressLine progress(a.quiet);
   set_phase(Phase::Reading);
@@ -57,7 +59,9 @@ int run_render(const RenderArgs& a) {
   const RenderResult r = render(caster, o);
   progress.clear();
   if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
-  write_outputs([&] { write_png(r.image, a.output); }, {a.output});
+  set_phase(Phase::Writing);
+  write_png(r.image, outputs.open("-o"));
+  outputs.commit_all();
   if (!a.quiet) {
     const auto& f = caster.field();
     const Camera& c = r.camera;

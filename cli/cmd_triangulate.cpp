@@ -18,6 +18,7 @@
 #include "particlemesh/surface/triangulate.h"
 #include "progress_line.h"
 #include "report_json.h"
+#include "run_outputs.h"
 #include "smooth_chain.h"
 
 namespace particlemesh::cli {
@@ -86,6 +87,12 @@ std::vector<std::string> surface_hints(const SurfaceResult& r, double thin) {
 
 int run_triangulate(const TriangulateArgs& a) {
   using Clock = std::chrono::steady_clock;
+  WriteMeshOptions wo;
+  if (a.ascii) wo.format = MeshFormat::PlyAscii;
+  RunOutputs outputs({{"-o", a.output, OutputKind::Mesh, wo.format},
+                      {"--report", a.report, OutputKind::Text},
+                      {"--pcl-mesh", a.input_options.pcl_mesh, OutputKind::PlyOnly}},
+                     {a.input});
   const auto t0 = Clock::now();
   ProgressLine progress(a.quiet);
   const ParticleInput input = read_particles(a.input, a.input_options, a.threads);
@@ -137,14 +144,11 @@ int run_triangulate(const TriangulateArgs& a) {
 
   apply_smooth_chain(result.mesh, a.smooth, a.threads, progress);  // --smooth: after the mesh is made
 
-  WriteMeshOptions wo;
-  if (a.ascii) wo.format = MeshFormat::PlyAscii;
-  const double t_write = write_outputs(
-      [&] {
-        write_mesh(result.mesh, a.output, wo);
-        write_pcl_mesh(result.mesh, a.input_options);
-      },
-      {a.output, a.input_options.pcl_mesh});
+  set_phase(Phase::Writing);
+  const auto t2 = Clock::now();
+  write_mesh(result.mesh, outputs.open("-o"), wo);
+  if (outputs.has("--pcl-mesh")) write_pcl_mesh(result.mesh, outputs.open("--pcl-mesh"));
+  const double t_write = std::chrono::duration<double>(Clock::now() - t2).count();
 
   const TopologyReport report = topology_report(result.mesh);
   if (!a.report.empty()) {
@@ -163,8 +167,9 @@ int run_triangulate(const TriangulateArgs& a) {
       for (const std::string& h : surface_hints(result, a.thin)) joined += (joined.empty() ? "" : " / ") + h;
       if (!joined.empty()) j["hint"] = joined;
     }
-    write_json_file(j, a.report);
+    outputs.open("--report").write(json_text(j));
   }
+  outputs.commit_all();
   if (!a.quiet) {
     const auto& s = result.triangulation;
     std::printf("particlemesh triangulate: %s -> %s\n", a.input.c_str(), a.output.c_str());
