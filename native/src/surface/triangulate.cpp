@@ -8,6 +8,8 @@
 
 #include <tbb/parallel_sort.h>
 
+#include "core/format_number.h"
+#include "core/length_limits.h"
 #include "core/parallel.h"
 #include "core/progress_tracker.h"
 #include "particlemesh/core/error.h"
@@ -31,7 +33,7 @@ void check_options(const TriangulateOptions& o) {
   if (!std::isfinite(o.spacing) || o.spacing < 0)
     throw Error(Status::InvalidArgument,
                 "spacing must be a finite positive length (or 0 to estimate it), got " +
-                    std::to_string(o.spacing));
+                    detail::format_number(o.spacing));
   if (!std::isfinite(o.max_edge_factor) || o.max_edge_factor <= 0 || o.max_edge_factor > 100)
     throw Error(Status::InvalidArgument,
                 "max_edge_factor must be in (0, 100], got " + std::to_string(o.max_edge_factor));
@@ -70,6 +72,7 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
     st.spacing = est.spacing;
     st.spacing_estimated = true;
   }
+  check_length(st.spacing, std::string("the particle spacing r0") + (st.spacing_estimated ? " (estimated)" : ""));
   st.max_edge = options.max_edge_factor * st.spacing;
   if (!(st.max_edge > 0) || !std::isfinite(st.max_edge))
     throw Error(Status::InvalidArgument, "the max edge length is not a positive finite number");
@@ -82,7 +85,12 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
   t0 = Clock::now();
   tracker.stage("neighbour search", at(0.3), at(0.55), n);
   raw.neighbor_radius = st.max_edge * (2.0 / std::sqrt(3.0)) * (1.0 + 1e-6);
-  raw.grid = std::make_unique<NeighborGrid>(cloud.positions.data(), n, raw.neighbor_radius);
+  try {
+    raw.grid = std::make_unique<NeighborGrid>(cloud.positions.data(), n, raw.neighbor_radius);
+  } catch (const Error& e) {
+    if (e.status() != Status::LimitExceeded) throw;
+    throw Error(e.status(), std::string(e.what()) + " (the cells follow the spacing: a larger spacing makes them larger)");
+  }
   const NeighborGrid& grid = *raw.grid;
   size_t duplicates = 0;
   raw.rep = find_duplicates(grid, &duplicates);
@@ -119,8 +127,8 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
                   "the triangle test would examine " + std::to_string(st.triplets) + " candidate triplets (" +
                       std::to_string(st.triplets / distinct) + " per point, more than max_triplets_per_point = " +
                       std::to_string(options.max_triplets_per_point) + "): the max edge L = " +
-                      std::to_string(st.max_edge) + " is far too large for the spacing r0 = " +
-                      std::to_string(st.spacing) + " (lower the max edge factor, or raise the limit)");
+                      format_number(st.max_edge) + " is far too large for the spacing r0 = " +
+                      format_number(st.spacing) + " (lower the max edge factor, or raise the limit)");
   }
   st.seconds_neighbors = seconds_since(t0);
 

@@ -158,7 +158,12 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
   f.support_lo_ = lo;
   f.support_hi_ = hi;
 
-  f.grid_ = NeighborGrid(positions, n, f.max_radius_);  // the particles are kept once, in grid order
+  try {
+    f.grid_ = NeighborGrid(positions, n, f.max_radius_);  // the particles are kept once, in grid order
+  } catch (const Error& e) {
+    if (e.status() != Status::LimitExceeded) throw;
+    throw Error(e.status(), std::string(e.what()) + " (the cells follow the particle radius)");
+  }
   f.sorted_index_.resize(n);
   for (uint32_t s = 0; s < n; ++s) f.sorted_index_[f.grid_.original_index(s)] = s;
   if (!f.uniform_) {

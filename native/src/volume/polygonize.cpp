@@ -35,7 +35,7 @@ std::string num(double v) {
 
 std::string bytes_text(double b) {
   char buf[64];
-  if (b >= double(1ull << 30)) std::snprintf(buf, sizeof buf, "%.2f GiB", b / double(1ull << 30));
+  if (b >= double(1ull << 30)) std::snprintf(buf, sizeof buf, "%.3g GiB", b / double(1ull << 30));  // %g: 1e300 bytes is not 300 digits
   else if (b >= double(1ull << 20)) std::snprintf(buf, sizeof buf, "%.1f MiB", b / double(1ull << 20));
   else std::snprintf(buf, sizeof buf, "%.0f bytes", b);
   return buf;

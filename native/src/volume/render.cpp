@@ -9,6 +9,7 @@
 
 #include "core/parallel.h"
 #include "core/progress_tracker.h"
+#include "core/format_number.h"
 #include "particlemesh/core/error.h"
 
 namespace particlemesh {
@@ -26,7 +27,7 @@ Frame camera_frame(const Camera& c) {
     if (!std::isfinite(c.eye[a]) || !std::isfinite(c.target[a]) || !std::isfinite(c.up[a]))
       throw Error(Status::InvalidArgument, "camera eye, target and up must be finite");
   if (!(c.fov_degrees > 0 && c.fov_degrees < 180))
-    throw Error(Status::InvalidArgument, "camera fov is " + std::to_string(c.fov_degrees) + " degrees (must be in (0, 180))");
+    throw Error(Status::InvalidArgument, "camera fov is " + detail::format_number(c.fov_degrees) + " degrees (must be in (0, 180))");
   const Vec3 f = c.target - c.eye;
   if (!(norm(f) > 0)) throw Error(Status::InvalidArgument, "camera eye and target coincide");
   Frame fr;
