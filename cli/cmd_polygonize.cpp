@@ -80,6 +80,18 @@ int run_polygonize(const PolygonizeArgs& a) {
   const auto t2 = Clock::now();
   write_mesh(result.mesh, outputs.open("-o"), wo);
   const double t_write = std::chrono::duration<double>(Clock::now() - t2).count();
+  // No surface at all: the field never reaches the threshold where it was sampled. The empty
+  // mesh is still written (a frame of a sequence may well be empty), with a warning.
+  std::string warning;
+  if (result.mesh.triangles.empty()) {
+    char w[400];
+    std::snprintf(w, sizeof w,
+                  "no surface: the field reaches the threshold T = %g nowhere (T above the field's largest value, or "
+                  "particles too far apart for the radius R = %g): lower --threshold or raise --radius",
+                  result.stats.threshold, result.stats.radius);
+    warning = w;
+    std::fprintf(stderr, "particlemesh polygonize: warning: %s\n", w);
+  }
 
   const TopologyReport report = topology_report(result.mesh);
   if (!a.report.empty()) {
@@ -89,6 +101,7 @@ int run_polygonize(const PolygonizeArgs& a) {
                      {"polygonize", stats_json(result.stats)},
                      {"topology", to_json(report)},
                      {"seconds", {{"read", t_read}, {"polygonize", t_poly}, {"write", t_write}}}};
+    if (!warning.empty()) j["warning"] = warning;
     outputs.open("--report").write(json_text(j));
   }
   outputs.commit_all();
@@ -140,8 +153,19 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app->add_option("--max-grid-mib", args->max_grid_mib,
-                  "Fail before the sparse grid would need more memory than this, MiB (0 = no limit)")
+                  "Fail before the block search, the sparse grid or the grid with the mesh would need more memory "
+                  "than this, MiB (0 = no limit; at least one byte, 1e-6 MiB, otherwise)")
       ->check(CLI::NonNegativeNumber)
+      ->check(finite_number())
+      ->check(CLI::Validator(
+          [](std::string& s) -> std::string {
+            // Below one byte the budget would round to 0, which means "no limit".
+            const double v = std::strtod(s.c_str(), nullptr);
+            if (v > 0 && v * double(1 << 20) < 1) return "value " + s + " MiB is less than one byte (0 = no limit)";
+            if (v * double(1 << 20) >= 1.8e19) return "value " + s + " MiB is beyond 2^64 bytes (0 = no limit)";
+            return {};
+          },
+          "BYTES"))
       ->capture_default_str();
   app->add_option("--report", args->report, "Also write statistics and the topology report as JSON");
   app->add_flag("--ascii", args->ascii, "Write ASCII PLY instead of binary");

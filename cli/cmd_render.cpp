@@ -62,6 +62,13 @@ int run_render(const RenderArgs& a) {
   set_phase(Phase::Writing);
   write_png(r.image, outputs.open("-o"));
   outputs.commit_all();
+  // No pixel on the surface: the image is written (a frame of a sequence may be empty), with
+  // a word on why it is blank.
+  if (r.hits == 0)
+    std::fprintf(stderr,
+                 "particlemesh render: warning: the surface appears in no pixel: the field may reach the threshold "
+                 "T = %g nowhere (lower --threshold or raise --radius), or the camera looks away from it\n",
+                 caster.field().threshold());
   if (!a.quiet) {
     const auto& f = caster.field();
     const Camera& c = r.camera;

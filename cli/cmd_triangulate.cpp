@@ -1,5 +1,8 @@
 // particlemesh triangulate IN -o OUT: surface particles to a mesh.
+#include <algorithm>
+#include <cfloat>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <memory>
@@ -185,7 +188,11 @@ int run_triangulate(const TriangulateArgs& a) {
                 s.ties ? (", " + std::to_string(s.ties) + " ties broken").c_str() : "");
     if (!a.raw) {
       const auto& f = result.surface;
-      std::printf("  normals       %s\n", f.normals_estimated ? (cloud.has_normals() && a.normals == "auto" ? "plane fits, facing as the input's normals" : "plane fits, oriented by a spanning tree") : "the input's");
+      // Input normals that are all zero (no direction) are no normals: the tree orients.
+      bool directions = false;
+      for (const Vec3& n : cloud.normals)
+        directions = directions || std::max({std::abs(n.x), std::abs(n.y), std::abs(n.z)}) >= double(FLT_MIN);
+      std::printf("  normals       %s\n", f.normals_estimated ? (directions && a.normals == "auto" ? "plane fits, facing as the input's normals" : "plane fits, oriented by a spanning tree") : "the input's");
       std::printf("  surface       %zu co-normal candidates (%zu dropped), %zu grown from %zu seeds\n", f.candidates,
                   f.rejected_conormal, f.grown, f.seeds);
       std::printf("  repair        %zu holes filled (%zu triangles), %zu pinches resolved, %zu loops left open%s\n",

@@ -283,8 +283,9 @@ typedef struct pm_polygonize_options {
                                  R = 2 spacings (3.33 Wyvill, 3.94 poly4, 2.58 poly6, 1.23 Blinn) */
   double cell_size;         /**< grid cell h in world units; 0 = R / 4 */
   int32_t threads;          /**< 0 = all cores; the output does not depend on it */
-  uint64_t max_grid_bytes;  /**< fail with PM_STATUS_LIMIT_EXCEEDED before the sparse grid
-                                 would need more (default 4 GiB); 0 = no limit */
+  uint64_t max_grid_bytes;  /**< fail with PM_STATUS_LIMIT_EXCEEDED before the block search,
+                                 the sparse grid, or the grid with the output mesh would need
+                                 more (default 4 GiB); 0 = no limit */
   pm_progress_fn progress;  /**< may be NULL */
   void* progress_user_data;
 } pm_polygonize_options;
@@ -297,7 +298,8 @@ typedef struct pm_polygonize_stats {
   double spacing;           /**< median particle spacing, when the default radius needed it (else 0) */
   uint64_t particles;
   uint64_t sampled_blocks;  /**< blocks of 8^3 grid nodes sampled */
-  uint64_t grid_bytes;      /**< memory of the sparse grid */
+  uint64_t grid_bytes;      /**< memory of the sparse grid and the output mesh (what
+                                 max_grid_bytes bounds) */
   uint64_t vertices;
   uint64_t triangles;
 } pm_polygonize_stats;

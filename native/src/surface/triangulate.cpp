@@ -111,6 +111,11 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
       if (tracker.cancelled()) return;
       uint64_t sum = 0;
       for (size_t i = b; i < e; ++i) {
+        // Lists of up to max_neighbors (100000) each: a block can take seconds.
+        if ((i & 63) == 0) {
+          if (tracker.cancelled()) return;
+          tracker.tick(0);  // on the calling thread: lets the callback ask to cancel
+        }
         uint64_t higher = 0;
         for (const uint32_t* q = std::upper_bound(nbr.begin(uint32_t(i)), nbr.end(uint32_t(i)), uint32_t(i));
              q != nbr.end(uint32_t(i)); ++q)
@@ -154,9 +159,18 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
         near.clear();
         for (const uint32_t* q = std::upper_bound(ni, ne, i); q != ne; ++q)
           if (squared_distance(P[*q], pi) <= L2) near.push_back(*q);
+        // With the limits lifted one point can have ~1e9 triplets, each tested against up to
+        // 1e5 neighbours: the cancel flag is checked inside the point's work too (every 256
+        // pairs; a check costs a relaxed load, and on the calling thread a clock read).
+        uint32_t since_check = 0;
         for (size_t a = 0; a < near.size(); ++a) {
           const uint32_t j = near[a];
           for (size_t c = a + 1; c < near.size(); ++c) {
+            if (++since_check == 256) {
+              since_check = 0;
+              if (tracker.cancelled()) return;
+              tracker.tick(0);
+            }
             const uint32_t k = near[c];
             if (squared_distance(P[j], P[k]) > L2) continue;
             const SmallestSphere s = smallest_sphere(pi, P[j], P[k]);

@@ -652,8 +652,10 @@ FirstHits cast_first_hits(const RayCaster& caster, const Vec3* origins, const Ve
   tracker.stage("ray casting", 0.0, 1.0, (n + kRayGrain - 1) / kRayGrain);
   detail::with_threads(options.threads, [&] {
     detail::parallel_blocks(n, kRayGrain, [&](size_t begin, size_t end) {
-      if (tracker.cancelled()) return;
       for (size_t i = begin; i < end; ++i) {
+        // Every ray: with a huge radius one ray sums thousands of particles per step.
+        if (tracker.cancelled()) return;
+        tracker.tick(0);
         const auto h = caster.first_hit(origins[i], directions[i], options.t_min, options.t_max);
         if (!h) continue;
         r.t[i] = h->t;
@@ -678,8 +680,11 @@ AllHits cast_all_hits(const RayCaster& caster, const Vec3* origins, const Vec3* 
   tracker.stage("ray casting", 0.0, 1.0, (n + kRayGrain - 1) / kRayGrain);
   detail::with_threads(options.threads, [&] {
     detail::parallel_blocks(n, kRayGrain, [&](size_t begin, size_t end) {
-      if (tracker.cancelled()) return;
-      for (size_t i = begin; i < end; ++i) per[i] = caster.all_hits(origins[i], directions[i], options.t_min, options.t_max);
+      for (size_t i = begin; i < end; ++i) {
+        if (tracker.cancelled()) return;  // every ray (see cast_first_hits)
+        tracker.tick(0);
+        per[i] = caster.all_hits(origins[i], directions[i], options.t_min, options.t_max);
+      }
       tracker.tick();
     });
   });

@@ -122,6 +122,9 @@ RenderResult render(const RayCaster& caster, const RenderOptions& options) {
         if (tracker.cancelled()) return;
         const double py = 1.0 - 2.0 * (double(y) + 0.5) / double(H);
         for (int x = 0; x < W; ++x) {
+          // Every pixel: with a huge radius a row of rays takes seconds.
+          if (tracker.cancelled()) return;
+          tracker.tick(0);
           const double px = 2.0 * (double(x) + 0.5) / double(W) - 1.0;
           const Vec3 dir = fr.forward + fr.right * (px * th) + fr.up * (py * tv);
           const auto hit = caster.first_hit(r.camera.eye, dir);
