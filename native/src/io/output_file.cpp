@@ -380,8 +380,8 @@ void OutputFile::commit() {
       ok = false;
     }
     if (!ok) io_error(s.path, error_text(e) + " (while rewriting the hard-linked file in place; it may be incomplete)");
+    s.discard();  // closes and removes the temporary
     s.committed = true;
-    s.discard();
     return;
   }
   if (::rename(s.temp.c_str(), s.target.c_str()) != 0) io_error(s.path, error_text(errno));
