@@ -1,6 +1,9 @@
 #include "run_outputs.h"
 
 #include <csignal>
+#include <cstdio>
+#include <fcntl.h>
+#include <unistd.h>
 #include <sys/stat.h>
 
 #include "particlemesh/core/error.h"
@@ -29,6 +32,22 @@ bool character_device(const std::string& path) {
 RunOutputs::RunOutputs(std::vector<OutputSpec> outputs, const std::vector<std::string>& inputs) {
   for (OutputSpec& o : outputs)
     if (!o.path.empty()) specs_.push_back(std::move(o));
+  // "-" is standard output. An output that goes to standard output (-, /dev/stdout, or the
+  // file stdout is redirected to) gets its own copy of the descriptor, and what the command
+  // prints (its summary) goes to stderr instead, so that the file's bytes stay alone.
+  bool to_stdout = false;
+  for (OutputSpec& o : specs_) {
+    if (o.path == "-") o.path = "/dev/stdout";
+    if (o.path == "/dev/stdout" || o.path == "/proc/self/fd/1" || o.path == "/dev/fd/1") to_stdout = true;
+  }
+  if (to_stdout) {
+    std::fflush(stdout);
+    const int fd = ::fcntl(STDOUT_FILENO, F_DUPFD_CLOEXEC, 3);
+    if (fd < 0) throw UsageError("-o: standard output is not open");
+    for (OutputSpec& o : specs_)
+      if (o.path == "/dev/stdout" || o.path == "/proc/self/fd/1" || o.path == "/dev/fd/1") o.path = "/dev/fd/" + std::to_string(fd);
+    ::dup2(STDERR_FILENO, STDOUT_FILENO);
+  }
   for (const OutputSpec& o : specs_) {
     auto usage = [&](const std::string& why) { throw UsageError(o.option + ": " + why); };
     try {
