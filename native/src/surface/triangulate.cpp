@@ -107,7 +107,12 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
   const auto& P = grid.sorted_points();
   {
     std::atomic<uint64_t> triplets{0};
-    parallel_blocks(n, 4096, [&](size_t b, size_t e) {
+    // Blocks of about a million list entries (4096 points on even samplings): with huge lists
+    // smaller blocks, so that the calling thread, which alone may ask the callback, is never
+    // left waiting long on another thread's block.
+    const uint64_t entries = nbr.index.size();
+    const size_t count_grain = std::clamp<size_t>(size_t((uint64_t(1) << 20) * n / std::max<uint64_t>(1, entries)), 16, 4096);
+    parallel_blocks(n, count_grain, [&](size_t b, size_t e) {
       if (tracker.cancelled()) return;
       uint64_t sum = 0;
       for (size_t i = b; i < e; ++i) {
@@ -141,7 +146,11 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
   //    j < k of i's higher neighbours within L.
   t0 = Clock::now();
   tracker.stage("testing triangles", at(0.55), at(0.95), n);
-  const size_t block = 1024;
+  // Blocks of 1024 points, or fewer when points have many triplets (the limits lifted: up to
+  // ~1e6 per point), so that no block keeps the calling thread - the only one that calls the
+  // progress callback - waiting for long. The triangles are joined in block order either way.
+  const uint64_t per_point = st.triplets / std::max<uint64_t>(1, n - duplicates);
+  const size_t block = std::clamp<size_t>(size_t(65536 / std::max<uint64_t>(1, per_point)), 1, 1024);
   const size_t blocks = (n + block - 1) / block;
   std::vector<std::vector<Triangle>> out(blocks);
   std::vector<TestCounters> counters(blocks);
