@@ -66,7 +66,8 @@ PM_EXPORT pm_status pm_cloud_create(const double* positions, const double* norma
 /** The same from float32 arrays (numpy / Blender buffers). */
 PM_EXPORT pm_status pm_cloud_create_f32(const float* positions, const float* normals, size_t count,
                                         pm_cloud** out_cloud);
-/** Read a .ply or .xyz file. */
+/** Read a .ply or .xyz file, once and exactly (see particlemesh/io/mesh_io.h); a malformed
+ *  file is PM_STATUS_FORMAT_ERROR naming the file and the element or line. */
 PM_EXPORT pm_status pm_cloud_read(const char* path, pm_cloud** out_cloud);
 PM_EXPORT pm_status pm_cloud_get_count(const pm_cloud* cloud, size_t* out_count);
 /** 1 if the cloud carries normals, else 0. */
@@ -164,9 +165,11 @@ PM_EXPORT pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_o
 PM_EXPORT pm_status pm_mesh_create(const double* positions, size_t vertex_count,
                                    const int32_t* triangles, size_t triangle_count,
                                    const double* normals, pm_mesh** out_mesh);
-/** Read .ply / .obj / .off / .stl. */
+/** Read .ply / .obj / .off (ASCII) / .stl, once and exactly. */
 PM_EXPORT pm_status pm_mesh_read(const char* path, pm_mesh** out_mesh);
-/** Write .ply (binary) or .obj, atomically (temporary file, then rename). */
+/** Write .ply (binary) or .obj: a regular file through an exclusively created temporary in
+ *  its folder, renamed into place when complete (an existing file keeps its mode); a device
+ *  or FIFO written straight through (PLY when the name has no .ply / .obj extension). */
 PM_EXPORT pm_status pm_mesh_write(const pm_mesh* mesh, const char* path);
 PM_EXPORT pm_status pm_mesh_get_counts(const pm_mesh* mesh, size_t* out_vertex_count,
                                        size_t* out_triangle_count);
