@@ -134,7 +134,7 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("input", args->input,
                   "Particles: .ply (x y z ...), .xyz (x y z per line) or, with the PCL bridge, .pcd")
       ->required();
-  app->add_option("-o,--output", args->output, "Output mesh with normals: .ply (binary; --ascii for text) or .obj")
+  app->add_option("-o,--output", args->output, "Output mesh with normals: .ply (binary; --ascii for text) or .obj; - (or a device, a FIFO) for PLY on standard output")
       ->required();
   app->add_option("--radius", args->radius,
                   "Particle radius R (the field's support), world units (default: 2 x the median particle spacing)")

@@ -99,7 +99,7 @@ void add_render(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("input", args->input,
                   "Particles: .ply (x y z ...), .xyz (x y z per line) or, with the PCL bridge, .pcd")
       ->required();
-  app->add_option("-o,--output", args->output, "Output image (.png)")->required();
+  app->add_option("-o,--output", args->output, "Output image (.png; - for standard output)")->required();
   app->add_option("--radius", args->radius,
                   "Particle radius R (the field's support), world units (default: 2 x the median particle spacing)")
       ->check(CLI::PositiveNumber)

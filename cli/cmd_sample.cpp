@@ -32,7 +32,7 @@ void add_sample(CLI::App& root, std::vector<Command>& commands) {
                   "rim) | prism (unit legs meeting at 60 degrees, height 1)")
       ->check(CLI::IsMember({"trefoil", "torus", "sphere", "fibonacci", "box", "cone", "prism"}))
       ->capture_default_str();
-  app->add_option("-o,--output", args->output, "Output particles (.xyz or .ply)")->required();
+  app->add_option("-o,--output", args->output, "Output particles (.xyz or .ply; - for .xyz text on standard output)")->required();
   app->add_option("--spacing", args->spacing, "Poisson-disk spacing r0 (every shape but fibonacci)")
       ->check(CLI::Range(1e-4, 10.0))
       ->check(finite_number())

@@ -215,7 +215,7 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
   CLI::App* app = root.add_subcommand("triangulate", "Surface particles to a triangle mesh (seed section 5.2.3)");
   app->add_option("input", args->input, "Particles: .ply (x y z [nx ny nz]), .xyz (x y z [nx ny nz] per line) or .pcd (PCL: ascii, binary, binary_compressed)")
       ->required();
-  app->add_option("-o,--output", args->output, "Output mesh: .ply (binary; --ascii for text) or .obj")->required();
+  app->add_option("-o,--output", args->output, "Output mesh: .ply (binary; --ascii for text) or .obj; - (or a device, a FIFO) for PLY on standard output")->required();
   app->add_option("--spacing", args->spacing,
                   "Particle spacing r0 in world units (default: estimated as the median nearest-neighbour distance)")
       ->check(CLI::PositiveNumber)

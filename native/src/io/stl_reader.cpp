@@ -114,14 +114,15 @@ class StlReader {
              (r == NumberText::Overflow ? "beyond the range of double (1.8e308)" : "not a number"));
       return v;
     };
-    while (in_.token(tok, 256)) {
+    bool ended = false;  // the token ended its line (then there is no rest of the line to skip)
+    while (in_.token(tok, 256, &ended)) {
       if (tok == "vertex") {
         if (!in_loop) fail("'vertex' outside an 'outer loop' (triangle " + std::to_string(triangles_) + ")");
         const double x = number("x"), y = number("y"), z = number("z");
         corners.push_back(vertex(x, y, z));
       } else if (tok == "facet") {
         if (in_loop) fail("'facet' inside a loop (triangle " + std::to_string(triangles_) + ")");
-        in_.skip_line();  // normal nx ny nz: recomputed from the corners by whoever needs it
+        if (!ended) in_.skip_line();  // normal nx ny nz: recomputed from the corners by whoever needs it
       } else if (tok == "outer") {
         if (!in_.token(tok, 256) || tok != "loop") fail("'outer' without 'loop'");
         in_loop = true;
@@ -136,7 +137,7 @@ class StlReader {
         in_loop = false;
       } else if (tok == "endfacet") {
       } else if (tok == "endsolid" || tok == "solid") {
-        in_.skip_line();  // the name
+        if (!ended) in_.skip_line();  // the name
       } else {
         fail("unexpected '" + shown(tok) + "' in ASCII STL (triangle " + std::to_string(triangles_) + ")");
       }

@@ -258,3 +258,32 @@ TEST(FileReaders, EachFileIsReadOnceFrontToBack) {
     EXPECT_EQ(m.triangles, ico.triangles);
   }
 }
+
+// STL: corners with equal coordinates become one vertex (topology needs shared vertices),
+// ASCII (with or without solid names, several solids) and binary alike; coordinates exact.
+TEST(StlReader, AsciiAndBinaryShareVertices) {
+  const auto dir = test::scratch_dir("stl");
+  auto facet = [](const char* a, const char* b, const char* c) {
+    return std::string("facet normal 0 0 1\n outer loop\n  vertex ") + a + "\n  vertex " + b + "\n  vertex " + c +
+           "\n endloop\nendfacet\n";
+  };
+  const std::string text = "solid\n" + facet("0 0 0", "1 0 0", "0 1 0") + facet("1 0 0", "1 1 0", "0 1 0") +
+                           "endsolid\nsolid second\n" + facet("0 0 0", "0 1 0", "0 0 0.10000000000000001") +
+                           "endsolid second\n";
+  const TriMesh a = read_mesh(write(dir / "a.stl", text));
+  EXPECT_EQ(a.positions.size(), 5u);
+  EXPECT_EQ(a.triangles, (std::vector<Triangle>{{0, 1, 2}, {1, 3, 2}, {0, 2, 4}}));
+  EXPECT_EQ(a.positions[4].z, 0.1);
+  EXPECT_EQ(topology_report(a).components, 1u);
+  std::string b(80, ' ');
+  append(b, uint32_t(2));
+  const float tris[2][12] = {{0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 0, 1, 1, 0, 0, 1, 1, 0, 0, 1, 0}};
+  for (const auto& t : tris) {
+    for (float v : t) append(b, v);
+    append(b, uint16_t(0));
+  }
+  const TriMesh m = read_mesh(write(dir / "b.stl", b));
+  EXPECT_EQ(m.positions.size(), 4u);
+  EXPECT_EQ(m.triangles, (std::vector<Triangle>{{0, 1, 2}, {1, 3, 2}}));
+  EXPECT_REFUSED(read_mesh(write(dir / "more.stl", b + "xx")), Status::FormatError, "binary STL with more data");
+}
