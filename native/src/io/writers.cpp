@@ -128,14 +128,16 @@ void write_ply(const TriMesh& mesh, OutputFile& out, bool binary, bool normals) 
                 : "\nproperty float x\nproperty float y\nproperty float z\n");
   if (normals) t.put("property float nx\nproperty float ny\nproperty float nz\n");
   if (color) t.put("property uchar red\nproperty uchar green\nproperty uchar blue\n");
+  // Property names are unique in a PLY element: an attribute whose name is taken (x, red, a
+  // second "v", ...) gets a suffix.
+  std::vector<std::string> used{"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue"};
   for (const VertexAttribute* a : extra) {
     for (int c = 0; c < a->components; ++c) {
+      std::string name = ply_name(a->name) + (a->components > 1 ? "_" + std::to_string(c) : std::string());
+      while (std::find(used.begin(), used.end(), name) != used.end()) name += "_";
+      used.push_back(name);
       t.put("property float ");
-      t.put(ply_name(a->name));
-      if (a->components > 1) {
-        t.put('_');
-        t.integer(uint64_t(c));
-      }
+      t.put(name);
       t.put('\n');
     }
   }

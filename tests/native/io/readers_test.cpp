@@ -195,6 +195,15 @@ TEST(PlyReader, ColoursAndOtherPropertiesAreAttributes) {
     for (size_t i = 0; i < back.attributes[0].values.size(); ++i)
       EXPECT_NEAR(back.attributes[0].values[i], m.attributes[0].values[i], 0.5 / 255 + 1e-6) << name << " " << i;
   }
+  // Other attributes are float properties; names are kept unique ("x" is taken).
+  m.attributes.push_back({"x", 1, std::vector<float>(m.positions.size(), 2.5f)});
+  m.attributes.push_back({"v", 2, std::vector<float>(2 * m.positions.size(), -1.0f)});
+  write_mesh(m, (dir / "more.ply").string());
+  const TriMesh back = read_mesh((dir / "more.ply").string());
+  ASSERT_EQ(back.attributes.size(), 4u);
+  EXPECT_EQ(back.attributes[1].name, "x_");
+  EXPECT_EQ(back.attributes[1].values[7], 2.5f);
+  EXPECT_EQ(back.attributes[3].name, "v_1");
 }
 
 // OBJ: NaN and values beyond double named with their line (before: "a face refers to a
