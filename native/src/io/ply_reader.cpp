@@ -279,7 +279,9 @@ class PlyReader {
   size_t plausible(const Element& e) const {
     const uint64_t left = bytes_left();
     const uint64_t per = encoding_ == Encoding::Ascii ? 2 * std::max<size_t>(1, e.properties.size()) : std::max<uint64_t>(1, e.record);
-    const uint64_t most = left == UINT64_MAX ? (uint64_t(1) << 16) : left / per;
+    // A FIFO's length is unknown: a modest start (the vectors grow with what really comes),
+    // shared by the element's properties (each may be an attribute array).
+    const uint64_t most = left == UINT64_MAX ? (uint64_t(1) << 16) / std::max<size_t>(1, e.properties.size()) : left / per;
     return size_t(std::min(e.count, most));
   }
 

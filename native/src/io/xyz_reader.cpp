@@ -20,7 +20,7 @@ FileContents read_xyz(const std::string& path, ReadPurpose) {
   if (in.peek() < 0) throw Error(Status::FormatError, "'" + path + "': the file is empty");
   if (in.look_ahead(3) == "\xEF\xBB\xBF") in.skip(3);
   FileContents out;
-  if (in.size() > 0) out.positions.reserve(size_t(std::min<int64_t>(in.size() / 24, 1 << 22)));  // ~24 bytes a point at least
+  if (in.size() > 0) out.positions.reserve(size_t(std::min<int64_t>(in.size() / 24, 1 << 20)));  // ~24 bytes a point at least
   int columns = -1;
   std::string_view line;
   auto fail = [&](const std::string& problem) {
