@@ -18,6 +18,7 @@
 #include "particlemesh/surface/reconstruct.h"
 #include "particlemesh/surface/triangulate.h"
 #include "particlemesh/volume/polygonize.h"
+#include "particlemesh/volume/raycast.h"
 #include "particlemesh/volume/render.h"
 #include "support/test_support.h"
 
@@ -183,21 +184,37 @@ TEST(Cancellation, OnePointsTripletsWithTheLimitsLifted) {
   EXPECT_LT(latency, 2.0);
 }
 
-// A radius covering every particle: each ray sums all of them at every step. Cancellation
-// was checked per image row (a row of 2048 rays: seconds); now per pixel.
-TEST(Cancellation, RenderWithAHugeRadius) {
+// A radius covering every particle, rays cast from inside the blob: each ray sums thousands of
+// particles on each of thousands of intervals (seconds per ray). Cancellation was checked per
+// image row (render) and per 256 rays (batches); now within a ray, every 32 intervals.
+TEST(Cancellation, RaysThroughAHugeRadius) {
   FieldParams fp;
   fp.radius = 3;
-  const RayCaster caster(ParticleField(fibonacci_sphere(20000), fp));
+  const RayCaster caster(ParticleField(fibonacci_sphere(kSanitized ? 10000 : 30000), fp));
   RenderOptions ro;
-  ro.width = 2048;
-  ro.height = 16;
+  ro.width = 64;
+  ro.height = 8;
+  Camera cam;  // at the centre of the particles, inside the iso-surface
+  cam.eye = {0, 0, 0};
+  cam.target = {0, 0, 1};
+  ro.camera = cam;
   Status status = Status::Ok;
-  const double latency = cancel_after(0.3, [&](const ProgressCallback& p) {
+  double latency = cancel_after(0.3, [&](const ProgressCallback& p) {
     ro.progress = p;
     render(caster, ro);
   }, &status);
   std::printf("render cancelled: returned after %.3f s\n", latency);
+  EXPECT_EQ(status, Status::Cancelled);
+  EXPECT_GE(latency, 0.0);
+  EXPECT_LT(latency, 2.0);
+  std::vector<Vec3> origins(64, Vec3{0, 0, 0}), directions;
+  for (int i = 0; i < 64; ++i) directions.push_back(normalized(Vec3{std::cos(i * 0.1), std::sin(i * 0.1), 0.3}));
+  latency = cancel_after(0.3, [&](const ProgressCallback& p) {
+    RaycastOptions o;
+    o.progress = p;
+    cast_all_hits(caster, origins.data(), directions.data(), origins.size(), o);
+  }, &status);
+  std::printf("cast_all_hits cancelled: returned after %.3f s\n", latency);
   EXPECT_EQ(status, Status::Cancelled);
   EXPECT_GE(latency, 0.0);
   EXPECT_LT(latency, 2.0);

@@ -7,6 +7,7 @@
 #include "core/parallel.h"
 #include "core/progress_tracker.h"
 #include "particlemesh/core/error.h"
+#include "volume/ray_cancel.h"
 #include "volume/ray_roots.h"
 
 namespace particlemesh {
@@ -486,7 +487,12 @@ void RayCaster::Impl::Query::run(Scratch& sc) {
   if (!box(im.nodes[0], &t_root)) return;
   push_node(t_root, 0);
   double cur = tlo;
+  uint32_t since_check = 0;  // intervals and nodes since the last cancellation check
   while (!done) {
+    if (++since_check >= 32) {
+      since_check = 0;
+      if (detail::ray_cancelled()) return;  // abandoned: the batch throws Cancelled
+    }
     // No unvisited sphere begins before the smallest entry of the nodes still to visit: the
     // intervals up to there are final.
     const double horizon = nheap.empty() ? kInf : nheap.front().t;
@@ -496,6 +502,10 @@ void RayCaster::Impl::Query::run(Scratch& sc) {
         interval(cur, te, active);
         cur = te;
         if (done) break;
+        if (++since_check >= 32) {
+          since_check = 0;
+          if (detail::ray_cancelled()) return;
+        }
       }
       while (!eheap.empty() && eheap.front().t == te) {
         const Event e = eheap.front();
@@ -555,6 +565,13 @@ void RayCaster::Impl::Query::run(Scratch& sc) {
     finalize();
   }
 }
+
+namespace detail {
+ProgressTracker*& ray_tracker() {
+  thread_local ProgressTracker* tracker = nullptr;
+  return tracker;
+}
+}  // namespace detail
 
 RayCaster::RayCaster() : impl_(std::make_unique<Impl>()) {}
 RayCaster::~RayCaster() = default;
@@ -652,6 +669,7 @@ FirstHits cast_first_hits(const RayCaster& caster, const Vec3* origins, const Ve
   tracker.stage("ray casting", 0.0, 1.0, (n + kRayGrain - 1) / kRayGrain);
   detail::with_threads(options.threads, [&] {
     detail::parallel_blocks(n, kRayGrain, [&](size_t begin, size_t end) {
+      const detail::RayCancelScope scope(&tracker);
       for (size_t i = begin; i < end; ++i) {
         // Every ray: with a huge radius one ray sums thousands of particles per step.
         if (tracker.cancelled()) return;
@@ -680,6 +698,7 @@ AllHits cast_all_hits(const RayCaster& caster, const Vec3* origins, const Vec3* 
   tracker.stage("ray casting", 0.0, 1.0, (n + kRayGrain - 1) / kRayGrain);
   detail::with_threads(options.threads, [&] {
     detail::parallel_blocks(n, kRayGrain, [&](size_t begin, size_t end) {
+      const detail::RayCancelScope scope(&tracker);
       for (size_t i = begin; i < end; ++i) {
         if (tracker.cancelled()) return;  // every ray (see cast_first_hits)
         tracker.tick(0);

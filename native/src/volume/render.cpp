@@ -10,6 +10,7 @@
 #include "core/parallel.h"
 #include "core/progress_tracker.h"
 #include "core/format_number.h"
+#include "volume/ray_cancel.h"
 #include "particlemesh/core/error.h"
 
 namespace particlemesh {
@@ -118,6 +119,7 @@ RenderResult render(const RayCaster& caster, const RenderOptions& options) {
   tracker.stage("rendering", 0.0, 1.0, uint64_t(H));
   detail::with_threads(options.threads, [&] {
     detail::parallel_blocks(size_t(H), 1, [&](size_t y0, size_t y1) {
+      const detail::RayCancelScope scope(&tracker);  // a long ray checks it too
       for (size_t y = y0; y < y1; ++y) {
         if (tracker.cancelled()) return;
         const double py = 1.0 - 2.0 * (double(y) + 0.5) / double(H);
