@@ -372,8 +372,11 @@ namespace particlemesh_pcl
       if (!std::isfinite (v))
         fail (path, "bad data: line " + std::to_string (file_line) + ": a non-finite value in integer field '" +
                     f.name + "'");
+      // Saturated to the type's range (double(INT64_MAX) rounds up to 2^63, itself out of
+      // range: compare, do not convert, at the ends).
       const double lo = double (std::numeric_limits<T>::lowest ()), hi = double (std::numeric_limits<T>::max ());
-      const T x = static_cast<T> (std::clamp (std::trunc (v), lo, hi));
+      const double w = std::trunc (v);
+      const T x = w >= hi ? std::numeric_limits<T>::max () : w <= lo ? std::numeric_limits<T>::lowest () : static_cast<T> (w);
       std::memcpy (at, &x, sizeof x);
     };
     switch (f.datatype)
