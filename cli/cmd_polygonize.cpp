@@ -12,6 +12,7 @@
 #include "progress_line.h"
 #include "report_json.h"
 #include "volume_options.h"
+#include "run_outputs.h"
 
 namespace particlemesh::cli {
 
@@ -61,6 +62,10 @@ nlohmann::json stats_json(const PolygonizeStats& s) {
 
 int run_polygonize(const PolygonizeArgs& a) {
   using Clock = std::chrono::steady_clock;
+  WriteMeshOptions wo;
+  if (a.ascii) wo.format = MeshFormat::PlyAscii;
+  RunOutputs outputs({{"-o", a.output, OutputKind::Mesh, wo.format}, {"--report", a.report, OutputKind::Text}},
+                     {a.input});
   const auto t0 = Clock::now();
   ProgressLine progress(a.quiet);
   const ParticleInput input = read_particles(a.input, ParticleInputArgs{}, a.threads);
@@ -89,9 +94,22 @@ int run_polygonize(const PolygonizeArgs& a) {
   progress.clear();
   if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
 
-  WriteMeshOptions wo;
-  if (a.ascii) wo.format = MeshFormat::PlyAscii;
-  const double t_write = write_outputs([&] { write_mesh(result.mesh, a.output, wo); }, {a.output});
+  set_phase(Phase::Writing);
+  const auto t2 = Clock::now();
+  write_mesh(result.mesh, outputs.open("-o"), wo);
+  const double t_write = std::chrono::duration<double>(Clock::now() - t2).count();
+  // No surface at all: the field never reaches the threshold where it was sampled. The empty
+  // mesh is still written (a frame of a sequence may well be empty), with a warning.
+  std::string warning;
+  if (result.mesh.triangles.empty()) {
+    char w[400];
+    std::snprintf(w, sizeof w,
+                  "no surface: the field reaches the threshold T = %g nowhere (T above the field's largest value, or "
+                  "particles too far apart for the radius R = %g): lower --threshold or raise --radius",
+                  result.stats.threshold, result.stats.radius);
+    warning = w;
+    std::fprintf(stderr, "particlemesh polygonize: warning: %s\n", w);
+  }
 
   const TopologyReport report = topology_report(result.mesh);
   if (!a.report.empty()) {
@@ -101,8 +119,10 @@ int run_polygonize(const PolygonizeArgs& a) {
                      {"polygonize", stats_json(result.stats)},
                      {"topology", to_json(report)},
                      {"seconds", {{"read", t_read}, {"polygonize", t_poly}, {"write", t_write}}}};
-    write_json_file(j, a.report);
+    if (!warning.empty()) j["warning"] = warning;
+    outputs.open("--report").write(json_text(j));
   }
+  outputs.commit_all();
   if (!a.quiet) {
     const auto& s = result.stats;
     std::printf("particlemesh polygonize: %s -> %s\n", a.input.c_str(), a.output.c_str());
@@ -145,7 +165,7 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("input", args->input,
                   "Particles: .ply (x y z ...), .xyz (x y z per line) or, with the PCL bridge, .pcd")
       ->required();
-  app->add_option("-o,--output", args->output, "Output mesh with normals: .ply (binary; --ascii for text) or .obj")
+  app->add_option("-o,--output", args->output, "Output mesh with normals: .ply (binary; --ascii for text) or .obj; - (or a device, a FIFO) for PLY on standard output")
       ->required();
   app->add_option("--radius", args->radius,
                   "Particle radius R (the field's support), world units (default: 2 x the median particle spacing)")
@@ -164,8 +184,19 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app->add_option("--max-grid-mib", args->max_grid_mib,
-                  "Fail before the sparse grid would need more memory than this, MiB (0 = no limit)")
+                  "Fail before the block search, the sparse grid or the grid with the mesh would need more memory "
+                  "than this, MiB (0 = no limit; at least one byte, 1e-6 MiB, otherwise)")
       ->check(CLI::NonNegativeNumber)
+      ->check(finite_number())
+      ->check(CLI::Validator(
+          [](std::string& s) -> std::string {
+            // Below one byte the budget would round to 0, which means "no limit".
+            const double v = std::strtod(s.c_str(), nullptr);
+            if (v > 0 && v * double(1 << 20) < 1) return "value " + s + " MiB is less than one byte (0 = no limit)";
+            if (v * double(1 << 20) >= 1.8e19) return "value " + s + " MiB is beyond 2^64 bytes (0 = no limit)";
+            return {};
+          },
+          "BYTES"))
       ->capture_default_str();
   add_anisotropy_options(*app, args->anisotropy);
   app->add_option("--min-component-volume", args->min_component_volume,

@@ -10,6 +10,7 @@
 #include "particle_input.h"
 #include "progress_line.h"
 #include "volume_options.h"
+#include "run_outputs.h"
 
 namespace particlemesh::cli {
 
@@ -26,6 +27,7 @@ struct RenderArgs {
 
 int run_render(const RenderArgs& a) {
   using Clock = std::chrono::steady_clock;
+  RunOutputs outputs({{"-o", a.output, OutputKind::Png}}, {a.input});
   const auto t0 = Clock::now();
   ProgressLine progress(a.quiet);
   set_phase(Phase::Reading);
@@ -60,7 +62,16 @@ int run_render(const RenderArgs& a) {
   const RenderResult r = render(caster, o);
   progress.clear();
   if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
-  write_outputs([&] { write_png(r.image, a.output); }, {a.output});
+  set_phase(Phase::Writing);
+  write_png(r.image, outputs.open("-o"));
+  outputs.commit_all();
+  // No pixel on the surface: the image is written (a frame of a sequence may be empty), with
+  // a word on why it is blank.
+  if (r.hits == 0)
+    std::fprintf(stderr,
+                 "particlemesh render: warning: the surface appears in no pixel: the field may reach the threshold "
+                 "T = %g nowhere (lower --threshold or raise --radius), or the camera looks away from it\n",
+                 caster.field().threshold());
   if (!a.quiet) {
     const auto& f = caster.field();
     const Camera& c = r.camera;
@@ -98,7 +109,7 @@ void add_render(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("input", args->input,
                   "Particles: .ply (x y z ...), .xyz (x y z per line) or, with the PCL bridge, .pcd")
       ->required();
-  app->add_option("-o,--output", args->output, "Output image (.png)")->required();
+  app->add_option("-o,--output", args->output, "Output image (.png; - for standard output)")->required();
   app->add_option("--radius", args->radius,
                   "Particle radius R (the field's support), world units (default: 2 x the median particle spacing)")
       ->check(CLI::PositiveNumber)

@@ -13,6 +13,7 @@
 #include "particlemesh/smooth/subdivide.h"
 #include "progress_line.h"
 #include "report_json.h"
+#include "run_outputs.h"
 #include "smooth_chain.h"
 
 namespace particlemesh::cli {
@@ -87,6 +88,10 @@ nlohmann::json smooth_stats_json(const SmoothStats& s) {
 
 int run_smooth(const SmoothArgs& a) {
   using Clock = std::chrono::steady_clock;
+  WriteMeshOptions wo;
+  if (a.ascii) wo.format = MeshFormat::PlyAscii;
+  RunOutputs outputs({{"-o", a.output, OutputKind::Mesh, wo.format}, {"--report", a.report, OutputKind::Text}},
+                     {a.input});
   const auto t0 = Clock::now();
   ProgressLine progress(a.quiet);
   const TriMesh mesh = read_mesh(a.input);
@@ -110,9 +115,10 @@ int run_smooth(const SmoothArgs& a) {
   progress.clear();
   if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
 
-  WriteMeshOptions wo;
-  if (a.ascii) wo.format = MeshFormat::PlyAscii;
-  const double t_write = write_outputs([&] { write_mesh(result.mesh, a.output, wo); }, {a.output});
+  set_phase(Phase::Writing);
+  const auto t2 = Clock::now();
+  write_mesh(result.mesh, outputs.open("-o"), wo);
+  const double t_write = std::chrono::duration<double>(Clock::now() - t2).count();
 
   const TopologyReport report = topology_report(result.mesh);
   if (!a.report.empty()) {
@@ -123,8 +129,9 @@ int run_smooth(const SmoothArgs& a) {
                      {"smooth", smooth_stats_json(result.stats)},
                      {"topology", to_json(report)},
                      {"seconds", {{"read", t_read}, {"smooth", t_smooth}, {"write", t_write}}}};
-    write_json_file(j, a.report);
+    outputs.open("--report").write(json_text(j));
   }
+  outputs.commit_all();
   if (!a.quiet) {
     const auto& s = result.stats;
     std::printf("particlemesh smooth: %s -> %s\n", a.input.c_str(), a.output.c_str());
@@ -149,7 +156,7 @@ void add_smooth(CLI::App& root, std::vector<Command>& commands) {
   CLI::App* app = root.add_subcommand(
       "smooth", "Subdivide a triangle mesh into a smooth one: Loop (OpenSubdiv) or modified butterfly (OpenMesh)");
   app->add_option("mesh", args->input, "Input mesh: .ply, .obj, .off or .stl (a 2-manifold)")->required();
-  app->add_option("-o,--output", args->output, "Output mesh: .ply (binary; --ascii for text) or .obj")->required();
+  app->add_option("-o,--output", args->output, "Output mesh: .ply (binary; --ascii for text) or .obj; - (or a device, a FIFO) for PLY on standard output")->required();
   app->add_option("--scheme", args->scheme,
                   "loop: approximating, exact limit surface; butterfly: interpolating, keeps every vertex")
       ->check(CLI::IsMember({"loop", "butterfly"}))

@@ -1,5 +1,8 @@
 // particlemesh triangulate IN -o OUT: surface particles to a mesh.
+#include <algorithm>
+#include <cfloat>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <memory>
@@ -18,6 +21,7 @@
 #include "particlemesh/surface/triangulate.h"
 #include "progress_line.h"
 #include "report_json.h"
+#include "run_outputs.h"
 #include "smooth_chain.h"
 
 namespace particlemesh::cli {
@@ -86,6 +90,12 @@ std::vector<std::string> surface_hints(const SurfaceResult& r, double thin) {
 
 int run_triangulate(const TriangulateArgs& a) {
   using Clock = std::chrono::steady_clock;
+  WriteMeshOptions wo;
+  if (a.ascii) wo.format = MeshFormat::PlyAscii;
+  RunOutputs outputs({{"-o", a.output, OutputKind::Mesh, wo.format},
+                      {"--report", a.report, OutputKind::Text},
+                      {"--pcl-mesh", a.input_options.pcl_mesh, OutputKind::PlyOnly}},
+                     {a.input});
   const auto t0 = Clock::now();
   ProgressLine progress(a.quiet);
   const ParticleInput input = read_particles(a.input, a.input_options, a.threads);
@@ -137,14 +147,11 @@ int run_triangulate(const TriangulateArgs& a) {
 
   apply_smooth_chain(result.mesh, a.smooth, a.threads, progress);  // --smooth: after the mesh is made
 
-  WriteMeshOptions wo;
-  if (a.ascii) wo.format = MeshFormat::PlyAscii;
-  const double t_write = write_outputs(
-      [&] {
-        write_mesh(result.mesh, a.output, wo);
-        write_pcl_mesh(result.mesh, a.input_options);
-      },
-      {a.output, a.input_options.pcl_mesh});
+  set_phase(Phase::Writing);
+  const auto t2 = Clock::now();
+  write_mesh(result.mesh, outputs.open("-o"), wo);
+  if (outputs.has("--pcl-mesh")) write_pcl_mesh(result.mesh, outputs.open("--pcl-mesh"));
+  const double t_write = std::chrono::duration<double>(Clock::now() - t2).count();
 
   const TopologyReport report = topology_report(result.mesh);
   if (!a.report.empty()) {
@@ -163,8 +170,9 @@ int run_triangulate(const TriangulateArgs& a) {
       for (const std::string& h : surface_hints(result, a.thin)) joined += (joined.empty() ? "" : " / ") + h;
       if (!joined.empty()) j["hint"] = joined;
     }
-    write_json_file(j, a.report);
+    outputs.open("--report").write(json_text(j));
   }
+  outputs.commit_all();
   if (!a.quiet) {
     const auto& s = result.triangulation;
     std::printf("particlemesh triangulate: %s -> %s\n", a.input.c_str(), a.output.c_str());
@@ -180,7 +188,11 @@ int run_triangulate(const TriangulateArgs& a) {
                 s.ties ? (", " + std::to_string(s.ties) + " ties broken").c_str() : "");
     if (!a.raw) {
       const auto& f = result.surface;
-      std::printf("  normals       %s\n", f.normals_estimated ? (cloud.has_normals() && a.normals == "auto" ? "plane fits, facing as the input's normals" : "plane fits, oriented by a spanning tree") : "the input's");
+      // Input normals that are all zero (no direction) are no normals: the tree orients.
+      bool directions = false;
+      for (const Vec3& n : cloud.normals)
+        directions = directions || std::max({std::abs(n.x), std::abs(n.y), std::abs(n.z)}) >= double(FLT_MIN);
+      std::printf("  normals       %s\n", f.normals_estimated ? (directions && a.normals == "auto" ? "plane fits, facing as the input's normals" : "plane fits, oriented by a spanning tree") : "the input's");
       std::printf("  surface       %zu co-normal candidates (%zu dropped), %zu grown from %zu seeds\n", f.candidates,
                   f.rejected_conormal, f.grown, f.seeds);
       std::printf("  repair        %zu holes filled (%zu triangles), %zu pinches resolved, %zu loops left open%s\n",
@@ -203,7 +215,7 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
   CLI::App* app = root.add_subcommand("triangulate", "Surface particles to a triangle mesh (seed section 5.2.3)");
   app->add_option("input", args->input, "Particles: .ply (x y z [nx ny nz]), .xyz (x y z [nx ny nz] per line) or .pcd (PCL: ascii, binary, binary_compressed)")
       ->required();
-  app->add_option("-o,--output", args->output, "Output mesh: .ply (binary; --ascii for text) or .obj")->required();
+  app->add_option("-o,--output", args->output, "Output mesh: .ply (binary; --ascii for text) or .obj; - (or a device, a FIFO) for PLY on standard output")->required();
   app->add_option("--spacing", args->spacing,
                   "Particle spacing r0 in world units (default: estimated as the median nearest-neighbour distance)")
       ->check(CLI::PositiveNumber)

@@ -5,7 +5,9 @@
 //   particlemesh smooth MESH -o OUT.ply         Loop / butterfly subdivision
 //   particlemesh polygonize IN -o OUT.ply       volume particles -> implicit surface mesh
 //   particlemesh render IN -o IMAGE.png         volume particles -> ray-cast image of the surface
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 
 #include <CLI/CLI.hpp>
@@ -14,6 +16,7 @@
 #include "particlemesh/core/error.h"
 #include "particlemesh/version.h"
 #include "progress_line.h"
+#include "run_outputs.h"
 
 int main(int argc, char** argv) {
   using namespace particlemesh;
@@ -34,11 +37,22 @@ int main(int argc, char** argv) {
     const int code = app.exit(e);  // prints help / the usage error
     return code == 0 ? 0 : 2;
   }
-  cli::install_interrupt_handler();
+  cli::install_signal_handlers();
   for (auto& c : commands) {
     if (!c.app->parsed()) continue;
+    const char* name = c.app->get_name().c_str();
     try {
-      return c.run();
+      const int status = c.run();
+      // What was printed must have reached stdout (inspect > /dev/full, a closed pipe).
+      if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+        std::fprintf(stderr, "particlemesh %s: error: cannot write to standard output: %s\n", name,
+                     std::strerror(errno));
+        return 1;
+      }
+      return status;
+    } catch (const cli::UsageError& e) {
+      std::fprintf(stderr, "particlemesh %s: usage error: %s\nRun with --help for more information.\n", name, e.what());
+      return 2;
     } catch (const Error& e) {
       std::fprintf(stderr, "particlemesh %s: error: %s\n", c.app->get_name().c_str(), e.what());
       return e.status() == Status::Cancelled ? 130 : 1;

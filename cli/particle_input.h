@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "particlemesh/io/output_file.h"
 #include "particlemesh/mesh/point_cloud.h"
 #include "particlemesh/mesh/tri_mesh.h"
 
@@ -39,7 +40,7 @@ void add_particle_input_options(CLI::App& app, ParticleInputArgs& args);
 /// Read `path` (.pcd, .ply, .xyz) and preprocess as asked. @throws Error naming the file.
 ParticleInput read_particles(const std::string& path, const ParticleInputArgs& args, int threads);
 
-/// Write the mesh as a pcl::PolygonMesh PLY if --pcl-mesh was given (atomically).
-void write_pcl_mesh(const TriMesh& mesh, const ParticleInputArgs& args);
+/// Write the mesh as a pcl::PolygonMesh PLY (--pcl-mesh) into `out`.
+void write_pcl_mesh(const TriMesh& mesh, OutputFile& out);
 
 }  // namespace particlemesh::cli

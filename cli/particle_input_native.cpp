@@ -19,6 +19,8 @@ ParticleInput read_particles(const std::string& path, const ParticleInputArgs&, 
   return in;
 }
 
-void write_pcl_mesh(const TriMesh&, const ParticleInputArgs&) {}
+void write_pcl_mesh(const TriMesh&, OutputFile& out) {
+  throw Error(Status::InvalidArgument, "'" + out.path() + "': --pcl-mesh needs the PCL bridge (built with PM_WITH_PCL=OFF)");
+}
 
 }  // namespace particlemesh::cli

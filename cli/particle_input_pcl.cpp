@@ -131,11 +131,10 @@ ParticleInput read_particles(const std::string& path, const ParticleInputArgs& a
   return in;
 }
 
-void write_pcl_mesh(const TriMesh& mesh, const ParticleInputArgs& a) {
-  if (a.pcl_mesh.empty()) return;
+void write_pcl_mesh(const TriMesh& mesh, OutputFile& out) {
   pcl::PolygonMesh pm;
   particlemesh_pcl::toPolygonMesh(mesh, pm);
-  particlemesh_pcl::savePLYFile(a.pcl_mesh, pm);
+  particlemesh_pcl::savePLYFile(out, pm);
 }
 
 }  // namespace particlemesh::cli

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include "particlemesh/core/error.h"
+#include "particlemesh/io/output_file.h"
 
 namespace particlemesh::cli {
 
@@ -13,15 +14,27 @@ namespace {
 volatile std::sig_atomic_t g_interrupted = 0;
 volatile std::sig_atomic_t g_phase = 0;  // Phase::Reading
 
-extern "C" void on_sigint(int) {
-  g_interrupted = 1;
-  if (g_phase == int(Phase::Reading)) {
+extern "C" void on_signal(int sig) {
+  const bool cancel = sig == SIGINT || sig == SIGTERM;
+  if (g_phase == int(Phase::Done)) {  // the outputs are in place: end as the signal ends a process
+    std::signal(sig, SIG_DFL);
+    raise(sig);
+    return;
+  }
+  if (cancel && g_phase == int(Phase::Computing) && !g_interrupted) {
+    g_interrupted = 1;  // the progress callback cancels the library's work
+    return;
+  }
+  // Reading (nothing written), writing (temporaries only), a second Ctrl-C, or a hang-up,
+  // quit or broken pipe: no output may be left half-made.
+  particlemesh::remove_unfinished_outputs();
+  if (cancel) {
     static const char msg[] = "particlemesh: cancelled (interrupted)\n";
     (void)!write(STDERR_FILENO, msg, sizeof msg - 1);
-    _exit(130);  // async-signal-safe; nothing has been written yet
+    _exit(130);
   }
-  std::signal(SIGINT, SIG_DFL);  // a second Ctrl-C terminates at once
-  std::signal(SIGTERM, SIG_DFL);
+  std::signal(sig, SIG_DFL);
+  raise(sig);
 }
 }  // namespace
 
@@ -30,27 +43,16 @@ void set_phase(Phase phase) {
   if (phase == Phase::Reading && g_interrupted) _exit(130);
 }
 
-void install_interrupt_handler() {
+void install_signal_handlers() {
   struct sigaction sa {};
-  sa.sa_handler = on_sigint;
+  sa.sa_handler = on_signal;
   sigemptyset(&sa.sa_mask);
-  sigaction(SIGINT, &sa, nullptr);
-  sigaction(SIGTERM, &sa, nullptr);
+  sa.sa_flags = SA_RESTART;
+  for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE}) sigaction(sig, &sa, nullptr);
+  std::signal(SIGXFSZ, SIG_IGN);  // a file size limit: EFBIG, a clear error, no killed process
 }
 
 bool interrupted() { return g_interrupted != 0; }
-
-double write_outputs(const std::function<void()>& write, std::initializer_list<std::string> paths) {
-  const auto t0 = std::chrono::steady_clock::now();
-  set_phase(Phase::Writing);
-  write();
-  if (interrupted()) {  // Ctrl-C while writing: the run is cancelled, so no output either
-    for (const std::string& p : paths)
-      if (!p.empty()) std::remove(p.c_str());
-    throw Error(Status::Cancelled, "interrupted");
-  }
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 ProgressCallback ProgressLine::callback() {
   tty_ = isatty(STDERR_FILENO) != 0;

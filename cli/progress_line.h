@@ -1,10 +1,12 @@
-// A progress line on stderr for work that takes more than a second, and Ctrl-C handling:
-// SIGINT sets a flag that the library's progress callback turns into a prompt cancel.
+// A progress line on stderr for work that takes more than a second, and signal handling:
+// SIGINT / SIGTERM while computing set a flag that the library's progress callback turns into
+// a prompt cancel; any other time, and SIGHUP, SIGQUIT, SIGPIPE at any time, end the process
+// at once after removing the unfinished output files' temporaries. SIGXFSZ (a file size
+// limit) is ignored, so that a write past the limit fails with "File too large" and the run
+// ends with that error instead of being killed half-way.
 #pragma once
 
 #include <chrono>
-#include <functional>
-#include <initializer_list>
 #include <string>
 #include <string_view>
 
@@ -12,21 +14,17 @@
 
 namespace particlemesh::cli {
 
-/// Install the SIGINT/SIGTERM handler. While the command computes, the first Ctrl-C sets a
-/// flag that the progress callback turns into the library's cancellation; while it only reads
-/// input (nothing to cancel, nothing written yet) the process exits at once with status 130.
-/// A second Ctrl-C always exits at once.
-void install_interrupt_handler();
+/// Install the handlers. While the command computes, the first SIGINT or SIGTERM sets a flag
+/// that the progress callback turns into the library's cancellation (exit status 130); while
+/// it reads input or writes its outputs, the process removes the outputs' temporaries and
+/// exits with status 130 at once. A second SIGINT / SIGTERM always exits at once. SIGHUP,
+/// SIGQUIT and SIGPIPE remove the temporaries, then end the process as they would have.
+void install_signal_handlers();
 bool interrupted();
 
-enum class Phase { Reading, Computing, Writing };
+enum class Phase { Reading, Computing, Writing, Done };
 /// Tell the handler what the command is doing now.
 void set_phase(Phase phase);
-
-/// The writing phase shared by the commands: runs `write` (whose writers are atomic), and if a
-/// Ctrl-C arrived meanwhile the run counts as cancelled, so the files it finished (`paths`;
-/// empty names are skipped) are removed and Error(Cancelled) is thrown. Returns the seconds taken.
-double write_outputs(const std::function<void()>& write, std::initializer_list<std::string> paths);
 
 class ProgressLine {
  public:

@@ -3,7 +3,6 @@
 #include <cmath>
 #include <sstream>
 
-#include "particlemesh/io/atomic_write.h"
 
 namespace particlemesh::cli {
 
@@ -103,8 +102,6 @@ std::string describe(const TopologyReport& r) {
   return o.str();
 }
 
-void write_json_file(const nlohmann::json& j, const std::string& path) {
-  write_file_atomically(path, j.dump(2) + "\n");
-}
+std::string json_text(const nlohmann::json& j) { return j.dump(2) + "\n"; }
 
 }  // namespace particlemesh::cli

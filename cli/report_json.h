@@ -18,7 +18,7 @@ nlohmann::json to_json(const SurfaceStats& s);
 /// A few lines describing the mesh, for people.
 std::string describe(const TopologyReport& r);
 
-/// Write JSON to a file atomically (temporary file + rename). @throws Error(IoError).
-void write_json_file(const nlohmann::json& j, const std::string& path);
+/// The text of a --report file.
+std::string json_text(const nlohmann::json& j);
 
 }  // namespace particlemesh::cli

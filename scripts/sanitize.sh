@@ -43,7 +43,7 @@ cmake --build "$BUILD" -j "$JOBS"
 # halt_on_error for what is built without it), LeakSanitizer makes the exit status non-zero.
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=0:strict_string_checks=1:detect_stack_use_after_return=1:check_initialization_order=1${ASAN_OPTIONS:+:$ASAN_OPTIONS}"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
-# One known third-party leak (OpenMesh's stream disconnect): see the file.
+# Suppressions, if ever needed, go in tests/lsan.supp (none at present).
 export LSAN_OPTIONS="suppressions=$ROOT/tests/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
 if [ -z "${PM_SKIP_SUITES:-}" ]; then
   # The determinism suite repeats whole runs 6 times and the million-point sphere checks a

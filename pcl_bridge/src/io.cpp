@@ -1,4 +1,8 @@
-// PCD in through pcl::PCDReader after our own header check; PLY meshes out through PCL.
+// PCD in: the file is read into memory once; our header check runs on those bytes, then
+// pcl::PCDReader reads the header from them and decodes binary and binary_compressed bodies
+// from them (readBodyBinary); an ASCII body is parsed once, by the check itself, straight
+// into the PCLPointCloud2 PCL's header reading laid out. PLY meshes out through PCL's writer,
+// into an OutputFile (a temporary renamed into place, checked complete before).
 #include <particlemesh_pcl/io.h>
 
 #include <algorithm>
@@ -20,8 +24,7 @@
 
 #include <particlemesh/core/error.h>
 #include <particlemesh/io/mesh_io.h>
-
-#include "io/header_check.h"  // native/src: the PLY completeness check (compiled in, hidden)
+#include <particlemesh/io/output_file.h>
 
 namespace particlemesh_pcl
 {
@@ -96,17 +99,15 @@ namespace particlemesh_pcl
       return s;
     }
 
-    // Up to `limit` bytes of the file from `offset` (the header lives in the first few
-    // hundred bytes; ascii data sections are read whole to count their lines).
+    // The whole file, read once (PCD files are read whole by PCL too).
     std::string
-    readBytes (const std::string &path, std::size_t offset, std::size_t limit)
+    readFile (const std::string &path, std::size_t size)
     {
       std::ifstream in (path, std::ios::binary);
       if (!in)
         throw Error (Status::IoError, path + ": cannot open for reading");
-      in.seekg (static_cast<std::streamoff> (offset));
-      std::string out (limit, '\0');
-      in.read (out.data (), static_cast<std::streamsize> (limit));
+      std::string out (size, '\0');
+      in.read (out.data (), static_cast<std::streamsize> (size));
       if (in.bad ())
         throw Error (Status::IoError, path + ": read error");
       out.resize (static_cast<std::size_t> (in.gcount ()));
@@ -128,21 +129,22 @@ namespace particlemesh_pcl
     }
 
     constexpr std::size_t kMaxHeader = 1 << 20;
-  }
 
+  // The header (and the sizes of a binary body) of the PCD file whose bytes are `file`;
+  // `line_no` gets the number of the DATA line.
   PCDHeader
-  checkPCDFile (const std::string &path)
+  checkHeader (const std::string &path, const std::string &file, std::size_t &line_no)
   {
-    const std::size_t file_size = fileSize (path);
+    const std::size_t file_size = file.size ();
     if (file_size == 0)
       fail (path, "empty file, not a PCD file");
-    const std::string bytes = readBytes (path, 0, std::min (file_size, kMaxHeader));
+    const std::string bytes = file.substr (0, std::min (file_size, kMaxHeader));
 
     PCDHeader h;
     bool seen_fields = false, seen_size = false, seen_type = false, seen_count = false;
     bool seen_width = false, seen_points = false, seen_data = false;
     std::size_t pos = 0;
-    std::size_t line_no = 0;
+    line_no = 0;
     while (pos < bytes.size () && !seen_data)
     {
       std::size_t eol = bytes.find ('\n', pos);
@@ -348,10 +350,7 @@ namespace particlemesh_pcl
       if (available < 8)
         fail (path, "truncated data: no compressed block header after DATA");
       std::uint32_t sizes[2];
-      const std::string block = readBytes (path, h.data_offset, 8);
-      if (block.size () != 8)
-        fail (path, "truncated data: no compressed block header after DATA");
-      std::memcpy (sizes, block.data (), 8);
+      std::memcpy (sizes, file.data () + h.data_offset, 8);
       if (std::size_t (sizes[0]) > available - 8)
         fail (path, "truncated data: compressed block of " + std::to_string (sizes[0]) + " bytes, only " +
                     std::to_string (available - 8) + " left");
@@ -360,9 +359,80 @@ namespace particlemesh_pcl
                     std::to_string (h.points) + " points x " + std::to_string (h.point_size) + " bytes = " +
                     std::to_string (h.points * h.point_size));
     }
-    else  // ascii: one line per point, every value a number
+    return h;
+  }
+
+  // The values of a PCLPointCloud2 field, stored from text.
+  void
+  storeValue (const std::string &path, std::size_t file_line, const pcl::PCLPointField &f, double v,
+              std::uint8_t *at, bool &dense)
+  {
+    auto integer = [&] (auto t) {
+      using T = decltype (t);
+      if (!std::isfinite (v))
+        fail (path, "bad data: line " + std::to_string (file_line) + ": a non-finite value in integer field '" +
+                    f.name + "'");
+      // Saturated to the type's range (double(INT64_MAX) rounds up to 2^63, itself out of
+      // range: compare, do not convert, at the ends).
+      const double lo = double (std::numeric_limits<T>::lowest ()), hi = double (std::numeric_limits<T>::max ());
+      const double w = std::trunc (v);
+      const T x = w >= hi ? std::numeric_limits<T>::max () : w <= lo ? std::numeric_limits<T>::lowest () : static_cast<T> (w);
+      std::memcpy (at, &x, sizeof x);
+    };
+    switch (f.datatype)
     {
-      const std::string body = readBytes (path, h.data_offset, available);
+      case pcl::PCLPointField::INT8: integer (std::int8_t {}); break;
+      case pcl::PCLPointField::UINT8: integer (std::uint8_t {}); break;
+      case pcl::PCLPointField::INT16: integer (std::int16_t {}); break;
+      case pcl::PCLPointField::UINT16: integer (std::uint16_t {}); break;
+      case pcl::PCLPointField::INT32: integer (std::int32_t {}); break;
+      case pcl::PCLPointField::UINT32: integer (std::uint32_t {}); break;
+      case pcl::PCLPointField::INT64: integer (std::int64_t {}); break;
+      case pcl::PCLPointField::UINT64: integer (std::uint64_t {}); break;
+      case pcl::PCLPointField::FLOAT32:
+      {
+        const float x = static_cast<float> (v);
+        dense = dense && std::isfinite (x);
+        std::memcpy (at, &x, sizeof x);
+        break;
+      }
+      case pcl::PCLPointField::FLOAT64:
+        dense = dense && std::isfinite (v);
+        std::memcpy (at, &v, sizeof v);
+        break;
+      default:
+        fail (path, "field '" + f.name + "' has a type PCL's header reading did not expect");
+    }
+  }
+
+  // An ASCII body: one line per point, every value a number, as many as FIELDS x COUNT say.
+  // With `cloud` (laid out by PCL's readHeader), the values are stored into it: the body is
+  // parsed once, here.
+  void
+  readAsciiBody (const std::string &path, const std::string &file, const PCDHeader &h, std::size_t line_no,
+                 pcl::PCLPointCloud2 *cloud)
+  {
+    std::size_t values_per_point = 0;
+    for (int c : h.counts)
+      values_per_point += std::size_t (c);
+    // Where each value of a line goes: the field and the byte offset in the point.
+    std::vector<std::pair<const pcl::PCLPointField *, std::size_t>> slots;
+    if (cloud)
+    {
+      if (cloud->fields.size () != h.fields.size () ||
+          std::size_t (cloud->width) * cloud->height != h.points ||
+          cloud->data.size () != h.points * std::size_t (cloud->point_step))
+        fail (path, "PCL's reading of the header disagrees with ours");
+      for (const auto &f : cloud->fields)
+        for (std::uint32_t c = 0; c < f.count; ++c)
+          slots.emplace_back (&f, f.offset + c * pcl::getFieldSize (f.datatype));
+      if (slots.size () != values_per_point)
+        fail (path, "PCL's reading of the header disagrees with ours (values per point)");
+      cloud->is_dense = true;
+    }
+    bool dense = true;
+    const std::string_view body (file.data () + h.data_offset, file.size () - h.data_offset);
+    {
       std::size_t rows = 0;
       std::size_t p = 0;
       std::size_t file_line = line_no;
@@ -389,6 +459,13 @@ namespace particlemesh_pcl
             if (!parseNumber (t, q))
               fail (path, "bad data: line " + std::to_string (file_line) + ": '" +
                           std::string (t, std::min<std::size_t> (std::size_t (q - t), 20)) + "' is not a number");
+            if (cloud && values < slots.size ())
+            {
+              const std::string token (t, q);
+              const double v = std::strtod (token.c_str (), nullptr);
+              std::uint8_t *at = cloud->data.data () + rows * std::size_t (cloud->point_step) + slots[values].second;
+              storeValue (path, file_line, *slots[values].first, v, at, dense);
+            }
             ++values;
           }
         }
@@ -402,6 +479,19 @@ namespace particlemesh_pcl
       if (rows < h.points)
         fail (path, "truncated data: " + std::to_string (rows) + " data lines, POINTS says " + std::to_string (h.points));
     }
+    if (cloud)
+      cloud->is_dense = dense;
+  }
+  }  // namespace
+
+  PCDHeader
+  checkPCDFile (const std::string &path)
+  {
+    const std::string file = readFile (path, fileSize (path));
+    std::size_t line_no = 0;
+    PCDHeader h = checkHeader (path, file, line_no);
+    if (h.data == "ascii")
+      readAsciiBody (path, file, h, line_no, nullptr);
     return h;
   }
 
@@ -409,12 +499,26 @@ namespace particlemesh_pcl
   loadPCDFile (const std::string &path)
   {
     PCDFile file;
-    file.header = checkPCDFile (path);
+    const std::string bytes = readFile (path, fileSize (path));
+    std::size_t line_no = 0;
+    file.header = checkHeader (path, bytes, line_no);
     Eigen::Vector4f origin;
     Eigen::Quaternionf orientation;
-    int version = 0;
+    int version = 0, data_type = 0;
+    unsigned int data_idx = 0;
     pcl::PCDReader reader;
-    const int rc = reader.read (path, file.cloud, origin, orientation, version);
+    std::istringstream header (bytes);
+    int rc = reader.readHeader (header, file.cloud, origin, orientation, version, data_type, data_idx);
+    if (rc >= 0)
+    {
+      if (data_type == 0)
+        readAsciiBody (path, bytes, file.header, line_no, &file.cloud);
+      else if (data_idx > bytes.size ())
+        rc = -1;
+      else
+        rc = reader.readBodyBinary (reinterpret_cast<const unsigned char *> (bytes.data ()), file.cloud, version,
+                                    data_type == 2, data_idx);
+    }
     if (rc < 0)
       throw Error (Status::FormatError, path + ": PCL's PCD reader failed (code " + std::to_string (rc) + ")");
     if (std::size_t (file.cloud.width) * file.cloud.height != file.header.points)
@@ -476,41 +580,30 @@ namespace particlemesh_pcl
   }
 
   void
-  savePLYFile (const std::string &path, const pcl::PolygonMesh &mesh)
+  savePLYFile (particlemesh::OutputFile &out, const pcl::PolygonMesh &mesh)
   {
-    namespace fs = std::filesystem;
-    const fs::path target (path);
-    std::error_code ec;
-    if (target.has_parent_path () && !fs::is_directory (target.parent_path (), ec))
-      throw Error (Status::IoError, path + ": folder does not exist");
-    // A temporary name next to the target (same file system, so the rename is atomic),
-    // keeping the extension.
-    std::random_device rd;
-    const fs::path temp = target.parent_path () /
-                          ("." + target.stem ().string () + ".tmp" + std::to_string (rd ()) + target.extension ().string ());
-    const int rc = pcl::io::savePLYFileBinary (temp.string (), mesh);
-    if (rc < 0 || !fs::exists (temp, ec))
-    {
-      fs::remove (temp, ec);
-      throw Error (Status::IoError, path + ": cannot write (PCL's PLY writer failed)");
-    }
+    const std::string target = out.path_for_external_writer ();
+    if (pcl::io::savePLYFileBinary (target, mesh) < 0)
+      throw Error (Status::IoError, "cannot write '" + out.path () + "': PCL's PLY writer failed");
+    if (out.streams ())
+      return;  // a device or FIFO: written straight through, nothing to read back
     // PCL's writer does not check its stream: a write cut short (disk full, file size limit)
-    // still returns 0. The file must hold everything its header promises before it is
-    // renamed into place (the same check the readers make).
+    // still returns 0. The file must read back complete before it is put in place.
     try
     {
-      particlemesh::detail::check_mesh_file_header (temp.string (), ".ply");
+      particlemesh::read_mesh (target);
     }
     catch (const Error &)
     {
-      fs::remove (temp, ec);
-      throw Error (Status::IoError, path + ": cannot write (the file came out incomplete: disk full?)");
+      throw Error (Status::IoError, "cannot write '" + out.path () + "': the file came out incomplete (disk full?)");
     }
-    fs::rename (temp, target, ec);
-    if (ec)
-    {
-      fs::remove (temp, ec);
-      throw Error (Status::IoError, path + ": cannot rename the written file into place");
-    }
+  }
+
+  void
+  savePLYFile (const std::string &path, const pcl::PolygonMesh &mesh)
+  {
+    particlemesh::OutputFile out (path);
+    savePLYFile (out, mesh);
+    out.commit ();
   }
 }

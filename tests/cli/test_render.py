@@ -96,9 +96,10 @@ def test_errors_are_one_line_and_leave_no_file(cli, tmp_path):
     assert proc.returncode == 2
     proc = cli("render", SCENE, "-o", out, "--radius", "0.8", "--camera", "0,0,0,0,0,0", check=False)
     assert proc.returncode == 1 and "eye and target coincide" in proc.stderr
+    # An output folder that does not exist is a usage error, found before any work.
     proc = cli("render", SCENE, "-o", tmp_path / "no" / "dir" / "x.png", "--radius", "0.8", "--width", "8",
                "--height", "8", check=False)
-    assert proc.returncode == 1
+    assert proc.returncode == 2 and "does not exist" in proc.stderr
     assert not out.exists()
 
 

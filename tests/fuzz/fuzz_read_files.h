@@ -30,7 +30,7 @@ inline void check_mesh(const TriMesh& m) {
 /// API; anything else propagates and is a finding.
 inline void read_both(const uint8_t* data, size_t size, const char* extension, bool as_cloud, bool as_mesh) {
   static TempFileCleanup cleanup{extension};
-  const std::string& path = temp_file(extension, data, size);
+  const std::string path = temp_file(extension, data, size);
   if (as_cloud) {
     try {
       check_cloud(read_point_cloud(path));
@@ -52,7 +52,17 @@ inline void read_both(const uint8_t* data, size_t size, const char* extension, b
   }
   if (as_mesh) {
     try {
-      check_mesh(read_mesh(path));
+      const TriMesh m = read_mesh(path);
+      check_mesh(m);
+      // What was read is written and read again: same vertices, triangles and attributes.
+      static TempFileCleanup written{".out.ply"};
+      const std::string out = temp_file(".out.ply", nullptr, 0);
+      write_mesh(m, out);
+      const TriMesh back = read_mesh(out);
+      PM_FUZZ_CHECK(back.positions.size() == m.positions.size());
+      PM_FUZZ_CHECK(back.triangles == m.triangles);
+      PM_FUZZ_CHECK(back.attributes.size() == m.attributes.size());
+      for (const Vec3& p : back.positions) PM_FUZZ_CHECK(is_finite(p));
     } catch (const Error& e) {
       PM_FUZZ_CHECK(e.status() != Status::Internal);
       PM_FUZZ_CHECK(e.what()[0] != '\0');

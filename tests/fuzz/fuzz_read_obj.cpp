@@ -1,4 +1,4 @@
-// Fuzz target: OBJ files (OpenMesh's reader behind read_mesh), through the C++ API and the
+// Fuzz target: OBJ files (io/obj_reader.cpp behind read_mesh), through the C++ API and the
 // C ABI. The first byte picks the extension among .obj, .off and .stl: the other mesh formats
 // read_mesh accepts go through the same door.
 #include "fuzz_read_files.h"

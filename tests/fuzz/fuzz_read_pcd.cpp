@@ -1,5 +1,6 @@
-// Fuzz target: PCD files through the PCL bridge's checked reader (our header check, then
-// pcl::PCDReader, then the conversion to particles).
+// Fuzz target: PCD files through the PCL bridge's checked reader (the file read once; our
+// header check and ASCII parser, pcl::PCDReader's header and binary decoding on the same
+// bytes; then the conversion to particles).
 #include <pcl/console/print.h>
 
 #include "fuzz_read_files.h"

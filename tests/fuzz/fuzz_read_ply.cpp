@@ -1,5 +1,5 @@
-// Fuzz target: PLY files (OpenMesh's reader behind read_point_cloud / read_mesh, our header
-// check in front of it), through the C++ API and the C ABI.
+// Fuzz target: PLY files (io/ply_reader.cpp behind read_point_cloud / read_mesh), through the
+// C++ API and the C ABI; what reads back is written and read again (fuzz_read_files.h).
 #include "fuzz_read_files.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -87,6 +87,28 @@ void file_seeds() {
     put("read_ply", "tri_big_endian.ply", be);
   }
 
+  // The reader's own paths: a list inside the vertex element, faces before vertices, colours
+  // and other properties (attributes), upper-case names, doubles beyond float32.
+  put("read_ply", "list_in_vertex_faces_first.ply",
+      "ply\nformat ascii 1.0\nelement face 1\nproperty list uchar int vertex_indices\nelement vertex 3\n"
+      "property float X\nproperty list uchar int ids\nproperty float Y\nproperty float Z\nproperty uchar red\n"
+      "property uchar green\nproperty uchar blue\nproperty float density\nend_header\n3 0 1 2\n"
+      "0 2 4 5 0 0 255 0 0 1.5\n1 0 0 0 0 255 0 2\n0 1 7 1 0 0 0 255 3\n");
+  {
+    std::string d = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
+                    "property double z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    for (double v : {4e38, 0.0, 0.0, 5e38, 0.0, 0.0, 1e-300, 1e38, 0.0}) append(d, v);
+    d += char(3);
+    for (int32_t i : {0, 1, 2}) append(d, i);
+    put("read_ply", "doubles_beyond_float.ply", d);
+  }
+  put("read_xyz", "bom.xyz", "\xEF\xBB\xBF" "0 0 0\n1 0 0\n0 1 0\n");
+  put("read_obj", "colours.obj", "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nvn 0 0 1\nf 1//1 2//1 3//1\n");
+  put("read_obj", "stl_two_solids.bin",
+      "\xFE" "solid\nfacet normal 0 0 1\n outer loop\n vertex 0 0 0\n vertex 1 0 0\n vertex 0 1 0\n endloop\nendfacet\n"
+      "endsolid\nsolid b\nfacet normal 0 0 1\n outer loop\n vertex 1 0 0\n vertex 1 1 0\n vertex 0 1 0\n endloop\n"
+      "endfacet\nendsolid b\n");
+
   // OBJ (and OFF / STL behind their marker byte, see fuzz_read_obj.cpp).
   put("read_obj", "ico.obj", via_mesh_writer(ico, ".obj"));
   put("read_obj", "quads_negative_uv.obj",

@@ -66,7 +66,8 @@ PM_EXPORT pm_status pm_cloud_create(const double* positions, const double* norma
 /** The same from float32 arrays (numpy / Blender buffers). */
 PM_EXPORT pm_status pm_cloud_create_f32(const float* positions, const float* normals, size_t count,
                                         pm_cloud** out_cloud);
-/** Read a .ply or .xyz file. */
+/** Read a .ply or .xyz file, once and exactly (see particlemesh/io/mesh_io.h); a malformed
+ *  file is PM_STATUS_FORMAT_ERROR naming the file and the element or line. */
 PM_EXPORT pm_status pm_cloud_read(const char* path, pm_cloud** out_cloud);
 PM_EXPORT pm_status pm_cloud_get_count(const pm_cloud* cloud, size_t* out_count);
 /** 1 if the cloud carries normals, else 0. */
@@ -167,9 +168,11 @@ PM_EXPORT pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_o
 PM_EXPORT pm_status pm_mesh_create(const double* positions, size_t vertex_count,
                                    const int32_t* triangles, size_t triangle_count,
                                    const double* normals, pm_mesh** out_mesh);
-/** Read .ply / .obj / .off / .stl. */
+/** Read .ply / .obj / .off (ASCII) / .stl, once and exactly. */
 PM_EXPORT pm_status pm_mesh_read(const char* path, pm_mesh** out_mesh);
-/** Write .ply (binary) or .obj, atomically (temporary file, then rename). */
+/** Write .ply (binary) or .obj: a regular file through an exclusively created temporary in
+ *  its folder, renamed into place when complete (an existing file keeps its mode); a device
+ *  or FIFO written straight through (PLY when the name has no .ply / .obj extension). */
 PM_EXPORT pm_status pm_mesh_write(const pm_mesh* mesh, const char* path);
 PM_EXPORT pm_status pm_mesh_get_counts(const pm_mesh* mesh, size_t* out_vertex_count,
                                        size_t* out_triangle_count);
@@ -287,8 +290,9 @@ typedef struct pm_polygonize_options {
                                  R = 2 spacings (3.33 Wyvill, 3.94 poly4, 2.58 poly6, 1.23 Blinn) */
   double cell_size;         /**< grid cell h in world units; 0 = R / 4 */
   int32_t threads;          /**< 0 = all cores; the output does not depend on it */
-  uint64_t max_grid_bytes;  /**< fail with PM_STATUS_LIMIT_EXCEEDED before the sparse grid
-                                 would need more (default 4 GiB); 0 = no limit */
+  uint64_t max_grid_bytes;  /**< fail with PM_STATUS_LIMIT_EXCEEDED before the block search,
+                                 the sparse grid, or the grid with the output mesh would need
+                                 more (default 4 GiB); 0 = no limit */
   pm_progress_fn progress;  /**< may be NULL */
   void* progress_user_data;
   /* Appended (a caller built against an older header gets the defaults below): */
@@ -332,7 +336,8 @@ typedef struct pm_polygonize_stats {
   double spacing;           /**< median particle spacing, when the default radius needed it (else 0) */
   uint64_t particles;
   uint64_t sampled_blocks;  /**< blocks of 8^3 grid nodes sampled */
-  uint64_t grid_bytes;      /**< memory of the sparse grid */
+  uint64_t grid_bytes;      /**< memory of the sparse grid and the output mesh (what
+                                 max_grid_bytes bounds) */
   uint64_t vertices;
   uint64_t triangles;
   /* Appended: */

@@ -9,11 +9,17 @@
 #include <memory>
 
 #include "particlemesh/core/error.h"
-#include "particlemesh/io/atomic_write.h"
 
 namespace particlemesh {
 
 void write_png(const Image& image, const std::string& path) {
+  OutputFile out(path);
+  write_png(image, out);
+  out.commit();
+}
+
+void write_png(const Image& image, OutputFile& out) {
+  const std::string& path = out.path();
   if (image.width <= 0 || image.height <= 0)
     throw Error(Status::InvalidArgument, "cannot write an empty image (" + std::to_string(image.width) + " x " +
                                              std::to_string(image.height) + ") to " + path);
@@ -33,7 +39,7 @@ void write_png(const Image& image, const std::string& path) {
   if (!png_image_write_to_memory(&png, bytes.data(), &size, 0, image.rgb.data(), 0, nullptr))
     throw Error(Status::IoError, std::string("cannot encode PNG for ") + path + ": " + png.message);
   bytes.resize(size);
-  write_file_atomically(path, bytes);
+  out.write(bytes);
 }
 
 Image read_png(const std::string& path) {

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <string>
 
+#include "core/format_number.h"
 #include "particlemesh/core/error.h"
 
 namespace particlemesh {
@@ -104,7 +105,7 @@ class KeptCells {
 std::vector<uint32_t> thin_points(const Vec3* points, size_t n, double min_distance) {
   if (!(min_distance > 0) || !std::isfinite(min_distance))
     throw Error(Status::InvalidArgument,
-                "min_distance must be a positive finite distance, got " + std::to_string(min_distance));
+                "min_distance must be a positive finite distance, got " + detail::format_number(min_distance));
   if (points == nullptr && n > 0) throw Error(Status::InvalidArgument, "points is NULL");
   if (n > size_t(UINT32_MAX) - 1) throw Error(Status::LimitExceeded, "more than 2^32 - 2 points");
   std::vector<uint32_t> kept;
@@ -121,8 +122,8 @@ std::vector<uint32_t> thin_points(const Vec3* points, size_t n, double min_dista
   constexpr double kMaxCells = double((1 << 21) - 4);  // packed in 21 bits with the margins
   for (int a = 0; a < 3; ++a)
     if (!((hi[a] - lo[a]) * inv < kMaxCells))
-      throw Error(Status::LimitExceeded, "the points span " + std::to_string((hi[a] - lo[a]) * inv) +
-                                             " cells of size " + std::to_string(cell) + " along " +
+      throw Error(Status::LimitExceeded, "the points span " + detail::format_number((hi[a] - lo[a]) * inv) +
+                                             " cells of size " + detail::format_number(cell) + " along " +
                                              std::string(1, "xyz"[a]) +
                                              " (at most 2097148): the thinning distance is far too small");
   // One cell of margin below the data, so that p - d never has a negative cell coordinate.

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "core/parallel.h"
+#include "core/format_number.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/smooth/subdivide.h"
 
@@ -97,8 +98,8 @@ ControlMesh prepare_control_mesh(const TriMesh& mesh) {
       // Finite is not enough: Loop's and butterfly's sums of coordinates near DBL_MAX overflow
       // to infinity (found by fuzzing).
       if (std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > kMaxSmoothCoordinate)
-        throw Error(Status::InvalidInput, "positions[" + std::to_string(v) + "] = (" + std::to_string(p.x) + ", " +
-                                              std::to_string(p.y) + ", " + std::to_string(p.z) +
+        throw Error(Status::InvalidInput, "positions[" + std::to_string(v) + "] = (" + detail::format_number(p.x) + ", " +
+                                              detail::format_number(p.y) + ", " + detail::format_number(p.z) +
                                               ") is too large to smooth (coordinates must be at most 1e50 in magnitude)");
       cm.control_index[v] = uint32_t(cm.original_vertex.size());
       cm.original_vertex.push_back(uint32_t(v));

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "core/counting_sort.h"
+#include "core/format_number.h"
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
 
@@ -92,9 +93,9 @@ void NeighborGrid::build(const Vec3* points, size_t n, double cell_size, const V
     const double cells = (hi[a] - lo[a]) * inv_cell_;
     if (!(cells < double(kMaxCellsPerAxis - 4)))
       throw Error(Status::LimitExceeded,
-                  "the points span " + std::to_string(cells) + " cells of size " + std::to_string(cell_size) +
-                      " along " + std::string(1, "xyz"[a]) +
-                      " (at most 2097148): remove far outliers or use a larger spacing");
+                  "the points span " + detail::format_number(cells) + " cells of size " +
+                      detail::format_number(cell_size) + " along " + std::string(1, "xyz"[a]) +
+                      " (at most 2097148): remove far outliers, or use larger cells");
   }
 
   std::vector<Entry> entries(n);

@@ -1,7 +1,9 @@
 #include "particlemesh/surface/reconstruct.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <numeric>
 #include <string>
@@ -28,6 +30,14 @@ void check_surface_options(const SurfaceOptions& o) {
     throw Error(Status::InvalidArgument, "fill_edge_factor must be in (0, 10], got " + std::to_string(o.fill_edge_factor));
   if (o.fill_holes > 100000)
     throw Error(Status::InvalidArgument, "fill_holes must be at most 100000 edges, got " + std::to_string(o.fill_holes));
+}
+
+/// Whether a particle's normal has a direction: finite, and not zero or so short (below
+/// float32's smallest normal number, 1.2e-38) that it is noise: a file's "0 0 0" or a
+/// subnormal float is a particle without a normal.
+bool usable_normal(const Vec3& n) {
+  const double m = std::max({std::abs(n.x), std::abs(n.y), std::abs(n.z)});
+  return std::isfinite(m) && m >= double(std::numeric_limits<float>::min());
 }
 
 }  // namespace
@@ -64,6 +74,12 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     });
     std::vector<Vec3> normals;
     if (options.normals == Source::Input) {
+      for (size_t i = 0; i < n; ++i)
+        if (!usable_normal(cloud.normals[i]))
+          throw Error(Status::InvalidInput,
+                      "normals = input, but normals[" + std::to_string(i) +
+                          "] has no direction (zero, or shorter than 1.2e-38): give every particle a normal, or let "
+                          "normals = auto estimate the missing ones");
       normals.resize(n);
       detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
         for (size_t s = b; s < e; ++s) normals[s] = normalized(cloud.normals[original[s]]);
@@ -73,8 +89,16 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
       normals = detail::pca_normals_sorted(grid, raw.rep, raw.neighbors, raw.stats.max_edge, tracker, &raw.triangles);
       std::vector<Vec3> reference;
       if (options.normals == Source::Auto && cloud.has_normals()) {
+        // A normal without a direction (zero, or subnormal) is a particle without a normal:
+        // it does not vote, its neighbours decide. None with a direction: no reference at all.
         reference.resize(n);
-        for (uint32_t s = 0; s < n; ++s) reference[s] = cloud.normals[original[s]];
+        size_t usable = 0;
+        for (uint32_t s = 0; s < n; ++s) {
+          const Vec3& r = cloud.normals[original[s]];
+          reference[s] = usable_normal(r) ? r : Vec3{};
+          usable += usable_normal(r);
+        }
+        if (usable == 0) reference.clear();
       }
       tracker.stage("orienting normals", 0.65, 0.7);
       // The cloud's normals orient directly when they are consistent; otherwise (or without

@@ -5,6 +5,7 @@
 #include <limits>
 #include <string>
 
+#include "core/length_limits.h"
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/spatial/neighbor_grid.h"
@@ -28,8 +29,12 @@ NeighborGrid occupancy_grid(const Vec3* points, size_t n, ProgressTracker& track
     lo = {std::min(lo.x, points[i].x), std::min(lo.y, points[i].y), std::min(lo.z, points[i].z)};
     hi = {std::max(hi.x, points[i].x), std::max(hi.y, points[i].y), std::max(hi.z, points[i].z)};
   }
+  // The largest side, not the diagonal: squaring a side of 1e-300 underflows to 0, and the
+  // points would be called coincident.
+  const double side = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+  if (!(side > 0)) throw Error(Status::InvalidInput, "all points coincide: there is no spacing");
+  check_length(side, "the largest side of the points' bounding box");
   const double diag = distance(lo, hi);
-  if (!(diag > 0)) throw Error(Status::InvalidInput, "all points coincide: there is no spacing");
   const double finest = diag / double(NeighborGrid::kMaxCellsPerAxis / 2);
   double h = std::max(2.0 * diag / std::sqrt(double(n)), finest);
   for (int it = 0;; ++it) {

@@ -8,6 +8,8 @@
 
 #include <tbb/parallel_sort.h>
 
+#include "core/format_number.h"
+#include "core/length_limits.h"
 #include "core/parallel.h"
 #include "core/progress_tracker.h"
 #include "particlemesh/core/error.h"
@@ -31,7 +33,7 @@ void check_options(const TriangulateOptions& o) {
   if (!std::isfinite(o.spacing) || o.spacing < 0)
     throw Error(Status::InvalidArgument,
                 "spacing must be a finite positive length (or 0 to estimate it), got " +
-                    std::to_string(o.spacing));
+                    detail::format_number(o.spacing));
   if (!std::isfinite(o.max_edge_factor) || o.max_edge_factor <= 0 || o.max_edge_factor > 100)
     throw Error(Status::InvalidArgument,
                 "max_edge_factor must be in (0, 100], got " + std::to_string(o.max_edge_factor));
@@ -70,6 +72,7 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
     st.spacing = est.spacing;
     st.spacing_estimated = true;
   }
+  check_length(st.spacing, std::string("the particle spacing r0") + (st.spacing_estimated ? " (estimated)" : ""));
   st.max_edge = options.max_edge_factor * st.spacing;
   if (!(st.max_edge > 0) || !std::isfinite(st.max_edge))
     throw Error(Status::InvalidArgument, "the max edge length is not a positive finite number");
@@ -82,7 +85,12 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
   t0 = Clock::now();
   tracker.stage("neighbour search", at(0.3), at(0.55), n);
   raw.neighbor_radius = st.max_edge * (2.0 / std::sqrt(3.0)) * (1.0 + 1e-6);
-  raw.grid = std::make_unique<NeighborGrid>(cloud.positions.data(), n, raw.neighbor_radius);
+  try {
+    raw.grid = std::make_unique<NeighborGrid>(cloud.positions.data(), n, raw.neighbor_radius);
+  } catch (const Error& e) {
+    if (e.status() != Status::LimitExceeded) throw;
+    throw Error(e.status(), std::string(e.what()) + " (the cells follow the spacing: a larger spacing makes them larger)");
+  }
   const NeighborGrid& grid = *raw.grid;
   size_t duplicates = 0;
   raw.rep = find_duplicates(grid, &duplicates);
@@ -99,10 +107,20 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
   const auto& P = grid.sorted_points();
   {
     std::atomic<uint64_t> triplets{0};
-    parallel_blocks(n, 4096, [&](size_t b, size_t e) {
+    // Blocks of about a million list entries (4096 points on even samplings): with huge lists
+    // smaller blocks, so that the calling thread, which alone may ask the callback, is never
+    // left waiting long on another thread's block.
+    const uint64_t entries = nbr.index.size();
+    const size_t count_grain = std::clamp<size_t>(size_t((uint64_t(1) << 20) * n / std::max<uint64_t>(1, entries)), 16, 4096);
+    parallel_blocks(n, count_grain, [&](size_t b, size_t e) {
       if (tracker.cancelled()) return;
       uint64_t sum = 0;
       for (size_t i = b; i < e; ++i) {
+        // Lists of up to max_neighbors (100000) each: a block can take seconds.
+        if ((i & 63) == 0) {
+          if (tracker.cancelled()) return;
+          tracker.tick(0);  // on the calling thread: lets the callback ask to cancel
+        }
         uint64_t higher = 0;
         for (const uint32_t* q = std::upper_bound(nbr.begin(uint32_t(i)), nbr.end(uint32_t(i)), uint32_t(i));
              q != nbr.end(uint32_t(i)); ++q)
@@ -119,8 +137,8 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
                   "the triangle test would examine " + std::to_string(st.triplets) + " candidate triplets (" +
                       std::to_string(st.triplets / distinct) + " per point, more than max_triplets_per_point = " +
                       std::to_string(options.max_triplets_per_point) + "): the max edge L = " +
-                      std::to_string(st.max_edge) + " is far too large for the spacing r0 = " +
-                      std::to_string(st.spacing) + " (lower the max edge factor, or raise the limit)");
+                      format_number(st.max_edge) + " is far too large for the spacing r0 = " +
+                      format_number(st.spacing) + " (lower the max edge factor, or raise the limit)");
   }
   st.seconds_neighbors = seconds_since(t0);
 
@@ -128,7 +146,11 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
   //    j < k of i's higher neighbours within L.
   t0 = Clock::now();
   tracker.stage("testing triangles", at(0.55), at(0.95), n);
-  const size_t block = 1024;
+  // Blocks of 1024 points, or fewer when points have many triplets (the limits lifted: up to
+  // ~1e6 per point), so that no block keeps the calling thread - the only one that calls the
+  // progress callback - waiting for long. The triangles are joined in block order either way.
+  const uint64_t per_point = st.triplets / std::max<uint64_t>(1, n - duplicates);
+  const size_t block = std::clamp<size_t>(size_t(65536 / std::max<uint64_t>(1, per_point)), 1, 1024);
   const size_t blocks = (n + block - 1) / block;
   std::vector<std::vector<Triangle>> out(blocks);
   std::vector<TestCounters> counters(blocks);
@@ -146,9 +168,18 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
         near.clear();
         for (const uint32_t* q = std::upper_bound(ni, ne, i); q != ne; ++q)
           if (squared_distance(P[*q], pi) <= L2) near.push_back(*q);
+        // With the limits lifted one point can have ~1e9 triplets, each tested against up to
+        // 1e5 neighbours: the cancel flag is checked inside the point's work too (every 256
+        // pairs; a check costs a relaxed load, and on the calling thread a clock read).
+        uint32_t since_check = 0;
         for (size_t a = 0; a < near.size(); ++a) {
           const uint32_t j = near[a];
           for (size_t c = a + 1; c < near.size(); ++c) {
+            if (++since_check == 256) {
+              since_check = 0;
+              if (tracker.cancelled()) return;
+              tracker.tick(0);
+            }
             const uint32_t k = near[c];
             if (squared_distance(P[j], P[k]) > L2) continue;
             const SmallestSphere s = smallest_sphere(pi, P[j], P[k]);

@@ -321,25 +321,30 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
   // reach, whose cells hold several times the particles an evaluation needs to look at.
   // The grid's corner is the given domain's (every tile of a cloud then shares the cloud's
   // cells and summation order) or the centres' smallest coordinates.
-  if (domain.min) {
-    const Vec3& d = *domain.min;
-    for (int a = 0; a < 3; ++a) {
-      if (!std::isfinite(d[a]))
-        throw Error(Status::InvalidArgument, std::string("domain_min.") + "xyz"[a] + " is " + num(d[a]));
-      for (size_t i = 0; i < n; ++i)
-        if (positions[i][a] < d[a] || C[i][a] < d[a])
-          throw Error(Status::InvalidArgument, std::string("domain_min.") + "xyz"[a] + " is " + num(d[a]) +
-                                                   ", above positions[" + std::to_string(i) + "]." + "xyz"[a] + " = " +
-                                                   num(std::min(positions[i][a], C[i][a])) +
-                                                   " (it must be at or below every particle)");
+  try {
+    if (domain.min) {
+      const Vec3& d = *domain.min;
+      for (int a = 0; a < 3; ++a) {
+        if (!std::isfinite(d[a]))
+          throw Error(Status::InvalidArgument, std::string("domain_min.") + "xyz"[a] + " is " + num(d[a]));
+        for (size_t i = 0; i < n; ++i)
+          if (positions[i][a] < d[a] || C[i][a] < d[a])
+            throw Error(Status::InvalidArgument, std::string("domain_min.") + "xyz"[a] + " is " + num(d[a]) +
+                                                     ", above positions[" + std::to_string(i) + "]." + "xyz"[a] +
+                                                     " = " + num(std::min(positions[i][a], C[i][a])) +
+                                                     " (it must be at or below every particle)");
+      }
+      f.lower_ = d;
+      f.grid_ = NeighborGrid(C, n, f.max_radius_, d);
+    } else {
+      Vec3 m = C[0];
+      for (size_t i = 1; i < n; ++i) m = {std::min(m.x, C[i].x), std::min(m.y, C[i].y), std::min(m.z, C[i].z)};
+      f.lower_ = m;
+      f.grid_ = NeighborGrid(C, n, f.max_radius_);
     }
-    f.lower_ = d;
-    f.grid_ = NeighborGrid(C, n, f.max_radius_, d);
-  } else {
-    Vec3 m = C[0];
-    for (size_t i = 1; i < n; ++i) m = {std::min(m.x, C[i].x), std::min(m.y, C[i].y), std::min(m.z, C[i].z)};
-    f.lower_ = m;
-    f.grid_ = NeighborGrid(C, n, f.max_radius_);
+  } catch (const Error& e) {
+    if (e.status() != Status::LimitExceeded) throw;
+    throw Error(e.status(), std::string(e.what()) + " (the cells follow the particle radius)");
   }
   f.sorted_index_.resize(n);
   for (uint32_t s = 0; s < n; ++s) f.sorted_index_[f.grid_.original_index(s)] = s;

@@ -37,7 +37,7 @@ std::string num(double v) {
 
 std::string bytes_text(double b) {
   char buf[64];
-  if (b >= double(1ull << 30)) std::snprintf(buf, sizeof buf, "%.2f GiB", b / double(1ull << 30));
+  if (b >= double(1ull << 30)) std::snprintf(buf, sizeof buf, "%.3g GiB", b / double(1ull << 30));  // %g: 1e300 bytes is not 300 digits
   else if (b >= double(1ull << 20)) std::snprintf(buf, sizeof buf, "%.1f MiB", b / double(1ull << 20));
   else std::snprintf(buf, sizeof buf, "%.0f bytes", b);
   return buf;
@@ -743,6 +743,19 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   }
 
   // ---- 5. vertices (refined on the true field) and triangles --------------------------------
+  // The mesh is the other large allocation: counted now, before it is made, against the same
+  // budget (tiny radii over many particles made a 1 GB mesh on top of a grid under the budget).
+  {
+    const double mesh_bytes = double(total_vertices) * 2 * sizeof(Vec3) + double(total_triangles) * sizeof(Triangle) +
+                              double(nm) * sizeof(uint64_t);
+    if (budget != 0 && grid_bytes + mesh_bytes > double(budget))
+      throw Error(Status::LimitExceeded,
+                  "the mesh would need " + bytes_text(mesh_bytes) + " (" + std::to_string(total_vertices) +
+                      " vertices, " + std::to_string(total_triangles) + " triangles) on top of the sampled grid's " +
+                      bytes_text(grid_bytes) + ", more than the grid memory budget of " + bytes_text(double(budget)) +
+                      " (max_grid_bytes; use a larger cell size or raise the budget)");
+    st.grid_bytes = uint64_t(grid_bytes + mesh_bytes);
+  }
   tracker.stage("meshing", begin + 0.7 * (1 - begin), begin + 1.0 * (1 - begin), nm);
   PolygonizeResult result;
   TriMesh& mesh = result.mesh;

@@ -8,6 +8,7 @@
 #include "core/progress_tracker.h"
 #include "particlemesh/core/error.h"
 #include "volume/anisotropy_impl.h"
+#include "volume/ray_cancel.h"
 #include "volume/ray_roots.h"
 
 namespace particlemesh {
@@ -526,7 +527,12 @@ void RayCaster::Impl::Query::run(Scratch& sc) {
   if (!box(im.nodes[0], &t_root)) return;
   push_node(t_root, 0);
   double cur = tlo;
+  uint32_t since_check = 0;  // intervals and nodes since the last cancellation check
   while (!done) {
+    if (++since_check >= 32) {
+      since_check = 0;
+      if (detail::ray_cancelled()) return;  // abandoned: the batch throws Cancelled
+    }
     // No unvisited sphere begins before the smallest entry of the nodes still to visit: the
     // intervals up to there are final.
     const double horizon = nheap.empty() ? kInf : nheap.front().t;
@@ -536,6 +542,10 @@ void RayCaster::Impl::Query::run(Scratch& sc) {
         interval(cur, te, active);
         cur = te;
         if (done) break;
+        if (++since_check >= 32) {
+          since_check = 0;
+          if (detail::ray_cancelled()) return;
+        }
       }
       while (!eheap.empty() && eheap.front().t == te) {
         const Event e = eheap.front();
@@ -609,6 +619,13 @@ void RayCaster::Impl::Query::run(Scratch& sc) {
     finalize();
   }
 }
+
+namespace detail {
+ProgressTracker*& ray_tracker() {
+  thread_local ProgressTracker* tracker = nullptr;
+  return tracker;
+}
+}  // namespace detail
 
 RayCaster::RayCaster() : impl_(std::make_unique<Impl>()) {}
 RayCaster::~RayCaster() = default;
@@ -706,8 +723,11 @@ FirstHits cast_first_hits(const RayCaster& caster, const Vec3* origins, const Ve
   tracker.stage("ray casting", 0.0, 1.0, (n + kRayGrain - 1) / kRayGrain);
   detail::with_threads(options.threads, [&] {
     detail::parallel_blocks(n, kRayGrain, [&](size_t begin, size_t end) {
-      if (tracker.cancelled()) return;
+      const detail::RayCancelScope scope(&tracker);
       for (size_t i = begin; i < end; ++i) {
+        // Every ray: with a huge radius one ray sums thousands of particles per step.
+        if (tracker.cancelled()) return;
+        tracker.tick(0);
         const auto h = caster.first_hit(origins[i], directions[i], options.t_min, options.t_max);
         if (!h) continue;
         r.t[i] = h->t;
@@ -732,8 +752,12 @@ AllHits cast_all_hits(const RayCaster& caster, const Vec3* origins, const Vec3* 
   tracker.stage("ray casting", 0.0, 1.0, (n + kRayGrain - 1) / kRayGrain);
   detail::with_threads(options.threads, [&] {
     detail::parallel_blocks(n, kRayGrain, [&](size_t begin, size_t end) {
-      if (tracker.cancelled()) return;
-      for (size_t i = begin; i < end; ++i) per[i] = caster.all_hits(origins[i], directions[i], options.t_min, options.t_max);
+      const detail::RayCancelScope scope(&tracker);
+      for (size_t i = begin; i < end; ++i) {
+        if (tracker.cancelled()) return;  // every ray (see cast_first_hits)
+        tracker.tick(0);
+        per[i] = caster.all_hits(origins[i], directions[i], options.t_min, options.t_max);
+      }
       tracker.tick();
     });
   });

@@ -9,6 +9,8 @@
 
 #include "core/parallel.h"
 #include "core/progress_tracker.h"
+#include "core/format_number.h"
+#include "volume/ray_cancel.h"
 #include "particlemesh/core/error.h"
 
 namespace particlemesh {
@@ -26,7 +28,7 @@ Frame camera_frame(const Camera& c) {
     if (!std::isfinite(c.eye[a]) || !std::isfinite(c.target[a]) || !std::isfinite(c.up[a]))
       throw Error(Status::InvalidArgument, "camera eye, target and up must be finite");
   if (!(c.fov_degrees > 0 && c.fov_degrees < 180))
-    throw Error(Status::InvalidArgument, "camera fov is " + std::to_string(c.fov_degrees) + " degrees (must be in (0, 180))");
+    throw Error(Status::InvalidArgument, "camera fov is " + detail::format_number(c.fov_degrees) + " degrees (must be in (0, 180))");
   const Vec3 f = c.target - c.eye;
   if (!(norm(f) > 0)) throw Error(Status::InvalidArgument, "camera eye and target coincide");
   Frame fr;
@@ -117,10 +119,14 @@ RenderResult render(const RayCaster& caster, const RenderOptions& options) {
   tracker.stage("rendering", 0.0, 1.0, uint64_t(H));
   detail::with_threads(options.threads, [&] {
     detail::parallel_blocks(size_t(H), 1, [&](size_t y0, size_t y1) {
+      const detail::RayCancelScope scope(&tracker);  // a long ray checks it too
       for (size_t y = y0; y < y1; ++y) {
         if (tracker.cancelled()) return;
         const double py = 1.0 - 2.0 * (double(y) + 0.5) / double(H);
         for (int x = 0; x < W; ++x) {
+          // Every pixel: with a huge radius a row of rays takes seconds.
+          if (tracker.cancelled()) return;
+          tracker.tick(0);
           const double px = 2.0 * (double(x) + 0.5) / double(W) - 1.0;
           const Vec3 dir = fr.forward + fr.right * (px * th) + fr.up * (py * tv);
           const auto hit = caster.first_hit(r.camera.eye, dir);

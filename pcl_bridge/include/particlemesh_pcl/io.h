@@ -1,6 +1,8 @@
 /*
- * Files: PCD in (ASCII, binary, binary_compressed) through pcl::PCDReader, PLY meshes out
- * through pcl::io::savePLYFileBinary.
+ * Files: PCD in (ASCII, binary, binary_compressed), read once: our header check and
+ * pcl::PCDReader's header and binary-body decoding work on the same bytes in memory, an ASCII
+ * body is parsed once by our check into PCL's cloud layout. PLY meshes out through
+ * pcl::io::savePLYFileBinary.
  *
  * PCL's reader trusts the header (in PCL 1.13 it crashes on an empty or non-PCD file and
  * reads a cloud without x/y/z as if nothing were wrong), so every file is checked first by a
@@ -18,6 +20,7 @@
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/PolygonMesh.h>
 
+#include <particlemesh/io/output_file.h>
 #include <particlemesh/mesh/point_cloud.h>
 #include <particlemesh_pcl/conversions.h>
 
@@ -85,10 +88,15 @@ namespace particlemesh_pcl
                  pcl::Indices *index_map = nullptr);
 
   /** \brief Write a pcl::PolygonMesh as binary PLY with pcl::io::savePLYFileBinary (the
-    * format PCL's pcl::io::loadPLYFile and pcl_viewer read), through a temporary file in the
-    * same folder renamed into place, so a failed write leaves no partial file.
+    * format PCL's pcl::io::loadPLYFile and pcl_viewer read), through a particlemesh::OutputFile
+    * (a temporary file in the same folder, read back complete, then renamed into place; a
+    * device or FIFO written straight through), so a failed write leaves no partial file.
     * \throws particlemesh::Error(IoError) naming the file.
     */
   void
   savePLYFile (const std::string &path, const pcl::PolygonMesh &mesh);
+
+  /** \brief The same into `out`, which the caller commits with the run's other outputs. */
+  void
+  savePLYFile (particlemesh::OutputFile &out, const pcl::PolygonMesh &mesh);
 }

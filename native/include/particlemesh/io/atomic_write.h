@@ -1,4 +1,4 @@
-// Writing small files (reports, sidecars) with the same guarantee as the mesh writers.
+// Writing small files (reports, sidecars) with the same guarantees as the mesh writers.
 #pragma once
 
 #include <string>
@@ -7,8 +7,9 @@
 
 namespace particlemesh {
 
-/// Write `contents` to `path` through a temporary file in the same folder and a rename, so
-/// `path` is either the complete new file or untouched. @throws Error(IoError).
+/// Write `contents` to `path` through an OutputFile (see particlemesh/io/output_file.h): a
+/// regular file is either the complete new file or untouched; a device or FIFO is written
+/// straight through. @throws Error(IoError).
 PM_EXPORT void write_file_atomically(const std::string& path, const std::string& contents);
 
 }  // namespace particlemesh

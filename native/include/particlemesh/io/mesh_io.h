@@ -1,20 +1,23 @@
 // Reading and writing meshes and point clouds.
 //
-// Meshes go through OpenMesh's readers and writers (PLY binary/ASCII, OBJ; OFF and STL read),
-// fed from our flat arrays through OpenMesh's importer/exporter interfaces, so non-manifold
-// meshes (such as the seed's raw triangle set) are written and read faithfully.
+// Every file is read once, front to back, by one reader per format, keeping coordinates
+// exactly (double, integer and float32 values alike); every file is written through an
+// OutputFile (particlemesh/io/output_file.h): complete or untouched, devices and FIFOs
+// written straight through. Formats: PLY (ASCII and binary, read and written), OBJ (read and
+// written), OFF and STL (read), XYZ text (points, read and written).
 #pragma once
 
 #include <string>
 
 #include "particlemesh/core/export.h"
+#include "particlemesh/io/output_file.h"
 #include "particlemesh/mesh/point_cloud.h"
 #include "particlemesh/mesh/tri_mesh.h"
 
 namespace particlemesh {
 
 enum class MeshFormat {
-  Auto,       ///< from the file extension: .ply -> PlyBinary, .obj -> Obj
+  Auto,       ///< from the file extension: .ply -> PlyBinary, .obj -> Obj (a device or FIFO without one: PlyBinary)
   PlyBinary,  ///< binary little-endian PLY, float32 positions/normals, int32 indices
   PlyAscii,
   Obj,
@@ -25,24 +28,51 @@ struct WriteMeshOptions {
   bool write_normals = true;  ///< write per-vertex normals when the mesh has them
 };
 
-/// Write a mesh. The file is written under a temporary name in the same folder and renamed
-/// into place only when complete, so a failed write never leaves a truncated file behind.
+/// The format a mesh written to `path` gets (Auto resolved from the extension; a device,
+/// FIFO or /dev/stdout without a .ply / .obj extension gets PLY). Call it before any work to
+/// refuse a bad output name early. @throws Error(InvalidArgument) for an extension that is
+/// not .ply or .obj on a file, or one that does not match `format`.
+PM_EXPORT MeshFormat mesh_output_format(const std::string& path, MeshFormat format = MeshFormat::Auto);
+
+/// Write a mesh through a temporary file renamed into place when complete (see OutputFile):
+/// a failed write never leaves a truncated file. Positions are float32 unless float32 would
+/// lose them (far from the origin for their size, beyond 3.4e38, or below 1.2e-38): then
+/// float64. A "color" attribute (3 floats in [0, 1]) is written as red green blue (PLY uchar;
+/// OBJ "v x y z r g b"); other attributes as float properties of PLY.
 /// @throws Error(IoError | InvalidArgument) naming the file.
-PM_EXPORT void write_mesh(const TriMesh& mesh, const std::string& path,
-                          const WriteMeshOptions& options = {});
+PM_EXPORT void write_mesh(const TriMesh& mesh, const std::string& path, const WriteMeshOptions& options = {});
+
+/// Write a mesh's bytes into `out` (the caller commits it, with the run's other outputs).
+PM_EXPORT void write_mesh(const TriMesh& mesh, OutputFile& out, const WriteMeshOptions& options = {});
 
 /// Read a mesh (.ply, .obj, .off, .stl). Polygons with more than three corners are fanned.
-/// @throws Error(IoError | FormatError) naming the file and the problem.
+/// A PLY file's colours come back as the "color" attribute, its other vertex properties as
+/// attributes of their names.
+/// @throws Error(IoError | FormatError) naming the file and the problem (and the element or
+///         line): a header that promises more or less than the data, a face corner beyond
+///         the vertices, a NaN or infinite coordinate, a face with fewer than three corners.
 PM_EXPORT TriMesh read_mesh(const std::string& path);
 
-/// Read particles: .ply (vertices and, if present, nx ny nz and red green blue -> the "color"
-/// attribute, 3 floats in [0, 1]; faces ignored) or .xyz
-/// (one point per line: "x y z" or "x y z nx ny nz", '#' starts a comment).
+/// Read particles: .ply (the vertex element: x y z, optional nx ny nz, red green blue -> the
+/// "color" attribute in [0, 1], other properties as attributes; faces ignored) or .xyz (one
+/// point per line: "x y z" or "x y z nx ny nz", '#' starts a comment). A (0, 0, 0) normal is
+/// kept as it is: the surface stage reads it as a point without a normal.
 /// The cloud is validated (see validate_point_cloud).
 /// @throws Error(IoError | FormatError | InvalidInput) naming the file and line or index.
 PM_EXPORT PointCloud read_point_cloud(const std::string& path);
 
-/// Write particles as .ply (binary) or .xyz, atomically (see write_mesh).
+/// The extensions read_point_cloud (points) or read_mesh reads, for messages: ".ply, .xyz".
+PM_EXPORT std::string readable_extensions(bool points);
+
+/// Check, before any work, that particles can be written to `path` (.ply or .xyz, or a
+/// device / FIFO). @throws Error(InvalidArgument).
+PM_EXPORT void check_point_cloud_output(const std::string& path);
+
+/// Write particles as .ply (binary) or .xyz (17 digits: doubles round-trip), atomically; a
+/// device or FIFO without either extension gets .xyz text.
 PM_EXPORT void write_point_cloud(const PointCloud& cloud, const std::string& path);
+
+/// Write particles' bytes into `out` (the caller commits it).
+PM_EXPORT void write_point_cloud(const PointCloud& cloud, OutputFile& out);
 
 }  // namespace particlemesh

@@ -97,8 +97,9 @@ struct PolygonizeOptions {
   TaubinOptions surface_smoothing{.iterations = 0};
   /// Worker threads, 0 = all cores. The output does not depend on it.
   int threads = 0;
-  /// Fail with LimitExceeded, before allocating, if the sampled grid (blocks of samples and
-  /// their bookkeeping) would need more than this many bytes. 0 = no limit.
+  /// Fail with LimitExceeded, before allocating, if the large allocations - the block
+  /// search, the sampled grid (blocks of samples and their bookkeeping) and then the grid
+  /// with the output mesh - would need more than this many bytes. 0 = no limit.
   uint64_t max_grid_bytes = kDefaultMaxGridBytes;
   ProgressCallback progress;
   /// Empty, or the lower corner of the whole cloud these particles are a tile of (at or below
@@ -141,7 +142,7 @@ struct PolygonizeStats {
   size_t surface_blocks = 0;    ///< blocks with an inside/outside change (meshed)
   uint64_t sampled_nodes = 0;   ///< sampled_blocks x 512
   uint64_t bounding_box_nodes = 0;  ///< nodes a dense grid over the supports' box would need
-  uint64_t grid_bytes = 0;      ///< memory of the sparse grid (samples + bookkeeping)
+  uint64_t grid_bytes = 0;      ///< memory of the sparse grid (samples + bookkeeping) and the output mesh: what max_grid_bytes bounds
   size_t vertices = 0;
   size_t triangles = 0;
   uint64_t field_evaluations = 0;  ///< exact evaluations of F (edge refinement and normals)

@@ -1,0 +1,59 @@
+// A run's output files, handled as one: every path (-o, --report, --pcl-mesh) is checked
+// before any input is read (a usage error, exit 2: a missing or read-only folder, a folder,
+// a read-only file, an extension the command cannot write, two outputs naming one file, an
+// output naming an input), each is written into its own temporary (OutputFile), and they are
+// put in place together at the end, with signals held off so that a Ctrl-C cannot leave some
+// of them: a run's outputs appear together or not at all.
+#pragma once
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "particlemesh/io/mesh_io.h"
+#include "particlemesh/io/output_file.h"
+
+namespace particlemesh::cli {
+
+/// A usage error found after CLI11's parsing (main prints it and exits with status 2).
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+enum class OutputKind {
+  Mesh,     ///< .ply / .obj (or a device / FIFO: PLY)
+  Points,   ///< .ply / .xyz
+  Png,      ///< .png
+  PlyOnly,  ///< .ply (PCL's PLY writer)
+  Text,     ///< any name (JSON reports)
+};
+
+struct OutputSpec {
+  std::string option;  ///< "-o", "--report", ...: for messages
+  std::string path;    ///< "" = not asked for
+  OutputKind kind = OutputKind::Text;
+  MeshFormat format = MeshFormat::Auto;  ///< Mesh: the format asked for (--ascii)
+};
+
+class RunOutputs {
+ public:
+  /// Checks every output and its collisions with the others and with `inputs`.
+  /// @throws UsageError naming the option, the path and the problem.
+  RunOutputs(std::vector<OutputSpec> outputs, const std::vector<std::string>& inputs);
+  ~RunOutputs();
+
+  /// Whether `option` was given.
+  bool has(const std::string& option) const;
+  /// Opens `option`'s output for writing (its temporary, or the device / FIFO).
+  OutputFile& open(const std::string& option);
+  /// Finish every opened output and put them all in place.
+  void commit_all();
+
+ private:
+  std::vector<OutputSpec> specs_;
+  std::vector<std::pair<std::string, std::unique_ptr<OutputFile>>> open_;
+};
+
+}  // namespace particlemesh::cli

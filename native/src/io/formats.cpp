@@ -1,0 +1,71 @@
+#include "io/formats.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include "particlemesh/core/error.h"
+
+namespace particlemesh::detail {
+
+const std::vector<FileFormat>& file_formats() {
+  // The one table of readable formats. A new one: its reader (io/<format>_reader.cpp,
+  // returning FileContents), declared in formats.h, and a line here.
+  static const std::vector<FileFormat> formats{
+      // extension, name, reader, points, mesh
+      {".ply", "PLY", &read_ply, true, true},
+      {".xyz", "XYZ text", &read_xyz, true, false},
+      {".obj", "Wavefront OBJ", &read_obj, false, true},
+      {".off", "OFF", &read_off, false, true},
+      {".stl", "STL", &read_stl, false, true},
+  };
+  return formats;
+}
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+const FileFormat* format_for(const std::string& path) {
+  const std::string ext = lower_extension(path);
+  for (const FileFormat& f : file_formats())
+    if (ext == f.extension) return &f;
+  return nullptr;
+}
+
+std::string known_extensions(bool points) {
+  std::string s;
+  for (const FileFormat& f : file_formats())
+    if (points ? f.points : f.mesh) s += (s.empty() ? "" : ", ") + std::string(f.extension);
+  return s;
+}
+
+void check_contents(const std::string& path, const FileContents& c, ReadPurpose purpose) {
+  auto fail = [&](Status s, const std::string& problem) { throw Error(s, "'" + path + "': " + problem); };
+  const size_t n = c.positions.size();
+  if (!c.normals.empty() && c.normals.size() != n)
+    fail(Status::Internal, "the reader returned " + std::to_string(c.normals.size()) + " normals for " +
+                               std::to_string(n) + " points");
+  for (const VertexAttribute& a : c.attributes)
+    if (a.components < 1 || a.values.size() != n * size_t(a.components))
+      fail(Status::Internal, "the reader returned attribute '" + a.name + "' with " + std::to_string(a.values.size()) +
+                                 " values for " + std::to_string(n) + " points");
+  if (purpose == ReadPurpose::Points) return;  // validate_point_cloud names bad values as for any cloud
+  static const char* const kAxis[3] = {"x", "y", "z"};
+  for (size_t i = 0; i < n; ++i)
+    for (int a = 0; a < 3; ++a)
+      if (!std::isfinite(c.positions[i][a]))
+        fail(Status::FormatError, "vertex " + std::to_string(i) + ": " + kAxis[a] + " is " +
+                                      (std::isnan(c.positions[i][a]) ? "NaN" : "infinite"));
+  for (size_t t = 0; t < c.triangles.size(); ++t)
+    for (uint32_t v : c.triangles[t])
+      if (v >= n)
+        fail(Status::FormatError, "a face refers to vertex " + std::to_string(v) + ", but the file has " +
+                                      std::to_string(n) + " vertices (indices from 0)");
+  if (c.faces > 0 && c.triangles.empty())
+    fail(Status::FormatError, "the file declares " + std::to_string(c.faces) + " faces, but none could be read");
+}
+
+}  // namespace particlemesh::detail

@@ -1,0 +1,77 @@
+// Internal: the file formats particlemesh reads, and what a reader returns.
+//
+// One table (file_formats(), in formats.cpp) maps each extension to its reader; read_mesh and
+// read_point_cloud (mesh_io.cpp) look the extension up there and nowhere else. A new format
+// is one reader function and one line in that table.
+//
+// Every reader reads its file once, front to back (FileReader), keeps coordinates exactly
+// (doubles, and integer and float32 values converted exactly), and throws Error(IoError |
+// FormatError) with a message that starts with the file's name in quotes and says where
+// (element, line) and what is wrong. What it returns is checked once more by
+// check_contents (formats.cpp): finite coordinates, indices in range, attribute sizes.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "particlemesh/mesh/point_cloud.h"
+#include "particlemesh/mesh/tri_mesh.h"
+
+namespace particlemesh::detail {
+
+/// What a reader found in a file.
+struct FileContents {
+  std::vector<Vec3> positions;
+  /// Empty, or one per position. A (0, 0, 0) normal is a point without a normal (the surface
+  /// stage estimates those); readers keep it as it is.
+  std::vector<Vec3> normals;
+  /// Polygons fanned into triangles (corners in the file's order); empty for point formats.
+  std::vector<Triangle> triangles;
+  /// Per-position channels: "color" (3 floats in [0, 1]) from a file's red/green/blue, and
+  /// whatever named per-point values a format carries (values[point * components + c]).
+  std::vector<VertexAttribute> attributes;
+  /// The number of faces the file declares (before fanning): a mesh file that declares faces
+  /// but yields no triangle is an error, never an empty mesh.
+  uint64_t faces = 0;
+};
+
+/// Why a file is read: for a mesh (faces wanted) or for its points (faces skipped, though
+/// still walked, so that a truncated file is refused either way).
+enum class ReadPurpose { Mesh, Points };
+
+using ReadFunction = FileContents (*)(const std::string& path, ReadPurpose purpose);
+
+struct FileFormat {
+  const char* extension;  ///< lower case, with the dot: ".ply"
+  const char* name;       ///< for messages and --help: "PLY"
+  ReadFunction read;
+  bool points;  ///< read_point_cloud reads it (particles)
+  bool mesh;    ///< read_mesh reads it
+};
+
+/// Every format particlemesh reads (the one place a reader is registered).
+const std::vector<FileFormat>& file_formats();
+
+/// The format for `path`'s extension (any case), or nullptr.
+const FileFormat* format_for(const std::string& path);
+
+/// ".ply, .xyz" - the extensions read for points (points = true) or meshes.
+std::string known_extensions(bool points);
+
+/// Lower-case extension of `path`, with the dot ("" if none).
+std::string lower_extension(const std::string& path);
+
+/// The shared checks on what a reader returned: positions finite (a NaN or infinite
+/// coordinate names the vertex; for meshes FormatError, for points InvalidInput as
+/// validate_point_cloud words it), normals and attributes sized to the positions, triangle
+/// indices below the vertex count, and a file that declares faces yielding triangles.
+void check_contents(const std::string& path, const FileContents& c, ReadPurpose purpose);
+
+// The readers (one file each).
+FileContents read_ply(const std::string& path, ReadPurpose purpose);
+FileContents read_obj(const std::string& path, ReadPurpose purpose);
+FileContents read_off(const std::string& path, ReadPurpose purpose);
+FileContents read_stl(const std::string& path, ReadPurpose purpose);
+FileContents read_xyz(const std::string& path, ReadPurpose purpose);
+
+}  // namespace particlemesh::detail

@@ -1,0 +1,461 @@
+// PLY (Turk 1994): ASCII and binary in either byte order, read in one pass.
+//
+// Written by hand: Debian 12 packages no stand-alone C++ PLY library, and the readers inside
+// the libraries we use keep float32 positions and trust the header (OpenMesh's read an ASCII
+// file promising 2e9 vertices as complete with made-up ones, and looped forever on several
+// malformed headers; PCL's crashed on others). This one reads every value exactly (integer,
+// float32 and double properties alike), takes nothing from a header on trust (counts are only
+// believed as far as the bytes really there), reads the elements in the order the header
+// declares them (faces before vertices is valid PLY), and refuses what it cannot read with
+// the element, the property and the value named.
+//
+// What it reads: the "vertex" element's x y z (any numeric type; upper-case X Y Z too, when
+// no lower-case one is declared), nx ny nz (all three, or they are kept as plain
+// attributes), red green blue (-> the "color" attribute in [0, 1]: 8-bit values / 255,
+// 16-bit / 65535, float as stored), every other scalar vertex property as a one-component
+// attribute of its name; and the "face" element's vertex_indices (or vertex_index) lists,
+// fanned into triangles. List properties anywhere (a vertex element with a list, an "edge"
+// or "material" element) are walked and skipped. After the last element the file must end
+// (whitespace aside): data beyond what the header declares means a count is wrong.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "io/file_reader.h"
+#include "io/formats.h"
+#include "io/text_numbers.h"
+#include "particlemesh/core/error.h"
+
+namespace particlemesh::detail {
+
+namespace {
+
+enum class Type : uint8_t { I8, U8, I16, U16, I32, U32, F32, F64, None };
+
+Type type_of(std::string_view t) {
+  if (t == "char" || t == "int8") return Type::I8;
+  if (t == "uchar" || t == "uint8") return Type::U8;
+  if (t == "short" || t == "int16") return Type::I16;
+  if (t == "ushort" || t == "uint16") return Type::U16;
+  if (t == "int" || t == "int32") return Type::I32;
+  if (t == "uint" || t == "uint32") return Type::U32;
+  if (t == "float" || t == "float32") return Type::F32;
+  if (t == "double" || t == "float64") return Type::F64;
+  return Type::None;
+}
+
+int size_of(Type t) {
+  switch (t) {
+    case Type::I8: case Type::U8: return 1;
+    case Type::I16: case Type::U16: return 2;
+    case Type::I32: case Type::U32: case Type::F32: return 4;
+    case Type::F64: return 8;
+    case Type::None: break;
+  }
+  return 0;
+}
+
+bool is_integer(Type t) { return t != Type::F32 && t != Type::F64; }
+
+// What a property is read into.
+enum Role : int { kSkip = -1, kX = 0, kY, kZ, kNX, kNY, kNZ, kRed, kGreen, kBlue, kIndices, kAttribute };
+
+struct Property {
+  std::string name;
+  Type type = Type::None;  ///< the scalar's type, or the list items' type
+  bool list = false;
+  Type count_type = Type::None;
+  int role = kSkip;
+  size_t attribute = 0;  ///< index into FileContents::attributes for kAttribute
+};
+
+struct Element {
+  std::string name;
+  uint64_t count = 0;
+  std::vector<Property> properties;
+  bool has_list = false;
+  uint64_t record = 0;  ///< bytes of one element without lists' items (binary)
+};
+
+enum class Encoding { None, Ascii, BinaryLE, BinaryBE };
+
+std::vector<std::string_view> words(std::string_view line) {
+  std::vector<std::string_view> w;
+  size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
+    size_t j = i;
+    while (j < line.size() && line[j] != ' ' && line[j] != '\t' && line[j] != '\r') ++j;
+    if (j > i) w.push_back(line.substr(i, j - i));
+    i = j;
+  }
+  return w;
+}
+
+std::string plural(uint64_t n, const std::string& what) {
+  return std::to_string(n) + " '" + what + "' element" + (n == 1 ? "" : "s");
+}
+
+uint64_t mul_add(uint64_t a, uint64_t b, uint64_t c) {  // saturating a * b + c
+  if (b != 0 && a > (UINT64_MAX - c) / b) return UINT64_MAX;
+  return a * b + c;
+}
+
+class PlyReader {
+ public:
+  PlyReader(const std::string& path, ReadPurpose purpose) : in_(path), purpose_(purpose) {}
+
+  FileContents read() {
+    if (in_.peek() < 0) fail("the file is empty");
+    read_header();
+    assign_roles();
+    for (Element& e : elements_) read_element(e);
+    if (!in_.only_whitespace_left())
+      fail("more data after the " + declared() +
+           " the header declares (at byte " + std::to_string(in_.offset() - 1) +
+           "): a count in the header is too small, or the file is not one PLY file");
+    if (!colors_.empty()) {
+      VertexAttribute color{"color", 3, std::move(colors_)};
+      out_.attributes.insert(out_.attributes.begin(), std::move(color));
+    }
+    return std::move(out_);
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& problem) const {
+    throw Error(Status::FormatError, "'" + in_.path() + "': " + problem);
+  }
+
+  std::string declared() const {
+    std::string s;
+    for (const Element& e : elements_) s += (s.empty() ? "" : ", ") + plural(e.count, e.name);
+    return s.empty() ? "no elements" : s;
+  }
+
+  // ---- header ---------------------------------------------------------------------------
+  void read_header() {
+    constexpr size_t kMaxLine = 1 << 16;
+    constexpr uint64_t kMaxHeader = 1 << 20;
+    std::string_view line;
+    if (!in_.line(line, kMaxLine)) fail("the file is empty");
+    const auto magic = words(line);
+    if (magic.size() != 1 || !equals_ignoring_case(magic[0], "ply"))
+      fail("not a PLY file (it does not start with the line 'ply')");
+    bool first = true, ended = false;
+    while (in_.offset() <= kMaxHeader && in_.line(line, kMaxLine)) {
+      const auto w = words(line);
+      if (w.empty()) continue;
+      const std::string shown_line = shown(line.substr(0, 80));
+      auto bad = [&](const std::string& why) { fail("bad PLY header line '" + shown_line + "' (" + why + ")"); };
+      if (first && (w[0] != "format" || w.size() != 3))
+        bad("the line after 'ply' must be: format TYPE VERSION");
+      first = false;
+      if (w[0] == "comment" || w[0] == "obj_info") continue;
+      if (w[0] == "end_header") {
+        if (w.size() != 1) bad("end_header alone");
+        ended = true;
+        break;
+      }
+      if (w[0] == "format") {
+        if (encoding_ != Encoding::None) fail("bad PLY header: a second format line");
+        if (w.size() != 3) bad("format TYPE VERSION");
+        encoding_ = w[1] == "ascii"                  ? Encoding::Ascii
+                    : w[1] == "binary_little_endian" ? Encoding::BinaryLE
+                    : w[1] == "binary_big_endian"    ? Encoding::BinaryBE
+                                                     : Encoding::None;
+        if (encoding_ == Encoding::None) fail("PLY format '" + shown(w[1]) + "' is not ascii or binary");
+        double version = 0;
+        if (parse_number(w[2], version) != NumberText::Ok || !std::isfinite(version))
+          bad("format TYPE VERSION, e.g. 1.0");
+      } else if (w[0] == "element") {
+        Element e;
+        if (w.size() != 3 || !parse_count(w[2], e.count)) bad("element NAME COUNT");
+        e.name = std::string(w[1].substr(0, 64));
+        elements_.push_back(std::move(e));
+      } else if (w[0] == "property") {
+        if (elements_.empty()) fail("bad PLY header: a property before any element");
+        Property p;
+        if (w.size() == 5 && w[1] == "list") {
+          p.list = true;
+          p.count_type = type_of(w[2]);
+          p.type = type_of(w[3]);
+          p.name = std::string(w[4].substr(0, 64));
+          if (p.count_type == Type::None || p.type == Type::None || !is_integer(p.count_type))
+            bad("unknown list types: property list COUNT_TYPE ITEM_TYPE NAME, the count an integer type");
+        } else if (w.size() == 3) {
+          p.type = type_of(w[1]);
+          p.name = std::string(w[2].substr(0, 64));
+          if (p.type == Type::None) bad("unknown type '" + shown(w[1]) + "'");
+        } else {
+          bad("property TYPE NAME or property list COUNT_TYPE ITEM_TYPE NAME");
+        }
+        Element& e = elements_.back();
+        for (const Property& q : e.properties)
+          if (q.name == p.name) bad("a second property named '" + shown(p.name) + "'");
+        e.has_list |= p.list;
+        e.record += uint64_t(p.list ? size_of(p.count_type) : size_of(p.type));
+        e.properties.push_back(std::move(p));
+      } else {
+        bad("unknown keyword '" + shown(w[0]) + "'");
+      }
+    }
+    if (!ended) {
+      if (in_.offset() > kMaxHeader) fail("no end_header in the first MiB: not a PLY file");
+      fail("truncated PLY header (no end_header)");
+    }
+    if (encoding_ == Encoding::None) fail("bad PLY header: no format line");
+  }
+
+  // Which property of the vertex element is x, y, z, ...: an exact match first, then one
+  // in another case (X Y Z). The face element's vertex_indices list.
+  void assign_roles() {
+    Element* vertex = nullptr;
+    Element* face = nullptr;
+    for (Element& e : elements_) {
+      if (!vertex && equals_ignoring_case(e.name, "vertex")) vertex = &e;
+      if (!face && equals_ignoring_case(e.name, "face")) face = &e;
+    }
+    if (!vertex) fail("no 'vertex' element (the header declares " + declared() + ")");
+    vertex_ = vertex;
+    static const char* const kNames[9] = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue"};
+    auto find = [&](const char* name) -> Property* {
+      for (Property& p : vertex->properties)
+        if (!p.list && p.role == kSkip && p.name == name) return &p;
+      for (Property& p : vertex->properties)
+        if (!p.list && p.role == kSkip && equals_ignoring_case(p.name, name)) return &p;
+      return nullptr;
+    };
+    Property* found[9] = {};
+    for (int k = 0; k < 9; ++k)
+      if ((found[k] = find(kNames[k]))) found[k]->role = k;
+    for (int k = 0; k < 3; ++k)
+      if (!found[k]) {
+        std::string has;
+        for (const Property& p : vertex->properties) has += " " + shown(p.name);
+        fail("the 'vertex' element has no '" + std::string(kNames[k]) + "' property (it has:" +
+             (has.empty() ? std::string(" none") : has) + ")");
+      }
+    // Normals and colours come in threes; a partial set stays plain attributes.
+    for (int group : {3, 6})
+      if (!(found[group] && found[group + 1] && found[group + 2]))
+        for (int k = group; k < group + 3; ++k)
+          if (found[k]) found[k]->role = kSkip;
+    has_normals_ = found[kNX] && found[kNX]->role == kNX;
+    has_colors_ = found[kRed] && found[kRed]->role == kRed;
+    for (Property& p : vertex->properties) {
+      if (p.list || p.role != kSkip) continue;
+      if (has_colors_ && p.name == "color") continue;  // the colour channel's name is taken
+      p.role = kAttribute;
+      p.attribute = out_.attributes.size();
+      out_.attributes.push_back({p.name, 1, {}});
+    }
+    if (face) {
+      for (Property& p : face->properties)
+        if (p.list && (equals_ignoring_case(p.name, "vertex_indices") || equals_ignoring_case(p.name, "vertex_index"))) {
+          if (purpose_ == ReadPurpose::Points) break;  // walked, not read
+          if (!is_integer(p.type))
+            fail("the 'face' element's " + p.name + " list holds non-integer values (indices must be integers)");
+          p.role = kIndices;
+          face_ = face;
+          break;
+        }
+      if (!face_ && purpose_ == ReadPurpose::Mesh && face->count > 0)
+        fail("the 'face' element has no vertex_indices list");
+    }
+  }
+
+  // ---- data -----------------------------------------------------------------------------
+  uint64_t bytes_left() const { return in_.size() < 0 ? UINT64_MAX : uint64_t(in_.size()) - std::min<uint64_t>(in_.offset(), uint64_t(in_.size())); }
+
+  [[noreturn]] void truncated(const Element& e, uint64_t i) const {
+    fail("truncated: the header promises " + plural(e.count, e.name) + ", the file ends in element " + std::to_string(i));
+  }
+
+  // How many elements the rest of the file can hold at least (for reserve): never more than
+  // its bytes allow, so that a lying count allocates nothing.
+  size_t plausible(const Element& e) const {
+    const uint64_t left = bytes_left();
+    const uint64_t per = encoding_ == Encoding::Ascii ? 2 * std::max<size_t>(1, e.properties.size()) : std::max<uint64_t>(1, e.record);
+    // A FIFO's length is unknown: a modest start (the vectors grow with what really comes),
+    // shared by the element's properties (each may be an attribute array).
+    const uint64_t most = left == UINT64_MAX ? (uint64_t(1) << 16) / std::max<size_t>(1, e.properties.size()) : left / per;
+    return size_t(std::min(e.count, most));
+  }
+
+  void read_element(Element& e) {
+    const bool binary = encoding_ != Encoding::Ascii;
+    if (binary) {
+      const uint64_t least = mul_add(e.count, e.record, 0);
+      if (least > bytes_left())
+        fail("truncated: the header promises " + plural(e.count, e.name) + " (at least " + std::to_string(least) +
+             " bytes), the file holds " + std::to_string(bytes_left()) + " bytes for them");
+    }
+    const bool is_vertex = &e == vertex_, is_face = &e == face_ && purpose_ == ReadPurpose::Mesh;
+    if (is_vertex) {
+      const size_t n = plausible(e);
+      out_.positions.reserve(n);
+      if (has_normals_) out_.normals.reserve(n);
+      if (has_colors_) colors_.reserve(3 * n);
+      for (VertexAttribute& a : out_.attributes) a.values.reserve(n);
+    }
+    if (is_face) {
+      out_.faces = e.count;
+      out_.triangles.reserve(plausible(e));
+    }
+    // Binary elements without lists that nothing is read from: one skip.
+    if (binary && !e.has_list && !is_vertex) {
+      if (!in_.skip(mul_add(e.count, e.record, 0))) truncated(e, 0);
+      return;
+    }
+    for (uint64_t i = 0; i < e.count; ++i) {
+      if (is_vertex) {
+        out_.positions.emplace_back();
+        if (has_normals_) out_.normals.emplace_back();
+        if (has_colors_) colors_.insert(colors_.end(), 3, 0.0f);
+      }
+      for (const Property& p : e.properties) {
+        if (!p.list) {
+          const double v = scalar(e, i, p);
+          if (is_vertex) store(p, v);
+          continue;
+        }
+        const uint64_t n = list_count(e, i, p);
+        if (binary && mul_add(n, uint64_t(size_of(p.type)), 0) > bytes_left())
+          fail("'" + e.name + "' element " + std::to_string(i) + " has a list of " + std::to_string(n) +
+               " items, more than the rest of the file holds");
+        if (p.role == kIndices) {
+          if (n < 3)
+            fail("'" + e.name + "' element " + std::to_string(i) + " has " + std::to_string(n) +
+                 " corner" + (n == 1 ? "" : "s") + " (a face needs at least 3)");
+          corners_.clear();
+          for (uint64_t k = 0; k < n; ++k) {
+            const double v = scalar(e, i, p);
+            if (v < 0)
+              fail("'" + e.name + "' element " + std::to_string(i) + " refers to vertex " + format(v) +
+                   " (indices start at 0)");
+            if (v > double(UINT32_MAX - 1))
+              fail("'" + e.name + "' element " + std::to_string(i) + " refers to vertex " + format(v) +
+                   ", beyond 2^32 - 2");
+            corners_.push_back(uint32_t(v));
+          }
+          for (size_t k = 1; k + 1 < corners_.size(); ++k)
+            out_.triangles.push_back({corners_[0], corners_[k], corners_[k + 1]});
+        } else if (binary) {
+          if (!in_.skip(mul_add(n, uint64_t(size_of(p.type)), 0))) truncated(e, i);
+        } else {
+          for (uint64_t k = 0; k < n; ++k) scalar(e, i, p);
+        }
+      }
+    }
+  }
+
+  static std::string format(double v) {
+    char s[32];
+    std::snprintf(s, sizeof s, "%.0f", v);
+    return s;
+  }
+
+  uint64_t list_count(const Element& e, uint64_t i, const Property& p) {
+    if (encoding_ == Encoding::Ascii) {
+      if (!in_.token(token_, 64)) truncated(e, i);
+      uint64_t n = 0;
+      if (!parse_count(token_, n))
+        fail("'" + e.name + "' element " + std::to_string(i) + ": list count '" + shown(token_) +
+             "' is not a non-negative integer");
+      return n;
+    }
+    unsigned char raw[8];
+    const int size = size_of(p.count_type);
+    if (!in_.read(raw, size_t(size))) truncated(e, i);
+    const double n = decode(raw, p.count_type);
+    if (n < 0) fail("'" + e.name + "' element " + std::to_string(i) + " has a negative list count");
+    return uint64_t(n);
+  }
+
+  double scalar(const Element& e, uint64_t i, const Property& p) {
+    if (encoding_ == Encoding::Ascii) {
+      if (!in_.token(token_, 128)) truncated(e, i);
+      auto where = [&] { return "'" + e.name + "' element " + std::to_string(i) + ": "; };
+      if (is_integer(p.type)) {
+        int64_t v = 0;
+        if (!parse_integer(token_, v)) fail(where() + "'" + shown(token_) + "' is not an integer");
+        return double(v);
+      }
+      double v = 0;
+      switch (parse_number(token_, v)) {
+        case NumberText::Ok: return v;
+        case NumberText::NotANumber: fail(where() + "'" + shown(token_) + "' is not a number");
+        case NumberText::Overflow:
+          fail(where() + p.name + " = " + shown(token_) + " is beyond the range of double (1.8e308)");
+      }
+      return v;
+    }
+    unsigned char raw[8];
+    if (!in_.read(raw, size_t(size_of(p.type)))) truncated(e, i);
+    return decode(raw, p.type);
+  }
+
+  // A binary value in the file's byte order, exactly (every PLY type fits a double).
+  double decode(const unsigned char* raw, Type t) const {
+    const int size = size_of(t);
+    unsigned char b[8];
+    const bool swap = encoding_ == Encoding::BinaryBE;  // hosts are little-endian (x86-64, aarch64)
+    for (int k = 0; k < size; ++k) b[k] = raw[swap ? size - 1 - k : k];
+    auto as = [&](auto v) {
+      std::memcpy(&v, b, sizeof v);
+      return double(v);
+    };
+    switch (t) {
+      case Type::I8: return as(int8_t{});
+      case Type::U8: return as(uint8_t{});
+      case Type::I16: return as(int16_t{});
+      case Type::U16: return as(uint16_t{});
+      case Type::I32: return as(int32_t{});
+      case Type::U32: return as(uint32_t{});
+      case Type::F32: return as(float{});
+      case Type::F64: return as(double{});
+      case Type::None: break;
+    }
+    return 0;
+  }
+
+  void store(const Property& p, double v) {
+    switch (p.role) {
+      case kX: out_.positions.back().x = v; return;
+      case kY: out_.positions.back().y = v; return;
+      case kZ: out_.positions.back().z = v; return;
+      case kNX: out_.normals.back().x = v; return;
+      case kNY: out_.normals.back().y = v; return;
+      case kNZ: out_.normals.back().z = v; return;
+      case kRed: case kGreen: case kBlue: {
+        const double scale = size_of(p.type) == 1 ? 1.0 / 255 : size_of(p.type) == 2 ? 1.0 / 65535
+                             : is_integer(p.type)   ? 1.0 / 255 : 1.0;
+        colors_[colors_.size() - 3 + size_t(p.role - kRed)] = float(v * scale);
+        return;
+      }
+      case kAttribute: out_.attributes[p.attribute].values.push_back(float(v)); return;
+      default: return;
+    }
+  }
+
+  FileReader in_;
+  ReadPurpose purpose_;
+  Encoding encoding_ = Encoding::None;
+  std::vector<Element> elements_;
+  const Element* vertex_ = nullptr;
+  const Element* face_ = nullptr;
+  bool has_normals_ = false, has_colors_ = false;
+  FileContents out_;
+  std::vector<float> colors_;
+  std::vector<uint32_t> corners_;
+  std::string token_;
+};
+
+}  // namespace
+
+FileContents read_ply(const std::string& path, ReadPurpose purpose) { return PlyReader(path, purpose).read(); }
+
+}  // namespace particlemesh::detail

@@ -1,0 +1,292 @@
+// The writers. Hand-written, byte for byte the layout OpenMesh's writers produced (the ones
+// we used until they were replaced): OpenMesh's IO is a process-wide singleton whose reader
+// and writer modules keep per-call state, so every call had to hold one global lock and
+// route its errors through a process-wide stream - not something a library loaded into
+// Blender should do. PLY and OBJ are simple enough that the layout is a few lines each.
+//
+// PLY: one vertex element (x y z float32, or float64 when needs_double_positions; nx ny nz
+// float32; red green blue uchar from a "color" attribute; every other attribute as float
+// properties, "name" or "name_0".."name_k"), one face element (uchar count, int indices).
+// OBJ: "# V vertices, F faces", then v (with r g b from a "color" attribute) and vn lines
+// in turn (float64 positions: every v line, then every vn line), then f a//a b//b c//c (or
+// f a b c). Text values have 9 significant digits
+// (what gives a float32 back), 17 for float64 positions.
+#include "io/writers.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cfloat>
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "particlemesh/core/error.h"
+
+namespace particlemesh::detail {
+
+namespace {
+
+/// Appends numbers as text: the same digits as printf("%.*g") (std::to_chars is specified
+/// so), several times faster.
+class Text {
+ public:
+  explicit Text(OutputFile& out) : out_(out) {}
+  ~Text() = default;
+  void number(double v, int digits) {
+    room(40);
+    const auto r = std::to_chars(p_, p_ + 40, v, std::chars_format::general, digits);
+    p_ = r.ptr;
+  }
+  void integer(uint64_t v) {
+    room(24);
+    p_ = std::to_chars(p_, p_ + 24, v).ptr;
+  }
+  void put(char c) {
+    room(1);
+    *p_++ = c;
+  }
+  void put(std::string_view s) {
+    if (s.size() > sizeof buf_ / 2) {
+      flush();
+      out_.write(s);
+      return;
+    }
+    room(s.size());
+    std::memcpy(p_, s.data(), s.size());
+    p_ += s.size();
+  }
+  void flush() {
+    out_.write(buf_, size_t(p_ - buf_));
+    p_ = buf_;
+  }
+
+ private:
+  void room(size_t n) {
+    if (size_t(buf_ + sizeof buf_ - p_) < n) flush();
+  }
+  OutputFile& out_;
+  char buf_[1 << 16];
+  char* p_ = buf_;
+};
+
+uint8_t color_byte(float c) {
+  if (!(c > 0)) return 0;
+  if (c >= 1) return 255;
+  return uint8_t(std::lround(double(c) * 255.0));
+}
+
+/// A PLY property name from an attribute name: letters, digits, '_' (others become '_').
+std::string ply_name(const std::string& name) {
+  std::string s = name.empty() ? std::string("attribute") : name;
+  for (char& c : s)
+    if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_')) c = '_';
+  return s;
+}
+
+const VertexAttribute* color_of(const TriMesh& mesh) {
+  for (const VertexAttribute& a : mesh.attributes)
+    if (a.name == "color" && a.components == 3 && a.values.size() == 3 * mesh.positions.size()) return &a;
+  return nullptr;
+}
+
+}  // namespace
+
+bool needs_double_positions(const std::vector<Vec3>& positions) {
+  if (positions.empty()) return false;
+  Vec3 lo = positions[0], hi = positions[0];
+  double largest = 0, smallest = DBL_MAX;
+  for (const Vec3& p : positions) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    for (int a = 0; a < 3; ++a) {
+      const double m = std::abs(p[a]);
+      largest = std::max(largest, m);
+      if (m > 0) smallest = std::min(smallest, m);
+    }
+  }
+  if (largest > FLT_MAX) return true;  // float32 would make it inf
+  const double size = norm(hi - lo);
+  // float32 rounds by up to 2^-24 of a value, and by up to 2^-150 below FLT_MIN (subnormals).
+  double rounding = largest * 0x1p-24;
+  if (smallest < FLT_MIN) rounding = std::max(rounding, 0x1p-150);
+  return rounding > 1e-6 * size;
+}
+
+void write_ply(const TriMesh& mesh, OutputFile& out, bool binary, bool normals) {
+  const auto& P = mesh.positions;
+  const auto& N = mesh.normals;
+  const bool doubles = needs_double_positions(P);
+  const VertexAttribute* color = color_of(mesh);
+  std::vector<const VertexAttribute*> extra;
+  for (const VertexAttribute& a : mesh.attributes)
+    if (&a != color && a.components >= 1 && a.values.size() == P.size() * size_t(a.components)) extra.push_back(&a);
+
+  Text t(out);
+  t.put(binary ? "ply\nformat binary_little_endian 1.0\nelement vertex " : "ply\nformat ascii 1.0\nelement vertex ");
+  t.integer(P.size());
+  t.put(doubles ? "\nproperty double x\nproperty double y\nproperty double z\n"
+                : "\nproperty float x\nproperty float y\nproperty float z\n");
+  if (normals) t.put("property float nx\nproperty float ny\nproperty float nz\n");
+  if (color) t.put("property uchar red\nproperty uchar green\nproperty uchar blue\n");
+  // Property names are unique in a PLY element: an attribute whose name is taken (x, red, a
+  // second "v", ...) gets a suffix.
+  std::vector<std::string> used{"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue"};
+  for (const VertexAttribute* a : extra) {
+    for (int c = 0; c < a->components; ++c) {
+      std::string name = ply_name(a->name) + (a->components > 1 ? "_" + std::to_string(c) : std::string());
+      while (std::find(used.begin(), used.end(), name) != used.end()) name += "_";
+      used.push_back(name);
+      t.put("property float ");
+      t.put(name);
+      t.put('\n');
+    }
+  }
+  t.put("element face ");
+  t.integer(mesh.triangles.size());
+  t.put("\nproperty list uchar int vertex_indices\nend_header\n");
+  // Binary: little-endian, as the header says (x86-64 and aarch64 hosts are).
+  for (size_t i = 0; i < P.size(); ++i) {
+    if (binary) {
+      char rec[64];
+      size_t k = 0;
+      auto f32 = [&](double v) {
+        const float f = float(v);
+        std::memcpy(rec + k, &f, 4);
+        k += 4;
+      };
+      if (doubles) {
+        const double p[3] = {P[i].x, P[i].y, P[i].z};
+        std::memcpy(rec, p, 24);
+        k = 24;
+      } else {
+        f32(P[i].x), f32(P[i].y), f32(P[i].z);
+      }
+      if (normals) f32(N[i].x), f32(N[i].y), f32(N[i].z);
+      if (color)
+        for (int c = 0; c < 3; ++c) rec[k++] = char(color_byte(color->values[3 * i + size_t(c)]));
+      t.put(std::string_view(rec, k));
+      for (const VertexAttribute* a : extra)
+        for (int c = 0; c < a->components; ++c) {
+          const float f = a->values[i * size_t(a->components) + size_t(c)];
+          t.put(std::string_view(reinterpret_cast<const char*>(&f), 4));
+        }
+    } else {
+      const int digits = doubles ? 17 : 9;
+      auto value = [&](double v, bool first) {
+        if (!first) t.put(' ');
+        t.number(doubles ? v : double(float(v)), digits);
+      };
+      value(P[i].x, true), value(P[i].y, false), value(P[i].z, false);
+      if (normals)
+        for (int a = 0; a < 3; ++a) {
+          t.put(' ');
+          t.number(doubles ? N[i][a] : double(float(N[i][a])), 9);
+        }
+      if (color)
+        for (int c = 0; c < 3; ++c) {
+          t.put(' ');
+          t.integer(color_byte(color->values[3 * i + size_t(c)]));
+        }
+      for (const VertexAttribute* a : extra)
+        for (int c = 0; c < a->components; ++c) {
+          t.put(' ');
+          t.number(double(a->values[i * size_t(a->components) + size_t(c)]), 9);
+        }
+      t.put('\n');
+    }
+  }
+  for (const Triangle& tri : mesh.triangles) {
+    if (binary) {
+      char face[13];
+      face[0] = 3;
+      std::memcpy(face + 1, tri.data(), 12);
+      t.put(std::string_view(face, 13));
+    } else {
+      t.put("3 ");
+      t.integer(tri[0]);
+      t.put(' ');
+      t.integer(tri[1]);
+      t.put(' ');
+      t.integer(tri[2]);
+      t.put('\n');
+    }
+  }
+  t.flush();
+}
+
+void write_obj(const TriMesh& mesh, OutputFile& out, bool normals) {
+  const auto& P = mesh.positions;
+  const auto& N = mesh.normals;
+  const bool doubles = needs_double_positions(P);
+  const VertexAttribute* color = color_of(mesh);
+  Text t(out);
+  t.put("# ");
+  t.integer(P.size());
+  t.put(" vertices, ");
+  t.integer(mesh.triangles.size());
+  t.put(" faces\n");
+  auto v_line = [&](size_t i) {
+    t.put('v');
+    for (int a = 0; a < 3; ++a) {
+      t.put(' ');
+      t.number(doubles ? P[i][a] : double(float(P[i][a])), doubles ? 17 : 9);
+    }
+    if (color)
+      for (int c = 0; c < 3; ++c) {
+        t.put(' ');
+        t.number(double(color->values[3 * i + size_t(c)]), 9);
+      }
+    t.put('\n');
+  };
+  auto vn_line = [&](size_t i) {
+    t.put("vn");
+    for (int a = 0; a < 3; ++a) {
+      t.put(' ');
+      t.number(doubles ? N[i][a] : double(float(N[i][a])), 9);
+    }
+    t.put('\n');
+  };
+  if (doubles) {  // all v lines, then all vn lines (the float64 layout has always been so)
+    for (size_t i = 0; i < P.size(); ++i) v_line(i);
+    if (normals)
+      for (size_t i = 0; i < P.size(); ++i) vn_line(i);
+  } else {  // v and vn in turn, as OpenMesh wrote
+    for (size_t i = 0; i < P.size(); ++i) {
+      v_line(i);
+      if (normals) vn_line(i);
+    }
+  }
+  for (const Triangle& tri : mesh.triangles) {
+    t.put('f');
+    for (uint32_t v : tri) {
+      t.put(' ');
+      t.integer(uint64_t(v) + 1);
+      if (normals) {
+        t.put("//");
+        t.integer(uint64_t(v) + 1);
+      }
+    }
+    t.put('\n');
+  }
+  t.flush();
+}
+
+void write_xyz(const PointCloud& cloud, OutputFile& out) {
+  Text t(out);
+  const bool normals = cloud.has_normals();
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    for (int a = 0; a < 3; ++a) {
+      if (a) t.put(' ');
+      t.number(cloud.positions[i][a], 17);
+    }
+    if (normals)
+      for (int a = 0; a < 3; ++a) {
+        t.put(' ');
+        t.number(cloud.normals[i][a], 9);
+      }
+    t.put('\n');
+  }
+  t.flush();
+}
+
+}  // namespace particlemesh::detail
