@@ -68,6 +68,9 @@ void NeighborGrid::build(const Vec3* points, size_t n, double cell_size, const V
     throw Error(Status::LimitExceeded, "more than 4294967294 points");
   cell_size_ = cell_size;
   inv_cell_ = 1.0 / cell_size;
+  if (!std::isfinite(inv_cell_))
+    throw Error(Status::InvalidArgument,
+                "grid cell size " + detail::format_number(cell_size) + " is too small to divide by");
 
   Vec3 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
           std::numeric_limits<double>::infinity()};
@@ -137,7 +140,8 @@ NeighborGrid::CellCoord NeighborGrid::coord_of(const Vec3& p) const {
   // Clamped so that queries far outside the data stay inside the key range.
   auto axis = [&](double v, double o) {
     const double f = std::floor((v - o) * inv_cell_);
-    return int32_t(std::clamp(f, 0.0, double(kMaxCellsPerAxis + 3)));
+    if (!(f > 0)) return int32_t(0);  // also NaN: a converted NaN is undefined behaviour
+    return int32_t(std::min(f, double(kMaxCellsPerAxis + 3)));
   };
   return {axis(p.x, origin_.x), axis(p.y, origin_.y), axis(p.z, origin_.z)};
 }

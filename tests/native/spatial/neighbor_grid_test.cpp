@@ -74,6 +74,8 @@ TEST(NeighborGrid, RejectsBadCellSizeAndAbsurdExtent) {
   const PointCloud c = test::random_cloud(10, 1);
   EXPECT_THROW(NeighborGrid(c.positions.data(), c.size(), 0.0), Error);
   EXPECT_THROW(NeighborGrid(c.positions.data(), c.size(), -1.0), Error);
+  // A subnormal cell size has no finite reciprocal: refused, not turned into NaN cell indices.
+  EXPECT_THROW(NeighborGrid(c.positions.data(), c.size(), 1e-310), Error);
   std::vector<Vec3> far = {{0, 0, 0}, {1e12, 0, 0}};
   try {
     NeighborGrid g(far.data(), far.size(), 1e-3);
