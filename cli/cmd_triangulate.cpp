@@ -13,7 +13,7 @@
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
 #include "particlemesh/sample/thin.h"
-#include "particlemesh/surface/spacing.h"
+#include "particlemesh/spatial/spacing.h"
 #include "particlemesh/surface/reconstruct.h"
 #include "particlemesh/surface/triangulate.h"
 #include "progress_line.h"

@@ -14,7 +14,7 @@
 #include "spatial/grid_search.h"
 #include "surface/normals_impl.h"
 #include "surface/raw_triangulation.h"
-#include "surface/spacing_impl.h"
+#include "spatial/spacing_impl.h"
 
 namespace particlemesh {
 namespace detail {

@@ -12,6 +12,7 @@
 #include "particlemesh/core/error.h"
 #include "surface/normals_impl.h"
 #include "surface/raw_triangulation.h"
+#include "surface/orient_outward.h"
 #include "surface/surface_builder.h"
 
 namespace particlemesh {

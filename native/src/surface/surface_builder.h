@@ -1,24 +1,14 @@
-// Internal: grows a consistently oriented 2-manifold from the seed's candidate triangles and
-// repairs what growth leaves (holes, pinched vertices).
-//
-// The rules, in the order they matter (measured in shared/notes/manifold-extraction.md):
-//  1. Every candidate is oriented by the particles' normals, and each directed edge may be
-//     used by one triangle only: no edge can get a third triangle and neighbours always agree
-//     on the winding.
-//  2. Wedge rule: at each vertex, the new triangle's angular wedge in the vertex's tangent
-//     plane must not overlap the wedges already there; fans stay disks and sheets that merely
-//     touch are not joined (genus stays right).
-//  3. Growth runs best-first from the front of the surface built so far; a candidate that
-//     would start a second fan at a vertex (a pinch) waits until nothing else is left;
-//     a new seed is only taken when the front is exhausted. It runs in parallel in fixed
-//     blocks of points, then across the seams between them, where no flat candidate is
-//     taken (see Builder::grow()).
-//  4. Repair in a fixed order: split boundary loops at repeated vertices, fill small loops,
-//     keep only the largest fan at each pinched vertex, then fill the larger loops whose
-//     fill stays within the edge limit (real openings are wider than that and stay open).
+// Internal: from the raw triangles to the finished surface's triangles and vertex normals -
+// the extraction and repair stages in order:
+//   candidates.h   co-normality, orientation by the normals, ranking, corner lists
+//   growth.h       best-first manifold growth in blocks, then across their seams
+//   repair.h       loop filling (hole_fill.h), unpinching, fragments, unused particles
+//   vertex_normals.h
+// (orient_outward.h turns closed components outward afterwards.)
 #pragma once
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "core/progress_tracker.h"
@@ -53,18 +43,11 @@ struct BuilderStats {
 };
 
 /// positions/normals (normals unit or zero = unknown); `active[i]` false for duplicates; `raw`
-/// the seed's triangles. Returns oriented triangles, and in `vertex_normals` the surface's
-/// angle-weighted vertex normals (a point in no triangle keeps its normal).
+/// the raw triangles (sorted indices). Returns oriented triangles, and in `vertex_normals` the
+/// surface's angle-weighted vertex normals (a point in no triangle keeps its normal).
 std::vector<Triangle> build_surface(const std::vector<Vec3>& positions, const std::vector<Vec3>& normals,
                                     const std::vector<uint8_t>& active, const std::vector<Triangle>& raw,
                                     const BuilderOptions& options, bool repair, BuilderStats& stats,
                                     ProgressTracker& tracker, std::vector<Vec3>& vertex_normals);
-
-/// Turn every closed component (one holding none of the `boundary` half-edges) so that it
-/// encloses positive volume, negating its points' `vertex_normals` (if given) to match;
-/// returns how many flipped.
-size_t orient_closed_components_outward(const std::vector<Vec3>& positions, std::vector<Triangle>& triangles,
-                                        const std::vector<uint64_t>& boundary,
-                                        std::vector<Vec3>* vertex_normals = nullptr);
 
 }  // namespace particlemesh::detail

@@ -16,7 +16,7 @@
 #include "surface/neighbor_lists.h"
 #include "surface/raw_triangulation.h"
 #include "surface/smallest_sphere.h"
-#include "surface/spacing_impl.h"
+#include "spatial/spacing_impl.h"
 
 namespace particlemesh {
 

@@ -10,7 +10,7 @@
 #include "particlemesh/sample/shapes.h"
 #include "particlemesh/spatial/neighbor_grid.h"
 #include "particlemesh/surface/reconstruct.h"
-#include "particlemesh/surface/spacing.h"
+#include "particlemesh/spatial/spacing.h"
 #include "support/test_support.h"
 
 using namespace particlemesh;
