@@ -19,6 +19,7 @@ PACKAGES=(
   libpcl-dev
   clang llvm libclang-rt-14-dev  # the sanitizer build and libFuzzer (scripts/sanitize.sh, fuzz.sh)
   libopenvdb-dev  # the polygonize benchmark's peer (bench/ only)
+  libcgal-dev     # the scan benchmark's advancing-front peer (bench/ only)
 )
 
 missing=()

@@ -4,19 +4,26 @@
 #include <cmath>
 #include <utility>
 
+#include "surface/raw_triangulation.h"
 #include "surface/triangle_angles.h"
 
 namespace particlemesh::detail {
+
+double FillOptions::edge_limit(uint32_t a, uint32_t b) const { return pair_limit((*max_edge)[a], (*max_edge)[b]); }
+
+double FillOptions::fill_limit(uint32_t a, uint32_t b) const {
+  return std::min(fill_edge_factor * edge_limit(a, b), edge_cap);
+}
 
 bool fill_loop(EditableSurface& s, const std::vector<uint32_t>& L, const FillOptions& o, FillStats& stats,
                double max_fold) {
   const std::vector<Vec3>& P = s.positions();
   const size_t m = L.size();
   if (m < 3) return false;
-  const double limit2 = std::pow(o.fill_edge_factor * o.max_edge, 2);
   const bool smooth = m > o.small_hole;
   auto diag_ok = [&](size_t i, size_t j) {
     if ((j == i + 1) || (i == 0 && j == m - 1)) return true;
+    const double limit2 = std::pow(o.fill_limit(L[i], L[j]), 2);
     return squared_distance(P[L[i]], P[L[j]]) <= limit2 && !s.edge_exists(L[i], L[j]);
   };
   // The surface's triangle across each loop edge L[i] -> L[i+1], for the dihedral angles.
@@ -115,17 +122,18 @@ size_t fill_folded_loops(EditableSurface& s, size_t max_size, const FillOptions&
   return filled;
 }
 
-double loop_width(const std::vector<Vec3>& P, const std::vector<uint32_t>& L, double max_edge) {
+double loop_width(const std::vector<Vec3>& P, const std::vector<uint32_t>& L, const FillOptions& o) {
   const size_t m = L.size();
+  auto span = [&](size_t i, size_t k) { return distance(P[L[i]], P[L[k]]) / o.edge_limit(L[i], L[k]); };
   std::vector<double> w(m * m, INFINITY);
-  for (size_t i = 0; i + 1 < m; ++i) w[i * m + i + 1] = distance(P[L[i]], P[L[i + 1]]);
+  for (size_t i = 0; i + 1 < m; ++i) w[i * m + i + 1] = span(i, i + 1);
   for (size_t len = 2; len < m; ++len)
     for (size_t i = 0; i + len < m; ++i) {
       const size_t k = i + len;
-      const double d = distance(P[L[i]], P[L[k]]);
+      const double d = span(i, k);
       for (size_t j = i + 1; j < k; ++j) w[i * m + k] = std::min(w[i * m + k], std::max({w[i * m + j], w[j * m + k], d}));
     }
-  return w[m - 1] / max_edge;
+  return w[m - 1];
 }
 
 }  // namespace particlemesh::detail

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -18,9 +19,19 @@
 namespace particlemesh::detail {
 
 struct FillOptions {
-  double max_edge = 0;            ///< L of the raw test
+  /// Per point: its edge limit L of the raw test (raw_triangulation.h: an edge's is the pair
+  /// limit of its ends'). Must outlive the calls.
+  const std::vector<double>* max_edge = nullptr;
   double fill_edge_factor = 1.5;  ///< fill triangles' edges at most this x L
+  /// No repair edge is longer than this, whatever the points' limits (the longest edge the
+  /// raw test may have; see SurfaceOptions::local_spacing).
+  double edge_cap = INFINITY;
   size_t small_hole = 6;          ///< loops up to this many edges take the min-max-angle fill
+  /// The raw test's limit for an edge a b (the pair limit of the points' max_edge).
+  double edge_limit(uint32_t a, uint32_t b) const;
+  /// The longest a repair triangle's edge a b may be: fill_edge_factor x edge_limit, at most
+  /// edge_cap.
+  double fill_limit(uint32_t a, uint32_t b) const;
 };
 
 struct FillStats {
@@ -52,8 +63,8 @@ size_t fill_loops(EditableSurface& s, size_t max_size, const FillOptions& o, Fil
 size_t fill_folded_loops(EditableSurface& s, size_t max_size, const FillOptions& o, FillStats& stats);
 
 /// The smallest possible longest edge over all triangulations of a loop (a min-max dynamic
-/// program, cubic in the loop's edges), in units of max_edge: how far apart the particles
-/// across the loop are.
-double loop_width(const std::vector<Vec3>& positions, const std::vector<uint32_t>& loop, double max_edge);
+/// program, cubic in the loop's edges), each edge in units of its limit (FillOptions::
+/// edge_limit): how far apart the particles across the loop are.
+double loop_width(const std::vector<Vec3>& positions, const std::vector<uint32_t>& loop, const FillOptions& o);
 
 }  // namespace particlemesh::detail

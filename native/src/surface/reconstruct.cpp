@@ -41,7 +41,7 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
   std::vector<Triangle> tris;
   detail::with_threads(options.threads, [&] {
     detail::RawTriangulation raw = detail::run_raw_triangulation(cloud, options, tracker, 0.0, 0.55,
-                                                                   detail::TriangleIndices::Sorted);
+                                                                   detail::TriangleIndices::Sorted, options.local_spacing);
     result.triangulation = raw.stats;
     const NeighborGrid& grid = *raw.grid;
     const size_t n = cloud.size();
@@ -71,7 +71,7 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
       });
     } else {
       tracker.stage("estimating normals", 0.55, 0.65, n);
-      normals = detail::pca_normals_sorted(grid, raw.rep, raw.neighbors, raw.stats.max_edge, tracker, &raw.triangles);
+      normals = detail::pca_normals_sorted(grid, raw.rep, raw.neighbors, raw.max_edge, tracker, &raw.triangles);
       std::vector<Vec3> reference;
       if (options.normals == Source::Auto && cloud.has_normals()) {
         reference.resize(n);
@@ -81,8 +81,8 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
       // The cloud's normals orient directly when they are consistent; otherwise (or without
       // them) the spanning tree orients, and they only vote which way each piece faces.
       if (reference.empty() ||
-          !detail::orient_normals_by_reference(grid, raw.rep, raw.neighbors, raw.stats.max_edge, normals, reference, tracker))
-        detail::orient_normals_mst(grid, raw.rep, raw.neighbors, raw.stats.max_edge, normals, reference, tracker);
+          !detail::orient_normals_by_reference(grid, raw.rep, raw.neighbors, raw.max_edge, normals, reference, tracker))
+        detail::orient_normals_mst(grid, raw.rep, raw.neighbors, raw.max_edge, normals, reference, tracker);
       st.normals_estimated = true;
     }
     st.seconds_normals = seconds_since(t0);
@@ -95,7 +95,8 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     t0 = Clock::now();
     detail::BuilderOptions bo;
     bo.cos_normal_angle = std::cos(options.normal_angle * std::numbers::pi / 180.0);
-    bo.max_edge = raw.stats.max_edge;
+    bo.max_edge = &raw.max_edge;
+    bo.edge_cap = raw.edge_cap;
     bo.max_hole = options.fill_holes;
     bo.small_hole = std::min<size_t>(6, options.fill_holes);
     bo.fill_edge_factor = options.fill_edge_factor;

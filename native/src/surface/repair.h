@@ -37,6 +37,8 @@ struct RepairStats : FillStats {
 
 /// Fragments of at most this many triangles may be dissolved (see drop_fragments).
 constexpr uint32_t kMaxFragment = 12;
+/// Rounds of insert_unused at most (each lets particles attach to the ones the round before put in).
+constexpr int kInsertRounds = 4;
 /// loop_width is cubic in the loop's edges; above this many edges it is not computed (reported
 /// as infinite: such loops are openings).
 constexpr size_t kMaxWidthLoop = 128;
@@ -47,16 +49,19 @@ constexpr size_t kMaxWidthLoop = 128;
 size_t unpinch(EditableSurface& s);
 
 /// A particle the surface passed by (active, in no triangle) is inserted into the surface
-/// triangle it lies over (split in three), or, at a boundary, joined to the nearest boundary
-/// edge: every input particle ends up a vertex of the surface. Returns how many were inserted.
+/// triangle it lies over (split in three), or beside the nearest edge: beyond a boundary edge
+/// as a new triangle on it, else splitting the edge. Every new edge is within the fill limit
+/// (FillOptions::fill_limit), no new triangle folds back over the surface or overlaps a
+/// vertex's fan. Particles that fit nowhere stay out. Returns how many were inserted.
 size_t insert_unused(EditableSurface& s, const std::vector<uint8_t>& active, const std::vector<Triangle>& raw,
-                     double max_edge);
+                     const FillOptions& o);
 
 /// Fragments of a few triangles that lie against a larger piece of surface (a lone triangle
 /// or a tiny closed "bubble" grown from particles the main surface passed by, where it is
 /// thin or sharp) are dissolved; insert_unused then puts their particles into the surface
 /// around them. A small piece on its own (a droplet of four particles) is a surface of its
-/// own and stays: a fragment is only dissolved if a raw triangle joins it to another piece.
+/// own and stays, as do small pieces joined only to each other (a sparse patch): a fragment is
+/// only dissolved if a raw triangle joins it to a larger piece.
 /// Returns the triangles removed.
 size_t drop_fragments(EditableSurface& s, const std::vector<Triangle>& raw);
 

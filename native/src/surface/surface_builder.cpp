@@ -33,6 +33,7 @@ std::vector<Triangle> build_surface(const std::vector<Vec3>& positions, const st
     RepairOptions ro;
     ro.fill.max_edge = options.max_edge;
     ro.fill.fill_edge_factor = options.fill_edge_factor;
+    ro.fill.edge_cap = options.edge_cap;
     ro.fill.small_hole = options.small_hole;
     ro.max_hole = options.max_hole;
     RepairStats rs;

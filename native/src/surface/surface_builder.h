@@ -7,6 +7,7 @@
 // (orient_outward.h turns closed components outward afterwards.)
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -19,7 +20,9 @@ namespace particlemesh::detail {
 
 struct BuilderOptions {
   double cos_normal_angle = -0.5;  ///< co-normality: corner normals and face normal agree within
-  double max_edge = 0;            ///< L of the raw test
+  /// Per point (sorted index): its edge limit L of the raw test (RawTriangulation::max_edge).
+  const std::vector<double>* max_edge = nullptr;
+  double edge_cap = INFINITY;     ///< no repair edge longer than this (RawTriangulation::edge_cap)
   size_t small_hole = 6;          ///< loops up to this many edges are filled before unpinching
   size_t max_hole = 100;          ///< loops up to this many edges may be filled (0 = none)
   double fill_edge_factor = 1.5;  ///< fill triangles' edges at most this x L

@@ -31,6 +31,13 @@
 namespace particlemesh {
 
 struct SurfaceOptions : TriangulateOptions {
+  /// Each particle's edge limit follows the sampling around it: L_i = max_edge_factor x h_i,
+  /// h_i its local spacing (estimate_local_spacing; scaled so that the cloud's median
+  /// nearest-neighbour distance is `spacing` when that is given), and an edge may be as long
+  /// as the mean of its ends' limits. Everything measured in L uses the local value: the
+  /// neighbour search, the plane fits, the fill limit, the widths of open loops. false: one
+  /// limit L = max_edge_factor x spacing for the whole cloud, as the raw test has.
+  bool local_spacing = true;
   /// Co-normality limit in degrees (seed 5.2.4): corner normals may differ by at most this,
   /// and the face normal from each corner's by at most this and never more than 90. Sheets
   /// facing each other (normals ~180 degrees apart) are separated at any setting; the default

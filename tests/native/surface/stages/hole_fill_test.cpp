@@ -13,6 +13,14 @@ using namespace particlemesh::detail;
 
 namespace {
 
+// Fill options with every point's edge limit L (kept alive in `limits`).
+FillOptions with_limit(std::vector<double>& limits, size_t points, double L) {
+  limits.assign(points, L);
+  FillOptions o;
+  o.max_edge = &limits;
+  return o;
+}
+
 // A 7 x 7-point sheet with the points of the k x k block at (2, 2) taken out.
 std::vector<uint32_t> block(const test::Sheet& s, size_t k) {
   std::vector<uint32_t> out;
@@ -25,9 +33,16 @@ std::vector<uint32_t> block(const test::Sheet& s, size_t k) {
 
 TEST(HoleFill, LoopWidthIsTheShortestPossibleLongestEdge) {
   const std::vector<Vec3> P = {{0, 0, 0}, {2, 0, 0}, {2, 1, 0}, {0, 1, 0}};
+  std::vector<double> L;
   // A 2 x 1 rectangle: its best triangulation's longest edge is a diagonal, sqrt(5).
-  EXPECT_NEAR(loop_width(P, {0, 1, 2, 3}, 1.0), std::sqrt(5.0), 1e-12);
-  EXPECT_NEAR(loop_width(P, {0, 1, 2, 3}, 2.0), std::sqrt(5.0) / 2, 1e-12);
+  EXPECT_NEAR(loop_width(P, {0, 1, 2, 3}, with_limit(L, 4, 1.0)), std::sqrt(5.0), 1e-12);
+  EXPECT_NEAR(loop_width(P, {0, 1, 2, 3}, with_limit(L, 4, 2.0)), std::sqrt(5.0) / 2, 1e-12);
+  // Each edge counts in units of its own limit (the mean of its ends'): with limits 1 at the
+  // left and 3 at the right, the diagonals' limit is 2 and the right side's (length 1) is 3.
+  L = {1, 3, 3, 1};
+  FillOptions o;
+  o.max_edge = &L;
+  EXPECT_NEAR(loop_width(P, {0, 1, 2, 3}, o), std::sqrt(5.0) / 2, 1e-12);
 }
 
 TEST(HoleFill, HolesWithinTheEdgeLimitCloseWiderOnesStayOpen) {
@@ -36,8 +51,8 @@ TEST(HoleFill, HolesWithinTheEdgeLimitCloseWiderOnesStayOpen) {
   // sqrt(2) and 2.
   {
     EditableSurface e(s.P, s.frames, s.without(block(s, 1)));
-    FillOptions o;
-    o.max_edge = 1.5;  // limit 1.5 x 1.5 = 2.25: fillable
+    std::vector<double> L;
+    FillOptions o = with_limit(L, s.P.size(), 1.5);  // fill limit 1.5 x 1.5 = 2.25: fillable
     FillStats st;
     EXPECT_EQ(fill_loops(e, 100, o, st), 1u);
     EXPECT_EQ(e.trace_loops().size(), 1u);  // only the outline is left
@@ -49,13 +64,13 @@ TEST(HoleFill, HolesWithinTheEdgeLimitCloseWiderOnesStayOpen) {
   // A missing 3 x 3 block: a loop whose narrowest span is 4.
   {
     EditableSurface e(s.P, s.frames, s.without(block(s, 3)));
-    FillOptions o;
-    o.max_edge = 2.0;  // limit 3: narrower than the opening
+    std::vector<double> L;
+    FillOptions o = with_limit(L, s.P.size(), 2.0);  // fill limit 3: narrower than the opening
     FillStats st;
     EXPECT_EQ(fill_loops(e, 100, o, st), 0u);
     ASSERT_EQ(e.trace_loops().size(), 2u);
-    EXPECT_NEAR(loop_width(s.P, e.trace_loops()[1], 2.0), 2.0, 1e-12);  // 4 / L
-    o.max_edge = 3.0;  // limit 4.5: wide enough
+    EXPECT_NEAR(loop_width(s.P, e.trace_loops()[1], o), 2.0, 1e-12);  // 4 / L
+    o = with_limit(L, s.P.size(), 3.0);  // fill limit 4.5: wide enough
     EXPECT_EQ(fill_loops(e, 100, o, st), 1u);
     EXPECT_EQ(e.trace_loops().size(), 1u);
     // Every fill edge is within the limit.
@@ -65,8 +80,8 @@ TEST(HoleFill, HolesWithinTheEdgeLimitCloseWiderOnesStayOpen) {
   // Loops longer than max_size are left.
   {
     EditableSurface e(s.P, s.frames, s.without(block(s, 1)));
-    FillOptions o;
-    o.max_edge = 1.5;
+    std::vector<double> L;
+    const FillOptions o = with_limit(L, s.P.size(), 1.5);
     FillStats st;
     EXPECT_EQ(fill_loops(e, 5, o, st), 0u);
   }
@@ -77,8 +92,8 @@ TEST(HoleFill, AnIsolatedPatchIsNotCappedIntoAPillow) {
   // degrees back onto it.
   const test::Sheet s(2, 2);
   EditableSurface e(s.P, s.frames, s.tris);
-  FillOptions o;
-  o.max_edge = 2;
+  std::vector<double> L;
+  const FillOptions o = with_limit(L, s.P.size(), 2.0);
   FillStats st;
   EXPECT_EQ(fill_loops(e, 100, o, st), 0u);
   EXPECT_EQ(fill_folded_loops(e, 100, o, st), 0u);

@@ -36,7 +36,10 @@ TEST(Repair, UnusedParticlesAreInsertedIntoTheTriangleOrEdgeUnderThem) {
   // The raw triangles at the particles say which surface is around them.
   const std::vector<Triangle> raw = {{s.id(1, 1), s.id(2, 1), over}, {s.id(1, 0), s.id(2, 0), on_edge},
                                      {s.id(1, 0), on_edge, s.id(1, 1)}};
-  EXPECT_EQ(insert_unused(e, active, raw, 2.0), 2u);
+  const std::vector<double> L(s.P.size(), 2.0);
+  FillOptions o;
+  o.max_edge = &L;
+  EXPECT_EQ(insert_unused(e, active, raw, o), 2u);
   const auto tris = e.take();
   EXPECT_EQ(tris.size(), 18u + 2 + 1);  // a triangle split in three, an edge's triangle in two
   size_t at_over = 0, at_edge = 0;
@@ -79,7 +82,8 @@ TEST(Repair, SheetWithHolesClosesThemAndKeepsItsOutline) {
   std::vector<uint8_t> active(s.P.size(), 1);
   for (uint32_t v : out) active[v] = 0;  // not particles: nothing to insert
   RepairOptions o;
-  o.fill.max_edge = 2.0;
+  const std::vector<double> L(s.P.size(), 2.0);
+  o.fill.max_edge = &L;
   RepairStats st;
   test::QuietTracker q;
   repair_surface(e, active, {}, o, st, q.tracker);
