@@ -3,7 +3,7 @@
 // prepared as such a user would.
 //
 //   scan_bench [shared/data folder] [--scan FILE.pcd|.ply]... [--runs N] [--write-prepared DIR]
-//              [--no-peers] [--write-meshes DIR]
+//              [--no-peers] [--write-meshes DIR] [--viewpoint]
 //
 // Without --scan it runs the scans of the shared data (pcd/bun0, milk, the Kinect frame,
 // colored_cloud; bunny.pcd holds bun0's points and the *_binary files re-encode others, so
@@ -20,7 +20,8 @@
 //                  (mu 2.5, 100 neighbours, 45 deg surface angle, 10..120 deg angles), search
 //                  radius 4.16 r0 (the tutorial's 0.025 on bun0), normals by NormalEstimation
 //                  with k = 20 (their time is included)
-// Printed per scan and method: small holes (boundary loops of fewer than 10 edges), all
+// --viewpoint adds particlemesh given the file's sensor origin (PCD VIEWPOINT), where it is
+// taken (SurfaceOptions::viewpoint). Printed per scan and method: small holes (boundary loops of fewer than 10 edges), all
 // boundary loops, the share of the prepared points in a triangle, the longest triangle edge
 // / r0 and how many triangles have an edge over 6 r0, non-manifold edges, orientation
 // conflicts, and the time; then the sums. A Markdown table (bench/RESULTS.md).
@@ -60,6 +61,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 using XYZ = pcl::PointCloud<pcl::PointXYZ>;
+constexpr int kMethods = 5;
 
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
@@ -91,6 +93,7 @@ struct Scan {
   double raw_r0 = 0;       ///< their median NN distance
   XYZ::Ptr prepared{new XYZ};
   double r0 = 0;           ///< the prepared cloud's median NN distance
+  particlemesh::Vec3 origin;  ///< the file's sensor origin (PCD VIEWPOINT)
 };
 
 XYZ::Ptr read_scan(const std::string& path) {
@@ -104,6 +107,7 @@ XYZ::Ptr read_scan(const std::string& path) {
 Scan prepare(const std::string& name, const XYZ& input) {
   Scan s;
   s.name = name;
+  s.origin = {input.sensor_origin_.x(), input.sensor_origin_.y(), input.sensor_origin_.z()};
   XYZ::Ptr finite(new XYZ);
   std::vector<int> kept;
   pcl::removeNaNFromPointCloud(input, *finite, kept);
@@ -190,7 +194,7 @@ int main(int argc, char** argv) {
   std::string data = "../shared/data", prepared_dir, meshes_dir;
   std::vector<std::string> scans;
   int runs = 3;
-  bool peers = true;
+  bool peers = true, viewpoint = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--scan" && i + 1 < argc) scans.push_back(argv[++i]);
@@ -198,10 +202,11 @@ int main(int argc, char** argv) {
     else if (a == "--write-prepared" && i + 1 < argc) prepared_dir = argv[++i];
     else if (a == "--write-meshes" && i + 1 < argc) meshes_dir = argv[++i];
     else if (a == "--no-peers") peers = false;
+    else if (a == "--viewpoint") viewpoint = true;
     else if (!a.empty() && a[0] != '-') data = a;
     else {
       std::fprintf(stderr, "usage: scan_bench [data folder] [--scan FILE]... [--runs N] [--write-prepared DIR] "
-                           "[--write-meshes DIR] [--no-peers]\n");
+                           "[--write-meshes DIR] [--no-peers] [--viewpoint]\n");
       return 2;
     }
   }
@@ -223,9 +228,10 @@ int main(int argc, char** argv) {
   struct Sum {
     size_t small_holes = 0;
     double worst_used = 100, longest = 0, seconds = 0;
-  } sums[4];
-  const char* names[4] = {"particlemesh", "CGAL advancing front, > 6 r0 cut", "CGAL advancing front, uncut",
-                          "PCL greedy projection"};
+    int scans = 0;
+  } sums[kMethods];
+  const char* names[kMethods] = {"particlemesh", "CGAL advancing front, > 6 r0 cut", "CGAL advancing front, uncut",
+                                 "PCL greedy projection", "particlemesh, with the PCD's VIEWPOINT"};
   std::vector<std::string> notes;
   for (const std::string& path : scans) {
     const std::string name = std::filesystem::path(path).stem().string();
@@ -236,17 +242,21 @@ int main(int argc, char** argv) {
     notes.push_back(note);
     if (!prepared_dir.empty()) pcl::io::savePLYFileBinary(prepared_dir + "/" + name + ".ply", *s.prepared);
     const std::vector<particlemesh::Vec3> P = positions_of(*s.prepared);
-    Metrics m[4];
+    Metrics m[kMethods];
 
-    {
+    for (int k : {0, 4}) {
+      if (k == 4 && !viewpoint) continue;
       particlemesh::PointCloud cloud;
       cloud.positions = P;
       particlemesh::SurfaceOptions o;
       o.spacing = s.r0;
+      o.has_viewpoint = k == 4;
+      o.viewpoint = s.origin;
       particlemesh::SurfaceResult r;
       const double t = best_of(runs, [&] { r = particlemesh::reconstruct_surface(cloud, o); });
-      m[0] = measure(P, r.mesh.triangles, s.r0, t);
-      write_mesh(meshes_dir, name + "_particlemesh", P, r.mesh.triangles);
+      m[k] = measure(P, r.mesh.triangles, s.r0, t);
+      if (k == 4 && !r.surface.viewpoint_used) m[k].ran = false;
+      write_mesh(meshes_dir, name + (k == 4 ? "_particlemesh_viewpoint" : "_particlemesh"), P, r.mesh.triangles);
     }
     if (peers) {
 #ifdef PM_BENCH_WITH_CGAL
@@ -298,9 +308,10 @@ int main(int argc, char** argv) {
       m[3] = measure(P, gp3, s.r0, tg);
       write_mesh(meshes_dir, name + "_pcl_gp3", P, gp3);
     }
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < kMethods; ++k) {
       row(s, names[k], m[k]);
       if (!m[k].ran) continue;
+      ++sums[k].scans;
       sums[k].small_holes += m[k].small_holes;
       sums[k].worst_used = std::min(sums[k].worst_used, 100.0 * double(m[k].used) / double(m[k].points));
       sums[k].longest = std::max(sums[k].longest, m[k].longest);
@@ -310,10 +321,10 @@ int main(int argc, char** argv) {
   }
   std::printf("\n| method | small holes, summed | worst share of points in the mesh | longest edge / r0 | seconds, summed |\n");
   std::printf("|---|---|---|---|---|\n");
-  for (int k = 0; k < 4; ++k)
-    if (k == 0 || peers)
-      std::printf("| %s | %zu | %.2f %% | %.1f | %.3f |\n", names[k], sums[k].small_holes, sums[k].worst_used,
-                  sums[k].longest, sums[k].seconds);
+  for (int k = 0; k < kMethods; ++k)
+    if (sums[k].scans > 0)
+      std::printf("| %s%s | %zu | %.2f %% | %.1f | %.3f |\n", names[k], k == 4 ? " (scans where it was taken)" : "",
+                  sums[k].small_holes, sums[k].worst_used, sums[k].longest, sums[k].seconds);
   std::printf("\n");
   for (const auto& n : notes) std::printf("- %s\n", n.c_str());
   return 0;

@@ -49,7 +49,8 @@ std::vector<Frame> tangent_frames(const std::vector<Vec3>& normals) {
 
 CandidateSet rank_candidates(const std::vector<Vec3>& P, const std::vector<Vec3>& N,
                              const std::vector<Frame>& frame, const std::vector<uint8_t>& active,
-                             const std::vector<Triangle>& raw, double cos_normal_angle, ProgressTracker& tracker) {
+                             const std::vector<Triangle>& raw, double cos_normal_angle, ProgressTracker& tracker,
+                             const ViewRays& view) {
   CandidateSet out;
   // Per raw triangle: kept or not, turned or not (to face along its normals), its quality.
   // Eight bytes, not a copy of the triangle: the list is as long as the raw test's output.
@@ -67,9 +68,9 @@ CandidateSet rank_candidates(const std::vector<Vec3>& P, const std::vector<Vec3>
   const size_t n = P.size();
   auto& vc_off = out.corner_offset;
   vc_off.assign(n + 1, 0);  // each vertex's corners, counted here
-  std::atomic<size_t> kept_sum{0};
+  std::atomic<size_t> kept_sum{0}, shadow_sum{0};
   parallel_blocks(raw.size(), 4096, [&](size_t b, size_t e) {
-    size_t block_kept = 0;
+    size_t block_kept = 0, block_shadow = 0;
     for (size_t i = b; i < e; ++i) {
       Triangle t = raw[i];
       o[i].ok = o[i].turned = 0;
@@ -85,6 +86,10 @@ CandidateSet rank_candidates(const std::vector<Vec3>& P, const std::vector<Vec3>
       const Vec3 fu = normalized(f);
       if (dot(na, nb) < cosa || dot(nb, nc) < cosa || dot(na, nc) < cosa) continue;
       if (dot(fu, na) < cosf || dot(fu, nb) < cosf || dot(fu, nc) < cosf) continue;
+      if (view.shadows(P[t[0]], P[t[1]], P[t[2]])) {
+        ++block_shadow;
+        continue;
+      }
       o[i].quality = float(-min_corner_cosine(P[t[0]], P[t[1]], P[t[2]]));  // ~ the largest angle
       o[i].ok = 1;
       o[i].turned = turned;
@@ -92,10 +97,12 @@ CandidateSet rank_candidates(const std::vector<Vec3>& P, const std::vector<Vec3>
       for (uint32_t v : t) std::atomic_ref<uint32_t>(vc_off[v + 1]).fetch_add(1, std::memory_order_relaxed);
     }
     kept_sum.fetch_add(block_kept, std::memory_order_relaxed);
+    shadow_sum.fetch_add(block_shadow, std::memory_order_relaxed);
   });
   tracker.check();
   const size_t kept = kept_sum.load();
-  out.rejected_conormal = raw.size() - kept;
+  out.rejected_shadow = shadow_sum.load();
+  out.rejected_conormal = raw.size() - kept - out.rejected_shadow;
   // Sorted as (quality, index) keys: a float's bits, with the sign folded, order as the float.
   std::vector<uint64_t> key(kept);
   counting_place(o.size(), 2, [&](size_t i) { return o[i].ok ? 0 : 1; }, [&](size_t i, size_t pos) {

@@ -21,6 +21,7 @@
 #include "particlemesh/core/vec3.h"
 #include "particlemesh/mesh/tri_mesh.h"
 #include "surface/tangent_arcs.h"
+#include "surface/view_rays.h"
 
 namespace particlemesh::detail {
 
@@ -61,15 +62,18 @@ struct CandidateSet {
   /// Candidates ranked from here on are flat: largest angle over 150 degrees.
   uint32_t flat_from = 0;
   size_t rejected_conormal = 0;  ///< raw triangles dropped by co-normality (or at an inactive/normal-less point)
+  size_t rejected_shadow = 0;    ///< raw triangles dropped for bridging a depth jump (view_rays.h)
 };
 
 /// Tangent frames of the (unit or zero) normals; zero normals get none.
 std::vector<Frame> tangent_frames(const std::vector<Vec3>& normals);
 
 /// The candidates among `raw` (sorted indices): corners active, with non-zero normals, and
-/// co-normal within cos_normal_angle (the face within max(cos_normal_angle, 0)).
+/// co-normal within cos_normal_angle (the face within max(cos_normal_angle, 0)); with an
+/// active `view`, no edge along a view ray.
 CandidateSet rank_candidates(const std::vector<Vec3>& positions, const std::vector<Vec3>& normals,
                              const std::vector<Frame>& frames, const std::vector<uint8_t>& active,
-                             const std::vector<Triangle>& raw, double cos_normal_angle, ProgressTracker& tracker);
+                             const std::vector<Triangle>& raw, double cos_normal_angle, ProgressTracker& tracker,
+                             const ViewRays& view = {});
 
 }  // namespace particlemesh::detail

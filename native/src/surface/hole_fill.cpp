@@ -24,7 +24,7 @@ bool fill_loop(EditableSurface& s, const std::vector<uint32_t>& L, const FillOpt
   auto diag_ok = [&](size_t i, size_t j) {
     if ((j == i + 1) || (i == 0 && j == m - 1)) return true;
     const double limit2 = std::pow(o.fill_limit(L[i], L[j]), 2);
-    return squared_distance(P[L[i]], P[L[j]]) <= limit2 && !s.edge_exists(L[i], L[j]);
+    return squared_distance(P[L[i]], P[L[j]]) <= limit2 && !s.edge_exists(L[i], L[j]) && !o.view.along_ray(P[L[i]], P[L[j]]);
   };
   // The surface's triangle across each loop edge L[i] -> L[i+1], for the dihedral angles.
   std::vector<Vec3> outside(m);

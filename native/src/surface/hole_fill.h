@@ -15,6 +15,7 @@
 
 #include "particlemesh/core/vec3.h"
 #include "surface/editable_surface.h"
+#include "surface/view_rays.h"
 
 namespace particlemesh::detail {
 
@@ -27,6 +28,7 @@ struct FillOptions {
   /// raw test may have; see SurfaceOptions::local_spacing).
   double edge_cap = INFINITY;
   size_t small_hole = 6;          ///< loops up to this many edges take the min-max-angle fill
+  ViewRays view;                  ///< with a viewpoint: no repair edge along a view ray
   /// The raw test's limit for an edge a b (the pair limit of the points' max_edge).
   double edge_limit(uint32_t a, uint32_t b) const;
   /// The longest a repair triangle's edge a b may be: fill_edge_factor x edge_limit, at most

@@ -1,5 +1,6 @@
 #include "particlemesh/surface/reconstruct.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <numbers>
@@ -14,6 +15,7 @@
 #include "surface/raw_triangulation.h"
 #include "surface/orient_outward.h"
 #include "surface/surface_builder.h"
+#include "surface/view_rays.h"
 
 namespace particlemesh {
 
@@ -21,6 +23,24 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+/// The distribution of the distinct particles' local spacings, in units of r0.
+SurfaceStats::Spread spacing_spread(const detail::RawTriangulation& raw) {
+  std::vector<double> h;
+  h.reserve(raw.max_edge.size());
+  for (size_t s = 0; s < raw.max_edge.size(); ++s)
+    if (raw.rep[s] == s) h.push_back(raw.max_edge[s] / raw.stats.max_edge);
+  SurfaceStats::Spread out;
+  if (h.empty()) return out;
+  std::sort(h.begin(), h.end());
+  auto at = [&](double f) { return h[size_t(f * double(h.size() - 1) + 0.5)]; };
+  out.min = h.front();
+  out.p10 = at(0.1);
+  out.median = at(0.5);
+  out.p90 = at(0.9);
+  out.max = h.back();
+  return out;
+}
 
 void check_surface_options(const SurfaceOptions& o) {
   if (!(o.normal_angle > 0 && o.normal_angle <= 180))
@@ -45,6 +65,7 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     result.triangulation = raw.stats;
     const NeighborGrid& grid = *raw.grid;
     const size_t n = cloud.size();
+    if (options.local_spacing) st.local_spacing = spacing_spread(raw);
 
     auto t0 = Clock::now();
     using Source = SurfaceOptions::NormalSource;
@@ -94,6 +115,12 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     tracker.check();
     t0 = Clock::now();
     detail::BuilderOptions bo;
+    if (options.has_viewpoint) {
+      if (!is_finite(options.viewpoint)) throw Error(Status::InvalidArgument, "the viewpoint is not finite");
+      st.viewpoint_used = detail::plausible_viewpoint(P, normals, active, options.viewpoint);
+      bo.view.active = st.viewpoint_used;
+      bo.view.origin = options.viewpoint;
+    }
     bo.cos_normal_angle = std::cos(options.normal_angle * std::numbers::pi / 180.0);
     bo.max_edge = &raw.max_edge;
     bo.edge_cap = raw.edge_cap;
@@ -113,6 +140,7 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     tracker.check();
     st.candidates = bs.candidates;
     st.rejected_conormal = bs.rejected_conormal;
+    st.rejected_shadow = bs.rejected_shadow;
     st.grown = bs.grown;
     st.seeds = bs.seeds;
     st.pinches_resolved = bs.pinches_resolved;

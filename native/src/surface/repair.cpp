@@ -128,7 +128,8 @@ size_t insert_unused(EditableSurface& s, const std::vector<uint8_t>& active, con
   // scale or p's, whichever is larger: p is a sample of the surface around v (a stray one: its
   // own spacing, from the few particles around it, says little).
   auto short_enough = [&](uint32_t p, uint32_t v) {
-    return distance(P[p], P[v]) <= std::min(o.fill_edge_factor * std::max(Lp[p], Lp[v]), o.edge_cap);
+    return distance(P[p], P[v]) <= std::min(o.fill_edge_factor * std::max(Lp[p], Lp[v]), o.edge_cap) &&
+           !o.view.along_ray(P[p], P[v]);
   };
   std::unique_ptr<NeighborGrid> near;
   // The largest limit among the surface's vertices: the farthest any of them may reach out.
@@ -287,14 +288,14 @@ size_t drop_fragments(EditableSurface& s, const std::vector<Triangle>& raw) {
   for (uint32_t v = 0; v < n; ++v)
     if (piece[v] == v && count[v] > 0 && count[v] <= kMaxFragment) small[v] = any = true;
   if (!any) return 0;
-  // A raw triangle with corners in a small piece and in a larger one joins them (small pieces
-  // joined only to each other are a surface of their own: a sparse patch stays).
+  // A raw triangle with corners in a small piece and in a larger one joins them (of small
+  // pieces joined only to each other the largest stays: a sparse patch keeps a surface).
   for (const Triangle& t : raw) {
     const uint32_t r0 = piece[t[0]], r1 = piece[t[1]], r2 = piece[t[2]];
     for (uint32_t a : {r0, r1, r2})
       if (small[a])
         for (uint32_t b : {r0, r1, r2})
-          if (b != a && count[b] > kMaxFragment) touching[a] = 1;
+          if (b != a && count[b] > count[a]) touching[a] = 1;
   }
   size_t dropped = 0;
   for (uint32_t t = 0; t < s.triangle_slots(); ++t) {

@@ -60,8 +60,7 @@ size_t insert_unused(EditableSurface& s, const std::vector<uint8_t>& active, con
 /// or a tiny closed "bubble" grown from particles the main surface passed by, where it is
 /// thin or sharp) are dissolved; insert_unused then puts their particles into the surface
 /// around them. A small piece on its own (a droplet of four particles) is a surface of its
-/// own and stays, as do small pieces joined only to each other (a sparse patch): a fragment is
-/// only dissolved if a raw triangle joins it to a larger piece.
+/// own and stays: a fragment is only dissolved if a raw triangle joins it to a larger piece.
 /// Returns the triangles removed.
 size_t drop_fragments(EditableSurface& s, const std::vector<Triangle>& raw);
 

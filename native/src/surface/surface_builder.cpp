@@ -18,9 +18,11 @@ std::vector<Triangle> build_surface(const std::vector<Vec3>& positions, const st
   auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
   auto t0 = Clock::now();
   const std::vector<Frame> frames = tangent_frames(normals);
-  CandidateSet cands = rank_candidates(positions, normals, frames, active, raw, options.cos_normal_angle, tracker);
+  CandidateSet cands =
+      rank_candidates(positions, normals, frames, active, raw, options.cos_normal_angle, tracker, options.view);
   stats.candidates = cands.cand.size();
   stats.rejected_conormal = cands.rejected_conormal;
+  stats.rejected_shadow = cands.rejected_shadow;
   stats.seconds_candidates = since(t0);
   t0 = Clock::now();
   GrownSurface grown = grow_surface(positions.size(), std::move(cands), tracker);
@@ -34,6 +36,7 @@ std::vector<Triangle> build_surface(const std::vector<Vec3>& positions, const st
     ro.fill.max_edge = options.max_edge;
     ro.fill.fill_edge_factor = options.fill_edge_factor;
     ro.fill.edge_cap = options.edge_cap;
+    ro.fill.view = options.view;
     ro.fill.small_hole = options.small_hole;
     ro.max_hole = options.max_hole;
     RepairStats rs;

@@ -15,6 +15,7 @@
 #include "core/progress_tracker.h"
 #include "particlemesh/core/vec3.h"
 #include "particlemesh/mesh/tri_mesh.h"
+#include "surface/view_rays.h"
 
 namespace particlemesh::detail {
 
@@ -26,11 +27,13 @@ struct BuilderOptions {
   size_t small_hole = 6;          ///< loops up to this many edges are filled before unpinching
   size_t max_hole = 100;          ///< loops up to this many edges may be filled (0 = none)
   double fill_edge_factor = 1.5;  ///< fill triangles' edges at most this x L
+  ViewRays view;                  ///< a scan's sensor: no triangle bridges a depth jump
 };
 
 struct BuilderStats {
   size_t candidates = 0;          ///< oriented candidates after co-normality
   size_t rejected_conormal = 0;   ///< raw triangles dropped by co-normality
+  size_t rejected_shadow = 0;     ///< raw triangles dropped for bridging a depth jump
   size_t grown = 0;               ///< triangles accepted by growth
   size_t seeds = 0;
   size_t pinches_resolved = 0;    ///< fans removed at pinched vertices
