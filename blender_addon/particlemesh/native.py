@@ -50,6 +50,8 @@ STATUS_INTERNAL = 8
 TRIANGULATE_RAW = 0x1        # the seed's exact triangle set instead of the finished surface
 TRIANGULATE_NO_REPAIR = 0x2  # skip hole filling / unpinching
 TRIANGULATE_NO_ORIENT = 0x4  # do not turn closed components outward
+TRIANGULATE_GLOBAL_SPACING = 0x8  # one longest edge for all particles, not each one's own
+TRIANGULATE_VIEWPOINT = 0x10  # options.viewpoint is the scan's sensor position
 
 # Where the finished surface's normals come from (PM_NORMALS_*).
 NORMALS_AUTO = 0
@@ -138,6 +140,8 @@ class TriangulateOptions(Structure):
         ("normals", c_int32),
         # appended (issue 9)
         ("max_triplets_per_point", c_uint32),
+        # appended
+        ("viewpoint", c_double * 3),
     ]
 
 
@@ -162,6 +166,10 @@ class TriangulateStats(Structure):
         # appended (issue 9)
         ("triplets", c_uint64),
         ("rejected_conormal", c_uint64),
+        # appended
+        ("local_spacing", c_double * 5),
+        ("viewpoint_used", c_int32),
+        ("rejected_shadow", c_uint64),
     ]
 
 
@@ -893,10 +901,11 @@ def triangle_edges(triangles, vertex_count, threads=0):
 def triangulate(positions, normals=None, spacing=0.0, max_edge_factor=2.0, threads=0,
                 max_neighbors=256, raw=False, normal_angle=None, fill_holes=None,
                 fill_edge_factor=None, normal_source=None, repair=True, orient=True,
-                progress=None):
+                progress=None, local_spacing=True):
     """Triangulate surface particles: by default the library's finished surface (a
     consistently oriented 2-manifold, closed parts facing outward, per-vertex normals); with
     raw=True the seed's exact triangle set. None keeps the library's default of an option.
+    local_spacing=False: one longest edge for all particles (PM_TRIANGULATE_GLOBAL_SPACING).
     Output vertex i is particle i. Returns MeshData whose `stats` holds the library's
     pm_triangulate_stats as a dict."""
     lib = load()
@@ -907,7 +916,8 @@ def triangulate(positions, normals=None, spacing=0.0, max_edge_factor=2.0, threa
     opt.threads = int(threads)
     opt.max_neighbors = int(max_neighbors)
     opt.flags = ((TRIANGULATE_RAW if raw else 0) | (0 if repair else TRIANGULATE_NO_REPAIR)
-                 | (0 if orient else TRIANGULATE_NO_ORIENT))
+                 | (0 if orient else TRIANGULATE_NO_ORIENT)
+                 | (0 if local_spacing else TRIANGULATE_GLOBAL_SPACING))
     if normal_angle is not None:
         opt.normal_angle = float(normal_angle)
     if fill_holes is not None:
@@ -933,7 +943,8 @@ def triangulate(positions, normals=None, spacing=0.0, max_edge_factor=2.0, threa
             lib.pm_mesh_destroy(mesh)
     finally:
         lib.pm_cloud_destroy(cloud)
-    data.stats = {name: getattr(stats, name) for name, _ in TriangulateStats._fields_[1:]}
+    data.stats = {name: (list(v) if isinstance(v, ctypes.Array) else v)
+                  for name, v in ((name, getattr(stats, name)) for name, _ in TriangulateStats._fields_[1:])}
     data.stats["raw"] = bool(raw)
     return data
 

@@ -459,6 +459,7 @@ def header_struct_fields(name):
         if not decl:
             continue
         decl = re.sub(r"\(\s*\*\s*(\w+)\s*\)\s*\(.*\)", r"\1", decl)  # function pointers
+        decl = re.sub(r"\[\s*\d+\s*\]\s*$", "", decl)  # arrays: the name
         head, *rest = [d.strip() for d in decl.split(",")]
         fields.append(re.findall(r"(\w+)\s*$", head)[0])
         fields.extend(rest)

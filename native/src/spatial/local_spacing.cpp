@@ -155,7 +155,7 @@ double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, i
   for (double x : nearest)
     if (std::isfinite(x)) found[size_t(f++)] = x;
   if (f < 4) return 0;
-  std::sort(found.begin(), found.begin() + f);
+  std::nth_element(found.begin(), found.begin() + 2, found.begin() + f);
   return found[2];
 }
 
@@ -185,8 +185,9 @@ std::vector<double> local_spacing_impl(const Vec3* points, size_t n, double r0, 
     }
   });
   tracker.check();
-  // Per point: the larger of the median nearest-neighbour distance around it and the sector
-  // reach (in units of an even sampling's spacing).
+  // Per point: the median nearest-neighbour distance around it, and the sector reach (in units
+  // of an even sampling's spacing; 0 where it is not taken).
+  std::vector<double> reach(n);
   parallel_blocks(n, 4096, [&](size_t b, size_t e) {
     std::array<double, kK + 1> v;
     std::vector<Vec3> work;
@@ -195,24 +196,29 @@ std::vector<double> local_spacing_impl(const Vec3* points, size_t n, double r0, 
       int count = 0;
       v[size_t(count++)] = nn[s];
       for (int k = 0; k < m; ++k) v[size_t(count++)] = nn[knn[s * kK + size_t(k)]];
-      const double local_nn = median_of(v.data(), count);
-      const double reach = sector_reach(grid, uint32_t(s), knn.data() + s * kK, m, m == kK, work) / kSectorReach;
-      raw[s] = std::max(local_nn, reach);
+      raw[s] = median_of(v.data(), count);
+      reach[s] = sector_reach(grid, uint32_t(s), knn.data() + s * kK, m, m == kK, work) / kSectorReach;
     }
   });
   tracker.check();
-  // Smoothed: a high quantile over the neighbourhood, so that where the sampling needs a long
-  // reach (across a depth camera's rows) every point around has it, whichever way its own
-  // nearest neighbours happen to lie; scaled back so that an even sampling keeps its spacing.
+  // Smoothed over the neighbourhood, and the larger taken: the median of the nearest-neighbour
+  // spacings; a high quantile of the reaches (scaled back so that an even sampling keeps its
+  // spacing), so that where the sampling needs a long reach (across a depth camera's rows)
+  // every point around has it, whichever way its own nearest neighbours happen to lie.
   parallel_blocks(n, 4096, [&](size_t b, size_t e) {
-    std::array<double, kK + 1> v;
+    std::array<double, kK + 1> v, w;
     for (size_t s = b; s < e; ++s) {
       int count = 0;
-      v[size_t(count++)] = raw[s];
-      for (int k = 0; k < size[s]; ++k) v[size_t(count++)] = raw[knn[s * kK + size_t(k)]];
+      v[size_t(count)] = raw[s];
+      w[size_t(count++)] = reach[s];
+      for (int k = 0; k < size[s]; ++k) {
+        const uint32_t t = knn[s * kK + size_t(k)];
+        v[size_t(count)] = raw[t];
+        w[size_t(count++)] = reach[t];
+      }
       const int q = std::min(count - 1, int(kSmoothQuantile * count));
-      std::nth_element(v.begin(), v.begin() + q, v.begin() + count);
-      out_sorted[s] = v[size_t(q)] / kSmoothBias;
+      std::nth_element(w.begin(), w.begin() + q, w.begin() + count);
+      out_sorted[s] = std::max(median_of(v.data(), count), w[size_t(q)] / kSmoothBias);
     }
   });
   tracker.check();

@@ -151,6 +151,7 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     st.components_flipped = bs.components_flipped;
     st.unused_points = bs.unused_points;
     for (const auto& [edges, width] : bs.open_loops) st.open_loops.push_back({edges, width});
+    st.holes_left_edges = std::move(bs.holes_left_edges);
     tracker.check();
     t0 = Clock::now();
     // Back to the input's indices.

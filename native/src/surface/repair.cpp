@@ -353,9 +353,11 @@ void repair_surface(EditableSurface& s, const std::vector<uint8_t>& active, cons
     stats.holes_left = left.size();
     for (const auto& l : left) {
       stats.largest_hole_left = std::max(stats.largest_hole_left, l.size());
+      stats.holes_left_edges.push_back(l.size());
       if (stats.open_loops.size() < 1000)
         stats.open_loops.push_back({l.size(), l.size() <= kMaxWidthLoop ? loop_width(s.positions(), l, f) : INFINITY});
     }
+    std::sort(stats.holes_left_edges.begin(), stats.holes_left_edges.end());
   }
 }
 

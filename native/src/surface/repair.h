@@ -33,6 +33,7 @@ struct RepairStats : FillStats {
   size_t holes_left = 0;          ///< boundary loops left open
   size_t largest_hole_left = 0;   ///< edges of the largest loop left open
   std::vector<std::pair<size_t, double>> open_loops;  ///< (edges, width / L) of loops left open (at most 1000)
+  std::vector<size_t> holes_left_edges;  ///< the edges of every loop left open, ascending
 };
 
 /// Fragments of at most this many triangles may be dissolved (see drop_fragments).

@@ -47,6 +47,7 @@ std::vector<Triangle> build_surface(const std::vector<Vec3>& positions, const st
     stats.holes_left = rs.holes_left;
     stats.largest_hole_left = rs.largest_hole_left;
     stats.open_loops = std::move(rs.open_loops);
+    stats.holes_left_edges = std::move(rs.holes_left_edges);
   }
   stats.seconds_repair = since(t0);
   stats.boundary = surface.boundary();

@@ -46,6 +46,7 @@ struct BuilderStats {
   double seconds_candidates = 0, seconds_growth = 0, seconds_repair = 0;
   std::vector<uint64_t> boundary;  ///< boundary half-edges (a << 32 | b), sorted
   std::vector<std::pair<size_t, double>> open_loops;  ///< (edges, width / L) of loops left open
+  std::vector<size_t> holes_left_edges;  ///< the edges of every loop left open, ascending
 };
 
 /// positions/normals (normals unit or zero = unknown); `active[i]` false for duplicates; `raw`

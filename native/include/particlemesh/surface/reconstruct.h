@@ -95,6 +95,9 @@ struct SurfaceStats {
     double width = 0;
   };
   std::vector<OpenLoop> open_loops;
+  /// The edges of every loop left open, ascending: the holes left by size (a scan's sampling
+  /// gaps are loops of a few edges, its real openings and outlines long ones).
+  std::vector<size_t> holes_left_edges;
   size_t components_flipped = 0;  ///< closed components turned outward
   size_t unused_points = 0;       ///< distinct particles in no triangle
   /// The particles' local spacings in units of r0 (all 1 without local_spacing): smallest,

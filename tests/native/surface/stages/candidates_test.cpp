@@ -88,3 +88,39 @@ TEST(Candidates, FacingNormalsAreSeparatedAtAnyAngle) {
       EXPECT_LT(cross(P[t[1]] - P[t[0]], P[t[2]] - P[t[0]]).z, 0);
     }
 }
+
+TEST(Candidates, EdgesAlongTheViewRaysAreDepthJumps) {
+  // Seen from the origin: a triangle on a plate facing it, and one joining the plate's edge to
+  // a point 5 spacings behind it on nearly the same ray (a depth jump). Given the viewpoint,
+  // only the second is dropped, and counted apart from co-normality.
+  const std::vector<Vec3> P = {{0, 0, 10}, {1, 0, 10}, {0, 1, 10}, {1.2, 0.1, 15}};
+  const std::vector<Vec3> N(P.size(), Vec3{0, 0, -1});
+  const std::vector<uint8_t> active(P.size(), 1);
+  const std::vector<Triangle> raw = {{0, 1, 2}, {0, 1, 3}};
+  test::QuietTracker q;
+  ViewRays view;
+  EXPECT_EQ(rank_candidates(P, N, tangent_frames(N), active, raw, -1.0, q.tracker, view).cand.size(), 2u);
+  view.active = true;
+  const CandidateSet c = rank_candidates(P, N, tangent_frames(N), active, raw, -1.0, q.tracker, view);
+  EXPECT_EQ(test::canonical(c.cand), (std::vector<Triangle>{{0, 1, 2}}));
+  EXPECT_EQ(c.rejected_shadow, 1u);
+  EXPECT_EQ(c.rejected_conormal, 0u);
+  EXPECT_TRUE(view.along_ray(P[1], P[3]));
+  EXPECT_FALSE(view.along_ray(P[0], P[1]));
+}
+
+TEST(Candidates, ViewpointPlausibleWhereThePlanesFaceIt) {
+  // A plate facing the origin is plausibly scanned from there; seen from its own plane (every
+  // plane edge-on), or from one of its points, it is not.
+  std::vector<Vec3> P, N;
+  for (int i = -5; i <= 5; ++i)
+    for (int j = -5; j <= 5; ++j) {
+      P.push_back({double(i), double(j), 10});
+      N.push_back({0, 0, 1});  // either sense
+    }
+  const std::vector<uint8_t> active(P.size(), 1);
+  EXPECT_TRUE(plausible_viewpoint(P, N, active, {0, 0, 0}));
+  EXPECT_TRUE(plausible_viewpoint(P, N, active, {3, -2, 40}));
+  EXPECT_FALSE(plausible_viewpoint(P, N, active, {100, 0, 10}));
+  EXPECT_FALSE(plausible_viewpoint(P, N, active, P[7]));
+}

@@ -93,3 +93,33 @@ TEST(Repair, SheetWithHolesClosesThemAndKeepsItsOutline) {
   ASSERT_EQ(st.open_loops.size(), 2u);
   for (const auto& [edges, width] : st.open_loops) EXPECT_GT(width, o.fill.fill_edge_factor);
 }
+
+TEST(Repair, InsertedParticlesStayWithinTheFillLimit) {
+  // Beside a sheet (spacing 1, L = 2, fill limit 3): a particle 0.8 beyond its outline becomes
+  // a triangle on the nearest outline edge (the edge's triangle stays); one 2.5 above its
+  // middle, whose edges to any triangle's corners would be over 3, stays out.
+  test::Sheet s(5, 5);
+  s.P.push_back({2.5, -0.8, 0});  // beyond the edge (2,0) - (3,0)
+  s.P.push_back({2.0, 2.0, 3.2});  // far above point (2, 2)
+  s.N.push_back({0, 0, 1});
+  s.N.push_back({0, 0, 1});
+  s.frames = tangent_frames(s.N);
+  const uint32_t beside = 25, above = 26;
+  EditableSurface e(s.P, s.frames, s.tris);
+  const std::vector<uint8_t> active(s.P.size(), 1);
+  const std::vector<Triangle> raw = {{s.id(2, 0), s.id(3, 0), beside}, {s.id(2, 2), s.id(3, 2), above}};
+  const std::vector<double> L(s.P.size(), 2.0);
+  FillOptions o;
+  o.max_edge = &L;
+  EXPECT_EQ(insert_unused(e, active, raw, o), 1u);
+  const auto tris = e.take();
+  EXPECT_EQ(tris.size(), s.tris.size() + 1);  // an ear: nothing split
+  bool ear = false;
+  for (const Triangle& t : tris) {
+    for (uint32_t v : t) EXPECT_NE(v, above);
+    ear = ear || test::canonical({t})[0] == test::canonical({{s.id(2, 0), s.id(3, 0), beside}})[0];
+    EXPECT_GT(cross(s.P[t[1]] - s.P[t[0]], s.P[t[2]] - s.P[t[0]]).z, 0);
+  }
+  EXPECT_TRUE(ear);
+  for (const auto& [edge, count] : test::edge_counts(tris)) EXPECT_LE(distance(s.P[edge.first], s.P[edge.second]), 3.0);
+}
