@@ -54,30 +54,31 @@ std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, ProgressTracke
       open.clear();
       for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) open.push_back(s);
       // Rings of cells around the cell, gathered once for all its points: after ring r the
-      // block holds every point within r h of any of them.
-      for (int32_t ring = 0; !open.empty(); ++ring) {
+      // block holds every point within r h of any of them. The first two rings at once.
+      for (int32_t ring = 2; !open.empty(); ++ring) {
         grid.for_each_cell_in({cc[0] - ring, cc[1] - ring, cc[2] - ring}, {cc[0] + ring, cc[1] + ring, cc[2] + ring},
                               [&](uint32_t b) {
                                 const auto bc = grid.cell_coord(b);
-                                if (std::max({std::abs(bc[0] - cc[0]), std::abs(bc[1] - cc[1]), std::abs(bc[2] - cc[2])}) != ring)
+                                if (ring > 2 &&
+                                    std::max({std::abs(bc[0] - cc[0]), std::abs(bc[1] - cc[1]), std::abs(bc[2] - cc[2])}) != ring)
                                   return;
                                 for (uint32_t t = grid.cell_begin(b); t < grid.cell_end(b); ++t) block.push_back(t);
                               });
-        if (ring < 2) continue;
         const double reach2 = double(ring) * h * double(ring) * h;
         size_t still = 0;
         for (uint32_t s : open) {
           const Vec3 p = grid.sorted_point(s);
+          // Only the points within the rings' reach count now (every one of them is in the
+          // block); the k nearest are done when there are k (or no more rings will come).
           found.clear();
           for (uint32_t t : block) {
             const double e2 = squared_distance(grid.sorted_point(t), p);
-            if (e2 > 0) found.push_back({e2, t});
+            if (e2 > 0 && (e2 <= reach2 || ring == kMaxRing)) found.push_back({e2, t});
           }
           const size_t k = std::min<size_t>(kK, found.size());
-          std::nth_element(found.begin(), found.begin() + ptrdiff_t(k), found.end());
-          std::sort(found.begin(), found.begin() + ptrdiff_t(k));
-          // Done when the k-th nearest lies within the rings gathered (or no more will come).
-          if ((k == kK && found[k - 1].first <= reach2) || ring == kMaxRing) {
+          if (k == kK || ring == kMaxRing) {
+            std::nth_element(found.begin(), found.begin() + ptrdiff_t(k), found.end());
+            std::sort(found.begin(), found.begin() + ptrdiff_t(k));
             for (size_t i = 0; i < k; ++i) out[size_t(s) * kK + i] = found[i].second;
           } else {
             open[still++] = s;

@@ -140,7 +140,12 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
       }
     });
     for (size_t s = 0; s < n; ++s) Lp[s] = Lp[raw.rep[s]], radius[s] = radius[raw.rep[s]];
-    raw.neighbors = build_neighbor_lists(grid, raw.rep, radius, options.max_neighbors, tracker);
+    // Every particle at r0 (an even sampling): the lists of one radius, as without local
+    // spacing (the same lists, built faster).
+    if (std::all_of(Lp.begin(), Lp.end(), [&](double l) { return l == st.max_edge; }))
+      raw.neighbors = build_neighbor_lists(grid, raw.rep, neighbor_radius, options.max_neighbors, tracker);
+    else
+      raw.neighbors = build_neighbor_lists(grid, raw.rep, radius, options.max_neighbors, tracker);
   } else {
     Lp.assign(n, st.max_edge);
     raw.neighbors = build_neighbor_lists(grid, raw.rep, neighbor_radius, options.max_neighbors, tracker);
