@@ -6,6 +6,7 @@
 #include <cmath>
 #include <random>
 
+#include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
 #include "particlemesh/sample/shapes.h"
 #include "particlemesh/surface/reconstruct.h"
@@ -165,4 +166,21 @@ TEST(UnevenSampling, RawTestKeepsOneSpacing) {
   TriangulateOptions o;
   const TriangulateResult raw = triangulate_raw(c, o);
   EXPECT_LE(longest_edge(raw.mesh), raw.stats.max_edge * (1 + 1e-12));
+}
+
+TEST(UnevenSampling, EvenModelsKeepTheirShapeAndShortEdges) {
+  // Evenly sampled models: no triangle, whichever stage made it, over 3 r0; the right genus;
+  // the bunny scan's five real openings stay five loops.
+  PM_REQUIRE_DATA(spot, "points/spot_poisson.ply");
+  PM_REQUIRE_DATA(bunny, "points/bunny_poisson.ply");
+  for (const std::string& path : {spot, bunny}) {
+    const PointCloud c = read_point_cloud(path);
+    const SurfaceResult r = reconstruct_surface(c);
+    const TopologyReport t = topology_report(r.mesh);
+    EXPECT_LE(longest_edge(r.mesh), 3 * r.triangulation.spacing) << path;
+    EXPECT_EQ(t.components, 1u) << path;
+    EXPECT_EQ(t.per_component[0].genus, 0) << path;
+    EXPECT_EQ(t.vertices_used, c.size()) << path;
+    EXPECT_EQ(t.boundary_loops, path == bunny ? 5u : 0u) << path;
+  }
 }
