@@ -95,12 +95,14 @@ std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, ProgressTracke
 
 /// How far point s must reach to be connected all around, from its m nearest neighbours `ids`:
 /// in the plane fitted to them, the nearest neighbour in each of six sectors of 60 degrees
-/// (centred on the direction the neighbours spread most along), and the median of those
-/// distances over the sectors that have one (at least four: a point at an edge of the
-/// surface has neighbours on one side only). On an even sampling every sector's nearest is
-/// about one spacing away; where the sampling is denser along one direction than across it
-/// (a depth camera's rows on a surface seen at a grazing angle, a line scanner's scan lines)
-/// most sectors' nearest lie across, and the reach is the spacing across. Where the nearest
+/// (centred on the direction the neighbours spread most along), and the third nearest of those
+/// (among the sectors that have one, at least four). On an even sampling every sector's
+/// nearest is about one spacing away; where the sampling is denser along one direction than
+/// across it (a depth camera's rows on a surface seen at a grazing angle, a line scanner's
+/// scan lines) at most two sectors' nearest lie along, and the reach is the spacing across.
+/// The third, not the median: at the rim of a small opening up to three sectors see its far
+/// side, and the reach must not grow with it (nor, then, the fill limit that keeps the
+/// opening open). Where the nearest
 /// neighbours all lie along one line, the neighbourhood is widened (a ball of twice, then four
 /// times the farthest's distance; only when it is not cut off by a gap) until it spans the
 /// surface. 0 when it never does.

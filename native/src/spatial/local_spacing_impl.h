@@ -16,7 +16,7 @@ constexpr int kLocalSpacingNeighbors = 16;
 constexpr double kSectorReach = 1.22;
 /// A neighbour more than this times as far as the one before ends a point's neighbourhood.
 constexpr double kGap = 2.0;
-/// The local spacing is this quantile of the per-point values over the neighbourhood ...
+/// The sector reaches are smoothed by this quantile over each point's neighbourhood ...
 constexpr double kSmoothQuantile = 0.9;
 /// ... divided by this, the quantile's bias on an even (Poisson-disk) sampling, so that its
 /// local spacing is its median nearest-neighbour distance.
