@@ -29,7 +29,7 @@
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
 #include "particlemesh/sample/shapes.h"
-#include "particlemesh/surface/spacing.h"
+#include "particlemesh/spatial/spacing.h"
 #include "particlemesh_pcl/io.h"
 #include "particlemesh_pcl/particle_triangulation.h"
 #include "particlemesh_pcl/preprocessing.h"

@@ -8,7 +8,7 @@
 
 #include "particlemesh/sample/shapes.h"
 #include "particlemesh/surface/reconstruct.h"
-#include "particlemesh/surface/spacing.h"
+#include "particlemesh/spatial/spacing.h"
 #include "particlemesh/surface/triangulate.h"
 
 using namespace particlemesh;

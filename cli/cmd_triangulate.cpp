@@ -16,7 +16,8 @@
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
 #include "particlemesh/sample/thin.h"
-#include "particlemesh/surface/spacing.h"
+#include "particlemesh/spatial/local_spacing.h"
+#include "particlemesh/spatial/spacing.h"
 #include "particlemesh/surface/reconstruct.h"
 #include "particlemesh/surface/triangulate.h"
 #include "progress_line.h"
@@ -34,6 +35,8 @@ struct TriangulateArgs {
   double max_edge_factor = 2.0;
   double thin = 1.0;
   bool raw = false;
+  bool global_spacing = false;
+  bool no_viewpoint = false;
   bool no_orient = false;
   bool no_repair = false;
   std::string normals = "auto";
@@ -50,16 +53,36 @@ struct TriangulateArgs {
 };
 
 /// When over 5 % of the particles are in no triangle of the surface, their spacing varies more
-/// than one longest edge L allows (mesh vertices, scans): say what helps. Empty otherwise.
-std::string uneven_spacing_hint(const SurfaceResult& r, double thin) {
+/// than the edge limits follow: with one limit for the whole cloud (--global-spacing), any
+/// unevenness does; with each particle's own, sparser than 3 r0 or clusters too small for a
+/// surface. Say what helps. Empty otherwise.
+std::string uneven_spacing_hint(const SurfaceResult& r, double thin, bool global_spacing) {
   const size_t points = r.triangulation.points, unused = r.surface.unused_points;
   if (points == 0 || unused * 20 <= points) return {};
-  char s[320];
+  char s[400];
   std::snprintf(s, sizeof s,
-                "%.0f%% of the particles are in no triangle: they are unevenly spaced for L; try --thin %g "
+                "%.0f%% of the particles are in no triangle: they are unevenly spaced for %s; %stry --thin %g "
                 "(an even subset) or a larger --max-edge-factor",
-                100.0 * double(unused) / double(points), thin > 1 ? thin + 1 : 2.0);
+                100.0 * double(unused) / double(points), global_spacing ? "one L" : "their local L",
+                global_spacing ? "leave out --global-spacing (each particle's own L), or " : "",
+                thin > 1 ? thin + 1 : 2.0);
   return s;
+}
+
+/// The loops left open by their edges: the small ones (holes of a few edges) one by one, the
+/// larger ones in ranges.
+nlohmann::json holes_by_size(const std::vector<size_t>& edges) {
+  const std::pair<size_t, const char*> bins[] = {{3, "3"},      {4, "4"},       {5, "5"},        {6, "6"},
+                                                 {9, "7-9"},    {19, "10-19"},  {99, "20-99"},   {SIZE_MAX, "100+"}};
+  nlohmann::json out = nlohmann::json::object();
+  for (const auto& [top, name] : bins) out[name] = 0;
+  for (size_t e : edges)
+    for (const auto& [top, name] : bins)
+      if (e <= top) {
+        out[name] = out[name].get<size_t>() + 1;
+        break;
+      }
+  return out;
 }
 
 /// When the co-normality test dropped over a third of the seed's triangles (triangles across
@@ -81,9 +104,9 @@ std::string volume_particles_hint(const SurfaceResult& r) {
 }
 
 /// Every hint that applies, most important first.
-std::vector<std::string> surface_hints(const SurfaceResult& r, double thin) {
+std::vector<std::string> surface_hints(const SurfaceResult& r, double thin, bool global_spacing) {
   std::vector<std::string> out;
-  for (std::string h : {volume_particles_hint(r), uneven_spacing_hint(r, thin)})
+  for (std::string h : {volume_particles_hint(r), uneven_spacing_hint(r, thin, global_spacing)})
     if (!h.empty()) out.push_back(std::move(h));
   return out;
 }
@@ -101,17 +124,27 @@ int run_triangulate(const TriangulateArgs& a) {
   const ParticleInput input = read_particles(a.input, a.input_options, a.threads);
   const double t_read = std::chrono::duration<double>(Clock::now() - t0).count();
 
-  // --thin: an even subset, no two particles closer than thin x r0 (r0 given or estimated).
-  // Its spacing is estimated afresh: the subset's gaps run from d to 2d.
+  // --thin: an even subset, no particle within thin x r0 of a kept one (r0 given or
+  // estimated), or within thin x its local spacing (scaled to r0) unless --global-spacing:
+  // an uneven cloud stays as uneven as it was, only coarser. Its spacing is estimated afresh:
+  // the subset's gaps run from d to 2d.
   PointCloud thinned;
   double thin_distance = 0;
   if (a.thin > 1) {
     if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
-    const double r0 = a.spacing > 0           ? a.spacing
-                      : input.spacing_hint > 0 ? input.spacing_hint
-                                               : estimate_spacing(input.cloud.positions.data(), input.cloud.size(), a.threads).spacing;
-    thin_distance = a.thin * r0;
-    thinned = thin_cloud(input.cloud, thin_distance);
+    const Vec3* pts = input.cloud.positions.data();
+    const size_t n = input.cloud.size();
+    const double given = a.spacing > 0 ? a.spacing : input.spacing_hint;
+    if (a.global_spacing) {
+      thin_distance = a.thin * (given > 0 ? given : estimate_spacing(pts, n, a.threads).spacing);
+      thinned = thin_cloud(input.cloud, thin_distance);
+    } else {
+      LocalSpacing ls = estimate_local_spacing(pts, n, a.threads);
+      const double scale = a.thin * (given > 0 ? given / ls.median_nn : 1.0);
+      for (double& h : ls.spacing) h *= scale;
+      thin_distance = a.thin * (given > 0 ? given : ls.median_nn);
+      thinned = thin_cloud(input.cloud, ls.spacing);
+    }
   }
   const PointCloud& cloud = a.thin > 1 ? thinned : input.cloud;
 
@@ -129,6 +162,9 @@ int run_triangulate(const TriangulateArgs& a) {
   opt.fill_holes = a.fill_holes;
   opt.fill_edge_factor = a.fill_edge_factor;
   opt.orient = !a.no_orient;
+  opt.local_spacing = !a.global_spacing;
+  opt.has_viewpoint = input.has_viewpoint && !a.no_viewpoint;
+  opt.viewpoint = input.viewpoint;
   opt.progress = progress.callback();
   const auto t1 = Clock::now();
   set_phase(Phase::Computing);
@@ -160,14 +196,17 @@ int run_triangulate(const TriangulateArgs& a) {
                      {"mode", a.raw ? "raw" : "surface"},
                      {"triangulation", to_json(result.triangulation)},
                      {"surface", a.raw ? nlohmann::json(nullptr) : to_json(result.surface)},
+                     {"spacing", a.raw || a.global_spacing ? "global" : "local"},
                      {"topology", to_json(report)},
                      {"seconds", {{"read", t_read}, {"triangulate", t_tri}, {"write", t_write}}}};
     if (!input.report.is_null()) j["input_cloud"] = input.report;
     if (a.thin > 1)
-      j["thin"] = {{"factor", a.thin}, {"distance", thin_distance}, {"kept", cloud.size()}, {"of", input.cloud.size()}};
+      j["thin"] = {{"factor", a.thin}, {"local", !a.global_spacing}, {"distance", thin_distance}, {"kept", cloud.size()}, {"of", input.cloud.size()}};
     if (!a.raw) {
+      j["surface"]["holes_left_by_size"] = holes_by_size(result.surface.holes_left_edges);
       std::string joined;  // one string, as the report has always had
-      for (const std::string& h : surface_hints(result, a.thin)) joined += (joined.empty() ? "" : " / ") + h;
+      for (const std::string& h : surface_hints(result, a.thin, a.global_spacing))
+        joined += (joined.empty() ? "" : " / ") + h;
       if (!joined.empty()) j["hint"] = joined;
     }
     outputs.open("--report").write(json_text(j));
@@ -178,12 +217,17 @@ int run_triangulate(const TriangulateArgs& a) {
     std::printf("particlemesh triangulate: %s -> %s\n", a.input.c_str(), a.output.c_str());
     std::printf("%s", input.summary.c_str());
     if (a.thin > 1)
-      std::printf("  thinned       %zu of %zu particles kept, none closer than %.6g (%g x r0)\n", cloud.size(),
-                  input.cloud.size(), thin_distance, a.thin);
+      std::printf("  thinned       %zu of %zu particles kept, none closer than %g x %s\n", cloud.size(),
+                  input.cloud.size(), a.thin, a.global_spacing ? ("r0 = " + std::to_string(thin_distance)).c_str() : "its local spacing");
     std::printf("  points        %zu%s\n", s.points,
                 s.duplicate_points ? (" (" + std::to_string(s.duplicate_points) + " exact duplicates set aside)").c_str() : "");
     std::printf("  spacing r0    %.6g (%s)\n", s.spacing, s.spacing_estimated ? "estimated: median nearest-neighbour distance" : "given");
     std::printf("  max edge L    %.6g (%g x r0)\n", s.max_edge, a.max_edge_factor);
+    if (!a.raw && !a.global_spacing) {
+      const auto& h = result.surface.local_spacing;
+      std::printf("  local spacing %.2g-%.2g r0 (10%%-90%%: %.2g-%.2g, median %.2g): each particle's L = %g x its own\n",
+                  h.min, h.max, h.p10, h.p90, h.median, a.max_edge_factor);
+    }
     std::printf("  seed's test   %zu candidate triplets, %zu kept%s\n", s.candidates, s.kept,
                 s.ties ? (", " + std::to_string(s.ties) + " ties broken").c_str() : "");
     if (!a.raw) {
@@ -195,11 +239,20 @@ int run_triangulate(const TriangulateArgs& a) {
       std::printf("  normals       %s\n", f.normals_estimated ? (directions && a.normals == "auto" ? "plane fits, facing as the input's normals" : "plane fits, oriented by a spanning tree") : "the input's");
       std::printf("  surface       %zu co-normal candidates (%zu dropped), %zu grown from %zu seeds\n", f.candidates,
                   f.rejected_conormal, f.grown, f.seeds);
+      const size_t small = size_t(std::count_if(f.holes_left_edges.begin(), f.holes_left_edges.end(),
+                                                 [](size_t e) { return e < 10; }));
       std::printf("  repair        %zu holes filled (%zu triangles), %zu pinches resolved, %zu loops left open%s\n",
                   f.holes_filled, f.hole_triangles, f.pinches_resolved, f.holes_left,
-                  f.holes_left ? (" (largest " + std::to_string(f.largest_hole_left) + " edges)").c_str() : "");
+                  f.holes_left ? (" (largest " + std::to_string(f.largest_hole_left) + " edges, " +
+                                  std::to_string(small) + " under 10)").c_str()
+                               : "");
+      if (opt.has_viewpoint)
+        std::printf("  viewpoint     %.6g %.6g %.6g: %s\n", opt.viewpoint.x, opt.viewpoint.y, opt.viewpoint.z,
+                    f.viewpoint_used ? (std::to_string(f.rejected_shadow) + " triangles across depth jumps dropped").c_str()
+                                     : "not taken (the particles do not look scanned from there)");
       if (f.unused_points) std::printf("  unused        %zu particles in no triangle\n", f.unused_points);
-      for (const std::string& h : surface_hints(result, a.thin)) std::printf("  hint          %s\n", h.c_str());
+      for (const std::string& h : surface_hints(result, a.thin, a.global_spacing))
+        std::printf("  hint          %s\n", h.c_str());
     }
     std::printf("%s", describe(report).c_str());
     std::printf("  time          %.2f s (read %.2f, triangulate %.2f, write %.2f)\n",
@@ -217,7 +270,8 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
       ->required();
   app->add_option("-o,--output", args->output, "Output mesh: .ply (binary; --ascii for text) or .obj; - (or a device, a FIFO) for PLY on standard output")->required();
   app->add_option("--spacing", args->spacing,
-                  "Particle spacing r0 in world units (default: estimated as the median nearest-neighbour distance)")
+                  "Particle spacing r0 in world units (default: estimated as the median nearest-neighbour distance); "
+                  "the local spacings are scaled to it, unless --global-spacing")
       ->check(CLI::PositiveNumber)
       ->check(finite_number());
   app->add_option("--max-edge-factor", args->max_edge_factor, "Longest triangle edge L = factor x r0")
@@ -225,13 +279,21 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
       ->check(finite_number())
       ->capture_default_str();
   app->add_option("--thin", args->thin,
-                  "Mesh an even subset of the particles, none closer than FACTOR x r0 (r0 from --spacing or "
-                  "estimated; the subset's own spacing is then estimated): a coarse preview, and evener input "
-                  "from unevenly sampled clouds. 1 = every particle")
+                  "Mesh a subset of the particles, none within FACTOR x its local spacing of a kept one (FACTOR x "
+                  "r0 with --global-spacing; r0 from --spacing or estimated; the subset's own spacing is then "
+                  "estimated): a coarse preview, and evener input from unevenly sampled clouds. 1 = every particle")
       ->check(CLI::Range(1.0, 1000.0))
       ->check(finite_number())
       ->capture_default_str();
-  app->add_flag("--raw", args->raw, "Return the seed's exact triangle set (not a surface: overlapping pairs on quads)");
+  app->add_flag("--raw", args->raw,
+                "Return the seed's exact triangle set (not a surface: overlapping pairs on quads), with one L for the "
+                "whole cloud");
+  app->add_flag("--global-spacing", args->global_spacing,
+                "One longest edge L = factor x r0 for the whole cloud, instead of each particle's own from the "
+                "sampling around it (local spacing: within 15% of r0 it is r0, at most 3 r0)");
+  app->add_flag("--no-viewpoint", args->no_viewpoint,
+                "Ignore a .pcd's VIEWPOINT (and --viewpoint): without it, triangles along the sensor's rays (across "
+                "depth jumps) are not told apart");
   app->add_option("--normal-angle", args->normal_angle,
                   "Co-normality: drop triangles whose corner normals differ by more than this, or whose face normal differs from a corner's by more than min(this, 90) (degrees)")
       ->check(CLI::Range(1.0, 180.0))

@@ -23,7 +23,7 @@ struct ParticleInputArgs {
   double outlier_std = 1.0;
   bool estimate_normals = false;
   int normal_k = 20;
-  std::vector<double> viewpoint;  ///< empty = the PCD's sensor origin (else 0 0 0)
+  std::vector<double> viewpoint;  ///< empty = the PCD's sensor origin (none for other formats)
   std::string pcl_mesh;           ///< also write a pcl::PolygonMesh PLY here
 };
 
@@ -32,6 +32,9 @@ struct ParticleInput {
   nlohmann::json report;  ///< what was read, dropped and preprocessed
   std::string summary;    ///< lines for the human summary ("" when nothing to say)
   double spacing_hint = 0;  ///< the downsampling leaf size: the spacing to use when none is given
+  /// Where the scan was taken from: a .pcd's VIEWPOINT, or --viewpoint.
+  bool has_viewpoint = false;
+  Vec3 viewpoint;
 };
 
 /// Add the input options (preprocessing switches, --pcl-mesh) to a subcommand.

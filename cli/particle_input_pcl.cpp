@@ -45,7 +45,9 @@ void add_particle_input_options(CLI::App& app, ParticleInputArgs& a) {
       ->check(CLI::Range(3, 100000))
       ->capture_default_str()
       ->group(group);
-  app.add_option("--viewpoint", a.viewpoint, "Viewpoint X Y Z for normal orientation (default: the PCD's sensor origin)")
+  app.add_option("--viewpoint", a.viewpoint,
+                 "Where the scan was taken from, X Y Z: normals estimated with --estimate-normals face it, and "
+                 "triangulate keeps depth jumps seen from it open (default: a .pcd's VIEWPOINT)")
       ->expected(3)
       ->group(group);
   app.add_option("--pcl-mesh", a.pcl_mesh,
@@ -98,6 +100,9 @@ ParticleInput read_particles(const std::string& path, const ParticleInputArgs& a
   o.estimate_normals = a.estimate_normals;
   o.normal_k = a.normal_k;
   for (int k = 0; k < 3; ++k) o.viewpoint[k] = a.viewpoint.size() == 3 ? float(a.viewpoint[k]) : load.origin[k];
+  in.has_viewpoint = a.viewpoint.size() == 3 || load.format == "pcd";
+  in.viewpoint = a.viewpoint.size() == 3 ? Vec3{a.viewpoint[0], a.viewpoint[1], a.viewpoint[2]}
+                                         : Vec3{load.origin[0], load.origin[1], load.origin[2]};
   o.threads = threads;
   in.spacing_hint = o.downsampling == particlemesh_pcl::Downsampling::None ? 0.0 : o.leaf_size;
   if (particlemesh_pcl::anyPreprocessing(o)) {

@@ -75,6 +75,10 @@ nlohmann::json to_json(const SurfaceStats& s) {
           {"largest_hole_left", s.largest_hole_left},
           {"components_flipped", s.components_flipped},
           {"unused_points", s.unused_points},
+          {"local_spacing", {{"unit", "r0"}, {"min", s.local_spacing.min}, {"p10", s.local_spacing.p10},
+                             {"median", s.local_spacing.median}, {"p90", s.local_spacing.p90}, {"max", s.local_spacing.max}}},
+          {"viewpoint_used", s.viewpoint_used},
+          {"rejected_shadow", s.rejected_shadow},
           {"seconds", {{"normals", s.seconds_normals}, {"extraction", s.seconds_extraction}, {"repair", s.seconds_repair}, {"orient", s.seconds_orient}}}};
 }
 

@@ -23,6 +23,7 @@ PACKAGES=(
   clang llvm libclang-rt-14-dev  # the sanitizer build and libFuzzer (scripts/sanitize.sh, fuzz.sh)
   libopenvdb-dev  # the polygonize benchmark's peer (bench/ only)
   python3-distributed python3-scipy  # particlemesh.distributed (Dask; SciPy: connected components) and its tests
+  libcgal-dev     # the scan benchmark's advancing-front peer (bench/ only)
 )
 
 missing=()

@@ -3,7 +3,7 @@ flat settings dict in, a particlemesh.Mesh out. bpy-free, so it runs in a worker
 tests outside Blender.
 
 Settings keys (the operators' and the generated objects' property names):
-  triangulate: auto_spacing, spacing, max_edge_factor, thin, raw, normal_angle (radians),
+  triangulate: auto_spacing, spacing, max_edge_factor, local_spacing, thin, raw, normal_angle (radians),
                fill_holes, fill_edge_factor, normal_source, repair, orient; viewport_budget
                (live mode adds it in the viewport: thin out bigger systems to about that many)
   polygonize:  kernel, anisotropic, radius_mode, radius, radius_factor, threshold, auto_cell,
@@ -154,8 +154,9 @@ def triangulate(particles, settings, progress=None):
         fill_edge_factor=settings.get("fill_edge_factor"),
         normal_source=settings.get("normal_source"),
         repair=settings.get("repair"), orient=settings.get("orient"),
-        progress=progress)
+        local_spacing=bool(settings.get("local_spacing", True)), progress=progress)
     mesh.stats["raw"] = raw
+    mesh.stats["global_spacing"] = not bool(settings.get("local_spacing", True))
     if mesh.triangle_count == 0:
         raise EmptyResult(
             f"no triangles: with spacing {mesh.stats['spacing']:.6g} the longest edge is "
@@ -182,13 +183,15 @@ def triangulate(particles, settings, progress=None):
 
 def uneven_spacing_warning(stats):
     """A warning when over 5 % of the particles are in no triangle of the finished surface:
-    their spacing varies more than one longest edge L allows (mesh vertices, scans), which
-    Thin Out (an even subset) or a larger edge factor helps. None otherwise."""
+    their spacing varies more than the longest edges follow (with one for all particles, any
+    unevenness does; with each one's own, sparser than 3 spacings), which Local Spacing, Thin
+    Out (an even subset) or a larger edge factor helps. None otherwise."""
     points, unused = stats.get("points", 0), stats.get("unused_points", 0)
     if stats.get("raw") or not points or unused * 20 <= points:
         return None
+    advice = "turn on Local Spacing, or " if stats.get("global_spacing") else ""
     return (f"{unused} of {points} particles are in no triangle: they are unevenly spaced "
-            "for the longest edge; try Thin Out 2 or a larger Max Edge Factor")
+            f"for the longest edge; {advice}try Thin Out 2 or a larger Edge Factor")
 
 
 def volume_particles_warning(stats):
@@ -244,6 +247,7 @@ def polygonize(particles, settings, progress=None):
         cell=0.0 if settings.get("auto_cell", True) else float(settings["cell_size"]),
         threads=int(settings.get("threads", 0)), attributes=_attributes(particles),
         progress=progress, anisotropic=bool(settings.get("anisotropic", False)))
+    mesh.stats["global_spacing"] = not bool(settings.get("local_spacing", True))
     if mesh.triangle_count == 0:
         raise EmptyResult("no surface: the summed field stays below the threshold everywhere "
                           "(raise the radius or lower the threshold)")

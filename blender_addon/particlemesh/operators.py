@@ -199,6 +199,7 @@ def draw_method_settings(layout, props, method):
         sub.active = not props.auto_spacing
         sub.prop(props, "spacing")
         col.prop(props, "max_edge_factor")
+        col.prop(props, "local_spacing")
         col.prop(props, "thin")
         col.prop(props, "raw")
         sub = col.column()

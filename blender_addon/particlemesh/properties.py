@@ -34,6 +34,11 @@ class TriangulateProps:
         update=_settings_changed,
         description="Longest triangle edge L as a multiple of the spacing (the seed's default "
                     "is 2); larger bridges bigger gaps")
+    local_spacing: BoolProperty(
+        name="Local Spacing", default=True, update=_settings_changed,
+        description="Each particle's longest edge follows the spacing of the particles around "
+                    "it (unevenly sampled systems and scans mesh whole); off: one longest edge, "
+                    "Edge Factor times the spacing, for all")
     thin: FloatProperty(
         name="Thin Out", default=1.0, min=1.0, max=16.0, soft_max=4.0, precision=2, step=10,
         update=_settings_changed,

@@ -30,6 +30,9 @@ namespace particlemesh_pcl::detail
     options.max_neighbors = surface.max_neighbors;
     options.normal_angle = surface.normal_angle;
     options.fill_holes = surface.fill_holes;
+    options.local_spacing = surface.local_spacing;
+    options.has_viewpoint = surface.use_viewpoint;
+    options.viewpoint = {preprocessing.viewpoint[0], preprocessing.viewpoint[1], preprocessing.viewpoint[2]};
     SurfaceMesh s = buildSurface (particles, options, surface.raw);
     out.vertex_source.resize (s.vertex_source.size ());
     for (std::size_t v = 0; v < s.vertex_source.size (); ++v)

@@ -150,11 +150,15 @@ def _points_args(positions, normals, attributes):
 
 
 def triangulate(positions, normals=None, *, attributes=None, raw=None, repair=None, orient=None,
-                progress=None, **options):
+                local_spacing=None, viewpoint=None, progress=None, **options):
     """Triangulate surface particles: by default the finished surface (a consistently oriented
     2-manifold whose closed parts face outward, with per-vertex normals); raw=True gives the
     smallest-sphere test's exact triangle set instead. repair=False skips hole filling and
-    unpinching, orient=False keeps closed parts as the normals face.
+    unpinching, orient=False keeps closed parts as the normals face. local_spacing=False gives
+    every particle one edge limit (max_edge_factor x spacing) instead of its own from the
+    sampling around it (the default, for unevenly sampled scans); viewpoint=(x, y, z) is where a
+    scan was taken from, so that no triangle bridges a depth jump (taken only where the points
+    look scanned from it: mesh.stats["viewpoint_used"]).
 
     positions: (N, 3) or Points (its normals and attributes come with it); normals: (N, 3) or
     None; attributes: {name: (N, C)} carried to the vertices. Vertex i of the result is
@@ -167,9 +171,17 @@ def triangulate(positions, normals=None, *, attributes=None, raw=None, repair=No
     opt = _options.TRIANGULATE.build(lib, options)
     for value, flag, when in ((raw, _abi.PM_TRIANGULATE_RAW, True),
                               (repair, _abi.PM_TRIANGULATE_NO_REPAIR, False),
-                              (orient, _abi.PM_TRIANGULATE_NO_ORIENT, False)):
+                              (orient, _abi.PM_TRIANGULATE_NO_ORIENT, False),
+                              (local_spacing, _abi.PM_TRIANGULATE_GLOBAL_SPACING, False)):
         if value is not None:
             opt.flags = (opt.flags | flag) if bool(value) == when else (opt.flags & ~flag)
+    if viewpoint is not None:
+        v = np.asarray(viewpoint, dtype=np.float64).reshape(-1)
+        if v.size != 3 or not np.all(np.isfinite(v)):
+            raise Error(f"viewpoint must be 3 finite numbers (x, y, z), got {viewpoint!r}",
+                        _abi.PM_STATUS_INVALID_ARGUMENT)
+        opt.flags |= _abi.PM_TRIANGULATE_VIEWPOINT
+        opt.viewpoint[:] = [float(x) for x in v]
     stats = _abi.pm_triangulate_stats(struct_size=ctypes.sizeof(_abi.pm_triangulate_stats))
     cloud = new_cloud(lib, positions, normals, attributes)
     mesh = _abi.pm_mesh_p()  # NULL unless the call succeeds; destroying NULL is a no-op

@@ -41,6 +41,8 @@ pm_progress_fn = CFUNCTYPE(c_int, c_void_p, c_char_p, c_double)
 PM_TRIANGULATE_RAW = 0x1
 PM_TRIANGULATE_NO_REPAIR = 0x2
 PM_TRIANGULATE_NO_ORIENT = 0x4
+PM_TRIANGULATE_GLOBAL_SPACING = 0x8
+PM_TRIANGULATE_VIEWPOINT = 0x10
 
 PM_NORMALS_AUTO = 0
 PM_NORMALS_INPUT = 1
@@ -62,6 +64,7 @@ class pm_triangulate_options(Structure):
         ("fill_edge_factor", c_double),
         ("normals", c_int32),
         ("max_triplets_per_point", c_uint32),
+        ("viewpoint", c_double * 3),
     ]
 
 
@@ -84,6 +87,9 @@ class pm_triangulate_stats(Structure):
         ("normals_estimated", c_int32),
         ("triplets", c_uint64),
         ("rejected_conormal", c_uint64),
+        ("local_spacing", c_double * 5),
+        ("viewpoint_used", c_int32),
+        ("rejected_shadow", c_uint64),
     ]
 
 

@@ -128,7 +128,7 @@ class OptionsSpec:
 
 TRIANGULATE = OptionsSpec(
     "triangulate", _abi.pm_triangulate_options, "pm_triangulate_options_init",
-    internal=("flags",),  # raw=, repair=, orient=
+    internal=("flags", "viewpoint"),  # raw=, repair=, orient=, local_spacing=, viewpoint=
     renamed={"normals": "normal_source"},
     enums={"normals": enum_names("PM_NORMALS_")})
 

@@ -668,23 +668,31 @@ def run_modal(driver, context, first=None):
 
 
 def test_unevenly_spaced_particles_warn(pm, clean_scene):
-    """A sphere sampled 2.6x sparser on its upper half: its sparse particles fall out of the
-    surface, and the operator warns with what helps (Thin Out); an even sphere does not."""
-    co, sparse = fibonacci_sphere(20000), fibonacci_sphere(3000)
+    """A sphere sampled 2.8x sparser on its upper half. With Local Spacing (the default) each
+    particle's longest edge follows its neighbours and the sphere closes; with one longest edge
+    for all, its sparse particles fall out of the surface and the operator warns with what
+    helps (Local Spacing, Thin Out); an even sphere does not."""
+    co, sparse = fibonacci_sphere(20000), fibonacci_sphere(2500)
     uneven = np.concatenate([co[co[:, 2] < 0], sparse[sparse[:, 2] >= 0]])
-    data = pm.generate.run("TRIANGULATE", pm.generate.Particles(uneven), {"auto_spacing": True})
+    local = pm.generate.run("TRIANGULATE", pm.generate.Particles(uneven), {"auto_spacing": True})
+    assert local.stats["unused_points"] == 0 and pm.generate.uneven_spacing_warning(local.stats) is None
+    rep = pm.particlemesh.topology(local)
+    assert rep["closed"] and rep["components"] == 1 and rep["vertices_used"] == len(uneven)
+    assert local.stats["local_spacing"][4] > 1.5 * local.stats["local_spacing"][0]  # the halves differ
+    data = pm.generate.run("TRIANGULATE", pm.generate.Particles(uneven), {"auto_spacing": True, "local_spacing": False})
     assert data.stats["unused_points"] * 20 > len(uneven)
     warning = pm.generate.uneven_spacing_warning(data.stats)
-    assert warning and "Thin Out" in warning and f"of {len(uneven)} particles" in warning
-    even = pm.generate.run("TRIANGULATE", pm.generate.Particles(co), {"auto_spacing": True})
+    assert warning and "Local Spacing" in warning and "Thin Out" in warning and f"of {len(uneven)} particles" in warning
+    even = pm.generate.run("TRIANGULATE", pm.generate.Particles(co), {"auto_spacing": True, "local_spacing": False})
     assert pm.generate.uneven_spacing_warning(even.stats) is None
     # Thin Out 2, as the warning says, meshes every kept particle: one closed sphere.
-    thinned = pm.generate.run("TRIANGULATE", pm.generate.Particles(uneven), {"auto_spacing": True, "thin": 2.0})
+    thinned = pm.generate.run("TRIANGULATE", pm.generate.Particles(uneven),
+                              {"auto_spacing": True, "thin": 2.0, "local_spacing": False})
     assert pm.generate.uneven_spacing_warning(thinned.stats) is None
     rep = pm.particlemesh.topology(thinned)
     assert rep["closed"] and rep["components"] == 1 and rep["vertices_used"] == thinned.vertex_count
     make_active(point_cloud_object("uneven", uneven))
-    assert bpy.ops.particlemesh.triangulate() == {"FINISHED"}  # a warning, not a failure
+    assert bpy.ops.particlemesh.triangulate(local_spacing=False) == {"FINISHED"}  # a warning, not a failure
 
 
 def test_modal_job_finishes_and_shows_progress(pm):

@@ -105,6 +105,48 @@ TEST(CApi, DefaultIsTheFinishedSurface) {
   pm_cloud_destroy(cloud);
 }
 
+TEST(CApi, LocalSpacingByDefaultGlobalOnRequestAndTheViewpoint) {
+  // A sphere whose upper half is 2.8 times sparser: whole by default (each particle's own
+  // spacing, reported in units of r0), not with PM_TRIANGULATE_GLOBAL_SPACING.
+  PointCloud c;
+  for (const Vec3& p : fibonacci_sphere(20000).positions)
+    if (p.z < 0) c.positions.push_back(p);
+  for (const Vec3& p : fibonacci_sphere(2500).positions)
+    if (p.z >= 0) c.positions.push_back(p);
+  const auto pos = flat(c.positions);
+  pm_cloud* cloud = nullptr;
+  ASSERT_EQ(pm_cloud_create(pos.data(), nullptr, c.size(), &cloud), PM_OK);
+  pm_triangulate_stats stats{};
+  stats.struct_size = sizeof(stats);
+  pm_mesh* mesh = nullptr;
+  ASSERT_EQ(pm_triangulate(cloud, nullptr, &mesh, &stats), PM_OK) << last();
+  EXPECT_EQ(stats.unused_points, 0u);
+  EXPECT_NEAR(stats.local_spacing[0], 1.0, 0.02);
+  EXPECT_GT(stats.local_spacing[4], 2.0);
+  EXPECT_LE(stats.local_spacing[1], stats.local_spacing[2]);
+  EXPECT_LE(stats.local_spacing[2], stats.local_spacing[3]);
+  EXPECT_EQ(stats.viewpoint_used, 0);
+  pm_mesh_destroy(mesh);
+  pm_triangulate_options opt;
+  pm_triangulate_options_init(&opt);
+  opt.flags = PM_TRIANGULATE_GLOBAL_SPACING;
+  ASSERT_EQ(pm_triangulate(cloud, &opt, &mesh, &stats), PM_OK) << last();
+  EXPECT_GT(stats.unused_points * 20, c.size());
+  EXPECT_EQ(stats.local_spacing[4], 1.0);
+  pm_mesh_destroy(mesh);
+  // A viewpoint outside, over the pole: most of the sphere is seen at a slant, not edge-on,
+  // so it is taken; a non-finite one is refused.
+  opt.flags = PM_TRIANGULATE_VIEWPOINT;
+  opt.viewpoint[0] = 0, opt.viewpoint[1] = 0, opt.viewpoint[2] = 10;
+  ASSERT_EQ(pm_triangulate(cloud, &opt, &mesh, &stats), PM_OK) << last();
+  EXPECT_EQ(stats.viewpoint_used, 1);
+  pm_mesh_destroy(mesh);
+  opt.viewpoint[1] = std::nan("");
+  EXPECT_EQ(pm_triangulate(cloud, &opt, &mesh, &stats), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("viewpoint"), std::string::npos);
+  pm_cloud_destroy(cloud);
+}
+
 TEST(CApi, Float32InputAndNormals) {
   const PointCloud c = fibonacci_sphere(500);
   std::vector<float> p, n;

@@ -138,23 +138,34 @@ def test_georeferenced_coordinates_mesh_as_at_the_origin(cli, inspect, tmp_path)
 
 
 def test_unevenly_spaced_particles_get_a_hint(cli, tmp_path):
-    """A sphere sampled 2.6x sparser on its upper half: the sparse particles are farther apart
-    than L = 2 r0 of the dense half, fall out of the surface, and the summary and the report
-    say what helps (and --thin 2 does: one closed sphere); an even sphere gets no hint."""
+    """A sphere sampled 2.8x sparser on its upper half. By default each particle's L follows
+    its own spacing and the sphere closes through every particle. With --global-spacing the
+    sparse particles are farther apart than L = 2 r0 of the dense half, fall out of the
+    surface, and the summary and the report say what helps (and --thin 2 does: one closed
+    sphere); an even sphere gets no hint."""
     pts, sparse = tmp_path / "s.xyz", tmp_path / "sparse.xyz"
     cli("sample", "fibonacci", "--points", "20000", "-o", pts)
-    cli("sample", "fibonacci", "--points", "3000", "-o", sparse)
+    cli("sample", "fibonacci", "--points", "2500", "-o", sparse)
     rows = lambda p: [line for line in p.read_text().splitlines() if line.strip()]  # noqa: E731
     uneven = ([r for r in rows(pts) if float(r.split()[2]) < 0]
               + [r for r in rows(sparse) if float(r.split()[2]) >= 0])
     (tmp_path / "uneven.xyz").write_text("\n".join(uneven) + "\n")
     rep = tmp_path / "r.json"
-    proc = cli("triangulate", tmp_path / "uneven.xyz", "-o", tmp_path / "u.ply", "--report", rep)
+    proc = cli("triangulate", tmp_path / "uneven.xyz", "-o", tmp_path / "l.ply", "--report", rep)
     r = json.loads(rep.read_text())
+    assert "hint" not in r and "hint" not in proc.stdout and r["spacing"] == "local"
+    assert r["topology"]["closed"] and r["topology"]["components"] == 1 and r["surface"]["unused_points"] == 0
+    spread = r["surface"]["local_spacing"]
+    assert abs(spread["min"] - 1) < 0.01 and spread["max"] > 1.5  # the dense half meshes at r0, the sparse one wider
+    assert "local spacing" in proc.stdout
+    proc = cli("triangulate", tmp_path / "uneven.xyz", "-o", tmp_path / "u.ply", "--report", rep, "--global-spacing")
+    r = json.loads(rep.read_text())
+    assert r["spacing"] == "global" and r["surface"]["local_spacing"]["max"] == 1
     assert r["surface"]["unused_points"] * 20 > len(uneven)
-    assert "--thin 2" in r["hint"] and "--max-edge-factor" in r["hint"]
+    assert "--thin 2" in r["hint"] and "--max-edge-factor" in r["hint"] and "leave out --global-spacing" in r["hint"]
     assert "hint" in proc.stdout and "--thin 2" in proc.stdout
-    proc = cli("triangulate", tmp_path / "uneven.xyz", "-o", tmp_path / "t.ply", "--thin", "2", "--report", rep)
+    proc = cli("triangulate", tmp_path / "uneven.xyz", "-o", tmp_path / "t.ply", "--thin", "2", "--report", rep,
+               "--global-spacing")
     r = json.loads(rep.read_text())
     assert "hint" not in r and r["topology"]["closed"] and r["topology"]["components"] == 1
     proc = cli("triangulate", pts, "-o", tmp_path / "e.ply", "--report", rep)

@@ -107,7 +107,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (which & 2) opt.max_edge_factor = in.number(0.25);
   if (which & 4) opt.threads = int32_t(in.range(0, 4)) - 1;
   if (which & 8) opt.max_neighbors = uint32_t(in.take<uint16_t>());
-  if (which & 16) opt.flags = in.flag() ? uint32_t(in.range(0, 7)) : in.take<uint32_t>();
+  if (which & 16) {
+    opt.flags = in.flag() ? uint32_t(in.range(0, 31)) : in.take<uint32_t>();
+    // Local or global spacing, and a viewpoint (any value: a non-finite one is refused).
+    if (opt.flags & PM_TRIANGULATE_VIEWPOINT)
+      for (double& v : opt.viewpoint) v = in.number(1.0);
+  }
   if (which & 32) opt.normal_angle = in.number(8.0);
   if (which & 64) {
     opt.fill_holes = uint32_t(in.take<uint32_t>() % 200001);

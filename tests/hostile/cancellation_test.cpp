@@ -15,7 +15,7 @@
 #include "particlemesh/smooth/subdivide.h"
 #include "particlemesh/surface/normals.h"
 #include "particlemesh/surface/reconstruct.h"
-#include "particlemesh/surface/spacing.h"
+#include "particlemesh/spatial/spacing.h"
 #include "particlemesh/surface/triangulate.h"
 
 using namespace particlemesh;

@@ -10,7 +10,7 @@
 #include "particlemesh/spatial/neighbor_grid.h"
 #include "particlemesh/surface/normals.h"
 #include "particlemesh/surface/reconstruct.h"
-#include "particlemesh/surface/spacing.h"
+#include "particlemesh/spatial/spacing.h"
 #include "particlemesh/surface/triangulate.h"
 #include "support/test_support.h"
 

@@ -451,7 +451,12 @@ TEST(ParticleTriangulation, SharedScansReconstruct) {
         EXPECT_LE(c.triangles, 12u);
       }
     }
-    EXPECT_NEAR(double(mesh.polygons.size()), 572, 30);
+    // Every point of the scan in the surface (each point's own spacing: one spacing for the
+    // whole scan gave 551 triangles and left a point out), and between 1.4 and 2 triangles per
+    // point, as an open surface with a long outline has.
+    EXPECT_EQ(t.vertices_used, 397u);
+    EXPECT_GT(mesh.polygons.size(), 1.4 * 397);
+    EXPECT_LT(mesh.polygons.size(), 2 * 397);
   }
   {
     // An object cut out of one depth view: documented preprocessing, normals toward the

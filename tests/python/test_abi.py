@@ -128,7 +128,7 @@ def test_every_options_field_is_a_keyword_or_set_by_the_binding(pm, pm_options):
     """A field appended to an options struct becomes a keyword with the library's default;
     only the fields the functions fill themselves are not keywords."""
     set_by_binding = {
-        "triangulate": {"struct_size", "progress", "progress_user_data", "flags"},
+        "triangulate": {"struct_size", "progress", "progress_user_data", "flags", "viewpoint"},
         "polygonize": {"struct_size", "progress", "progress_user_data", "flags", "domain_min",
                        "cell_min", "cell_max"},
         "smooth": {"struct_size", "progress", "progress_user_data", "crease_count",

@@ -105,6 +105,12 @@ PM_EXPORT pm_status pm_cloud_thin(const pm_cloud* cloud, double min_distance, ui
 #define PM_TRIANGULATE_NO_REPAIR 0x2u
 /** Do not turn closed components to face outward. */
 #define PM_TRIANGULATE_NO_ORIENT 0x4u
+/** One edge limit L = max_edge_factor x spacing for the whole cloud, instead of each particle's
+ *  own from the sampling around it (the default; see SurfaceOptions::local_spacing). */
+#define PM_TRIANGULATE_GLOBAL_SPACING 0x8u
+/** options->viewpoint is where the scan was taken from: no triangle bridges a depth jump
+ *  (see SurfaceOptions::viewpoint). */
+#define PM_TRIANGULATE_VIEWPOINT 0x10u
 
 /** Where the surface's normals come from (see particlemesh/surface/reconstruct.h). */
 #define PM_NORMALS_AUTO 0     /**< plane fits, facing as the cloud's normals say (if any) */
@@ -128,6 +134,8 @@ typedef struct pm_triangulate_options {
   /* -- appended (issue 9) -- */
   uint32_t max_triplets_per_point; /**< fail with PM_STATUS_LIMIT_EXCEEDED before the test when the
                                         candidate triplets average more per point (default 4096; 0 = no limit) */
+  /* -- appended -- */
+  double viewpoint[3];      /**< the scan's sensor position, read with PM_TRIANGULATE_VIEWPOINT */
 } pm_triangulate_options;
 
 typedef struct pm_triangulate_stats {
@@ -152,6 +160,12 @@ typedef struct pm_triangulate_stats {
   /* -- appended -- */
   uint64_t rejected_conormal; /**< seed triangles dropped by co-normality (over a third, with loops
                                    left open: the particles probably fill a volume) */
+  /* -- appended -- */
+  double local_spacing[5];  /**< the particles' local spacings in units of r0: smallest, 10th
+                                 percentile, median, 90th percentile, largest (all 1 with
+                                 PM_TRIANGULATE_GLOBAL_SPACING) */
+  int32_t viewpoint_used;   /**< the viewpoint was given and taken (the cloud looks scanned from it) */
+  uint64_t rejected_shadow; /**< seed triangles dropped for bridging a depth jump */
 } pm_triangulate_stats;
 
 PM_EXPORT void pm_triangulate_options_init(pm_triangulate_options* options);

@@ -7,7 +7,7 @@
 #include "capi/handles.h"
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/sample/thin.h"
-#include "particlemesh/surface/spacing.h"
+#include "particlemesh/spatial/spacing.h"
 
 using namespace particlemesh;
 using particlemesh::capi::guarded;

@@ -1,4 +1,5 @@
 // C ABI: triangulation of surface particles.
+#include <cmath>
 #include <memory>
 
 #include "capi/firewall.h"
@@ -55,8 +56,12 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
         {offsetof(pm_triangulate_options, progress),
          offsetof(pm_triangulate_options, progress_user_data)});
     if (out_stats) capi::check_versioned(out_stats, "out_stats");
-    if (o.flags & ~uint32_t(PM_TRIANGULATE_RAW | PM_TRIANGULATE_NO_REPAIR | PM_TRIANGULATE_NO_ORIENT))
+    if (o.flags & ~uint32_t(PM_TRIANGULATE_RAW | PM_TRIANGULATE_NO_REPAIR | PM_TRIANGULATE_NO_ORIENT |
+                            PM_TRIANGULATE_GLOBAL_SPACING | PM_TRIANGULATE_VIEWPOINT))
       throw Error(Status::InvalidArgument, "options->flags has unknown bits");
+    if ((o.flags & PM_TRIANGULATE_VIEWPOINT) &&
+        !(std::isfinite(o.viewpoint[0]) && std::isfinite(o.viewpoint[1]) && std::isfinite(o.viewpoint[2])))
+      throw Error(Status::InvalidArgument, "options->viewpoint is not finite");
     if (o.normals < PM_NORMALS_AUTO || o.normals > PM_NORMALS_ESTIMATE)
       throw Error(Status::InvalidArgument, "options->normals must be PM_NORMALS_AUTO, _INPUT or _ESTIMATE");
     SurfaceOptions opt;
@@ -71,6 +76,9 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
     opt.fill_edge_factor = o.fill_edge_factor;
     opt.repair = !(o.flags & PM_TRIANGULATE_NO_REPAIR);
     opt.orient = !(o.flags & PM_TRIANGULATE_NO_ORIENT);
+    opt.local_spacing = !(o.flags & PM_TRIANGULATE_GLOBAL_SPACING);
+    opt.has_viewpoint = (o.flags & PM_TRIANGULATE_VIEWPOINT) != 0;
+    opt.viewpoint = {o.viewpoint[0], o.viewpoint[1], o.viewpoint[2]};
     opt.normals = o.normals == PM_NORMALS_INPUT ? SurfaceOptions::NormalSource::Input
                   : o.normals == PM_NORMALS_ESTIMATE ? SurfaceOptions::NormalSource::Estimate
                                                      : SurfaceOptions::NormalSource::Auto;
@@ -103,6 +111,14 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
       s.normals_estimated = r.surface.normals_estimated;
       s.triplets = r.triangulation.triplets;
       s.rejected_conormal = r.surface.rejected_conormal;
+      const SurfaceStats::Spread& h = r.surface.local_spacing;
+      s.local_spacing[0] = h.min;
+      s.local_spacing[1] = h.p10;
+      s.local_spacing[2] = h.median;
+      s.local_spacing[3] = h.p90;
+      s.local_spacing[4] = h.max;
+      s.viewpoint_used = r.surface.viewpoint_used;
+      s.rejected_shadow = r.surface.rejected_shadow;
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();

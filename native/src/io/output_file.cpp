@@ -284,14 +284,20 @@ OutputFile::OutputFile(const std::string& path) : s_(std::make_unique<State>()) 
     for (int k = 0; k < 10; ++k) name += random_char(bits);
     name += ext;
     const std::string temp = folder == "/" ? "/" + name : folder + "/" + name;
+    // Published for the signal handler before the file exists: a signal between the two
+    // would otherwise leave the new file behind. Were the name taken (EEXIST), the slot goes
+    // at once; the name is random, 60 bits.
+    const int slot = register_temporary(temp);
     const int fd = ::open(temp.c_str(), O_RDWR | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, mode);
     if (fd >= 0) {
       s.fd = fd;
       s.temp = temp;
-      s.slot = register_temporary(temp);
+      s.slot = slot;
       return;
     }
-    if (errno != EEXIST && errno != EINTR) io_error(path, error_text(errno));
+    const int e = errno;
+    unregister_temporary(slot);
+    if (e != EEXIST && e != EINTR) io_error(path, error_text(e));
   }
   io_error(path, "could not create a temporary file in '" + folder + "'");
 }

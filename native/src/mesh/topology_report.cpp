@@ -249,9 +249,10 @@ TopologyReport topology_report(const TriMesh& mesh) {
     for (size_t start = 0; start < bidx.size(); ++start) {
       if (visited[start]) continue;
       size_t cur = start;
-      size_t guard = 0;
+      size_t guard = 0, edges = 0;
       while (!visited[cur] && guard++ <= bidx.size()) {
         visited[cur] = 1;
+        ++edges;
         const HalfEdge& h = he[bidx[cur]];
         const Triangle& t = T[h.face];
         const uint32_t b = t[(h.corner + 1) % 3];
@@ -273,6 +274,7 @@ TopologyReport topology_report(const TriMesh& mesh) {
       }
       ++r.boundary_loops;
       ++loops_per_comp[comp[he[bidx[start]].face]];
+      r.boundary_loop_edges.push_back(edges);
     }
   } else if (r.boundary_edges > 0) {
     UnionFind verts(V);
@@ -284,16 +286,21 @@ TopologyReport topology_report(const TriMesh& mesh) {
       on_boundary[a] = on_boundary[b] = 1;
     }
     std::vector<uint8_t> counted(V, 0);
+    std::vector<size_t> edges_at(V, 0);
     for (size_t e = 0; e < E; ++e) {
       if (edge_kind[e] != 1) continue;
       const uint32_t root = verts.find(uint32_t(he[group_start[e]].key >> 32));
+      ++edges_at[root];
       if (!counted[root]) {
         counted[root] = 1;
         ++r.boundary_loops;
         ++loops_per_comp[comp[he[group_start[e]].face]];
       }
     }
+    for (uint32_t v = 0; v < V; ++v)
+      if (counted[v]) r.boundary_loop_edges.push_back(edges_at[v]);
   }
+  std::sort(r.boundary_loop_edges.begin(), r.boundary_loop_edges.end());
 
   // Finish the per-component records.
   for (size_t c = 0; c < ncomp; ++c) {

@@ -102,10 +102,11 @@ class KeptCells {
 
 }  // namespace
 
-std::vector<uint32_t> thin_points(const Vec3* points, size_t n, double min_distance) {
-  if (!(min_distance > 0) || !std::isfinite(min_distance))
-    throw Error(Status::InvalidArgument,
-                "min_distance must be a positive finite distance, got " + detail::format_number(min_distance));
+namespace {
+
+/// thin_points with point i's distance distance_of(i), at most max_distance.
+template <class DistanceOf>
+std::vector<uint32_t> thin_greedily(const Vec3* points, size_t n, double max_distance, DistanceOf&& distance_of) {
   if (points == nullptr && n > 0) throw Error(Status::InvalidArgument, "points is NULL");
   if (n > size_t(UINT32_MAX) - 1) throw Error(Status::LimitExceeded, "more than 2^32 - 2 points");
   std::vector<uint32_t> kept;
@@ -118,7 +119,7 @@ std::vector<uint32_t> thin_points(const Vec3* points, size_t n, double min_dista
     lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
     hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
   }
-  const double cell = 4 * min_distance, inv = 1.0 / cell;
+  const double cell = 4 * max_distance, inv = 1.0 / cell;
   constexpr double kMaxCells = double((1 << 21) - 4);  // packed in 21 bits with the margins
   for (int a = 0; a < 3; ++a)
     if (!((hi[a] - lo[a]) * inv < kMaxCells))
@@ -128,17 +129,17 @@ std::vector<uint32_t> thin_points(const Vec3* points, size_t n, double min_dista
                                              " (at most 2097148): the thinning distance is far too small");
   // One cell of margin below the data, so that p - d never has a negative cell coordinate.
   const Vec3 origin = lo - Vec3{cell, cell, cell};
-  // Truncation is floor here: every coordinate asked for is at least min_distance above origin.
+  // Truncation is floor here: every coordinate asked for is at least a distance above origin.
   const auto axis = [&](double v, int a) { return int32_t((v - origin[a]) * inv); };
 
   KeptCells cells;
-  const double r2 = min_distance * min_distance;
   for (uint32_t i = 0; i < uint32_t(n); ++i) {
     const Vec3& p = points[i];
+    const double d = distance_of(i), r2 = d * d;
     KeptCells::Coord from, to;
     for (int a = 0; a < 3; ++a) {
-      from[a] = axis(p[a] - min_distance, a);
-      to[a] = axis(p[a] + min_distance, a);
+      from[a] = axis(p[a] - d, a);
+      to[a] = axis(p[a] + d, a);
     }
     bool free = true;
     for (int32_t x = from[0]; free && x <= to[0]; ++x)
@@ -156,8 +157,7 @@ std::vector<uint32_t> thin_points(const Vec3* points, size_t n, double min_dista
   return kept;
 }
 
-PointCloud thin_cloud(const PointCloud& cloud, double min_distance) {
-  const std::vector<uint32_t> kept = thin_points(cloud.positions.data(), cloud.size(), min_distance);
+PointCloud subset(const PointCloud& cloud, const std::vector<uint32_t>& kept) {
   PointCloud out;
   out.positions.reserve(kept.size());
   for (uint32_t i : kept) out.positions.push_back(cloud.positions[i]);
@@ -171,6 +171,38 @@ PointCloud thin_cloud(const PointCloud& cloud, double min_distance) {
                       a.values.begin() + ptrdiff_t(i + 1) * a.components);
   }
   return out;
+}
+
+}  // namespace
+
+std::vector<uint32_t> thin_points(const Vec3* points, size_t n, double min_distance) {
+  if (!(min_distance > 0) || !std::isfinite(min_distance))
+    throw Error(Status::InvalidArgument,
+                "min_distance must be a positive finite distance, got " + detail::format_number(min_distance));
+  return thin_greedily(points, n, min_distance, [&](uint32_t) { return min_distance; });
+}
+
+std::vector<uint32_t> thin_points(const Vec3* points, size_t n, const std::vector<double>& min_distance) {
+  if (min_distance.size() != n)
+    throw Error(Status::InvalidArgument, "one thinning distance per point is needed, got " +
+                                             std::to_string(min_distance.size()) + " for " + std::to_string(n));
+  double largest = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (!(min_distance[i] > 0) || !std::isfinite(min_distance[i]))
+      throw Error(Status::InvalidArgument, "min_distance[" + std::to_string(i) +
+                                               "] must be a positive finite distance, got " +
+                                               detail::format_number(min_distance[i]));
+    largest = std::max(largest, min_distance[i]);
+  }
+  return thin_greedily(points, n, largest, [&](uint32_t i) { return min_distance[i]; });
+}
+
+PointCloud thin_cloud(const PointCloud& cloud, double min_distance) {
+  return subset(cloud, thin_points(cloud.positions.data(), cloud.size(), min_distance));
+}
+
+PointCloud thin_cloud(const PointCloud& cloud, const std::vector<double>& min_distance) {
+  return subset(cloud, thin_points(cloud.positions.data(), cloud.size(), min_distance));
 }
 
 }  // namespace particlemesh

@@ -7,6 +7,18 @@
 
 namespace particlemesh::detail {
 
+namespace {
+
+[[noreturn]] void too_many(size_t point, size_t max_neighbors, const std::string& within) {
+  throw Error(Status::LimitExceeded,
+              "point " + std::to_string(point) + " has more than " + std::to_string(max_neighbors) +
+                  " neighbours within " + within +
+                  ": the points are packed far denser than the spacing (raise the neighbour "
+                  "limit, or give a smaller spacing / max edge factor)");
+}
+
+}  // namespace
+
 NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
                                    double radius, size_t max_neighbors,
                                    ProgressTracker& tracker) {
@@ -52,13 +64,7 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
   tracker.check();
   for (size_t k = 0; k < chunks; ++k)
     if (chunk_over[k] != UINT32_MAX) cap_point = std::min<size_t>(cap_point, chunk_over[k]);
-  if (cap_point != SIZE_MAX) {
-    throw Error(Status::LimitExceeded,
-                "point " + std::to_string(cap_point) + " has more than " +
-                    std::to_string(max_neighbors) + " neighbours within " + std::to_string(radius) +
-                    ": the points are packed far denser than the spacing (raise the neighbour "
-                    "limit, or give a smaller spacing / max edge factor)");
-  }
+  if (cap_point != SIZE_MAX) too_many(cap_point, max_neighbors, std::to_string(radius));
 
   NeighborLists lists;
   lists.offset.resize(n + 1);
@@ -77,6 +83,87 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
       const uint64_t dst = lists.offset[grid.cell_begin(uint32_t(cb))];
       std::copy(chunk_index[k].begin(), chunk_index[k].end(), lists.index.begin() + dst);
       std::vector<uint32_t>().swap(chunk_index[k]);
+    }
+  });
+  return lists;
+}
+
+NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
+                                   const std::vector<double>& radius, size_t max_neighbors,
+                                   ProgressTracker& tracker) {
+  const size_t n = grid.point_count();
+  // Per fixed chunk of points: each point's own neighbours (within its radius, ascending), and
+  // the pairs (t, s) where s reaches t but t's smaller radius does not reach s.
+  const size_t chunk = 2048, chunks = (n + chunk - 1) / chunk;
+  std::vector<std::vector<uint32_t>> own(chunks);
+  std::vector<std::vector<uint64_t>> back(chunks);
+  std::vector<uint32_t> own_count(n, 0);
+  parallel_blocks(chunks, 1, [&](size_t kb, size_t ke) {
+    for (size_t k = kb; k < ke; ++k) {
+      if (tracker.cancelled()) return;
+      for (size_t s = k * chunk; s < std::min(n, (k + 1) * chunk); ++s) {
+        if (rep[s] != s) continue;
+        const size_t before = own[k].size();
+        const double rs = radius[s];
+        grid.for_each_within(grid.sorted_point(uint32_t(s)), rs, [&](uint32_t t, double d2) {
+          if (t == s || rep[t] != t) return;
+          own[k].push_back(t);
+          if (d2 > radius[t] * radius[t]) back[k].push_back((uint64_t(t) << 32) | s);
+        });
+        own_count[s] = uint32_t(own[k].size() - before);
+      }
+      tracker.tick(std::min(n, (k + 1) * chunk) - k * chunk);
+    }
+  });
+  tracker.check();
+  // The pairs by their first point (stable: for each t its s ascend, chunks being in order).
+  std::vector<uint64_t> pairs;
+  for (auto& b : back) {
+    pairs.insert(pairs.end(), b.begin(), b.end());
+    std::vector<uint64_t>().swap(b);
+  }
+  std::vector<size_t> back_start(n + 1, 0);
+  for (uint64_t p : pairs) ++back_start[(p >> 32) + 1];
+  for (size_t s = 0; s < n; ++s) back_start[s + 1] += back_start[s];
+  std::vector<uint64_t> by_point(pairs.size());
+  {
+    std::vector<size_t> at(back_start.begin(), back_start.end() - 1);
+    for (uint64_t p : pairs) by_point[at[p >> 32]++] = p;
+  }
+  std::vector<uint64_t>().swap(pairs);
+  NeighborLists lists;
+  lists.offset.assign(n + 1, 0);
+  for (size_t s = 0; s < n; ++s) {
+    const size_t count = own_count[s] + (back_start[s + 1] - back_start[s]);
+    lists.offset[s + 1] = lists.offset[s] + count;
+    if (count > lists.max_count) {
+      lists.max_count = count;
+      lists.max_point = uint32_t(s);
+    }
+  }
+  if (lists.max_count > max_neighbors) {
+    size_t lowest = SIZE_MAX;
+    for (size_t s = 0; s < n; ++s)
+      if (lists.offset[s + 1] - lists.offset[s] > max_neighbors) lowest = std::min<size_t>(lowest, grid.original_index(uint32_t(s)));
+    too_many(lowest, max_neighbors, "its local radius");
+  }
+  lists.index.resize(lists.offset[n]);
+  parallel_blocks(chunks, 1, [&](size_t kb, size_t ke) {
+    for (size_t k = kb; k < ke; ++k) {
+      const uint32_t* mine = own[k].data();
+      for (size_t s = k * chunk; s < std::min(n, (k + 1) * chunk); ++s) {
+        uint32_t* out = lists.index.data() + lists.offset[s];
+        const uint32_t* a = mine;
+        const uint32_t* a_end = mine + own_count[s];
+        const uint64_t* b = by_point.data() + back_start[s];
+        const uint64_t* b_end = by_point.data() + back_start[s + 1];
+        while (a != a_end || b != b_end) {
+          if (b == b_end || (a != a_end && *a < uint32_t(*b))) *out++ = *a++;
+          else *out++ = uint32_t(*b++);
+        }
+        mine = a_end;
+      }
+      std::vector<uint32_t>().swap(own[k]);
     }
   });
   return lists;

@@ -28,4 +28,10 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
                                    double radius, size_t max_neighbors,
                                    ProgressTracker& tracker);
 
+/// The same over a radius per point (sorted index): s's list holds every t with
+/// |s t| <= max(radius[s], radius[t]) (so t is in s's list iff s is in t's). Any cell size.
+NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
+                                   const std::vector<double>& radius, size_t max_neighbors,
+                                   ProgressTracker& tracker);
+
 }  // namespace particlemesh::detail

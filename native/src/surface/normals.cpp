@@ -14,7 +14,7 @@
 #include "spatial/grid_search.h"
 #include "surface/normals_impl.h"
 #include "surface/raw_triangulation.h"
-#include "surface/spacing_impl.h"
+#include "spatial/spacing_impl.h"
 
 namespace particlemesh {
 namespace detail {
@@ -142,13 +142,10 @@ std::optional<Vec3> crease_normal(const std::vector<Vec3>& near, const Plane& A,
 }  // namespace
 
 std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
-                                     const NeighborLists& lists, double radius, ProgressTracker& tracker,
-                                     const std::vector<Triangle>* triangles) {
+                                     const NeighborLists& lists, const std::vector<double>& radius,
+                                     ProgressTracker& tracker, const std::vector<Triangle>* triangles) {
   const size_t n = grid.point_count();
   std::vector<Vec3> normals(n);
-  const double r2 = radius * radius;
-  const double band = 0.25 * radius;
-  const double crease_band = 0.75 * band;
   // 1. Every point's plane. Points that already lie close to one plane keep it (noise and the
   //    steps of a depth scan or a lattice do not call for more); a thick neighbourhood may be
   //    two sheets, and is looked at again below.
@@ -157,6 +154,7 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
     if (tracker.cancelled()) return;
     for (size_t s = b; s < e; ++s) {
       if (rep[s] != s) continue;
+      const double r2 = radius[s] * radius[s];
       const Vec3 p = grid.sorted_point(uint32_t(s));
       Moments m;
       m.add(Vec3{});  // the point itself
@@ -204,6 +202,9 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
       std::vector<Candidate> tried;
       for (size_t i = b; i < e; ++i) {
         const uint32_t s = redo[i];
+        const double r2 = radius[s] * radius[s];
+        const double band = 0.25 * radius[s];
+        const double crease_band = 0.75 * band;
         gather_near(grid, lists, s, r2, near);
         // Inliers count more the closer they are: next to the point its own sheet dominates
         // even where another sheet ends nearby (the free ends of a folded sheet).
@@ -249,7 +250,7 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
           if (db < da) normals[s] = B.normal;  // the point lies on the second face, not the first
           continue;
         }
-        if (const auto n = crease_normal(near, A, B, band, kCreaseReach * radius)) normals[s] = *n;
+        if (const auto n = crease_normal(near, A, B, band, kCreaseReach * radius[s])) normals[s] = *n;
       }
     });
     tracker.check();
@@ -260,10 +261,14 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
 }
 
 bool orient_normals_by_reference(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
-                                 const NeighborLists& lists, double radius, std::vector<Vec3>& normals,
-                                 const std::vector<Vec3>& reference, ProgressTracker& tracker) {
+                                 const NeighborLists& lists, const std::vector<double>& radius,
+                                 std::vector<Vec3>& normals, const std::vector<Vec3>& reference,
+                                 ProgressTracker& tracker) {
   const size_t n = grid.point_count();
-  const double r2 = radius * radius;
+  const auto r2 = [&](uint32_t s, uint32_t t) {
+    const double r = pair_limit(radius[s], radius[t]);
+    return r * r;
+  };
   // 0 = undecided, 1 = decided. Where the reference clearly says which way a point faces it
   // decides; elsewhere (reference nearly in the tangent plane, or missing) the neighbours
   // of the same sheet that are decided vote, round after round.
@@ -292,7 +297,7 @@ bool orient_normals_by_reference(const NeighborGrid& grid, const std::vector<uin
       for (const uint32_t* q = lists.begin(s); q != lists.end(s); ++q) {
         if (!decided[*q]) continue;
         const Vec3 d = grid.sorted_point(*q) - p;
-        if (squared_norm(d) > r2) continue;
+        if (squared_norm(d) > r2(s, *q)) continue;
         // Same-sheet neighbours (the edge in both tangent planes) count, gap-crossing ones
         // count reversed, like the spanning tree's signed edges.
         const double slope = (std::abs(dot(d, normals[s])) + std::abs(dot(d, normals[*q]))) / (2 * norm(d));
@@ -320,7 +325,7 @@ bool orient_normals_by_reference(const NeighborGrid& grid, const std::vector<uin
     for (const uint32_t* q = lists.begin(uint32_t(s)); q != lists.end(uint32_t(s)); ++q) {
       if (*q <= s || !decided[*q]) continue;
       const Vec3 d = grid.sorted_point(*q) - p;
-      if (squared_norm(d) > r2) continue;
+      if (squared_norm(d) > r2(uint32_t(s), *q)) continue;
       const double slope = (std::abs(dot(d, normals[s])) + std::abs(dot(d, normals[*q]))) / (2 * norm(d));
       if (slope > 0.3) continue;
       ++pairs;
@@ -333,10 +338,9 @@ bool orient_normals_by_reference(const NeighborGrid& grid, const std::vector<uin
 }
 
 void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
-                        const NeighborLists& lists, double radius, std::vector<Vec3>& normals,
+                        const NeighborLists& lists, const std::vector<double>& radius, std::vector<Vec3>& normals,
                         const std::vector<Vec3>& reference, ProgressTracker& tracker) {
   const size_t n = grid.point_count();
-  const double r2 = radius * radius;
   // Edges s < t of the neighbour graph, keyed by (cost as float bits, edge index): the keys
   // order the edges by cost, ties broken by position in the list, and are all distinct.
   // One pass: each block of points lists its edges, then the blocks are placed in order.
@@ -357,7 +361,8 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
         for (const uint32_t* q = std::upper_bound(lists.begin(uint32_t(s)), lists.end(uint32_t(s)), uint32_t(s));
              q != lists.end(uint32_t(s)); ++q) {
           const Vec3 d = grid.sorted_point(*q) - p;
-          if (!(squared_norm(normals[*q]) > 0) || squared_norm(d) > r2) continue;
+          const double r = pair_limit(radius[s], radius[*q]);
+          if (!(squared_norm(normals[*q]) > 0) || squared_norm(d) > r * r) continue;
           const Vec3 nt = normals[*q];
           const double len = norm(d);
           // Slope of the edge out of the tangent planes: ~0 within a sheet, ~1 across a gap.
@@ -613,7 +618,7 @@ std::vector<Vec3> estimate_normals(const PointCloud& cloud, const NormalOptions&
     topt.max_neighbors = size_t(1) << 20;
     const detail::RawTriangulation raw = detail::run_raw_triangulation(cloud, topt, tracker, 0.0, 0.6,
                                                                          detail::TriangleIndices::Sorted);
-    const double radius = raw.stats.max_edge;
+    const std::vector<double>& radius = raw.max_edge;
     tracker.stage("estimating normals", 0.6, 0.85, cloud.size());
     std::vector<Vec3> sorted = detail::pca_normals_sorted(*raw.grid, raw.rep, raw.neighbors, radius, tracker, &raw.triangles);
     tracker.stage("orienting normals", 0.85, 1.0);

@@ -12,7 +12,8 @@
 namespace particlemesh::detail {
 
 /// Unoriented unit normals indexed by SORTED index (duplicates copy their representative's)
-/// from the lists' neighbours within `radius` (<= the lists' radius).
+/// from the lists' neighbours within `radius[s]` of each point s (its edge limit L_s: at most
+/// the lists' radius; between two points the pair limit of theirs, raw_triangulation.h).
 /// A plain PCA of a point's neighbourhood mixes in a second sheet that passes within the
 /// radius (at a fold, a thin part, the rim of two close surfaces), tilting the normal. So when
 /// `triangles` (the seed's raw triangles, sorted indices) are given, the plane comes from
@@ -20,8 +21,8 @@ namespace particlemesh::detail {
 /// its plane (the point's own sheet is the denser one near it), refined by a PCA of those
 /// inliers. Without triangles, or where none has three inliers, the plain PCA is used.
 std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
-                                     const NeighborLists& lists, double radius, ProgressTracker& tracker,
-                                     const std::vector<Triangle>* triangles = nullptr);
+                                     const NeighborLists& lists, const std::vector<double>& radius,
+                                     ProgressTracker& tracker, const std::vector<Triangle>* triangles = nullptr);
 
 /// Orient unit normals (sorted index) consistently over a minimum spanning tree of the
 /// neighbour graph (Hoppe et al. 1992) with signed edges: an edge that lies in the tangent
@@ -32,7 +33,7 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
 /// follows the clearest evidence first. Each tree faces as `reference` normals (sorted index,
 /// may be empty) say on the majority of its points, else its highest point faces +z.
 void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
-                        const NeighborLists& lists, double radius, std::vector<Vec3>& normals,
+                        const NeighborLists& lists, const std::vector<double>& radius, std::vector<Vec3>& normals,
                         const std::vector<Vec3>& reference, ProgressTracker& tracker);
 
 /// Orient unit normals (sorted index) by reference normals (sorted index): where a reference
@@ -41,7 +42,8 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
 /// Returns false when the references are not a consistent orientation (more than 1 % of
 /// same-sheet neighbour pairs face opposite ways); the normals are then to be re-oriented.
 bool orient_normals_by_reference(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
-                                 const NeighborLists& lists, double radius, std::vector<Vec3>& normals,
-                                 const std::vector<Vec3>& reference, ProgressTracker& tracker);
+                                 const NeighborLists& lists, const std::vector<double>& radius,
+                                 std::vector<Vec3>& normals, const std::vector<Vec3>& reference,
+                                 ProgressTracker& tracker);
 
 }  // namespace particlemesh::detail

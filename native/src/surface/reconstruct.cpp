@@ -14,7 +14,9 @@
 #include "particlemesh/core/error.h"
 #include "surface/normals_impl.h"
 #include "surface/raw_triangulation.h"
+#include "surface/orient_outward.h"
 #include "surface/surface_builder.h"
+#include "surface/view_rays.h"
 
 namespace particlemesh {
 
@@ -22,6 +24,24 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+/// The distribution of the distinct particles' local spacings, in units of r0.
+SurfaceStats::Spread spacing_spread(const detail::RawTriangulation& raw) {
+  std::vector<double> h;
+  h.reserve(raw.max_edge.size());
+  for (size_t s = 0; s < raw.max_edge.size(); ++s)
+    if (raw.rep[s] == s) h.push_back(raw.max_edge[s] / raw.stats.max_edge);
+  SurfaceStats::Spread out;
+  if (h.empty()) return out;
+  std::sort(h.begin(), h.end());
+  auto at = [&](double f) { return h[size_t(f * double(h.size() - 1) + 0.5)]; };
+  out.min = h.front();
+  out.p10 = at(0.1);
+  out.median = at(0.5);
+  out.p90 = at(0.9);
+  out.max = h.back();
+  return out;
+}
 
 void check_surface_options(const SurfaceOptions& o) {
   if (!(o.normal_angle > 0 && o.normal_angle <= 180))
@@ -50,10 +70,11 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
   std::vector<Triangle> tris;
   detail::with_threads(options.threads, [&] {
     detail::RawTriangulation raw = detail::run_raw_triangulation(cloud, options, tracker, 0.0, 0.55,
-                                                                   detail::TriangleIndices::Sorted);
+                                                                   detail::TriangleIndices::Sorted, options.local_spacing);
     result.triangulation = raw.stats;
     const NeighborGrid& grid = *raw.grid;
     const size_t n = cloud.size();
+    if (options.local_spacing) st.local_spacing = spacing_spread(raw);
 
     auto t0 = Clock::now();
     using Source = SurfaceOptions::NormalSource;
@@ -86,7 +107,7 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
       });
     } else {
       tracker.stage("estimating normals", 0.55, 0.65, n);
-      normals = detail::pca_normals_sorted(grid, raw.rep, raw.neighbors, raw.stats.max_edge, tracker, &raw.triangles);
+      normals = detail::pca_normals_sorted(grid, raw.rep, raw.neighbors, raw.max_edge, tracker, &raw.triangles);
       std::vector<Vec3> reference;
       if (options.normals == Source::Auto && cloud.has_normals()) {
         // A normal without a direction (zero, or subnormal) is a particle without a normal:
@@ -104,8 +125,8 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
       // The cloud's normals orient directly when they are consistent; otherwise (or without
       // them) the spanning tree orients, and they only vote which way each piece faces.
       if (reference.empty() ||
-          !detail::orient_normals_by_reference(grid, raw.rep, raw.neighbors, raw.stats.max_edge, normals, reference, tracker))
-        detail::orient_normals_mst(grid, raw.rep, raw.neighbors, raw.stats.max_edge, normals, reference, tracker);
+          !detail::orient_normals_by_reference(grid, raw.rep, raw.neighbors, raw.max_edge, normals, reference, tracker))
+        detail::orient_normals_mst(grid, raw.rep, raw.neighbors, raw.max_edge, normals, reference, tracker);
       st.normals_estimated = true;
     }
     st.seconds_normals = seconds_since(t0);
@@ -117,8 +138,15 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     tracker.check();
     t0 = Clock::now();
     detail::BuilderOptions bo;
+    if (options.has_viewpoint) {
+      if (!is_finite(options.viewpoint)) throw Error(Status::InvalidArgument, "the viewpoint is not finite");
+      st.viewpoint_used = detail::plausible_viewpoint(P, normals, active, options.viewpoint);
+      bo.view.active = st.viewpoint_used;
+      bo.view.origin = options.viewpoint;
+    }
     bo.cos_normal_angle = std::cos(options.normal_angle * std::numbers::pi / 180.0);
-    bo.max_edge = raw.stats.max_edge;
+    bo.max_edge = &raw.max_edge;
+    bo.edge_cap = raw.edge_cap;
     bo.max_hole = options.fill_holes;
     bo.small_hole = std::min<size_t>(6, options.fill_holes);
     bo.fill_edge_factor = options.fill_edge_factor;
@@ -135,6 +163,7 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     tracker.check();
     st.candidates = bs.candidates;
     st.rejected_conormal = bs.rejected_conormal;
+    st.rejected_shadow = bs.rejected_shadow;
     st.grown = bs.grown;
     st.seeds = bs.seeds;
     st.pinches_resolved = bs.pinches_resolved;
@@ -145,6 +174,7 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     st.components_flipped = bs.components_flipped;
     st.unused_points = bs.unused_points;
     for (const auto& [edges, width] : bs.open_loops) st.open_loops.push_back({edges, width});
+    st.holes_left_edges = std::move(bs.holes_left_edges);
     tracker.check();
     t0 = Clock::now();
     // Back to the input's indices.

@@ -18,7 +18,8 @@
 #include "surface/neighbor_lists.h"
 #include "surface/raw_triangulation.h"
 #include "surface/smallest_sphere.h"
-#include "surface/spacing_impl.h"
+#include "spatial/local_spacing_impl.h"
+#include "spatial/spacing_impl.h"
 
 namespace particlemesh {
 
@@ -49,9 +50,21 @@ struct TestCounters {
 
 namespace detail {
 
+namespace {
+
+/// Within kSpacingBand of r0 a local spacing is sampling noise and r0 stands (an even sampling
+/// meshes as with one spacing); beyond, it follows the cloud, less the band (continuous).
+double r0_with_band(double h, double r0, double band) {
+  if (h > r0 * (1 + band)) return h / (1 + band);
+  if (h < r0 * (1 - band)) return h / (1 - band);
+  return r0;
+}
+
+}  // namespace
+
 RawTriangulation run_raw_triangulation(const PointCloud& cloud, const TriangulateOptions& options,
                                        ProgressTracker& tracker, double begin, double end,
-                                       TriangleIndices indices) {
+                                       TriangleIndices indices, bool local) {
   check_options(options);
   validate_point_cloud(cloud);
   const size_t n = cloud.size();
@@ -68,7 +81,7 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
   if (options.spacing > 0) {
     st.spacing = options.spacing;
   } else {
-    const SpacingEstimate est = estimate_spacing_impl(cloud.positions.data(), n, tracker, at(0.0), at(0.3));
+    const SpacingEstimate est = estimate_spacing_impl(cloud.positions.data(), n, tracker, at(0.0), at(local ? 0.15 : 0.3));
     st.spacing = est.spacing;
     st.spacing_estimated = true;
   }
@@ -76,17 +89,43 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
   st.max_edge = options.max_edge_factor * st.spacing;
   if (!(st.max_edge > 0) || !std::isfinite(st.max_edge))
     throw Error(Status::InvalidArgument, "the max edge length is not a positive finite number");
+  // Each point's own spacing, in the units of r0: scaled so that the cloud's median
+  // nearest-neighbour distance is r0 (unchanged when r0 was estimated).
+  std::vector<double> local_spacing;
+  if (local) {
+    const double measured = st.spacing_estimated
+                                ? st.spacing
+                                : estimate_spacing_impl(cloud.positions.data(), n, tracker, at(0.0), at(0.15)).spacing;
+    local_spacing = local_spacing_impl(cloud.positions.data(), n, measured, tracker, at(0.15), at(0.3));
+    // At most kMaxLocalSpacing r0: sparser than that, samples are too far apart to be one
+    // surface at the cloud's scale (stray clusters, a scan's far fringe).
+    const double scale = st.spacing / measured, cap = kMaxLocalSpacing * st.spacing;
+    for (double& h : local_spacing) h = std::min(r0_with_band(h * scale, st.spacing, kSpacingBand), cap);
+    raw.edge_cap = options.max_edge_factor * cap;
+  }
   st.seconds_spacing = seconds_since(t0);
 
   // 2. Neighbour lists within R = 2L/sqrt(3). A point strictly inside the smallest sphere of
   //    a triangle with edges <= L is closer than 2 rho <= 2L/sqrt(3) to *every* corner (rho is
   //    at most L/sqrt(3) for an acute triangle, L/2 for an obtuse one), so the list of the
-  //    triangle's lowest corner alone holds every possible blocker.
+  //    triangle's lowest corner alone holds every possible blocker. With a local spacing each
+  //    point has its own L and R, every edge is at most the pair limit of its ends (at most
+  //    the larger L), and the list of the corner with the largest L holds every blocker.
   t0 = Clock::now();
   tracker.stage("neighbour search", at(0.3), at(0.55), n);
-  raw.neighbor_radius = st.max_edge * (2.0 / std::sqrt(3.0)) * (1.0 + 1e-6);
+  const auto to_radius = [](double L) { return L * (2.0 / std::sqrt(3.0)) * (1.0 + 1e-6); };
+  const double neighbor_radius = to_radius(st.max_edge);
+  double cell = neighbor_radius;
+  if (local) {
+    // Cells of the median radius: a point's box query then spans 2-3 cells per axis, more
+    // only where the spacing is larger.
+    std::vector<double> r(local_spacing);
+    std::nth_element(r.begin(), r.begin() + ptrdiff_t(n / 2), r.end());
+    cell = to_radius(options.max_edge_factor * r[n / 2]);
+    if (!(cell > 0) || !std::isfinite(cell)) throw Error(Status::InvalidArgument, "the local spacing is not positive and finite");
+  }
   try {
-    raw.grid = std::make_unique<NeighborGrid>(cloud.positions.data(), n, raw.neighbor_radius);
+    raw.grid = std::make_unique<NeighborGrid>(cloud.positions.data(), n, cell);
   } catch (const Error& e) {
     if (e.status() != Status::LimitExceeded) throw;
     throw Error(e.status(), std::string(e.what()) + " (the cells follow the spacing: a larger spacing makes them larger)");
@@ -97,13 +136,37 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
   st.duplicate_points = duplicates;
   if (n - duplicates < 3)
     throw Error(Status::InvalidInput, "fewer than three distinct points (all points coincide?)");
-  raw.neighbors = build_neighbor_lists(grid, raw.rep, raw.neighbor_radius, options.max_neighbors, tracker);
+  std::vector<double>& Lp = raw.max_edge;
+  if (local) {
+    Lp.resize(n);
+    std::vector<double> radius(n);
+    parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+      for (size_t s = b; s < e; ++s) {
+        // Duplicates take their representative's (the first copy's) spacing.
+        Lp[s] = options.max_edge_factor * local_spacing[grid.original_index(uint32_t(s))];
+        radius[s] = to_radius(Lp[s]);
+      }
+    });
+    for (size_t s = 0; s < n; ++s) Lp[s] = Lp[raw.rep[s]], radius[s] = radius[raw.rep[s]];
+    // Every particle at r0 (an even sampling): the lists of one radius, as without local
+    // spacing (the same lists, built faster).
+    if (std::all_of(Lp.begin(), Lp.end(), [&](double l) { return l == st.max_edge; }))
+      raw.neighbors = build_neighbor_lists(grid, raw.rep, neighbor_radius, options.max_neighbors, tracker);
+    else
+      raw.neighbors = build_neighbor_lists(grid, raw.rep, radius, options.max_neighbors, tracker);
+  } else {
+    Lp.assign(n, st.max_edge);
+    raw.neighbors = build_neighbor_lists(grid, raw.rep, neighbor_radius, options.max_neighbors, tracker);
+  }
   const NeighborLists& nbr = raw.neighbors;
   st.max_neighbors_seen = nbr.max_count;
+  auto limit2 = [&](uint32_t a, uint32_t b) {
+    const double l = pair_limit(Lp[a], Lp[b]);
+    return l * l;
+  };
 
   // The test's work, counted before it starts: the pairs (j, k) of each point's higher
   // neighbours within L are the triplets it examines (max_triplets_per_point).
-  const double L2 = st.max_edge * st.max_edge;
   const auto& P = grid.sorted_points();
   {
     std::atomic<uint64_t> triplets{0};
@@ -124,7 +187,7 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
         uint64_t higher = 0;
         for (const uint32_t* q = std::upper_bound(nbr.begin(uint32_t(i)), nbr.end(uint32_t(i)), uint32_t(i));
              q != nbr.end(uint32_t(i)); ++q)
-          higher += squared_distance(P[*q], P[i]) <= L2;
+          higher += squared_distance(P[*q], P[i]) <= limit2(uint32_t(i), *q);
         sum += higher * (higher - (higher > 0)) / 2;
       }
       triplets.fetch_add(sum, std::memory_order_relaxed);
@@ -167,7 +230,7 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
         const Vec3 pi = P[i];
         near.clear();
         for (const uint32_t* q = std::upper_bound(ni, ne, i); q != ne; ++q)
-          if (squared_distance(P[*q], pi) <= L2) near.push_back(*q);
+          if (squared_distance(P[*q], pi) <= limit2(i, *q)) near.push_back(*q);
         // With the limits lifted one point can have ~1e9 triplets, each tested against up to
         // 1e5 neighbours: the cancel flag is checked inside the point's work too (every 256
         // pairs; a check costs a relaxed load, and on the calling thread a clock read).
@@ -181,16 +244,20 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
               tracker.tick(0);
             }
             const uint32_t k = near[c];
-            if (squared_distance(P[j], P[k]) > L2) continue;
+            if (squared_distance(P[j], P[k]) > limit2(j, k)) continue;
             const SmallestSphere s = smallest_sphere(pi, P[j], P[k]);
             if (s.degenerate) {
               ++cnt.degenerate;
               continue;
             }
             ++cnt.candidates;
+            // Every possible blocker is in the list of the corner with the largest L.
+            uint32_t widest = i;
+            if (Lp[j] > Lp[widest]) widest = j;
+            if (Lp[k] > Lp[widest]) widest = k;
             bool blocked = false, tie = false;
-            for (const uint32_t* q = ni; q != ne; ++q) {
-              if (*q == j || *q == k) continue;
+            for (const uint32_t *q = nbr.begin(widest), *qe = nbr.end(widest); q != qe; ++q) {
+              if (*q == i || *q == j || *q == k) continue;
               if (sphere_contains(s, P[*q], &tie)) {
                 blocked = true;
                 break;

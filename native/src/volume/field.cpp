@@ -8,7 +8,7 @@
 #include "core/parallel.h"
 #include "core/progress_tracker.h"
 #include "particlemesh/core/error.h"
-#include "surface/spacing_impl.h"
+#include "spatial/spacing_impl.h"
 #include "volume/anisotropy_impl.h"
 #include "volume/field_impl.h"
 

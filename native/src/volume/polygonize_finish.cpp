@@ -9,7 +9,7 @@
 #include "particlemesh/core/error.h"
 #include "particlemesh/mesh/components.h"
 #include "particlemesh/smooth/taubin.h"
-#include "surface/spacing_impl.h"
+#include "spatial/spacing_impl.h"
 
 namespace particlemesh::detail {
 

@@ -45,6 +45,8 @@ namespace particlemesh_pcl
     double normal_angle = 120.0;     ///< co-normality limit, degrees (SurfaceOptions::normal_angle)
     std::size_t fill_holes = 100;    ///< largest boundary loop filled, edges (SurfaceOptions::fill_holes)
     bool raw = false;                ///< the seed's exact triangle set instead of the surface
+    bool local_spacing = true;       ///< each point's own edge limit (SurfaceOptions::local_spacing)
+    bool use_viewpoint = true;       ///< keep depth jumps seen from the viewpoint open (SurfaceOptions::viewpoint)
   };
 
   namespace detail
@@ -169,7 +171,7 @@ namespace particlemesh_pcl
       inline std::size_t
       getMaximumNearestNeighbors () const { return (surface_.max_neighbors); }
 
-      /** \brief Set the co-normality limit in degrees (default 90): a triangle whose corner
+      /** \brief Set the co-normality limit in degrees (default 120): a triangle whose corner
         * normals disagree by more is not surface (keeps sheets that face each other apart). */
       inline void
       setNormalAngle (double degrees) { surface_.normal_angle = degrees; }
@@ -187,6 +189,30 @@ namespace particlemesh_pcl
       /** \brief Get the largest boundary loop that may be filled. */
       inline std::size_t
       getMaximumHoleSize () const { return (surface_.fill_holes); }
+
+      /** \brief Give each point its own longest edge from the spacing of the points around it
+        * (default true): unevenly sampled scans (a depth camera's samples spread with the
+        * distance) mesh whole. Within 15 % of r0 a point's spacing is r0, at most it is 3 r0,
+        * and r0 (setSpacing, or estimated) scales them. false: one longest edge, r0 x the max
+        * edge factor, for every point. */
+      inline void
+      setLocalSpacing (bool enable) { surface_.local_spacing = enable; }
+
+      /** \brief Does each point get its own longest edge? */
+      inline bool
+      getLocalSpacing () const { return (surface_.local_spacing); }
+
+      /** \brief Keep the depth jumps seen from the viewpoint (the input's sensor_origin_, or
+        * setNormalViewPoint) open (default true): no triangle gets an edge within 12.5 degrees
+        * of the view ray through it. Taken only where the points look scanned from there (most
+        * of their planes face it well below grazing angles): a default origin an object was
+        * never scanned from is ignored (getReport ().surface.viewpoint_used). */
+      inline void
+      setUseViewPoint (bool enable) { surface_.use_viewpoint = enable; }
+
+      /** \brief Are depth jumps seen from the viewpoint kept open? */
+      inline bool
+      getUseViewPoint () const { return (surface_.use_viewpoint); }
 
       /** \brief Return the seed's exact triangle set (default false): every triangle that
         * passes the smallest-sphere test, unoriented and not a manifold (overlapping pairs on

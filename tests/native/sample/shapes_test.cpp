@@ -7,7 +7,7 @@
 #include "particlemesh/core/error.h"
 
 #include "particlemesh/mesh/topology_report.h"
-#include "particlemesh/surface/spacing.h"
+#include "particlemesh/spatial/spacing.h"
 #include "support/test_support.h"
 
 using namespace particlemesh;

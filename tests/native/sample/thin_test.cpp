@@ -10,7 +10,8 @@
 #include "particlemesh/sample/shapes.h"
 #include "particlemesh/spatial/neighbor_grid.h"
 #include "particlemesh/surface/reconstruct.h"
-#include "particlemesh/surface/spacing.h"
+#include "particlemesh/spatial/local_spacing.h"
+#include "particlemesh/spatial/spacing.h"
 #include "support/test_support.h"
 
 using namespace particlemesh;
@@ -135,4 +136,40 @@ TEST(ThinPoints, BadArgumentsAreNamed) {
     EXPECT_NE(std::string(e.what()).find("point 7"), std::string::npos) << e.what();
   }
   EXPECT_TRUE(thin_points(nullptr, 0, 0.1).empty());
+}
+
+TEST(ThinPoints, PerPointDistancesThinEachRegionByItsOwnSpacing) {
+  // Two halves of a sphere, one 2.8 times sparser, thinned by twice each point's own local
+  // spacing: both halves keep about the same share of their points (one distance for all
+  // would thin the dense half to the sparse one's spacing and leave the sparse one whole),
+  // and every dropped point has a kept point of lower index within its own distance.
+  PointCloud c;
+  for (const Vec3& p : fibonacci_sphere(20000).positions)
+    if (p.z < 0) c.positions.push_back(p);
+  const size_t dense = c.size();
+  for (const Vec3& p : fibonacci_sphere(2500).positions)
+    if (p.z >= 0) c.positions.push_back(p);
+  LocalSpacing ls = estimate_local_spacing(c.positions.data(), c.size());
+  for (double& h : ls.spacing) h *= 2;
+  const std::vector<uint32_t> kept = thin_points(c.positions.data(), c.size(), ls.spacing);
+  size_t kept_dense = 0;
+  for (uint32_t i : kept) kept_dense += i < dense;
+  const double share_dense = double(kept_dense) / double(dense);
+  const double share_sparse = double(kept.size() - kept_dense) / double(c.size() - dense);
+  EXPECT_GT(share_dense, 0.15);
+  EXPECT_LT(share_dense, 0.4);
+  EXPECT_NEAR(share_sparse / share_dense, 1.0, 0.35);
+  std::vector<char> is_kept(c.size(), 0);
+  for (uint32_t i : kept) is_kept[i] = 1;
+  for (uint32_t i = 0; i < c.size(); ++i) {
+    bool covered = is_kept[i] != 0;
+    for (uint32_t k : kept)
+      if (k < i && distance(c.positions[k], c.positions[i]) < ls.spacing[i]) covered = true;
+    ASSERT_TRUE(covered) << i;
+  }
+  const std::vector<double> wrong(3, 1.0);
+  EXPECT_THROW(thin_points(c.positions.data(), c.size(), wrong), Error);
+  std::vector<double> bad(c.size(), 1.0);
+  bad[7] = 0;
+  EXPECT_THROW(thin_points(c.positions.data(), c.size(), bad), Error);
 }

@@ -11,7 +11,7 @@
 
 #include "particlemesh/core/error.h"
 #include "particlemesh/sample/shapes.h"
-#include "particlemesh/surface/spacing.h"
+#include "particlemesh/spatial/spacing.h"
 #include "support/test_support.h"
 
 using namespace particlemesh;

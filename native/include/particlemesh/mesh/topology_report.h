@@ -50,6 +50,9 @@ struct TopologyReport {
   bool consistently_oriented = false; ///< no orientation conflicts and no edge with > 2 faces
   bool outward = false;               ///< every closed component has positive signed volume
   std::vector<ComponentReport> per_component;  ///< largest first (then by lowest triangle)
+  /// The edges of each boundary loop, smallest first (holes by size: a scan's sampling gaps
+  /// are loops of a few edges, its real openings long ones).
+  std::vector<size_t> boundary_loop_edges;
 };
 
 /// Compute the report. O(F log F).

@@ -25,7 +25,14 @@ namespace particlemesh {
 ///         would span more than 2^21 cells along an axis.
 PM_EXPORT std::vector<uint32_t> thin_points(const Vec3* points, size_t n, double min_distance);
 
+/// The same with a distance per point: point i is kept unless a kept point of lower index lies
+/// closer than min_distance[i] (an unevenly sampled cloud thinned by a factor of each point's
+/// local spacing, estimate_local_spacing, stays as uneven as it was, only coarser).
+/// @throws as above, and Error(InvalidArgument) if min_distance does not hold n values.
+PM_EXPORT std::vector<uint32_t> thin_points(const Vec3* points, size_t n, const std::vector<double>& min_distance);
+
 /// The cloud's points at thin_points' indices, with their normals and attributes.
 PM_EXPORT PointCloud thin_cloud(const PointCloud& cloud, double min_distance);
+PM_EXPORT PointCloud thin_cloud(const PointCloud& cloud, const std::vector<double>& min_distance);
 
 }  // namespace particlemesh

@@ -57,6 +57,22 @@ struct SurfaceOptions : TriangulateOptions {
   double fill_edge_factor = 1.5;
   /// Turn each closed component to face outward (positive signed volume).
   bool orient = true;
+  /// Each particle's edge limit follows the sampling around it (real scans are sampled
+  /// unevenly): L_i = max_edge_factor x h_i, h_i its local spacing (estimate_local_spacing;
+  /// within 15 % of r0 it is r0, so an even sampling meshes as with one spacing; at most 3 r0),
+  /// scaled so that the cloud's median nearest-neighbour distance is `spacing` when that is
+  /// given. An edge may be as long as the mean of its ends' limits. Everything measured in L
+  /// uses the local value: the neighbour search, the plane fits, the fill limit, the widths of
+  /// open loops. false: one limit L = max_edge_factor x spacing for the whole cloud, as the raw
+  /// test (triangulate_raw) has.
+  bool local_spacing = true;
+  /// Where a scan was taken from (a PCD's VIEWPOINT, pcl::PointCloud::sensor_origin_), if
+  /// known: no triangle then has an edge within 12.5 degrees of the view ray through it (such
+  /// an edge joins a surface to what lies behind it, across a depth jump). Used only where the
+  /// cloud looks like a scan from there (most points' estimated planes face it at well below
+  /// grazing angles; SurfaceStats::viewpoint_used says whether it was).
+  bool has_viewpoint = false;
+  Vec3 viewpoint;
 };
 
 struct SurfaceStats {
@@ -79,8 +95,19 @@ struct SurfaceStats {
     double width = 0;
   };
   std::vector<OpenLoop> open_loops;
+  /// The edges of every loop left open, ascending: the holes left by size (a scan's sampling
+  /// gaps are loops of a few edges, its real openings and outlines long ones).
+  std::vector<size_t> holes_left_edges;
   size_t components_flipped = 0;  ///< closed components turned outward
   size_t unused_points = 0;       ///< distinct particles in no triangle
+  /// The particles' local spacings in units of r0 (all 1 without local_spacing): smallest,
+  /// 10th percentile, median, 90th percentile, largest, over the distinct particles.
+  struct Spread {
+    double min = 1, p10 = 1, median = 1, p90 = 1, max = 1;
+  };
+  Spread local_spacing;
+  bool viewpoint_used = false;    ///< SurfaceOptions::viewpoint was given and taken
+  size_t rejected_shadow = 0;     ///< raw triangles dropped for bridging a depth jump
   double seconds_normals = 0;
   double seconds_extraction = 0;
   double seconds_repair = 0;

@@ -30,9 +30,8 @@ namespace particlemesh_pcl
       report_.input = toParticles (*input_, *indices_, particles, index_map);
 
       PreprocessOptions options = preprocess_;
-      if (use_sensor_origin_)
-        for (int c = 0; c < 3; ++c)
-          options.viewpoint[c] = input_->sensor_origin_[c];
+      for (int c = 0; c < 3; ++c)
+        options.viewpoint[c] = use_sensor_origin_ ? input_->sensor_origin_[c] : viewpoint_[c];
 
       detail::SurfaceOutput out = detail::reconstructParticles (std::move (particles), options, surface_);
 

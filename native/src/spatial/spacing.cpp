@@ -1,4 +1,4 @@
-#include "particlemesh/surface/spacing.h"
+#include "particlemesh/spatial/spacing.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +10,7 @@
 #include "particlemesh/core/error.h"
 #include "particlemesh/spatial/neighbor_grid.h"
 #include "spatial/grid_search.h"
-#include "surface/spacing_impl.h"
+#include "spatial/spacing_impl.h"
 
 namespace particlemesh {
 namespace detail {

@@ -1,4 +1,4 @@
-#include "particlemesh/surface/spacing.h"
+#include "particlemesh/spatial/spacing.h"
 
 #include <gtest/gtest.h>
 

@@ -2,7 +2,7 @@
 #pragma once
 
 #include "core/progress_tracker.h"
-#include "particlemesh/surface/spacing.h"
+#include "particlemesh/spatial/spacing.h"
 
 namespace particlemesh::detail {
 

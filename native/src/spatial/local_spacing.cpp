@@ -1,0 +1,254 @@
+#include "particlemesh/spatial/local_spacing.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <string>
+
+#include <Eigen/Eigenvalues>
+
+#include "core/parallel.h"
+#include "particlemesh/core/error.h"
+#include "particlemesh/spatial/neighbor_grid.h"
+#include "spatial/local_spacing_impl.h"
+#include "spatial/spacing_impl.h"
+
+namespace particlemesh {
+namespace detail {
+
+namespace {
+
+constexpr int kK = kLocalSpacingNeighbors;
+
+constexpr uint32_t kNone = 0xffffffffu;
+/// Rings of cells searched at most around a point (a point farther than this from its
+/// neighbours' cells keeps what it found).
+constexpr int32_t kMaxRing = 24;
+
+/// The median of v (the upper one of an even count).
+double median_of(double* v, int count) {
+  std::nth_element(v, v + count / 2, v + count);
+  return v[count / 2];
+}
+
+/// The k nearest distinct neighbours (at a distance > 0) of each point, as sorted indices of
+/// `grid`, nearest first (ties by distance, then index); kNone where a point has fewer within
+/// reach. Written over the library's own grid rather than with a k-d tree: the grid is the
+/// neighbour structure of every other stage, and on surface samplings the 5^3 cells around a
+/// point's cell hold its nearest (cells of 2 r0), gathered once for all the cell's points.
+
+std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, ProgressTracker& tracker) {
+  const size_t n = grid.point_count();
+  const double h = grid.cell_size();
+  std::vector<uint32_t> out(n * kK, kNone);
+  parallel_blocks(grid.cell_count(), 256, [&](size_t cb, size_t ce) {
+    if (tracker.cancelled()) return;
+    std::vector<uint32_t> block;  // the points of the cells within `ring` of the cell
+    std::vector<uint32_t> open;   // the cell's points whose k nearest are not all found yet
+    std::vector<std::pair<double, uint32_t>> found;
+    for (size_t c = cb; c < ce; ++c) {
+      const auto cc = grid.cell_coord(uint32_t(c));
+      block.clear();
+      open.clear();
+      for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) open.push_back(s);
+      // Rings of cells around the cell, gathered once for all its points: after ring r the
+      // block holds every point within r h of any of them. The first two rings at once.
+      for (int32_t ring = 2; !open.empty(); ++ring) {
+        grid.for_each_cell_in({cc[0] - ring, cc[1] - ring, cc[2] - ring}, {cc[0] + ring, cc[1] + ring, cc[2] + ring},
+                              [&](uint32_t b) {
+                                const auto bc = grid.cell_coord(b);
+                                if (ring > 2 &&
+                                    std::max({std::abs(bc[0] - cc[0]), std::abs(bc[1] - cc[1]), std::abs(bc[2] - cc[2])}) != ring)
+                                  return;
+                                for (uint32_t t = grid.cell_begin(b); t < grid.cell_end(b); ++t) block.push_back(t);
+                              });
+        const double reach2 = double(ring) * h * double(ring) * h;
+        size_t still = 0;
+        for (uint32_t s : open) {
+          const Vec3 p = grid.sorted_point(s);
+          // Only the points within the rings' reach count now (every one of them is in the
+          // block); the k nearest are done when there are k (or no more rings will come).
+          found.clear();
+          for (uint32_t t : block) {
+            const double e2 = squared_distance(grid.sorted_point(t), p);
+            if (e2 > 0 && (e2 <= reach2 || ring == kMaxRing)) found.push_back({e2, t});
+          }
+          const size_t k = std::min<size_t>(kK, found.size());
+          if (k == kK || ring == kMaxRing) {
+            std::nth_element(found.begin(), found.begin() + ptrdiff_t(k), found.end());
+            std::sort(found.begin(), found.begin() + ptrdiff_t(k));
+            for (size_t i = 0; i < k; ++i) out[size_t(s) * kK + i] = found[i].second;
+          } else {
+            open[still++] = s;
+          }
+        }
+        open.resize(still);
+      }
+      tracker.tick(grid.cell_end(uint32_t(c)) - grid.cell_begin(uint32_t(c)));
+    }
+  });
+  tracker.check();
+  return out;
+}
+
+/// How far point s must reach to be connected all around, from its m nearest neighbours `ids`:
+/// in the plane fitted to them, the nearest neighbour in each of six sectors of 60 degrees
+/// (centred on the direction the neighbours spread most along), and the third nearest of those
+/// (among the sectors that have one, at least four). On an even sampling every sector's
+/// nearest is about one spacing away; where the sampling is denser along one direction than
+/// across it (a depth camera's rows on a surface seen at a grazing angle, a line scanner's
+/// scan lines) at most two sectors' nearest lie along, and the reach is the spacing across.
+/// The third, not the median: at the rim of a small opening up to three sectors see its far
+/// side, and the reach must not grow with it (nor, then, the fill limit that keeps the
+/// opening open). Where the nearest
+/// neighbours all lie along one line, the neighbourhood is widened (a ball of twice, then four
+/// times the farthest's distance; only when it is not cut off by a gap) until it spans the
+/// surface. 0 when it never does.
+double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, int m, bool may_widen,
+                    std::vector<Vec3>& d) {
+  if (m < 6) return 0;
+  const Vec3 p = grid.sorted_point(s);
+  d.clear();
+  double farthest = 0;
+  for (int k = 0; k < m; ++k) {
+    d.push_back(grid.sorted_point(ids[k]) - p);
+    farthest = std::max(farthest, norm(d.back()));
+  }
+  Eigen::Vector3d u, w;
+  for (int round = 0;; ++round) {
+    Vec3 c;
+    for (const Vec3& x : d) c += x;
+    c = c * (1.0 / double(d.size()));
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (const Vec3& x : d) {
+      const Eigen::Vector3d y(x.x - c.x, x.y - c.y, x.z - c.z);
+      cov += y * y.transpose();
+    }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+    eig.computeDirect(cov);
+    u = eig.eigenvectors().col(2);
+    w = eig.eigenvectors().col(1);
+    if (eig.eigenvalues()(1) >= kElongated * eig.eigenvalues()(2)) break;
+    if (round == 2 || !may_widen) return 0;
+    const double reach = farthest * double(2 << round);
+    d.clear();
+    grid.for_each_within(p, reach, [&](uint32_t t, double e2) {
+      if (e2 > 0) d.push_back(grid.sorted_point(t) - p);
+    });
+  }
+  std::array<double, 6> nearest;
+  nearest.fill(INFINITY);
+  constexpr double kHalfSqrt3 = 0.8660254037844386;
+  for (const Vec3& x : d) {
+    const double a = x.x * u.x() + x.y * u.y() + x.z * u.z();
+    const double b = x.x * w.x() + x.y * w.y() + x.z * w.z();
+    // Sector k is centred on the direction at 60 k degrees from u: the one the offset is
+    // closest to, from its components along the directions at 0, 60 and 120 degrees.
+    const double c[3] = {a, 0.5 * a + kHalfSqrt3 * b, -0.5 * a + kHalfSqrt3 * b};
+    int best = 0;
+    for (int j = 1; j < 3; ++j)
+      if (std::abs(c[j]) > std::abs(c[best])) best = j;
+    const int sector = c[best] >= 0 ? best : best + 3;
+    nearest[size_t(sector)] = std::min(nearest[size_t(sector)], norm(x));
+  }
+  std::array<double, 6> found;
+  int f = 0;
+  for (double x : nearest)
+    if (std::isfinite(x)) found[size_t(f++)] = x;
+  if (f < 4) return 0;
+  std::nth_element(found.begin(), found.begin() + 2, found.begin() + f);
+  return found[2];
+}
+
+
+}  // namespace
+
+std::vector<double> local_spacing_impl(const Vec3* points, size_t n, double r0, ProgressTracker& tracker,
+                                       double begin, double end) {
+  tracker.stage("local spacing", begin, end, n);
+  const NeighborGrid grid(points, n, 2 * r0);
+  const std::vector<uint32_t> knn = nearest_neighbors(grid, tracker);
+  auto dist = [&](uint32_t s, int k) {
+    const uint32_t t = knn[size_t(s) * kK + size_t(k)];
+    return t == kNone ? INFINITY : distance(grid.sorted_point(s), grid.sorted_point(t));
+  };
+  // Each point's neighbourhood: its nearest neighbours up to the first gap (a neighbour more
+  // than kGap times as far as the one before): a small cluster of particles far from the rest
+  // is a neighbourhood of its own, and the rest's spacing is not its.
+  std::vector<double> nn(n), raw(n), out_sorted(n);
+  std::vector<uint8_t> size(n);
+  parallel_blocks(n, 4096, [&](size_t b, size_t e) {
+    for (size_t s = b; s < e; ++s) {
+      nn[s] = dist(uint32_t(s), 0);
+      int k = std::isfinite(nn[s]) ? 1 : 0;
+      while (k < kK && knn[s * kK + size_t(k)] != kNone && (k < 2 || dist(uint32_t(s), k) <= kGap * dist(uint32_t(s), k - 1))) ++k;
+      size[s] = uint8_t(k);
+    }
+  });
+  tracker.check();
+  // Per point: the median nearest-neighbour distance around it, and the sector reach (in units
+  // of an even sampling's spacing; 0 where it is not taken).
+  std::vector<double> reach(n);
+  parallel_blocks(n, 4096, [&](size_t b, size_t e) {
+    std::array<double, kK + 1> v;
+    std::vector<Vec3> work;
+    for (size_t s = b; s < e; ++s) {
+      const int m = size[s];
+      int count = 0;
+      v[size_t(count++)] = nn[s];
+      for (int k = 0; k < m; ++k) v[size_t(count++)] = nn[knn[s * kK + size_t(k)]];
+      raw[s] = median_of(v.data(), count);
+      reach[s] = sector_reach(grid, uint32_t(s), knn.data() + s * kK, m, m == kK, work) / kSectorReach;
+    }
+  });
+  tracker.check();
+  // Smoothed over the neighbourhood, and the larger taken: the median of the nearest-neighbour
+  // spacings; a high quantile of the reaches (scaled back so that an even sampling keeps its
+  // spacing), so that where the sampling needs a long reach (across a depth camera's rows)
+  // every point around has it, whichever way its own nearest neighbours happen to lie.
+  parallel_blocks(n, 4096, [&](size_t b, size_t e) {
+    std::array<double, kK + 1> v, w;
+    for (size_t s = b; s < e; ++s) {
+      int count = 0;
+      v[size_t(count)] = raw[s];
+      w[size_t(count++)] = reach[s];
+      for (int k = 0; k < size[s]; ++k) {
+        const uint32_t t = knn[s * kK + size_t(k)];
+        v[size_t(count)] = raw[t];
+        w[size_t(count++)] = reach[t];
+      }
+      const int q = std::min(count - 1, int(kSmoothQuantile * count));
+      std::nth_element(w.begin(), w.begin() + q, w.begin() + count);
+      out_sorted[s] = std::max(median_of(v.data(), count), w[size_t(q)] / kSmoothBias);
+    }
+  });
+  tracker.check();
+  std::vector<double> out(n);
+  for (uint32_t s = 0; s < n; ++s) {
+    // A point with no neighbour at all within reach (a far outlier) keeps the cloud's spacing.
+    const double v = out_sorted[s];
+    out[grid.original_index(s)] = std::isfinite(v) && v > 0 ? v : r0;
+  }
+  return out;
+}
+
+}  // namespace detail
+
+LocalSpacing estimate_local_spacing(const Vec3* points, size_t n, int threads, const ProgressCallback& progress) {
+  if (points == nullptr && n > 0) throw Error(Status::InvalidArgument, "points is NULL");
+  for (size_t i = 0; i < n; ++i)
+    if (!is_finite(points[i]))
+      throw Error(Status::InvalidInput, "point " + std::to_string(i) + " has a non-finite coordinate");
+  detail::ProgressTracker tracker(progress);
+  return detail::with_threads(threads, [&] {
+    LocalSpacing r;
+    r.median_nn = detail::estimate_spacing_impl(points, n, tracker, 0.0, 0.3).spacing;
+    r.spacing = detail::local_spacing_impl(points, n, r.median_nn, tracker, 0.3, 1.0);
+    tracker.finish();
+    return r;
+  });
+}
+
+}  // namespace particlemesh

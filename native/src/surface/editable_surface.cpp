@@ -1,0 +1,231 @@
+#include "surface/editable_surface.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "core/parallel.h"
+#include "surface/triangle_angles.h"
+
+namespace particlemesh::detail {
+
+EditableSurface::EditableSurface(const std::vector<Vec3>& P, const std::vector<Frame>& frames, GrownSurface&& g,
+                                 ProgressTracker& tracker)
+    : P_(P), frame_(frames), tris_(std::move(g.triangles)) {
+  const size_t n = P_.size();
+  const auto& vc = g.corners;
+  const auto& vc_off = g.corner_offset;
+  const auto& acc_count = g.accepted_count;
+  alive_.assign(tris_.size(), 1);
+  has_extra_.assign(n, 0);
+  vt_off_.assign(n + 1, 0);
+  parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+    for (size_t v = b; v < e; ++v) vt_off_[v + 1] = acc_count[v];
+  });
+  std::partial_sum(vt_off_.begin(), vt_off_.end(), vt_off_.begin());
+  vt_.resize(vt_off_[n]);
+  {
+    std::vector<uint32_t> fill(vt_off_.begin(), vt_off_.end() - 1);
+    for (uint32_t t = 0; t < tris_.size(); ++t)
+      for (uint32_t v : tris_[t]) vt_[fill[v]++] = t;
+  }
+  tracker.check();
+  // Per vertex: its boundary half-edges v -> s (no accepted triangle holds s -> v, i.e. no
+  // corner at v has s as its predecessor). Found in parallel and joined in block order.
+  const size_t block = 8192, blocks = (n + block - 1) / block;
+  std::vector<std::vector<uint64_t>> found(blocks);
+  parallel_blocks(blocks, 1, [&](size_t bb, size_t be) {
+    for (size_t b = bb; b < be; ++b) {
+      if (tracker.cancelled()) return;
+      tracker.tick(0);  // on the calling thread: lets a cancel request in
+      for (size_t v = b * block; v < std::min(n, (b + 1) * block); ++v) {
+        const Corner* x = vc.data() + vc_off[v];
+        const uint32_t m = acc_count[v];
+        for (uint32_t i = 0; i < m; ++i) {
+          bool closed = false;
+          for (uint32_t j = 0; j < m && !closed; ++j) closed = x[j].pred == x[i].succ;
+          if (!closed) found[b].push_back(half_key(uint32_t(v), x[i].succ));
+        }
+      }
+    }
+  });
+  tracker.check();
+  for (const auto& f : found) boundary_.insert(f.begin(), f.end());
+  // Growth is over: free its structures.
+  decltype(g.corners)().swap(g.corners);
+  std::vector<uint32_t>().swap(g.corner_offset);
+}
+
+EditableSurface::EditableSurface(const std::vector<Vec3>& P, const std::vector<Frame>& frames,
+                                 const std::vector<Triangle>& triangles)
+    : P_(P), frame_(frames), tris_(triangles) {
+  const size_t n = P_.size();
+  alive_.assign(tris_.size(), 1);
+  has_extra_.assign(n, 0);
+  vt_off_.assign(n + 1, 0);
+  for (const Triangle& t : tris_)
+    for (uint32_t v : t) ++vt_off_[v + 1];
+  std::partial_sum(vt_off_.begin(), vt_off_.end(), vt_off_.begin());
+  vt_.resize(vt_off_[n]);
+  std::vector<uint32_t> fill(vt_off_.begin(), vt_off_.end() - 1);
+  for (uint32_t t = 0; t < tris_.size(); ++t)
+    for (uint32_t v : tris_[t]) vt_[fill[v]++] = t;
+  for (const Triangle& T : tris_)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = T[k], b = T[(k + 1) % 3];
+      if (!boundary_.erase(half_key(b, a))) boundary_.insert(half_key(a, b));
+    }
+}
+
+bool EditableSurface::directed_used(uint32_t a, uint32_t b) const {
+  bool used = false;
+  for_each_tri(a, [&](uint32_t t) {
+    const Triangle& T = tris_[t];
+    if (T[(corner_of(T, a) + 1) % 3] == b) used = true;
+  });
+  return used;
+}
+
+bool EditableSurface::triangle_exists(uint32_t a, uint32_t b, uint32_t c) const {
+  bool found = false;
+  for_each_tri(a, [&](uint32_t t) {
+    const Triangle& T = tris_[t];
+    if ((T[0] == b || T[1] == b || T[2] == b) && (T[0] == c || T[1] == c || T[2] == c)) found = true;
+  });
+  return found;
+}
+
+bool EditableSurface::starts_boundary(uint32_t v) const {
+  bool found = false;
+  for_each_tri(v, [&](uint32_t t) {
+    const Triangle& T = tris_[t];
+    const uint32_t w = T[(corner_of(T, v) + 1) % 3];
+    bool twin = false;
+    for_each_tri(v, [&](uint32_t u) {
+      const Triangle& U = tris_[u];
+      twin = twin || U[(corner_of(U, v) + 2) % 3] == w;
+    });
+    found = found || !twin;
+  });
+  return found;
+}
+
+void EditableSurface::add_triangle(const Triangle& T) {
+  const uint32_t id = uint32_t(tris_.size());
+  tris_.push_back(T);
+  alive_.push_back(1);
+  for (uint32_t v : T) {
+    extra_[v].push_back(id);
+    has_extra_[v] = 1;
+  }
+  for (int k = 0; k < 3; ++k) {
+    const uint32_t a = T[k], b = T[(k + 1) % 3];
+    if (!boundary_.erase(half_key(b, a))) boundary_.insert(half_key(a, b));
+  }
+}
+
+void EditableSurface::kill_triangle(uint32_t t) {
+  alive_[t] = 0;
+  const Triangle& T = tris_[t];
+  for (int k = 0; k < 3; ++k) {
+    const uint32_t a = T[k], b = T[(k + 1) % 3];
+    if (!boundary_.erase(half_key(a, b))) boundary_.insert(half_key(b, a));
+  }
+}
+
+std::vector<uint32_t> EditableSurface::vertices_with_added_triangles() const {
+  std::vector<uint32_t> out;
+  for (const auto& [v, list] : extra_) out.push_back(v);
+  return out;
+}
+
+std::vector<std::vector<uint32_t>> EditableSurface::trace_loops() const {
+  std::vector<uint64_t> bnd(boundary_.begin(), boundary_.end());
+  std::sort(bnd.begin(), bnd.end());
+  std::vector<uint8_t> used(bnd.size(), 0);
+  auto find_edge = [&](uint32_t a, uint32_t b) -> int64_t {
+    auto it = std::lower_bound(bnd.begin(), bnd.end(), half_key(a, b));
+    return it != bnd.end() && *it == half_key(a, b) ? it - bnd.begin() : -1;
+  };
+  // Next boundary edge after a -> b: leave b along the wedge that follows, counter-clockwise,
+  // the gap where a -> b's triangle ends.
+  auto next_edge = [&](uint32_t a, uint32_t b) -> int64_t {
+    const double gap = angle_of(frame_[b], P_[a] - P_[b]);
+    double best = INFINITY;
+    int64_t best_e = -1;
+    for_each_tri(b, [&](uint32_t t) {
+      const Triangle& T = tris_[t];
+      const uint32_t s = T[(corner_of(T, b) + 1) % 3];
+      const int64_t e = find_edge(b, s);
+      if (e < 0 || used[size_t(e)]) return;
+      double d = angle_of(frame_[b], P_[s] - P_[b]) - gap;
+      while (d < 0) d += kTwoPi;
+      while (d >= kTwoPi) d -= kTwoPi;
+      if (d < best) {
+        best = d;
+        best_e = e;
+      }
+    });
+    return best_e;
+  };
+  std::vector<std::vector<uint32_t>> loops;
+  for (size_t start = 0; start < bnd.size(); ++start) {
+    if (used[start]) continue;
+    std::vector<uint32_t> path;
+    int64_t e = int64_t(start);
+    while (e >= 0 && !used[size_t(e)]) {
+      used[size_t(e)] = 1;
+      const uint32_t a = uint32_t(bnd[size_t(e)] >> 32), b = uint32_t(bnd[size_t(e)]);
+      // Split at a repeated vertex: the part since its last visit is a loop of its own.
+      auto it = std::find(path.begin(), path.end(), a);
+      if (it != path.end()) {
+        loops.emplace_back(it, path.end());
+        path.erase(it, path.end());
+      }
+      path.push_back(a);
+      if (b == path.front()) break;
+      e = next_edge(a, b);
+    }
+    if (path.size() >= 3) loops.push_back(std::move(path));
+  }
+  for (auto& l : loops) std::rotate(l.begin(), std::min_element(l.begin(), l.end()), l.end());
+  std::sort(loops.begin(), loops.end());
+  return loops;
+}
+
+void EditableSurface::surface_pieces(std::vector<uint32_t>& piece, std::vector<uint32_t>& triangles) const {
+  const size_t n = P_.size();
+  piece.resize(n);
+  std::iota(piece.begin(), piece.end(), 0u);
+  auto find = [&](uint32_t x) {
+    while (piece[x] != x) x = piece[x] = piece[piece[x]];
+    return x;
+  };
+  for (uint32_t t = 0; t < tris_.size(); ++t) {
+    if (!alive_[t]) continue;
+    for (int k = 1; k < 3; ++k) {
+      const uint32_t a = find(tris_[t][0]), b = find(tris_[t][k]);
+      if (a != b) piece[std::max(a, b)] = std::min(a, b);
+    }
+  }
+  for (uint32_t v = 0; v < n; ++v) piece[v] = find(v);
+  triangles.assign(n, 0);
+  for (uint32_t t = 0; t < tris_.size(); ++t)
+    if (alive_[t]) ++triangles[piece[tris_[t][0]]];
+}
+
+std::vector<Triangle> EditableSurface::take() const {
+  std::vector<Triangle> out;
+  out.reserve(tris_.size());
+  for (uint32_t t = 0; t < tris_.size(); ++t)
+    if (alive_[t]) out.push_back(tris_[t]);
+  return out;
+}
+
+std::vector<uint64_t> EditableSurface::boundary() const {
+  std::vector<uint64_t> b(boundary_.begin(), boundary_.end());
+  std::sort(b.begin(), b.end());
+  return b;
+}
+
+}  // namespace particlemesh::detail

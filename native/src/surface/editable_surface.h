@@ -1,0 +1,98 @@
+// Internal: the grown surface as the repair edits it - vertex -> triangles (a CSR built once
+// plus a small overflow for triangles added later) and the set of boundary half-edges (a -> b
+// with no b -> a), kept up to date as triangles come and go, so that tracing loops and finding
+// pinched vertices look only at the boundary, not at the whole surface.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
+
+#include "core/progress_tracker.h"
+#include "particlemesh/core/vec3.h"
+#include "particlemesh/mesh/tri_mesh.h"
+#include "surface/growth.h"
+#include "surface/tangent_arcs.h"
+
+namespace particlemesh::detail {
+
+class EditableSurface {
+ public:
+  /// Indexes the grown surface, read off the growth's corner lists (which are then freed): a
+  /// vertex's accepted corners lead its list, each with its triangle's other two corners.
+  /// `positions` and `frames` (the vertices' tangent frames) must outlive the surface.
+  EditableSurface(const std::vector<Vec3>& positions, const std::vector<Frame>& frames, GrownSurface&& grown,
+                  ProgressTracker& tracker);
+  /// A surface of the given triangles (consistently wound, at most two per edge).
+  EditableSurface(const std::vector<Vec3>& positions, const std::vector<Frame>& frames,
+                  const std::vector<Triangle>& triangles);
+
+  const std::vector<Vec3>& positions() const { return P_; }
+  const std::vector<Frame>& frames() const { return frame_; }
+  size_t point_count() const { return P_.size(); }
+
+  /// f(t) for each live triangle at v: those of the index in order, then those added.
+  template <class F>
+  void for_each_tri(uint32_t v, F&& f) const {
+    for (uint32_t i = vt_off_[v]; i < vt_off_[v + 1]; ++i)
+      if (alive_[vt_[i]]) f(vt_[i]);
+    if (has_extra_[v]) {
+      auto it = extra_.find(v);
+      if (it != extra_.end())
+        for (uint32_t t : it->second)
+          if (alive_[t]) f(t);
+    }
+  }
+
+  /// Triangle ids: [0, triangle_slots()); killed ones stay, not alive.
+  size_t triangle_slots() const { return tris_.size(); }
+  const Triangle& triangle(uint32_t t) const { return tris_[t]; }
+  bool alive(uint32_t t) const { return alive_[t] != 0; }
+  Vec3 face_normal(const Triangle& T) const { return normalized(cross(P_[T[1]] - P_[T[0]], P_[T[2]] - P_[T[0]])); }
+
+  /// Is the directed edge a -> b in a live triangle?
+  bool directed_used(uint32_t a, uint32_t b) const;
+  bool edge_exists(uint32_t a, uint32_t b) const { return directed_used(a, b) || directed_used(b, a); }
+  bool triangle_exists(uint32_t a, uint32_t b, uint32_t c) const;
+  /// Does a boundary half-edge start at v (an edge v -> w of a triangle with no w -> v)?
+  bool starts_boundary(uint32_t v) const;
+
+  void add_triangle(const Triangle& T);
+  void kill_triangle(uint32_t t);
+
+  static uint64_t half_key(uint32_t a, uint32_t b) { return (uint64_t(a) << 32) | b; }
+  /// Boundary half-edges (a << 32 | b), unordered.
+  const std::unordered_set<uint64_t>& boundary_set() const { return boundary_; }
+  bool closed() const { return boundary_.empty(); }
+  /// The vertices with triangles added since indexing (not held to the growth's wedge rule).
+  std::vector<uint32_t> vertices_with_added_triangles() const;
+
+  /// Boundary loops, each a vertex sequence following the boundary edges v_i -> v_{i+1};
+  /// loops through a vertex twice are split there. Sorted, each starting at its smallest
+  /// vertex, so the repair is deterministic.
+  std::vector<std::vector<uint32_t>> trace_loops() const;
+
+  /// The pieces of the surface (triangles sharing a vertex are connected), by union-find:
+  /// each vertex's piece, named by the piece's lowest vertex, and each piece's triangles,
+  /// counted at that vertex.
+  void surface_pieces(std::vector<uint32_t>& piece, std::vector<uint32_t>& triangles) const;
+
+  /// The live triangles, in order.
+  std::vector<Triangle> take() const;
+  /// Boundary half-edges, sorted.
+  std::vector<uint64_t> boundary() const;
+
+ private:
+  const std::vector<Vec3>& P_;
+  const std::vector<Frame>& frame_;
+  std::vector<Triangle> tris_;
+  std::vector<uint8_t> alive_;
+  std::vector<uint32_t> vt_off_, vt_;
+  std::unordered_map<uint32_t, std::vector<uint32_t>> extra_;
+  std::vector<uint8_t> has_extra_;  ///< per vertex: holds a list in extra_
+  std::unordered_set<uint64_t> boundary_;
+};
+
+}  // namespace particlemesh::detail

@@ -1,0 +1,92 @@
+#include "surface/orient_outward.h"
+
+#include <algorithm>
+#include <atomic>
+#include <numeric>
+#include <utility>
+
+#include "core/parallel.h"
+
+namespace particlemesh::detail {
+
+size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<Triangle>& T,
+                                        const std::vector<uint64_t>& boundary, std::vector<Vec3>* vertex_normals) {
+  // Components by shared vertices (the same as by shared edges on a manifold without
+  // pinches); a component is open if it holds a boundary half-edge. A concurrent union-find
+  // that always links the higher root under the lower: each component ends at its lowest
+  // point, whatever the threads did (a serial pass over 2M triangles took 40-50 ms).
+  const size_t n = P.size();
+  std::vector<uint32_t> parent(n);
+  std::iota(parent.begin(), parent.end(), 0u);
+  auto up = [&](uint32_t x) { return std::atomic_ref<uint32_t>(parent[x]).load(std::memory_order_relaxed); };
+  auto find = [&](uint32_t x) {  // halving the path: a parent's parent is an ancestor too
+    for (uint32_t p = up(x); p != x; p = up(x)) {
+      const uint32_t g = up(p);
+      if (g != p) std::atomic_ref<uint32_t>(parent[x]).store(g, std::memory_order_relaxed);
+      x = g;
+    }
+    return x;
+  };
+  parallel_blocks(T.size(), 8192, [&](size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i)
+      for (int k = 1; k < 3; ++k) {
+        uint32_t a = T[i][0], c = T[i][k];
+        while (true) {
+          a = find(a);
+          c = find(c);
+          if (a == c) break;
+          if (a < c) std::swap(a, c);  // link the higher root a under c
+          uint32_t expected = a;
+          if (std::atomic_ref<uint32_t>(parent[a]).compare_exchange_strong(expected, c, std::memory_order_relaxed)) break;
+        }
+      }
+  });
+  std::vector<uint32_t> root(n);
+  parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+    for (size_t v = b; v < e; ++v) root[v] = find(uint32_t(v));
+  });
+  std::vector<uint8_t> open(n, 0);
+  for (uint64_t e : boundary) open[root[uint32_t(e >> 32)]] = 1;
+  // Signed volumes: partial sums per fixed chunk of triangles (in space order, so a chunk
+  // meets few components), added up in chunk order: the same sums for any thread count.
+  const size_t chunk = 16384, chunks = (T.size() + chunk - 1) / chunk;
+  std::vector<std::vector<std::pair<uint32_t, double>>> part(chunks);
+  parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
+    for (size_t h = hb; h < he; ++h)
+      for (size_t i = h * chunk; i < std::min(T.size(), (h + 1) * chunk); ++i) {
+        const Triangle& t = T[i];
+        const uint32_t r = root[t[0]];
+        const Vec3 o = P[r];
+        const double v = dot(P[t[0]] - o, cross(P[t[1]] - o, P[t[2]] - o));
+        auto& pt = part[h];
+        auto it = std::find_if(pt.rbegin(), pt.rend(), [r](const auto& x) { return x.first == r; });
+        if (it != pt.rend()) it->second += v;
+        else pt.push_back({r, v});
+      }
+  });
+  std::vector<double> vol(n, 0.0);
+  for (const auto& pt : part)
+    for (const auto& [r, v] : pt) vol[r] += v;
+  auto turned = [&](uint32_t r) { return !open[r] && vol[r] < 0; };
+  parallel_blocks(T.size(), 8192, [&](size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i)
+      if (turned(root[T[i][0]])) std::swap(T[i][1], T[i][2]);
+  });
+  std::atomic<size_t> flipped{0};
+  parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+    size_t count = 0;
+    for (size_t v = b; v < e; ++v) {
+      const uint32_t r = root[v];
+      if (!turned(r)) continue;
+      count += r == v;
+      // Reversing a triangle negates its normal exactly (the cross product's terms swap), so
+      // the vertex normals of a turned component are the negated ones, to the bit (0 - x, as
+      // a sum of negated terms gives +0 where they cancel).
+      if (vertex_normals) (*vertex_normals)[v] = Vec3{} - (*vertex_normals)[v];
+    }
+    flipped.fetch_add(count, std::memory_order_relaxed);
+  });
+  return flipped.load();
+}
+
+}  // namespace particlemesh::detail

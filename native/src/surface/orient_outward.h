@@ -1,0 +1,21 @@
+// Internal: turning the closed components of the finished surface to face outward.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "particlemesh/core/vec3.h"
+#include "particlemesh/mesh/tri_mesh.h"
+
+namespace particlemesh::detail {
+
+/// Turn every closed component (one holding none of the `boundary` half-edges, a << 32 | b)
+/// so that it encloses positive volume, negating its points' `vertex_normals` (if given) to
+/// match; returns how many flipped. Components are by shared vertices (the same as by shared
+/// edges on a manifold without pinches). The result does not depend on the thread count.
+size_t orient_closed_components_outward(const std::vector<Vec3>& positions, std::vector<Triangle>& triangles,
+                                        const std::vector<uint64_t>& boundary,
+                                        std::vector<Vec3>* vertex_normals = nullptr);
+
+}  // namespace particlemesh::detail

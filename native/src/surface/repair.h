@@ -1,0 +1,72 @@
+// Internal: the repair of the grown surface, in a fixed order (measured: filling large loops
+// before unpinching created wrong handles):
+//  1. boundary loops are split at repeated vertices (EditableSurface::trace_loops) and loops
+//     of up to `small_hole` edges are filled;
+//  2. at each pinched vertex (more than one fan) only the largest fan is kept;
+//  3. loops of up to `max_hole` edges whose fill stays within the edge limit are filled (real
+//     openings are wider than that and stay open);
+//  4. open fragments of a few triangles joined to another piece by a raw triangle are
+//     dissolved, and particles the surface passed by are inserted into the triangle or edge
+//     they lie over;
+//  5. loops that only a sharper fold closes are filled inside large components.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "core/progress_tracker.h"
+#include "particlemesh/mesh/tri_mesh.h"
+#include "surface/editable_surface.h"
+#include "surface/hole_fill.h"
+
+namespace particlemesh::detail {
+
+struct RepairOptions {
+  FillOptions fill;
+  size_t max_hole = 100;  ///< loops up to this many edges may be filled (0 = none)
+};
+
+struct RepairStats : FillStats {
+  size_t pinches_resolved = 0;    ///< fans removed at pinched vertices
+  size_t holes_left = 0;          ///< boundary loops left open
+  size_t largest_hole_left = 0;   ///< edges of the largest loop left open
+  std::vector<std::pair<size_t, double>> open_loops;  ///< (edges, width / L) of loops left open (at most 1000)
+  std::vector<size_t> holes_left_edges;  ///< the edges of every loop left open, ascending
+};
+
+/// Fragments of at most this many triangles may be dissolved (see drop_fragments).
+constexpr uint32_t kMaxFragment = 12;
+/// Rounds of insert_unused at most (each lets particles attach to the ones the round before put in).
+constexpr int kInsertRounds = 4;
+/// loop_width is cubic in the loop's edges; above this many edges it is not computed (reported
+/// as infinite: such loops are openings).
+constexpr size_t kMaxWidthLoop = 128;
+
+/// At vertices whose triangles form more than one fan, keep the largest fan. Such a vertex
+/// has a gap between its fans, so it starts two or more boundary edges: only those, and the
+/// corners of triangles added since indexing, are checked. Returns the fans removed.
+size_t unpinch(EditableSurface& s);
+
+/// A particle the surface passed by (active, in no triangle) is inserted into the surface
+/// triangle it lies over (split in three), or beside the nearest edge: beyond a boundary edge
+/// as a new triangle on it, else splitting the edge. Every new edge is within the fill limit
+/// (FillOptions::fill_limit), no new triangle folds back over the surface or overlaps a
+/// vertex's fan. Particles that fit nowhere stay out. Returns how many were inserted.
+size_t insert_unused(EditableSurface& s, const std::vector<uint8_t>& active, const std::vector<Triangle>& raw,
+                     const FillOptions& o);
+
+/// Fragments of a few triangles that lie against a larger piece of surface (a lone triangle
+/// or a tiny closed "bubble" grown from particles the main surface passed by, where it is
+/// thin or sharp) are dissolved; insert_unused then puts their particles into the surface
+/// around them. A small piece on its own (a droplet of four particles) is a surface of its
+/// own and stays: a fragment is only dissolved if a raw triangle joins it to a larger piece.
+/// Returns the triangles removed.
+size_t drop_fragments(EditableSurface& s, const std::vector<Triangle>& raw);
+
+/// The whole repair, in the order above; then counts the loops left open.
+void repair_surface(EditableSurface& s, const std::vector<uint8_t>& active, const std::vector<Triangle>& raw,
+                    const RepairOptions& o, RepairStats& stats, ProgressTracker& tracker);
+
+}  // namespace particlemesh::detail

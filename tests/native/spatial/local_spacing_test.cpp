@@ -1,0 +1,127 @@
+// Each particle's own spacing (particlemesh/spatial/local_spacing.h).
+#include "particlemesh/spatial/local_spacing.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <random>
+
+#include "particlemesh/core/error.h"
+#include "particlemesh/sample/shapes.h"
+#include "particlemesh/spatial/spacing.h"
+#include "support/test_support.h"
+
+using namespace particlemesh;
+
+namespace test_local {
+
+// A Fibonacci sphere with its lower half `dense` points' worth and its upper half `sparse`'s.
+PointCloud two_density_sphere(size_t dense, size_t sparse) {
+  PointCloud out;
+  for (const Vec3& p : fibonacci_sphere(dense).positions)
+    if (p.z < 0) out.positions.push_back(p);
+  for (const Vec3& p : fibonacci_sphere(sparse).positions)
+    if (p.z >= 0) out.positions.push_back(p);
+  return out;
+}
+
+// A flat sheet in z = 0 sampled in rows: `along` apart within a row, rows `across` apart,
+// alternate rows shifted by half a step (a depth camera's rows on a surface seen at a grazing
+// angle), with a little jitter.
+PointCloud rows(size_t nx, size_t ny, double along, double across, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-0.05, 0.05);
+  PointCloud c;
+  for (size_t j = 0; j < ny; ++j)
+    for (size_t i = 0; i < nx; ++i)
+      c.positions.push_back({(double(i) + 0.5 * double(j % 2) + u(rng)) * along, (double(j) + u(rng)) * across, 0});
+  return c;
+}
+
+double median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+}  // namespace test_local
+
+using namespace test_local;
+
+TEST(LocalSpacing, EvenSamplingsGetTheirMedianSpacingEverywhere) {
+  for (const PointCloud& c : {fibonacci_sphere(20000), poisson_disk_sample(torus_mesh(1.0, 0.4, 96, 48), 0.03, 3)}) {
+    const LocalSpacing ls = estimate_local_spacing(c.positions.data(), c.size());
+    ASSERT_EQ(ls.spacing.size(), c.size());
+    EXPECT_DOUBLE_EQ(ls.median_nn, estimate_spacing(c.positions.data(), c.size()).spacing);
+    EXPECT_NEAR(median(ls.spacing) / ls.median_nn, 1.0, 0.03);
+    for (double h : ls.spacing) {
+      EXPECT_GT(h, 0.85 * ls.median_nn);
+      EXPECT_LT(h, 1.3 * ls.median_nn);
+    }
+  }
+}
+
+TEST(LocalSpacing, FollowsTheDensity) {
+  // Nearest neighbours sqrt(20000 / 3000) = 2.6 times farther apart on the upper half.
+  const PointCloud c = two_density_sphere(20000, 3000);
+  const LocalSpacing ls = estimate_local_spacing(c.positions.data(), c.size());
+  std::vector<double> low, high;
+  for (size_t i = 0; i < c.size(); ++i)
+    if (std::abs(c.positions[i].z) > 0.2) (c.positions[i].z < 0 ? low : high).push_back(ls.spacing[i]);
+  EXPECT_NEAR(median(high) / median(low), std::sqrt(20000.0 / 3000.0), 0.4);
+  EXPECT_NEAR(median(low) / ls.median_nn, 1.0, 0.05);
+}
+
+TEST(LocalSpacing, RowsGiveTheSpacingAcrossThem) {
+  // Rows 3 apart, points 1 apart along them: the nearest-neighbour distance is 1, but a
+  // surface through the rows needs edges across them (3 and more).
+  const PointCloud c = rows(60, 20, 1.0, 3.0, 7);
+  const LocalSpacing ls = estimate_local_spacing(c.positions.data(), c.size());
+  EXPECT_NEAR(ls.median_nn, 1.0, 0.1);
+  EXPECT_GT(median(ls.spacing), 1.6);  // x 2 = an edge limit past 3
+  EXPECT_LT(median(ls.spacing), 3.5);
+  // The same rows 1.2 apart are an even sampling.
+  const PointCloud even = rows(60, 20, 1.0, 1.2, 7);
+  const LocalSpacing le = estimate_local_spacing(even.positions.data(), even.size());
+  EXPECT_NEAR(median(le.spacing) / le.median_nn, 1.0, 0.15);
+}
+
+TEST(LocalSpacing, AFarClusterKeepsItsOwnSpacing) {
+  // A dense sheet (spacing 1) and, 500 away, a small cluster of particles 10 apart: the
+  // cluster's neighbourhood ends at the gap, so its spacing is its own, and the sheet's
+  // is not raised by the cluster.
+  PointCloud c = rows(40, 40, 1.0, 1.0, 3);
+  const size_t sheet = c.size();
+  for (int i = 0; i < 5; ++i)
+    for (int j = 0; j < 5; ++j) c.positions.push_back({500.0 + 10.0 * i, 10.0 * j, 0});
+  const LocalSpacing ls = estimate_local_spacing(c.positions.data(), c.size());
+  for (size_t i = sheet; i < c.size(); ++i) {
+    EXPECT_GT(ls.spacing[i], 7.0) << i;
+    EXPECT_LT(ls.spacing[i], 20.0) << i;
+  }
+  std::vector<double> own(ls.spacing.begin(), ls.spacing.begin() + long(sheet));
+  EXPECT_LT(*std::max_element(own.begin(), own.end()), 2.0);
+}
+
+TEST(LocalSpacing, SameForAnyThreadCountAndInputOrder) {
+  const PointCloud c = two_density_sphere(8000, 2000);
+  const LocalSpacing a = estimate_local_spacing(c.positions.data(), c.size(), 1);
+  const LocalSpacing b = estimate_local_spacing(c.positions.data(), c.size(), 0);
+  EXPECT_EQ(a.spacing, b.spacing);
+  std::vector<size_t> order(c.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::shuffle(order.begin(), order.end(), std::mt19937_64(11));
+  std::vector<Vec3> shuffled;
+  for (size_t i : order) shuffled.push_back(c.positions[i]);
+  const LocalSpacing s = estimate_local_spacing(shuffled.data(), shuffled.size());
+  for (size_t k = 0; k < order.size(); ++k) ASSERT_EQ(s.spacing[k], a.spacing[order[k]]) << k;
+}
+
+TEST(LocalSpacing, BadInput) {
+  std::vector<Vec3> p = {{0, 0, 0}, {1, 0, 0}, {0, std::nan(""), 0}};
+  EXPECT_THROW(estimate_local_spacing(p.data(), p.size()), Error);
+  EXPECT_THROW(estimate_local_spacing(nullptr, 3), Error);
+  p = {{0, 0, 0}, {0, 0, 0}};
+  EXPECT_THROW(estimate_local_spacing(p.data(), p.size()), Error);
+}

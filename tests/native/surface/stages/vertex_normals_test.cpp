@@ -1,0 +1,52 @@
+// The finished surface's vertex normals and outward orientation (surface/vertex_normals.h,
+// surface/orient_outward.h).
+#include "surface/vertex_normals.h"
+
+#include <gtest/gtest.h>
+
+#include "stage_support.h"
+#include "surface/orient_outward.h"
+
+using namespace particlemesh;
+using namespace particlemesh::detail;
+
+TEST(VertexNormals, AngleWeightedAndFallbackForUnusedPoints) {
+  test::Sheet s(3, 3);
+  s.P.push_back({5, 5, 5});
+  s.N.push_back({1, 0, 0});  // a point in no triangle keeps its own normal
+  s.frames = tangent_frames(s.N);
+  EditableSurface e(s.P, s.frames, s.tris);
+  std::vector<uint8_t> active(s.P.size(), 1);
+  size_t unused = 0;
+  const auto n = surface_vertex_normals(e, active, s.N, unused);
+  EXPECT_EQ(unused, 1u);
+  for (size_t v = 0; v < 9; ++v) EXPECT_NEAR(distance(n[v], Vec3{0, 0, 1}), 0, 1e-12) << v;
+  EXPECT_EQ(n[9].x, 1);
+  // A bent sheet: the corner between two faces at 90 degrees gets their angle-weighted mean.
+  const std::vector<Vec3> P = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  const std::vector<Vec3> N(4, Vec3{0, 0, 0});
+  const std::vector<Frame> frames(4);
+  EditableSurface bent(P, frames, std::vector<Triangle>{{0, 1, 2}, {0, 3, 1}});
+  const auto m = surface_vertex_normals(bent, std::vector<uint8_t>(4, 1), N, unused);
+  EXPECT_NEAR(distance(m[0], normalized(Vec3{0, 1, 1})), 0, 1e-7);  // two right angles
+}
+
+TEST(OrientOutward, ClosedComponentsTurnOutwardOpenOnesStay) {
+  // A tetrahedron wound inward, one wound outward, and an open triangle.
+  std::vector<Vec3> P = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (int k = 0; k < 4; ++k) P.push_back(P[k] + Vec3{3, 0, 0});
+  for (const Vec3& p : {Vec3{6, 0, 0}, Vec3{7, 0, 0}, Vec3{6, 1, 0}}) P.push_back(p);
+  const std::vector<Triangle> outward = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  std::vector<Triangle> tris;
+  for (const Triangle& t : outward) tris.push_back({t[0], t[2], t[1]});                 // inward
+  for (const Triangle& t : outward) tris.push_back({t[0] + 4, t[1] + 4, t[2] + 4});     // outward
+  tris.push_back({8, 10, 9});                                                           // open, down
+  const std::vector<uint64_t> boundary = {(uint64_t(8) << 32) | 10, (uint64_t(9) << 32) | 8, (uint64_t(10) << 32) | 9};
+  std::vector<Vec3> normals(P.size(), Vec3{0, 0, 1});
+  std::vector<Triangle> turned = tris;
+  EXPECT_EQ(orient_closed_components_outward(P, turned, boundary, &normals), 1u);
+  for (size_t i = 0; i < 4; ++i) EXPECT_EQ(turned[i], outward[i]);
+  for (size_t i = 4; i < 9; ++i) EXPECT_EQ(turned[i], tris[i]);
+  for (size_t v = 0; v < 4; ++v) EXPECT_EQ(normals[v].z, -1);
+  for (size_t v = 4; v < P.size(); ++v) EXPECT_EQ(normals[v].z, 1);
+}

@@ -1,0 +1,186 @@
+// The finished surface on unevenly sampled particles: each particle's edge limit from its
+// own spacing (SurfaceOptions::local_spacing), and depth jumps seen from a scan's viewpoint.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "particlemesh/io/mesh_io.h"
+#include "particlemesh/mesh/topology_report.h"
+#include "particlemesh/sample/shapes.h"
+#include "particlemesh/surface/reconstruct.h"
+#include "particlemesh/surface/triangulate.h"
+#include "support/test_support.h"
+
+using namespace particlemesh;
+
+namespace {
+
+PointCloud two_density_sphere(size_t dense, size_t sparse) {
+  PointCloud out;
+  for (const Vec3& p : fibonacci_sphere(dense).positions)
+    if (p.z < 0) out.positions.push_back(p);
+  for (const Vec3& p : fibonacci_sphere(sparse).positions)
+    if (p.z >= 0) out.positions.push_back(p);
+  return out;
+}
+
+// A flat sheet sampled in rows `along` apart within a row and `across` between rows.
+PointCloud rows(size_t nx, size_t ny, double along, double across, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-0.05, 0.05);
+  PointCloud c;
+  for (size_t j = 0; j < ny; ++j)
+    for (size_t i = 0; i < nx; ++i)
+      c.positions.push_back({(double(i) + 0.5 * double(j % 2) + u(rng)) * along, (double(j) + u(rng)) * across, u(rng) * along});
+  return c;
+}
+
+double longest_edge(const TriMesh& m) {
+  double longest = 0;
+  for (const Triangle& t : m.triangles)
+    for (int k = 0; k < 3; ++k) longest = std::max(longest, distance(m.positions[t[k]], m.positions[t[(k + 1) % 3]]));
+  return longest;
+}
+
+SurfaceOptions global() {
+  SurfaceOptions o;
+  o.local_spacing = false;
+  return o;
+}
+
+}  // namespace
+
+TEST(UnevenSampling, TwoDensitiesCloseWithLocalSpacingOnly) {
+  // The upper half 2.8 times sparser: with one L (2 r0 of the dense half) its particles fall
+  // out; with each particle's own, one closed sphere through every particle.
+  const PointCloud c = two_density_sphere(20000, 2500);
+  const SurfaceResult local = reconstruct_surface(c);
+  const TopologyReport t = topology_report(local.mesh);
+  EXPECT_TRUE(t.closed && t.manifold && t.consistently_oriented && t.outward);
+  EXPECT_EQ(t.components, 1u);
+  EXPECT_EQ(t.per_component[0].genus, 0);
+  EXPECT_EQ(t.vertices_used, c.size());
+  EXPECT_GT(local.surface.local_spacing.max, 2.0);
+  EXPECT_NEAR(local.surface.local_spacing.min, 1.0, 0.02);
+  const SurfaceResult one = reconstruct_surface(c, global());
+  EXPECT_GT(one.surface.unused_points * 20, c.size());
+  EXPECT_EQ(one.surface.local_spacing.max, 1.0);
+}
+
+TEST(UnevenSampling, RowsJoinAcross) {
+  // A depth camera's rows on a surface seen at a grazing angle: 3 times farther apart across
+  // than along. One L from the nearest-neighbour distance cannot reach across the rows.
+  const PointCloud c = rows(60, 24, 1.0, 3.0, 5);
+  const SurfaceResult local = reconstruct_surface(c);
+  const TopologyReport t = topology_report(local.mesh);
+  EXPECT_TRUE(t.manifold && t.consistently_oriented);
+  EXPECT_EQ(t.components, 1u);
+  EXPECT_EQ(t.boundary_loops, 1u);  // the sheet's outline, no holes
+  EXPECT_EQ(t.vertices_used, c.size());
+  const TopologyReport g = topology_report(reconstruct_surface(c, global()).mesh);
+  EXPECT_GT(g.components, 10u);
+}
+
+TEST(UnevenSampling, EvenSamplingsMeshAsWithOneSpacing) {
+  // Within 15 % of r0 a particle's spacing is r0: even samplings give exactly the surface of
+  // one spacing.
+  for (const PointCloud& c : {fibonacci_sphere(10000), fibonacci_sphere(30000, 2.0, {1, 2, 3})}) {
+    const SurfaceResult local = reconstruct_surface(c), one = reconstruct_surface(c, global());
+    EXPECT_EQ(local.mesh.triangles, one.mesh.triangles);
+    EXPECT_EQ(local.surface.local_spacing.median, 1.0);
+  }
+}
+
+TEST(UnevenSampling, SpacingGivenScalesTheLocalSpacings) {
+  // --spacing R: the local spacings keep their ratios, scaled so that the cloud's median
+  // nearest-neighbour distance is R: twice the measured r0 gives twice the edge limits.
+  const PointCloud c = two_density_sphere(8000, 1500);
+  SurfaceOptions o;
+  const SurfaceResult a = reconstruct_surface(c, o);
+  o.spacing = 2 * a.triangulation.spacing;
+  o.max_edge_factor = 1.0;
+  const SurfaceResult b = reconstruct_surface(c, o);
+  EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
+  EXPECT_NEAR(b.surface.local_spacing.max, a.surface.local_spacing.max, 1e-9);
+}
+
+TEST(UnevenSampling, NoEdgeBeyondThreeTimesTheLimitOfR0) {
+  // A sparse stray cluster beside a dense sheet: local spacings stop at 3 r0, and no triangle,
+  // whichever stage made it, has an edge over 3 x 2 r0.
+  PointCloud c = rows(50, 50, 1.0, 1.0, 3);
+  const size_t sheet = c.size();
+  for (int i = 0; i < 8; ++i)
+    for (int j = 0; j < 8; ++j) c.positions.push_back({80.0 + 7.0 * i, 7.0 * j, 0});
+  const SurfaceResult r = reconstruct_surface(c);
+  EXPECT_NEAR(r.surface.local_spacing.max, 3.0, 1e-9);
+  EXPECT_LE(longest_edge(r.mesh), 6.0 * r.triangulation.spacing * (1 + 1e-12));
+  // The cluster's particles (7 apart, beyond 6 r0) stay out; the sheet is whole.
+  const TopologyReport t = topology_report(r.mesh);
+  EXPECT_EQ(t.vertices_used, sheet);
+}
+
+TEST(UnevenSampling, ViewpointTakenWhereTheParticlesLookScannedFromIt) {
+  // A plate 20 in front of the origin, and behind it, 6 spacings deeper, a wall sampled on the
+  // same view rays around it (a depth camera sees no wall behind the plate), meshed with a long
+  // edge limit (L = 7 spacings). Seen from the origin: the viewpoint is taken, and no triangle
+  // joins the plate to the wall (the rule itself: candidates_test.cpp).
+  PointCloud c;
+  for (int i = -12; i <= 12; ++i)
+    for (int j = -12; j <= 12; ++j) {
+      if (std::abs(i) <= 4 && std::abs(j) <= 4) c.positions.push_back({double(i), double(j), 20.0});
+      else c.positions.push_back({i * 26.0 / 20.0, j * 26.0 / 20.0, 26.0});
+    }
+  SurfaceOptions o = global();
+  o.spacing = 1.0;
+  o.max_edge_factor = 7.0;
+  auto bridges = [&](const TriMesh& m) {
+    size_t n = 0;
+    for (const Triangle& t : m.triangles)
+      n += std::abs(m.positions[t[0]].z - m.positions[t[1]].z) + std::abs(m.positions[t[1]].z - m.positions[t[2]].z) > 1;
+    return n;
+  };
+  const SurfaceResult blind = reconstruct_surface(c, o);
+  EXPECT_FALSE(blind.surface.viewpoint_used);
+  o.has_viewpoint = true;
+  o.viewpoint = {0, 0, 0};
+  const SurfaceResult seen = reconstruct_surface(c, o);
+  EXPECT_TRUE(seen.surface.viewpoint_used);
+  EXPECT_EQ(bridges(seen.mesh), 0u);
+  const TopologyReport t = topology_report(seen.mesh);
+  EXPECT_TRUE(t.manifold && t.consistently_oriented);
+  EXPECT_EQ(t.components, 2u);  // the plate, and the wall around it
+  EXPECT_EQ(t.vertices_used, c.size());
+  // A viewpoint the particles were not scanned from (beside them, seeing the plate and the
+  // wall edge-on) is not taken.
+  o.viewpoint = {100, 0, 23};
+  const SurfaceResult side = reconstruct_surface(c, o);
+  EXPECT_FALSE(side.surface.viewpoint_used);
+  EXPECT_EQ(side.mesh.triangles, blind.mesh.triangles);
+}
+
+TEST(UnevenSampling, RawTestKeepsOneSpacing) {
+  // The raw test is the seed's exactly: one L, whatever the sampling.
+  const PointCloud c = two_density_sphere(8000, 1500);
+  TriangulateOptions o;
+  const TriangulateResult raw = triangulate_raw(c, o);
+  EXPECT_LE(longest_edge(raw.mesh), raw.stats.max_edge * (1 + 1e-12));
+}
+
+TEST(UnevenSampling, EvenModelsKeepTheirShapeAndShortEdges) {
+  // Evenly sampled models: no triangle, whichever stage made it, over 3 r0; the right genus;
+  // the bunny scan's five real openings stay five loops.
+  PM_REQUIRE_DATA(spot, "points/spot_poisson.ply");
+  PM_REQUIRE_DATA(bunny, "points/bunny_poisson.ply");
+  for (const std::string& path : {spot, bunny}) {
+    const PointCloud c = read_point_cloud(path);
+    const SurfaceResult r = reconstruct_surface(c);
+    const TopologyReport t = topology_report(r.mesh);
+    EXPECT_LE(longest_edge(r.mesh), 3 * r.triangulation.spacing) << path;
+    EXPECT_EQ(t.components, 1u) << path;
+    EXPECT_EQ(t.per_component[0].genus, 0) << path;
+    EXPECT_EQ(t.vertices_used, c.size()) << path;
+    EXPECT_EQ(t.boundary_loops, path == bunny ? 5u : 0u) << path;
+  }
+}
