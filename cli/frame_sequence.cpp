@@ -277,7 +277,12 @@ int run_sequence(const SequenceSpec& spec) {
       int64_t out_ns = 0;
       if (current && !o.path.empty()) current = modified_ns(o.path, out_ns) && out_ns > in_ns;
     }
-    if (current) current = file_text(fr.sidecar) == sidecar_text(fr.input);
+    if (current) {  // the sidecar: the same options text, then the frame's attributes
+      const std::string text = file_text(fr.sidecar), expected = sidecar_text(fr.input);
+      current = text.compare(0, expected.size(), expected) == 0 &&
+                text.compare(expected.size(), 11, "attributes=") == 0 &&
+                text.find('\n', expected.size()) == text.size() - 1;
+    }
     if (current)
       up_to_date.push_back(f);
     else
@@ -317,8 +322,16 @@ int run_sequence(const SequenceSpec& spec) {
   };
   std::vector<Failure> failures;
   bool cancelled = false;
-  std::optional<std::vector<std::pair<std::string, int>>> layout;
+  // Every frame must carry the attributes of the sequence's first frame: read from its
+  // sidecar when it is up to date, else that frame is meshed first, alone.
+  std::optional<std::string> layout;
   int64_t layout_frame = 0;
+  if (!up_to_date.empty() && (todo.empty() || up_to_date.front() < todo.front().number)) {
+    const std::string text = file_text(sidecar_path(paths_of(up_to_date.front()).front().path));
+    const size_t at = text.rfind("attributes=");
+    layout = text.substr(at + 11, text.size() - at - 12);
+    layout_frame = up_to_date.front();
+  }
   const bool tty = !quiet && isatty(STDERR_FILENO) != 0;
   bool line_shown = false;
   auto draw = [&]() {  // with the mutex held
@@ -335,8 +348,8 @@ int run_sequence(const SequenceSpec& spec) {
   };
 
   hold_phase(true);
-  auto worker = [&]() {
-    for (;;) {
+  auto worker = [&](bool one) {
+    for (bool first = true; first || !one; first = false) {
       if (interrupted()) return;
       const size_t i = next.fetch_add(1);
       if (i >= todo.size()) return;
@@ -346,21 +359,19 @@ int run_sequence(const SequenceSpec& spec) {
       ctx.label = label;
       ctx.extra_outputs.push_back({"the options sidecar", fr.sidecar, OutputKind::Text});
       ctx.extra_contents.push_back(sidecar_text(fr.input));
-      ctx.check_attributes = [&, n = fr.number](const std::vector<VertexAttribute>& attributes) {
-        std::vector<std::pair<std::string, int>> mine;
-        for (const VertexAttribute& a : attributes) mine.emplace_back(a.name, a.components);
-        auto text = [](const std::vector<std::pair<std::string, int>>& l) {
-          std::string t;
-          for (const auto& [name, c] : l) t += (t.empty() ? "" : ", ") + name + "(" + std::to_string(c) + ")";
-          return t.empty() ? std::string("none") : t;
-        };
+      ctx.check_attributes = [&, n = fr.number, c = &ctx](const std::vector<VertexAttribute>& attributes) {
+        std::string mine;
+        for (const VertexAttribute& a : attributes)
+          mine += (mine.empty() ? "" : ", ") + a.name + "(" + std::to_string(a.components) + ")";
+        if (mine.empty()) mine = "none";
+        c->extra_contents.front() += "attributes=" + mine + "\n";
         std::lock_guard lock(mutex);
         if (!layout) {
           layout = mine;
           layout_frame = n;
         } else if (*layout != mine) {
-          throw Error(Status::InvalidInput, "its particles carry the attributes " + text(mine) + ", frame " +
-                                                std::to_string(layout_frame) + "'s carry " + text(*layout) +
+          throw Error(Status::InvalidInput, "its particles carry the attributes " + mine + ", frame " +
+                                                std::to_string(layout_frame) + "'s carry " + *layout +
                                                 ": every frame of a sequence must carry the same (or pick them "
                                                 "with --attributes)");
         }
@@ -403,9 +414,10 @@ int run_sequence(const SequenceSpec& spec) {
       draw();
     }
   };
+  if (!layout) worker(true);  // the first frame, alone: its attributes are the reference
   std::vector<std::thread> pool;
-  for (int j = 1; j < jobs; ++j) pool.emplace_back(worker);
-  worker();
+  for (int j = 1; j < jobs; ++j) pool.emplace_back(worker, false);
+  worker(false);
   for (std::thread& t : pool) t.join();
   hold_phase(false);
   clear_line();

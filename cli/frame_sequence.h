@@ -78,8 +78,9 @@ struct FrameContext {
   /// Outputs the run writes besides its own, committed with them: the options sidecar.
   std::vector<OutputSpec> extra_outputs;
   std::vector<std::string> extra_contents;
-  /// Throws Error naming the frame when the particles' attributes (after --attributes)
-  /// differ from the sequence's first frame's.
+  /// Call once the particles are read (after --attributes): records their attributes in the
+  /// sidecar, and throws Error when they differ from the sequence's first frame's (that
+  /// frame's sidecar when it is up to date; else it is meshed first, alone).
   std::function<void(const std::vector<VertexAttribute>&)> check_attributes;
   /// A warning about this frame (printed with its label, under the progress line).
   std::function<void(const std::string&)> warn;
