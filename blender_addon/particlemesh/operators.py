@@ -305,13 +305,14 @@ class PARTICLEMESH_OT_smooth(_ModalJob, bpy.types.Operator):
 
 
 class PARTICLEMESH_OT_import_cloud(bpy.types.Operator, ImportHelper):
-    """Import point clouds (.ply, .xyz, .pcd) as vertex-only mesh objects; normals and colours become attributes"""
+    """Import point clouds and simulation particles (.ply, .xyz, .pcd, .vtk, .vtu, .vtp, classic .bgeo) as vertex-only mesh objects; normals, colours, velocity and other channels become attributes"""
     bl_idname = "particlemesh.import_cloud"
     bl_label = "Import Point Cloud"
     bl_options = {"REGISTER", "UNDO"}
 
     filename_ext = ".ply"
-    filter_glob: StringProperty(default="*.ply;*.xyz;*.pcd", options={"HIDDEN"})
+    filter_glob: StringProperty(default="*.ply;*.xyz;*.pcd;*.vtk;*.vtu;*.vtp;*.bgeo;*.bgeo.gz",
+                                options={"HIDDEN"})
     files: CollectionProperty(type=bpy.types.OperatorFileListElement,
                               options={"HIDDEN", "SKIP_SAVE"})
     directory: StringProperty(subtype="DIR_PATH", options={"HIDDEN", "SKIP_SAVE"})
