@@ -2,6 +2,7 @@
 
 import os
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -203,3 +204,27 @@ def test_shared_simulator_samples(cli, tmp_path):
         r = cli("inspect", folder / name, "--json", check=False)
         cli("polygonize", folder / name, "-o", tmp_path / "s.vtu", "-q")
         assert (tmp_path / "s.vtu").stat().st_size > 0, name
+
+
+def test_ctrl_c_cancels_the_frames_in_flight(tmp_path):
+    exe = os.environ.get("PARTICLEMESH_CLI")
+    if not exe:
+        pytest.skip("PARTICLEMESH_CLI is not set to the built particlemesh binary")
+    import signal
+    import subprocess
+    for f in range(4):
+        p, a = particles(f, n=30)
+        write_vtk(tmp_path / f"f_{f}.vtk", p, a, binary=True)
+    proc = subprocess.Popen([exe, "polygonize", tmp_path / "f_{}.vtk", "-o", tmp_path / "m_{}.ply",
+                             "--radius", "0.14", "--cell", "0.004", "--jobs", "2"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(1.5)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert "cancelled (interrupted)" in err
+    # No temporary is left; a frame finished before the signal has its mesh and its sidecar.
+    left = {x.name for x in tmp_path.iterdir() if not x.name.endswith(".vtk")}
+    meshes = {n for n in left if n.startswith("m_")}
+    assert left == meshes | {f".{m}.particlemesh" for m in meshes}, left
+    assert len(meshes) < 4
