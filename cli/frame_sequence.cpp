@@ -126,7 +126,8 @@ std::string frame_path(const FramePattern& p, int64_t frame) {
 
 std::vector<int64_t> find_frames(const FramePattern& p) {
   // The field's folder is listed; a name there that starts like the pattern and goes on with
-  // a number is frame n when the pattern written for n gives exactly that file.
+  // a number is frame n when the pattern written for n gives exactly that file. ("x" stands
+  // in for the field, so that a prefix ending in '/' splits into its folder and no name.)
   const std::string folder = folder_of(p.prefix + "x");
   const std::string lead = name_of(p.prefix + "x");
   const std::string name_prefix = lead.substr(0, lead.size() - 1);
