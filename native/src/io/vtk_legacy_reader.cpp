@@ -319,7 +319,7 @@ class VtkLegacyReader {
       uint64_t next = 0, cell = 0;
       values(Type::I32, b, k, [&](uint64_t i, double v) {
         if (i == next) {
-          if (v < 0 || v > double(b)) fail(k + ": cell " + std::to_string(cell) + " has " + format_number(v) + " points");
+          if (!(v >= 0 && v <= double(b))) fail(k + ": cell " + std::to_string(cell) + " has " + format_number(v) + " points");
           next = i + 1 + uint64_t(v);
           ++cell;
           if (wanted) cells.offsets.push_back(double(cells.ids.size()));

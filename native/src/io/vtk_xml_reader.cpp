@@ -80,6 +80,13 @@ int size_of(Type t) {
   }
 }
 
+/// A value read from the file, for a message: any double (huge, NaN) without a cast.
+std::string shown_number(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.17g", v);
+  return text;
+}
+
 double decode(Type t, const unsigned char* b, bool big_endian) {
   const int n = size_of(t);
   uint64_t u = 0;
@@ -343,7 +350,16 @@ class VtkXmlReader {
     return out;
   }
 
-  uint64_t header_value(const unsigned char* b) const { return uint64_t(decode(header_size_ == 8 ? Type::U64 : Type::U32, b, big_endian_)); }
+  /// A UInt32 / UInt64 header word, read as an integer (through a double, a UInt64 near
+  /// 2^64 would round beyond the type).
+  uint64_t header_value(const unsigned char* b) const {
+    uint64_t v = 0;
+    for (size_t i = 0; i < header_size_; ++i) {
+      const size_t k = big_endian_ ? i : header_size_ - 1 - i;
+      v = v << 8 | b[k];
+    }
+    return v;
+  }
 
   /// The payload bytes of a binary or appended array: header + data, or header + zlib blocks.
   std::vector<unsigned char> payload(const unsigned char* b, size_t size, uint64_t expected, const std::string& what) const {
@@ -529,7 +545,7 @@ class VtkXmlReader {
         ++out_.faces;
         auto corner = [&](size_t i) -> uint32_t {
           if (!(ids[i] >= 0 && ids[i] < double(n)))
-            fail(label + " " + kind + ": cell " + std::to_string(k) + " refers to point " + std::to_string(int64_t(ids[i])) +
+            fail(label + " " + kind + ": cell " + std::to_string(k) + " refers to point " + shown_number(ids[i]) +
                  " (the piece has " + std::to_string(n) + ")");
           return uint32_t(base + size_t(ids[i]));
         };
