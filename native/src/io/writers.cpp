@@ -4,7 +4,7 @@
 // route its errors through a process-wide stream - not something a library loaded into
 // Blender should do. PLY and OBJ are simple enough that the layout is a few lines each.
 //
-// PLY: an optional comment line (the CLI's options digest), one vertex element (x y z float32, or float64 when needs_double_positions; nx ny nz
+// PLY: an optional comment line (WriteMeshOptions::comment), one vertex element (x y z float32, or float64 when needs_double_positions; nx ny nz
 // float32; red green blue uchar from a "color" attribute; every other attribute as float
 // properties, "name" or "name_0".."name_k"), one face element (uchar count, int indices).
 // OBJ: "# V vertices, F faces", then v (with r g b from a "color" attribute) and vn lines

@@ -31,8 +31,7 @@ struct WriteMeshOptions {
   MeshFormat format = MeshFormat::Auto;
   bool write_normals = true;  ///< write per-vertex normals when the mesh has them
   /// One line of text carried in the file's header (PLY "comment", OBJ "#", the VTK legacy
-  /// title, a VTK XML comment); empty: none. The command-line tool stores its options digest
-  /// there (a re-run of a sequence reads it back).
+  /// title, a VTK XML comment); empty: none.
   std::string comment;
 };
 
