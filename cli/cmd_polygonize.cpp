@@ -8,6 +8,8 @@
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
 #include "particlemesh/volume/polygonize.h"
+#include "attribute_selection.h"
+#include "frame_sequence.h"
 #include "particle_input.h"
 #include "progress_line.h"
 #include "report_json.h"
@@ -28,6 +30,9 @@ struct PolygonizeArgs {
   double min_component_volume = 0, min_component_particles = 0;
   int taubin = 0;
   double taubin_lambda = TaubinOptions{}.lambda, taubin_mu = TaubinOptions{}.mu;
+  std::string attributes = "all";
+  std::string lattice_anchor = "space";
+  SequenceArgs sequence;
 };
 
 nlohmann::json stats_json(const PolygonizeStats& s) {
@@ -60,15 +65,24 @@ nlohmann::json stats_json(const PolygonizeStats& s) {
                        {"finishing", s.seconds_finishing}}}};
 }
 
-int run_polygonize(const PolygonizeArgs& a) {
+std::vector<OutputSpec> output_specs(const PolygonizeArgs& a) {
+  return {{"-o", a.output, OutputKind::Mesh, a.ascii ? MeshFormat::PlyAscii : MeshFormat::Auto},
+          {"--report", a.report, OutputKind::Text}};
+}
+
+/// Mesh one file; `frame` is null for a single file, the sequence's context for a frame.
+int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
   using Clock = std::chrono::steady_clock;
   WriteMeshOptions wo;
   if (a.ascii) wo.format = MeshFormat::PlyAscii;
-  RunOutputs outputs({{"-o", a.output, OutputKind::Mesh, wo.format}, {"--report", a.report, OutputKind::Text}},
-                     {a.input});
+  std::vector<OutputSpec> specs = output_specs(a);
+  if (frame) specs.insert(specs.end(), frame->extra_outputs.begin(), frame->extra_outputs.end());
+  RunOutputs outputs(specs, {a.input});
   const auto t0 = Clock::now();
   ProgressLine progress(a.quiet);
-  const ParticleInput input = read_particles(a.input, ParticleInputArgs{}, a.threads);
+  ParticleInput input = read_particles(a.input, ParticleInputArgs{}, a.threads);
+  select_attributes(input.cloud, a.attributes);
+  if (frame) frame->check_attributes(input.cloud.attributes);
   const PointCloud& cloud = input.cloud;
   const double t_read = std::chrono::duration<double>(Clock::now() - t0).count();
 
@@ -85,6 +99,7 @@ int run_polygonize(const PolygonizeArgs& a) {
   opt.surface_smoothing.iterations = a.taubin;
   opt.surface_smoothing.lambda = a.taubin_lambda;
   opt.surface_smoothing.mu = a.taubin_mu;
+  opt.lattice_anchor = a.lattice_anchor == "particles" ? LatticeAnchor::Particles : LatticeAnchor::Space;
   opt.progress = progress.callback();
   const auto t1 = Clock::now();
   set_phase(Phase::Computing);
@@ -108,7 +123,10 @@ int run_polygonize(const PolygonizeArgs& a) {
                   "particles too far apart for the radius R = %g): lower --threshold or raise --radius",
                   result.stats.threshold, result.stats.radius);
     warning = w;
-    std::fprintf(stderr, "particlemesh polygonize: warning: %s\n", w);
+    if (frame)
+      frame->warn(w);
+    else
+      std::fprintf(stderr, "particlemesh polygonize: warning: %s\n", w);
   }
 
   const TopologyReport report = topology_report(result.mesh);
@@ -122,8 +140,11 @@ int run_polygonize(const PolygonizeArgs& a) {
     if (!warning.empty()) j["warning"] = warning;
     outputs.open("--report").write(json_text(j));
   }
+  if (frame)
+    for (size_t i = 0; i < frame->extra_outputs.size(); ++i)
+      outputs.open(frame->extra_outputs[i].option).write(frame->extra_contents[i]);
   outputs.commit_all();
-  if (!a.quiet) {
+  if (!a.quiet && !frame) {
     const auto& s = result.stats;
     std::printf("particlemesh polygonize: %s -> %s\n", a.input.c_str(), a.output.c_str());
     std::printf("  particles     %zu\n", s.particles);
@@ -163,9 +184,14 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
   CLI::App* app = root.add_subcommand(
       "polygonize", "Volume particles to the mesh of their implicit surface (seed section 5.1, marching cubes)");
   app->add_option("input", args->input,
-                  "Particles: .ply (x y z ...), .xyz (x y z per line) or, with the PCL bridge, .pcd")
+                  "Particles: .ply (x y z ...), .xyz (x y z per line), VTK .vtk/.vtu/.vtp, Houdini .bgeo or, with "
+                  "the PCL bridge, .pcd; a path with a frame field ({} or {:04d}, e.g. sim/fluid_{:04d}.vtk) is a "
+                  "sequence: every frame is meshed")
       ->required();
-  app->add_option("-o,--output", args->output, "Output mesh with normals: .ply (binary; --ascii for text) or .obj; - (or a device, a FIFO) for PLY on standard output")
+  app->add_option("-o,--output", args->output,
+                  "Output mesh with normals: .ply (binary; --ascii for text), .obj, .vtk, .vtu or .vtp; - (or a "
+                  "device, a FIFO) for PLY on standard output. With a frame pattern input, a pattern too "
+                  "(out/fluid_{:04d}.ply)")
       ->required();
   app->add_option("--radius", args->radius,
                   "Particle radius R (the field's support), world units (default: 2 x the median particle spacing)")
@@ -221,10 +247,42 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
       ->check(CLI::Range(-1.0, -1e-9))
       ->check(finite_number())
       ->capture_default_str();
-  app->add_option("--report", args->report, "Also write statistics and the topology report as JSON");
+  app->add_option("--lattice-anchor", args->lattice_anchor,
+                  "space: the marching-cubes lattice's nodes lie at multiples of the cell h in world coordinates, "
+                  "so the frames of a simulation are sampled at the same points and do not shimmer; particles: the "
+                  "lattice starts at the particles' box (what the Python polygonize does by default)")
+      ->check(CLI::IsMember({"space", "particles"}))
+      ->capture_default_str();
+  add_attributes_option(*app, args->attributes);
+  app->add_option("--report", args->report, "Also write statistics and the topology report as JSON (with a frame pattern input: a pattern too)");
   app->add_flag("--ascii", args->ascii, "Write ASCII PLY instead of binary");
   app->add_flag("-q,--quiet", args->quiet, "No summary and no progress line");
-  commands.push_back({app, [args] { return run_polygonize(*args); }});
+  add_sequence_options(*app, args->sequence);
+  commands.push_back({app, [args, app] {
+                        if (!has_frame_field(args->input)) {
+                          check_single_file(*app, output_specs(*args));
+                          return run_polygonize(*args);
+                        }
+                        SequenceSpec spec;
+                        spec.command = "polygonize";
+                        spec.input = args->input;
+                        spec.outputs = output_specs(*args);
+                        spec.sequence = args->sequence;
+                        spec.threads = args->threads;
+                        spec.quiet = args->quiet;
+                        spec.options_text = options_text(*app, kSequenceIgnored);
+                        spec.run_frame = [args](const std::string& in, const std::vector<OutputSpec>& outs, int threads,
+                                                FrameContext& frame) {
+                          PolygonizeArgs a = *args;
+                          a.input = in;
+                          a.output = outs[0].path;
+                          a.report = outs[1].path;
+                          a.threads = threads;
+                          a.quiet = true;
+                          run_polygonize(a, &frame);
+                        };
+                        return run_sequence(spec);
+                      }});
 }
 
 }  // namespace particlemesh::cli

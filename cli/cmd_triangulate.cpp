@@ -11,6 +11,8 @@
 #include <vector>
 
 #include "commands.h"
+#include "attribute_selection.h"
+#include "frame_sequence.h"
 #include "particle_input.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/io/mesh_io.h"
@@ -50,6 +52,8 @@ struct TriangulateArgs {
   size_t max_triplets_per_point = TriangulateOptions{}.max_triplets_per_point;
   ParticleInputArgs input_options;  // .pcd, PCL preprocessing, --pcl-mesh
   SmoothChainArgs smooth;  // --smooth loop|butterfly --levels K
+  std::string attributes = "all";
+  SequenceArgs sequence;
 };
 
 /// When over 5 % of the particles are in no triangle of the surface, their spacing varies more
@@ -111,17 +115,25 @@ std::vector<std::string> surface_hints(const SurfaceResult& r, double thin, bool
   return out;
 }
 
-int run_triangulate(const TriangulateArgs& a) {
+std::vector<OutputSpec> output_specs(const TriangulateArgs& a) {
+  return {{"-o", a.output, OutputKind::Mesh, a.ascii ? MeshFormat::PlyAscii : MeshFormat::Auto},
+          {"--report", a.report, OutputKind::Text},
+          {"--pcl-mesh", a.input_options.pcl_mesh, OutputKind::PlyOnly}};
+}
+
+/// Mesh one file; `frame` is null for a single file, the sequence's context for a frame.
+int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
   using Clock = std::chrono::steady_clock;
   WriteMeshOptions wo;
   if (a.ascii) wo.format = MeshFormat::PlyAscii;
-  RunOutputs outputs({{"-o", a.output, OutputKind::Mesh, wo.format},
-                      {"--report", a.report, OutputKind::Text},
-                      {"--pcl-mesh", a.input_options.pcl_mesh, OutputKind::PlyOnly}},
-                     {a.input});
+  std::vector<OutputSpec> specs = output_specs(a);
+  if (frame) specs.insert(specs.end(), frame->extra_outputs.begin(), frame->extra_outputs.end());
+  RunOutputs outputs(specs, {a.input});
   const auto t0 = Clock::now();
   ProgressLine progress(a.quiet);
-  const ParticleInput input = read_particles(a.input, a.input_options, a.threads);
+  ParticleInput input = read_particles(a.input, a.input_options, a.threads);
+  select_attributes(input.cloud, a.attributes);
+  if (frame) frame->check_attributes(input.cloud.attributes);
   const double t_read = std::chrono::duration<double>(Clock::now() - t0).count();
 
   // --thin: an even subset, no particle within thin x r0 of a kept one (r0 given or
@@ -211,8 +223,11 @@ int run_triangulate(const TriangulateArgs& a) {
     }
     outputs.open("--report").write(json_text(j));
   }
+  if (frame)
+    for (size_t i = 0; i < frame->extra_outputs.size(); ++i)
+      outputs.open(frame->extra_outputs[i].option).write(frame->extra_contents[i]);
   outputs.commit_all();
-  if (!a.quiet) {
+  if (!a.quiet && !frame) {
     const auto& s = result.triangulation;
     std::printf("particlemesh triangulate: %s -> %s\n", a.input.c_str(), a.output.c_str());
     std::printf("%s", input.summary.c_str());
@@ -266,9 +281,15 @@ int run_triangulate(const TriangulateArgs& a) {
 void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
   auto args = std::make_shared<TriangulateArgs>();
   CLI::App* app = root.add_subcommand("triangulate", "Surface particles to a triangle mesh (seed section 5.2.3)");
-  app->add_option("input", args->input, "Particles: .ply (x y z [nx ny nz]), .xyz (x y z [nx ny nz] per line) or .pcd (PCL: ascii, binary, binary_compressed)")
+  app->add_option("input", args->input,
+                  "Particles: .ply (x y z [nx ny nz] ...), .xyz (x y z [nx ny nz] per line), VTK .vtk/.vtu/.vtp, "
+                  "Houdini .bgeo or .pcd (PCL: ascii, binary, binary_compressed); a path with a frame field ({} or "
+                  "{:04d}, e.g. scan_{:04d}.ply) is a sequence: every frame is meshed")
       ->required();
-  app->add_option("-o,--output", args->output, "Output mesh: .ply (binary; --ascii for text) or .obj; - (or a device, a FIFO) for PLY on standard output")->required();
+  app->add_option("-o,--output", args->output,
+                  "Output mesh: .ply (binary; --ascii for text), .obj, .vtk, .vtu or .vtp; - (or a device, a FIFO) "
+                  "for PLY on standard output. With a frame pattern input, a pattern too (out/mesh_{:04d}.ply)")
+      ->required();
   app->add_option("--spacing", args->spacing,
                   "Particle spacing r0 in world units (default: estimated as the median nearest-neighbour distance); "
                   "the local spacings are scaled to it, unless --global-spacing")
@@ -331,7 +352,34 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
   app->add_flag("-q,--quiet", args->quiet, "No summary and no progress line");
   add_particle_input_options(*app, args->input_options);
   add_smooth_chain_options(app, args->smooth);
-  commands.push_back({app, [args] { return run_triangulate(*args); }});
+  add_attributes_option(*app, args->attributes);
+  add_sequence_options(*app, args->sequence);
+  commands.push_back({app, [args, app] {
+                        if (!has_frame_field(args->input)) {
+                          check_single_file(*app, output_specs(*args));
+                          return run_triangulate(*args);
+                        }
+                        SequenceSpec spec;
+                        spec.command = "triangulate";
+                        spec.input = args->input;
+                        spec.outputs = output_specs(*args);
+                        spec.sequence = args->sequence;
+                        spec.threads = args->threads;
+                        spec.quiet = args->quiet;
+                        spec.options_text = options_text(*app, kSequenceIgnored);
+                        spec.run_frame = [args](const std::string& in, const std::vector<OutputSpec>& outs, int threads,
+                                                FrameContext& frame) {
+                          TriangulateArgs a = *args;
+                          a.input = in;
+                          a.output = outs[0].path;
+                          a.report = outs[1].path;
+                          a.input_options.pcl_mesh = outs[2].path;
+                          a.threads = threads;
+                          a.quiet = true;
+                          run_triangulate(a, &frame);
+                        };
+                        return run_sequence(spec);
+                      }});
 }
 
 }  // namespace particlemesh::cli

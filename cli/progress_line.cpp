@@ -13,6 +13,7 @@ namespace particlemesh::cli {
 namespace {
 volatile std::sig_atomic_t g_interrupted = 0;
 volatile std::sig_atomic_t g_phase = 0;  // Phase::Reading
+std::atomic<bool> g_phase_held{false};
 
 extern "C" void on_signal(int sig) {
   const bool cancel = sig == SIGINT || sig == SIGTERM;
@@ -39,8 +40,19 @@ extern "C" void on_signal(int sig) {
 }  // namespace
 
 void set_phase(Phase phase) {
+  if (g_phase_held.load()) return;
   g_phase = int(phase);
   if (phase == Phase::Reading && g_interrupted) _exit(130);
+}
+
+void hold_phase(bool held) {
+  if (held) {
+    g_phase = int(Phase::Computing);
+    g_phase_held = true;
+  } else {
+    g_phase_held = false;
+    g_phase = int(Phase::Done);
+  }
 }
 
 void install_signal_handlers() {

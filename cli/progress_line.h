@@ -25,6 +25,11 @@ bool interrupted();
 enum class Phase { Reading, Computing, Writing, Done };
 /// Tell the handler what the command is doing now.
 void set_phase(Phase phase);
+/// A sequence of frames (frame_sequence.h) holds the phase at Computing while its frames
+/// run, several at once: a Ctrl-C then only sets the flag that cancels every frame in flight
+/// (each removes its temporaries); the frames' own set_phase calls change nothing. Releasing
+/// sets Done.
+void hold_phase(bool held);
 
 class ProgressLine {
  public:

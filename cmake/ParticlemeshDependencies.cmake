@@ -4,6 +4,7 @@ find_package(TBB REQUIRED)
 find_package(OpenMesh REQUIRED)  # targets OpenMeshCore, OpenMeshTools
 find_package(Eigen3 REQUIRED NO_MODULE)
 find_package(PNG REQUIRED)       # libpng16 (Debian's libpng-dev): the renderer's PNG output
+find_package(ZLIB REQUIRED)      # zlib1g-dev: gzip .bgeo, zlib-compressed VTK XML arrays
 if(PM_BUILD_CLI)
   find_package(CLI11 REQUIRED)
   find_package(nlohmann_json REQUIRED)

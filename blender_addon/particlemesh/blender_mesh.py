@@ -95,8 +95,14 @@ def _clear_custom_normals(mesh):
 
 
 def set_point_attribute(mesh, name, values):
+    """Write (V, C) values as a POINT attribute: FLOAT, FLOAT2, FLOAT_VECTOR or FLOAT_COLOR by
+    C; a one-component `id` (simulators' particle ids) becomes Blender's own integer `id`
+    attribute, which its name reserves. None when Blender refuses the name or C."""
     values = np.ascontiguousarray(values, dtype=np.float32).reshape(len(mesh.vertices), -1)
     kind, field = _ATTRIBUTE_TYPES.get(values.shape[1], (None, None))
+    if name == "id" and values.shape[1] == 1:
+        kind, field = "INT", "value"
+        values = np.rint(values).astype(np.int32)
     if kind is None:
         return None
     attribute = mesh.attributes.get(name)
@@ -105,6 +111,8 @@ def set_point_attribute(mesh, name, values):
         attribute = None
     if attribute is None:
         attribute = mesh.attributes.new(name, kind, "POINT")
+        if attribute is None:  # a name Blender reserves for another type
+            return None
     attribute.data.foreach_set(field, values.ravel())
     return attribute
 

@@ -101,12 +101,16 @@ def compute(obj, depsgraph, mode=None, use_cache=True, progress=None, timings=No
     state = obj.particlemesh
     mode = mode or depsgraph.mode
     source = state.source
-    if source is None:
+    if source is None and state.source_kind != "FILES":
         raise sources.SourceError(f"'{obj.name}' has lost its source object")
     settings = settings_for(obj, mode)
     t0 = time.perf_counter()
-    particles = sources.read(source, depsgraph, state.source_kind, state.particle_system,
-                             need_sizes=(state.method == "POLYGONIZE"))
+    if state.source_kind == "FILES":  # a simulation cache: this frame's file
+        particles = sources.read_file_frame(state.file_pattern,
+                                            depsgraph.scene.frame_current + state.frame_offset)
+    else:
+        particles = sources.read(source, depsgraph, state.source_kind, state.particle_system,
+                                 need_sizes=(state.method == "POLYGONIZE"))
     if budget > 0 and state.method == "TRIANGULATE":
         settings["viewport_budget"] = budget
     # frame_current_final includes the subframe (motion blur steps evaluate between frames).

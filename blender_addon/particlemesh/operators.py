@@ -7,6 +7,7 @@ progress callback. In background mode, and when the redo panel re-executes, exec
 the same work synchronously."""
 
 import os
+import re
 import traceback
 
 import bpy
@@ -306,13 +307,14 @@ class PARTICLEMESH_OT_smooth(_ModalJob, bpy.types.Operator):
 
 
 class PARTICLEMESH_OT_import_cloud(bpy.types.Operator, ImportHelper):
-    """Import point clouds (.ply, .xyz, .pcd) as vertex-only mesh objects; normals and colours become attributes"""
+    """Import point clouds and simulation particles (.ply, .xyz, .pcd, .vtk, .vtu, .vtp, classic .bgeo) as vertex-only mesh objects; normals, colours, velocity and other channels become attributes"""
     bl_idname = "particlemesh.import_cloud"
     bl_label = "Import Point Cloud"
     bl_options = {"REGISTER", "UNDO"}
 
     filename_ext = ".ply"
-    filter_glob: StringProperty(default="*.ply;*.xyz;*.pcd", options={"HIDDEN"})
+    filter_glob: StringProperty(default="*.ply;*.xyz;*.pcd;*.vtk;*.vtu;*.vtp;*.bgeo;*.bgeo.gz",
+                                options={"HIDDEN"})
     files: CollectionProperty(type=bpy.types.OperatorFileListElement,
                               options={"HIDDEN", "SKIP_SAVE"})
     directory: StringProperty(subtype="DIR_PATH", options={"HIDDEN", "SKIP_SAVE"})
@@ -538,9 +540,70 @@ class PARTICLEMESH_OT_update(bpy.types.Operator):
         return {"FINISHED"}
 
 
+class PARTICLEMESH_OT_import_sequence(bpy.types.Operator, ImportHelper):
+    """Import a simulation cache (one particle file per frame: .ply, .xyz, .vtk, .vtu, .vtp, classic .bgeo) as a live mesh that shows the scene frame's file, meshed"""
+    bl_idname = "particlemesh.import_sequence"
+    bl_label = "Import Particle Sequence"
+    bl_options = {"REGISTER", "UNDO"}
+
+    filename_ext = ".vtk"
+    filter_glob: StringProperty(default="*.ply;*.xyz;*.vtk;*.vtu;*.vtp;*.bgeo;*.bgeo.gz",
+                                options={"HIDDEN"})
+    method: EnumProperty(
+        name="Method", default="POLYGONIZE",
+        items=[("POLYGONIZE", "Polygonize", "Iso-surface of volume particles (fluids)"),
+               ("TRIANGULATE", "Triangulate", "Surface particles to triangles")])
+    start_at_scene_start: BoolProperty(
+        name="Start at Scene Start", default=True,
+        description="Show the sequence's first file at the scene's start frame (else the file "
+                    "of frame F at scene frame F)")
+
+    def execute(self, context):
+        try:
+            pm.version()
+            pattern, _ = sources.pattern_from_file(self.filepath)
+            frames = sources.find_frames(pattern)
+            if not frames:
+                raise sources.SourceError(f"no file matches '{pattern}'")
+            scene = context.scene
+            offset = frames[0] - scene.frame_start if self.start_at_scene_start else 0
+            name = re.sub(r"[_.\- ]*\{[^}]*\}.*$", "", os.path.basename(pattern)) or "particles"
+            mesh = bpy.data.meshes.new(name)
+            obj = bpy.data.objects.new(name, mesh)
+            context.collection.objects.link(obj)
+            state = obj.particlemesh
+            live.suspended.add(obj.name_full)
+            try:
+                state.is_generated = True
+                state.method = self.method
+                state.source_kind = "FILES"
+                state.file_pattern = pattern
+                state.frame_offset = offset
+                state.live = True
+            finally:
+                live.suspended.discard(obj.name_full)
+            live.lock_interface_for_renders(scene)
+            for selected in context.selected_objects:
+                selected.select_set(False)
+            obj.select_set(True)
+            context.view_layer.objects.active = obj
+            record = live.update_object(obj, context.evaluated_depsgraph_get())
+        except Exception as e:  # noqa: BLE001
+            return report_failure(self, e)
+        if "error" in record:
+            self.report({"WARNING"}, f"{obj.name}: frame {record['frame']}: {record['error']}")
+        else:
+            self.report({"INFO"}, f"{obj.name}: {len(frames)} frames ({frames[0]}..{frames[-1]}) "
+                                  f"from '{pattern}'; frame {record['frame']}: "
+                                  f"{record['triangles']} triangles")
+        return {"FINISHED"}
+
+
 def menu_import(self, context):
     self.layout.operator(PARTICLEMESH_OT_import_cloud.bl_idname,
-                         text="Point Cloud (.ply/.xyz/.pcd)")
+                         text="Point Cloud (.ply/.xyz/.pcd/.vtk/.vtu/.bgeo)")
+    self.layout.operator(PARTICLEMESH_OT_import_sequence.bl_idname,
+                         text="Particle Sequence (simulation cache)")
 
 
 classes = (
@@ -548,6 +611,7 @@ classes = (
     PARTICLEMESH_OT_polygonize,
     PARTICLEMESH_OT_smooth,
     PARTICLEMESH_OT_import_cloud,
+    PARTICLEMESH_OT_import_sequence,
     PARTICLEMESH_OT_bake,
     PARTICLEMESH_OT_free_bake,
     PARTICLEMESH_OT_clear_cache,

@@ -208,8 +208,17 @@ class PARTICLEMESH_PG_object(bpy.types.PropertyGroup):
     source_kind: EnumProperty(
         name="Source Kind", default="VERTICES",
         items=[("VERTICES", "Vertices", "The source's evaluated vertices"),
-               ("PARTICLES", "Particle System", "The source's particle system")])
+               ("PARTICLES", "Particle System", "The source's particle system"),
+               ("FILES", "Particle Files", "A simulation cache: one particle file per frame")])
     particle_system: StringProperty(name="Particle System", default="")
+    file_pattern: StringProperty(
+        name="Particle Files", default="", subtype="FILE_PATH", update=_settings_changed,
+        description="With Particle Files: the frame pattern, one field {} (or zero-padded "
+                    "{:04d}) for the frame number, e.g. //cache/fluid_{:04d}.vtk (.ply, .xyz, "
+                    ".vtk, .vtu, .vtp, classic .bgeo)")
+    frame_offset: IntProperty(
+        name="Frame Offset", default=0, update=_settings_changed,
+        description="With Particle Files: scene frame F shows the file of frame F + offset")
     live: BoolProperty(
         name="Update Every Frame", default=False, update=_live_changed,
         description="Regenerate this mesh from its source whenever the frame changes, also "

@@ -1,5 +1,10 @@
 """Particles from Blender: an object's evaluated vertices (a point cloud mesh) or one of its
-evaluated particle systems (living particles only), as numpy arrays in world space."""
+evaluated particle systems (living particles only), as numpy arrays in world space; or a
+simulation cache's file for a frame (a frame pattern, as the command-line tool takes)."""
+
+import glob
+import os
+import re
 
 import bpy
 import numpy as np
@@ -23,6 +28,62 @@ def _alive_state_values(settings):
     if getattr(settings, "use_dead", False):
         keep.add("DEAD")
     return [items[name].value for name in keep]
+
+
+def pattern_from_file(path):
+    """The frame pattern of one frame's file: its name's last run of digits becomes the field,
+    zero-padded ({:04d}) when the digits start with 0 ("fluid_0012.vtk" -> "fluid_{:04d}.vtk",
+    "fluid_12.vtk" -> "fluid_{}.vtk"), and that frame's number. SourceError without digits."""
+    folder, name = os.path.split(path)
+    matches = list(re.finditer(r"\d+", name))
+    if not matches:
+        raise SourceError(f"'{name}' has no frame number in its name (e.g. fluid_0001.vtk)")
+    m = matches[-1]
+    digits = m.group(0)
+    field = f"{{:0{len(digits)}d}}" if len(digits) > 1 and digits[0] == "0" else "{}"
+    pattern = name[:m.start()].replace("{", "{{").replace("}", "}}") + field + \
+        name[m.end():].replace("{", "{{").replace("}", "}}")
+    return os.path.join(folder, pattern), int(digits)
+
+
+def frame_file(pattern, frame):
+    """The file of `frame` under a pattern ("//" paths relative to the .blend file)."""
+    try:
+        return bpy.path.abspath(pattern.format(frame))
+    except (IndexError, KeyError, ValueError) as e:
+        raise SourceError(f"'{pattern}' is not a frame pattern with one field, {{}} or {{:04d}} "
+                          f"({e})") from None
+
+
+def find_frames(pattern):
+    """The frame numbers of the files the pattern names, ascending."""
+    path = bpy.path.abspath(pattern)
+    head, sep, rest = path.partition("{")
+    _, _, tail = rest.partition("}")
+    frames = set()
+    for candidate in glob.glob(glob.escape(head) + "*" + glob.escape(tail)):
+        number = candidate[len(head):len(candidate) - len(tail)]
+        if sep and re.fullmatch(r"-?\d+", number) and frame_file(pattern, int(number)) == candidate:
+            frames.add(int(number))
+    return sorted(frames)
+
+
+def read_file_frame(pattern, frame):
+    """The particles of one frame's file: positions, normals and a 3-component `velocity`
+    channel (what motion blur reads on the mesh). SourceError when the file is missing;
+    particlemesh.Error when it cannot be read."""
+    from . import particlemesh as pm
+    path = frame_file(pattern, frame)
+    if not os.path.isfile(path):
+        raise SourceError(f"no particle file for frame {frame}: '{path}' does not exist")
+    cloud = pm.read_points(path)
+    velocity = cloud.attributes.get("velocity")
+    if velocity is not None and velocity.shape[1] != 3:
+        velocity = None
+    return Particles(np.ascontiguousarray(cloud.positions, dtype=np.float32),
+                     None if cloud.normals is None else np.asarray(cloud.normals, np.float32),
+                     None if velocity is None else np.ascontiguousarray(velocity, np.float32),
+                     label=os.path.basename(path))
 
 
 def particle_systems(obj):

@@ -45,9 +45,14 @@ class VIEW3D_PT_particlemesh_object(_Panel, bpy.types.Panel):
         state = obj.particlemesh
         layout = self.layout
         layout.use_property_split = True
-        layout.prop(state, "source")
-        layout.label(text=f"{state.method.title()} the {state.source_kind.lower()}"
-                          + (f" '{state.particle_system}'" if state.particle_system else ""))
+        if state.source_kind == "FILES":
+            layout.prop(state, "file_pattern")
+            layout.prop(state, "frame_offset")
+            layout.label(text=f"{state.method.title()} the particle files")
+        else:
+            layout.prop(state, "source")
+            layout.label(text=f"{state.method.title()} the {state.source_kind.lower()}"
+                              + (f" '{state.particle_system}'" if state.particle_system else ""))
         row = layout.row()
         row.enabled = not state.baked
         row.prop(state, "live")

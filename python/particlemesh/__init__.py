@@ -88,7 +88,8 @@ def defaults(function):
 
 def read_points(path):
     """Particles from a file: .ply (any numeric vertex properties, normals, vertex colours as
-    the "color" attribute) and .xyz through the library; .pcd (ascii, binary, compressed)
+    the "color" attribute), .xyz, VTK .vtk/.vtu/.vtp and classic Houdini .bgeo (every
+    point-data array / point attribute in `attributes`) through the library; .pcd (ascii, binary, compressed)
     through the PCL bridge, which drops points with a NaN coordinate and counts them in
     `info`. Coordinates keep their full precision. Returns Points."""
     lib = _library.load()
@@ -227,8 +228,8 @@ def _tile_options(opt, domain_min, cells):
 
 
 def polygonize(positions, radius=None, threshold=None, kernel=None, cell=None, *, radii=None,
-               strengths=None, attributes=None, domain_min=None, cells=None, progress=None,
-               **options):
+               strengths=None, attributes=None, domain_min=None, cells=None,
+               lattice_anchor="particles", progress=None, **options):
     """The iso-surface F(x) = threshold of volume particles, F(x) = sum_i w_i g(|x - p_i|^2 /
     R_i^2), by marching cubes on a sparse grid: a closed, outward mesh with normals from the
     field's gradient (no vertex when the field stays below the threshold).
@@ -236,8 +237,11 @@ def polygonize(positions, radius=None, threshold=None, kernel=None, cell=None, *
     positions: (N, 3) or Points; radius R (None = 2 x the median spacing) or radii, one per
     particle; strengths w_i (None = 1); threshold T (None = half the field inside evenly
     packed particles); kernel "wyvill", "poly4", "poly6" or "blinn"; cell the grid cell (the C
-    field cell_size; None = R / 4); attributes {name: (N, C)} interpolated onto the vertices.
-    Other options (pm_polygonize_options): threads, max_grid_bytes, domain_max_radius.
+    field cell_size; None = R / 4); attributes {name: (N, C)} interpolated onto the vertices
+    with the normalised kernel weights. lattice_anchor "particles" (the lattice at the
+    particles' box) or "space" (its nodes at multiples of the cell: the frames of a sequence
+    do not shimmer; what the command-line tool uses). Other options (pm_polygonize_options):
+    threads, max_grid_bytes, domain_max_radius.
 
     A tile of a larger cloud (what particlemesh.distributed.polygonize_tiled runs):
     domain_min=(x, y, z), the whole cloud's lower corner, anchors the lattice and the particle
@@ -253,6 +257,11 @@ def polygonize(positions, radius=None, threshold=None, kernel=None, cell=None, *
     options.update(radius=radius, threshold=threshold, kernel=kernel)
     opt = _options.POLYGONIZE.build(lib, options)
     _tile_options(opt, domain_min, cells)
+    if lattice_anchor not in ("particles", "space"):
+        raise Error(f"lattice_anchor must be 'particles' or 'space', not {lattice_anchor!r}",
+                    _abi.PM_STATUS_INVALID_ARGUMENT)
+    if lattice_anchor == "space":
+        opt.flags |= _abi.PM_POLYGONIZE_ANCHOR_IN_SPACE
     stats = _abi.pm_polygonize_stats(struct_size=ctypes.sizeof(_abi.pm_polygonize_stats))
     cloud = new_cloud(lib, positions, None, attributes)
     mesh = _abi.pm_mesh_p()

@@ -177,6 +177,7 @@ class pm_polygonize_options(Structure):
 
 PM_POLYGONIZE_DOMAIN_MIN = 0x1
 PM_POLYGONIZE_CELL_RANGE = 0x2
+PM_POLYGONIZE_ANCHOR_IN_SPACE = 0x4
 
 
 class pm_polygonize_stats(Structure):

@@ -54,6 +54,61 @@ void append(std::string& s, T v) {
   s.append(reinterpret_cast<const char*>(&v), sizeof v);
 }
 
+// Big-endian values, as bgeo stores them.
+void append_be32(std::string& s, uint32_t v) {
+  for (int k = 3; k >= 0; --k) s += char((v >> (8 * k)) & 0xff);
+}
+void append_be_float(std::string& s, float f) {
+  uint32_t u;
+  std::memcpy(&u, &f, 4);
+  append_be32(s, u);
+}
+void append_be16(std::string& s, uint16_t v) {
+  s += char(v >> 8);
+  s += char(v & 0xff);
+}
+
+/// A classic bgeo ("BgeoV" 5) of `points` points with a float, an int, a vector "N" and an
+/// index (string) attribute; `primitive`: one particle-system primitive listing them.
+std::string bgeo_seed(int points, bool primitive) {
+  std::string s = "BgeoV";
+  for (int v : {5, points, primitive ? 1 : 0, 0, 0, 4, 0, 0, 0}) append_be32(s, uint32_t(v));
+  auto define = [&](const std::string& name, uint16_t size, int type) {
+    append_be16(s, uint16_t(name.size()));
+    s += name;
+    append_be16(s, size);
+    append_be32(s, uint32_t(type));
+    if (type == 4) {
+      append_be32(s, 2);
+      for (const char* str : {"water", "foam"}) {
+        append_be16(s, uint16_t(std::strlen(str)));
+        s += str;
+      }
+    } else {
+      for (int k = 0; k < size; ++k) append_be32(s, 0);
+    }
+  };
+  define("density", 1, 0);
+  define("id", 1, 1);
+  define("N", 3, 5);
+  define("kind", 1, 4);
+  for (int i = 0; i < points; ++i) {
+    for (float v : {float(i), float(i % 2), 0.5f, 1.0f}) append_be_float(s, v);
+    append_be_float(s, 1000.0f + float(i));
+    append_be32(s, uint32_t(i));
+    for (float v : {0.0f, 0.0f, 1.0f}) append_be_float(s, v);
+    append_be32(s, uint32_t(i % 2));
+  }
+  if (primitive) {
+    append_be32(s, 0x8000);
+    append_be32(s, uint32_t(points));
+    for (int i = 0; i < points; ++i) append_be16(s, uint16_t(i));
+  }
+  s += '\0';
+  s += char(0xff);
+  return s;
+}
+
 void file_seeds() {
   const PointCloud sphere = fibonacci_sphere(40);
   PointCloud bare = sphere;
@@ -102,6 +157,31 @@ void file_seeds() {
     for (int32_t i : {0, 1, 2}) append(d, i);
     put("read_ply", "doubles_beyond_float.ply", d);
   }
+  // bgeo: our own layouts (the shared data adds gzip-compressed ones).
+  put("read_bgeo", "points_attributes.bgeo", bgeo_seed(5, false));
+  put("read_bgeo", "particle_system.bgeo", bgeo_seed(4, true));
+  put("read_bgeo", "binary_json.bgeo", std::string("\x7fNSJ") + std::string(16, '\0'));
+  // VTK: the first byte picks the format (0 .vtk, 1 .vtu, 2 .vtp); our writers' files, then
+  // hand-made ASCII ones with POINT_DATA and inline XML arrays.
+  put("read_vtk", "ico.vtk", std::string(1, '\0') + via_mesh_writer(ico, ".vtk"));
+  put("read_vtk", "ico.vtu", std::string(1, '\1') + via_mesh_writer(ico, ".vtu"));
+  put("read_vtk", "torus.vtp", std::string(1, '\2') + via_mesh_writer(torus, ".vtp"));
+  put("read_vtk", "points_ascii.vtk",
+      std::string(1, '\0') +
+          "# vtk DataFile Version 3.0\nparticles\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 3 double\n0 0 0 1 0 0 0 1 "
+          "0\nCELLS 0 0\nCELL_TYPES 0\nPOINT_DATA 3\nVECTORS velocity float\n1 0 0 0 1 0 0 0 1\nSCALARS density "
+          "float 1\nLOOKUP_TABLE default\n1000 1001 1002\nFIELD FieldData 1\nid 1 3 int\n7 8 9\nNORMALS n float\n0 0 "
+          "1 0 0 1 0 0 1\n");
+  put("read_vtk", "points_ascii.vtu",
+      std::string(1, '\1') +
+          "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
+          "header_type=\"UInt64\">\n<UnstructuredGrid><Piece NumberOfPoints=\"3\" NumberOfCells=\"0\"><PointData>"
+          "<DataArray type=\"Float64\" Name=\"density\" format=\"ascii\">1 2 3</DataArray><DataArray type=\"Int32\" "
+          "Name=\"id\" format=\"ascii\">4 5 6</DataArray></PointData><Points><DataArray type=\"Float32\" "
+          "NumberOfComponents=\"3\" format=\"ascii\">0 0 0 1 0 0 0 1 0</DataArray></Points><Cells><DataArray "
+          "type=\"Int64\" Name=\"connectivity\" format=\"ascii\"></DataArray><DataArray type=\"Int64\" "
+          "Name=\"offsets\" format=\"ascii\"></DataArray><DataArray type=\"UInt8\" Name=\"types\" "
+          "format=\"ascii\"></DataArray></Cells></Piece></UnstructuredGrid>\n</VTKFile>\n");
   put("read_xyz", "bom.xyz", "\xEF\xBB\xBF" "0 0 0\n1 0 0\n0 1 0\n");
   put("read_obj", "colours.obj", "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nvn 0 0 1\nf 1//1 2//1 3//1\n");
   put("read_obj", "stl_two_solids.bin",
@@ -264,6 +344,10 @@ void shared_seeds(const fs::path& shared) {
     if (ext == ".ply") put("read_ply", name, slurp(e.path()));
     if (ext == ".obj") put("read_obj", name, slurp(e.path()));
     if (ext == ".pcd") put("read_pcd", name, slurp(e.path()));
+    if (ext == ".bgeo") put("read_bgeo", name, slurp(e.path()));
+    if (ext == ".vtk") put("read_vtk", name, std::string(1, '\0') + slurp(e.path()));
+    if (ext == ".vtu") put("read_vtk", name, std::string(1, '\1') + slurp(e.path()));
+    if (ext == ".vtp") put("read_vtk", name, std::string(1, '\2') + slurp(e.path()));
   }
 }
 

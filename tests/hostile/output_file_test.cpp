@@ -215,7 +215,7 @@ TEST(OutputFiles, PathsAreCheckedBeforeAnyWork) {
   EXPECT_TRUE(same_file((dir / "new.ply").string(), (dir / "folder" / ".." / "new.ply").string()));
   EXPECT_FALSE(same_file((dir / "in.ply").string(), (dir / "new.ply").string()));
   // Mesh names: the extension decides, a device or FIFO without one gets PLY.
-  PM_EXPECT_ERROR(mesh_output_format((dir / "o.txt").string()), Status::InvalidArgument, "use .ply or .obj");
+  PM_EXPECT_ERROR(mesh_output_format((dir / "o.txt").string()), Status::InvalidArgument, "use .ply, .obj, .vtk, .vtu or .vtp");
   EXPECT_EQ(mesh_output_format("/dev/null"), MeshFormat::PlyBinary);
   EXPECT_EQ(mesh_output_format((dir / "o.obj").string()), MeshFormat::Obj);
 }

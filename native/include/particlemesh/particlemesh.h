@@ -327,7 +327,8 @@ typedef struct pm_polygonize_options {
    *    particlemesh/volume/polygonize.h). A tile given its cloud's domain_min and
    *    domain_max_radius, its cell range and every particle within R_max of those cells (in
    *    their order in the cloud) yields exactly the cloud's triangles in those cells. -- */
-  uint32_t flags;           /**< PM_POLYGONIZE_DOMAIN_MIN | PM_POLYGONIZE_CELL_RANGE (default 0) */
+  uint32_t flags;           /**< PM_POLYGONIZE_DOMAIN_MIN | PM_POLYGONIZE_CELL_RANGE |
+                                 PM_POLYGONIZE_ANCHOR_IN_SPACE (default 0) */
   double domain_min[3];     /**< with PM_POLYGONIZE_DOMAIN_MIN: the whole cloud's lower corner,
                                  used as `lower` (at or below every particle) */
   double domain_max_radius; /**< 0, or the whole cloud's largest radius, used as R_max (at least
@@ -341,6 +342,11 @@ typedef struct pm_polygonize_options {
 #define PM_POLYGONIZE_DOMAIN_MIN 0x1u
 /** pm_polygonize_options.flags: mesh only the cells in [cell_min, cell_max). */
 #define PM_POLYGONIZE_CELL_RANGE 0x2u
+/** pm_polygonize_options.flags: anchor the lattice in space: its origin rounded down to a
+ *  multiple of the cell size on each axis, so that every node lies at an integer multiple of
+ *  h (frames of a sequence are sampled at the same points: no shimmer). Tiles given this
+ *  flag with their cloud's domain_min round the same origin. What the command-line tool uses. */
+#define PM_POLYGONIZE_ANCHOR_IN_SPACE 0x4u
 
 typedef struct pm_polygonize_stats {
   uint32_t struct_size;     /**< set by the caller to sizeof(pm_polygonize_stats) */
@@ -368,8 +374,10 @@ PM_EXPORT void pm_polygonize_options_init(pm_polygonize_options* options);
 /** Polygonize the particles' iso-surface. `radii` (one R_i > 0 per particle) and
  *  `strengths` (one finite w_i per particle) are NULL for one radius / strength 1. `options`
  *  may be NULL (defaults). The mesh is closed, consistently oriented (counter-clockwise seen
- *  from outside) and carries per-vertex normals from the field gradient; it has no vertex
- *  when F >= T nowhere on the grid. */
+ *  from outside) and carries per-vertex normals from the field gradient, and the cloud's
+ *  attributes interpolated with the normalised kernel weights (sum w_i a_i / sum w_i,
+ *  w_i = |strength_i| g(s_i), isotropic or anisotropic kernels); it has no vertex when
+ *  F >= T nowhere on the grid. */
 PM_EXPORT pm_status pm_polygonize(const pm_cloud* cloud, const double* radii, const double* strengths,
                                   const pm_polygonize_options* options, pm_mesh** out_mesh);
 /** The same, also filling `out_stats` (may be NULL). */

@@ -94,8 +94,9 @@ pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii, const dou
     opt.surface_smoothing.iterations = o.taubin_iterations;
     opt.surface_smoothing.lambda = o.taubin_lambda;
     opt.surface_smoothing.mu = o.taubin_mu;
-    if (o.flags & ~uint32_t(PM_POLYGONIZE_DOMAIN_MIN | PM_POLYGONIZE_CELL_RANGE))
+    if (o.flags & ~uint32_t(PM_POLYGONIZE_DOMAIN_MIN | PM_POLYGONIZE_CELL_RANGE | PM_POLYGONIZE_ANCHOR_IN_SPACE))
       throw Error(Status::InvalidArgument, "options->flags has unknown bits: " + std::to_string(o.flags));
+    if (o.flags & PM_POLYGONIZE_ANCHOR_IN_SPACE) opt.lattice_anchor = LatticeAnchor::Space;
     if (o.flags & PM_POLYGONIZE_DOMAIN_MIN) opt.domain_min = Vec3{o.domain_min[0], o.domain_min[1], o.domain_min[2]};
     opt.domain_max_radius = o.domain_max_radius;
     if (o.flags & PM_POLYGONIZE_CELL_RANGE) {

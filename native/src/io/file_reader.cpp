@@ -94,6 +94,14 @@ bool FileReader::read(void* out, size_t n) {
   return true;
 }
 
+size_t FileReader::read_some(void* out, size_t n) {
+  if (pos_ == end_ && !refill()) return 0;
+  const size_t k = std::min(n, end_ - pos_);
+  std::memcpy(out, buf_.data() + pos_, k);
+  pos_ += k;
+  return k;
+}
+
 bool FileReader::skip(uint64_t n) {
   while (n > 0) {
     if (pos_ == end_) {

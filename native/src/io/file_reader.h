@@ -42,6 +42,9 @@ class FileReader {
   std::string_view look_ahead(size_t n);
   /// Exactly `n` bytes into `out`; false when the file ends first.
   bool read(void* out, size_t n);
+  /// Up to `n` bytes into `out`: what the buffer holds, or one read's worth; 0 only at the end
+  /// of the file.
+  size_t read_some(void* out, size_t n);
   /// Skip `n` bytes; false when the file ends first.
   bool skip(uint64_t n);
 

@@ -1,6 +1,7 @@
 #include "io/formats.h"
 
 #include <algorithm>
+#include <string>
 #include <cmath>
 #include <filesystem>
 
@@ -18,14 +19,38 @@ const std::vector<FileFormat>& file_formats() {
       {".obj", "Wavefront OBJ", &read_obj, false, true},
       {".off", "OFF", &read_off, false, true},
       {".stl", "STL", &read_stl, false, true},
+      {".vtk", "VTK legacy", &read_vtk_legacy, true, true},
+      {".vtu", "VTK XML UnstructuredGrid", &read_vtk_xml, true, true},
+      {".vtp", "VTK XML PolyData", &read_vtk_xml, true, true},
+      {".bgeo", "Houdini classic bgeo", &read_bgeo, true, false},
+      {".bgeo.gz", "Houdini classic bgeo", &read_bgeo, true, false},
+      {".bhclassic", "Houdini classic bgeo", &read_bgeo, true, false},
+      {".bgeo.sc", "Houdini bgeo.sc (refused with what is read)", &read_bgeo_sc, true, false},
   };
   return formats;
 }
 
 std::string lower_extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
+  const std::filesystem::path p(path);
+  std::string ext = p.extension().string();
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".gz" || ext == ".sc") {
+    std::string inner = p.stem().extension().string();
+    for (char& c : inner) c = char(std::tolower(static_cast<unsigned char>(c)));
+    if (inner == ".bgeo") return inner + ext;
+  }
   return ext;
+}
+
+std::string unique_attribute_name(const FileContents& c, const std::string& name) {
+  auto taken = [&](const std::string& n) {
+    for (const VertexAttribute& a : c.attributes)
+      if (a.name == n) return true;
+    return false;
+  };
+  if (!taken(name)) return name;
+  for (int k = 2;; ++k)
+    if (!taken(name + "_" + std::to_string(k))) return name + "_" + std::to_string(k);
 }
 
 const FileFormat* format_for(const std::string& path) {

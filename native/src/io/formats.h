@@ -58,8 +58,13 @@ const FileFormat* format_for(const std::string& path);
 /// ".ply, .xyz" - the extensions read for points (points = true) or meshes.
 std::string known_extensions(bool points);
 
-/// Lower-case extension of `path`, with the dot ("" if none).
+/// Lower-case extension of `path`, with the dot ("" if none). The compound ".bgeo.gz" and
+/// ".bgeo.sc" count as one extension.
 std::string lower_extension(const std::string& path);
+
+/// `name`, or name_2, name_3 ... when `c` already has an attribute of that name (attribute
+/// names are how the C ABI and the writers address them, so they are unique).
+std::string unique_attribute_name(const FileContents& c, const std::string& name);
 
 /// The shared checks on what a reader returned: positions finite (a NaN or infinite
 /// coordinate names the vertex; for meshes FormatError, for points InvalidInput as
@@ -73,5 +78,10 @@ FileContents read_obj(const std::string& path, ReadPurpose purpose);
 FileContents read_off(const std::string& path, ReadPurpose purpose);
 FileContents read_stl(const std::string& path, ReadPurpose purpose);
 FileContents read_xyz(const std::string& path, ReadPurpose purpose);
+FileContents read_vtk_legacy(const std::string& path, ReadPurpose purpose);
+FileContents read_vtk_xml(const std::string& path, ReadPurpose purpose);
+FileContents read_bgeo(const std::string& path, ReadPurpose purpose);
+/// Refuses .bgeo.sc with a message saying what is read.
+FileContents read_bgeo_sc(const std::string& path, ReadPurpose purpose);
 
 }  // namespace particlemesh::detail

@@ -63,17 +63,24 @@ PointCloud read_point_cloud(const std::string& path) {
 
 MeshFormat mesh_output_format(const std::string& path, MeshFormat format) {
   const std::string ext = detail::lower_extension(path);
-  const bool known = ext == ".ply" || ext == ".obj";
-  if (!known) {
+  const MeshFormat by_extension = ext == ".ply"   ? MeshFormat::PlyBinary
+                                  : ext == ".obj" ? MeshFormat::Obj
+                                  : ext == ".vtk" ? MeshFormat::Vtk
+                                  : ext == ".vtu" ? MeshFormat::Vtu
+                                  : ext == ".vtp" ? MeshFormat::Vtp
+                                                  : MeshFormat::Auto;
+  if (by_extension == MeshFormat::Auto) {
     if (!is_stream_output(path))
       throw Error(Status::InvalidArgument, "'" + path + "': cannot tell the mesh format from " +
                                                (ext.empty() ? std::string("a name without extension") : "'" + ext + "'") +
-                                               " (use .ply or .obj)");
+                                               " (use .ply, .obj, .vtk, .vtu or .vtp)");
     return format == MeshFormat::Auto ? MeshFormat::PlyBinary : format;  // a device or FIFO: PLY unless asked
   }
-  if (format == MeshFormat::Auto) return ext == ".obj" ? MeshFormat::Obj : MeshFormat::PlyBinary;
-  if ((format == MeshFormat::Obj) != (ext == ".obj"))
-    throw Error(Status::InvalidArgument, "'" + path + "': the extension does not match the requested format");
+  if (format == MeshFormat::Auto) return by_extension;
+  const bool ply = format == MeshFormat::PlyBinary || format == MeshFormat::PlyAscii;
+  if (ply ? by_extension != MeshFormat::PlyBinary : format != by_extension)
+    throw Error(Status::InvalidArgument, "'" + path + "': the extension does not match the requested format" +
+                                             std::string(format == MeshFormat::PlyAscii ? " (ASCII is for .ply)" : ""));
   return format;
 }
 
@@ -85,8 +92,13 @@ void write_mesh(const TriMesh& mesh, OutputFile& out, const WriteMeshOptions& op
         throw Error(Status::InvalidArgument, "mesh has a triangle index " + std::to_string(v) + " beyond its " +
                                                  std::to_string(mesh.positions.size()) + " vertices");
   const bool normals = options.write_normals && !mesh.normals.empty() && mesh.normals.size() == mesh.positions.size();
-  if (format == MeshFormat::Obj) detail::write_obj(mesh, out, normals);
-  else detail::write_ply(mesh, out, format == MeshFormat::PlyBinary, normals);
+  switch (format) {
+    case MeshFormat::Obj: detail::write_obj(mesh, out, normals, options.comment); break;
+    case MeshFormat::Vtk: detail::write_vtk(mesh, out, normals, options.comment); break;
+    case MeshFormat::Vtu: detail::write_vtk_xml(mesh, out, normals, false, options.comment); break;
+    case MeshFormat::Vtp: detail::write_vtk_xml(mesh, out, normals, true, options.comment); break;
+    default: detail::write_ply(mesh, out, format != MeshFormat::PlyAscii, normals, options.comment);
+  }
 }
 
 void write_mesh(const TriMesh& mesh, const std::string& path, const WriteMeshOptions& options) {

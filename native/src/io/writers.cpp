@@ -4,7 +4,7 @@
 // route its errors through a process-wide stream - not something a library loaded into
 // Blender should do. PLY and OBJ are simple enough that the layout is a few lines each.
 //
-// PLY: one vertex element (x y z float32, or float64 when needs_double_positions; nx ny nz
+// PLY: an optional comment line (WriteMeshOptions::comment), one vertex element (x y z float32, or float64 when needs_double_positions; nx ny nz
 // float32; red green blue uchar from a "color" attribute; every other attribute as float
 // properties, "name" or "name_0".."name_k"), one face element (uchar count, int indices).
 // OBJ: "# V vertices, F faces", then v (with r g b from a "color" attribute) and vn lines
@@ -112,7 +112,7 @@ bool needs_double_positions(const std::vector<Vec3>& positions) {
   return rounding > 1e-6 * size;
 }
 
-void write_ply(const TriMesh& mesh, OutputFile& out, bool binary, bool normals) {
+void write_ply(const TriMesh& mesh, OutputFile& out, bool binary, bool normals, const std::string& comment) {
   const auto& P = mesh.positions;
   const auto& N = mesh.normals;
   const bool doubles = needs_double_positions(P);
@@ -122,7 +122,13 @@ void write_ply(const TriMesh& mesh, OutputFile& out, bool binary, bool normals) 
     if (&a != color && a.components >= 1 && a.values.size() == P.size() * size_t(a.components)) extra.push_back(&a);
 
   Text t(out);
-  t.put(binary ? "ply\nformat binary_little_endian 1.0\nelement vertex " : "ply\nformat ascii 1.0\nelement vertex ");
+  t.put(binary ? "ply\nformat binary_little_endian 1.0\n" : "ply\nformat ascii 1.0\n");
+  if (!comment.empty()) {
+    t.put("comment ");
+    t.put(comment);
+    t.put('\n');
+  }
+  t.put("element vertex ");
   t.integer(P.size());
   t.put(doubles ? "\nproperty double x\nproperty double y\nproperty double z\n"
                 : "\nproperty float x\nproperty float y\nproperty float z\n");
@@ -214,12 +220,17 @@ void write_ply(const TriMesh& mesh, OutputFile& out, bool binary, bool normals) 
   t.flush();
 }
 
-void write_obj(const TriMesh& mesh, OutputFile& out, bool normals) {
+void write_obj(const TriMesh& mesh, OutputFile& out, bool normals, const std::string& comment) {
   const auto& P = mesh.positions;
   const auto& N = mesh.normals;
   const bool doubles = needs_double_positions(P);
   const VertexAttribute* color = color_of(mesh);
   Text t(out);
+  if (!comment.empty()) {
+    t.put("# ");
+    t.put(comment);
+    t.put('\n');
+  }
   t.put("# ");
   t.integer(P.size());
   t.put(" vertices, ");

@@ -4,6 +4,8 @@
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/io/output_file.h"
 
+#include <string>
+
 namespace particlemesh::detail {
 
 /// Whether positions go to the file as float64 rather than float32: when float32 would
@@ -13,8 +15,15 @@ namespace particlemesh::detail {
 /// 3.4e38).
 bool needs_double_positions(const std::vector<Vec3>& positions);
 
-void write_ply(const TriMesh& mesh, OutputFile& out, bool binary, bool normals);
-void write_obj(const TriMesh& mesh, OutputFile& out, bool normals);
+/// `comment` (one line, may be empty): a PLY "comment" header line, an OBJ "#" line.
+void write_ply(const TriMesh& mesh, OutputFile& out, bool binary, bool normals, const std::string& comment = {});
+void write_obj(const TriMesh& mesh, OutputFile& out, bool normals, const std::string& comment = {});
+/// VTK legacy, BINARY (big-endian) POLYDATA: POINTS, POLYGONS, POINT_DATA with NORMALS and
+/// one FIELD array per attribute; `comment` is the title line (vtk_writers.cpp).
+void write_vtk(const TriMesh& mesh, OutputFile& out, bool normals, const std::string& comment = {});
+/// VTK XML UnstructuredGrid (.vtu) or PolyData (.vtp), raw appended little-endian data;
+/// `comment` an XML comment after the declaration.
+void write_vtk_xml(const TriMesh& mesh, OutputFile& out, bool normals, bool polydata, const std::string& comment = {});
 void write_xyz(const PointCloud& cloud, OutputFile& out);
 
 }  // namespace particlemesh::detail

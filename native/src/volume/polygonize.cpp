@@ -467,6 +467,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   // their lattice hangs below their ellipsoids' box.
   g.origin = field.anisotropic() ? field.support_min() - Vec3{1, 1, 1} * (double(kB + 1) * h)
                                  : (field.lower_corner() - Vec3{rmax, rmax, rmax}) - Vec3{1, 1, 1} * (double(kB + 1) * h);
+  if (options.lattice_anchor == LatticeAnchor::Space) g.origin = space_anchored_origin(g.origin, h);
   st.origin = g.origin;
   {
     double box_nodes = 1;
@@ -906,7 +907,8 @@ PolygonizeResult polygonize(const PointCloud& cloud, const PolygonizeOptions& op
         detail::FieldBuilder::build(cloud.positions.data(), cloud.positions.size(), params, tracker, 0.0, field_end,
                                     {options.domain_min, options.domain_max_radius});
     PolygonizeResult res = polygonize_field(field, options, tracker, field_end, PolygonizeStats{}, t0);
-    detail::finish_polygonized(res, options, field, cloud.positions.data(), cloud.positions.size(), tracker);
+    detail::finish_polygonized(res, options, field, cloud.positions.data(), cloud.positions.size(), tracker,
+                               &cloud.attributes);
     return res;
   });
   tracker.finish();

@@ -17,7 +17,7 @@ COMMANDS = ("triangulate", "polygonize")
 # Keywords of the functions that are not options of their C struct.
 _EXTRA_KEYWORDS = {
     "triangulate": {"raw", "repair", "orient"},
-    "polygonize": {"radius", "threshold", "kernel", "cell"},
+    "polygonize": {"radius", "threshold", "kernel", "cell", "lattice_anchor"},
 }
 
 
@@ -96,6 +96,8 @@ def mesh_file(command, input_path, output_path, options):
     Returns what the summary lists."""
     t0 = time.perf_counter()
     points = read_points(input_path)
+    if command == "polygonize":  # the command-line tool anchors the lattice in space
+        options = {"lattice_anchor": "space", **options}
     mesh = {"triangulate": triangulate, "polygonize": polygonize}[command](points, **options)
     folder = os.path.dirname(output_path)
     if folder:
@@ -113,7 +115,8 @@ def map_frames(client, command, input_pattern, output_pattern, frames=None, *, r
     frame); input_pattern / output_pattern: paths with one frame field, '{}' or a format such
     as '{:04d}' ("sim/fluid_{:04d}.xyz", "out/fluid_{:04d}.ply"); frames: the frame numbers
     (default: every file matching input_pattern). Options are those of particlemesh.triangulate
-    / polygonize (spacing=, radius=, threshold=, raw=, threads= ...). Each output is exactly the
+    / polygonize (spacing=, radius=, threshold=, raw=, threads= ...; polygonize's lattice_anchor
+    defaults to "space" here, as in the command-line tool). Each output is exactly the
     file `particlemesh triangulate|polygonize IN -o OUT` writes with the same options, written
     under a temporary name and renamed when complete. A frame that fails is retried once
     (`retries`), then reported with its error while the other frames go on.

@@ -54,7 +54,7 @@ def polygonize_tile(payload, cells, domain_min, domain_max_radius, options):
 
 def polygonize_tiled(client, particles, tiles=(2, 2, 1), *, bounds=None, radius=None,
                      threshold=None, kernel=None, cell=None, radii=None, strengths=None,
-                     attributes=None, progress=None, **options):
+                     attributes=None, lattice_anchor="particles", progress=None, **options):
     """particlemesh.polygonize of one cloud, cut into tiles that Dask meshes in parallel.
 
     particles: (N, 3) positions or Points, or a loader: a function loader(lo, hi) returning the
@@ -63,7 +63,8 @@ def polygonize_tiled(client, particles, tiles=(2, 2, 1), *, bounds=None, radius=
     cloud's order (the order the whole cloud would list them in); with a loader, bounds=(lo,
     hi) is the cloud's box (lo at or below every particle) and radius= (or, with per-particle
     radii, domain_max_radius=, their maximum) is needed. tiles=(nx, ny, nz): the lattice cut
-    evenly along each axis. The other arguments are polygonize's.
+    evenly along each axis. The other arguments are polygonize's (lattice_anchor="space"
+    too: the tiles round the same origin).
 
     Returns the Mesh particlemesh.polygonize(particles, ...) returns, vertices in canonical
     order (canonical_mesh): the same vertex coordinates and normals bit for bit, the same
@@ -99,7 +100,10 @@ def polygonize_tiled(client, particles, tiles=(2, 2, 1), *, bounds=None, radius=
 
     # The parameters the library would resolve from the whole cloud, resolved here once:
     # R (the radius, or the median of the radii), R_max (the largest radius), h (the cell).
-    tile_options = {k: v for k, v in {**options, "threshold": threshold, "kernel": kernel}.items()
+    if lattice_anchor not in ("particles", "space"):
+        raise invalid(f"lattice_anchor must be 'particles' or 'space', not {lattice_anchor!r}")
+    tile_options = {k: v for k, v in {**options, "threshold": threshold, "kernel": kernel,
+                                      "lattice_anchor": lattice_anchor}.items()
                     if v is not None}
     if source.loader is None:
         p = source.particles
@@ -139,6 +143,9 @@ def polygonize_tiled(client, particles, tiles=(2, 2, 1), *, bounds=None, radius=
     tile_options["cell_size"] = h
     lower = source.lo
     origin = (lower - R_max) - 9.0 * h  # the library's lattice origin (polygonize.h)
+    if lattice_anchor == "space":  # space_anchored_origin: down to a multiple of h
+        rounded = np.floor(origin / h) * h
+        origin = np.where(rounded > origin, rounded - h, rounded)
     top = np.ceil((source.hi + R_max - origin) / h).astype(np.int64) + 1
 
     tasks = []

@@ -44,6 +44,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -65,6 +66,29 @@ inline constexpr double kDefaultCellFraction = 0.25;
 
 /// Default memory budget for the sampled grid: 4 GiB.
 inline constexpr uint64_t kDefaultMaxGridBytes = uint64_t(4) << 30;
+
+/// Where the polygonization lattice is anchored.
+enum class LatticeAnchor {
+  /// origin = (lower - R_max) - 9 h (see the top): the lattice follows the particles' box.
+  Particles,
+  /// The same, rounded down to a multiple of h on each axis (space_anchored_origin): every
+  /// node lies at an integer multiple of h in world coordinates, whatever the particles'
+  /// box. Consecutive frames of a simulation, whose boxes move by fractions of a cell, are
+  /// then sampled at the same points in space (with the same h), so their surfaces do not
+  /// shimmer where the fluid is still. What the command-line tool uses.
+  Space,
+};
+
+/// (lower - R_max) - 9 h rounded down to a multiple of h per axis: floor(o / h) * h, one h
+/// lower where that product rounds above o. Tiles given their cloud's domain_min and R_max
+/// round the same origin the same way, so LatticeAnchor::Space keeps tiles exact.
+inline Vec3 space_anchored_origin(const Vec3& origin, double h) {
+  auto down = [h](double o) {
+    const double v = std::floor(o / h) * h;
+    return v > o ? v - h : v;
+  };
+  return {down(origin.x), down(origin.y), down(origin.z)};
+}
 
 struct PolygonizeOptions {
   Kernel kernel = Kernel::Wyvill;
@@ -116,6 +140,9 @@ struct PolygonizeOptions {
     std::array<int64_t, 3> min{}, max{};
   };
   std::optional<CellRange> cells;
+  /// Particles (the lattice at the particles' box, as at the top) or Space (nodes at
+  /// multiples of h: frames of a sequence do not shimmer; see LatticeAnchor).
+  LatticeAnchor lattice_anchor = LatticeAnchor::Particles;
 };
 
 struct PolygonizeStats {
@@ -156,6 +183,9 @@ struct PolygonizeStats {
 struct PolygonizeResult {
   /// The surface: vertices with normals from the field gradient (outward), triangles
   /// counter-clockwise seen from outside. Empty (no vertex) when F >= T nowhere on the grid.
+  /// The cloud's attributes (velocity, density, ...) are interpolated onto the vertices with
+  /// the normalised kernel weights, sum_i w_i a_i / sum_i w_i (isotropic and anisotropic
+  /// kernels alike; detail::interpolate_attributes in polygonize_finish.h says more).
   TriMesh mesh;
   PolygonizeStats stats;
 };

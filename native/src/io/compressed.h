@@ -1,0 +1,61 @@
+// Internal: compressed data inside particle files, through zlib (the library every reader of
+// these formats uses; it is on every system Blender runs on, and the add-on zip carries it).
+//
+//  - GzipStream: a file that may be gzip-compressed (Houdini's classic .bgeo usually is),
+//    read front to back: the file's own bytes when it does not start with gzip's magic
+//    bytes (1f 8b), else the decompressed stream (several concatenated gzip members too).
+//  - inflate_block: one zlib block of a VTK XML array (vtkZLibDataCompressor) into exactly
+//    the bytes its header promises.
+//
+// Errors are Error(FormatError) naming the file and what was wrong ("the gzip data is
+// corrupt: invalid distance too far back"), never zlib's codes.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "io/file_reader.h"
+
+namespace particlemesh::detail {
+
+class GzipStream {
+ public:
+  /// Reads from `file` (which must stay alive), decompressing when it starts with gzip's
+  /// magic bytes.
+  explicit GzipStream(FileReader& file);
+  ~GzipStream();
+  GzipStream(const GzipStream&) = delete;
+  GzipStream& operator=(const GzipStream&) = delete;
+
+  bool compressed() const { return zipped_; }
+  /// Exactly `n` bytes into `out`; false when the stream ends first.
+  bool read(void* out, size_t n);
+  /// Skip `n` bytes; false when the stream ends first.
+  bool skip(uint64_t n);
+  /// Whether the stream has no byte left.
+  bool at_end();
+  /// Bytes of the (decompressed) stream consumed so far.
+  uint64_t offset() const { return consumed_ + pos_; }
+
+ private:
+  bool refill();
+
+  FileReader& file_;
+  bool zipped_ = false;
+  struct Z;
+  Z* z_ = nullptr;
+  std::vector<unsigned char> in_, out_;
+  size_t pos_ = 0, end_ = 0;
+  uint64_t consumed_ = 0;
+  bool finished_ = false;
+};
+
+/// Inflate the zlib stream `in[0..in_size)` into exactly `out_size` bytes at `out`.
+/// @throws Error(FormatError) "'<path>': <what>: the zlib data is corrupt (...)" or holds more
+///         or fewer bytes than `out_size`.
+void inflate_block(const unsigned char* in, size_t in_size, unsigned char* out, size_t out_size,
+                   const std::string& path, const std::string& what);
+
+}  // namespace particlemesh::detail

@@ -1,0 +1,230 @@
+"""Simulators' files, particle attributes and frame sequences through the CLI."""
+
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent))
+from particle_files import FORMATS, particles, read_ascii_ply, write_bgeo, write_vtk  # noqa: E402
+
+POLY = ["--radius", "0.14", "--cell", "0.03"]  # fixed R and h: frames share a lattice
+
+
+def frames(folder, numbers, fmt=".vtk"):
+    folder.mkdir(parents=True, exist_ok=True)
+    for f in numbers:
+        p, a = particles(f)
+        FORMATS[fmt](folder / f"f_{f}{fmt}", p, a)
+
+
+def test_same_particles_same_mesh_whatever_the_file(cli, tmp_path):
+    p, a = particles(0)
+    meshes = {}
+    for fmt, write in FORMATS.items():
+        src = tmp_path / f"in{fmt}"
+        write(src, p, a)
+        out = tmp_path / f"out{fmt}.ply"
+        cli("polygonize", src, "-o", out, *POLY, "-q")
+        meshes[fmt] = out.read_bytes()
+        tri = tmp_path / f"tri{fmt}.ply"
+        cli("triangulate", src, "-o", tri, "--raw", "-q")
+        meshes["tri" + fmt] = tri.read_bytes()
+    for fmt in FORMATS:
+        assert meshes[fmt] == meshes[".ply"], f"{fmt} gives another polygonize mesh than .ply"
+        assert meshes["tri" + fmt] == meshes["tri.ply"], f"{fmt} gives another triangulate mesh than .ply"
+    assert b"property float velocity_2" in meshes[".ply"] and b"property float density" in meshes[".ply"]
+
+
+def test_attributes_reach_the_mesh(cli, tmp_path):
+    p, a = particles(0)
+    src = tmp_path / "in.vtk"
+    # A constant velocity: normalised kernel weights give exactly it on every vertex.
+    a["velocity"][:] = np.array([0.5, -0.25, 2.0], np.float32)
+    write_vtk(src, p, a)
+    cli("polygonize", src, "-o", tmp_path / "m.ply", "--ascii", *POLY, "-q")
+    pos, cols, faces = read_ascii_ply(tmp_path / "m.ply")
+    assert len(faces) > 100
+    vel = np.column_stack([cols[f"velocity_{c}"] for c in range(3)])
+    np.testing.assert_allclose(vel, np.tile([0.5, -0.25, 2.0], (len(pos), 1)), atol=1e-5)
+    # density varies: interpolated values lie within the particles' range (a convex combination).
+    assert cols["density"].min() >= a["density"].min() - 1e-3 and cols["density"].max() <= a["density"].max() + 1e-3
+    assert np.ptp(cols["density"]) > 0.1
+
+    # triangulate: vertex i is particle i, with its own values.
+    _, a = particles(0)
+    write_vtk(src, p, a)
+    cli("triangulate", src, "-o", tmp_path / "t.ply", "--ascii", "-q")
+    pos, cols, faces = read_ascii_ply(tmp_path / "t.ply")
+    assert len(pos) == len(p) and len(faces) > 0
+    np.testing.assert_allclose(pos, p, atol=1e-6)
+    np.testing.assert_array_equal(cols["density"].astype(np.float32), a["density"])
+    np.testing.assert_array_equal(cols["velocity_1"].astype(np.float32), a["velocity"][:, 1])
+
+    # --attributes picks; a name the particles lack is a clear error.
+    cli("polygonize", src, "-o", tmp_path / "d.ply", "--ascii", *POLY, "-q", "--attributes", "density")
+    _, cols, _ = read_ascii_ply(tmp_path / "d.ply")
+    assert "density" in cols and "velocity_0" not in cols
+    cli("polygonize", src, "-o", tmp_path / "n.ply", "--ascii", *POLY, "-q", "--attributes", "none")
+    _, cols, _ = read_ascii_ply(tmp_path / "n.ply")
+    assert set(cols) == {"x", "y", "z", "nx", "ny", "nz"}
+    r = cli("polygonize", src, "-o", tmp_path / "x.ply", *POLY, "--attributes", "speed", check=False)
+    assert r.returncode == 1 and "no 'speed'" in r.stderr and "velocity, density" in r.stderr
+    assert not (tmp_path / "x.ply").exists()
+
+    # VTK output: point-data arrays of the channels' names.
+    cli("polygonize", src, "-o", tmp_path / "m.vtu", *POLY, "-q")
+    text = (tmp_path / "m.vtu").read_bytes()
+    assert b'Name="velocity"' in text and b'NumberOfComponents="3"' in text and b'Name="density"' in text
+
+
+def test_sequence_meshes_each_frame_as_its_file_alone(cli, tmp_path):
+    frames(tmp_path / "in", [1, 2, 3, 10])
+    out = tmp_path / "out"
+    out.mkdir()
+    r = cli("polygonize", tmp_path / "in/f_{}.vtk", "-o", out / "m_{:04d}.ply", *POLY, "--jobs", "1")
+    # numeric order (10 after 3), one line per frame, the gap reported, a summary
+    order = [int(line.split(":")[0].split()[1]) for line in r.stderr.splitlines() if line.startswith("frame ")]
+    assert order == [1, 2, 3, 10]
+    assert "6 missing frames skipped (no file): 4, 5, 6, 7, 8, 9" in r.stderr
+    assert "meshed        4" in r.stdout and "failed        0" in r.stdout
+    for f in [1, 2, 3, 10]:
+        single = tmp_path / f"single_{f}.ply"
+        cli("polygonize", tmp_path / f"in/f_{f}.vtk", "-o", single, *POLY, "-q")
+        assert (out / f"m_{f:04d}.ply").read_bytes() == single.read_bytes(), f"frame {f}"
+    # --jobs 2: the same bytes
+    out2 = tmp_path / "out2"
+    out2.mkdir()
+    cli("polygonize", tmp_path / "in/f_{}.vtk", "-o", out2 / "m_{:04d}.ply", *POLY, "--jobs", "2", "-q")
+    for f in [1, 2, 3, 10]:
+        assert (out2 / f"m_{f:04d}.ply").read_bytes() == (out / f"m_{f:04d}.ply").read_bytes()
+    # triangulate sequences too
+    cli("triangulate", tmp_path / "in/f_{}.vtk", "-o", out / "t_{}.obj", "-q")
+    assert sorted(x.name for x in out.glob("t_*.obj")) == ["t_1.obj", "t_10.obj", "t_2.obj", "t_3.obj"]
+
+
+def test_rerun_leaves_up_to_date_frames_alone(cli, tmp_path):
+    frames(tmp_path / "in", [0, 1, 2])
+    pat_in, pat_out = tmp_path / "in/f_{}.vtk", tmp_path / "m_{}.ply"
+    cli("polygonize", pat_in, "-o", pat_out, *POLY)
+    stamp = {f: os.stat(tmp_path / f"m_{f}.ply").st_mtime_ns for f in range(3)}
+    r = cli("polygonize", pat_in, "-o", pat_out, *POLY)
+    assert "meshed        0" in r.stdout and "up to date    3" in r.stdout
+    assert all(os.stat(tmp_path / f"m_{f}.ply").st_mtime_ns == stamp[f] for f in range(3))
+    # an input newer than its output: that frame only
+    t = os.stat(tmp_path / "in/f_1.vtk").st_mtime - 10
+    os.utime(tmp_path / "m_1.ply", (t, t))
+    r = cli("polygonize", pat_in, "-o", pat_out, *POLY)
+    assert "meshed        1" in r.stdout and "up to date    2" in r.stdout
+    assert os.stat(tmp_path / "m_1.ply").st_mtime_ns > stamp[1]
+    # other options: every frame
+    r = cli("polygonize", pat_in, "-o", pat_out, "--radius", "0.15", "--cell", "0.03")
+    assert "meshed        3" in r.stdout
+    # --threads does not change the output: still up to date; --force redoes them
+    r = cli("polygonize", pat_in, "-o", pat_out, "--radius", "0.15", "--cell", "0.03", "--threads", "1")
+    assert "meshed        0" in r.stdout
+    r = cli("polygonize", pat_in, "-o", pat_out, "--radius", "0.15", "--cell", "0.03", "--force")
+    assert "meshed        3" in r.stdout
+    # a removed output: that frame again
+    (tmp_path / "m_2.ply").unlink()
+    r = cli("polygonize", pat_in, "-o", pat_out, "--radius", "0.15", "--cell", "0.03", "--dry-run")
+    assert "m_2.ply (to mesh)" in r.stdout and "m_0.ply (up to date" in r.stdout
+
+
+def test_frame_range_and_bad_frames(cli, tmp_path):
+    frames(tmp_path / "in", [1, 2, 3, 4, 6])
+    pat_in = tmp_path / "in/f_{}.vtk"
+    r = cli("polygonize", pat_in, "-o", tmp_path / "r_{}.ply", *POLY, "--frames", "2:5")
+    assert sorted(x.name for x in tmp_path.glob("r_*.ply")) == ["r_2.ply", "r_3.ply", "r_4.ply"]
+    assert "1 missing frame skipped (no file): 5" in r.stderr
+    # a truncated frame and a frame with other attributes fail, named; the others go on
+    data = (tmp_path / "in/f_3.vtk").read_bytes()
+    (tmp_path / "in/f_3.vtk").write_bytes(data[: len(data) // 2])
+    p, a = particles(4)
+    del a["density"]
+    write_vtk(tmp_path / "in/f_4.vtk", p, a)
+    r = cli("polygonize", pat_in, "-o", tmp_path / "b_{}.ply", *POLY, check=False)
+    assert r.returncode == 1
+    assert "frame 3 (" in r.stderr and "f_3.vtk" in r.stderr
+    assert "frame 4 (" in r.stderr and "every frame of a sequence must carry the same" in r.stderr
+    assert "failed        2" in r.stdout
+    assert sorted(x.name for x in tmp_path.glob("b_*.ply")) == ["b_1.ply", "b_2.ply", "b_6.ply"]
+    # the failed frames are not up to date: they run again (and fail again)
+    r = cli("polygonize", pat_in, "-o", tmp_path / "b_{}.ply", *POLY, check=False)
+    assert r.returncode == 1 and "up to date    3" in r.stdout and "failed        2" in r.stdout
+
+
+def test_sequence_usage_errors(cli, tmp_path):
+    frames(tmp_path / "in", [1])
+    pat_in = tmp_path / "in/f_{}.vtk"
+    cases = [
+        ([pat_in, "-o", tmp_path / "m.ply"], "has no frame field"),
+        ([tmp_path / "in/f_1.vtk", "-o", tmp_path / "m_{}.ply"], "is not a frame pattern"),
+        ([tmp_path / "in/f_1.vtk", "-o", tmp_path / "m.ply", "--frames", "1:2"], "--frames is for a sequence"),
+        ([pat_in, "-o", tmp_path / "m_{}.ply", "--frames", "5:2"], "the first frame is after the last"),
+        ([pat_in, "-o", tmp_path / "m_{}.ply", "--frames", "a:b"], "expected FIRST:LAST"),
+        ([tmp_path / "in/f_{x}.vtk", "-o", tmp_path / "m_{}.ply"], "unsupported field"),
+        ([tmp_path / "in/f_{}_{}.vtk", "-o", tmp_path / "m_{}.ply"], "more than one frame field"),
+        ([pat_in, "-o", tmp_path / "m_{}.stl"], "-o"),
+        ([pat_in, "-o", tmp_path / "nofolder/m_{}.ply"], "-o"),
+    ]
+    for args, message in cases:
+        r = cli("polygonize", *args, check=False)
+        assert r.returncode == 2 and message in r.stderr, (args, r.stderr)
+    r = cli("polygonize", tmp_path / "none_{}.vtk", "-o", tmp_path / "m_{}.ply", check=False)
+    assert r.returncode == 1 and "no file matches" in r.stderr
+    # zero-padded patterns: f_07 is not frame 7 of f_{}
+    (tmp_path / "in/f_07.vtk").write_bytes((tmp_path / "in/f_1.vtk").read_bytes())
+    r = cli("polygonize", pat_in, "-o", tmp_path / "m_{}.ply", *POLY, "--dry-run")
+    assert r.stdout.count("frame ") == 1
+
+
+def test_binary_json_bgeo_is_a_clear_error(cli, tmp_path):
+    for name, data in [("a.bgeo", b"\x7fNSJ" + b"\0" * 64), ("b.bgeo.sc", b"\0" * 64)]:
+        (tmp_path / name).write_bytes(data)
+        r = cli("polygonize", tmp_path / name, "-o", tmp_path / "m.ply", check=False)
+        assert r.returncode == 1 and "classic bgeo" in r.stderr and name in r.stderr
+
+
+def test_shared_simulator_samples(cli, tmp_path):
+    d = os.environ.get("PM_TEST_DATA")
+    folder = Path(d) / "particles" if d else None
+    if not folder or not folder.is_dir():
+        pytest.skip("shared particle samples not found (set PM_TEST_DATA to the shared/data folder)")
+    # The same frame as .ply and .vtk: the same mesh.
+    ply, vtk = folder / "cube_2366_particles.ply", folder / "cube_2366_particles.vtk"
+    cli("polygonize", ply, "-o", tmp_path / "a.ply", "-q", "--attributes", "none")
+    cli("polygonize", vtk, "-o", tmp_path / "b.ply", "-q", "--attributes", "none")
+    assert (tmp_path / "a.ply").read_bytes() == (tmp_path / "b.ply").read_bytes()
+    for name in ["ParticleData_Fluid_50.bgeo", "fluid_250_particles.vtu", "fluid_encoded_250_particles.vtu",
+                 "double_dam_break_frame_01_4732_particles.vtk"]:
+        r = cli("inspect", folder / name, "--json", check=False)
+        cli("polygonize", folder / name, "-o", tmp_path / "s.vtu", "-q")
+        assert (tmp_path / "s.vtu").stat().st_size > 0, name
+
+
+def test_ctrl_c_cancels_the_frames_in_flight(tmp_path):
+    exe = os.environ.get("PARTICLEMESH_CLI")
+    if not exe:
+        pytest.skip("PARTICLEMESH_CLI is not set to the built particlemesh binary")
+    import signal
+    import subprocess
+    for f in range(4):
+        p, a = particles(f, n=30)
+        write_vtk(tmp_path / f"f_{f}.vtk", p, a, binary=True)
+    proc = subprocess.Popen([exe, "polygonize", tmp_path / "f_{}.vtk", "-o", tmp_path / "m_{}.ply",
+                             "--radius", "0.14", "--cell", "0.004", "--jobs", "2"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(1.5)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert "cancelled (interrupted)" in err
+    # No temporary is left; a frame finished before the signal has its mesh and its sidecar.
+    left = {x.name for x in tmp_path.iterdir() if not x.name.endswith(".vtk")}
+    meshes = {n for n in left if n.startswith("m_")}
+    assert left == meshes | {f".{m}.particlemesh" for m in meshes}, left
+    assert len(meshes) < 4
