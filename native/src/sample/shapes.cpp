@@ -7,7 +7,7 @@
 #include <unordered_map>
 
 #include "particlemesh/core/error.h"
-#include "spatial/cell_hash.h"
+#include "core/hashing.h"
 
 namespace particlemesh {
 
