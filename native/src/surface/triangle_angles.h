@@ -30,7 +30,7 @@ inline double max_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
 }
 
 /// acos(x) for x in [-1, 1] within 2e-8 rad (Abramowitz and Stegun 4.4.46): the corner
-/// angles that weight the vertex normals, where std::acos took half the time of that stage.
+/// angles that weight the vertex normals, where std::acos was the largest cost of that stage.
 inline double fast_acos(double x) {
   const double a = std::min(std::abs(x), 1.0);
   const double r = std::sqrt(1.0 - a) *

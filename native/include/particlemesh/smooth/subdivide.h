@@ -1,4 +1,6 @@
-// Smooth surfaces from triangle meshes by subdivision (seed section 5.2.5).
+// Smooth surfaces from triangle meshes by subdivision (Tonnesen's thesis, section 5.2.5:
+// D. Tonnesen, "Dynamically Coupled Particle Systems for Geometric Modeling, Reconstruction,
+// and Animation", PhD thesis, University of Toronto, 1998).
 //
 //  - Loop (Loop 1987), through OpenSubdiv's Far::TopologyRefiner with the Loop scheme:
 //    approximating; uniform refinement to `levels`, then (by default) every vertex is moved
