@@ -2,6 +2,8 @@
 // ProgressCallback, a C kernel number into a Kernel, 3-vectors into caller memory.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -13,7 +15,7 @@
 #include "particlemesh/particlemesh.h"
 #include "particlemesh/volume/kernel.h"
 
-namespace particlemesh::capi {
+namespace PM_NAMESPACE::capi {
 
 /// The C callback as a ProgressCallback (empty for NULL): a non-zero return cancels.
 inline ProgressCallback wrap_progress(pm_progress_fn fn, void* user) {

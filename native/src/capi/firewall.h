@@ -3,6 +3,8 @@
 // PCL bridge) and a thread-local message.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <initializer_list>
 #include <new>
 #include <string>
@@ -11,7 +13,7 @@
 #include "particlemesh/core/error.h"
 #include "particlemesh/particlemesh.h"
 
-namespace particlemesh::capi {
+namespace PM_NAMESPACE::capi {
 
 void set_error(const std::string& message) noexcept;
 void clear_error() noexcept;
@@ -44,7 +46,7 @@ void write_versioned(T* out, const T& value, const char* name);
 #include <algorithm>
 #include <cstring>
 
-namespace particlemesh::capi {
+namespace PM_NAMESPACE::capi {
 
 template <class T>
 T read_versioned(const T* in, const T& defaults, const char* name, std::initializer_list<size_t> pointer_fields) {

@@ -3,13 +3,15 @@
 // element and the result depends on nothing but the elements (not the order of the unions).
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 #include <cstdint>
 #include <numeric>
 #include <utility>
 #include <vector>
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 class DisjointSets {
  public:

@@ -6,11 +6,13 @@
 // std::unordered_map or TBB's concurrent maps spend per entry), built once and then only read.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <array>
 #include <cstdint>
 #include <vector>
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// The finaliser of splitmix64 (Steele, Lea and Flood, "Fast splittable pseudorandom number
 /// generators", OOPSLA 2014): every input bit reaches every output bit; cheap.

@@ -9,7 +9,7 @@
 #include "mesh/orientation.h"
 #include "particlemesh/core/error.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 

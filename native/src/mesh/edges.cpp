@@ -8,7 +8,7 @@
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 // Hand-written: OpenMesh builds its half-edge structure (and refuses non-manifold input) to
 // get edges, and Blender's own edge pass was most of the time of writing a mesh into it

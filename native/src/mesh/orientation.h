@@ -5,9 +5,11 @@
 // outward.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include "particlemesh/core/vec3.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// Six times the signed volume of the tetrahedron (o, a, b, c): a triangle's term in the
 /// enclosed volume of its piece. Taken about a point `o` of the piece (one of its vertices),

@@ -9,7 +9,7 @@
 #include "core/parallel.h"
 #include "mesh/orientation.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 

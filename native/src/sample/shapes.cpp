@@ -9,7 +9,7 @@
 #include "particlemesh/core/error.h"
 #include "core/hashing.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 

@@ -13,7 +13,7 @@
 #include "core/hashing.h"
 #include "particlemesh/core/error.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 

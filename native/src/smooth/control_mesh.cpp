@@ -13,7 +13,7 @@
 #include "particlemesh/core/error.h"
 #include "particlemesh/smooth/subdivide.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 namespace {
 

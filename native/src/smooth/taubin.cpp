@@ -9,7 +9,7 @@
 #include "particlemesh/core/error.h"
 #include "particlemesh/mesh/edges.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 

@@ -12,7 +12,7 @@
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 

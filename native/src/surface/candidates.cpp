@@ -9,7 +9,7 @@
 #include "core/parallel.h"
 #include "surface/triangle_angles.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 namespace {
 

@@ -16,7 +16,7 @@
 #include "surface/raw_triangulation.h"
 #include "spatial/spacing_impl.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 namespace detail {
 
 namespace {

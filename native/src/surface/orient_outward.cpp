@@ -8,7 +8,7 @@
 #include "core/parallel.h"
 #include "mesh/orientation.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<Triangle>& T,
                                         const std::vector<uint64_t>& boundary, std::vector<Vec3>* vertex_normals) {

@@ -18,7 +18,7 @@
 #include "surface/surface_builder.h"
 #include "surface/view_rays.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 

@@ -1,6 +1,8 @@
 // Internal: the corner angles the surface stages rank and weight triangles by.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -9,7 +11,7 @@
 #include "particlemesh/core/vec3.h"
 #include "particlemesh/mesh/tri_mesh.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// The cosine of the triangle (p, q, r)'s angle at p.
 inline double corner_cosine(const Vec3& p, const Vec3& q, const Vec3& r) {

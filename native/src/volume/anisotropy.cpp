@@ -15,7 +15,7 @@
 #include "particlemesh/spatial/neighbor_grid.h"
 #include "volume/anisotropy_impl.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 

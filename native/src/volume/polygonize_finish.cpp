@@ -11,7 +11,7 @@
 #include "particlemesh/smooth/taubin.h"
 #include "spatial/spacing_impl.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 namespace {
 

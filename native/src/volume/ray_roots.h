@@ -21,9 +21,11 @@
 // whole line through a companion matrix, far slower and with no certification).
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 inline constexpr int kMaxPolyDegree = 6;
 inline constexpr int kMaxCrossings = 8;

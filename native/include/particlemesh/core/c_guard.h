@@ -3,6 +3,8 @@
 // failure maps to the same pm_status with a one-line message.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <exception>
 #include <new>
 #include <stdexcept>
@@ -11,7 +13,7 @@
 #include "particlemesh/core/error.h"
 #include "particlemesh/particlemesh.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 /// Runs `body()`: PM_OK when it returns; when it throws, hands the message to
 /// `report(const std::string&)` (which must not throw) and returns the status:

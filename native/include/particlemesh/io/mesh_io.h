@@ -7,6 +7,8 @@
 // written), OFF and STL (read), XYZ text (points, read and written).
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <string>
 
 #include "particlemesh/core/export.h"
@@ -14,7 +16,7 @@
 #include "particlemesh/mesh/point_cloud.h"
 #include "particlemesh/mesh/tri_mesh.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 enum class MeshFormat {
   Auto,       ///< from the file extension: .ply -> PlyBinary, .obj -> Obj (a device or FIFO without one: PlyBinary)

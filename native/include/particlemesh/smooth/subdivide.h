@@ -35,6 +35,8 @@
 // Input normals are ignored; the result always has normals (see SmoothResult::mesh).
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -44,7 +46,7 @@
 #include "particlemesh/core/progress.h"
 #include "particlemesh/mesh/tri_mesh.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 enum class SmoothScheme : int {
   Loop = 0,       ///< approximating, C2 except at extraordinary vertices (OpenSubdiv)

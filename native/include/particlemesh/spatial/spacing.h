@@ -1,13 +1,15 @@
 // The particle spacing r0 that the triangulation's edge limit is measured in.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 
 #include "particlemesh/core/export.h"
 #include "particlemesh/core/progress.h"
 #include "particlemesh/core/vec3.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 struct SpacingEstimate {
   double spacing = 0;          ///< median nearest-neighbour distance over distinct points

@@ -1,13 +1,15 @@
 // Per-particle normals for clouds that come without them.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <vector>
 
 #include "particlemesh/core/export.h"
 #include "particlemesh/core/progress.h"
 #include "particlemesh/mesh/point_cloud.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 struct NormalOptions {
   /// Neighbourhood radius in world units for the local plane fit; 0 = 2 x the estimated

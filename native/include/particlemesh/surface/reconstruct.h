@@ -24,12 +24,14 @@
 //  6. Orientation: every closed component is turned to enclose positive volume (outward).
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 
 #include "particlemesh/core/export.h"
 #include "particlemesh/surface/triangulate.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 struct SurfaceOptions : TriangulateOptions {
   /// Co-normality limit in degrees (Tonnesen's thesis, section 5.2.4): corner normals may differ by at most this,

@@ -28,6 +28,8 @@
 // a surface (overlapping pairs on quads, slivers). Use reconstruct_surface() for a mesh.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 #include <cstdint>
 
@@ -36,7 +38,7 @@
 #include "particlemesh/mesh/point_cloud.h"
 #include "particlemesh/mesh/tri_mesh.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 struct TriangulateOptions {
   /// Particle spacing r0 in world units (not relative). 0 = estimate it as the median
