@@ -89,15 +89,12 @@ nlohmann::json holes_by_size(const std::vector<size_t>& edges) {
   return out;
 }
 
-/// When the co-normality test dropped over a third of the seed's triangles (triangles across
-/// particles facing opposite ways) and the surface did not close, the particles probably fill
-/// a volume (a fluid simulation's) rather than sample a surface: say which command meshes
-/// those. Surfaces drop at most ~15 % (noisy scans; 0-3 % on clean samples); SPH frames
-/// 48-76 %; thin parts 1-1.5 spacings thick drop ~60 % too, but they close (or, thinner, leave
-/// loops, where the "if" of the hint applies). Empty otherwise.
+/// When the particles look like a volume's (SurfaceStats::looks_like_volume: co-normality
+/// dropped most raw triangles and loops stayed open), say which command meshes those. Empty
+/// otherwise.
 std::string volume_particles_hint(const SurfaceResult& r) {
+  if (!r.surface.looks_like_volume) return {};
   const size_t kept = r.triangulation.kept, dropped = r.surface.rejected_conormal;
-  if (kept == 0 || dropped * 20 <= kept * 7 || r.surface.holes_left == 0) return {};
   char s[320];
   std::snprintf(s, sizeof s,
                 "%.0f%% of the seed's triangles were dropped for joining particles that face opposite ways: if "

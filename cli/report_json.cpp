@@ -66,6 +66,7 @@ nlohmann::json to_json(const SurfaceStats& s) {
           {"normals_estimated", s.normals_estimated},
           {"candidates", s.candidates},
           {"rejected_conormal", s.rejected_conormal},
+          {"looks_like_volume", s.looks_like_volume},
           {"grown", s.grown},
           {"seeds", s.seeds},
           {"pinches_resolved", s.pinches_resolved},

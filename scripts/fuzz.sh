@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Fuzz one target (or all) with libFuzzer in the sanitizer build (issue 9).
+# Fuzz one target (or all) with libFuzzer in the sanitizer build.
 #
 #   scripts/fuzz.sh TARGET [SECONDS]     e.g. scripts/fuzz.sh read_ply 600
 #   scripts/fuzz.sh all [SECONDS]        every target, two at a time (scripts/test.sh: 30 s each)

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The sanitizer build (issue 9), run by scripts/test.sh after the normal suites:
+# The sanitizer build, run by scripts/test.sh after the normal suites:
 #
 #  1. configures build-asan/ with clang, AddressSanitizer + UndefinedBehaviorSanitizer (every
 #     report is fatal) and libFuzzer's coverage instrumentation, and builds the library, the

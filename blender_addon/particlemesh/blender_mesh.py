@@ -17,7 +17,7 @@ NORMAL_ATTRIBUTE = "point_normal"
 #: Blender declares loop vertex indices, loop starts and totals, edge and loop-triangle
 #: vertices as unsigned ints. foreach_get / foreach_set copy in bulk only when the buffer's
 #: format matches the property's ('I' here); any other walks the array item by item as a
-#: Python sequence: 600k loop indices took 30-50 ms as int32, 3-5 ms as uint32 (Blender 3.4).
+#: Python sequence, about ten times slower (bench/RESULTS.md).
 INDEX = np.uint32
 
 _ATTRIBUTE_TYPES = {1: ("FLOAT", "value"), 2: ("FLOAT2", "vector"), 3: ("FLOAT_VECTOR", "vector"),
@@ -52,8 +52,8 @@ def write(mesh, data, *, custom_normals=True, attributes=True):
             if _SET_LOOP_TOTAL:
                 mesh.polygons.foreach_set("loop_total", np.full(nt, 3, dtype=INDEX))
             mesh.polygons.foreach_set("use_smooth", np.ones(nt, dtype=bool))
-            # The library numbers the edges (a few ms); Blender's own edge pass, which
-            # update(calc_edges=True) runs, took 75 of the 90 ms of writing 200k triangles.
+            # The library numbers the edges; Blender's own edge pass, which
+            # update(calc_edges=True) runs, was most of the time of writing a mesh.
             edges, corner_edges = pm.triangle_edges(triangles, nv)
             mesh.edges.add(len(edges))
             mesh.edges.foreach_set("vertices", edges.ravel())

@@ -195,13 +195,12 @@ def uneven_spacing_warning(stats):
 
 
 def volume_particles_warning(stats):
-    """A warning when the co-normality test dropped over a third of the seed's triangles and
-    loops were left open: the particles probably fill a volume (a fluid simulation's), which
-    Polygonize meshes. Surfaces drop at most ~15 % (noisy scans), SPH frames 48-76 % (the
-    CLI's hint, cli/cmd_triangulate.cpp, says more). None otherwise."""
-    kept, dropped = stats.get("kept", 0), stats.get("rejected_conormal", 0)
-    if stats.get("raw") or not kept or dropped * 20 <= kept * 7 or not stats.get("holes_left"):
+    """A warning when the library says the particles look like a volume's (the triangulation
+    statistic looks_like_volume: co-normality dropped most raw triangles and loops were left
+    open), which Polygonize meshes. None otherwise."""
+    if stats.get("raw") or not stats.get("looks_like_volume"):
         return None
+    kept, dropped = stats.get("kept", 0), stats.get("rejected_conormal", 0)
     return (f"{100 * dropped / kept:.0f}% of the seed's triangles join particles facing opposite "
             "ways: if the particles fill a volume (a fluid simulation's), use Polygonize")
 

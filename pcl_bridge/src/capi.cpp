@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include <particlemesh/core/c_guard.h>
 #include <particlemesh/core/error.h>
 #include <particlemesh_pcl/io.h>
 
@@ -30,55 +31,20 @@ namespace
     }
   }
 
-  // A failed core C ABI call inside the bridge: carry its status and message.
-  struct CoreFailure
-  {
-    pm_status status;
-  };
-
+  // A failed core C ABI call inside the bridge: its status, its message after the file's name.
   void
   check (pm_status status, const std::string &path)
   {
     if (status != PM_OK)
-    {
-      setError (path + ": " + pm_last_error_message ());
-      throw CoreFailure{status};
-    }
+      throw particlemesh::Error (static_cast<particlemesh::Status> (status), path + ": " + pm_last_error_message ());
   }
 
+  // The same firewall as the core library's C ABI, with this library's own message.
   template <class F> pm_status
   guarded (F &&body) noexcept
   {
-    try
-    {
-      last_error.clear ();
-      body ();
-      return PM_OK;
-    }
-    catch (const CoreFailure &f)
-    {
-      return f.status;
-    }
-    catch (const particlemesh::Error &e)
-    {
-      setError (e.what ());
-      return static_cast<pm_status> (e.status ());
-    }
-    catch (const std::bad_alloc &)
-    {
-      setError ("out of memory");
-      return PM_STATUS_OUT_OF_MEMORY;
-    }
-    catch (const std::exception &e)
-    {
-      setError (std::string ("internal error: ") + e.what ());
-      return PM_STATUS_INTERNAL;
-    }
-    catch (...)
-    {
-      setError ("internal error: unknown exception");
-      return PM_STATUS_INTERNAL;
-    }
+    last_error.clear ();
+    return particlemesh::run_guarded (setError, body);
   }
 
   struct CloudDeleter

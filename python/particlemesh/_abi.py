@@ -90,6 +90,7 @@ class pm_triangulate_stats(Structure):
         ("local_spacing", c_double * 5),
         ("viewpoint_used", c_int32),
         ("rejected_shadow", c_uint64),
+        ("looks_like_volume", c_int32),
     ]
 
 

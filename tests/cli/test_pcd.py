@@ -51,7 +51,7 @@ def test_every_shared_pcd_triangulates(pcl_cli, inspect, data_dir, tmp_path, nam
 
 
 def test_kinect_frame_with_the_documented_preprocessing(pcl_cli, inspect, data_dir, tmp_path):
-    # README: outlier removal, uniform sampling to 5 mm, normals toward the sensor.
+    # docs/pcl.md: outlier removal, uniform sampling to 5 mm, normals toward the sensor.
     pcl_mesh = tmp_path / "pcl.ply"
     proc, r = _report(pcl_cli, tmp_path, data_dir / KINECT, "--remove-outliers", "--uniform-sampling", "0.005",
                       "--estimate-normals", "--pcl-mesh", pcl_mesh)

@@ -186,6 +186,7 @@ def test_volume_particles_get_a_hint_to_polygonize(cli, tmp_path):
     proc = cli("triangulate", tmp_path / "block.xyz", "-o", tmp_path / "b.ply", "--report", rep)
     r = json.loads(rep.read_text())
     assert r["surface"]["rejected_conormal"] * 20 > r["triangulation"]["kept"] * 7
+    assert r["surface"]["looks_like_volume"] is True
     assert "particlemesh polygonize" in r["hint"]
     assert "hint" in proc.stdout and "polygonize" in proc.stdout
     # Polygonize does mesh them: one closed surface.
@@ -195,7 +196,9 @@ def test_volume_particles_get_a_hint_to_polygonize(cli, tmp_path):
         pts = tmp_path / f"{shape}.xyz"
         cli("sample", shape, "--spacing", "0.05", "-o", pts)
         proc = cli("triangulate", pts, "-o", tmp_path / f"{shape}.ply", "--report", rep)
-        assert "polygonize" not in proc.stdout and "hint" not in json.loads(rep.read_text())
+        report = json.loads(rep.read_text())
+        assert "polygonize" not in proc.stdout and "hint" not in report
+        assert report["surface"]["looks_like_volume"] is False
 
 
 def test_sph_frames_get_the_polygonize_hint(cli, tmp_path, data_dir):

@@ -478,7 +478,7 @@ TEST(ParticleTriangulation, SharedScansReconstruct) {
     EXPECT_GT(t.per_component[0].triangles, 18000u);
   }
   {
-    // The depth frame: 640 x 480, 35 625 NaN. Documented preprocessing (README): outlier
+    // The depth frame: 640 x 480, 35 625 NaN. Documented preprocessing (docs/pcl.md): outlier
     // removal, uniform sampling to 5 mm (which is then the spacing r0), normals toward the
     // sensor.
     pcl::PointCloud<pcl::PointXYZRGB>::Ptr c(new pcl::PointCloud<pcl::PointXYZRGB>);

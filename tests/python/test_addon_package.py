@@ -171,7 +171,7 @@ def glibc_versions(path, prefix):
 
 
 def test_zip_needs_glibc_2_34_and_the_libstdcxx_of_gcc_11(unpacked_addon):
-    """What the README states, from the symbol versions the zip's libraries require: glibc
+    """What docs/blender.md states, from the symbol versions the zip's libraries require: glibc
     2.34 (Debian 12, Ubuntu 22.04, RHEL 9; libtbb and libgomp ask for it) and the libstdc++ of
     GCC 11 or newer (GLIBCXX_3.4.29, CXXABI_1.3.13)."""
     lib_dir = unpacked_addon / "particlemesh" / "lib"
@@ -315,11 +315,13 @@ def test_volume_particles_warn_to_polygonize(pkg):
     block = (grid + rng.normal(0, 0.1, grid.shape)).astype(np.float32)
     data = pkg.generate.run("TRIANGULATE", pkg.generate.Particles(block), {})
     assert data.stats["rejected_conormal"] * 20 > data.stats["kept"] * 7
+    assert data.stats["looks_like_volume"] == 1
     warning = pkg.generate.volume_particles_warning(data.stats)
     assert warning and "Polygonize" in warning
     surface = pkg.generate.run("TRIANGULATE", pkg.generate.Particles(sphere(5000)), {})
     assert pkg.generate.volume_particles_warning(surface.stats) is None
     assert surface.stats["rejected_conormal"] * 20 < surface.stats["kept"]
+    assert surface.stats["looks_like_volume"] == 0
 
 
 def test_generate_raw_is_wound_by_the_normals(pkg):

@@ -99,7 +99,8 @@ PM_EXPORT pm_status pm_cloud_thin(const pm_cloud* cloud, double min_distance, ui
 
 /* ---- triangulation of surface particles --------------------------------------------- */
 
-/** Return the seed's exact triangle set (not a surface) instead of the finished surface. */
+/** Return the exact triangle set of Tonnesen's smallest-sphere test (not a surface) instead of
+ *  the finished surface. */
 #define PM_TRIANGULATE_RAW 0x1u
 /** Skip the repair stage (hole filling, unpinching, inserting passed-by particles). */
 #define PM_TRIANGULATE_NO_REPAIR 0x2u
@@ -131,7 +132,7 @@ typedef struct pm_triangulate_options {
   uint32_t fill_holes;      /**< fill boundary loops of up to this many edges (default 100, 0 = none) */
   double fill_edge_factor;  /**< fill edges at most this x L: wider openings stay open (default 1.5) */
   int32_t normals;          /**< PM_NORMALS_* (default PM_NORMALS_AUTO) */
-  /* -- appended (issue 9) -- */
+  /* -- appended -- */
   uint32_t max_triplets_per_point; /**< fail with PM_STATUS_LIMIT_EXCEEDED before the test when the
                                         candidate triplets average more per point (default 4096; 0 = no limit) */
   /* -- appended -- */
@@ -146,8 +147,8 @@ typedef struct pm_triangulate_stats {
   uint64_t points;
   uint64_t duplicate_points;
   uint64_t max_neighbors_seen;
-  uint64_t candidates;      /**< triplets the seed's test examined */
-  uint64_t kept;            /**< triangles the seed's test kept */
+  uint64_t candidates;      /**< triplets the smallest-sphere test examined */
+  uint64_t kept;            /**< triangles the smallest-sphere test kept */
   /* -- finishing stages (0 with PM_TRIANGULATE_RAW) -- */
   uint64_t holes_filled;
   uint64_t holes_left;      /**< boundary loops left open (real openings) */
@@ -155,22 +156,25 @@ typedef struct pm_triangulate_stats {
   uint64_t pinches_resolved;
   uint64_t unused_points;   /**< distinct particles in no triangle */
   int32_t normals_estimated;
-  /* -- appended (issue 9) -- */
+  /* -- appended -- */
   uint64_t triplets;        /**< candidate triplets the test examined (see max_triplets_per_point) */
   /* -- appended -- */
-  uint64_t rejected_conormal; /**< seed triangles dropped by co-normality (over a third, with loops
-                                   left open: the particles probably fill a volume) */
+  uint64_t rejected_conormal; /**< raw triangles dropped by co-normality (see looks_like_volume) */
   /* -- appended -- */
   double local_spacing[5];  /**< the particles' local spacings in units of r0: smallest, 10th
                                  percentile, median, 90th percentile, largest (all 1 with
                                  PM_TRIANGULATE_GLOBAL_SPACING) */
   int32_t viewpoint_used;   /**< the viewpoint was given and taken (the cloud looks scanned from it) */
-  uint64_t rejected_shadow; /**< seed triangles dropped for bridging a depth jump */
+  uint64_t rejected_shadow; /**< raw triangles dropped for bridging a depth jump */
+  /* -- appended -- */
+  int32_t looks_like_volume; /**< 1: co-normality dropped over 35 % of the raw triangles and
+                                  loops were left open: the particles probably fill a volume
+                                  (pm_polygonize meshes those) rather than sample a surface */
 } pm_triangulate_stats;
 
 PM_EXPORT void pm_triangulate_options_init(pm_triangulate_options* options);
 /** Triangulate: by default the finished surface (a consistently oriented 2-manifold, closed
- *  components facing outward, with per-vertex normals); with PM_TRIANGULATE_RAW the seed's
+ *  components facing outward, with per-vertex normals); with PM_TRIANGULATE_RAW the smallest-sphere test's
  *  exact triangle set. `options` may be NULL (defaults); `out_stats` may be NULL. The mesh's
  *  vertices are the cloud's particles, in order. */
 PM_EXPORT pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* options,
@@ -286,10 +290,12 @@ PM_EXPORT void pm_smooth_options_init(pm_smooth_options* options);
  *  edge, vertex or triangle, and a result over max_triangles PM_STATUS_LIMIT_EXCEEDED. */
 PM_EXPORT pm_status pm_smooth(const pm_mesh* mesh, const pm_smooth_options* options, pm_mesh** out_mesh);
 
-/* ---- volume particles: implicit surfaces, polygonized (issue 7) ---------------------- */
+/* ---- volume particles: implicit surfaces, polygonized --------------------------------- */
 
 /* The surface F(x) = T of F(x) = sum_i w_i g(|x - p_i|^2 / R_i^2), polygonized by marching
- * cubes on a sparse grid near the surface only (see particlemesh/volume/polygonize.h).
+ * cubes on a sparse grid of blocks: only blocks some particle's support reaches are sampled,
+ * so memory and time follow the occupied volume, not the bounding box (see
+ * particlemesh/volume/polygonize.h).
  * Kernels g, as functions of s = r^2 / R^2 on 0 <= s < 1 (0 beyond): */
 #define PM_KERNEL_WYVILL 0 /**< 1 - 22/9 s + 17/9 s^2 - 4/9 s^3 (Wyvill's soft objects), C1 at R */
 #define PM_KERNEL_POLY4 1  /**< (1 - s)^2, C1 at R */
@@ -390,7 +396,7 @@ PM_EXPORT pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii,
  *  T = fraction x pm_lattice_field(kernel, R, rest spacing). */
 PM_EXPORT pm_status pm_lattice_field(int32_t kernel, double radius, double spacing, double* out_value);
 
-/* ---- volume particles: exact ray casting of the iso-surface (issue 8) ----------------- */
+/* ---- volume particles: exact ray casting of the iso-surface --------------------------- */
 
 /* Every crossing of a ray o + t d with the surface F(x) = T (see particlemesh/volume/raycast.h):
  * the ray is cut into intervals where a fixed set of particles contributes, and each
@@ -474,7 +480,7 @@ PM_EXPORT pm_status pm_ray_hits_copy(const pm_ray_hits* hits, double* out_t, dou
                                      double* out_normals, int32_t* out_entering, size_t capacity);
 PM_EXPORT void pm_ray_hits_destroy(pm_ray_hits* hits);
 
-/* ---- point-cloud attributes, read back (issue 6) --------------------------------------- */
+/* ---- point-cloud attributes, read back ------------------------------------------------- */
 
 /* The per-point float channels a cloud carries, as the mesh functions above give them for a
  * mesh: what pm_cloud_set_attribute stored, or what a reader found in the file. pm_cloud_read

@@ -3,6 +3,7 @@
 #include <memory>
 #include <string>
 
+#include "capi/conversions.h"
 #include "capi/firewall.h"
 #include "capi/handles.h"
 #include "particlemesh/io/mesh_io.h"
@@ -46,14 +47,7 @@ pm_status copy_vectors(const pm_cloud* cloud, T* out, size_t capacity, bool norm
     require(out, "out");
     const auto& v = normals ? cloud->cloud.normals : cloud->cloud.positions;
     if (normals && v.empty()) throw Error(Status::InvalidArgument, "the cloud has no normals");
-    if (capacity < v.size())
-      throw Error(Status::InvalidArgument, "capacity " + std::to_string(capacity) + " is less than the " +
-                                               std::to_string(v.size()) + " points");
-    for (size_t i = 0; i < v.size(); ++i) {
-      out[3 * i] = T(v[i].x);
-      out[3 * i + 1] = T(v[i].y);
-      out[3 * i + 2] = T(v[i].z);
-    }
+    capi::copy_vec3s(v, out, capacity, "points");
   });
 }
 

@@ -7,7 +7,7 @@
 #include "particlemesh/particlemesh.h"
 #include "particlemesh/version.h"
 
-namespace particlemesh::capi {
+namespace PM_NAMESPACE::capi {
 
 namespace {
 thread_local std::string last_error;

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "capi/conversions.h"
 #include "capi/firewall.h"
 #include "capi/handles.h"
 #include "particlemesh/io/mesh_io.h"
@@ -12,18 +13,10 @@
 #include "particlemesh/mesh/topology_report.h"
 
 using namespace particlemesh;
+using particlemesh::capi::check_capacity;
+using particlemesh::capi::copy_vec3s;
 using particlemesh::capi::guarded;
 using particlemesh::capi::require;
-
-namespace {
-
-void check_capacity(size_t capacity, size_t needed, const char* what) {
-  if (capacity < needed)
-    throw Error(Status::InvalidArgument, "capacity " + std::to_string(capacity) + " is less than the " +
-                                             std::to_string(needed) + " " + what);
-}
-
-}  // namespace
 
 extern "C" {
 
@@ -101,13 +94,7 @@ pm_status pm_mesh_copy_positions(const pm_mesh* mesh, double* out, size_t capaci
   return guarded([&] {
     require(mesh, "mesh");
     require(out, "out");
-    const auto& p = mesh->mesh.positions;
-    check_capacity(capacity, p.size(), "vertices");
-    for (size_t i = 0; i < p.size(); ++i) {
-      out[3 * i] = p[i].x;
-      out[3 * i + 1] = p[i].y;
-      out[3 * i + 2] = p[i].z;
-    }
+    copy_vec3s(mesh->mesh.positions, out, capacity, "vertices");
   });
 }
 
@@ -115,13 +102,7 @@ pm_status pm_mesh_copy_positions_f32(const pm_mesh* mesh, float* out, size_t cap
   return guarded([&] {
     require(mesh, "mesh");
     require(out, "out");
-    const auto& p = mesh->mesh.positions;
-    check_capacity(capacity, p.size(), "vertices");
-    for (size_t i = 0; i < p.size(); ++i) {
-      out[3 * i] = float(p[i].x);
-      out[3 * i + 1] = float(p[i].y);
-      out[3 * i + 2] = float(p[i].z);
-    }
+    copy_vec3s(mesh->mesh.positions, out, capacity, "vertices");
   });
 }
 
@@ -129,14 +110,8 @@ pm_status pm_mesh_copy_normals_f32(const pm_mesh* mesh, float* out, size_t capac
   return guarded([&] {
     require(mesh, "mesh");
     require(out, "out");
-    const auto& n = mesh->mesh.normals;
-    if (n.empty()) throw Error(Status::InvalidArgument, "the mesh has no normals");
-    check_capacity(capacity, n.size(), "vertices");
-    for (size_t i = 0; i < n.size(); ++i) {
-      out[3 * i] = float(n[i].x);
-      out[3 * i + 1] = float(n[i].y);
-      out[3 * i + 2] = float(n[i].z);
-    }
+    if (mesh->mesh.normals.empty()) throw Error(Status::InvalidArgument, "the mesh has no normals");
+    copy_vec3s(mesh->mesh.normals, out, capacity, "vertices");
   });
 }
 
@@ -144,14 +119,8 @@ pm_status pm_mesh_copy_normals(const pm_mesh* mesh, double* out, size_t capacity
   return guarded([&] {
     require(mesh, "mesh");
     require(out, "out");
-    const auto& n = mesh->mesh.normals;
-    if (n.empty()) throw Error(Status::InvalidArgument, "the mesh has no normals");
-    check_capacity(capacity, n.size(), "vertices");
-    for (size_t i = 0; i < n.size(); ++i) {
-      out[3 * i] = n[i].x;
-      out[3 * i + 1] = n[i].y;
-      out[3 * i + 2] = n[i].z;
-    }
+    if (mesh->mesh.normals.empty()) throw Error(Status::InvalidArgument, "the mesh has no normals");
+    copy_vec3s(mesh->mesh.normals, out, capacity, "vertices");
   });
 }
 

@@ -1,9 +1,10 @@
-// C ABI: ray casting of the iso-surface of volume particles (issue 8).
+// C ABI: ray casting of the iso-surface of volume particles.
 #include <cmath>
 #include <cstring>
 #include <memory>
 #include <string>
 
+#include "capi/conversions.h"
 #include "capi/firewall.h"
 #include "capi/handles.h"
 #include "particlemesh/volume/ray_csg.h"
@@ -11,6 +12,7 @@
 
 using namespace particlemesh;
 using particlemesh::capi::guarded;
+using particlemesh::capi::wrap_progress;
 using particlemesh::capi::require;
 
 struct pm_field {
@@ -22,14 +24,6 @@ struct pm_ray_hits {
 };
 
 namespace {
-
-ProgressCallback wrap_progress(pm_progress_fn fn, void* user) {
-  if (fn == nullptr) return {};
-  return [fn, user](std::string_view stage, double fraction) {
-    const std::string s(stage);
-    return fn(user, s.c_str(), fraction) == 0;
-  };
-}
 
 const Vec3* as_vec3(const double* p) { return reinterpret_cast<const Vec3*>(p); }
 
@@ -88,8 +82,7 @@ pm_status pm_field_create(const pm_cloud* cloud, const double* radii, const doub
         {offsetof(pm_field_options, progress),
          offsetof(pm_field_options, progress_user_data)});
     FieldParams p;
-    p.kernel = static_cast<Kernel>(o.kernel);
-    validate_kernel(p.kernel);
+    p.kernel = capi::to_kernel(o.kernel);
     p.radius = o.radius;
     p.threshold = o.threshold;
     p.anisotropy.enabled = o.anisotropic != 0;

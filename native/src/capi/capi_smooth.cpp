@@ -3,12 +3,14 @@
 #include <memory>
 #include <string>
 
+#include "capi/conversions.h"
 #include "capi/firewall.h"
 #include "capi/handles.h"
 #include "particlemesh/smooth/subdivide.h"
 
 using namespace particlemesh;
 using particlemesh::capi::guarded;
+using particlemesh::capi::wrap_progress;
 using particlemesh::capi::require;
 
 namespace {
@@ -51,14 +53,6 @@ const VertexAttribute& find(const pm_mesh* mesh, const char* name) {
   for (const auto& a : mesh->mesh.attributes)
     if (a.name == name) return a;
   throw Error(Status::InvalidArgument, std::string("the mesh has no attribute '") + name + "'");
-}
-
-ProgressCallback wrap_progress(pm_progress_fn fn, void* user) {
-  if (fn == nullptr) return {};
-  return [fn, user](std::string_view stage, double fraction) {
-    const std::string s(stage);
-    return fn(user, s.c_str(), fraction) == 0;
-  };
 }
 
 }  // namespace

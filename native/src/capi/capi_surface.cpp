@@ -2,6 +2,7 @@
 #include <cmath>
 #include <memory>
 
+#include "capi/conversions.h"
 #include "capi/firewall.h"
 #include "capi/handles.h"
 #include "particlemesh/surface/reconstruct.h"
@@ -9,19 +10,8 @@
 
 using namespace particlemesh;
 using particlemesh::capi::guarded;
+using particlemesh::capi::wrap_progress;
 using particlemesh::capi::require;
-
-namespace {
-
-ProgressCallback wrap_progress(pm_progress_fn fn, void* user) {
-  if (fn == nullptr) return {};
-  return [fn, user](std::string_view stage, double fraction) {
-    const std::string s(stage);
-    return fn(user, s.c_str(), fraction) == 0;
-  };
-}
-
-}  // namespace
 
 extern "C" {
 
@@ -119,6 +109,7 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
       s.local_spacing[4] = h.max;
       s.viewpoint_used = r.surface.viewpoint_used;
       s.rejected_shadow = r.surface.rejected_shadow;
+      s.looks_like_volume = r.surface.looks_like_volume;
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();

@@ -2,6 +2,7 @@
 #include <memory>
 #include <string>
 
+#include "capi/conversions.h"
 #include "capi/firewall.h"
 #include "capi/handles.h"
 #include "particlemesh/volume/field.h"
@@ -10,29 +11,13 @@
 
 using namespace particlemesh;
 using particlemesh::capi::guarded;
+using particlemesh::capi::wrap_progress;
 using particlemesh::capi::require;
+using particlemesh::capi::to_kernel;
 
 static_assert(PM_KERNEL_WYVILL == int(Kernel::Wyvill) && PM_KERNEL_POLY4 == int(Kernel::Poly4) &&
                   PM_KERNEL_POLY6 == int(Kernel::Poly6) && PM_KERNEL_BLINN == int(Kernel::Blinn),
               "the C kernel numbers are those of particlemesh::Kernel");
-
-namespace {
-
-ProgressCallback wrap_progress(pm_progress_fn fn, void* user) {
-  if (fn == nullptr) return {};
-  return [fn, user](std::string_view stage, double fraction) {
-    const std::string s(stage);
-    return fn(user, s.c_str(), fraction) == 0;
-  };
-}
-
-Kernel to_kernel(int32_t k) {
-  const Kernel kernel = static_cast<Kernel>(k);
-  validate_kernel(kernel);
-  return kernel;
-}
-
-}  // namespace
 
 extern "C" {
 

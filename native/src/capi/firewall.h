@@ -1,41 +1,29 @@
 // Internal: the exception firewall of the C ABI. Every extern "C" entry point runs its body
-// through guarded(), which turns any exception into a status and a thread-local message.
+// through guarded(), which turns any exception into a status (run_guarded, shared with the
+// PCL bridge) and a thread-local message.
 #pragma once
+
+#include "particlemesh/core/config.h"
 
 #include <initializer_list>
 #include <new>
 #include <string>
 
+#include "particlemesh/core/c_guard.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/particlemesh.h"
 
-namespace particlemesh::capi {
+namespace PM_NAMESPACE::capi {
 
 void set_error(const std::string& message) noexcept;
 void clear_error() noexcept;
 
+/// Runs `body` through run_guarded (particlemesh/core/c_guard.h), the message of a failure
+/// kept for pm_last_error_message().
 template <class F>
 pm_status guarded(F&& body) noexcept {
-  try {
-    clear_error();
-    body();
-    return PM_OK;
-  } catch (const Error& e) {
-    set_error(e.what());
-    return static_cast<pm_status>(e.status());
-  } catch (const std::bad_alloc&) {
-    set_error("out of memory");
-    return PM_STATUS_OUT_OF_MEMORY;
-  } catch (const std::length_error&) {
-    set_error("out of memory (a size exceeded what can be allocated)");
-    return PM_STATUS_OUT_OF_MEMORY;
-  } catch (const std::exception& e) {
-    set_error(std::string("internal error: ") + e.what());
-    return PM_STATUS_INTERNAL;
-  } catch (...) {
-    set_error("internal error: unknown exception");
-    return PM_STATUS_INTERNAL;
-  }
+  clear_error();
+  return run_guarded([](const std::string& message) noexcept { set_error(message); }, body);
 }
 
 /// Throw InvalidArgument naming `name` if p is NULL.
@@ -58,7 +46,7 @@ void write_versioned(T* out, const T& value, const char* name);
 #include <algorithm>
 #include <cstring>
 
-namespace particlemesh::capi {
+namespace PM_NAMESPACE::capi {
 
 template <class T>
 T read_versioned(const T* in, const T& defaults, const char* name, std::initializer_list<size_t> pointer_fields) {

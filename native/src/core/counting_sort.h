@@ -3,13 +3,15 @@
 // neighbour grid.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <algorithm>
 #include <cstddef>
 #include <vector>
 
 #include "core/parallel.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// A stable counting sort in parallel: item i of n goes to bucket bucket_of(i) < buckets, and
 /// place(i, pos) is called with its position in bucket order (the buckets in turn, the items

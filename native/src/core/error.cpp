@@ -1,6 +1,6 @@
 #include "particlemesh/core/error.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 const char* status_name(Status status) noexcept {
   switch (status) {

@@ -2,10 +2,12 @@
 // digits of std::to_string(1e300) nor the "0.000000" it makes of 1e-7.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstdio>
 #include <string>
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// `v` with `digits` significant digits (default 6, as %g).
 inline std::string format_number(double v, int digits = 6) {

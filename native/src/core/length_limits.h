@@ -6,12 +6,14 @@
 // refused with a message saying so, rather than meshed wrongly or called "coincident".
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <string>
 
 #include "core/format_number.h"
 #include "particlemesh/core/error.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 inline constexpr double kMinLength = 1e-50;
 inline constexpr double kMaxLength = 1e50;

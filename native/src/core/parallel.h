@@ -5,6 +5,8 @@
 // output is byte-identical whatever the thread count.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <algorithm>
 #include <cstddef>
 #include <thread>
@@ -16,7 +18,7 @@
 
 #include "particlemesh/core/error.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// Run f() inside a TBB arena limited to `threads` workers (0 = all hardware threads).
 template <class F>

@@ -5,6 +5,8 @@
 // every 50 ms, so callbacks never cost measurable time.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -14,7 +16,7 @@
 #include "particlemesh/core/error.h"
 #include "particlemesh/core/progress.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 class ProgressTracker {
  public:

@@ -8,7 +8,7 @@
 
 #include "particlemesh/core/error.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 namespace {
 constexpr size_t kChunk = size_t(1) << 16;

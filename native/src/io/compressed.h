@@ -18,7 +18,7 @@
 
 #include "io/file_reader.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 class GzipStream {
  public:

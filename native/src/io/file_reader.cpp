@@ -9,7 +9,7 @@
 
 #include "particlemesh/core/error.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 namespace {
 constexpr size_t kBuffer = size_t(1) << 16;

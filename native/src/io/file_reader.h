@@ -6,12 +6,14 @@
 // counts are only trusted as far as the bytes really there).
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 class FileReader {
  public:

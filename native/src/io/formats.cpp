@@ -7,7 +7,7 @@
 
 #include "particlemesh/core/error.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 const std::vector<FileFormat>& file_formats() {
   // The one table of readable formats. A new one: its reader (io/<format>_reader.cpp,

@@ -11,13 +11,15 @@
 // check_contents (formats.cpp): finite coordinates, indices in range, attribute sizes.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <string>
 #include <vector>
 
 #include "particlemesh/mesh/point_cloud.h"
 #include "particlemesh/mesh/tri_mesh.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// What a reader found in a file.
 struct FileContents {

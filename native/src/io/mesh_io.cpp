@@ -6,7 +6,7 @@
 #include "io/writers.h"
 #include "particlemesh/core/error.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 

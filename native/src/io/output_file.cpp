@@ -16,7 +16,7 @@
 #include "particlemesh/core/error.h"
 #include "particlemesh/io/atomic_write.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 

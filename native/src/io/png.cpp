@@ -10,7 +10,7 @@
 
 #include "particlemesh/core/error.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 void write_png(const Image& image, const std::string& path) {
   OutputFile out(path);

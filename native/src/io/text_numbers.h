@@ -5,6 +5,8 @@
 // but depends on the locale; istream >> float, as OpenMesh read, does not keep doubles.)
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -13,7 +15,7 @@
 #include <string>
 #include <string_view>
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 enum class NumberText {
   Ok,

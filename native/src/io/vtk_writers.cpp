@@ -20,7 +20,7 @@
 #include "io/writers.h"
 #include "particlemesh/core/error.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 namespace {
 

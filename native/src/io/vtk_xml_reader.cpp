@@ -27,7 +27,7 @@
 #include "io/text_numbers.h"
 #include "particlemesh/core/error.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 namespace {
 

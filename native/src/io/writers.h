@@ -1,12 +1,16 @@
 // Internal: the mesh and point writers (PLY binary and ASCII, OBJ, XYZ), onto an OutputFile.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/io/output_file.h"
 
 #include <string>
 
-namespace particlemesh::detail {
+#include "particlemesh/core/config.h"
+
+namespace PM_NAMESPACE::detail {
 
 /// Whether positions go to the file as float64 rather than float32: when float32 would
 /// round some coordinate by more than a millionth of the mesh's size (a mesh farther from

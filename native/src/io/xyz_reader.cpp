@@ -12,7 +12,7 @@
 #include "io/text_numbers.h"
 #include "particlemesh/core/error.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 FileContents read_xyz(const std::string& path, ReadPurpose) {
   constexpr size_t kMaxLine = size_t(1) << 16;

@@ -5,9 +5,11 @@
 #include <numeric>
 #include <string>
 
+#include "core/disjoint_sets.h"
+#include "mesh/orientation.h"
 #include "particlemesh/core/error.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 
@@ -28,23 +30,12 @@ void check_indices(const TriMesh& mesh) {
 MeshComponents mesh_components(const TriMesh& mesh) {
   check_indices(mesh);
   const size_t nv = mesh.positions.size();
-  // Union-find over vertices (path halving, union by index: the roots do not depend on
-  // anything but the triangle order).
-  std::vector<uint32_t> parent(nv);
-  std::iota(parent.begin(), parent.end(), 0u);
-  auto find = [&](uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
-  auto unite = [&](uint32_t a, uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  };
+  detail::DisjointSets sets(nv);
   for (const Triangle& t : mesh.triangles) {
-    unite(t[0], t[1]);
-    unite(t[0], t[2]);
+    sets.unite(t[0], t[1]);
+    sets.unite(t[0], t[2]);
   }
+  auto find = [&](uint32_t x) { return sets.find(x); };
   MeshComponents c;
   c.vertex_component.assign(nv, kUnused);
   std::vector<uint32_t> root_id(nv, kUnused);
@@ -64,7 +55,7 @@ MeshComponents mesh_components(const TriMesh& mesh) {
     ++c.triangles[id];
     c.area[id] += 0.5 * norm(cross(b - a, d - a));
     // Relative to a vertex of the piece: no cancellation far from the world origin.
-    c.volume[id] += dot(a, cross(b, d)) / 6.0;
+    c.volume[id] += detail::signed_volume6(o, mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]]) / 6.0;
   }
   for (size_t v = 0; v < nv; ++v) {
     const uint32_t r = root_id[find(uint32_t(v))];

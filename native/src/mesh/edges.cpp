@@ -8,11 +8,11 @@
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 // Hand-written: OpenMesh builds its half-edge structure (and refuses non-manifold input) to
 // get edges, and Blender's own edge pass was most of the time of writing a mesh into it
-// (75 ms of 90 for 200k triangles): here each edge belongs to its lower vertex, whose few
+// (bench/RESULTS.md): here each edge belongs to its lower vertex, whose few
 // higher neighbours are sorted in place.
 MeshEdges mesh_edges(const std::vector<Triangle>& triangles, size_t vertex_count, int threads) {
   if (vertex_count >= (size_t(1) << 32)) throw Error(Status::LimitExceeded, "more than 2^32 - 1 vertices");

@@ -5,7 +5,7 @@
 
 #include "particlemesh/core/error.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 const char* bad_value_name(double v) { return std::isnan(v) ? "NaN" : "infinite"; }

@@ -5,25 +5,15 @@
 
 #include <tbb/parallel_sort.h>
 
+#include "core/disjoint_sets.h"
 #include "core/parallel.h"
+#include "mesh/orientation.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 
-struct UnionFind {
-  std::vector<uint32_t> parent;
-  explicit UnionFind(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  uint32_t find(uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(uint32_t a, uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);  // the root is the lowest index
-  }
-};
+using UnionFind = detail::DisjointSets;
 
 struct HalfEdge {
   uint64_t key;   // (min << 32) | max
@@ -325,10 +315,8 @@ TopologyReport topology_report(const TriMesh& mesh) {
       const uint32_t c = comp[f];
       if (!C[c].closed) continue;
       if (!has_anchor[c]) { anchor[c] = mesh.positions[T[f][0]]; has_anchor[c] = 1; }
-      const Vec3 a = mesh.positions[T[f][0]] - anchor[c];
-      const Vec3 b = mesh.positions[T[f][1]] - anchor[c];
-      const Vec3 d = mesh.positions[T[f][2]] - anchor[c];
-      vol[c] += dot(a, cross(b, d)) / 6.0;
+      vol[c] += detail::signed_volume6(anchor[c], mesh.positions[T[f][0]], mesh.positions[T[f][1]],
+                                       mesh.positions[T[f][2]]) / 6.0;
     }
     for (size_t c = 0; c < ncomp; ++c) C[c].signed_volume = vol[c];
   }
@@ -342,7 +330,7 @@ TopologyReport topology_report(const TriMesh& mesh) {
   for (const auto& c : C) {
     if (c.closed) {
       ++r.closed_components;
-      if (!(c.signed_volume > 0)) r.outward = false;
+      if (!detail::faces_outward(c.signed_volume)) r.outward = false;
     }
   }
   if (r.closed_components == 0) r.outward = false;

@@ -7,9 +7,9 @@
 #include <unordered_map>
 
 #include "particlemesh/core/error.h"
-#include "spatial/cell_hash.h"
+#include "core/hashing.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 

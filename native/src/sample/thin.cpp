@@ -10,15 +10,16 @@
 #include <string>
 
 #include "core/format_number.h"
+#include "core/hashing.h"
 #include "particlemesh/core/error.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 
 // Cells of edge 4 d (d = min_distance) holding the kept points as linked lists. The points
 // closer than d to p lie in the cells that the box p +- d touches: 1 or 2 along each axis,
-// 3.4 lookups on average (cells of 2 d always need 8, and were a third slower). Only kept
+// 3.4 lookups on average (cells of 2 d always need 8, and are slower). Only kept
 // points are stored, so the table stays small and no pass sorts all the points.
 class KeptCells {
  public:
@@ -67,13 +68,7 @@ class KeptCells {
   static uint64_t pack(const Coord& c) {
     return (uint64_t(uint32_t(c[0])) << 42) | (uint64_t(uint32_t(c[1])) << 21) | uint64_t(uint32_t(c[2]));
   }
-  static uint64_t mix(uint64_t h) {  // splitmix64 finaliser
-    h ^= h >> 30;
-    h *= 0xBF58476D1CE4E5B9ull;
-    h ^= h >> 27;
-    h *= 0x94D049BB133111EBull;
-    return h ^ (h >> 31);
-  }
+  static uint64_t mix(uint64_t h) { return detail::mix64(h); }
 
   void rehash(size_t size) {
     std::vector<Slot> old(size);

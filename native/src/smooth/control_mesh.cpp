@@ -6,12 +6,14 @@
 #include <numeric>
 #include <string>
 
-#include "core/parallel.h"
+#include "core/disjoint_sets.h"
 #include "core/format_number.h"
+#include "core/parallel.h"
+#include "mesh/orientation.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/smooth/subdivide.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 namespace {
 
@@ -20,29 +22,6 @@ constexpr uint32_t kNone = UINT32_MAX;
 std::string edge_name(uint32_t a, uint32_t b) {
   return "edge (" + std::to_string(a) + ", " + std::to_string(b) + ")";
 }
-
-/// Union-find with path halving; union by smaller index so roots are deterministic.
-class DisjointSets {
- public:
-  explicit DisjointSets(size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), uint32_t(0)); }
-  uint32_t find(uint32_t x) {
-    while (parent_[x] != x) {
-      parent_[x] = parent_[parent_[x]];
-      x = parent_[x];
-    }
-    return x;
-  }
-  void unite(uint32_t a, uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a == b) return;
-    if (a < b) std::swap(a, b);
-    parent_[a] = b;
-  }
-
- private:
-  std::vector<uint32_t> parent_;
-};
 
 void check_sizes(const TriMesh& mesh) {
   const size_t nv = mesh.positions.size(), nf = mesh.triangles.size();
@@ -243,8 +222,7 @@ ControlMesh prepare_control_mesh(const TriMesh& mesh) {
         for (size_t q = begin; q < queue.size(); ++q) {
           const uint32_t f = queue[q];
           const Triangle& t = tris[f];
-          const Vec3 &a = mesh.positions[t[0]], &b = mesh.positions[t[1]], &c = mesh.positions[t[2]];
-          const double v6 = dot(a, cross(b, c));
+          const double v6 = signed_volume6(Vec3{}, mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]]);
           volume += flip[f] ? -v6 : v6;
         }
         if (volume < 0)

@@ -6,13 +6,15 @@
 // with messages in the caller's indices, and hands both schemes the same clean mesh.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstdint>
 #include <utility>
 #include <vector>
 
 #include "particlemesh/mesh/tri_mesh.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 class ProgressTracker;
 

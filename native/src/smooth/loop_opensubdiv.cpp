@@ -15,7 +15,7 @@
 #include "particlemesh/core/error.h"
 #include "smooth/schemes.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 namespace {
 

@@ -1,11 +1,13 @@
 // Internal: the two subdivision back ends behind smooth_mesh().
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include "core/progress_tracker.h"
 #include "particlemesh/smooth/subdivide.h"
 #include "smooth/control_mesh.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// Loop through OpenSubdiv (Far::TopologyRefiner + PrimvarRefiner). Fills out.mesh
 /// positions, triangles and attributes; normals too when options.limit (limit normals).

@@ -11,7 +11,7 @@
 #include "smooth/control_mesh.h"
 #include "smooth/schemes.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 

@@ -4,19 +4,16 @@
 #include <cstdio>
 #include <string>
 
+#include "core/format_number.h"
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/mesh/edges.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 
-std::string num(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
+std::string num(double v) { return detail::format_number(v, 17); }
 
 }  // namespace
 

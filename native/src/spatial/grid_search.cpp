@@ -5,7 +5,7 @@
 
 #include "core/parallel.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 std::vector<uint32_t> find_duplicates(const NeighborGrid& grid, size_t* duplicate_count) {
   const size_t n = grid.point_count();

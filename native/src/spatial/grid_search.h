@@ -1,12 +1,14 @@
 // Internal helpers over NeighborGrid used by the spacing estimate and the triangulation.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstdint>
 #include <vector>
 
 #include "particlemesh/spatial/neighbor_grid.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// For every sorted index s: the sorted index of the lowest-input-index point with exactly the
 /// same coordinates (s itself when the point is distinct). Identical points share a cell.

@@ -15,7 +15,7 @@
 #include "spatial/local_spacing_impl.h"
 #include "spatial/spacing_impl.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 namespace detail {
 
 namespace {

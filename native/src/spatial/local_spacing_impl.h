@@ -1,12 +1,14 @@
 // Internal entry of the local spacing estimate, sharing the caller's progress tracker.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <vector>
 
 #include "core/progress_tracker.h"
 #include "particlemesh/spatial/local_spacing.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// The neighbours each point's local spacing is taken over.
 constexpr int kLocalSpacingNeighbors = 16;

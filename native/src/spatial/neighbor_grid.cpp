@@ -8,21 +8,13 @@
 
 #include "core/counting_sort.h"
 #include "core/format_number.h"
+#include "core/hashing.h"
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
-
-uint64_t mix(uint64_t h) {  // splitmix64 finaliser
-  h ^= h >> 30;
-  h *= 0xBF58476D1CE4E5B9ull;
-  h ^= h >> 27;
-  h *= 0x94D049BB133111EBull;
-  h ^= h >> 31;
-  return h;
-}
 
 struct Entry {
   uint64_t key;  // the cell's coordinates packed, 21 bits each (NeighborGrid::pack)
@@ -125,15 +117,7 @@ void NeighborGrid::build(const Vec3* points, size_t n, double cell_size, const V
   }
   cell_start_.push_back(uint32_t(n));
 
-  uint64_t size = 16;
-  while (size < 2 * uint64_t(cell_keys_.size())) size <<= 1;
-  table_.assign(size, kNoCell);
-  table_mask_ = size - 1;
-  for (uint32_t c = 0; c < cell_keys_.size(); ++c) {
-    uint64_t h = mix(cell_keys_[c]) & table_mask_;
-    while (table_[h] != kNoCell) h = (h + 1) & table_mask_;
-    table_[h] = c;
-  }
+  table_mask_ = detail::build_key_table(cell_keys_, table_);
 }
 
 NeighborGrid::CellCoord NeighborGrid::coord_of(const Vec3& p) const {
@@ -147,14 +131,8 @@ NeighborGrid::CellCoord NeighborGrid::coord_of(const Vec3& p) const {
 }
 
 uint32_t NeighborGrid::find_key(uint64_t key) const {
-  if (table_.empty()) return kNoCell;
-  uint64_t h = mix(key) & table_mask_;
-  while (true) {
-    const uint32_t c = table_[h];
-    if (c == kNoCell) return kNoCell;
-    if (cell_keys_[c] == key) return c;
-    h = (h + 1) & table_mask_;
-  }
+  static_assert(kNoCell == detail::kNoKey);
+  return detail::find_key(table_, table_mask_, cell_keys_, key);
 }
 
 int NeighborGrid::neighbor_cells(uint32_t c, uint32_t out[27]) const {

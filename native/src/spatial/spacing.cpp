@@ -12,7 +12,7 @@
 #include "spatial/grid_search.h"
 #include "spatial/spacing_impl.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 namespace detail {
 
 namespace {

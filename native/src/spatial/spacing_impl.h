@@ -1,10 +1,12 @@
 // Internal entry of the spacing estimate, sharing the caller's progress tracker.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include "core/progress_tracker.h"
 #include "particlemesh/spatial/spacing.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// Assumes finite coordinates. Runs in the caller's TBB arena; reports progress in
 /// [begin, end) of the overall fraction. With stride > 1 the median is taken over the points

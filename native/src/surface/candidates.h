@@ -11,6 +11,8 @@
 // overlapping obtuse triangle), then the raw order - deterministic.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -23,7 +25,7 @@
 #include "surface/tangent_arcs.h"
 #include "surface/view_rays.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// An allocator whose resize leaves trivial elements uninitialised: the corner lists (150 MB
 /// at 1M points) are then first touched by the parallel pass that fills them, not zeroed

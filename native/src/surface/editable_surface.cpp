@@ -7,7 +7,7 @@
 #include "core/parallel.h"
 #include "surface/triangle_angles.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 EditableSurface::EditableSurface(const std::vector<Vec3>& P, const std::vector<Frame>& frames, GrownSurface&& g,
                                  ProgressTracker& tracker)

@@ -4,6 +4,8 @@
 // pinched vertices look only at the boundary, not at the whole surface.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 #include <cstdint>
 #include <unordered_map>
@@ -16,7 +18,7 @@
 #include "surface/growth.h"
 #include "surface/tangent_arcs.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 class EditableSurface {
  public:

@@ -8,7 +8,7 @@
 #include "particlemesh/core/error.h"
 #include "surface/rank_queue.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 namespace {
 

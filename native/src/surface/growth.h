@@ -13,6 +13,8 @@
 //     taken (see growth.cpp).
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -21,7 +23,7 @@
 #include "particlemesh/mesh/tri_mesh.h"
 #include "surface/candidates.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 struct GrownSurface {
   /// The accepted triangles in space order: each at its lowest vertex, in rank order there.

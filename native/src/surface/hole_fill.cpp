@@ -7,7 +7,7 @@
 #include "surface/raw_triangulation.h"
 #include "surface/triangle_angles.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 double FillOptions::edge_limit(uint32_t a, uint32_t b) const { return pair_limit((*max_edge)[a], (*max_edge)[b]); }
 

@@ -8,6 +8,8 @@
 // then the area (P. Liepa, "Filling holes in meshes", SGP 2003).
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 #include <cmath>
 #include <cstdint>
@@ -17,7 +19,7 @@
 #include "surface/editable_surface.h"
 #include "surface/view_rays.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 struct FillOptions {
   /// Per point: its edge limit L of the raw test (raw_triangulation.h: an edge's is the pair

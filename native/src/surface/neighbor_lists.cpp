@@ -5,7 +5,7 @@
 
 #include "core/parallel.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 namespace {
 

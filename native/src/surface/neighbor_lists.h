@@ -1,13 +1,15 @@
 // Internal: compressed lists of each point's neighbours within a radius.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstdint>
 #include <vector>
 
 #include "core/progress_tracker.h"
 #include "particlemesh/spatial/neighbor_grid.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// CSR over sorted indices: neighbours of s are index[offset[s] .. offset[s+1]), ascending,
 /// excluding s itself and every point whose rep != itself (exact duplicates). Points that are

@@ -1,6 +1,8 @@
 // Internal: normal estimation over an existing grid and neighbour lists.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <vector>
 
 #include "core/progress_tracker.h"
@@ -9,7 +11,7 @@
 #include "particlemesh/spatial/neighbor_grid.h"
 #include "surface/neighbor_lists.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// Unoriented unit normals indexed by SORTED index (duplicates copy their representative's)
 /// from the lists' neighbours within `radius[s]` of each point s (its edge limit L_s: at most

@@ -6,15 +6,17 @@
 #include <utility>
 
 #include "core/parallel.h"
+#include "mesh/orientation.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<Triangle>& T,
                                         const std::vector<uint64_t>& boundary, std::vector<Vec3>* vertex_normals) {
   // Components by shared vertices (the same as by shared edges on a manifold without
   // pinches); a component is open if it holds a boundary half-edge. A concurrent union-find
   // that always links the higher root under the lower: each component ends at its lowest
-  // point, whatever the threads did (a serial pass over 2M triangles took 40-50 ms).
+  // point, whatever the threads did (a serial pass is a visible cost at millions of
+  // triangles).
   const size_t n = P.size();
   std::vector<uint32_t> parent(n);
   std::iota(parent.begin(), parent.end(), 0u);
@@ -57,7 +59,7 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
         const Triangle& t = T[i];
         const uint32_t r = root[t[0]];
         const Vec3 o = P[r];
-        const double v = dot(P[t[0]] - o, cross(P[t[1]] - o, P[t[2]] - o));
+        const double v = signed_volume6(o, P[t[0]], P[t[1]], P[t[2]]);
         auto& pt = part[h];
         auto it = std::find_if(pt.rbegin(), pt.rend(), [r](const auto& x) { return x.first == r; });
         if (it != pt.rend()) it->second += v;
@@ -67,7 +69,7 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
   std::vector<double> vol(n, 0.0);
   for (const auto& pt : part)
     for (const auto& [r, v] : pt) vol[r] += v;
-  auto turned = [&](uint32_t r) { return !open[r] && vol[r] < 0; };
+  auto turned = [&](uint32_t r) { return !open[r] && vol[r] < 0; };  // faces_outward, or 0: left as it is
   parallel_blocks(T.size(), 8192, [&](size_t b, size_t e) {
     for (size_t i = b; i < e; ++i)
       if (turned(root[T[i][0]])) std::swap(T[i][1], T[i][2]);

@@ -1,6 +1,8 @@
 // Internal: turning the closed components of the finished surface to face outward.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -8,7 +10,7 @@
 #include "particlemesh/core/vec3.h"
 #include "particlemesh/mesh/tri_mesh.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// Turn every closed component (one holding none of the `boundary` half-edges, a << 32 | b)
 /// so that it encloses positive volume, negating its points' `vertex_normals` (if given) to

@@ -1,13 +1,15 @@
 // Internal: the priority queue of the surface growth.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <algorithm>
 #include <bit>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// A set of ranks in [0, n), taken smallest first: a 64-ary tree of bit words, so that adding
 /// and taking touch one word per level (4 levels for 16M ranks). Written here because the

@@ -2,6 +2,8 @@
 // (normals, extraction, hole filling) reuse the grid and the neighbour lists.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cmath>
 #include <memory>
 #include <vector>
@@ -11,7 +13,7 @@
 #include "particlemesh/surface/triangulate.h"
 #include "surface/neighbor_lists.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 struct RawTriangulation {
   TriangulateStats stats;

@@ -18,7 +18,7 @@
 #include "surface/surface_builder.h"
 #include "surface/view_rays.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 
@@ -82,7 +82,7 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
       throw Error(Status::InvalidArgument, "normals = input, but the cloud has no normals");
     // The finishing stages work on the points in the grid's cell order (sorted indices), as
     // the raw test does: points near in space are near in memory whatever order the input
-    // lists them in (in input order, a shuffled million points took 2.4x longer).
+    // lists them in (in input order, a shuffled cloud would be meshed much slower).
     std::vector<Vec3> P(n);
     std::vector<uint32_t> original(n);
     std::vector<uint8_t> active(n);
@@ -170,6 +170,7 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     st.holes_filled = bs.holes_filled;
     st.hole_triangles = bs.hole_triangles;
     st.holes_left = bs.holes_left;
+    st.looks_like_volume = st.holes_left > 0 && st.rejected_conormal * 20 > result.triangulation.kept * 7;
     st.largest_hole_left = bs.largest_hole_left;
     st.components_flipped = bs.components_flipped;
     st.unused_points = bs.unused_points;

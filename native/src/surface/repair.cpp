@@ -9,7 +9,7 @@
 #include "surface/tangent_arcs.h"
 #include "surface/triangle_angles.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 size_t unpinch(EditableSurface& s) {
   std::vector<uint32_t> starts;

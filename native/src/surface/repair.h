@@ -11,6 +11,8 @@
 //  5. loops that only a sharper fold closes are filled inside large components.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 #include <cstdint>
 #include <utility>
@@ -21,7 +23,7 @@
 #include "surface/editable_surface.h"
 #include "surface/hole_fill.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 struct RepairOptions {
   FillOptions fill;

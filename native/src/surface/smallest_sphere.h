@@ -3,13 +3,15 @@
 // two can only differ in which points they look at, never in how one point is judged.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 
 #include "particlemesh/core/vec3.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// Lexicographic order of coordinates: the rank of the symbolic perturbation.
 inline bool lex_less(const Vec3& p, const Vec3& q) {

@@ -8,7 +8,7 @@
 #include "surface/repair.h"
 #include "surface/vertex_normals.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 std::vector<Triangle> build_surface(const std::vector<Vec3>& positions, const std::vector<Vec3>& normals,
                                     const std::vector<uint8_t>& active, const std::vector<Triangle>& raw,

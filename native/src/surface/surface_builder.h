@@ -7,6 +7,8 @@
 // (orient_outward.h turns closed components outward afterwards.)
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cmath>
 #include <cstdint>
 #include <utility>
@@ -17,7 +19,7 @@
 #include "particlemesh/mesh/tri_mesh.h"
 #include "surface/view_rays.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 struct BuilderOptions {
   double cos_normal_angle = -0.5;  ///< co-normality: corner normals and face normal agree within

@@ -6,12 +6,14 @@
 // are pseudo-angles (see angle_of): only their order matters, so no trigonometry is needed.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <algorithm>
 #include <cmath>
 
 #include "particlemesh/core/vec3.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 constexpr double kTwoPi = 4.0;    ///< the period of angle_of's pseudo-angles
 constexpr float kArcEps = 1e-5f;  ///< in pseudo-angle units (about 1.5e-5 rad); arcs are floats

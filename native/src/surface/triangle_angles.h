@@ -1,6 +1,8 @@
 // Internal: the corner angles the surface stages rank and weight triangles by.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -9,7 +11,7 @@
 #include "particlemesh/core/vec3.h"
 #include "particlemesh/mesh/tri_mesh.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// The cosine of the triangle (p, q, r)'s angle at p.
 inline double corner_cosine(const Vec3& p, const Vec3& q, const Vec3& r) {
@@ -30,7 +32,7 @@ inline double max_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
 }
 
 /// acos(x) for x in [-1, 1] within 2e-8 rad (Abramowitz and Stegun 4.4.46): the corner
-/// angles that weight the vertex normals, where std::acos took half the time of that stage.
+/// angles that weight the vertex normals, where std::acos was the largest cost of that stage.
 inline double fast_acos(double x) {
   const double a = std::min(std::abs(x), 1.0);
   const double r = std::sqrt(1.0 - a) *

@@ -5,7 +5,7 @@
 #include "core/parallel.h"
 #include "surface/triangle_angles.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 std::vector<Vec3> surface_vertex_normals(const EditableSurface& s, const std::vector<uint8_t>& active,
                                          const std::vector<Vec3>& fallback, size_t& unused) {

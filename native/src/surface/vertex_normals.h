@@ -1,6 +1,8 @@
 // Internal: the finished surface's vertex normals.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -8,7 +10,7 @@
 #include "particlemesh/core/vec3.h"
 #include "surface/editable_surface.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// The surface's angle-weighted vertex normals (G. Thürmer and C. A. Wüthrich, "Computing
 /// vertex normals from polygonal facets", 1998), so they agree with the winding. Where a

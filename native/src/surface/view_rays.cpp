@@ -4,7 +4,7 @@
 
 #include "core/parallel.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 bool plausible_viewpoint(const std::vector<Vec3>& P, const std::vector<Vec3>& N, const std::vector<uint8_t>& active,
                          const Vec3& origin) {

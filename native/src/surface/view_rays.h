@@ -7,13 +7,15 @@
 // one (the angle tolerance of PCL's OrganizedFastMesh, 12.5 degrees, whose shadow test this is).
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cmath>
 #include <cstdint>
 #include <vector>
 
 #include "particlemesh/core/vec3.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 struct ViewRays {
   bool active = false;

@@ -6,7 +6,7 @@
 
 #include "volume/field_impl.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 namespace {
 

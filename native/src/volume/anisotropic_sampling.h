@@ -1,9 +1,11 @@
 // Internal: summing anisotropic kernels into a block of polygonization samples.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include "particlemesh/volume/field.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// Nodes per block edge of the polygonizer's sparse grid.
 inline constexpr int kSampleBlock = 8;

@@ -8,21 +8,18 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "core/format_number.h"
 #include "core/parallel.h"
 #include "core/progress_tracker.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/spatial/neighbor_grid.h"
 #include "volume/anisotropy_impl.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 
-std::string num(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
+std::string num(double v) { return detail::format_number(v, 17); }
 
 typedef float Float4 __attribute__((vector_size(4 * sizeof(float))));
 typedef int32_t Int4 __attribute__((vector_size(4 * sizeof(int32_t))));

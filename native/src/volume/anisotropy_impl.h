@@ -1,12 +1,14 @@
 // Internal: the anisotropic kernels computed inside a caller's progress tracker and arena.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <vector>
 
 #include "core/progress_tracker.h"
 #include "particlemesh/volume/anisotropy.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// Kernels of particles with finite positions; radius(i) = radii ? radii[i] : radius, all > 0.
 /// Runs in the caller's TBB arena; reports progress in [begin, end).

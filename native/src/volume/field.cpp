@@ -12,7 +12,7 @@
 #include "volume/anisotropy_impl.h"
 #include "volume/field_impl.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 

@@ -2,12 +2,14 @@
 // the kernel evaluated without a run-time switch in hot loops.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <optional>
 
 #include "core/progress_tracker.h"
 #include "particlemesh/volume/field.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// A tile's field anchored as its whole cloud's (see PolygonizeOptions::domain_min): the
 /// cloud's lower corner (at or below every particle) and largest radius (0: these particles').

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <string>
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 void validate_kernel(Kernel kernel) {
   switch (kernel) {

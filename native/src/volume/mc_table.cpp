@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <utility>
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 namespace {
 

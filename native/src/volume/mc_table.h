@@ -23,12 +23,14 @@
 // from outside the surface.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// Corner index (c = x + 2y + 4z) of the lower end of edge e, and the edge's axis.
 constexpr int mc_edge_axis(int e) { return e >> 2; }

@@ -22,7 +22,7 @@
 #include "volume/mc_table.h"
 #include "volume/polygonize_finish.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 

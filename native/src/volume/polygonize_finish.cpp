@@ -13,7 +13,7 @@
 #include "particlemesh/smooth/taubin.h"
 #include "spatial/spacing_impl.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 namespace {
 

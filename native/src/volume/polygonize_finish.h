@@ -2,10 +2,12 @@
 // pieces, then smooth (Taubin).
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include "core/progress_tracker.h"
 #include "particlemesh/volume/polygonize.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// Check min_component_volume, min_component_particles and surface_smoothing.
 /// @throws Error(InvalidArgument) naming the option.

@@ -5,9 +5,11 @@
 // cancelled ray ends early; its (partial) result is discarded with the rest of the call.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include "core/progress_tracker.h"
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 /// The tracker of the batch whose rays this thread is casting (nullptr: a single ray cast by
 /// the user, which is not cancellable).

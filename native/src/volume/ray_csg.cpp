@@ -4,7 +4,7 @@
 
 #include "particlemesh/core/error.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <numbers>
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 namespace {
 

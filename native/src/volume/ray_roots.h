@@ -3,7 +3,8 @@
 // the state "p >= 0" changes, in increasing u, each polished to full double precision, plus
 // the magnitudes of p sampled between them (the caster's tangent rule uses those).
 //
-// Two solvers, the two the seed's section 5.1.3 and issue 8 name:
+// Two solvers, the two that exact ray casting of implicit surfaces calls for (Tonnesen's
+// thesis, section 5.1.3, cites ray casting of blobs):
 //  - closed form (degree <= 4): Ferrari's quartic through the resolvent cubic (Cardano or
 //    the trigonometric form), the candidates then used as sample points: between two
 //    neighbouring samples whose states differ lies exactly one crossing of the candidates'
@@ -20,9 +21,11 @@
 // whole line through a companion matrix, far slower and with no certification).
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 
-namespace particlemesh::detail {
+namespace PM_NAMESPACE::detail {
 
 inline constexpr int kMaxPolyDegree = 6;
 inline constexpr int kMaxCrossings = 8;

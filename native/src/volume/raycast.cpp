@@ -11,7 +11,7 @@
 #include "volume/ray_cancel.h"
 #include "volume/ray_roots.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 

@@ -13,7 +13,7 @@
 #include "volume/ray_cancel.h"
 #include "particlemesh/core/error.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace {
 

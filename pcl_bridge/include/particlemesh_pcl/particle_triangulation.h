@@ -39,12 +39,12 @@ namespace particlemesh_pcl
   struct SurfaceSettings
   {
     double spacing = 0;              ///< r0 in world units, 0 = estimate
-    double max_edge_factor = 2.0;    ///< L = factor * r0 (the seed's default: 2)
+    double max_edge_factor = 2.0;    ///< L = factor * r0 (Tonnesen's default: 2)
     int threads = 0;                 ///< 0 = all cores; never changes the output
     std::size_t max_neighbors = 256; ///< see particlemesh::TriangulateOptions::max_neighbors
     double normal_angle = 120.0;     ///< co-normality limit, degrees (SurfaceOptions::normal_angle)
     std::size_t fill_holes = 100;    ///< largest boundary loop filled, edges (SurfaceOptions::fill_holes)
-    bool raw = false;                ///< the seed's exact triangle set instead of the surface
+    bool raw = false;                ///< the smallest-sphere test's exact triangle set instead of the surface
     bool local_spacing = true;       ///< each point's own edge limit (SurfaceOptions::local_spacing)
     bool use_viewpoint = true;       ///< keep depth jumps seen from the viewpoint open (SurfaceOptions::viewpoint)
   };
@@ -144,8 +144,8 @@ namespace particlemesh_pcl
       inline double
       getSpacing () const { return (surface_.spacing); }
 
-      /** \brief Set the longest allowed edge as a multiple of the spacing (default 2, the
-        * seed's value). Larger bridges wider gaps and costs more. */
+      /** \brief Set the longest allowed edge as a multiple of the spacing (default 2,
+        * Tonnesen's value). Larger bridges wider gaps and costs more. */
       inline void
       setMaxEdgeFactor (double factor) { surface_.max_edge_factor = factor; }
 
@@ -214,8 +214,8 @@ namespace particlemesh_pcl
       inline bool
       getUseViewPoint () const { return (surface_.use_viewpoint); }
 
-      /** \brief Return the seed's exact triangle set (default false): every triangle that
-        * passes the smallest-sphere test, unoriented and not a manifold (overlapping pairs on
+      /** \brief Return the exact triangle set of Tonnesen's smallest-sphere test (default
+        * false): every triangle that passes it, unoriented and not a manifold (overlapping pairs on
         * quads). For study and comparison; the default is the finished surface. */
       inline void
       setRawTriangulation (bool raw) { surface_.raw = raw; }

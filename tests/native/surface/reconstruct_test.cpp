@@ -485,3 +485,21 @@ TEST(ReconstructSurface, CancelsPromptly) {
   }
   EXPECT_EQ(last_stage, "extracting the surface");
 }
+
+// Particles filling a block (a jittered lattice, as a fluid simulation gives) are no surface
+// sample: co-normality drops most raw triangles, loops stay open, and the statistic the CLI's
+// and the add-on's hint read says so; a sphere's surface particles do not look like a volume.
+TEST(ReconstructSurface, VolumeParticlesLookLikeAVolume) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> jitter(0.0, 0.1);
+  PointCloud block;
+  for (int i = 0; i < 14; ++i)
+    for (int j = 0; j < 14; ++j)
+      for (int k = 0; k < 14; ++k) block.positions.push_back({i + jitter(rng), j + jitter(rng), k + jitter(rng)});
+  const SurfaceResult volume = reconstruct_surface(block);
+  EXPECT_GT(volume.surface.rejected_conormal * 20, volume.triangulation.kept * 7);
+  EXPECT_GT(volume.surface.holes_left, 0u);
+  EXPECT_TRUE(volume.surface.looks_like_volume);
+  const SurfaceResult sphere = reconstruct_surface(fibonacci_sphere(5000));
+  EXPECT_FALSE(sphere.surface.looks_like_volume);
+}

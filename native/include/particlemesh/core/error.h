@@ -5,12 +5,14 @@
 // never change meaning.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <stdexcept>
 #include <string>
 
 #include "particlemesh/core/export.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 enum class Status : int {
   Ok = 0,

@@ -1,10 +1,12 @@
 // Progress reporting and cancellation for long calls.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <functional>
 #include <string_view>
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 /// Called with the name of the running stage and the overall fraction done (0..1).
 /// Return false to cancel: the call then throws Error(Status::Cancelled) promptly and

@@ -2,9 +2,11 @@
 // so they cross the C ABI and numpy as flat double arrays without copying.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cmath>
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 struct Vec3 {
   double x = 0, y = 0, z = 0;

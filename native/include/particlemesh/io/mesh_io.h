@@ -8,6 +8,8 @@
 // XML .vtu / .vtp (read and written), Houdini's classic .bgeo (particles, read).
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <string>
 
 #include "particlemesh/core/export.h"
@@ -15,7 +17,7 @@
 #include "particlemesh/mesh/point_cloud.h"
 #include "particlemesh/mesh/tri_mesh.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 enum class MeshFormat {
   Auto,       ///< from the file extension: .ply -> PlyBinary, .obj -> Obj (a device or FIFO without one: PlyBinary)

@@ -19,6 +19,8 @@
 // handlers, so that a run killed by SIGTERM, SIGHUP, ... leaves no temporary file.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 #include <memory>
 #include <string>
@@ -26,7 +28,7 @@
 
 #include "particlemesh/core/export.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 /// Check, before any work, that `path` can be written: its folder exists and may be written
 /// in, it is not a folder, an existing file there is writable (a file without any write

@@ -1,6 +1,8 @@
 // PNG images through libpng (Debian's libpng16), for the renderer and its tests.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -8,7 +10,7 @@
 #include "particlemesh/core/export.h"
 #include "particlemesh/io/output_file.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 /// An 8-bit RGB image, rows top to bottom, pixels left to right, 3 bytes per pixel.
 struct Image {

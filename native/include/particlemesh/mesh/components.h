@@ -2,6 +2,8 @@
 // (the splashes and lone droplets of a fluid surface, the specks of a scan).
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -9,7 +11,7 @@
 #include "particlemesh/core/export.h"
 #include "particlemesh/mesh/tri_mesh.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 struct MeshComponents {
   /// Per vertex: its component, or UINT32_MAX for a vertex no triangle uses. Components are

@@ -2,6 +2,8 @@
 // application with an edge list (Blender) otherwise derives by hashing every corner itself.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -9,7 +11,7 @@
 #include "particlemesh/core/export.h"
 #include "particlemesh/mesh/tri_mesh.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 struct MeshEdges {
   /// Each edge once as (a, b), a < b: ordered by a, then b (the same for any thread count).

@@ -1,6 +1,8 @@
 // Particles: positions, optional normals, optional per-point attribute channels.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -8,7 +10,7 @@
 #include "particlemesh/core/export.h"
 #include "particlemesh/core/vec3.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 /// A named per-vertex float channel (colour, velocity, radius, ...), `components` floats per
 /// vertex, stored vertex-major: values[v * components + c].

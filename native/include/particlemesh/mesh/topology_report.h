@@ -1,6 +1,8 @@
 // What a mesh is, topologically: the facts an artist or a pipeline checks before using it.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -8,7 +10,7 @@
 #include "particlemesh/core/export.h"
 #include "particlemesh/mesh/tri_mesh.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 /// One edge-connected component of the triangles.
 struct ComponentReport {

@@ -1,6 +1,8 @@
 // The flat indexed triangle mesh that every stage produces and consumes.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -8,7 +10,7 @@
 #include "particlemesh/core/vec3.h"
 #include "particlemesh/mesh/point_cloud.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 /// Three vertex indices. The winding (counter-clockwise seen from outside) gives the facing.
 using Triangle = std::array<uint32_t, 3>;

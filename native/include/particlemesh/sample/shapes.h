@@ -4,6 +4,8 @@
 // so the same call gives the same points on every machine.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -12,7 +14,7 @@
 #include "particlemesh/mesh/point_cloud.h"
 #include "particlemesh/mesh/tri_mesh.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 /// n points on a sphere by the Fibonacci (golden-angle) spiral, with outward normals.
 /// Spacing is about radius * sqrt(4 pi / n) * 0.95.

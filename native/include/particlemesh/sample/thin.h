@@ -1,6 +1,8 @@
 // Thinning a particle set to a coarser, still even one (a preview of a big system).
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -9,7 +11,7 @@
 #include "particlemesh/core/vec3.h"
 #include "particlemesh/mesh/point_cloud.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 /// Indices (ascending) of a subset of the points in which no two are closer than
 /// `min_distance`, and every dropped point lies within `min_distance` of a kept one: a

@@ -1,4 +1,6 @@
-// Smooth surfaces from triangle meshes by subdivision (seed section 5.2.5).
+// Smooth surfaces from triangle meshes by subdivision (Tonnesen's thesis, section 5.2.5:
+// D. Tonnesen, "Dynamically Coupled Particle Systems for Geometric Modeling, Reconstruction,
+// and Animation", PhD thesis, University of Toronto, 1998).
 //
 //  - Loop (Loop 1987), through OpenSubdiv's Far::TopologyRefiner with the Loop scheme:
 //    approximating; uniform refinement to `levels`, then (by default) every vertex is moved
@@ -33,6 +35,8 @@
 // Input normals are ignored; the result always has normals (see SmoothResult::mesh).
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -42,7 +46,7 @@
 #include "particlemesh/core/progress.h"
 #include "particlemesh/mesh/tri_mesh.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 enum class SmoothScheme : int {
   Loop = 0,       ///< approximating, C2 except at extraordinary vertices (OpenSubdiv)

@@ -21,12 +21,14 @@
 // Deterministic: every sum runs over a vertex's neighbours in increasing index.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstdint>
 
 #include "particlemesh/core/export.h"
 #include "particlemesh/mesh/tri_mesh.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 struct TaubinOptions {
   /// lambda|mu pairs of steps; 0 leaves the mesh as it is. At most 10000.

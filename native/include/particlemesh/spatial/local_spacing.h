@@ -4,6 +4,8 @@
 // and too long in others.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 #include <vector>
 
@@ -11,7 +13,7 @@
 #include "particlemesh/core/progress.h"
 #include "particlemesh/core/vec3.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 struct LocalSpacing {
   /// Per input point: the spacing of the sampling around it (see estimate_local_spacing).

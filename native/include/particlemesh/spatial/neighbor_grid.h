@@ -6,6 +6,8 @@
 // the points by cell makes every query read memory that its neighbours just read.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <algorithm>
 #include <array>
 #include <cstddef>
@@ -15,7 +17,7 @@
 #include "particlemesh/core/export.h"
 #include "particlemesh/core/vec3.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 class PM_EXPORT NeighborGrid {
  public:

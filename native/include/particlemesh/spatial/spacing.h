@@ -1,13 +1,15 @@
 // The particle spacing r0 that the triangulation's edge limit is measured in.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 
 #include "particlemesh/core/export.h"
 #include "particlemesh/core/progress.h"
 #include "particlemesh/core/vec3.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 struct SpacingEstimate {
   double spacing = 0;          ///< median nearest-neighbour distance over distinct points
@@ -25,7 +27,7 @@ PM_EXPORT SpacingEstimate estimate_spacing(const Vec3* points, size_t n, int thr
 /// The same median over an evenly strided sample of at most max_samples points (input indices
 /// 0, k, 2k, ...; each one's nearest neighbour is searched among all the points), for quick
 /// previews of big clouds: within about 1 % of estimate_spacing on evenly spaced particles,
-/// at about a third of its cost for 100k points. Duplicates are not looked for
+/// at a fraction of its cost. Duplicates are not looked for
 /// (duplicate_points is 0). max_samples >= n gives the exact estimate.
 /// @throws Error(InvalidArgument) if max_samples is 0; as estimate_spacing otherwise.
 PM_EXPORT SpacingEstimate estimate_spacing_sampled(const Vec3* points, size_t n, size_t max_samples,

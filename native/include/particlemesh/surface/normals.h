@@ -1,23 +1,25 @@
 // Per-particle normals for clouds that come without them.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <vector>
 
 #include "particlemesh/core/export.h"
 #include "particlemesh/core/progress.h"
 #include "particlemesh/mesh/point_cloud.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 struct NormalOptions {
   /// Neighbourhood radius in world units for the local plane fit; 0 = 2 x the estimated
-  /// spacing (the seed's default edge limit).
+  /// spacing (Tonnesen's default edge limit).
   double radius = 0;
   int threads = 0;
   ProgressCallback progress;
 };
 
-/// Unit normals by a robust local plane fit: among the planes of the seed's triangles (edge
+/// Unit normals by a robust local plane fit: among the planes of the raw triangles (edge
 /// limit L = radius) at a point, the one with the most neighbours close to it, refined by a
 /// PCA of those neighbours, so that a second sheet passing within the radius (a fold, a thin
 /// part, a nearby surface) does not tilt the normal. Oriented consistently as Hoppe et al.

@@ -1,4 +1,6 @@
-// The seed's triangulation of surface particles (thesis chapter 5, section 5.2.3), exactly.
+// Tonnesen's triangulation of surface particles, the smallest-sphere test, exactly (D. Tonnesen,
+// "Dynamically Coupled Particle Systems for Geometric Modeling, Reconstruction, and
+// Animation", PhD thesis, University of Toronto, 1998, chapter 5, section 5.2.3).
 //
 // Triangle (i, j, k) is kept iff
 //   1. all three edges are at most L = max_edge_factor * r0 long, and
@@ -26,6 +28,8 @@
 // a surface (overlapping pairs on quads, slivers). Use reconstruct_surface() for a mesh.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 #include <cstdint>
 
@@ -34,13 +38,13 @@
 #include "particlemesh/mesh/point_cloud.h"
 #include "particlemesh/mesh/tri_mesh.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 struct TriangulateOptions {
   /// Particle spacing r0 in world units (not relative). 0 = estimate it as the median
   /// nearest-neighbour distance (estimate_spacing).
   double spacing = 0;
-  /// L = max_edge_factor * r0: the longest edge a triangle may have. The seed's default is 2.
+  /// L = max_edge_factor * r0: the longest edge a triangle may have. Tonnesen's default is 2.
   double max_edge_factor = 2.0;
   /// Worker threads, 0 = all cores. The output does not depend on it.
   int threads = 0;
@@ -82,7 +86,7 @@ struct TriangulateResult {
   TriangulateStats stats;
 };
 
-/// The seed's test over all triplets with edges <= L, found through a uniform grid of cell L:
+/// The smallest-sphere test over all triplets with edges <= L, found through a uniform grid of cell L:
 /// linear work for evenly spaced points, all cores used, byte-identical output for any
 /// thread count. Every input particle is a vertex of the result.
 /// @throws Error(InvalidInput) empty/one-point/all-coincident cloud, NaN or Inf coordinate;

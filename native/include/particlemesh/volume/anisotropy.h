@@ -36,6 +36,8 @@
 // thread count.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -45,7 +47,7 @@
 #include "particlemesh/core/progress.h"
 #include "particlemesh/core/vec3.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 /// Yu and Turk's parameters (their values are the defaults, but for `smoothing`). Off unless
 /// `enabled`. With them, FieldParams' default threshold is calibrated on the particles

@@ -20,6 +20,8 @@
 // the cells, and so every evaluation, correspondingly larger.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -34,7 +36,7 @@
 #include "particlemesh/volume/anisotropy.h"
 #include "particlemesh/volume/kernel.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 namespace detail {
 struct FieldBuilder;

@@ -27,6 +27,8 @@
 // decreasing on [0, 1) and exactly 0 for s >= 1.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -35,7 +37,7 @@
 #include "particlemesh/core/error.h"
 #include "particlemesh/core/export.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 /// The kernels. The numeric values are those of PM_KERNEL_* in the C ABI and never change.
 enum class Kernel : int32_t {

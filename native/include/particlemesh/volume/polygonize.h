@@ -43,6 +43,8 @@
 // seams bit for bit, and together they are the whole cloud's mesh (particlemesh.distributed).
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -58,7 +60,7 @@
 #include "particlemesh/volume/field.h"
 #include "particlemesh/volume/kernel.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 /// Default cell size: h = kDefaultCellFraction x R (with the default radius, half the
 /// particle spacing).

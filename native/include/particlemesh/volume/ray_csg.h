@@ -11,13 +11,15 @@
 // taken together (A ∪ A = A and A - A = ∅ exactly, not up to a tolerance).
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <limits>
 #include <optional>
 
 #include "particlemesh/core/export.h"
 #include "particlemesh/volume/raycast.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 enum class CsgOp : int32_t {
   Union = 0,         ///< inside A or inside B

@@ -46,6 +46,8 @@
 // same point twice.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -58,7 +60,7 @@
 #include "particlemesh/core/vec3.h"
 #include "particlemesh/volume/field.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 /// See the tangent rule at the top of this file.
 inline constexpr double kTangentTolerance = 1e-12;

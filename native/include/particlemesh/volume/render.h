@@ -3,6 +3,8 @@
 // it shows is the true surface F = T, not a mesh: there are no facets to see.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstdint>
 #include <optional>
 
@@ -12,7 +14,7 @@
 #include "particlemesh/io/png.h"
 #include "particlemesh/volume/raycast.h"
 
-namespace particlemesh {
+namespace PM_NAMESPACE {
 
 enum class Shading : int32_t {
   Lambert = 0,  ///< a clay colour lit by a key light from the camera's upper left, plus ambient

@@ -1,0 +1,32 @@
+# Every C++ symbol libparticlemesh exports lies in the versioned inline namespace
+# (particlemesh/core/config.h: particlemesh::v1), so two builds of different versions can be
+# loaded into one process without binding to each other's functions; the C ABI's pm_* stay
+# plain. Run as: cmake -DLIB=libparticlemesh.so -DNM=nm -DNS=v1 -P check_versioned_namespace.cmake
+execute_process(COMMAND "${NM}" -D -C --defined-only "${LIB}"
+                OUTPUT_VARIABLE symbols RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "${NM} failed on ${LIB}")
+endif()
+string(REPLACE "\n" ";" lines "${symbols}")
+set(versioned 0)
+set(plain_c 0)
+set(unversioned "")
+foreach(line IN LISTS lines)
+  if(line MATCHES "particlemesh::${NS}::")
+    math(EXPR versioned "${versioned} + 1")
+  elseif(line MATCHES "particlemesh::")
+    list(APPEND unversioned "${line}")
+  elseif(line MATCHES " T pm_")
+    math(EXPR plain_c "${plain_c} + 1")
+  endif()
+endforeach()
+list(LENGTH unversioned bad)
+if(bad GREATER 0)
+  list(SUBLIST unversioned 0 10 first)
+  string(REPLACE ";" "\n  " first "${first}")
+  message(FATAL_ERROR "${bad} exported symbols of particlemesh:: outside particlemesh::${NS}::, e.g.\n  ${first}")
+endif()
+if(versioned LESS 50 OR plain_c LESS 50)
+  message(FATAL_ERROR "expected many particlemesh::${NS}:: symbols and pm_* functions, found ${versioned} and ${plain_c}")
+endif()
+message(STATUS "${versioned} C++ symbols in particlemesh::${NS}::, ${plain_c} C functions pm_*")
