@@ -91,9 +91,9 @@ int run_polygonize(const PolygonizeArgs& a) {
 
   WriteMeshOptions wo;
   if (a.ascii) wo.format = MeshFormat::PlyAscii;
-  const double t_write = write_outputs([&] { write_mesh(result.mesh, a.output, wo); }, {a.output});
-
-  const TopologyReport report = topology_report(result.mesh);
+  TopologyReport report;
+  const double t_write = write_outputs([&] { write_mesh(result.mesh, a.output, wo); }, {a.output},
+                                       [&] { report = topology_report(result.mesh); });
   if (!a.report.empty()) {
     nlohmann::json j{{"input", a.input},
                      {"output", a.output},

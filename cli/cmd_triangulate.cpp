@@ -139,14 +139,13 @@ int run_triangulate(const TriangulateArgs& a) {
 
   WriteMeshOptions wo;
   if (a.ascii) wo.format = MeshFormat::PlyAscii;
+  TopologyReport report;
   const double t_write = write_outputs(
       [&] {
         write_mesh(result.mesh, a.output, wo);
         write_pcl_mesh(result.mesh, a.input_options);
       },
-      {a.output, a.input_options.pcl_mesh});
-
-  const TopologyReport report = topology_report(result.mesh);
+      {a.output, a.input_options.pcl_mesh}, [&] { report = topology_report(result.mesh); });
   if (!a.report.empty()) {
     nlohmann::json j{{"input", a.input},
                      {"output", a.output},

@@ -1,5 +1,7 @@
 #include "progress_line.h"
 
+#include <tbb/task_group.h>
+
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -50,6 +52,21 @@ double write_outputs(const std::function<void()>& write, std::initializer_list<s
     throw Error(Status::Cancelled, "interrupted");
   }
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+double write_outputs(const std::function<void()>& write, std::initializer_list<std::string> paths,
+                     const std::function<void()>& beside) {
+  tbb::task_group group;
+  group.run(beside);
+  double seconds = 0;
+  try {
+    seconds = write_outputs(write, paths);
+  } catch (...) {
+    group.wait();
+    throw;
+  }
+  group.wait();
+  return seconds;
 }
 
 ProgressCallback ProgressLine::callback() {

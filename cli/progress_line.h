@@ -27,6 +27,10 @@ void set_phase(Phase phase);
 /// Ctrl-C arrived meanwhile the run counts as cancelled, so the files it finished (`paths`;
 /// empty names are skipped) are removed and Error(Cancelled) is thrown. Returns the seconds taken.
 double write_outputs(const std::function<void()>& write, std::initializer_list<std::string> paths);
+/// The same, with `beside` (the topology report of what is written) computed meanwhile on the
+/// other cores; both are done when it returns or throws.
+double write_outputs(const std::function<void()>& write, std::initializer_list<std::string> paths,
+                     const std::function<void()>& beside);
 
 class ProgressLine {
  public:

@@ -16,6 +16,7 @@
 #include <sstream>
 #include <system_error>
 
+#include "core/parallel.h"
 #include "io/atomic_file.h"
 #include "io/header_check.h"
 #include "io/openmesh_adapters.h"
@@ -214,6 +215,43 @@ void write_double_positions(std::ostream& out, const TriMesh& mesh, MeshFormat f
   }
 }
 
+/// Binary PLY with float32 positions, the layout and bytes OpenMesh's PLY writer gives
+/// (float32 normals, faces as uchar-counted int lists), built in memory on all cores and
+/// written at once: OpenMesh's writer puts each value through the stream on its own, about
+/// ten times slower on the million-triangle meshes that smoothing makes.
+void write_float_binary_ply(std::ostream& out, const TriMesh& mesh, bool normals) {
+  const auto& P = mesh.positions;
+  const auto& N = mesh.normals;
+  const auto& T = mesh.triangles;
+  std::string header = "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(P.size()) +
+                       "\nproperty float x\nproperty float y\nproperty float z\n";
+  if (normals) header += "property float nx\nproperty float ny\nproperty float nz\n";
+  header += "element face " + std::to_string(T.size()) + "\nproperty list uchar int vertex_indices\nend_header\n";
+  const size_t vertex_bytes = normals ? 24 : 12, face_bytes = 13;
+  std::vector<char> body(P.size() * vertex_bytes + T.size() * face_bytes);
+  char* const faces = body.data() + P.size() * vertex_bytes;
+  detail::parallel_blocks(P.size(), 16384, [&](size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i) {  // a little-endian host (x86-64, aarch64), as the header says
+      float v[6] = {float(P[i].x), float(P[i].y), float(P[i].z), 0, 0, 0};
+      if (normals) {
+        v[3] = float(N[i].x);
+        v[4] = float(N[i].y);
+        v[5] = float(N[i].z);
+      }
+      std::memcpy(body.data() + i * vertex_bytes, v, vertex_bytes);
+    }
+  });
+  detail::parallel_blocks(T.size(), 16384, [&](size_t b, size_t e) {
+    for (size_t f = b; f < e; ++f) {
+      char* d = faces + f * face_bytes;
+      d[0] = 3;
+      std::memcpy(d + 1, T[f].data(), 12);
+    }
+  });
+  out.write(header.data(), std::streamsize(header.size()));
+  out.write(body.data(), std::streamsize(body.size()));
+}
+
 }  // namespace
 
 void write_mesh(const TriMesh& mesh, const std::string& path, const WriteMeshOptions& options) {
@@ -252,6 +290,9 @@ void write_mesh(const TriMesh& mesh, const std::string& path, const WriteMeshOpt
     try {
       if (doubles) {
         write_double_positions(out, mesh, format, normals);
+        ok = true;
+      } else if (format == MeshFormat::PlyBinary) {
+        write_float_binary_ply(out, mesh, normals);
         ok = true;
       } else {
         // Text (OBJ, ASCII PLY) with the 9 digits that give a float32 back (OpenMesh's
