@@ -269,6 +269,28 @@ PM_EXPORT void pm_smooth_options_init(pm_smooth_options* options);
  *  edge, vertex or triangle, and a result over max_triangles PM_STATUS_LIMIT_EXCEEDED. */
 PM_EXPORT pm_status pm_smooth(const pm_mesh* mesh, const pm_smooth_options* options, pm_mesh** out_mesh);
 
+/* Refine once, evaluate many (particlemesh/smooth/smoother.h): for a mesh whose vertices move
+ * while its triangles stay (frames of an animation), the checks and OpenSubdiv's refinement
+ * are done once by pm_smoother_create; each pm_smoother_evaluate then gives exactly what
+ * pm_smooth would for the same triangles and the new positions and attributes, for a fraction
+ * of its cost (Loop; butterfly subdivides again). */
+typedef struct pm_smoother pm_smoother;
+
+/** Check `mesh` and refine its topology as pm_smooth(mesh, options) would (the same statuses
+ *  and messages; options->progress reports this work, and crease indices refer to `mesh`).
+ *  `options` may be NULL (one Loop level at the limit). */
+PM_EXPORT pm_status pm_smoother_create(const pm_mesh* mesh, const pm_smooth_options* options,
+                                       pm_smoother** out_smoother);
+/** *out_matches = 1 when `mesh` has the smoother's triangles (same order) and vertex count,
+ *  else 0. */
+PM_EXPORT pm_status pm_smoother_matches(const pm_smoother* smoother, const pm_mesh* mesh, int32_t* out_matches);
+/** The smooth mesh of `mesh`'s positions and attributes through the smoother (normals and
+ *  attributes as pm_smooth gives them). PM_STATUS_INVALID_ARGUMENT when `mesh` does not
+ *  match (pm_smoother_matches); PM_STATUS_INVALID_INPUT for a non-finite or too large
+ *  coordinate or attribute value (naming the vertex). Safe to call from several threads. */
+PM_EXPORT pm_status pm_smoother_evaluate(const pm_smoother* smoother, const pm_mesh* mesh, pm_mesh** out_mesh);
+PM_EXPORT void pm_smoother_destroy(pm_smoother* smoother);
+
 /* ---- volume particles: implicit surfaces, polygonized (issue 7) ---------------------- */
 
 /* The surface F(x) = T of F(x) = sum_i w_i g(|x - p_i|^2 / R_i^2), polygonized by marching

@@ -15,6 +15,7 @@
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
 #include "smooth/loop_limit.h"
+#include "smooth/loop_refiner.h"
 #include "smooth/schemes.h"
 
 namespace particlemesh::detail {
@@ -72,17 +73,11 @@ Sdc::Options::VtxBoundaryInterpolation to_sdc(BoundaryRule b) {
 
 }  // namespace
 
-void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
-                    const std::vector<std::pair<uint32_t, uint32_t>>& crease_pairs,
-                    const std::vector<float>& crease_sharpness, ProgressTracker& progress,
-                    SmoothResult& out) {
-  const int levels = options.levels;
+std::unique_ptr<TopologyRefiner> loop_refiner(const ControlMesh& control, const SmoothOptions& options,
+                                              const std::vector<std::pair<uint32_t, uint32_t>>& crease_pairs,
+                                              const std::vector<float>& crease_sharpness, bool full_last_level) {
   const size_t nv = control.positions.size(), nf = control.triangles.size();
-  SmoothStats& st = out.stats;
-  auto t0 = Clock::now();
-
-  // 1. The topology, through OpenSubdiv's raw-array descriptor.
-  progress.stage("refining topology (OpenSubdiv)", 0.05, 0.25);
+  // Through OpenSubdiv's raw-array descriptor.
   std::vector<int> verts_per_face(nf, 3);
   std::vector<int> face_verts(3 * nf);
   parallel_blocks(nf, 8192, [&](size_t b, size_t e) {
@@ -107,20 +102,33 @@ void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
   sdc.SetVtxBoundaryInterpolation(to_sdc(options.boundary));
   sdc.SetCreasingMethod(options.crease_method == CreaseMethod::Chaikin ? Sdc::Options::CREASE_CHAIKIN
                                                                        : Sdc::Options::CREASE_UNIFORM);
-  // On a closed surface without creases the limit is taken here, in parallel, from the last
-  // level's triangles (loop_limit.h); otherwise by OpenSubdiv, which needs the last level's
-  // full topology.
-  const bool own_limit = options.limit && control.boundary_edges == 0 && crease_pairs.empty();
+  std::unique_ptr<TopologyRefiner> r(RefinerFactory::Create(desc, RefinerFactory::Options(Sdc::SCHEME_LOOP, sdc)));
+  if (!r)  // the control mesh was checked, so this is our bug, not the caller's input
+    throw Error(Status::Internal, "OpenSubdiv refused the checked control mesh");
+  if (options.levels > 0) {
+    TopologyRefiner::UniformOptions uniform(options.levels);
+    uniform.fullTopologyInLastLevel = full_last_level;
+    r->RefineUniform(uniform);
+  }
+  return r;
+}
+
+void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
+                    const std::vector<std::pair<uint32_t, uint32_t>>& crease_pairs,
+                    const std::vector<float>& crease_sharpness, ProgressTracker& progress,
+                    SmoothResult& out) {
+  const int levels = options.levels;
+  const size_t nv = control.positions.size();
+  SmoothStats& st = out.stats;
+  auto t0 = Clock::now();
+
+  // 1. The topology, refined by OpenSubdiv. On a closed surface without creases the limit is
+  // taken here, in parallel, from the last level's triangles (loop_limit.h); otherwise by
+  // OpenSubdiv, which needs the last level's full topology.
+  progress.stage("refining topology (OpenSubdiv)", 0.05, 0.25);
+  const bool own_limit = own_loop_limit(control, options, crease_pairs.size());
   auto refine = [&](bool full_last_level) {
-    std::unique_ptr<TopologyRefiner> r(RefinerFactory::Create(desc, RefinerFactory::Options(Sdc::SCHEME_LOOP, sdc)));
-    if (!r)  // the control mesh was checked, so this is our bug, not the caller's input
-      throw Error(Status::Internal, "OpenSubdiv refused the checked control mesh");
-    if (levels > 0) {
-      TopologyRefiner::UniformOptions uniform(levels);
-      uniform.fullTopologyInLastLevel = full_last_level;  // OpenSubdiv's limit masks need the last level's edges
-      r->RefineUniform(uniform);
-    }
-    return r;
+    return loop_refiner(control, options, crease_pairs, crease_sharpness, full_last_level);
   };
   std::unique_ptr<TopologyRefiner> refiner = refine(options.limit && !own_limit);
   progress.check();
