@@ -47,7 +47,10 @@ nlohmann::json stats_json(const PolygonizeStats& s) {
           {"components_removed", s.components_removed},
           {"smoothing_iterations", s.smoothing_iterations},
           {"candidate_blocks", s.candidate_blocks},
+          {"reached_blocks", s.reached_blocks},
           {"sampled_blocks", s.sampled_blocks},
+          {"inside_blocks", s.inside_blocks},
+          {"outside_blocks", s.outside_blocks},
           {"surface_blocks", s.surface_blocks},
           {"sampled_nodes", s.sampled_nodes},
           {"bounding_box_nodes", s.bounding_box_nodes},
@@ -55,7 +58,8 @@ nlohmann::json stats_json(const PolygonizeStats& s) {
           {"vertices", s.vertices},
           {"triangles", s.triangles},
           {"field_evaluations", s.field_evaluations},
-          {"seconds", {{"setup", s.seconds_setup}, {"sampling", s.seconds_sampling}, {"meshing", s.seconds_meshing},
+          {"seconds", {{"setup", s.seconds_setup}, {"proofs", s.seconds_proofs}, {"sampling", s.seconds_sampling},
+                       {"meshing", s.seconds_meshing},
                        {"finishing", s.seconds_finishing}}}};
 }
 
@@ -127,8 +131,10 @@ int run_polygonize(const PolygonizeArgs& a) {
     if (s.smoothing_iterations > 0)
       std::printf("  smoothing     %d Taubin iterations (lambda %.3g, mu %.3g)\n", s.smoothing_iterations,
                   a.taubin_lambda, a.taubin_mu);
-    std::printf("  grid          %zu blocks of 8^3 sampled (%.1f MiB), %zu with surface\n", s.sampled_blocks,
-                double(s.grid_bytes) / double(1 << 20), s.surface_blocks);
+    std::printf("  grid          %zu blocks of 8^3 reached, %zu sampled (%.1f MiB; %zu proven inside, %zu outside), "
+                "%zu with surface\n",
+                s.reached_blocks, s.sampled_blocks, double(s.grid_bytes) / double(1 << 20), s.inside_blocks,
+                s.outside_blocks, s.surface_blocks);
     std::printf("%s", describe(report).c_str());
     std::printf("  time          %.2f s (read %.2f, polygonize %.2f, write %.2f)\n", t_read + t_poly + t_write, t_read,
                 t_poly, t_write);

@@ -334,7 +334,7 @@ typedef struct pm_polygonize_stats {
   double cell_size;         /**< h used */
   double spacing;           /**< median particle spacing, when the default radius needed it (else 0) */
   uint64_t particles;
-  uint64_t sampled_blocks;  /**< blocks of 8^3 grid nodes sampled */
+  uint64_t sampled_blocks;  /**< blocks of 8^3 grid nodes sampled (those not proven inside or outside) */
   uint64_t grid_bytes;      /**< memory of the sparse grid */
   uint64_t vertices;
   uint64_t triangles;
