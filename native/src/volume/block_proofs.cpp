@@ -19,7 +19,7 @@ typedef int32_t Int4 __attribute__((vector_size(4 * sizeof(int32_t))));
 
 // The particles whose support can reach the block's nodes, in grid order: f(sorted index,
 // position in node units relative to the block's first node, radius in node units, s per
-// squared node unit, strength).
+// squared node unit, strength) returns whether to go on.
 template <class F>
 void for_each_particle_near(const ParticleField& field, const Vec3& o, double h, F&& f) {
   const NeighborGrid& grid = field.grid();
@@ -33,8 +33,9 @@ void for_each_particle_near(const ParticleField& field, const Vec3& o, double h,
   const double rn_common = std::sqrt(1.0 / c2_common);
   const NeighborGrid::CellCoord clo = grid.coord_of(o - Vec3{rmax, rmax, rmax});
   const NeighborGrid::CellCoord chi = grid.coord_of(o + Vec3{span + rmax, span + rmax, span + rmax});
+  bool go_on = true;
   field.for_each_cell_in(clo, chi, [&](uint32_t c) {
-    for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) {
+    for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c) && go_on; ++s) {
       const double w = ws.empty() ? 1.0 : ws[s];
       if (w == 0) continue;
       const double c2 = uniform ? c2_common : h * h * inv_r2s[s];
@@ -42,7 +43,7 @@ void for_each_particle_near(const ParticleField& field, const Vec3& o, double h,
       const double ux = (P[s].x - o.x) * inv_h, uy = (P[s].y - o.y) * inv_h, uz = (P[s].z - o.z) * inv_h;
       if (ux + rn < 0 || ux - rn > kB - 1 || uy + rn < 0 || uy - rn > kB - 1 || uz + rn < 0 || uz - rn > kB - 1)
         continue;
-      f(s, ux, uy, uz, rn, c2, w);
+      go_on = f(s, ux, uy, uz, rn, c2, w);
     }
   });
 }
@@ -56,15 +57,15 @@ bool outside(const ParticleField& field, const Vec3& o, double h) {
   size_t n = 0;
   bool reached = false;
   for_each_particle_near(field, o, h, [&](uint32_t, double ux, double uy, double uz, double, double c2, double w) {
-    if (reached) return;
     auto gap = [](double u) { return u < 0 ? -u : (u > kB - 1 ? u - (kB - 1) : 0.0); };
     const double dx = gap(ux), dy = gap(uy), dz = gap(uz);
     const double s = (dx * dx + dy * dy + dz * dz) * c2;
-    if (!(s < 1.0)) return;
+    if (!(s < 1.0)) return true;
     ub += w * kernel_value(kernel, s);
     wmax = std::max(wmax, w);
     ++n;
     reached = ub >= T;
+    return !reached;
   });
   // Far above the rounding of a float sample of n terms (about n 2^-22 of the sum).
   const double margin = double(n + 16) * 0x1p-20 * (ub + double(n + 16) * wmax);
@@ -83,36 +84,43 @@ bool inside(const ParticleField& field, const Vec3& o, double h) {
   const Float4 cx = {0.5f, 2.5f, 4.5f, 6.5f};
   for_each_particle_near(field, o, h, [&](uint32_t, double ux, double uy, double uz, double rn, double c2, double w) {
     // The centres span [0.5, 6.5] on each axis.
-    if (ux + rn < 0.5 || ux - rn > 6.5 || uy + rn < 0.5 || uy - rn > 6.5 || uz + rn < 0.5 || uz - rn > 6.5) return;
+    if (ux + rn < 0.5 || ux - rn > 6.5 || uy + rn < 0.5 || uy - rn > 6.5 || uz + rn < 0.5 || uz - rn > 6.5) return true;
     wmax = std::max(wmax, w);
     // w g = t^2 (wa + wb t), w dg/ds = -t (2 wa + 3 wb t), t = 1 - s.
     const float wa = K == Kernel::Wyvill ? float(w * 5.0 / 9.0) : (K == Kernel::Poly4 ? float(w) : 0.0f);
     const float wb = K == Kernel::Wyvill ? float(w * 4.0 / 9.0) : (K == Kernel::Poly6 ? float(w) : 0.0f);
+    // In float throughout: the bound's margin covers its rounding.
     const float c2f = float(c2);
     const Float4 dx = cx - float(ux);
     const Float4 dx2 = dx * dx * c2f;
+    float dy[kG], dy2[kG], dz[kG], dz2[kG];
+    for (int i = 0; i < kG; ++i) {
+      dy[i] = float(0.5 + 2 * i - uy);
+      dz[i] = float(0.5 + 2 * i - uz);
+      dy2[i] = dy[i] * dy[i] * c2f;
+      dz2[i] = dz[i] * dz[i] * c2f;
+    }
+    const float two_wa = 2.0f * wa, three_wb = 3.0f * wb;
     for (int z = 0; z < kG; ++z) {
-      const double dz = 0.5 + 2 * z - uz;
-      const double sz = dz * dz * c2;
-      if (!(sz < 1.0)) continue;
+      if (!(dz2[z] < 1.0f)) continue;
       for (int y = 0; y < kG; ++y) {
-        const double dy = 0.5 + 2 * y - uy;
-        const double syz = sz + dy * dy * c2;
-        if (!(syz < 1.0)) continue;
+        const float syz = dz2[z] + dy2[y];
+        if (!(syz < 1.0f)) continue;
         const int r = y + kG * z;
-        Float4 t = 1.0f - (dx2 + float(syz));
+        Float4 t = 1.0f - (dx2 + syz);
         const Int4 in = t > 0.0f;
         t = (Float4)((Int4)t & in);
-        const Float4 g = t * t * (wa + wb * t);
-        const Float4 a = -(t * (2.0f * wa + 3.0f * wb * t)) * c2f;  // w dg/ds, per squared node
-        acc_f[r] += g;
-        acc_gx[r] += 2.0f * a * dx;
-        acc_gy[r] += 2.0f * float(dy) * a;
-        acc_gz[r] += 2.0f * float(dz) * a;
+        const Float4 a = -(t * (two_wa + three_wb * t)) * c2f;  // w dg/ds, per squared node
+        const Float4 a2 = a + a;
+        acc_f[r] += t * t * (wa + wb * t);
+        acc_gx[r] += a2 * dx;
+        acc_gy[r] += dy[y] * a2;
+        acc_gz[r] += dz[z] * a2;
         acc_k[r] -= a;
         acc_n[r] += __builtin_convertvector(in & 1, Float4);
       }
     }
+    return true;
   });
   for (int r = 0; r < kG * kG; ++r)
     for (int i = 0; i < 4; ++i) {

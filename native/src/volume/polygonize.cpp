@@ -128,6 +128,10 @@ struct Grid {
   // samples (kBN floats, node x + 8 (y + 8 z)) or nullptr for a proven block left unsampled.
   std::vector<detail::BlockProof> proof;
   std::vector<const float*> samples;
+  // sampled_keys' indices in the order of the particles in memory (by x, then y, then z, as
+  // the field's grid keeps them): proving and sampling in it read the particles near each
+  // other one block after the next.
+  std::vector<uint32_t> memory_order;
   std::vector<float> values, more_values;  // the samples' storage
   std::vector<uint64_t> mesh_keys;     // sampled blocks and their lower neighbours, sorted
   std::vector<MeshBlock> mesh;
@@ -161,6 +165,20 @@ Vec3 block_first_node(const Grid& g, uint64_t key) {
   unpack(key, b);
   return {g.origin.x + double(b[0] * kB) * g.h, g.origin.y + double(b[1] * kB) * g.h,
           g.origin.z + double(b[2] * kB) * g.h};
+}
+
+// Block indices ordered by x, then y, then z (keys are by z, then y, then x).
+std::vector<uint32_t> particle_memory_order(const std::vector<uint64_t>& keys) {
+  std::vector<std::pair<uint64_t, uint32_t>> swapped(keys.size());
+  for (size_t i = 0; i < keys.size(); ++i) {
+    int64_t b[3];
+    unpack(keys[i], b);
+    swapped[i] = {pack(b[2], b[1], b[0]), uint32_t(i)};
+  }
+  tbb::parallel_sort(swapped.begin(), swapped.end());
+  std::vector<uint32_t> order(keys.size());
+  for (size_t i = 0; i < keys.size(); ++i) order[i] = swapped[i].second;
+  return order;
 }
 
 // Sample the blocks `todo` (indices into sampled_keys) into `storage`, on all cores.
@@ -387,6 +405,66 @@ Crossing center_vertex(const ParticleField& field, const Vec3& cell_lo, double h
   return out;
 }
 
+// The distinct blocks of every cell's range (cell_block_range), sorted: marked in a bitmap of
+// the ranges' box when that box is small against the ranges' total (dense particles), else
+// listed (`counts`: each cell's first slot) and sorted.
+template <class Range>
+std::vector<uint64_t> candidate_list(size_t ncells, uint64_t total, const std::vector<uint64_t>& counts,
+                                     const Range& cell_block_range, detail::ProgressTracker& tracker) {
+  int64_t lo[3] = {INT64_MAX, INT64_MAX, INT64_MAX}, hi[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
+  for (size_t c = 0; c < ncells; ++c) {
+    int64_t blo[3], bhi[3];
+    cell_block_range(uint32_t(c), blo, bhi);
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], blo[a]);
+      hi[a] = std::max(hi[a], bhi[a]);
+    }
+  }
+  std::vector<uint64_t> cand;
+  const double box = ncells == 0 ? 0.0 : double(hi[0] - lo[0] + 1) * double(hi[1] - lo[1] + 1) * double(hi[2] - lo[2] + 1);
+  if (ncells > 0 && box <= 64.0 * double(total) && box < double(uint64_t(1) << 31)) {
+    const uint64_t nx = uint64_t(hi[0] - lo[0] + 1), ny = uint64_t(hi[1] - lo[1] + 1);
+    std::vector<std::atomic<uint64_t>> bits((uint64_t(box) + 63) / 64);
+    detail::parallel_blocks(ncells, 256, [&](size_t cb, size_t ce) {
+      for (size_t c = cb; c < ce; ++c) {
+        int64_t blo[3], bhi[3];
+        cell_block_range(uint32_t(c), blo, bhi);
+        for (int64_t z = blo[2]; z <= bhi[2]; ++z)
+          for (int64_t y = blo[1]; y <= bhi[1]; ++y)
+            for (int64_t x = blo[0]; x <= bhi[0]; ++x) {
+              const uint64_t i = (uint64_t(z - lo[2]) * ny + uint64_t(y - lo[1])) * nx + uint64_t(x - lo[0]);
+              bits[i >> 6].fetch_or(uint64_t(1) << (i & 63), std::memory_order_relaxed);
+            }
+      }
+      tracker.tick(ce - cb);
+    });
+    tracker.check();
+    // Key order is z, then y, then x: the bitmap's order.
+    for (uint64_t w = 0; w < bits.size(); ++w)
+      for (uint64_t word = bits[w].load(std::memory_order_relaxed); word != 0; word &= word - 1) {
+        const uint64_t i = 64 * w + uint64_t(std::countr_zero(word));
+        cand.push_back(pack(lo[0] + int64_t(i % nx), lo[1] + int64_t((i / nx) % ny), lo[2] + int64_t(i / (nx * ny))));
+      }
+    return cand;
+  }
+  cand.resize(total);
+  detail::parallel_blocks(ncells, 256, [&](size_t cb, size_t ce) {
+    for (size_t c = cb; c < ce; ++c) {
+      int64_t blo[3], bhi[3];
+      cell_block_range(uint32_t(c), blo, bhi);
+      uint64_t k = counts[c];
+      for (int64_t z = blo[2]; z <= bhi[2]; ++z)
+        for (int64_t y = blo[1]; y <= bhi[1]; ++y)
+          for (int64_t x = blo[0]; x <= bhi[0]; ++x) cand[k++] = pack(x, y, z);
+    }
+    tracker.tick(ce - cb);
+  });
+  tracker.check();
+  tbb::parallel_sort(cand.begin(), cand.end());
+  cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+  return cand;
+}
+
 PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOptions& options,
                                   detail::ProgressTracker& tracker, double begin, PolygonizeStats st,
                                   Clock::time_point t_start) {
@@ -482,21 +560,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
                 "the block search alone would need " + bytes_text(double(candidate_keys) * sizeof(uint64_t)) +
                     ", more than the grid memory budget of " + bytes_text(double(budget)) +
                     " (max_grid_bytes; use a larger cell size or raise the budget)");
-  std::vector<uint64_t> cand(candidate_keys);
-  detail::parallel_blocks(ncells, 256, [&](size_t cb, size_t ce) {
-    for (size_t c = cb; c < ce; ++c) {
-      int64_t blo[3], bhi[3];
-      cell_block_range(uint32_t(c), blo, bhi);
-      uint64_t k = counts[c];
-      for (int64_t z = blo[2]; z <= bhi[2]; ++z)
-        for (int64_t y = blo[1]; y <= bhi[1]; ++y)
-          for (int64_t x = blo[0]; x <= bhi[0]; ++x) cand[k++] = pack(x, y, z);
-    }
-    tracker.tick(ce - cb);
-  });
-  tracker.check();
-  tbb::parallel_sort(cand.begin(), cand.end());
-  cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+  std::vector<uint64_t> cand = candidate_list(ncells, candidate_keys, counts, cell_block_range, tracker);
   st.candidate_blocks = cand.size();
 
   // ---- 2. the blocks some support really reaches ----------------------------------------------
@@ -551,11 +615,15 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   const size_t ns = g.sampled_keys.size();
   g.proof.assign(ns, detail::BlockProof::None);
   g.samples.assign(ns, nullptr);
+  g.memory_order = particle_memory_order(g.sampled_keys);
   if (detail::block_proofs_apply(field)) {
     tracker.stage("proving blocks", begin + 0.1 * (1 - begin), begin + 0.25 * (1 - begin), ns);
     detail::parallel_blocks(ns, 4, [&](size_t bb, size_t be) {
       if (tracker.cancelled()) return;
-      for (size_t i = bb; i < be; ++i) g.proof[i] = detail::prove_block(field, block_first_node(g, g.sampled_keys[i]), h);
+      for (size_t k = bb; k < be; ++k) {
+        const uint32_t i = g.memory_order[k];
+        g.proof[i] = detail::prove_block(field, block_first_node(g, g.sampled_keys[i]), h);
+      }
       tracker.tick(be - bb);
     });
     tracker.check();
@@ -564,8 +632,8 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   t0 = Clock::now();
   tracker.stage("sampling the field", begin + 0.25 * (1 - begin), begin + 0.6 * (1 - begin), ns);
   std::vector<uint32_t> todo;
-  for (size_t i = 0; i < ns; ++i)
-    if (g.proof[i] == detail::BlockProof::None) todo.push_back(uint32_t(i));
+  for (const uint32_t i : g.memory_order)
+    if (g.proof[i] == detail::BlockProof::None) todo.push_back(i);
   const size_t first_pass = todo.size();
   check_budget(first_pass);
   sample_blocks(field, g, todo, g.values, tracker);
@@ -578,8 +646,8 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
       for (size_t i = bb; i < be; ++i) need[i] = g.proof[i] != detail::BlockProof::None && touches_other_state(g, sampled_map, i, T);
     });
     todo.clear();
-    for (size_t i = 0; i < ns; ++i)
-      if (need[i]) todo.push_back(uint32_t(i));
+    for (const uint32_t i : g.memory_order)
+      if (need[i]) todo.push_back(i);
     st.grid_bytes = uint64_t(check_budget(first_pass + todo.size()));
     sample_blocks(field, g, todo, g.more_values, tracker);
   }
