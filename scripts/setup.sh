@@ -22,6 +22,7 @@ PACKAGES=(
   libpcl-dev
   clang llvm libclang-rt-14-dev  # the sanitizer build and libFuzzer (scripts/sanitize.sh, fuzz.sh)
   libopenvdb-dev  # the polygonize benchmark's peer (bench/ only)
+  libembree-dev  # the ray-casting benchmark's peer, with OpenVDB's mesh (bench/ only)
 )
 
 missing=()
