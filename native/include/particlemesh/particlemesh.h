@@ -294,7 +294,9 @@ PM_EXPORT void pm_smoother_destroy(pm_smoother* smoother);
 /* ---- volume particles: implicit surfaces, polygonized (issue 7) ---------------------- */
 
 /* The surface F(x) = T of F(x) = sum_i w_i g(|x - p_i|^2 / R_i^2), polygonized by marching
- * cubes on a sparse grid near the surface only (see particlemesh/volume/polygonize.h).
+ * cubes on a sparse grid near the surface only: blocks of the grid that bounds of the summed
+ * kernels prove wholly inside or outside are not sampled unless next to a crossing (see
+ * particlemesh/volume/polygonize.h).
  * Kernels g, as functions of s = r^2 / R^2 on 0 <= s < 1 (0 beyond): */
 #define PM_KERNEL_WYVILL 0 /**< 1 - 22/9 s + 17/9 s^2 - 4/9 s^3 (Wyvill's soft objects), C1 at R */
 #define PM_KERNEL_POLY4 1  /**< (1 - s)^2, C1 at R */
