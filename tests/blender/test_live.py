@@ -93,6 +93,27 @@ def test_cached_frames_swap_in_their_kept_mesh(pm, clean_scene):
         prefs.cache_megabytes = old
 
 
+def test_kept_meshes_go_with_their_frames(pm, clean_scene, monkeypatch):
+    """A cache too small for every frame drops the oldest and deletes their meshes (no
+    datablocks pile up); the mesh on screen is never deleted."""
+    em = emitter(speed=1.0)
+    obj = live_object(pm)
+    clean_scene.frame_set(2)
+    entry = pm.live.cache_for(obj).entries
+    frame_bytes = next(reversed(entry.values())).nbytes
+    monkeypatch.setattr(pm.live, "_cache_limit", lambda: int(4.5 * frame_bytes))  # 2 kept frames
+    for frame in range(3, 10):
+        clean_scene.frame_set(frame)
+        kept = [m for m in bpy.data.meshes if pm.live.FRAME_TAG in m]
+        assert obj.data in kept and len(kept) <= 3, [m.name for m in kept]
+        positions, _ = living_particles(em)
+        np.testing.assert_allclose(mesh_arrays(obj.data)[0], positions, atol=1e-5)
+    entries, size = pm.live.cache_info(obj)
+    assert entries >= 2 and size <= 4.5 * frame_bytes
+    clean_scene.frame_set(8)  # still cached and kept
+    assert pm.live.last_update[obj.name]["swapped"]
+
+
 def test_cached_frames_survive_their_meshes_going(pm, clean_scene):
     """The cache keeps its meshes by name and tag, not by reference (undo reloads or drops
     datablocks): a kept mesh deleted, or replaced by another of the same name, makes that

@@ -637,6 +637,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   const size_t first_pass = todo.size();
   check_budget(first_pass);
   sample_blocks(field, g, todo, g.values, tracker);
+  tracker.check();  // cancelled: stop before the second pass's search over every block
   // A proven block needs its samples after all where one of its nodes shares a cell with a
   // node of the other state: that cell holds a crossing, whose vertex and decider read them.
   {
