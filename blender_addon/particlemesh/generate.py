@@ -91,13 +91,21 @@ def _smooth(mesh, settings, progress, reuse=None):
     return out
 
 
+#: What a pm.Smoother keeps per output triangle (OpenSubdiv's refinement and its weights).
+SMOOTHER_BYTES_PER_TRIANGLE = 60
+
+
 def _smooth_again(mesh, levels, threads, reuse, progress):
     """Loop smoothing through a kept pm.Smoother (refine once, evaluate many: the same mesh as
     pm.smooth, several times cheaper) while the triangles stay those of the frame before (a
     paused or rigidly moving system); None where a plain smooth is due. The Smoother is made
     when the same triangles come a second time, so changing triangles cost nothing extra
     but a hash. `reuse`: a dict kept by the caller from frame to frame (live mode's cache);
-    reuse["reused"] is set when the Smoother gave the mesh."""
+    reuse["reused"] is set when the Smoother gave the mesh; reuse["max_bytes"], if given, is
+    the memory a Smoother may take (about SMOOTHER_BYTES_PER_TRIANGLE per output triangle)."""
+    if SMOOTHER_BYTES_PER_TRIANGLE * len(mesh.triangles) * 4 ** levels > reuse.get("max_bytes", math.inf):
+        release(reuse)
+        return None
     key = (levels, threads)
     smoother = reuse.get("smoother")
     if smoother is not None and reuse.get("smoother_key") == key and smoother.matches(mesh):

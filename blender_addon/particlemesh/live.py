@@ -210,6 +210,8 @@ def compute(obj, depsgraph, mode=None, use_cache=True, progress=None, timings=No
         data = cache.get(key)
         if data is not None:
             return data, settings, True
+    if use_cache:
+        cache.reuse["max_bytes"] = _cache_limit()  # a kept Smoother fits in the cache's memory
     data = generate.run(state.method, particles, settings, progress=progress,
                         reuse=cache.reuse if use_cache else None)
     if timings is not None:

@@ -161,6 +161,12 @@ def test_live_loop_smoothing_refines_once_while_the_triangles_stay(pm, clean_sce
     assert not reuse.pop("reused", False)
     pm.generate.release(reuse)
     assert "smoother" not in reuse
+    # No Smoother bigger than the memory allowed (live mode: the cache's).
+    reuse = {"max_bytes": 1000}
+    for scale in (1, 2, 4):
+        pm.generate.run("TRIANGULATE", pm.generate.Particles(positions * np.float32(scale)),
+                        settings, reuse=reuse)
+        assert not reuse.pop("reused", False) and "smoother" not in reuse
 
 
 def test_live_off_leaves_the_mesh_alone(pm, clean_scene):
