@@ -98,7 +98,7 @@ SMOOTHER_BYTES_PER_TRIANGLE = 60
 def _smooth_again(mesh, levels, threads, reuse, progress):
     """Loop smoothing through a kept pm.Smoother (refine once, evaluate many: the same mesh as
     pm.smooth, several times cheaper) while the triangles stay those of the frame before (a
-    paused or rigidly moving system); None where a plain smooth is due. The Smoother is made
+    system that moves without changing its triangles); None where a plain smooth is due. The Smoother is made
     when the same triangles come a second time, so changing triangles cost nothing extra
     but a hash. `reuse`: a dict kept by the caller from frame to frame (live mode's cache);
     reuse["reused"] is set when the Smoother gave the mesh; reuse["max_bytes"], if given, is
