@@ -211,7 +211,9 @@ TEST(TopologyReport, AgreesWithTheSerialReferenceForAnyThreadCount) {
   for (int i = 0; i < 400; ++i) soup.triangles.push_back({uint32_t(rng() % 30), uint32_t(rng() % 30), uint32_t(rng() % 30)});
   meshes.push_back({"soup", soup});
   meshes.push_back({"empty", TriMesh{}});
-  for (const auto& [name, m] : meshes) {
+  for (const auto& named : meshes) {
+    const std::string& name = named.first;
+    const TriMesh& m = named.second;  // not a structured binding: clang 14 cannot capture one
     const TopologyReport want = reference::topology_report(m);
     for (int threads : {1, tbb::this_task_arena::max_concurrency()}) {
       tbb::task_arena arena(threads);
