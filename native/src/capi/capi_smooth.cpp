@@ -186,7 +186,9 @@ pm_status pm_smooth(const pm_mesh* mesh, const pm_smooth_options* options, pm_me
   return guarded([&] {
     require(mesh, "mesh");
     require(out_mesh, "out_mesh");
-    SmoothResult r = smooth_mesh(mesh->mesh, smooth_options(mesh, options));
+    // The options first: a bad struct_size is refused before the mesh is touched.
+    const SmoothOptions o = smooth_options(mesh, options);
+    SmoothResult r = smooth_mesh(mesh->mesh, o);
     auto handle = std::make_unique<pm_mesh>();
     handle->mesh = std::move(r.mesh);
     *out_mesh = handle.release();
@@ -197,7 +199,8 @@ pm_status pm_smoother_create(const pm_mesh* mesh, const pm_smooth_options* optio
   return guarded([&] {
     require(mesh, "mesh");
     require(out_smoother, "out_smoother");
-    auto handle = std::make_unique<pm_smoother>(pm_smoother{Smoother(mesh->mesh, smooth_options(mesh, options))});
+    const SmoothOptions o = smooth_options(mesh, options);  // before the mesh is touched
+    auto handle = std::make_unique<pm_smoother>(pm_smoother{Smoother(mesh->mesh, o)});
     *out_smoother = handle.release();
   });
 }
