@@ -11,7 +11,10 @@
    from the evaluated particles (source read, triangulation, mesh write), beside the same
    frame change with live mode off, and revisiting cached frames: with every particle (Viewport
    Budget 0), with the default Viewport Budget (8 000: a bigger system is thinned to at most
-   about that many while scrubbing), and with the viewport's Thin Out set by hand.
+   about that many while scrubbing), and with the viewport's Thin Out set by hand. A cached
+   frame swaps in the mesh kept for it; the last polygonized frame is then written again
+   with and without custom split normals, and swapped in by a bare frame handler, to show
+   where a big frame's time goes (the write, and Blender's own evaluation of a new mesh).
 3. Blender's own particle meshers on the same particles for reference: Points to Volume ->
    Volume to Mesh (geometry nodes) and metaballs (element counts given; metaballs do not
    reach 100k in reasonable time).
@@ -199,7 +202,39 @@ def live_run(method, budget=0, **props):
     cached = [r for n, r in list(pm.live.history)[len(records):] if n == name]
     assert all(r["cached"] for r in cached)
     generated.particlemesh.live = False
+    entries = pm.live.cache_for(generated).entries
+    last_data[method, budget, tuple(sorted(props.items()))] = next(reversed(entries.values()))
     return live_costs, records, cached_costs, cached
+
+
+last_data = {}
+
+
+def time_swaps(data, custom_normals):
+    """Frame changes (beyond the particle step) whose handler only swaps the object's mesh
+    between two meshes already written: what a cached live frame costs Blender itself."""
+    meshes = [pm.blender_mesh.write(bpy.data.meshes.new("swap"), data, custom_normals=custom_normals)
+              for _ in range(2)]
+    obj = bpy.data.objects.new("swap", meshes[0])
+    scene.collection.objects.link(obj)
+    emitter.hide_viewport = True  # no particle step in these frame changes
+    live_objects = [o for o in scene.objects if o.particlemesh.live]
+    for o in live_objects:
+        o.particlemesh.live = False
+
+    def swap(scene_, depsgraph=None):
+        obj.data = meshes[1] if obj.data == meshes[0] else meshes[0]
+
+    bpy.app.handlers.frame_change_post.append(swap)
+    try:
+        costs = step(list(range(2, 2 + max(4, args.repeat + 2))))[1:]  # the first evaluates both
+    finally:
+        bpy.app.handlers.frame_change_post.remove(swap)
+        emitter.hide_viewport = False
+        bpy.data.objects.remove(obj)
+        for m in meshes:
+            bpy.data.meshes.remove(m)
+    return min(costs), statistics.median(costs)
 
 
 if "live" not in args.skip:
@@ -232,6 +267,30 @@ if "live" not in args.skip:
     row("-- write the Blender mesh", lambda lc, rec, cc, cr: ms(med([r["write"] for r in rec])))
     row("frame change, frame already in the cache", lambda lc, rec, cc, cr: ms(med(cc)))
     row("- the add-on's handler (cached)", lambda lc, rec, cc, cr: ms(med([r["seconds"] for r in cr])))
+    row("-- show the cached frame (swap in its kept mesh)",
+        lambda lc, rec, cc, cr: ms(med([r["write"] for r in cr])) + ("" if all(r["swapped"] for r in cr)
+                                                                      else " (not all swapped)"))
+
+    # Where a live write's time goes: the last polygonized frame into a new mesh, with and
+    # without the library's normals as custom split normals.
+    poly = last_data.get(("POLYGONIZE", 0, ()))
+    if poly is not None:
+        out()
+        out(f"### The last polygonized frame ({poly.triangle_count} triangles, {poly.vertex_count} "
+            f"vertices) into a new Blender mesh (best / median of {args.repeat})")
+        out()
+        out("| path | best | median |")
+        out("|---|---|---|")
+        best, median = time_write(poly, custom_normals=False)
+        out(f"| geometry only (Blender's own smooth normals) | {best:.2f} s | {median:.2f} s |")
+        best, median = time_write(poly, custom_normals=True)
+        out(f"| + the field's gradient normals as custom split normals (the live default) "
+            f"| {best:.2f} s | {median:.2f} s |")
+        for custom in (False, True):
+            best, median = time_swaps(poly, custom)
+            out(f"| a frame change that only swaps in a kept mesh of it ({'custom' if custom else 'own'} "
+                f"normals; Blender evaluates the object again) | {best:.2f} s | {median:.2f} s |")
+
 
 
 # ---- 3. Blender's own volume meshers on the same particles ------------------------------------

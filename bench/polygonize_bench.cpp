@@ -22,7 +22,8 @@
 // T = 0.6 x lattice_field(4r, 2r)), and OpenVDB with spheres of radius 2r, voxel r/2.
 //
 // Each measurement runs in a child process forked from the parent that generated the
-// particles: time = wall clock of the call (best of R), memory = the child's peak resident
+// particles: time = wall clock of the call (best of R), cpu = that run's CPU time (all
+// threads: on a shared machine the steadier figure), memory = the child's peak resident
 // set (getrusage) minus its resident set just before the call (input paged in), so each
 // pipeline's peak is measured alone.
 #include <sys/resource.h>
@@ -69,7 +70,14 @@ double rss_mib() {
   return double(resident) * double(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
 }
 
-// Run `body` in a forked child: returns what it measured (time and peak memory of the call).
+double cpu_seconds() {
+  rusage ru{};
+  getrusage(RUSAGE_SELF, &ru);
+  return double(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) + 1e-6 * double(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
+}
+
+// Run `body` in a forked child: returns what it measured (time and peak memory of the call;
+// its CPU time, all threads, unless the body measured that itself).
 Measure in_child(int threads, const std::function<void(Measure&)>& body) {
   int fd[2];
   if (pipe(fd) != 0) return {};
@@ -82,7 +90,9 @@ Measure in_child(int threads, const std::function<void(Measure&)>& body) {
       if (threads > 0)
         limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
       const double before = rss_mib();
+      const double cpu0 = cpu_seconds();
       body(m);
+      if (m.cpu_seconds == 0) m.cpu_seconds = cpu_seconds() - cpu0;
       rusage ru{};
       getrusage(RUSAGE_SELF, &ru);
       m.peak_mib = double(ru.ru_maxrss) / 1024.0 - before;
@@ -142,8 +152,8 @@ void row(const char* input, size_t n, const char* method, const Measure& m) {
     std::printf("| %-28s | %9zu | %-34s | failed |\n", input, n, method);
     return;
   }
-  std::printf("| %-28s | %9zu | %-34s | %8.3f | %8.1f | %9llu | %9llu | %-6s |\n", input, n, method, m.seconds,
-              m.peak_mib, (unsigned long long)m.vertices, (unsigned long long)m.triangles,
+  std::printf("| %-28s | %9zu | %-34s | %8.3f | %8.3f | %8.1f | %9llu | %9llu | %-6s |\n", input, n, method, m.seconds,
+              m.cpu_seconds, m.peak_mib, (unsigned long long)m.vertices, (unsigned long long)m.triangles,
               m.closed < 0 ? "-" : (m.closed ? "yes" : "NO"));
   std::fflush(stdout);
 }
@@ -156,11 +166,6 @@ std::vector<size_t> parse_sizes(const std::string& s) {
   return out;
 }
 
-double cpu_seconds() {
-  rusage ru{};
-  getrusage(RUSAGE_SELF, &ru);
-  return double(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) + 1e-6 * double(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
-}
 
 // Spherical and anisotropic kernels at the library's defaults on the same particles, measured
 // interleaved (iso, aniso, iso, aniso, ...) so that a change in the machine's load hits both.
@@ -207,8 +212,8 @@ int anisotropic_bench(const std::vector<size_t>& sizes, const std::vector<std::s
   std::printf("polygonize_bench --anisotropic: %ld hardware threads, using %s, best of %d\n",
               sysconf(_SC_NPROCESSORS_ONLN), threads > 0 ? (std::to_string(threads) + " threads").c_str() : "all",
               reps);
-  std::printf("| %-28s | %9s | %-34s | %8s | %8s | %9s | %9s | %-6s |\n", "input", "particles", "method", "time s",
-              "peak MiB", "vertices", "triangles", "closed");
+  std::printf("| %-28s | %9s | %-34s | %8s | %8s | %8s | %9s | %9s | %-6s |\n", "input", "particles", "method", "time s",
+              "cpu s", "peak MiB", "vertices", "triangles", "closed");
   std::fflush(stdout);  // before the children fork: they would print the buffer again
   for (const std::string& f : frames) {
     PointCloud c;
@@ -271,11 +276,12 @@ int main(int argc, char** argv) {
   std::printf("polygonize_bench: %ld hardware threads, using %s, best of %d\n", sysconf(_SC_NPROCESSORS_ONLN),
               threads > 0 ? (std::to_string(threads) + " threads").c_str() : "all", reps);
   if (!peer::openvdb_available()) std::printf("(built without OpenVDB: peer column absent)\n");
-  std::printf("| %-28s | %9s | %-34s | %8s | %8s | %9s | %9s | %-6s |\n", "input", "particles", "method", "time s",
-              "peak MiB", "vertices", "triangles", "closed");
-  std::printf("|%s|%s|%s|%s|%s|%s|%s|%s|\n", std::string(30, '-').c_str(), std::string(11, '-').c_str(),
+  std::printf("| %-28s | %9s | %-34s | %8s | %8s | %8s | %9s | %9s | %-6s |\n", "input", "particles", "method", "time s",
+              "cpu s", "peak MiB", "vertices", "triangles", "closed");
+  std::printf("|%s|%s|%s|%s|%s|%s|%s|%s|%s|\n", std::string(30, '-').c_str(), std::string(11, '-').c_str(),
               std::string(36, '-').c_str(), std::string(10, '-').c_str(), std::string(10, '-').c_str(),
-              std::string(11, '-').c_str(), std::string(11, '-').c_str(), std::string(8, '-').c_str());
+              std::string(10, '-').c_str(), std::string(11, '-').c_str(), std::string(11, '-').c_str(),
+              std::string(8, '-').c_str());
 
   const double s = 0.02;
   for (size_t n : sizes) {
@@ -303,8 +309,9 @@ int main(int argc, char** argv) {
       });
       row("dam-break block", c.size(), "OpenVDB ParticlesToLevelSet+VolToMesh", peer);
       if (ours.ok && peer.ok)
-        std::printf("|   -> particlemesh is %.1fx faster, %.1fx the peak memory\n", peer.seconds / ours.seconds,
-                    ours.peak_mib / std::max(peer.peak_mib, 1e-9));
+        std::printf("|   -> particlemesh / OpenVDB: time %.3f (%.1fx faster), CPU %.3f, peak memory %.2f\n",
+                    ours.seconds / peer.seconds, peer.seconds / ours.seconds,
+                    ours.cpu_seconds / std::max(peer.cpu_seconds, 1e-9), ours.peak_mib / std::max(peer.peak_mib, 1e-9));
     }
   }
 

@@ -21,6 +21,15 @@
 // "agree" is the share of pixels on which both say surface / background alike. "cpu s" is
 // the CPU time of particlemesh's render (all threads, best of reps) and "pov cpu" that of the
 // whole povray process (parsing included): on a shared machine, compare those.
+//
+// From scratch (built with Debian's libembree-dev and libopenvdb-dev; without them this table
+// is left out with a message at configure time): a new frame as a renderer meets it, the
+// field (the particles' grid), the caster's hierarchy and the image, timed together, beside
+// OpenVDB's ParticlesToLevelSet (spheres of radius s, voxels of s/2) + volumeToMesh, an Embree
+// BVH of that mesh and one primary ray per pixel through the same camera, interleaved in the
+// same run (best of reps each). "cpu r" is the ratio of the CPU times (all threads), the fair
+// one on a loaded machine; "agree" the share of pixels both call surface / background alike
+// (the peer's surface is a union of spheres, not the blob: a few silhouette pixels differ).
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -43,6 +52,8 @@
 
 #include "particlemesh/io/png.h"
 #include "particlemesh/volume/render.h"
+#include "peer_embree.h"
+#include "peer_openvdb.h"
 
 using namespace particlemesh;
 namespace fs = std::filesystem;
@@ -185,8 +196,16 @@ int main(int argc, char** argv) {
   }
   const double s = 0.02;
   const double rays = double(width) * double(height);
-  std::printf("%d x %d pixels, %d threads, best of %d; Poly4 kernel = POV-Ray blob density, R = 2s\n\n", width,
+  const bool embree = peer::embree_available() && peer::openvdb_available();
+  std::printf("%d x %d pixels, %d threads, best of %d; Poly4 kernel = POV-Ray blob density, R = 2s\n", width,
               height, threads, reps);
+  double load[3] = {0, 0, 0};
+  getloadavg(load, 3);
+  std::printf("load average %.2f at start\n\n", load[0]);
+  if (embree)
+    std::printf("%9s | %8s %8s | %8s %8s %8s %8s %8s | %6s %6s | %5s\n", "particles", "pm s", "pm cpu", "vdb+emb",
+                "peer cpu", "vdb mesh", "bvh", "rays", "ratio", "cpu r", "agree");
+  std::vector<std::string> from_scratch_rows;
   std::printf("%9s | %8s %9s %8s %12s %12s %6s | %9s %9s %8s %12s %12s | %6s\n", "particles", "build s",
               "render s", "cpu s", "rays/s poly4", "rays/s wyvil", "hit %", "pov parse", "pov trace", "pov cpu",
               "rays/s trace", "rays/s total", "agree");
@@ -195,6 +214,53 @@ int main(int argc, char** argv) {
     FieldParams p;
     p.kernel = Kernel::Poly4;
     p.radius = 2 * s;
+    // From scratch, as a renderer of a new frame runs it: the field (grid of the particles),
+    // the ray hierarchy and the image; the OpenVDB + Embree peer interleaved, the same camera.
+    if (embree) {
+      double best_pm = 1e300, pm_cpu = 1e300, best_peer = 1e300, peer_cpu = 1e300, vdb_s = 0, bvh_s = 0, rays_s = 0;
+      double agree = -1;
+      for (int r = 0; r < reps; ++r) {
+        const auto t0 = Clock::now();
+        const double c0 = cpu_seconds(RUSAGE_SELF);
+        const RayCaster fresh(ParticleField(c, p, threads));
+        RenderOptions fo;
+        fo.width = width;
+        fo.height = height;
+        fo.threads = threads;
+        const RenderResult img = render(fresh, fo);
+        const double pm = std::chrono::duration<double>(Clock::now() - t0).count();
+        pm_cpu = std::min(pm_cpu, cpu_seconds(RUSAGE_SELF) - c0);
+        best_pm = std::min(best_pm, pm);
+        const Camera& cam = img.camera;
+        const Vec3 fwd = normalized(cam.target - cam.eye), right = normalized(cross(fwd, cam.up)),
+                   up = cross(right, fwd);
+        const double tv = std::tan(0.5 * cam.fov_degrees * std::numbers::pi / 180.0);
+        const double pc0 = cpu_seconds(RUSAGE_SELF);
+        const peer::VdbMesh mesh = peer::openvdb_particles_mesh(c.positions, s, s / 2);
+        const peer::EmbreeResult e = peer::embree_primary_rays(mesh.points, mesh.triangles, cam.eye, fwd, right, up,
+                                                               tv, tv * width / height, width, height, threads);
+        peer_cpu = std::min(peer_cpu, cpu_seconds(RUSAGE_SELF) - pc0);
+        const double total = mesh.seconds + e.build_seconds + e.trace_seconds;
+        if (total < best_peer) {
+          best_peer = total;
+          vdb_s = mesh.seconds;
+          bvh_s = e.build_seconds;
+          rays_s = e.trace_seconds;
+        }
+        size_t same = 0;
+        for (int y = 0; y < height; ++y)
+          for (int x = 0; x < width; ++x)
+            same += (!is_background(img.image.pixel(x, y))) == (e.hit[size_t(y) * size_t(width) + size_t(x)] != 0);
+        agree = 100.0 * double(same) / rays;
+      }
+      char line[256];
+      std::snprintf(line, sizeof line, "%9zu | %8.3f %8.3f | %8.3f %8.3f %8.3f %8.3f %8.3f | %6.2f %6.2f | %4.1f%%",
+                    c.size(), best_pm, pm_cpu, best_peer, peer_cpu, vdb_s, bvh_s, rays_s, best_pm / best_peer,
+                    pm_cpu / peer_cpu, agree);
+      from_scratch_rows.push_back(line);
+      std::printf("%s\n", line);
+      std::fflush(stdout);
+    }
     const auto tb = Clock::now();
     const RayCaster caster(ParticleField(c, p, threads));
     const double build = std::chrono::duration<double>(Clock::now() - tb).count();
@@ -256,6 +322,14 @@ int main(int argc, char** argv) {
                 rays / pr.wall, agree);
     if (keep.empty()) fs::remove_all(dir);
     std::fflush(stdout);
+  }
+  if (!from_scratch_rows.empty()) {
+    getloadavg(load, 3);
+    std::printf("\nFrom scratch (field + hierarchy + image) beside OpenVDB (spheres of radius s, voxel s/2) + "
+                "Embree BVH + primary rays; load %.2f at the end:\n", load[0]);
+    std::printf("%9s | %8s %8s | %8s %8s %8s %8s %8s | %6s %6s | %5s\n", "particles", "pm s", "pm cpu", "vdb+emb",
+                "peer cpu", "vdb mesh", "bvh", "rays", "ratio", "cpu r", "agree");
+    for (const auto& r : from_scratch_rows) std::printf("%s\n", r.c_str());
   }
   return 0;
 }

@@ -25,6 +25,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "particlemesh/smooth/smoother.h"
 #include "particlemesh/smooth/subdivide.h"
 
 using namespace particlemesh;
@@ -125,6 +126,39 @@ void Loop_particlemesh_limit(benchmark::State& state) {
   counters(state, int64_t(m.triangles.size()), o.levels);
 }
 
+// Refine once, evaluate many (smooth/smoother.h): the Smoother made outside the timing, then
+// evaluate() of moved positions (each iteration a new frame) -- the same mesh smooth_mesh
+// gives, for the default limit=true. The row to set against Loop_particlemesh_limit.
+void Loop_Smoother_evaluate(benchmark::State& state) {
+  const TriMesh& m = mesh_for(state.range(0), state.range(2) != 0);
+  SmoothOptions o;
+  o.levels = int(state.range(1));
+  o.limit = true;
+  o.threads = int(state.range(3));
+  const Smoother smoother(m, o);
+  std::vector<Vec3> p = m.positions;
+  double t = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    t += 0.1;
+    for (size_t i = 0; i < p.size(); ++i) p[i] = m.positions[i] * (1.0 + 0.01 * std::sin(t + double(i)));
+    state.ResumeTiming();
+    benchmark::DoNotOptimize(smoother.evaluate(p));
+  }
+  counters(state, int64_t(m.triangles.size()), o.levels);
+}
+
+// Making the Smoother: the checks, OpenSubdiv's refinement and the stencils' recording.
+void Loop_Smoother_make(benchmark::State& state) {
+  const TriMesh& m = mesh_for(state.range(0), state.range(2) != 0);
+  SmoothOptions o;
+  o.levels = int(state.range(1));
+  o.limit = true;
+  o.threads = int(state.range(3));
+  for (auto _ : state) benchmark::DoNotOptimize(Smoother(m, o));
+  counters(state, int64_t(m.triangles.size()), o.levels);
+}
+
 void Loop_OpenMesh_LoopT(benchmark::State& state) {
   const TriMesh& m = mesh_for(state.range(0), state.range(2) != 0);
   const int levels = int(state.range(1));
@@ -203,5 +237,7 @@ BENCHMARK(Loop_OpenMesh_LoopT)->Apply(openmesh_args);
 BENCHMARK(Loop_OpenMesh_LoopT_only)->Apply(openmesh_args);
 BENCHMARK(Loop_particlemesh)->Name("Loop_particlemesh_1thread")->Apply(one_thread_args);
 BENCHMARK(Butterfly_particlemesh)->Apply(butterfly_args);
+BENCHMARK(Loop_Smoother_evaluate)->Apply(loop_args);
+BENCHMARK(Loop_Smoother_make)->Apply(loop_args);
 
 BENCHMARK_MAIN();

@@ -24,6 +24,7 @@ PACKAGES=(
   libopenvdb-dev  # the polygonize benchmark's peer (bench/ only)
   python3-distributed python3-scipy  # particlemesh.distributed (Dask; SciPy: connected components) and its tests
   libcgal-dev     # the scan benchmark's advancing-front peer (bench/ only)
+  libembree-dev  # the ray-casting benchmark's peer, with OpenVDB's mesh (bench/ only)
 )
 
 missing=()

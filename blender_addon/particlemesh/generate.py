@@ -11,6 +11,7 @@ Settings keys (the operators' and the generated objects' property names):
   both:        smooth ('NONE' | 'LOOP' | 'BUTTERFLY'), smooth_levels, threads
 """
 
+import hashlib
 import math
 
 import numpy as np
@@ -74,16 +75,60 @@ def _attributes(particles):
     return attrs
 
 
-def _smooth(mesh, settings, progress):
+def _smooth(mesh, settings, progress, reuse=None):
     scheme = settings.get("smooth", "NONE")
     levels = int(settings.get("smooth_levels", 1))
     if scheme == "NONE" or levels <= 0:
         return mesh
-    out = pm.smooth(mesh, scheme=scheme, levels=levels, threads=int(settings.get("threads", 0)),
-                    progress=progress)
+    threads = int(settings.get("threads", 0))
+    out = None
+    if reuse is not None and scheme == "LOOP":
+        out = _smooth_again(mesh, levels, threads, reuse, progress)
+    if out is None:
+        out = pm.smooth(mesh, scheme=scheme, levels=levels, threads=threads, progress=progress)
     out.stats = dict(mesh.stats, smooth_levels=levels)
     out.stats.pop("normals_are_face_weighted", None)  # Loop / butterfly normals are their own
     return out
+
+
+#: What a pm.Smoother keeps per output triangle (OpenSubdiv's refinement and its weights).
+SMOOTHER_BYTES_PER_TRIANGLE = 60
+
+
+def _smooth_again(mesh, levels, threads, reuse, progress):
+    """Loop smoothing through a kept pm.Smoother (refine once, evaluate many: the same mesh as
+    pm.smooth, several times cheaper) while the triangles stay those of the frame before (a
+    system that moves without changing its triangles); None where a plain smooth is due. The Smoother is made
+    when the same triangles come a second time, so changing triangles cost nothing extra
+    but a hash. `reuse`: a dict kept by the caller from frame to frame (live mode's cache);
+    reuse["reused"] is set when the Smoother gave the mesh; reuse["max_bytes"], if given, is
+    the memory a Smoother may take (about SMOOTHER_BYTES_PER_TRIANGLE per output triangle)."""
+    if SMOOTHER_BYTES_PER_TRIANGLE * len(mesh.triangles) * 4 ** levels > reuse.get("max_bytes", math.inf):
+        release(reuse)
+        return None
+    key = (levels, threads)
+    smoother = reuse.get("smoother")
+    if smoother is not None and reuse.get("smoother_key") == key and smoother.matches(mesh):
+        reuse["reused"] = True
+        return smoother.evaluate(mesh)
+    triangles = np.ascontiguousarray(mesh.triangles)
+    seen = (key, len(mesh.vertices), triangles.dtype.str,
+            hashlib.blake2b(triangles.tobytes(), digest_size=16).digest())
+    if reuse.get("last") != seen:
+        reuse["last"] = seen
+        return None
+    release(reuse)
+    smoother = pm.Smoother(mesh, "loop", levels, threads=threads, progress=progress)
+    reuse.update(smoother=smoother, smoother_key=key, reused=True)
+    return smoother.evaluate(mesh)
+
+
+def release(reuse):
+    """Free what _smooth_again keeps in `reuse` (its Smoother)."""
+    smoother = reuse.pop("smoother", None)
+    reuse.pop("smoother_key", None)
+    if smoother is not None:
+        smoother.close()
 
 
 #: Particles sampled for the spacing that Thin Out is measured in.
@@ -138,7 +183,7 @@ def budget_thin(count, budget):
     return math.sqrt(count / budget) if 0 < budget < count else 1.0
 
 
-def triangulate(particles, settings, progress=None):
+def triangulate(particles, settings, progress=None, reuse=None):
     everything = len(particles.positions)
     particles, thin_distance, thin_factor = thin(particles, settings)
     auto = settings.get("auto_spacing", True) or thin_distance is not None
@@ -178,7 +223,7 @@ def triangulate(particles, settings, progress=None):
     if thin_distance is not None:
         mesh.stats.update(thinned_from=everything, thin_distance=thin_distance,
                           thin_factor=thin_factor)
-    return _smooth(mesh, settings, progress)
+    return _smooth(mesh, settings, progress, reuse)
 
 
 def uneven_spacing_warning(stats):
@@ -236,7 +281,7 @@ def polygonize_threshold(settings, from_sizes):
     return 0.5 * pm.lattice_field(settings.get("kernel", "WYVILL"), factor, 2.0)
 
 
-def polygonize(particles, settings, progress=None):
+def polygonize(particles, settings, progress=None, reuse=None):
     radius, radii = polygonize_radii(particles, settings)
     from_sizes = settings.get("radius_mode") == "PARTICLE_SIZE" and (radius > 0 or radii is not None)
     # 0 is the library's "automatic" for radius, threshold and cell.
@@ -250,14 +295,17 @@ def polygonize(particles, settings, progress=None):
     if mesh.triangle_count == 0:
         raise EmptyResult("no surface: the summed field stays below the threshold everywhere "
                           "(raise the radius or lower the threshold)")
-    return _smooth(mesh, settings, progress)
+    return _smooth(mesh, settings, progress, reuse)
 
 
 METHODS = {"TRIANGULATE": triangulate, "POLYGONIZE": polygonize}
 
 
-def run(method, particles, settings, progress=None):
-    mesh = METHODS[method](particles, settings, progress=progress)
+def run(method, particles, settings, progress=None, reuse=None):
+    """The mesh of `particles` by `method` with `settings`. `reuse`: a dict the caller keeps
+    from one call to the next on the same object (live mode), where Loop smoothing keeps its
+    refinement while the triangles stay the same; the result is the same without it."""
+    mesh = METHODS[method](particles, settings, progress=progress, reuse=reuse)
     # Blender stores float32: convert once here (it also halves the live cache's memory).
     mesh.vertices = mesh.vertices.astype(np.float32)
     if mesh.normals is not None:

@@ -7,6 +7,7 @@ animation render. The depsgraph handed to the handler says whether this is a ren
 (depsgraph.mode == 'RENDER'), which picks the object's render settings."""
 
 import time
+import uuid
 from collections import OrderedDict, deque
 
 import bpy
@@ -18,10 +19,15 @@ from . import particlemesh as pm
 
 class _Cache:
     """Meshes already made, per object: (frame, mode, settings, particle digest) -> Mesh,
-    least recently used first out, bounded by the preference's megabytes."""
+    least recently used first out, bounded by the preference's megabytes. Each entry may
+    also keep the Blender mesh datablock written from it (by name, with a tag: Python
+    references to IDs do not survive undo), so that showing a cached frame again only swaps
+    the object's mesh instead of writing a new one; such an entry counts twice its bytes."""
 
     def __init__(self):
         self.entries = OrderedDict()
+        self.meshes = {}  # key -> (mesh name, tag)
+        self.reuse = {}  # what generate.run keeps from frame to frame (a Smoother)
         self.bytes = 0
         self.hits = 0
         self.misses = 0
@@ -38,18 +44,89 @@ class _Cache:
     def put(self, key, data, limit):
         if limit <= 0:
             return
-        old = self.entries.pop(key, None)
-        if old is not None:
-            self.bytes -= old.nbytes
+        self._pop(key)
         self.entries[key] = data
         self.bytes += data.nbytes
+        self._trim(limit)
+
+    def put_mesh(self, key, mesh, tag, limit):
+        """Keep `mesh` (written from the entry `key`) as that entry's Blender mesh."""
+        data = self.entries.get(key)
+        if data is None or key in self.meshes:
+            return False
+        self.meshes[key] = (mesh.name, tag)
+        self.bytes += data.nbytes
+        self._trim(limit, keep=key)
+        if self.bytes > limit:  # too big beside its data on its own: not kept
+            self.meshes.pop(key)
+            self.bytes -= data.nbytes
+            return False
+        return True
+
+    def mesh(self, key):
+        """The Blender mesh kept for entry `key`, if it still exists and is still the one
+        written for it (undo may have removed or replaced it)."""
+        name, tag = self.meshes.get(key, (None, None))
+        mesh = bpy.data.meshes.get(name) if name else None
+        if mesh is None or mesh.get(FRAME_TAG) != tag:
+            if name is not None:
+                self.meshes.pop(key)
+                self.bytes -= self.entries[key].nbytes
+            return None
+        return mesh
+
+    def holds(self, mesh):
+        tag = mesh.get(FRAME_TAG)
+        return tag is not None and any(t == tag for _, t in self.meshes.values())
+
+    def _pop(self, key):
+        data = self.entries.pop(key, None)
+        if data is None:
+            return
+        self.bytes -= data.nbytes
+        kept = self.meshes.pop(key, None)
+        if kept is not None:
+            self.bytes -= data.nbytes
+            _remove_unused(kept[0], kept[1])
+
+    def _trim(self, limit, keep=None):
+        """Drop the least recently used entries until under `limit`, but `keep`."""
         while self.bytes > limit and self.entries:
-            _, dropped = self.entries.popitem(last=False)
-            self.bytes -= dropped.nbytes
+            key = next(iter(self.entries))
+            if key == keep:
+                if len(self.entries) == 1:
+                    return
+                self.entries.move_to_end(key)
+                continue
+            self._pop(key)
 
     def clear(self):
+        generate.release(self.reuse)
+        for name, tag in self.meshes.values():
+            _remove_unused(name, tag)
         self.entries.clear()
+        self.meshes.clear()
         self.bytes = 0
+
+
+#: The custom property that marks a mesh datablock as a live frame kept by the cache (its
+#: value says which entry wrote it).
+FRAME_TAG = "particlemesh_live_frame"
+_session = uuid.uuid4().hex[:12]
+_tags = 0
+
+
+def _new_tag():
+    global _tags
+    _tags += 1
+    return f"{_session}.{_tags}"
+
+
+def _remove_unused(name, tag):
+    """Delete a kept frame's mesh once nothing uses it (the one on screen stays)."""
+    mesh = bpy.data.meshes.get(name)
+    if mesh is not None and mesh.get(FRAME_TAG) == tag and mesh.users == 0:
+        bpy.data.meshes.remove(mesh)
 
 
 _caches = {}
@@ -67,7 +144,15 @@ def cache_for(obj):
     return _caches.setdefault(obj.name_full, _Cache())
 
 
-def clear_cache(obj=None):
+def clear_cache(obj=None, remove_meshes=True):
+    """Forget the cached frames of `obj` (of every object when None) and delete their kept
+    meshes that nothing uses (not after loading a file: those names belong to the old one)."""
+    caches = list(_caches.values()) if obj is None else [_caches.get(obj.name_full)]
+    for cache in caches:
+        if cache is not None:
+            if not remove_meshes:
+                cache.meshes.clear()
+            cache.clear()
     if obj is None:
         _caches.clear()
     else:
@@ -93,11 +178,13 @@ def settings_for(obj, mode):
     return properties.snapshot(group, state.method)
 
 
-def compute(obj, depsgraph, mode=None, use_cache=True, progress=None, timings=None, budget=0):
+def compute(obj, depsgraph, mode=None, use_cache=True, progress=None, timings=None, budget=0,
+            keys=None):
     """Mesh data of generated object `obj` for the depsgraph's frame (from the cache when it
     was made before). Returns (particlemesh.Mesh, settings, cached). `timings` (a dict), if given,
     receives the seconds spent reading the source and meshing. `budget` > 0: triangulate at
-    most about that many particles (live mode's Viewport Budget)."""
+    most about that many particles (live mode's Viewport Budget). `keys` (a list), if given,
+    receives the frame's cache key."""
     state = obj.particlemesh
     mode = mode or depsgraph.mode
     source = state.source
@@ -116,6 +203,8 @@ def compute(obj, depsgraph, mode=None, use_cache=True, progress=None, timings=No
     # frame_current_final includes the subframe (motion blur steps evaluate between frames).
     key = (depsgraph.scene.frame_current_final, mode, state.method, state.source_kind,
            properties_key(settings), particles.digest())
+    if keys is not None:
+        keys.append(key)
     t1 = time.perf_counter()
     if timings is not None:
         timings["source"] = t1 - t0
@@ -125,9 +214,13 @@ def compute(obj, depsgraph, mode=None, use_cache=True, progress=None, timings=No
         data = cache.get(key)
         if data is not None:
             return data, settings, True
-    data = generate.run(state.method, particles, settings, progress=progress)
+    if use_cache:
+        cache.reuse["max_bytes"] = _cache_limit()  # a kept Smoother fits in the cache's memory
+    data = generate.run(state.method, particles, settings, progress=progress,
+                        reuse=cache.reuse if use_cache else None)
     if timings is not None:
         timings["mesh"] = time.perf_counter() - t1
+        timings["smoother_reused"] = cache.reuse.pop("reused", False) if use_cache else False
     if use_cache:
         cache.put(key, data, _cache_limit())
     return data, settings, False
@@ -138,8 +231,60 @@ def properties_key(settings):
 
 
 def apply(obj, data, settings):
-    """Write mesh data into the generated object's own mesh, in place (materials stay)."""
-    blender_mesh.write(obj.data, data, custom_normals=settings.get("custom_normals", True))
+    """Write mesh data into the generated object's own mesh, in place (materials stay). A
+    mesh the cache kept for a frame stops being that frame's."""
+    mesh = obj.data
+    if FRAME_TAG in mesh:
+        del mesh[FRAME_TAG]
+    blender_mesh.write(mesh, data, custom_normals=settings.get("custom_normals", True))
+
+
+def _show(obj, mesh, cache):
+    """Make `mesh` the object's mesh, with the materials of the one it replaces; a kept frame
+    mesh that the cache no longer holds goes once nothing uses it."""
+    old = obj.data
+    if old == mesh:
+        return
+    if list(mesh.materials) != list(old.materials):
+        mesh.materials.clear()
+        for material in old.materials:
+            mesh.materials.append(material)
+    obj.data = mesh
+    tag = old.get(FRAME_TAG)
+    if tag is not None and not cache.holds(old):
+        _remove_unused(old.name, tag)
+
+
+def show_frame(obj, data, settings, key, cached, keep=True):
+    """Put the frame `key` (mesh data `data`) on the object. With the cache on, each frame is
+    written once into a mesh datablock of its own that the cache keeps, and a frame seen
+    again swaps that mesh in (no write: a 1.5M-triangle mesh with custom normals takes about
+    a second to write). With the cache off, the frame too big for it or `keep` false
+    (renders: frames are rarely seen twice), the object's mesh is rewritten in place.
+    Returns whether a kept mesh was swapped in."""
+    cache = cache_for(obj)
+    if cached:
+        mesh = cache.mesh(key)
+        if mesh is not None:
+            _show(obj, mesh, cache)
+            return True
+    limit = _cache_limit()
+    if not keep or key not in cache.entries or 2 * data.nbytes > limit:
+        apply(obj, data, settings)
+        return False
+    mesh = bpy.data.meshes.new(f"{obj.name}.pm_live")
+    tag = _new_tag()
+    mesh[FRAME_TAG] = tag
+    for material in obj.data.materials:
+        mesh.materials.append(material)
+    blender_mesh.write(mesh, data, custom_normals=settings.get("custom_normals", True))
+    if not cache.put_mesh(key, mesh, tag, limit):
+        # Too big to keep beside its data: write the object's own mesh instead.
+        bpy.data.meshes.remove(mesh)
+        apply(obj, data, settings)
+        return False
+    _show(obj, mesh, cache)
+    return False
 
 
 def update_object(obj, depsgraph, mode=None):
@@ -150,9 +295,12 @@ def update_object(obj, depsgraph, mode=None):
     record = {"frame": depsgraph.scene.frame_current, "mode": mode}
     budget = obj.particlemesh.viewport_budget if mode != "RENDER" else 0
     try:
-        data, settings, cached = compute(obj, depsgraph, mode, timings=record, budget=budget)
+        keys = []
+        data, settings, cached = compute(obj, depsgraph, mode, timings=record, budget=budget,
+                                         keys=keys)
         t = time.perf_counter()
-        apply(obj, data, settings)
+        record["swapped"] = show_frame(obj, data, settings, keys[0], cached,
+                                       keep=(mode != "RENDER"))
         record["write"] = time.perf_counter() - t
         record.update(cached=cached, vertices=data.vertex_count, triangles=data.triangle_count)
         if "thin_factor" in data.stats:
@@ -194,7 +342,7 @@ def on_frame_change_post(scene, depsgraph=None):
     _in_handler = True
     try:
         for name in [n for n in _caches if n not in bpy.data.objects]:
-            del _caches[name]  # renamed or deleted objects
+            _caches.pop(name).clear()  # renamed or deleted objects
         if depsgraph is None:
             depsgraph = bpy.context.evaluated_depsgraph_get()
         for obj in generated_objects(scene):
@@ -209,7 +357,7 @@ def on_frame_change_post(scene, depsgraph=None):
 
 @persistent
 def on_load_post(*_args):
-    clear_cache()
+    clear_cache(remove_meshes=False)
     last_update.clear()
     history.clear()
     suspended.clear()

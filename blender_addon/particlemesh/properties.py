@@ -251,7 +251,7 @@ class PARTICLEMESH_AP_preferences(bpy.types.AddonPreferences):
     cache_megabytes: IntProperty(
         name="Live Cache (MB)", default=512, min=0, soft_max=8192,
         description="Memory for meshes of frames already generated in live mode, per session "
-                    "(0 = no cache)")
+                    "(0 = no cache). A frame kept as a mesh to swap in again counts twice")
 
     def draw(self, context):
         from . import generate

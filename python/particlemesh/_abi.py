@@ -33,6 +33,7 @@ pm_cloud_p = c_void_p
 pm_mesh_p = c_void_p
 pm_field_p = c_void_p
 pm_ray_hits_p = c_void_p
+pm_smoother_p = c_void_p
 
 pm_progress_fn = CFUNCTYPE(c_int, c_void_p, c_char_p, c_double)
 
@@ -293,6 +294,11 @@ FUNCTIONS = {
     # smoothing
     "pm_smooth_options_init": (None, [POINTER(pm_smooth_options)]),
     "pm_smooth": (pm_status, [pm_mesh_p, POINTER(pm_smooth_options), _meshpp]),
+    "pm_smoother_create": (pm_status, [pm_mesh_p, POINTER(pm_smooth_options),
+                                       POINTER(pm_smoother_p)]),
+    "pm_smoother_matches": (pm_status, [pm_smoother_p, pm_mesh_p, _i32p]),
+    "pm_smoother_evaluate": (pm_status, [pm_smoother_p, pm_mesh_p, _meshpp]),
+    "pm_smoother_destroy": (None, [pm_smoother_p]),
     # volume particles: polygonize
     "pm_polygonize_options_init": (None, [POINTER(pm_polygonize_options)]),
     "pm_polygonize": (pm_status, [pm_cloud_p, _f64p, _f64p, POINTER(pm_polygonize_options),

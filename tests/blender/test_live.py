@@ -44,6 +44,131 @@ def test_live_mesh_follows_the_particles(pm, clean_scene):
     assert entries >= 4 and size > 0
 
 
+def test_cached_frames_swap_in_their_kept_mesh(pm, clean_scene):
+    """Each live frame is written once into a mesh of its own that the cache keeps; a frame
+    seen again swaps that mesh in (same geometry, the object's materials), clearing the cache
+    deletes the kept meshes not on screen, and with the cache off the object's own mesh is
+    rewritten in place."""
+    em = emitter(speed=1.0)
+    obj = live_object(pm)
+    material = bpy.data.materials.new("Live")
+    obj.data.materials.append(material)
+    shown = {}
+    for frame in (2, 3, 4):
+        clean_scene.frame_set(frame)
+        record = pm.live.last_update[obj.name]
+        assert not record["cached"] and not record["swapped"], record
+        assert pm.live.FRAME_TAG in obj.data and list(obj.data.materials) == [material]
+        shown[frame] = obj.data.name
+    assert len(set(shown.values())) == 3
+    for frame in (3, 2, 4, 3):
+        clean_scene.frame_set(frame)
+        record = pm.live.last_update[obj.name]
+        assert record["cached"] and record["swapped"], record
+        assert obj.data.name == shown[frame]
+        assert list(obj.data.materials) == [material]
+        positions, _ = living_particles(em)
+        co, tris = mesh_arrays(obj.data)
+        np.testing.assert_allclose(co, positions, atol=1e-5)
+        assert not obj.data.validate(verbose=False)
+    # A material added later follows to the frames swapped in.
+    other = bpy.data.materials.new("Other")
+    obj.data.materials.append(other)
+    clean_scene.frame_set(2)
+    assert list(obj.data.materials) == [material, other]
+    # Clearing the cache deletes the kept meshes but the one on screen.
+    assert bpy.ops.particlemesh.clear_cache() == {"FINISHED"}
+    assert [n for n in shown.values() if n in bpy.data.meshes] == [shown[2]]
+    # With the cache off the object's mesh is rewritten in place.
+    prefs = bpy.context.preferences.addons["particlemesh"].preferences
+    old = prefs.cache_megabytes
+    try:
+        prefs.cache_megabytes = 0
+        mesh = obj.data
+        clean_scene.frame_set(6)
+        assert obj.data == mesh and pm.live.FRAME_TAG not in mesh
+        positions, _ = living_particles(em)
+        np.testing.assert_allclose(mesh_arrays(obj.data)[0], positions, atol=1e-5)
+    finally:
+        prefs.cache_megabytes = old
+
+
+def test_kept_meshes_go_with_their_frames(pm, clean_scene, monkeypatch):
+    """A cache too small for every frame drops the oldest and deletes their meshes (no
+    datablocks pile up); the mesh on screen is never deleted."""
+    em = emitter(speed=1.0)
+    obj = live_object(pm)
+    clean_scene.frame_set(2)
+    entry = pm.live.cache_for(obj).entries
+    frame_bytes = next(reversed(entry.values())).nbytes
+    monkeypatch.setattr(pm.live, "_cache_limit", lambda: int(4.5 * frame_bytes))  # 2 kept frames
+    for frame in range(3, 10):
+        clean_scene.frame_set(frame)
+        kept = [m for m in bpy.data.meshes if pm.live.FRAME_TAG in m]
+        assert obj.data in kept and len(kept) <= 3, [m.name for m in kept]
+        positions, _ = living_particles(em)
+        np.testing.assert_allclose(mesh_arrays(obj.data)[0], positions, atol=1e-5)
+    entries, size = pm.live.cache_info(obj)
+    assert entries >= 2 and size <= 4.5 * frame_bytes
+    clean_scene.frame_set(8)  # still cached and kept
+    assert pm.live.last_update[obj.name]["swapped"]
+
+
+def test_cached_frames_survive_their_meshes_going(pm, clean_scene):
+    """The cache keeps its meshes by name and tag, not by reference (undo reloads or drops
+    datablocks): a kept mesh deleted, or replaced by another of the same name, makes that
+    frame be written again."""
+    em = emitter(speed=1.0)
+    obj = live_object(pm)
+    names = {}
+    for frame in (2, 3, 4):
+        clean_scene.frame_set(frame)
+        names[frame] = obj.data.name
+    bpy.data.meshes.remove(bpy.data.meshes[names[2]])
+    impostor = bpy.data.meshes[names[3]]
+    impostor.name = "elsewhere"
+    bpy.data.meshes.new(names[3])  # an unrelated mesh under the kept name
+    for frame in (2, 3):
+        clean_scene.frame_set(frame)
+        record = pm.live.last_update[obj.name]
+        assert record["cached"] and not record["swapped"], record
+        positions, _ = living_particles(em)
+        np.testing.assert_allclose(mesh_arrays(obj.data)[0], positions, atol=1e-5)
+    clean_scene.frame_set(4)
+    assert pm.live.last_update[obj.name]["swapped"] and obj.data.name == names[4]
+
+
+def test_live_loop_smoothing_refines_once_while_the_triangles_stay(pm, clean_scene):
+    """Live mode keeps a Smoother while the triangles come back unchanged (a system moving
+    without changing its triangles): the same mesh as a plain smooth, from the second
+    unchanged frame on."""
+    em = emitter(speed=0.0)
+    positions, _ = living_particles(em)
+    settings = {"smooth": "LOOP", "smooth_levels": 2}
+    reuse = {}
+    meshes = []
+    for scale in (1, 2, 4, 8):  # exact in floating point: the same triangles
+        particles = pm.generate.Particles(positions * np.float32(scale))
+        meshes.append(pm.generate.run("TRIANGULATE", particles, settings, reuse=reuse))
+        assert reuse.pop("reused", False) == (scale > 1)
+        plain = pm.generate.run("TRIANGULATE", particles, settings)
+        np.testing.assert_array_equal(meshes[-1].triangles, plain.triangles)
+        np.testing.assert_array_equal(meshes[-1].vertices, plain.vertices)
+        np.testing.assert_array_equal(meshes[-1].normals, plain.normals)
+    # Other triangles: a plain smooth again.
+    particles = pm.generate.Particles(positions[::2].copy())
+    pm.generate.run("TRIANGULATE", particles, settings, reuse=reuse)
+    assert not reuse.pop("reused", False)
+    pm.generate.release(reuse)
+    assert "smoother" not in reuse
+    # No Smoother bigger than the memory allowed (live mode: the cache's).
+    reuse = {"max_bytes": 1000}
+    for scale in (1, 2, 4):
+        pm.generate.run("TRIANGULATE", pm.generate.Particles(positions * np.float32(scale)),
+                        settings, reuse=reuse)
+        assert not reuse.pop("reused", False) and "smoother" not in reuse
+
+
 def test_live_off_leaves_the_mesh_alone(pm, clean_scene):
     emitter()
     assert bpy.ops.particlemesh.triangulate() == {"FINISHED"}

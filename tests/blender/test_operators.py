@@ -219,7 +219,12 @@ def test_materials_kept_when_regenerated(pm, clean_scene):
     clean_scene.frame_set(4)
     assert pm.live.last_update[result.name]["frame"] == 4
     assert "error" not in pm.live.last_update[result.name]
-    assert result.data == mesh_before and list(result.data.materials) == [material]
+    # The frame's own mesh (kept by the live cache), with the object's materials.
+    assert result.data != mesh_before and list(result.data.materials) == [material]
+    # Update Now writes the mesh on screen in place, materials and all.
+    mesh_now = result.data
+    assert bpy.ops.particlemesh.update() == {"FINISHED"}
+    assert result.data == mesh_now and list(result.data.materials) == [material]
     assert em.name in bpy.data.objects
 
 

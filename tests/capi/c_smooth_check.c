@@ -12,6 +12,9 @@ int main(void) {
   float out[6 + 12];
   pm_mesh* mesh = NULL;
   pm_mesh* smooth = NULL;
+  pm_mesh* again = NULL;
+  pm_smoother* smoother = NULL;
+  int32_t matches = 0;
   pm_smooth_options opt;
   size_t nv = 0, nt = 0, i;
   int32_t comps = 0;
@@ -31,6 +34,13 @@ int main(void) {
   for (i = 0; i < nv; ++i)
     if (fabsf(out[i] - 1.0f) > 1e-6f) return 7;
   if (pm_mesh_get_attribute_components(smooth, "none", &comps) != PM_STATUS_INVALID_ARGUMENT) return 8;
+  /* Refine once, evaluate many: the same mesh again. */
+  if (pm_smoother_create(mesh, &opt, &smoother) != PM_OK) return 9;
+  if (pm_smoother_matches(smoother, mesh, &matches) != PM_OK || matches != 1) return 10;
+  if (pm_smoother_evaluate(smoother, mesh, &again) != PM_OK) return 11;
+  if (pm_mesh_get_counts(again, &nv, &nt) != PM_OK || nv != 18 || nt != 32) return 12;
+  pm_mesh_destroy(again);
+  pm_smoother_destroy(smoother);
   pm_mesh_destroy(smooth);
   pm_mesh_destroy(mesh);
   printf("C ABI smoothing ok: %u vertices, %u triangles\n", (unsigned)nv, (unsigned)nt);

@@ -298,3 +298,124 @@ TEST(CApiSmooth, ProgressCallbackCancels) {
   EXPECT_EQ(pm_smooth(in.m, &o, &out), PM_STATUS_CANCELLED);
   EXPECT_EQ(out, kSentinel);
 }
+
+// ---- refine once, evaluate many -----------------------------------------------------------
+
+namespace {
+
+struct SmootherGuard {
+  pm_smoother* s = nullptr;
+  ~SmootherGuard() { pm_smoother_destroy(s); }
+};
+
+/// Everything a mesh handle holds, to compare two of them byte for byte.
+struct Copied {
+  std::vector<double> positions, normals;
+  std::vector<int32_t> triangles;
+  std::vector<float> velocity;
+  bool operator==(const Copied&) const = default;
+};
+
+Copied copy_out(pm_mesh* m) {
+  Copied c;
+  size_t nv = 0, nt = 0;
+  EXPECT_EQ(pm_mesh_get_counts(m, &nv, &nt), PM_OK);
+  c.positions.resize(3 * nv);
+  c.normals.resize(3 * nv);
+  c.triangles.resize(3 * nt);
+  c.velocity.resize(3 * nv);
+  EXPECT_EQ(pm_mesh_copy_positions(m, c.positions.data(), nv), PM_OK);
+  EXPECT_EQ(pm_mesh_copy_normals(m, c.normals.data(), nv), PM_OK);
+  EXPECT_EQ(pm_mesh_copy_triangles(m, c.triangles.data(), nt), PM_OK);
+  EXPECT_EQ(pm_mesh_copy_attribute(m, "velocity", c.velocity.data(), nv), PM_OK) << last();
+  return c;
+}
+
+}  // namespace
+
+TEST(CApiSmoother, EvaluateGivesWhatPmSmoothGives) {
+  const TriMesh m = torus_mesh(1, 0.4, 24, 12);
+  for (int32_t scheme : {PM_SMOOTH_LOOP, PM_SMOOTH_BUTTERFLY}) {
+    SCOPED_TRACE(scheme == PM_SMOOTH_LOOP ? "loop" : "butterfly");
+    pm_smooth_options o;
+    pm_smooth_options_init(&o);
+    o.scheme = scheme;
+    o.levels = 2;
+    MeshGuard first{make_mesh(m)};
+    SmootherGuard s;
+    ASSERT_EQ(pm_smoother_create(first.m, &o, &s.s), PM_OK) << last();
+    for (int frame = 1; frame <= 3; ++frame) {
+      TriMesh moved = m;
+      for (size_t i = 0; i < moved.positions.size(); ++i)
+        moved.positions[i] = moved.positions[i] * (1.0 + 0.03 * std::sin(frame + double(i)));
+      MeshGuard in{make_mesh(moved)};
+      std::vector<float> vel;
+      for (const auto& p : moved.positions) vel.insert(vel.end(), {float(p.x), float(frame), float(p.z)});
+      ASSERT_EQ(pm_mesh_set_attribute(in.m, "velocity", 3, vel.data(), moved.positions.size()), PM_OK);
+      int32_t matches = -1;
+      ASSERT_EQ(pm_smoother_matches(s.s, in.m, &matches), PM_OK);
+      EXPECT_EQ(matches, 1);
+      MeshGuard a, b;
+      ASSERT_EQ(pm_smoother_evaluate(s.s, in.m, &a.m), PM_OK) << last();
+      ASSERT_EQ(pm_smooth(in.m, &o, &b.m), PM_OK) << last();
+      EXPECT_TRUE(copy_out(a.m) == copy_out(b.m)) << "frame " << frame;
+    }
+  }
+  // NULL options: one Loop level at the limit, as pm_smooth.
+  MeshGuard in{make_mesh(m)};
+  SmootherGuard s;
+  ASSERT_EQ(pm_smoother_create(in.m, nullptr, &s.s), PM_OK) << last();
+  MeshGuard out;
+  ASSERT_EQ(pm_smoother_evaluate(s.s, in.m, &out.m), PM_OK) << last();
+  size_t nt = 0;
+  ASSERT_EQ(pm_mesh_get_counts(out.m, nullptr, &nt), PM_OK);
+  EXPECT_EQ(nt, 4 * m.triangles.size());
+}
+
+TEST(CApiSmoother, MisuseGivesStatusAndMessageAndLeavesTheOutputAlone) {
+  const TriMesh m = torus_mesh(1, 0.4, 24, 12);
+  MeshGuard in{make_mesh(m)};
+  SmootherGuard s;
+  pm_smoother* const kNoSmoother = reinterpret_cast<pm_smoother*>(0x1);
+  pm_smoother* unset = kNoSmoother;
+  EXPECT_EQ(pm_smoother_create(nullptr, nullptr, &unset), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(last().rfind("mesh is NULL", 0), 0u) << last();
+  EXPECT_EQ(pm_smoother_create(in.m, nullptr, nullptr), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(last().rfind("out_smoother is NULL", 0), 0u) << last();
+  pm_smooth_options o;
+  pm_smooth_options_init(&o);
+  o.levels = 11;
+  EXPECT_EQ(pm_smoother_create(in.m, &o, &unset), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("levels"), std::string::npos) << last();
+  EXPECT_EQ(unset, kNoSmoother);
+  ASSERT_EQ(pm_smoother_create(in.m, nullptr, &s.s), PM_OK) << last();
+
+  // Another mesh: refused by evaluate, told apart by matches.
+  MeshGuard other{make_mesh(torus_mesh(1, 0.4, 20, 12))};
+  int32_t matches = -1;
+  ASSERT_EQ(pm_smoother_matches(s.s, other.m, &matches), PM_OK);
+  EXPECT_EQ(matches, 0);
+  pm_mesh* out = kSentinel;
+  EXPECT_EQ(pm_smoother_evaluate(s.s, other.m, &out), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("does not have the triangles"), std::string::npos) << last();
+  EXPECT_EQ(out, kSentinel);
+  // A bad coordinate is named.
+  TriMesh bad = m;
+  bad.positions[5].x = 1e60;
+  MeshGuard b{make_mesh(bad)};
+  EXPECT_EQ(pm_smoother_evaluate(s.s, b.m, &out), PM_STATUS_INVALID_INPUT);
+  EXPECT_NE(last().find("positions[5]"), std::string::npos) << last();
+  EXPECT_EQ(out, kSentinel);
+  // NULL arguments, each named.
+  EXPECT_EQ(pm_smoother_evaluate(nullptr, in.m, &out), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(last().rfind("smoother is NULL", 0), 0u) << last();
+  EXPECT_EQ(pm_smoother_evaluate(s.s, nullptr, &out), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(last().rfind("mesh is NULL", 0), 0u) << last();
+  EXPECT_EQ(pm_smoother_evaluate(s.s, in.m, nullptr), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(last().rfind("out_mesh is NULL", 0), 0u) << last();
+  EXPECT_EQ(pm_smoother_matches(nullptr, in.m, &matches), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(pm_smoother_matches(s.s, nullptr, &matches), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(pm_smoother_matches(s.s, in.m, nullptr), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(last().rfind("out_matches is NULL", 0), 0u) << last();
+  pm_smoother_destroy(nullptr);  // tolerated
+}

@@ -653,6 +653,61 @@ def test_every_option_is_documented(pm):
         section = doc.split(f"### `{function}(")[1].split("\n### ")[0]
         for keyword in pm.defaults(function):
             assert f"| `{keyword}`" in section, f"docs/python.md: {function}() option {keyword}"
+    # The Smoother takes smooth()'s keywords: its section names each one, and its methods.
+    section = doc.split("### `Smoother(")[1].split("\n### ")[0]
+    for keyword in list(pm.defaults("smooth")) + ["crease_edges", "crease_sharpness", "progress"]:
+        assert f"`{keyword}`" in section, f"docs/python.md: Smoother() option {keyword}"
+    for member in ("evaluate", "matches", "close", "vertex_count", "triangle_count"):
+        assert hasattr(pm.Smoother, member) or member.endswith("_count")
+        assert f"`{member}" in section, f"docs/python.md: Smoother.{member}"
+
+
+def test_smoother_evaluates_what_smooth_gives(pm):
+    """Refine once, evaluate many: each frame's evaluate() equals smooth() of that frame, byte
+    for byte (positions, normals, triangles, attributes), for Loop and butterfly."""
+    base = pm.triangulate(fibonacci_sphere(2000))
+    for scheme in ("loop", "butterfly"):
+        with pm.Smoother(base, scheme=scheme, levels=2, threads=2) as smoother:
+            assert smoother.vertex_count == len(base.vertices)
+            assert smoother.triangle_count == len(base.triangles)
+            for frame in range(3):
+                wobble = 1 + 0.03 * np.sin(frame + np.arange(len(base.vertices)))[:, None]
+                moved = pm.Mesh(base.vertices * wobble, base.triangles,
+                                attributes={"velocity": (base.vertices * frame).astype(np.float32)})
+                assert smoother.matches(moved)
+                got = smoother.evaluate(moved)
+                want = pm.smooth(moved, scheme=scheme, levels=2, threads=2)
+                assert got.vertices.tobytes() == want.vertices.tobytes(), scheme
+                assert got.normals.tobytes() == want.normals.tobytes(), scheme
+                assert np.array_equal(got.triangles, want.triangles)
+                assert got.attributes["velocity"].tobytes() == want.attributes["velocity"].tobytes()
+
+
+def test_smoother_refuses_other_meshes_and_closed_use(pm):
+    base = pm.triangulate(fibonacci_sphere(1000))
+    smoother = pm.Smoother(base, levels=1)
+    other = pm.triangulate(fibonacci_sphere(1200))
+    assert not smoother.matches(other)
+    shuffled = pm.Mesh(base.vertices, base.triangles[::-1].copy())
+    assert not smoother.matches(shuffled)
+    with pytest.raises(pm.Error, match="does not have the triangles") as e:
+        smoother.evaluate(other)
+    assert e.value.status == pm.STATUS_INVALID_ARGUMENT
+    bad = pm.Mesh(base.vertices.copy(), base.triangles)
+    bad.vertices[3, 1] = np.nan
+    with pytest.raises(pm.Error, match=r"positions\[3\]"):
+        smoother.evaluate(bad)
+    smoother.close()
+    with pytest.raises(pm.Error, match="closed"):
+        smoother.evaluate(base)
+    with pytest.raises(pm.Error, match="levels"):
+        pm.Smoother(base, levels=11)
+    # Its own progress, and cancellation from it.
+    seen = []
+    pm.Smoother(base, levels=2, progress=lambda stage, f: seen.append(stage) or True)
+    assert seen
+    with pytest.raises(pm.CancelledError):
+        pm.Smoother(base, levels=2, progress=lambda stage, f: False)
 
 
 def test_simulator_files_carry_their_channels(pm, tmp_path):

@@ -290,11 +290,35 @@ PM_EXPORT void pm_smooth_options_init(pm_smooth_options* options);
  *  edge, vertex or triangle, and a result over max_triangles PM_STATUS_LIMIT_EXCEEDED. */
 PM_EXPORT pm_status pm_smooth(const pm_mesh* mesh, const pm_smooth_options* options, pm_mesh** out_mesh);
 
+/* Refine once, evaluate many (particlemesh/smooth/smoother.h): for a mesh whose vertices move
+ * while its triangles stay (frames of an animation), the checks and OpenSubdiv's refinement
+ * are done once by pm_smoother_create; each pm_smoother_evaluate then gives exactly what
+ * pm_smooth would for the same triangles and the new positions and attributes, for a fraction
+ * of its cost (Loop; butterfly subdivides again). */
+typedef struct pm_smoother pm_smoother;
+
+/** Check `mesh` and refine its topology as pm_smooth(mesh, options) would (the same statuses
+ *  and messages; options->progress reports this work, and crease indices refer to `mesh`).
+ *  `options` may be NULL (one Loop level at the limit). */
+PM_EXPORT pm_status pm_smoother_create(const pm_mesh* mesh, const pm_smooth_options* options,
+                                       pm_smoother** out_smoother);
+/** *out_matches = 1 when `mesh` has the smoother's triangles (same order) and vertex count,
+ *  else 0. */
+PM_EXPORT pm_status pm_smoother_matches(const pm_smoother* smoother, const pm_mesh* mesh, int32_t* out_matches);
+/** The smooth mesh of `mesh`'s positions and attributes through the smoother (normals and
+ *  attributes as pm_smooth gives them). PM_STATUS_INVALID_ARGUMENT when `mesh` does not
+ *  match (pm_smoother_matches); PM_STATUS_INVALID_INPUT for a non-finite or too large
+ *  coordinate or attribute value (naming the vertex). Safe to call from several threads. */
+PM_EXPORT pm_status pm_smoother_evaluate(const pm_smoother* smoother, const pm_mesh* mesh, pm_mesh** out_mesh);
+PM_EXPORT void pm_smoother_destroy(pm_smoother* smoother);
+
 /* ---- volume particles: implicit surfaces, polygonized --------------------------------- */
 
 /* The surface F(x) = T of F(x) = sum_i w_i g(|x - p_i|^2 / R_i^2), polygonized by marching
- * cubes on a sparse grid of blocks: only blocks some particle's support reaches are sampled,
- * so memory and time follow the occupied volume, not the bounding box (see
+ * cubes on a sparse grid of blocks: only blocks some particle's support reaches are
+ * considered, and of those, blocks that bounds of the summed kernels prove wholly inside or
+ * outside are not sampled unless next to a crossing, so memory and time follow the occupied
+ * volume and the surface, not the bounding box (see
  * particlemesh/volume/polygonize.h).
  * Kernels g, as functions of s = r^2 / R^2 on 0 <= s < 1 (0 beyond): */
 #define PM_KERNEL_WYVILL 0 /**< 1 - 22/9 s + 17/9 s^2 - 4/9 s^3 (Wyvill's soft objects), C1 at R */
@@ -361,7 +385,7 @@ typedef struct pm_polygonize_stats {
   double cell_size;         /**< h used */
   double spacing;           /**< median particle spacing, when the default radius needed it (else 0) */
   uint64_t particles;
-  uint64_t sampled_blocks;  /**< blocks of 8^3 grid nodes sampled */
+  uint64_t sampled_blocks;  /**< blocks of 8^3 grid nodes sampled (those not proven inside or outside) */
   uint64_t grid_bytes;      /**< memory of the sparse grid and the output mesh (what
                                  max_grid_bytes bounds) */
   uint64_t vertices;

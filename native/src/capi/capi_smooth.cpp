@@ -6,6 +6,7 @@
 #include "capi/conversions.h"
 #include "capi/firewall.h"
 #include "capi/handles.h"
+#include "particlemesh/smooth/smoother.h"
 #include "particlemesh/smooth/subdivide.h"
 
 using namespace particlemesh;
@@ -53,6 +54,45 @@ const VertexAttribute& find(const pm_mesh* mesh, const char* name) {
   for (const auto& a : mesh->mesh.attributes)
     if (a.name == name) return a;
   throw Error(Status::InvalidArgument, std::string("the mesh has no attribute '") + name + "'");
+}
+
+/// The C++ options of a pm_smooth_options (NULL: the defaults), creases checked against `mesh`.
+SmoothOptions smooth_options(const pm_mesh* mesh, const pm_smooth_options* options) {
+  pm_smooth_options defaults;
+  pm_smooth_options_init(&defaults);
+  const pm_smooth_options o = capi::read_versioned(
+      options, defaults, "options",
+      {offsetof(pm_smooth_options, crease_edges),
+       offsetof(pm_smooth_options, crease_sharpness),
+       offsetof(pm_smooth_options, progress),
+       offsetof(pm_smooth_options, progress_user_data)});
+  SmoothOptions opt;
+  opt.scheme = static_cast<SmoothScheme>(o.scheme);
+  opt.levels = o.levels;
+  opt.limit = o.limit != 0;
+  opt.boundary = static_cast<BoundaryRule>(o.boundary);
+  opt.crease_method = static_cast<CreaseMethod>(o.crease_method);
+  opt.threads = o.threads;
+  opt.max_triangles = o.max_triangles;
+  if (o.crease_count > 0) {
+    require(o.crease_edges, "options->crease_edges");
+    if (o.crease_count > mesh->mesh.triangles.size() * 3)
+      throw Error(Status::InvalidArgument, "options->crease_count " + std::to_string(o.crease_count) +
+                                               " exceeds the mesh's edge count");
+    opt.creases.resize(o.crease_count);
+    for (size_t i = 0; i < o.crease_count; ++i) {
+      const int32_t a = o.crease_edges[2 * i], b = o.crease_edges[2 * i + 1];
+      if (a < 0 || b < 0)
+        throw Error(Status::InvalidArgument, "options->crease_edges[" + std::to_string(i) + "] = (" +
+                                                 std::to_string(a) + ", " + std::to_string(b) +
+                                                 ") has a negative vertex index");
+      opt.creases[i].a = uint32_t(a);
+      opt.creases[i].b = uint32_t(b);
+      if (o.crease_sharpness) opt.creases[i].sharpness = o.crease_sharpness[i];
+    }
+  }
+  opt.progress = wrap_progress(o.progress, o.progress_user_data);
+  return opt;
 }
 
 }  // namespace
@@ -140,45 +180,53 @@ pm_status pm_smooth(const pm_mesh* mesh, const pm_smooth_options* options, pm_me
   return guarded([&] {
     require(mesh, "mesh");
     require(out_mesh, "out_mesh");
-    pm_smooth_options defaults;
-    pm_smooth_options_init(&defaults);
-    const pm_smooth_options o = capi::read_versioned(
-        options, defaults, "options",
-        {offsetof(pm_smooth_options, crease_edges),
-         offsetof(pm_smooth_options, crease_sharpness),
-         offsetof(pm_smooth_options, progress),
-         offsetof(pm_smooth_options, progress_user_data)});
-    SmoothOptions opt;
-    opt.scheme = static_cast<SmoothScheme>(o.scheme);
-    opt.levels = o.levels;
-    opt.limit = o.limit != 0;
-    opt.boundary = static_cast<BoundaryRule>(o.boundary);
-    opt.crease_method = static_cast<CreaseMethod>(o.crease_method);
-    opt.threads = o.threads;
-    opt.max_triangles = o.max_triangles;
-    if (o.crease_count > 0) {
-      require(o.crease_edges, "options->crease_edges");
-      if (o.crease_count > mesh->mesh.triangles.size() * 3)
-        throw Error(Status::InvalidArgument, "options->crease_count " + std::to_string(o.crease_count) +
-                                                 " exceeds the mesh's edge count");
-      opt.creases.resize(o.crease_count);
-      for (size_t i = 0; i < o.crease_count; ++i) {
-        const int32_t a = o.crease_edges[2 * i], b = o.crease_edges[2 * i + 1];
-        if (a < 0 || b < 0)
-          throw Error(Status::InvalidArgument, "options->crease_edges[" + std::to_string(i) + "] = (" +
-                                                   std::to_string(a) + ", " + std::to_string(b) +
-                                                   ") has a negative vertex index");
-        opt.creases[i].a = uint32_t(a);
-        opt.creases[i].b = uint32_t(b);
-        if (o.crease_sharpness) opt.creases[i].sharpness = o.crease_sharpness[i];
-      }
-    }
-    opt.progress = wrap_progress(o.progress, o.progress_user_data);
-    SmoothResult r = smooth_mesh(mesh->mesh, opt);
+    // The options first: a bad struct_size is refused before the mesh is touched.
+    const SmoothOptions o = smooth_options(mesh, options);
+    SmoothResult r = smooth_mesh(mesh->mesh, o);
     auto handle = std::make_unique<pm_mesh>();
     handle->mesh = std::move(r.mesh);
     *out_mesh = handle.release();
   });
 }
+
+pm_status pm_smoother_create(const pm_mesh* mesh, const pm_smooth_options* options, pm_smoother** out_smoother) {
+  return guarded([&] {
+    require(mesh, "mesh");
+    require(out_smoother, "out_smoother");
+    const SmoothOptions o = smooth_options(mesh, options);  // before the mesh is touched
+    auto handle = std::make_unique<pm_smoother>(pm_smoother{Smoother(mesh->mesh, o)});
+    *out_smoother = handle.release();
+  });
+}
+
+pm_status pm_smoother_matches(const pm_smoother* smoother, const pm_mesh* mesh, int32_t* out_matches) {
+  return guarded([&] {
+    require(smoother, "smoother");
+    require(mesh, "mesh");
+    require(out_matches, "out_matches");
+    *out_matches = smoother->smoother.matches(mesh->mesh.triangles, mesh->mesh.positions.size()) ? 1 : 0;
+  });
+}
+
+pm_status pm_smoother_evaluate(const pm_smoother* smoother, const pm_mesh* mesh, pm_mesh** out_mesh) {
+  return guarded([&] {
+    require(smoother, "smoother");
+    require(mesh, "mesh");
+    require(out_mesh, "out_mesh");
+    const Smoother& s = smoother->smoother;
+    if (!s.matches(mesh->mesh.triangles, mesh->mesh.positions.size()))
+      throw Error(Status::InvalidArgument,
+                  "the mesh (" + std::to_string(mesh->mesh.positions.size()) + " vertices, " +
+                      std::to_string(mesh->mesh.triangles.size()) + " triangles) does not have the triangles the smoother "
+                      "was made for (" + std::to_string(s.vertex_count()) + " vertices, " +
+                      std::to_string(s.triangle_count()) + " triangles)");
+    SmoothResult r = s.evaluate(mesh->mesh.positions, mesh->mesh.attributes);
+    auto handle = std::make_unique<pm_mesh>();
+    handle->mesh = std::move(r.mesh);
+    *out_mesh = handle.release();
+  });
+}
+
+void pm_smoother_destroy(pm_smoother* smoother) { delete smoother; }
 
 }  // extern "C"

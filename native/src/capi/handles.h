@@ -3,6 +3,7 @@
 
 #include "particlemesh/mesh/point_cloud.h"
 #include "particlemesh/mesh/tri_mesh.h"
+#include "particlemesh/smooth/smoother.h"
 
 struct pm_cloud {
   particlemesh::PointCloud cloud;
@@ -10,4 +11,8 @@ struct pm_cloud {
 
 struct pm_mesh {
   particlemesh::TriMesh mesh;
+};
+
+struct pm_smoother {
+  particlemesh::Smoother smoother;
 };

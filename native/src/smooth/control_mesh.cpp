@@ -56,7 +56,71 @@ void check_triangles(const TriMesh& mesh) {
   }
 }
 
+/// The signed volume (times 6) of a repaired component with its triangles flipped as
+/// recorded, summed in flood-fill order.
+double component_volume(const std::vector<Triangle>& tris, const std::vector<Vec3>& positions,
+                        const ControlMesh::VolumeDecision& d) {
+  double volume = 0;
+  for (size_t i = 0; i < d.triangles.size(); ++i) {
+    const Triangle& t = tris[d.triangles[i]];
+    const double v6 = signed_volume6(Vec3{}, positions[t[0]], positions[t[1]], positions[t[2]]);
+    volume += d.flips[i] ? -v6 : v6;
+  }
+  return volume;
+}
+
 }  // namespace
+
+bool same_volume_decisions(const ControlMesh& control, const std::vector<Triangle>& triangles,
+                           const std::vector<Vec3>& positions) {
+  for (const auto& d : control.volume_decisions)
+    if ((component_volume(triangles, positions, d) < 0) != d.turned) return false;
+  return true;
+}
+
+void compact_vertex_values(const std::vector<Vec3>& positions, const std::vector<VertexAttribute>& attributes,
+                           const std::vector<uint32_t>& original_vertex, std::vector<Vec3>* out_positions,
+                           std::vector<VertexAttribute>* out_attributes) {
+  const size_t nv = positions.size(), nc = original_vertex.size();
+  for (const auto& a : attributes) {
+    if (a.components < 1 || a.components > 4096 || a.values.size() != nv * size_t(a.components))
+      throw Error(Status::InvalidInput, "attribute '" + a.name + "' has " + std::to_string(a.values.size()) +
+                                            " values with " + std::to_string(a.components) +
+                                            " components, expected " + std::to_string(nv) + " vertices x " +
+                                            "components (1..4096)");
+  }
+  for (const uint32_t v : original_vertex) {
+    const Vec3& p = positions[v];
+    if (!is_finite(p)) throw Error(Status::InvalidInput, "positions[" + std::to_string(v) + "] is not finite");
+    // Finite is not enough: Loop's and butterfly's sums of coordinates near DBL_MAX overflow
+    // to infinity (found by fuzzing).
+    if (std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > kMaxSmoothCoordinate)
+      throw Error(Status::InvalidInput, "positions[" + std::to_string(v) + "] = (" + detail::format_number(p.x) + ", " +
+                                            detail::format_number(p.y) + ", " + detail::format_number(p.z) +
+                                            ") is too large to smooth (coordinates must be at most 1e50 in magnitude)");
+  }
+  out_positions->resize(nc);
+  for (size_t i = 0; i < nc; ++i) (*out_positions)[i] = positions[original_vertex[i]];
+  out_attributes->clear();
+  for (const auto& a : attributes) {
+    VertexAttribute c{a.name, a.components, {}};
+    const size_t k = size_t(a.components);
+    c.values.resize(nc * k);
+    for (size_t i = 0; i < nc; ++i)
+      for (size_t j = 0; j < k; ++j) {
+        const float x = a.values[size_t(original_vertex[i]) * k + j];
+        if (!std::isfinite(x))
+          throw Error(Status::InvalidInput, "attribute '" + a.name + "' of vertex " +
+                                                std::to_string(original_vertex[i]) + " is not finite");
+        if (std::abs(x) > kMaxSmoothAttribute)
+          throw Error(Status::InvalidInput, "attribute '" + a.name + "' of vertex " +
+                                                std::to_string(original_vertex[i]) + " is " + detail::format_number(x) +
+                                                ": too large to smooth (at most 1e30 in magnitude)");
+        c.values[i * k + j] = x;
+      }
+    out_attributes->push_back(std::move(c));
+  }
+}
 
 ControlMesh prepare_control_mesh(const TriMesh& mesh) {
   check_sizes(mesh);
@@ -71,40 +135,11 @@ ControlMesh prepare_control_mesh(const TriMesh& mesh) {
   cm.control_index.assign(nv, ControlMesh::kDropped);
   for (size_t v = 0; v < nv; ++v)
     if (used[v]) {
-      const Vec3& p = mesh.positions[v];
-      if (!is_finite(p))
-        throw Error(Status::InvalidInput, "positions[" + std::to_string(v) + "] is not finite");
-      // Finite is not enough: Loop's and butterfly's sums of coordinates near DBL_MAX overflow
-      // to infinity (found by fuzzing).
-      if (std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > kMaxSmoothCoordinate)
-        throw Error(Status::InvalidInput, "positions[" + std::to_string(v) + "] = (" + detail::format_number(p.x) + ", " +
-                                              detail::format_number(p.y) + ", " + detail::format_number(p.z) +
-                                              ") is too large to smooth (coordinates must be at most 1e50 in magnitude)");
       cm.control_index[v] = uint32_t(cm.original_vertex.size());
       cm.original_vertex.push_back(uint32_t(v));
     }
   cm.dropped_vertices = nv - cm.original_vertex.size();
-  const size_t nc = cm.original_vertex.size();
-  cm.positions.resize(nc);
-  for (size_t i = 0; i < nc; ++i) cm.positions[i] = mesh.positions[cm.original_vertex[i]];
-  for (const auto& a : mesh.attributes) {
-    VertexAttribute c{a.name, a.components, {}};
-    const size_t k = size_t(a.components);
-    c.values.resize(nc * k);
-    for (size_t i = 0; i < nc; ++i)
-      for (size_t j = 0; j < k; ++j) {
-        const float x = a.values[size_t(cm.original_vertex[i]) * k + j];
-        if (!std::isfinite(x))
-          throw Error(Status::InvalidInput, "attribute '" + a.name + "' of vertex " +
-                                                std::to_string(cm.original_vertex[i]) + " is not finite");
-        if (std::abs(x) > kMaxSmoothAttribute)
-          throw Error(Status::InvalidInput, "attribute '" + a.name + "' of vertex " +
-                                                std::to_string(cm.original_vertex[i]) + " is " + std::to_string(x) +
-                                                ": too large to smooth (at most 1e30 in magnitude)");
-        c.values[i * k + j] = x;
-      }
-    cm.attributes.push_back(std::move(c));
-  }
+  compact_vertex_values(mesh.positions, mesh.attributes, cm.original_vertex, &cm.positions, &cm.attributes);
 
   // 2. Half-edges h = 3 f + c, from tris[f][c] to tris[f][c + 1], grouped by undirected edge.
   auto from = [&](uint32_t h) { return tris[h / 3][h % 3]; };
@@ -218,15 +253,13 @@ ControlMesh prepare_control_mesh(const TriMesh& mesh) {
       if (!conflict) continue;  // consistent already: the caller's winding stays
       if (closed) {
         // Turn a repaired closed component outward: positive signed volume.
-        double volume = 0;
-        for (size_t q = begin; q < queue.size(); ++q) {
-          const uint32_t f = queue[q];
-          const Triangle& t = tris[f];
-          const double v6 = signed_volume6(Vec3{}, mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]]);
-          volume += flip[f] ? -v6 : v6;
-        }
-        if (volume < 0)
+        ControlMesh::VolumeDecision d;
+        d.triangles.assign(queue.begin() + ptrdiff_t(begin), queue.end());
+        for (const uint32_t f : d.triangles) d.flips.push_back(flip[f]);
+        d.turned = component_volume(tris, mesh.positions, d) < 0;
+        if (d.turned)
           for (size_t q = begin; q < queue.size(); ++q) flip[queue[q]] ^= 1;
+        cm.volume_decisions.push_back(std::move(d));
       }
     }
   }

@@ -29,6 +29,15 @@ struct ControlMesh {
   size_t boundary_edges = 0;
   size_t reoriented_triangles = 0;
   size_t dropped_vertices = 0;
+  /// Closed components whose orientation was repaired: which way they face came from their
+  /// signed volume, so from the positions. Per component: its triangles in flood-fill order,
+  /// each one's flip relative to the first, and whether the whole was then turned outward.
+  struct VolumeDecision {
+    std::vector<uint32_t> triangles;
+    std::vector<uint8_t> flips;
+    bool turned = false;
+  };
+  std::vector<VolumeDecision> volume_decisions;
 
   static constexpr uint32_t kDropped = UINT32_MAX;
 };
@@ -37,6 +46,19 @@ struct ControlMesh {
 /// repair the orientation. Parallel parts run in the caller's thread arena.
 /// @throws Error(InvalidInput | LimitExceeded) naming the triangle, edge or vertex.
 ControlMesh prepare_control_mesh(const TriMesh& mesh);
+
+/// The positions and attribute values of the referenced vertices (`original_vertex`, in
+/// control order), checked as prepare_control_mesh checks them: attribute sizes, finite and
+/// not too large values (Error(InvalidInput) naming the vertex).
+void compact_vertex_values(const std::vector<Vec3>& positions, const std::vector<VertexAttribute>& attributes,
+                           const std::vector<uint32_t>& original_vertex, std::vector<Vec3>* out_positions,
+                           std::vector<VertexAttribute>* out_attributes);
+
+/// Whether the repaired closed components of `mesh` (same triangles as the control mesh was
+/// made from) would be turned outward with these positions as they were (see
+/// ControlMesh::volume_decisions): when not, the repaired orientation differs.
+bool same_volume_decisions(const ControlMesh& control, const std::vector<Triangle>& triangles,
+                           const std::vector<Vec3>& positions);
 
 /// Area-weighted unit vertex normals (sum of the adjacent triangles' cross products).
 /// A vertex whose sum vanishes gets (0, 0, 0).

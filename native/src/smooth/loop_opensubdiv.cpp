@@ -2,6 +2,7 @@
 // Far::PrimvarRefiner interpolates positions and every attribute channel through it, and
 // PrimvarRefiner::Limit evaluates exact limit positions, tangents and attributes.
 #include <chrono>
+#include <cstring>
 #include <memory>
 #include <string>
 
@@ -13,6 +14,8 @@
 
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
+#include "smooth/loop_limit.h"
+#include "smooth/loop_refiner.h"
 #include "smooth/schemes.h"
 
 namespace PM_NAMESPACE::detail {
@@ -70,17 +73,11 @@ Sdc::Options::VtxBoundaryInterpolation to_sdc(BoundaryRule b) {
 
 }  // namespace
 
-void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
-                    const std::vector<std::pair<uint32_t, uint32_t>>& crease_pairs,
-                    const std::vector<float>& crease_sharpness, ProgressTracker& progress,
-                    SmoothResult& out) {
-  const int levels = options.levels;
+std::unique_ptr<TopologyRefiner> loop_refiner(const ControlMesh& control, const SmoothOptions& options,
+                                              const std::vector<std::pair<uint32_t, uint32_t>>& crease_pairs,
+                                              const std::vector<float>& crease_sharpness, bool full_last_level) {
   const size_t nv = control.positions.size(), nf = control.triangles.size();
-  SmoothStats& st = out.stats;
-  auto t0 = Clock::now();
-
-  // 1. The topology, through OpenSubdiv's raw-array descriptor.
-  progress.stage("refining topology (OpenSubdiv)", 0.05, 0.25);
+  // Through OpenSubdiv's raw-array descriptor.
   std::vector<int> verts_per_face(nf, 3);
   std::vector<int> face_verts(3 * nf);
   parallel_blocks(nf, 8192, [&](size_t b, size_t e) {
@@ -105,17 +102,35 @@ void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
   sdc.SetVtxBoundaryInterpolation(to_sdc(options.boundary));
   sdc.SetCreasingMethod(options.crease_method == CreaseMethod::Chaikin ? Sdc::Options::CREASE_CHAIKIN
                                                                        : Sdc::Options::CREASE_UNIFORM);
-  std::unique_ptr<TopologyRefiner> refiner(
-      RefinerFactory::Create(desc, RefinerFactory::Options(Sdc::SCHEME_LOOP, sdc)));
-  if (!refiner)  // the control mesh was checked, so this is our bug, not the caller's input
+  std::unique_ptr<TopologyRefiner> r(RefinerFactory::Create(desc, RefinerFactory::Options(Sdc::SCHEME_LOOP, sdc)));
+  if (!r)  // the control mesh was checked, so this is our bug, not the caller's input
     throw Error(Status::Internal, "OpenSubdiv refused the checked control mesh");
-  verts_per_face = {};
-  face_verts = {};
-  if (levels > 0) {
-    TopologyRefiner::UniformOptions uniform(levels);
-    uniform.fullTopologyInLastLevel = options.limit;  // limit masks need the last level's edges
-    refiner->RefineUniform(uniform);
+  if (options.levels > 0) {
+    TopologyRefiner::UniformOptions uniform(options.levels);
+    uniform.fullTopologyInLastLevel = full_last_level;
+    r->RefineUniform(uniform);
   }
+  return r;
+}
+
+void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
+                    const std::vector<std::pair<uint32_t, uint32_t>>& crease_pairs,
+                    const std::vector<float>& crease_sharpness, ProgressTracker& progress,
+                    SmoothResult& out) {
+  const int levels = options.levels;
+  const size_t nv = control.positions.size();
+  SmoothStats& st = out.stats;
+  auto t0 = Clock::now();
+
+  // 1. The topology, refined by OpenSubdiv. On a closed surface without creases the limit is
+  // taken here, in parallel, from the last level's triangles (loop_limit.h); otherwise by
+  // OpenSubdiv, which needs the last level's full topology.
+  progress.stage("refining topology (OpenSubdiv)", 0.05, 0.25);
+  const bool own_limit = own_loop_limit(control, options, crease_pairs.size());
+  auto refine = [&](bool full_last_level) {
+    return loop_refiner(control, options, crease_pairs, crease_sharpness, full_last_level);
+  };
+  std::unique_ptr<TopologyRefiner> refiner = refine(options.limit && !own_limit);
   progress.check();
 
   // 2. Interpolate level by level (ping-pong buffers): positions and all attribute channels
@@ -168,7 +183,38 @@ void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
   // 3. The limit: exact positions, tangents (-> normals) and attributes.
   const size_t n_out = pos.size();
   auto t1 = Clock::now();
-  if (options.limit) {
+  const auto last = refiner->GetLevel(levels);
+  const size_t nf_out = size_t(last.GetNumFaces());
+  out.mesh.triangles.resize(nf_out);
+  parallel_blocks(nf_out, 8192, [&](size_t b, size_t e) {
+    for (size_t f = b; f < e; ++f) {
+      const auto fv = last.GetFaceVertices(int(f));
+      out.mesh.triangles[f] = {uint32_t(fv[0]), uint32_t(fv[1]), uint32_t(fv[2])};
+    }
+  });
+  LoopRings rings;
+  if (own_limit && build_loop_rings(out.mesh.triangles, n_out, &rings)) {
+    progress.stage("limit positions and normals", 0.75, 0.85);
+    const LoopLimitMasks masks(rings.max_valence);
+    static_assert(sizeof(Point3) == sizeof(Vec3));
+    std::vector<Vec3> src(n_out), lim;
+    std::memcpy(static_cast<void*>(src.data()), pos.data(), n_out * sizeof(Vec3));
+    std::vector<double> attr_lim(n_out * size_t(channels));
+    tbb::parallel_invoke([&] { loop_limit_positions(rings, masks, src, lim, out.mesh.normals); },
+                         [&] {
+                           if (channels > 0) loop_limit_channels(rings, masks, attr.data(), channels, attr_lim.data());
+                         });
+    std::memcpy(static_cast<void*>(pos.data()), lim.data(), n_out * sizeof(Vec3));
+    attr.swap(attr_lim);
+    st.limit = true;
+    progress.check();
+  } else if (options.limit) {
+    if (own_limit) {
+      // Not one closed fan at every vertex after all (cannot happen on a checked closed
+      // 2-manifold): OpenSubdiv's limit, on a refinement with the full last level.
+      refiner = refine(true);
+    }
+    const PrimvarRefiner limit_primvar(*refiner);
     progress.stage("limit positions and normals", 0.75, 0.85);
     std::vector<Point3> lim(n_out), tan1(n_out), tan2(n_out);
     std::vector<double> attr_lim(n_out * size_t(channels));
@@ -176,13 +222,13 @@ void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
         [&] {
           const Point3* src = pos.data();
           Point3 *p = lim.data(), *t1p = tan1.data(), *t2p = tan2.data();
-          primvar.Limit(src, p, t1p, t2p);
+          limit_primvar.Limit(src, p, t1p, t2p);
         },
         [&] {
           if (channels == 0) return;
           const ChannelBuffer src{attr.data(), channels};
           ChannelBuffer dst{attr_lim.data(), channels};
-          primvar.Limit(src, dst);
+          limit_primvar.Limit(src, dst);
         });
     pos.swap(lim);
     attr.swap(attr_lim);
@@ -204,18 +250,9 @@ void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
   // 4. Output arrays.
   auto t2 = Clock::now();
   progress.stage("output", 0.85, 0.95);
-  const auto last = refiner->GetLevel(levels);
-  const size_t nf_out = size_t(last.GetNumFaces());
   out.mesh.positions.resize(n_out);
-  out.mesh.triangles.resize(nf_out);
   parallel_blocks(n_out, 8192, [&](size_t b, size_t e) {
     for (size_t i = b; i < e; ++i) out.mesh.positions[i] = {pos[i].p[0], pos[i].p[1], pos[i].p[2]};
-  });
-  parallel_blocks(nf_out, 8192, [&](size_t b, size_t e) {
-    for (size_t f = b; f < e; ++f) {
-      const auto fv = last.GetFaceVertices(int(f));
-      out.mesh.triangles[f] = {uint32_t(fv[0]), uint32_t(fv[1]), uint32_t(fv[2])};
-    }
   });
   out.mesh.attributes.clear();
   int offset = 0;

@@ -9,6 +9,18 @@
 
 namespace PM_NAMESPACE::detail {
 
+/// The option and size checks of smooth_mesh (Error InvalidArgument / LimitExceeded).
+void check_smooth_options(const SmoothOptions& options, size_t triangles);
+
+/// The options' creases in control indices; each must be an edge of the mesh (else
+/// Error(InvalidArgument) naming it). Sharpness at least 10 is passed as 10 (infinite).
+void resolve_creases(const ControlMesh& control, const SmoothOptions& options,
+                     std::vector<std::pair<uint32_t, uint32_t>>* pairs, std::vector<float>* sharpness);
+
+/// The last step of smooth_mesh: area-weighted normals where the mesh has none, or where a
+/// limit normal vanished (degenerate geometry).
+void finish_smooth_normals(TriMesh& mesh);
+
 /// Loop through OpenSubdiv (Far::TopologyRefiner + PrimvarRefiner). Fills out.mesh
 /// positions, triangles and attributes; normals too when options.limit (limit normals).
 /// Creases are in control indices already.

@@ -59,11 +59,46 @@ void check_size(size_t triangles, const SmoothOptions& o) {
 
 }  // namespace
 
-SmoothResult smooth_mesh(const TriMesh& mesh, const SmoothOptions& options) {
+namespace detail {
+
+void check_smooth_options(const SmoothOptions& options, size_t triangles) {
   check_options(options);
-  if (mesh.triangles.size() > size_t(INT32_MAX))
-    throw Error(Status::LimitExceeded, "more than 2^31 - 1 triangles");
-  check_size(mesh.triangles.size(), options);
+  if (triangles > size_t(INT32_MAX)) throw Error(Status::LimitExceeded, "more than 2^31 - 1 triangles");
+  check_size(triangles, options);
+}
+
+void resolve_creases(const ControlMesh& cm, const SmoothOptions& options,
+                     std::vector<std::pair<uint32_t, uint32_t>>* pairs, std::vector<float>* sharpness) {
+  // Input indices -> control indices; each must be an edge of the mesh.
+  for (size_t i = 0; i < options.creases.size(); ++i) {
+    const CreaseEdge& c = options.creases[i];
+    const std::pair<uint32_t, uint32_t> key{std::min(c.a, c.b), std::max(c.a, c.b)};
+    if (!std::binary_search(cm.edges.begin(), cm.edges.end(), key))
+      throw Error(Status::InvalidArgument, "creases[" + std::to_string(i) + "] = (" + std::to_string(c.a) + ", " +
+                                               std::to_string(c.b) + ") is not an edge of the mesh");
+    pairs->push_back({cm.control_index[c.a], cm.control_index[c.b]});
+    sharpness->push_back(std::min(c.sharpness, kInfiniteSharpness));
+  }
+}
+
+void finish_smooth_normals(TriMesh& m) {
+  // Loop's limit normals where they exist, area-weighted ones elsewhere.
+  const bool any_zero = std::any_of(m.normals.begin(), m.normals.end(), [](const Vec3& n) { return n == Vec3{}; });
+  if (m.normals.empty() || any_zero) {
+    std::vector<Vec3> area = area_weighted_normals(m.positions, m.triangles);
+    if (m.normals.empty()) {
+      m.normals = std::move(area);
+    } else {
+      for (size_t i = 0; i < m.normals.size(); ++i)
+        if (m.normals[i] == Vec3{}) m.normals[i] = area[i];
+    }
+  }
+}
+
+}  // namespace detail
+
+SmoothResult smooth_mesh(const TriMesh& mesh, const SmoothOptions& options) {
+  detail::check_smooth_options(options, mesh.triangles.size());
 
   detail::ProgressTracker tracker(options.progress);
   SmoothResult result;
@@ -81,18 +116,9 @@ SmoothResult smooth_mesh(const TriMesh& mesh, const SmoothOptions& options) {
     st.reoriented_triangles = cm.reoriented_triangles;
     st.levels = options.levels;
 
-    // Creases: input indices -> control indices; each must be an edge of the mesh.
     std::vector<std::pair<uint32_t, uint32_t>> crease_pairs;
     std::vector<float> crease_sharpness;
-    for (size_t i = 0; i < options.creases.size(); ++i) {
-      const CreaseEdge& c = options.creases[i];
-      const std::pair<uint32_t, uint32_t> key{std::min(c.a, c.b), std::max(c.a, c.b)};
-      if (!std::binary_search(cm.edges.begin(), cm.edges.end(), key))
-        throw Error(Status::InvalidArgument, "creases[" + std::to_string(i) + "] = (" + std::to_string(c.a) + ", " +
-                                                 std::to_string(c.b) + ") is not an edge of the mesh");
-      crease_pairs.push_back({cm.control_index[c.a], cm.control_index[c.b]});
-      crease_sharpness.push_back(std::min(c.sharpness, kInfiniteSharpness));
-    }
+    detail::resolve_creases(cm, options, &crease_pairs, &crease_sharpness);
     st.creases = crease_pairs.size();
     st.seconds_prepare = seconds_since(t0);
     tracker.check();
@@ -105,21 +131,11 @@ SmoothResult smooth_mesh(const TriMesh& mesh, const SmoothOptions& options) {
     // Normals: Loop's limit normals where they exist, area-weighted ones elsewhere.
     auto t1 = Clock::now();
     tracker.stage("normals", 0.95, 1.0);
-    TriMesh& m = result.mesh;
-    const bool any_zero = std::any_of(m.normals.begin(), m.normals.end(), [](const Vec3& n) { return n == Vec3{}; });
-    if (m.normals.empty() || any_zero) {
-      std::vector<Vec3> area = detail::area_weighted_normals(m.positions, m.triangles);
-      if (m.normals.empty()) {
-        m.normals = std::move(area);
-      } else {
-        for (size_t i = 0; i < m.normals.size(); ++i)
-          if (m.normals[i] == Vec3{}) m.normals[i] = area[i];
-      }
-    }
+    detail::finish_smooth_normals(result.mesh);
     st.seconds_output += seconds_since(t1);
     result.original_vertex = std::move(cm.original_vertex);
-    st.vertices = m.positions.size();
-    st.triangles = m.triangles.size();
+    st.vertices = result.mesh.positions.size();
+    st.triangles = result.mesh.triangles.size();
     tracker.finish();
   });
   return result;

@@ -59,7 +59,7 @@ void sample(const ParticleField& field, const Vec3& o, double h, float* out) {
   const NeighborGrid::CellCoord chi = grid.coord_of(o + Vec3{span + reach, span + reach, span + reach});
   alignas(16) float a2[kB], dxs[kB];
   const auto& B = field.cell_support_boxes();
-  grid.for_each_cell_in(clo, chi, [&](uint32_t c) {
+  field.for_each_cell_in(clo, chi, [&](uint32_t c) {
     // The cell's kernels' boxes against the block's nodes: most cells in range miss them.
     const float* b = &B[6 * size_t(c)];
     if (double(b[3]) < o.x || double(b[4]) < o.y || double(b[5]) < o.z || double(b[0]) > o.x + span ||
@@ -133,7 +133,7 @@ bool anisotropic_support_meets_box(const ParticleField& field, const Vec3& lo, c
   const NeighborGrid::CellCoord chi = grid.coord_of(hi + Vec3{reach, reach, reach});
   const auto& B = field.cell_support_boxes();
   bool met = false;
-  grid.for_each_cell_in(clo, chi, [&](uint32_t c) {
+  field.for_each_cell_in(clo, chi, [&](uint32_t c) {
     const float* b = &B[6 * size_t(c)];
     if (met || double(b[3]) <= lo.x || double(b[4]) <= lo.y || double(b[5]) <= lo.z || double(b[0]) >= hi.x ||
         double(b[1]) >= hi.y || double(b[2]) >= hi.z)

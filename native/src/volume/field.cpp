@@ -348,6 +348,28 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
   }
   f.sorted_index_.resize(n);
   for (uint32_t s = 0; s < n; ++s) f.sorted_index_[f.grid_.original_index(s)] = s;
+  // The dense cell table, when the occupied cells' box has at most 8 times as many cells
+  // (plus a million: small clouds always get one).
+  NeighborGrid::CellCoord clo{INT32_MAX, INT32_MAX, INT32_MAX}, chi{INT32_MIN, INT32_MIN, INT32_MIN};
+  for (uint32_t c = 0; c < f.grid_.cell_count(); ++c) {
+    const NeighborGrid::CellCoord cc = f.grid_.cell_coord(c);
+    for (size_t a = 0; a < 3; ++a) {
+      clo[a] = std::min(clo[a], cc[a]);
+      chi[a] = std::max(chi[a], cc[a]);
+    }
+  }
+  const double box = double(chi[0] - clo[0] + 1) * double(chi[1] - clo[1] + 1) * double(chi[2] - clo[2] + 1);
+  if (box <= 8.0 * double(f.grid_.cell_count()) + 1e6) {
+    f.dense_lo_ = clo;
+    for (size_t a = 0; a < 3; ++a) f.dense_size_[a] = chi[a] - clo[a] + 1;
+    f.dense_cells_.assign(size_t(box), NeighborGrid::kNoCell);
+    for (uint32_t c = 0; c < f.grid_.cell_count(); ++c) {
+      const NeighborGrid::CellCoord cc = f.grid_.cell_coord(c);
+      f.dense_cells_[(size_t(cc[0] - clo[0]) * size_t(f.dense_size_[1]) + size_t(cc[1] - clo[1])) *
+                         size_t(f.dense_size_[2]) +
+                     size_t(cc[2] - clo[2])] = c;
+    }
+  }
   if (aniso) {
     f.sorted_metric_.resize(6 * size_t(n));
     f.sorted_extent_.resize(3 * size_t(n));
@@ -377,28 +399,6 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
         if (double(h) < bhi[a]) h = std::nextafter(h, kInfF);
         f.cell_support_[6 * size_t(c) + size_t(a)] = l;
         f.cell_support_[6 * size_t(c) + 3 + size_t(a)] = h;
-      }
-    }
-    // The dense cell table, when the occupied cells' box has at most 8 times as many cells
-    // (plus a million: small clouds always get one).
-    NeighborGrid::CellCoord clo{INT32_MAX, INT32_MAX, INT32_MAX}, chi{INT32_MIN, INT32_MIN, INT32_MIN};
-    for (uint32_t c = 0; c < f.grid_.cell_count(); ++c) {
-      const NeighborGrid::CellCoord cc = f.grid_.cell_coord(c);
-      for (size_t a = 0; a < 3; ++a) {
-        clo[a] = std::min(clo[a], cc[a]);
-        chi[a] = std::max(chi[a], cc[a]);
-      }
-    }
-    const double box = double(chi[0] - clo[0] + 1) * double(chi[1] - clo[1] + 1) * double(chi[2] - clo[2] + 1);
-    if (box <= 8.0 * double(f.grid_.cell_count()) + 1e6) {
-      f.dense_lo_ = clo;
-      for (size_t a = 0; a < 3; ++a) f.dense_size_[a] = chi[a] - clo[a] + 1;
-      f.dense_cells_.assign(size_t(box), NeighborGrid::kNoCell);
-      for (uint32_t c = 0; c < f.grid_.cell_count(); ++c) {
-        const NeighborGrid::CellCoord cc = f.grid_.cell_coord(c);
-        f.dense_cells_[(size_t(cc[0] - clo[0]) * size_t(f.dense_size_[1]) + size_t(cc[1] - clo[1])) *
-                           size_t(f.dense_size_[2]) +
-                       size_t(cc[2] - clo[2])] = c;
       }
     }
     if (need_threshold) calibrate_anisotropic_threshold(f, kernels, tracker);
@@ -471,7 +471,7 @@ double ParticleField::value_and_gradient(const Vec3& x, Vec3* gradient) const {
     return v;
   }
   detail::dispatch_kernel(params_.kernel, [&]<Kernel K>() {
-    grid_.for_each_within(x, max_radius_, [&](uint32_t s, double d2) {
+    for_each_within(x, max_radius_, [&](uint32_t s, double d2) {
       const double inv_r2 = uniform_ ? inv_r2_ : sorted_inv_r2_[s];
       const double q = d2 * inv_r2;
       if (!(q < 1.0)) return;

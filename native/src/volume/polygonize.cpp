@@ -18,9 +18,11 @@
 #include "core/progress_tracker.h"
 #include "particlemesh/core/error.h"
 #include "volume/anisotropic_sampling.h"
+#include "volume/block_proofs.h"
 #include "volume/field_impl.h"
 #include "volume/mc_table.h"
 #include "volume/polygonize_finish.h"
+#include "volume/sphere_sampling.h"
 
 namespace PM_NAMESPACE {
 
@@ -122,7 +124,15 @@ struct Grid {
   Vec3 origin;
   double h = 0;
   std::vector<uint64_t> sampled_keys;  // blocks some support reaches, sorted
-  std::vector<float> values;           // kBN per sampled block, node x + 8 (y + 8 z)
+  // Per block of sampled_keys: what block_proofs.h proved (None, Inside, Outside), and its
+  // samples (kBN floats, node x + 8 (y + 8 z)) or nullptr for a proven block left unsampled.
+  std::vector<detail::BlockProof> proof;
+  std::vector<const float*> samples;
+  // sampled_keys' indices in the order of the particles in memory (by x, then y, then z, as
+  // the field's grid keeps them): proving and sampling in it read the particles near each
+  // other one block after the next.
+  std::vector<uint32_t> memory_order;
+  std::vector<float> values, more_values;  // the samples' storage
   std::vector<uint64_t> mesh_keys;     // sampled blocks and their lower neighbours, sorted
   std::vector<MeshBlock> mesh;
 };
@@ -136,140 +146,113 @@ void gather(const Grid& g, const MeshBlock& mb, float* local) {
     const int x0 = dx ? kB : 0, x1 = dx ? kB + 1 : kB;
     const int y0 = dy ? kB : 0, y1 = dy ? kB + 1 : kB;
     const int z0 = dz ? kB : 0, z1 = dz ? kB + 1 : kB;
-    const float* src = si == kNone ? nullptr : g.values.data() + size_t(si) * kBN;
+    const float* src = si == kNone ? nullptr : g.samples[si];
+    // Unsampled: no support reaches it (F = 0), or proven outside (any value below T does)
+    // or inside (any value at or above T): such nodes are in no crossing cell.
+    const float fill = si != kNone && g.proof[si] == detail::BlockProof::Inside
+                           ? std::numeric_limits<float>::infinity() : 0.0f;
     for (int z = z0; z < z1; ++z)
       for (int y = y0; y < y1; ++y)
         for (int x = x0; x < x1; ++x)
           local[x + kL * (y + kL * z)] =
-              src ? src[(x - x0) + kB * ((y - y0) + kB * (z - z0))] : 0.0f;
+              src ? src[(x - x0) + kB * ((y - y0) + kB * (z - z0))] : fill;
   }
+}
+
+// The position of block `key`'s first node.
+Vec3 block_first_node(const Grid& g, uint64_t key) {
+  int64_t b[3];
+  unpack(key, b);
+  return {g.origin.x + double(b[0] * kB) * g.h, g.origin.y + double(b[1] * kB) * g.h,
+          g.origin.z + double(b[2] * kB) * g.h};
+}
+
+// Block indices ordered by x, then y, then z (keys are by z, then y, then x).
+std::vector<uint32_t> particle_memory_order(const std::vector<uint64_t>& keys) {
+  std::vector<std::pair<uint64_t, uint32_t>> swapped(keys.size());
+  for (size_t i = 0; i < keys.size(); ++i) {
+    int64_t b[3];
+    unpack(keys[i], b);
+    swapped[i] = {pack(b[2], b[1], b[0]), uint32_t(i)};
+  }
+  tbb::parallel_sort(swapped.begin(), swapped.end());
+  std::vector<uint32_t> order(keys.size());
+  for (size_t i = 0; i < keys.size(); ++i) order[i] = swapped[i].second;
+  return order;
+}
+
+// Sample the blocks `todo` (indices into sampled_keys) into `storage`, on all cores.
+void sample_blocks(const ParticleField& field, Grid& g, const std::vector<uint32_t>& todo, std::vector<float>& storage,
+                   detail::ProgressTracker& tracker) {
+  storage.resize(todo.size() * kBN);
+  detail::parallel_blocks(todo.size(), 4, [&](size_t bb, size_t be) {
+    if (tracker.cancelled()) return;
+    for (size_t k = bb; k < be; ++k) {
+      const uint32_t i = todo[k];
+      float* out = storage.data() + k * kBN;
+      const Vec3 first = block_first_node(g, g.sampled_keys[i]);
+      if (field.anisotropic()) detail::sample_block_anisotropic(field, first, g.h, out);
+      else detail::sample_block_spherical(field, first, g.h, out);
+      g.samples[i] = out;
+    }
+    tracker.tick(be - bb);
+  });
+}
+
+// Does a node of proven block i share a cell with a node of the other state? Those are the
+// nodes of its 26 neighbours next to it: a neighbour one block up along an axis contributes
+// its first layer there, one block down its last, one level with it all eight. Unreached
+// neighbours are 0 (outside); proven ones have their state; sampled ones are looked at.
+bool touches_other_state(const Grid& g, const BlockMap& map, size_t i, double T) {
+  const bool inside = g.proof[i] == detail::BlockProof::Inside;
+  int64_t b[3];
+  unpack(g.sampled_keys[i], b);
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        if (dx == 0 && dy == 0 && dz == 0) continue;
+        const uint32_t j = map.find(pack(b[0] + dx, b[1] + dy, b[2] + dz));
+        if (j == kNone) {
+          if (inside) return true;
+          continue;
+        }
+        const float* v = g.samples[j];
+        if (v == nullptr) {
+          if ((g.proof[j] == detail::BlockProof::Inside) != inside) return true;
+          continue;
+        }
+        const int x0 = dx > 0 ? 0 : (dx < 0 ? kB - 1 : 0), x1 = dx > 0 ? 0 : kB - 1;
+        const int y0 = dy > 0 ? 0 : (dy < 0 ? kB - 1 : 0), y1 = dy > 0 ? 0 : kB - 1;
+        const int z0 = dz > 0 ? 0 : (dz < 0 ? kB - 1 : 0), z1 = dz > 0 ? 0 : kB - 1;
+        for (int z = z0; z <= z1; ++z)
+          for (int y = y0; y <= y1; ++y)
+            for (int x = x0; x <= x1; ++x)
+              if ((double(v[x + kB * (y + kB * z)]) >= T) != inside) return true;
+      }
+  return false;
+}
+
+// Whether the eight blocks mesh block mb reads (itself and its upper neighbours) are all
+// unsampled and of one state: then it has no crossing and needs no gathering.
+bool uniform_unsampled(const Grid& g, const MeshBlock& mb) {
+  int state = -1;
+  for (int d = 0; d < 8; ++d) {
+    const uint32_t mi = d == 0 ? kNone : mb.up[d - 1];
+    const uint32_t si = d == 0 ? mb.sampled : (mi == kNone ? kNone : g.mesh[mi].sampled);
+    int s = 0;
+    if (si != kNone) {
+      if (g.samples[si] != nullptr) return false;
+      s = g.proof[si] == detail::BlockProof::Inside ? 1 : 0;
+    }
+    if (state >= 0 && s != state) return false;
+    state = s;
+  }
+  return true;
 }
 
 inline uint32_t rank_of(const MeshBlock& mb, int bit) {
   const int w = bit >> 6, b = bit & 63;
   return mb.prefix[w] + uint32_t(std::popcount(mb.mask[w] & ((uint64_t(1) << b) - 1)));
-}
-
-// floor / ceil for |v| < 2^31 without a library call (baseline x86-64 has no rounding
-// instruction, and these run several times per particle and block).
-inline int ifloor(double v) {
-  const int i = int(v);
-  return i - (double(i) > v);
-}
-inline int iceil(double v) {
-  const int i = int(v);
-  return i + (double(i) < v);
-}
-
-// g(s) with s clamped to the support, in float: t = max(0, 1 - s), so s >= 1 gives exactly
-// 0 with no branch (the polynomial kernels are written in t).
-template <Kernel K>
-inline float kernel_clamped(float s) {
-  const float t = std::max(0.0f, 1.0f - s);
-  if constexpr (K == Kernel::Wyvill) return t * t * (5.0f + 4.0f * t) * (1.0f / 9.0f);
-  else if constexpr (K == Kernel::Poly4) return t * t;
-  else if constexpr (K == Kernel::Poly6) return t * t * t;
-  else return float(kernel_value(Kernel::Blinn, double(s)));
-}
-
-// row[x] += w g(dx2[x] + syz) for the 8 nodes of a row, as two 4-float vectors (GCC/Clang
-// vector extensions: portable, one SSE2 / NEON operation each). Written this way because the
-// plain loop keeps a branch for the clamp and stays scalar, and 8-wide vectors get their
-// comparisons split lane by lane on hardware with 4-wide registers.
-typedef float Float4 __attribute__((vector_size(4 * sizeof(float))));
-typedef int32_t Int4 __attribute__((vector_size(4 * sizeof(int32_t))));
-
-// `a` and `b` carry the strength: w g = t^2 (a + b t) with a = 5w/9, b = 4w/9 for Wyvill,
-// a = w, b = 0 for Poly4, a = 0, b = w for Poly6.
-template <Kernel K>
-inline void add_row(float* row, const float* dx2, float syz, float a, float b) {
-  for (int half = 0; half < 2; ++half) {
-    Float4 d, r;
-    std::memcpy(&d, dx2 + 4 * half, sizeof d);
-    std::memcpy(&r, row + 4 * half, sizeof r);
-    Float4 t = 1.0f - (d + syz);
-    t = (Float4)((Int4)t & (t > 0.0f));  // max(t, 0): outside the support exactly 0
-    if constexpr (K == Kernel::Wyvill) r += t * t * (a + b * t);
-    else if constexpr (K == Kernel::Poly4) r += a * (t * t);
-    else r += b * (t * t * t);
-    std::memcpy(row + 4 * half, &r, sizeof r);
-  }
-}
-
-// Sum every particle's contribution into the samples of one block, in grid order.
-// The samples are float (as stored), and each row of 8 nodes is summed whole, branch-free
-// (nodes outside the support get exactly 0): fixed-length float loops that the compiler
-// vectorises with baseline SSE2, several times faster than finding each row's exact ends.
-// The order of the sums is fixed (particles in grid order), so the samples do not depend on
-// the thread count.
-template <Kernel K>
-void sample_block(const ParticleField& field, const Grid& g, uint64_t key, float* out) {
-  int64_t b[3];
-  unpack(key, b);
-  const double h = g.h, inv_h = 1.0 / h;
-  const NeighborGrid& grid = field.grid();
-  const auto& P = grid.sorted_points();
-  const auto& inv_r2s = field.sorted_inverse_squared_radii();
-  const auto& ws = field.sorted_strengths();
-  const bool uniform = field.uniform_radius();
-  const double inv_r2_common = 1.0 / (field.params().radius * field.params().radius);
-  const double rmax = field.max_radius();
-  const int64_t n0[3] = {b[0] * kB, b[1] * kB, b[2] * kB};
-  const double ox = g.origin.x + double(n0[0]) * h, oy = g.origin.y + double(n0[1]) * h,
-               oz = g.origin.z + double(n0[2]) * h;
-  const Vec3 lo{ox - rmax, oy - rmax, oz - rmax};
-  const Vec3 hi{ox + double(kB - 1) * h + rmax, oy + double(kB - 1) * h + rmax, oz + double(kB - 1) * h + rmax};
-  std::fill(out, out + kBN, 0.0f);
-  const NeighborGrid::CellCoord clo = grid.coord_of(lo), chi = grid.coord_of(hi);
-  // Uniform radius: the support in node units is the same for every particle.
-  double c2 = h * h * inv_r2_common;  // (node units)^2 -> s
-  double rn = std::sqrt(1.0 / c2);    // radius in node units
-  alignas(32) float dx2[kB];
-  grid.for_each_cell_in(clo, chi, [&](uint32_t c) {
-    for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) {
-      const float w = ws.empty() ? 1.0f : float(ws[s]);
-      if (w == 0.0f) continue;
-      const float wa = K == Kernel::Wyvill ? w * (5.0f / 9.0f) : (K == Kernel::Poly4 ? w : 0.0f);
-      const float wb = K == Kernel::Wyvill ? w * (4.0f / 9.0f) : (K == Kernel::Poly6 ? w : 0.0f);
-      if (!uniform) {
-        c2 = h * h * inv_r2s[s];
-        rn = std::sqrt(1.0 / c2);
-      }
-      // Particle position in node units, relative to the block's first node. (The cells
-      // scanned are within a few radii of the block, so these are small numbers.)
-      const double ux = (P[s].x - ox) * inv_h, uy = (P[s].y - oy) * inv_h, uz = (P[s].z - oz) * inv_h;
-      if (ux + rn < 0 || ux - rn > kB - 1 || uy + rn < 0 || uy - rn > kB - 1 || uz + rn < 0 ||
-          uz - rn > kB - 1)
-        continue;  // the support misses the block's nodes (most scanned particles)
-      const int x0 = std::max(iceil(ux - rn), 0), x1 = std::min(ifloor(ux + rn), kB - 1);
-      const int y0 = std::max(iceil(uy - rn), 0), y1 = std::min(ifloor(uy + rn), kB - 1);
-      const int z0 = std::max(iceil(uz - rn), 0), z1 = std::min(ifloor(uz + rn), kB - 1);
-      if (x0 > x1 || y0 > y1 || z0 > z1) continue;
-      for (int x = 0; x < kB; ++x) {
-        const double d = double(x) - ux;
-        dx2[x] = float(d * d * c2);
-      }
-      for (int z = z0; z <= z1; ++z) {
-        const double dz = double(z) - uz;
-        const double sz = dz * dz * c2;
-        if (!(sz < 1.0)) continue;
-        // The rows of this slice that meet the support (one square root per slice instead
-        // of a hard-to-predict test per row; a row grazing the edge just adds zeros).
-        const double half = std::sqrt((1.0 - sz) / c2);
-        const int ya = std::max(y0, iceil(uy - half)), yb = std::min(y1, ifloor(uy + half));
-        for (int y = ya; y <= yb; ++y) {
-          const double dy = double(y) - uy;
-          const float syz = float(sz + dy * dy * c2);
-          float* row = out + kB * (y + kB * z);
-          if constexpr (K == Kernel::Blinn) {
-            for (int x = 0; x < kB; ++x) row[x] += w * kernel_clamped<K>(dx2[x] + syz);
-          } else {
-            add_row<K>(row, dx2, syz, wa, wb);
-          }
-        }
-      }
-    }
-  });
 }
 
 // Does some particle's support reach a node of block `key`? (A cheap superset test: the
@@ -295,7 +278,7 @@ bool block_reached(const ParticleField& field, const Grid& g, uint64_t key) {
   const NeighborGrid::CellCoord clo = grid.coord_of({lo[0] - rmax, lo[1] - rmax, lo[2] - rmax});
   const NeighborGrid::CellCoord chi = grid.coord_of({hi[0] + rmax, hi[1] + rmax, hi[2] + rmax});
   bool reached = false;
-  grid.for_each_cell_in(clo, chi, [&](uint32_t c) {
+  field.for_each_cell_in(clo, chi, [&](uint32_t c) {
     for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c) && !reached; ++s) {
       const double r = uniform ? r_common : 1.0 / std::sqrt(inv_r2s[s]);
       double d2 = 0;
@@ -420,6 +403,66 @@ Crossing center_vertex(const ParticleField& field, const Vec3& cell_lo, double h
   const double gn = norm(grad);
   out.normal = gn > 0 && std::isfinite(gn) ? grad * (-1.0 / gn) : Vec3{0, 0, 1};
   return out;
+}
+
+// The distinct blocks of every cell's range (cell_block_range), sorted: marked in a bitmap of
+// the ranges' box when that box is small against the ranges' total (dense particles), else
+// listed (`counts`: each cell's first slot) and sorted.
+template <class Range>
+std::vector<uint64_t> candidate_list(size_t ncells, uint64_t total, const std::vector<uint64_t>& counts,
+                                     const Range& cell_block_range, detail::ProgressTracker& tracker) {
+  int64_t lo[3] = {INT64_MAX, INT64_MAX, INT64_MAX}, hi[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
+  for (size_t c = 0; c < ncells; ++c) {
+    int64_t blo[3], bhi[3];
+    cell_block_range(uint32_t(c), blo, bhi);
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], blo[a]);
+      hi[a] = std::max(hi[a], bhi[a]);
+    }
+  }
+  std::vector<uint64_t> cand;
+  const double box = ncells == 0 ? 0.0 : double(hi[0] - lo[0] + 1) * double(hi[1] - lo[1] + 1) * double(hi[2] - lo[2] + 1);
+  if (ncells > 0 && box <= 64.0 * double(total) && box < double(uint64_t(1) << 31)) {
+    const uint64_t nx = uint64_t(hi[0] - lo[0] + 1), ny = uint64_t(hi[1] - lo[1] + 1);
+    std::vector<std::atomic<uint64_t>> bits((uint64_t(box) + 63) / 64);
+    detail::parallel_blocks(ncells, 256, [&](size_t cb, size_t ce) {
+      for (size_t c = cb; c < ce; ++c) {
+        int64_t blo[3], bhi[3];
+        cell_block_range(uint32_t(c), blo, bhi);
+        for (int64_t z = blo[2]; z <= bhi[2]; ++z)
+          for (int64_t y = blo[1]; y <= bhi[1]; ++y)
+            for (int64_t x = blo[0]; x <= bhi[0]; ++x) {
+              const uint64_t i = (uint64_t(z - lo[2]) * ny + uint64_t(y - lo[1])) * nx + uint64_t(x - lo[0]);
+              bits[i >> 6].fetch_or(uint64_t(1) << (i & 63), std::memory_order_relaxed);
+            }
+      }
+      tracker.tick(ce - cb);
+    });
+    tracker.check();
+    // Key order is z, then y, then x: the bitmap's order.
+    for (uint64_t w = 0; w < bits.size(); ++w)
+      for (uint64_t word = bits[w].load(std::memory_order_relaxed); word != 0; word &= word - 1) {
+        const uint64_t i = 64 * w + uint64_t(std::countr_zero(word));
+        cand.push_back(pack(lo[0] + int64_t(i % nx), lo[1] + int64_t((i / nx) % ny), lo[2] + int64_t(i / (nx * ny))));
+      }
+    return cand;
+  }
+  cand.resize(total);
+  detail::parallel_blocks(ncells, 256, [&](size_t cb, size_t ce) {
+    for (size_t c = cb; c < ce; ++c) {
+      int64_t blo[3], bhi[3];
+      cell_block_range(uint32_t(c), blo, bhi);
+      uint64_t k = counts[c];
+      for (int64_t z = blo[2]; z <= bhi[2]; ++z)
+        for (int64_t y = blo[1]; y <= bhi[1]; ++y)
+          for (int64_t x = blo[0]; x <= bhi[0]; ++x) cand[k++] = pack(x, y, z);
+    }
+    tracker.tick(ce - cb);
+  });
+  tracker.check();
+  tbb::parallel_sort(cand.begin(), cand.end());
+  cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+  return cand;
 }
 
 PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOptions& options,
@@ -568,21 +611,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
                 "the block search alone would need " + bytes_text(double(candidate_keys) * sizeof(uint64_t)) +
                     ", more than the grid memory budget of " + bytes_text(double(budget)) +
                     " (max_grid_bytes; use a larger cell size or raise the budget)");
-  std::vector<uint64_t> cand(candidate_keys);
-  detail::parallel_blocks(ncells, 256, [&](size_t cb, size_t ce) {
-    for (size_t c = cb; c < ce; ++c) {
-      int64_t blo[3], bhi[3];
-      cell_block_range(uint32_t(c), blo, bhi);
-      uint64_t k = counts[c];
-      for (int64_t z = blo[2]; z <= bhi[2]; ++z)
-        for (int64_t y = blo[1]; y <= bhi[1]; ++y)
-          for (int64_t x = blo[0]; x <= bhi[0]; ++x) cand[k++] = pack(x, y, z);
-    }
-    tracker.tick(ce - cb);
-  });
-  tracker.check();
-  tbb::parallel_sort(cand.begin(), cand.end());
-  cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+  std::vector<uint64_t> cand = candidate_list(ncells, candidate_keys, counts, cell_block_range, tracker);
   if (ranged) cand.erase(std::remove_if(cand.begin(), cand.end(), [&](uint64_t k) { return !block_in_range(k); }), cand.end());
   st.candidate_blocks = cand.size();
 
@@ -613,47 +642,77 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
     if (ranged) keys.erase(std::remove_if(keys.begin(), keys.end(), [&](uint64_t k) { return !block_in_range(k); }), keys.end());
     g.mesh_keys = std::move(keys);
   }
-  st.sampled_blocks = g.sampled_keys.size();
-  st.sampled_nodes = uint64_t(st.sampled_blocks) * kBN;
-  const double grid_bytes = double(g.sampled_keys.size()) * (kBN * sizeof(float) + sizeof(uint64_t)) +
-                            double(g.mesh_keys.size()) * (sizeof(MeshBlock) + sizeof(uint64_t) + 2 * sizeof(uint32_t));
-  if (budget != 0 && grid_bytes > double(budget))
-    throw Error(Status::LimitExceeded,
-                "the sampled grid would need " + bytes_text(grid_bytes) + " (" + std::to_string(st.sampled_blocks) +
-                    " blocks of 8^3 nodes of size " + num(h) + "), more than the grid memory budget of " +
-                    bytes_text(double(budget)) + " (max_grid_bytes; use a larger cell size or raise the budget)");
-  st.grid_bytes = uint64_t(grid_bytes);
-  if (g.mesh_keys.size() >= kNone || st.sampled_blocks >= kNone)
+  st.reached_blocks = g.sampled_keys.size();
+  // The grid's memory: its bookkeeping, then the samples of the blocks sampled. Checked
+  // against the budget before each allocation, the bookkeeping first (the samples only add).
+  const double bookkeeping =
+      double(g.sampled_keys.size()) * (sizeof(uint64_t) + sizeof(float*) + sizeof(detail::BlockProof)) +
+      double(g.mesh_keys.size()) * (sizeof(MeshBlock) + sizeof(uint64_t) + 2 * sizeof(uint32_t));
+  auto check_budget = [&](size_t sampled) {
+    const double bytes = bookkeeping + double(sampled) * (kBN * sizeof(float));
+    if (budget != 0 && bytes > double(budget))
+      throw Error(Status::LimitExceeded,
+                  "the sampled grid would need " + bytes_text(bytes) + " (" + std::to_string(sampled) + " of " +
+                      std::to_string(st.reached_blocks) + " blocks of 8^3 nodes of size " + num(h) +
+                      " sampled), more than the grid memory budget of " + bytes_text(double(budget)) +
+                      " (max_grid_bytes; use a larger cell size or raise the budget)");
+    return bytes;
+  };
+  check_budget(0);
+  if (g.mesh_keys.size() >= kNone || st.reached_blocks >= kNone)
     throw Error(Status::LimitExceeded, "more than 4294967294 blocks");
   st.seconds_setup += seconds_since(t_start);
 
-  // ---- 3. sampling ---------------------------------------------------------------------------
+  // ---- 3. sampling, where the surface may be --------------------------------------------------
   auto t0 = Clock::now();
   const size_t ns = g.sampled_keys.size();
-  tracker.stage("sampling the field", begin + 0.1 * (1 - begin), begin + 0.6 * (1 - begin), ns);
-  g.values.resize(ns * kBN);
-  if (field.anisotropic()) {
+  g.proof.assign(ns, detail::BlockProof::None);
+  g.samples.assign(ns, nullptr);
+  g.memory_order = particle_memory_order(g.sampled_keys);
+  if (detail::block_proofs_apply(field)) {
+    tracker.stage("proving blocks", begin + 0.1 * (1 - begin), begin + 0.25 * (1 - begin), ns);
     detail::parallel_blocks(ns, 4, [&](size_t bb, size_t be) {
       if (tracker.cancelled()) return;
-      for (size_t i = bb; i < be; ++i) {
-        int64_t b[3];
-        unpack(g.sampled_keys[i], b);
-        const Vec3 first{g.origin.x + double(b[0] * kB) * h, g.origin.y + double(b[1] * kB) * h,
-                         g.origin.z + double(b[2] * kB) * h};
-        detail::sample_block_anisotropic(field, first, h, g.values.data() + i * kBN);
+      for (size_t k = bb; k < be; ++k) {
+        const uint32_t i = g.memory_order[k];
+        g.proof[i] = detail::prove_block(field, block_first_node(g, g.sampled_keys[i]), h);
       }
       tracker.tick(be - bb);
     });
-  } else {
-    detail::dispatch_kernel(field.kernel(), [&]<Kernel K>() {
-      detail::parallel_blocks(ns, 4, [&](size_t bb, size_t be) {
-        if (tracker.cancelled()) return;
-        for (size_t i = bb; i < be; ++i) sample_block<K>(field, g, g.sampled_keys[i], g.values.data() + i * kBN);
-        tracker.tick(be - bb);
-      });
-    });
+    tracker.check();
   }
+  st.seconds_proofs = seconds_since(t0);
+  t0 = Clock::now();
+  tracker.stage("sampling the field", begin + 0.25 * (1 - begin), begin + 0.6 * (1 - begin), ns);
+  std::vector<uint32_t> todo;
+  for (const uint32_t i : g.memory_order)
+    if (g.proof[i] == detail::BlockProof::None) todo.push_back(i);
+  const size_t first_pass = todo.size();
+  check_budget(first_pass);
+  sample_blocks(field, g, todo, g.values, tracker);
+  tracker.check();  // cancelled: stop before the second pass's search over every block
+  // A proven block needs its samples after all where one of its nodes shares a cell with a
+  // node of the other state: that cell holds a crossing, whose vertex and decider read them.
+  {
+    const BlockMap sampled_map(g.sampled_keys);
+    std::vector<uint8_t> need(ns, 0);
+    detail::parallel_blocks(ns, 64, [&](size_t bb, size_t be) {
+      for (size_t i = bb; i < be; ++i) need[i] = g.proof[i] != detail::BlockProof::None && touches_other_state(g, sampled_map, i, T);
+    });
+    todo.clear();
+    for (const uint32_t i : g.memory_order)
+      if (need[i]) todo.push_back(i);
+    st.grid_bytes = uint64_t(check_budget(first_pass + todo.size()));
+    sample_blocks(field, g, todo, g.more_values, tracker);
+  }
+  const double grid_bytes = double(st.grid_bytes);
   tracker.check();
+  for (size_t i = 0; i < ns; ++i) {
+    if (g.samples[i] != nullptr) ++st.sampled_blocks;
+    else if (g.proof[i] == detail::BlockProof::Inside) ++st.inside_blocks;
+    else ++st.outside_blocks;
+  }
+  st.sampled_nodes = uint64_t(st.sampled_blocks) * kBN;
   st.seconds_sampling = seconds_since(t0);
 
   // ---- 4. classification: crossings per block -----------------------------------------------
@@ -682,10 +741,12 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
         MeshBlock& mb = g.mesh[i];
         int64_t b[3];
         unpack(g.mesh_keys[i], b);
-        gather(g, mb, local.get());
         bool any_in = false, any_out = false;
-        for (int k = 0; k < kLN; ++k) {
-          if (double(local[k]) >= T) any_in = true; else any_out = true;
+        if (!uniform_unsampled(g, mb)) {
+          gather(g, mb, local.get());
+          for (int k = 0; k < kLN; ++k) {
+            if (double(local[k]) >= T) any_in = true; else any_out = true;
+          }
         }
         mb.mixed = any_in && any_out;
         std::memset(mb.mask, 0, sizeof mb.mask);

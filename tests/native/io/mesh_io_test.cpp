@@ -262,3 +262,48 @@ TEST(MeshIO, CoordinatesKeepTheirPrecision) {
   write_mesh(near.mesh, (dir / "near.ply").string());
   EXPECT_TRUE(header_says((dir / "near.ply").string(), "property float x"));
 }
+
+TEST(MeshIO, BinaryPlyHasOpenMeshsLayoutByteForByte) {
+  // The binary PLY writer fills the file on all cores; its bytes are those of OpenMesh's PLY
+  // writer (which wrote these files before): this header, float32 x y z (nx ny nz), then
+  // faces as a uchar count and three int32 indices. OpenMesh's reader reads it back.
+  const fs::path dir = test::scratch_dir("ply");
+  TriMesh m = torus_mesh(1.0, 0.3, 40, 20);
+  const std::string path = (dir / "torus.ply").string();
+  write_mesh(m, path);
+  std::ifstream in(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string header = "ply\nformat binary_little_endian 1.0\nelement vertex 800\nproperty float x\n"
+                             "property float y\nproperty float z\nproperty float nx\nproperty float ny\n"
+                             "property float nz\nelement face 1600\nproperty list uchar int vertex_indices\n"
+                             "end_header\n";
+  ASSERT_EQ(bytes.substr(0, header.size()), header);
+  ASSERT_EQ(bytes.size(), header.size() + 800 * 24 + 1600 * 13);
+  for (size_t i = 0; i < 800; ++i) {
+    float v[6];
+    std::memcpy(v, bytes.data() + header.size() + 24 * i, sizeof v);
+    ASSERT_EQ(v[0], float(m.positions[i].x));
+    ASSERT_EQ(v[2], float(m.positions[i].z));
+    ASSERT_EQ(v[3], float(m.normals[i].x));
+    ASSERT_EQ(v[5], float(m.normals[i].z));
+  }
+  for (size_t f = 0; f < 1600; ++f) {
+    const char* d = bytes.data() + header.size() + 800 * 24 + 13 * f;
+    ASSERT_EQ(d[0], 3);
+    uint32_t t[3];
+    std::memcpy(t, d + 1, sizeof t);
+    ASSERT_EQ(t[0], m.triangles[f][0]);
+    ASSERT_EQ(t[2], m.triangles[f][2]);
+  }
+  const TriMesh back = read_mesh(path);
+  EXPECT_EQ(back.triangles, m.triangles);
+  ASSERT_EQ(back.positions.size(), m.positions.size());
+  for (size_t i = 0; i < m.positions.size(); ++i) EXPECT_EQ(back.positions[i].y, double(float(m.positions[i].y)));
+  // Without normals: no normal properties, 12 bytes per vertex.
+  m.normals.clear();
+  write_mesh(m, path);
+  std::ifstream in2(path, std::ios::binary);
+  const std::string bytes2((std::istreambuf_iterator<char>(in2)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(bytes2.find("property float nx"), std::string::npos);
+  EXPECT_EQ(bytes2.size(), header.size() - 3 * std::string("property float nx\n").size() + 800 * 12 + 1600 * 13);
+}

@@ -406,6 +406,66 @@ TEST(SmoothLoopMasks, MatchesOpenSubdivCalledDirectly) {
   }
 }
 
+// The limit through OpenSubdiv itself: PrimvarRefiner::Limit on the full last level.
+void far_loop_limit(const TriMesh& m, int levels, std::vector<Vec3>* pos, std::vector<Vec3>* normals) {
+  namespace Far = OpenSubdiv::Far;
+  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
+  std::vector<int> per_face(m.triangles.size(), 3), verts;
+  for (const auto& t : m.triangles) verts.insert(verts.end(), {int(t[0]), int(t[1]), int(t[2])});
+  Far::TopologyDescriptor desc;
+  desc.numVertices = int(m.positions.size());
+  desc.numFaces = int(m.triangles.size());
+  desc.numVertsPerFace = per_face.data();
+  desc.vertIndicesPerFace = verts.data();
+  std::unique_ptr<Far::TopologyRefiner> refiner(
+      Factory::Create(desc, Factory::Options(OpenSubdiv::Sdc::SCHEME_LOOP, OpenSubdiv::Sdc::Options())));
+  Far::TopologyRefiner::UniformOptions uniform(levels);
+  uniform.fullTopologyInLastLevel = true;
+  refiner->RefineUniform(uniform);
+  struct P {
+    double x, y, z;
+    void Clear() { x = y = z = 0; }
+    void AddWithWeight(const P& s, double w) { x += w * s.x, y += w * s.y, z += w * s.z; }
+  };
+  std::vector<P> src;
+  for (const auto& p : m.positions) src.push_back({p.x, p.y, p.z});
+  Far::PrimvarRefinerReal<double> primvar(*refiner);
+  for (int l = 1; l <= levels; ++l) {
+    std::vector<P> dst(size_t(refiner->GetLevel(l).GetNumVertices()));
+    P* d = dst.data();
+    const P* s = src.data();
+    primvar.Interpolate(l, s, d);
+    src = std::move(dst);
+  }
+  std::vector<P> lim(src.size()), t1(src.size()), t2(src.size());
+  P *lp = lim.data(), *t1p = t1.data(), *t2p = t2.data();
+  const P* sp = src.data();
+  primvar.Limit(sp, lp, t1p, t2p);
+  pos->clear();
+  normals->clear();
+  for (size_t i = 0; i < lim.size(); ++i) {
+    pos->push_back({lim[i].x, lim[i].y, lim[i].z});
+    normals->push_back(normalized(cross(Vec3{t1[i].x, t1[i].y, t1[i].z}, Vec3{t2[i].x, t2[i].y, t2[i].z})));
+  }
+}
+
+TEST(SmoothLimit, ClosedSurfacesMatchOpenSubdivsLimit) {
+  // On a closed surface without creases smooth_mesh takes the limit itself, in parallel
+  // (smooth/loop_limit.h), with OpenSubdiv's masks: the same points and normals as
+  // PrimvarRefiner::Limit, to rounding, at irregular valences (3..9) too.
+  const TriMesh m = irregular_sphere(2, 7, 0.05, 5);
+  for (int levels : {0, 1, 2}) {
+    std::vector<Vec3> want_pos, want_normals;
+    far_loop_limit(m, levels, &want_pos, &want_normals);
+    const SmoothResult r = smooth_mesh(m, loop(levels, true));
+    ASSERT_EQ(r.mesh.positions.size(), want_pos.size());
+    for (size_t i = 0; i < want_pos.size(); ++i) {
+      ASSERT_LT(distance(r.mesh.positions[i], want_pos[i]), 1e-14) << "level " << levels << " vertex " << i;
+      ASSERT_GT(dot(r.mesh.normals[i], want_normals[i]), 1 - 1e-12) << "level " << levels << " vertex " << i;
+    }
+  }
+}
+
 TEST(SmoothLoopMasks, InfinitelySharpCreaseUsesTheCreaseRule) {
   // Crease the two edges 1-0-4 through the centre of a valence-6 fan: the centre becomes a
   // crease vertex (1/8-3/4-1/8 along the crease) and the crease edges split at their midpoints.

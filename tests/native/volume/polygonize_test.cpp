@@ -435,7 +435,10 @@ TEST(Polygonize, NoSurfaceGivesAnEmptyMesh) {
   const PolygonizeResult r = polygonize(one_particle({0, 0, 0}), o);
   EXPECT_TRUE(r.mesh.positions.empty());
   EXPECT_TRUE(r.mesh.triangles.empty());
-  EXPECT_GT(r.stats.sampled_blocks, 0u);
+  // The support reaches blocks, but none can reach T: every one is proven outside, none sampled.
+  EXPECT_GT(r.stats.reached_blocks, 0u);
+  EXPECT_EQ(r.stats.outside_blocks, r.stats.reached_blocks);
+  EXPECT_EQ(r.stats.sampled_blocks, 0u);
 }
 
 TEST(Polygonize, BadInputGivesClearErrors) {

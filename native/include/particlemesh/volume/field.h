@@ -197,9 +197,24 @@ class PM_EXPORT ParticleField {
       });
       return;
     }
-    grid_.for_each_within(x, reach_, [&](uint32_t sorted, double d2) {
+    for_each_within(x, reach_, [&](uint32_t sorted, double d2) {
       const double s = d2 * (uniform_ ? inv_r2_ : sorted_inv_r2_[sorted]);
       if (s < 1.0) f(size_t(grid_.original_index(sorted)), s);
+    });
+  }
+
+  /// As NeighborGrid::for_each_within on grid() (f(sorted index, squared distance) for every
+  /// centre within `radius` of p, in increasing sorted index), its cells found through
+  /// for_each_cell_in.
+  template <class F>
+  void for_each_within(const Vec3& p, double radius, F&& f) const {
+    const double r2 = radius * radius;
+    const Vec3 r{radius, radius, radius};
+    for_each_cell_in(grid_.coord_of(p - r), grid_.coord_of(p + r), [&](uint32_t c) {
+      for (uint32_t s = grid_.cell_begin(c); s < grid_.cell_end(c); ++s) {
+        const double d2 = squared_distance(grid_.sorted_point(s), p);
+        if (d2 <= r2) f(s, d2);
+      }
     });
   }
 
@@ -221,12 +236,19 @@ class PM_EXPORT ParticleField {
         f(s, d);
       }
     };
-    NeighborGrid::CellCoord lo = grid_.coord_of(x - r), hi = grid_.coord_of(x + r);
+    for_each_cell_in(grid_.coord_of(x - r), grid_.coord_of(x + r), visit);
+  }
+
+  /// f(c) for every occupied cell c of grid() whose coordinate lies in [lo, hi], in increasing
+  /// cell order (as NeighborGrid::for_each_cell_in), looked up in a dense table of the
+  /// occupied cells' box when that box is small enough (at most 8 times the occupied cells,
+  /// plus a million), else through the grid's hash.
+  template <class F>
+  void for_each_cell_in(NeighborGrid::CellCoord lo, NeighborGrid::CellCoord hi, F&& f) const {
     if (dense_cells_.empty()) {
-      grid_.for_each_cell_in(lo, hi, visit);
+      grid_.for_each_cell_in(lo, hi, f);
       return;
     }
-    // The same cells in the same (lexicographic) order, from the table.
     for (int a = 0; a < 3; ++a) {
       lo[size_t(a)] = std::max(lo[size_t(a)], dense_lo_[size_t(a)]);
       hi[size_t(a)] = std::min(hi[size_t(a)], dense_lo_[size_t(a)] + dense_size_[size_t(a)] - 1);
@@ -237,7 +259,7 @@ class PM_EXPORT ParticleField {
                                              size_t(cy - dense_lo_[1])) * size_t(dense_size_[2])];
         for (int32_t cz = lo[2]; cz <= hi[2]; ++cz) {
           const uint32_t c = row[cz - dense_lo_[2]];
-          if (c != NeighborGrid::kNoCell) visit(c);
+          if (c != NeighborGrid::kNoCell) f(c);
         }
       }
   }
@@ -267,7 +289,7 @@ class PM_EXPORT ParticleField {
   std::vector<double> sorted_metric_;  // anisotropic: 6 per particle, grid order
   std::vector<float> sorted_extent_;   // anisotropic: 3 per particle, grid order
   std::vector<float> cell_support_;    // anisotropic: 6 per grid cell
-  std::vector<uint32_t> dense_cells_;  // anisotropic: cell index per coordinate in the box (or empty)
+  std::vector<uint32_t> dense_cells_;  // cell index per coordinate in the occupied cells' box (or empty)
   NeighborGrid::CellCoord dense_lo_{}, dense_size_{};
   size_t anisotropic_count_ = 0;
   bool uniform_ = true;

@@ -2,12 +2,19 @@
 // sample space, classify the samples inside/outside, place the crossings on the edges between
 // inside and outside samples, fit polygons), done so that the work follows the surface.
 //
-// 1. Sampling only where the field can cross T. Space is cut into blocks of 8 x 8 x 8 grid
-//    nodes (cell size h); only the blocks that some particle's support reaches are allocated
-//    and sampled: F is zero everywhere else, and T > 0, so nothing else can hold surface.
-//    Memory and time therefore grow with the volume the particles occupy (a thin sheet costs
-//    a thin layer of blocks), never with their bounding box. Each block sums its particles'
-//    contributions in a fixed order, so the samples do not depend on the thread count.
+// 1. Sampling only where the surface may be. Space is cut into blocks of 8 x 8 x 8 grid nodes
+//    (cell size h). Blocks that no particle's support reaches are never touched: F is zero
+//    there, and T > 0. Of the others, a block is proven inside (every node's F >= T) or
+//    outside (every node's F < T) from bounds of the summed kernels: an upper bound from each
+//    particle's nearest point of the block, and a lower bound at the centre of every
+//    2 x 2 x 2 group of nodes from the kernels' convexity, F(x) >= F(c) + grad F(c).(x - c)
+//    - K |x - c|^2 (spherical kernels with strengths >= 0; otherwise every reached block is
+//    sampled). Only the blocks that may hold surface, and proven ones next to a crossing, are
+//    sampled and stored: memory and sampling follow the surface; the proofs cost about 40 %
+//    of sampling a block and never change the mesh (their margins are far above the samples'
+//    rounding). A thin sheet costs a thin layer of blocks, never its bounding box. Each block
+//    sums its particles' contributions in a fixed order, so the samples do not depend on the
+//    thread count.
 // 2. Classification: a node is inside when F >= T.
 // 3. Crossings: a vertex on every grid edge between an inside and an outside node, first by
 //    linear interpolation of the samples, then refined on the true field F along the edge
@@ -124,8 +131,10 @@ struct PolygonizeOptions {
   /// Worker threads, 0 = all cores. The output does not depend on it.
   int threads = 0;
   /// Fail with LimitExceeded, before allocating, if the large allocations - the block
-  /// search, the sampled grid (blocks of samples and their bookkeeping) and then the grid
-  /// with the output mesh - would need more than this many bytes. 0 = no limit.
+  /// search, the sampled grid (blocks of samples and their bookkeeping: checked before the
+  /// blocks are proven, and before each pass samples blocks) and then the grid with the
+  /// output mesh - would need more than this many bytes. The total a run used is
+  /// PolygonizeStats::grid_bytes. 0 = no limit.
   uint64_t max_grid_bytes = kDefaultMaxGridBytes;
   ProgressCallback progress;
   /// Empty, or the lower corner of the whole cloud these particles are a tile of (at or below
@@ -167,7 +176,10 @@ struct PolygonizeStats {
   size_t components_removed = 0;     ///< pieces dropped by it
   int32_t smoothing_iterations = 0;  ///< Taubin iterations applied to the mesh
   size_t candidate_blocks = 0;  ///< blocks near some particle, before the exact support test
-  size_t sampled_blocks = 0;    ///< blocks of 8^3 nodes that some support reaches (sampled)
+  size_t reached_blocks = 0;    ///< blocks of 8^3 nodes that some support reaches
+  size_t sampled_blocks = 0;    ///< of those, the blocks sampled (that may hold surface)
+  size_t inside_blocks = 0;     ///< reached blocks proven inside, not sampled
+  size_t outside_blocks = 0;    ///< reached blocks proven outside, not sampled
   size_t surface_blocks = 0;    ///< blocks with an inside/outside change (meshed)
   uint64_t sampled_nodes = 0;   ///< sampled_blocks x 512
   uint64_t bounding_box_nodes = 0;  ///< nodes a dense grid over the supports' box would need
@@ -176,6 +188,7 @@ struct PolygonizeStats {
   size_t triangles = 0;
   uint64_t field_evaluations = 0;  ///< exact evaluations of F (edge refinement and normals)
   double seconds_setup = 0;     ///< spacing estimate, field grid, block search
+  double seconds_proofs = 0;    ///< proving blocks inside or outside (no samples needed)
   double seconds_sampling = 0;  ///< summing the particles into the blocks
   double seconds_meshing = 0;   ///< classification, vertices (refinement), triangles
   double seconds_finishing = 0; ///< dropping small pieces and smoothing the mesh
@@ -193,8 +206,10 @@ struct PolygonizeResult {
 };
 
 /// Polygonize the iso-surface F = T of the particles' field (see the top of this file).
-/// Cost: O(N (R/h)^3) to sample (each particle touches the nodes in its support) and O(surface
-/// cells) to mesh; memory proportional to the occupied volume / (8h)^3 blocks plus the mesh.
+/// Cost: O(N (R/h)^3) to prove and sample (each particle touches the nodes, or the group
+/// centres, in its support; sampling only near the surface) and O(surface cells) to mesh;
+/// memory proportional to the surface's blocks plus the occupied volume / (8h)^3 blocks'
+/// bookkeeping, plus the mesh.
 /// @throws Error(InvalidInput) empty cloud, non-finite coordinate;
 ///         Error(InvalidArgument) kernel, radius, threshold, cell size, radii, strengths,
 ///         anisotropy, component or smoothing options out of range (the message names the

@@ -1,0 +1,248 @@
+#include "smooth/loop_limit.h"
+
+#include <algorithm>
+
+#include <opensubdiv/sdc/loopScheme.h>
+#include <opensubdiv/sdc/scheme.h>
+
+#include "core/parallel.h"
+
+namespace PM_NAMESPACE::detail {
+
+namespace {
+
+/// The interface Sdc::Scheme expects of a mask (as PrimvarRefiner's own).
+class Mask {
+ public:
+  typedef double Weight;
+  Mask(Weight* v, Weight* e, Weight* f) : v_(v), e_(e), f_(f) {}
+  int GetNumVertexWeights() const { return nv_; }
+  int GetNumEdgeWeights() const { return ne_; }
+  int GetNumFaceWeights() const { return nf_; }
+  void SetNumVertexWeights(int n) { nv_ = n; }
+  void SetNumEdgeWeights(int n) { ne_ = n; }
+  void SetNumFaceWeights(int n) { nf_ = n; }
+  Weight const& VertexWeight(int i) const { return v_[i]; }
+  Weight const& EdgeWeight(int i) const { return e_[i]; }
+  Weight const& FaceWeight(int i) const { return f_[i]; }
+  Weight& VertexWeight(int i) { return v_[i]; }
+  Weight& EdgeWeight(int i) { return e_[i]; }
+  Weight& FaceWeight(int i) { return f_[i]; }
+  bool AreFaceWeightsForFaceCenters() const { return centers_; }
+  void SetFaceWeightsForFaceCenters(bool on) { centers_ = on; }
+
+ private:
+  Weight *v_, *e_, *f_;
+  int nv_ = 0, ne_ = 0, nf_ = 0;
+  bool centers_ = false;
+};
+
+/// A smooth interior vertex of the given valence, as Sdc::Scheme sees it.
+struct SmoothVertex {
+  int valence;
+  int GetNumEdges() const { return valence; }
+  int GetNumFaces() const { return valence; }
+  float GetSharpness() const { return 0.0f; }
+  float* GetSharpnessPerEdge(float* s) const {
+    std::fill(s, s + valence, 0.0f);
+    return s;
+  }
+};
+
+}  // namespace
+
+bool build_loop_rings(const std::vector<Triangle>& T, size_t V, LoopRings* out) {
+  const size_t F = T.size();
+  // Corners by vertex: each corner's next and previous vertex, in triangle order (counted
+  // and placed per fixed chunk of triangles: the same layout for any thread count).
+  struct Corner {
+    uint32_t to, from;
+  };
+  std::vector<uint32_t>& off = out->offset;
+  off.assign(V + 1, 0);
+  std::vector<Corner> corners(3 * F);
+  {
+    constexpr size_t kChunks = 8;
+    const size_t per = (F + kChunks - 1) / kChunks;
+    std::vector<uint32_t> at(kChunks * V, 0);
+    parallel_blocks(kChunks, 1, [&](size_t cb, size_t ce) {
+      for (size_t h = cb; h < ce; ++h)
+        for (size_t f = h * per; f < std::min(F, (h + 1) * per); ++f)
+          for (uint32_t v : T[f]) ++at[h * V + v];
+    });
+    parallel_blocks(V, 16384, [&](size_t b, size_t e) {
+      for (size_t v = b; v < e; ++v) {
+        uint32_t n = 0;
+        for (size_t h = 0; h < kChunks; ++h) n += at[h * V + v];
+        off[v + 1] = n;
+      }
+    });
+    for (size_t v = 0; v < V; ++v) off[v + 1] += off[v];
+    parallel_blocks(V, 16384, [&](size_t b, size_t e) {
+      for (size_t v = b; v < e; ++v) {
+        uint32_t slot = off[v];
+        for (size_t h = 0; h < kChunks; ++h) {
+          const uint32_t n = at[h * V + v];
+          at[h * V + v] = slot;
+          slot += n;
+        }
+      }
+    });
+    parallel_blocks(kChunks, 1, [&](size_t cb, size_t ce) {
+      for (size_t h = cb; h < ce; ++h)
+        for (size_t f = h * per; f < std::min(F, (h + 1) * per); ++f)
+          for (int c = 0; c < 3; ++c) corners[at[h * V + T[f][size_t(c)]]++] = {T[f][size_t((c + 1) % 3)], T[f][size_t((c + 2) % 3)]};
+    });
+  }
+  // Each vertex's ring: from its first corner's next vertex, through the corner whose next
+  // vertex is the previous corner's previous one (counter-clockwise with the winding).
+  out->ring.resize(3 * F);
+  std::atomic<bool> ok{true};
+  std::atomic<int> max_valence{0};
+  parallel_blocks(V, 4096, [&](size_t b, size_t e) {
+    int local_max = 0;
+    std::vector<uint8_t> used;
+    for (size_t v = b; v < e && ok.load(std::memory_order_relaxed); ++v) {
+      const uint32_t begin = off[v], n = off[v + 1] - off[v];
+      if (n == 0) continue;  // unreferenced: the refined levels have none
+      if (n < 3) {
+        ok = false;
+        break;
+      }
+      local_max = std::max(local_max, int(n));
+      used.assign(n, 0);
+      uint32_t at = 0;
+      for (uint32_t k = 0; k < n; ++k) {
+        used[at] = 1;
+        out->ring[begin + k] = corners[begin + at].to;
+        if (k + 1 == n) break;
+        const uint32_t want = corners[begin + at].from;
+        uint32_t next = n;
+        for (uint32_t j = 0; j < n; ++j)
+          if (!used[j] && corners[begin + j].to == want) {
+            next = j;
+            break;
+          }
+        if (next == n) {
+          ok = false;
+          break;
+        }
+        at = next;
+      }
+      // The fan closes: the last corner's previous vertex is the first one's next.
+      if (ok && corners[begin + at].from != corners[begin].to) ok = false;
+      // Start at the lowest neighbour, so that the sums do not depend on the order of the
+      // triangles or of their corners.
+      uint32_t* r = out->ring.data() + begin;
+      std::rotate(r, std::min_element(r, r + n), r + n);
+    }
+    int m = max_valence.load();
+    while (local_max > m && !max_valence.compare_exchange_weak(m, local_max)) {
+    }
+  });
+  out->max_valence = max_valence.load();
+  return ok.load();
+}
+
+LoopLimitMasks::LoopLimitMasks(int max_valence) {
+  const size_t n = size_t(std::max(max_valence, 3)) + 1;
+  vertex_.assign(n, 0.0);
+  edge_.assign(n, 0.0);
+  start_.assign(n + 1, 0);
+  for (size_t k = 0; k < n; ++k) start_[k + 1] = start_[k] + k;
+  tan1_.assign(start_[n], 0.0);
+  tan2_.assign(start_[n], 0.0);
+  const OpenSubdiv::Sdc::Scheme<OpenSubdiv::Sdc::SCHEME_LOOP> scheme;
+  std::vector<double> pe(n), pf(n), t1e(n), t1f(n), t2e(n), t2f(n);
+  for (size_t k = 3; k < n; ++k) {
+    double pv = 0, t1v = 0, t2v = 0;
+    Mask pos(&pv, pe.data(), pf.data()), t1(&t1v, t1e.data(), t1f.data()), t2(&t2v, t2e.data(), t2f.data());
+    scheme.ComputeVertexLimitMask(SmoothVertex{int(k)}, pos, t1, t2, OpenSubdiv::Sdc::Crease::RULE_SMOOTH);
+    vertex_[k] = pv;
+    edge_[k] = pe[0];  // the same for every neighbour under the smooth rule
+    for (size_t i = 0; i < k; ++i) {
+      tan1_[start_[k] + i] = t1e[i];
+      tan2_[start_[k] + i] = t2e[i];
+    }
+  }
+}
+
+void loop_limit_positions(const LoopRings& rings, const LoopLimitMasks& masks, const std::vector<Vec3>& src,
+                          std::vector<Vec3>& pos, std::vector<Vec3>& normals) {
+  const size_t V = rings.offset.size() - 1;
+  pos.resize(V);
+  normals.resize(V);
+  parallel_blocks(V, 4096, [&](size_t b, size_t e) {
+    for (size_t v = b; v < e; ++v) {
+      const uint32_t begin = rings.offset[v];
+      const int n = int(rings.offset[v + 1] - begin);
+      if (n == 0) {
+        pos[v] = src[v];
+        normals[v] = Vec3{};
+        continue;
+      }
+      const uint32_t* r = rings.ring.data() + begin;
+      // As PrimvarRefiner::Limit: each output cleared, then edge weights in ring order, then
+      // the vertex weight (the tangents' is 0, added all the same).
+      const double ew = masks.edge_weight(n), vw = masks.vertex_weight(n);
+      const double *w1 = masks.tangent1(n), *w2 = masks.tangent2(n);
+      double p[3] = {0, 0, 0}, a[3] = {0, 0, 0}, c[3] = {0, 0, 0};
+      for (int i = 0; i < n; ++i) {
+        const Vec3& q = src[r[i]];
+        p[0] += ew * q.x;
+        p[1] += ew * q.y;
+        p[2] += ew * q.z;
+      }
+      const Vec3& s = src[v];
+      p[0] += vw * s.x;
+      p[1] += vw * s.y;
+      p[2] += vw * s.z;
+      for (int i = 0; i < n; ++i) {
+        const Vec3& q = src[r[i]];
+        a[0] += w1[i] * q.x;
+        a[1] += w1[i] * q.y;
+        a[2] += w1[i] * q.z;
+        c[0] += w2[i] * q.x;
+        c[1] += w2[i] * q.y;
+        c[2] += w2[i] * q.z;
+      }
+      a[0] += 0.0 * s.x;
+      a[1] += 0.0 * s.y;
+      a[2] += 0.0 * s.z;
+      c[0] += 0.0 * s.x;
+      c[1] += 0.0 * s.y;
+      c[2] += 0.0 * s.z;
+      pos[v] = {p[0], p[1], p[2]};
+      const Vec3 t1{a[0], a[1], a[2]}, t2{c[0], c[1], c[2]};
+      const Vec3 nn = cross(t1, t2);
+      // A vanishing cross product (degenerate control geometry) is marked with a zero normal.
+      normals[v] = squared_norm(nn) > 1e-24 * squared_norm(t1) * squared_norm(t2) ? normalized(nn) : Vec3{};
+    }
+  });
+}
+
+void loop_limit_channels(const LoopRings& rings, const LoopLimitMasks& masks, const double* src, int channels,
+                         double* dst) {
+  const size_t V = rings.offset.size() - 1, k = size_t(channels);
+  parallel_blocks(V, 4096, [&](size_t b, size_t e) {
+    for (size_t v = b; v < e; ++v) {
+      const uint32_t begin = rings.offset[v];
+      const int n = int(rings.offset[v + 1] - begin);
+      double* d = dst + v * k;
+      const double* s = src + v * k;
+      if (n == 0) {
+        std::copy(s, s + k, d);
+        continue;
+      }
+      const double ew = masks.edge_weight(n), vw = masks.vertex_weight(n);
+      std::fill(d, d + k, 0.0);
+      for (int i = 0; i < n; ++i) {
+        const double* q = src + size_t(rings.ring[begin + uint32_t(i)]) * k;
+        for (size_t j = 0; j < k; ++j) d[j] += ew * q[j];
+      }
+      for (size_t j = 0; j < k; ++j) d[j] += vw * s[j];
+    }
+  });
+}
+
+}  // namespace particlemesh::detail
