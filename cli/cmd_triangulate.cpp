@@ -97,7 +97,7 @@ std::string volume_particles_hint(const SurfaceResult& r) {
   const size_t kept = r.triangulation.kept, dropped = r.surface.rejected_conormal;
   char s[320];
   std::snprintf(s, sizeof s,
-                "%.0f%% of the seed's triangles were dropped for joining particles that face opposite ways: if "
+                "%.0f%% of the smallest-sphere test's triangles were dropped for joining particles that face opposite ways: if "
                 "these particles fill a volume (e.g. a fluid simulation's), `particlemesh polygonize` meshes its "
                 "surface",
                 100.0 * double(dropped) / double(kept));
@@ -240,7 +240,7 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
       std::printf("  local spacing %.2g-%.2g r0 (10%%-90%%: %.2g-%.2g, median %.2g): each particle's L = %g x its own\n",
                   h.min, h.max, h.p10, h.p90, h.median, a.max_edge_factor);
     }
-    std::printf("  seed's test   %zu candidate triplets, %zu kept%s\n", s.candidates, s.kept,
+    std::printf("  raw test      %zu candidate triplets, %zu kept%s\n", s.candidates, s.kept,
                 s.ties ? (", " + std::to_string(s.ties) + " ties broken").c_str() : "");
     if (!a.raw) {
       const auto& f = result.surface;
@@ -304,7 +304,7 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
       ->check(finite_number())
       ->capture_default_str();
   app->add_flag("--raw", args->raw,
-                "Return the seed's exact triangle set (not a surface: overlapping pairs on quads), with one L for the "
+                "Return the smallest-sphere test's exact triangle set (not a surface: overlapping pairs on quads), with one L for the "
                 "whole cloud");
   app->add_flag("--global-spacing", args->global_spacing,
                 "One longest edge L = factor x r0 for the whole cloud, instead of each particle's own from the "

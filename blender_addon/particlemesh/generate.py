@@ -208,7 +208,7 @@ def triangulate(particles, settings, progress=None, reuse=None):
             f"{mesh.stats['max_edge']:.6g}, shorter than the gaps between the "
             f"{len(particles.positions)} particles (raise the spacing or the edge factor)")
     if raw:
-        # The seed's triangles are not oriented (canonical a < b < c): wind them to agree
+        # The raw test's triangles are not oriented (canonical a < b < c): wind them to agree
         # with the particles' normals where there are some.
         if mesh.normals is not None:
             mesh.triangles, _ = mesh_arrays.orient_by_normals(mesh.triangles, mesh.normals,
@@ -246,7 +246,7 @@ def volume_particles_warning(stats):
     if stats.get("raw") or not stats.get("looks_like_volume"):
         return None
     kept, dropped = stats.get("kept", 0), stats.get("rejected_conormal", 0)
-    return (f"{100 * dropped / kept:.0f}% of the seed's triangles join particles facing opposite "
+    return (f"{100 * dropped / kept:.0f}% of the smallest-sphere test's triangles join particles facing opposite "
             "ways: if the particles fill a volume (a fluid simulation's), use Polygonize")
 
 

@@ -32,7 +32,7 @@ class TriangulateProps:
     max_edge_factor: FloatProperty(
         name="Edge Factor", default=2.0, min=0.1, max=20.0, soft_min=1.0, soft_max=4.0,
         update=_settings_changed,
-        description="Longest triangle edge L as a multiple of the spacing (the seed's default "
+        description="Longest triangle edge L as a multiple of the spacing (the smallest-sphere test's default "
                     "is 2); larger bridges bigger gaps")
     local_spacing: BoolProperty(
         name="Local Spacing", default=True, update=_settings_changed,
@@ -48,7 +48,7 @@ class TriangulateProps:
                     "faster while renders use the Render settings")
     raw: BoolProperty(
         name="Raw Triangles", default=False, update=_settings_changed,
-        description="Keep the seed's exact triangle set instead of the finished surface "
+        description="Keep the smallest-sphere test's exact triangle set instead of the finished surface "
                     "(not a manifold: overlapping pairs, slivers, no orientation)")
     normal_source: EnumProperty(
         name="Normals", default="AUTO", update=_settings_changed,

@@ -14,6 +14,7 @@
 
 #include <tbb/parallel_sort.h>
 
+#include "core/hashing.h"
 #include "core/parallel.h"
 #include "core/progress_tracker.h"
 #include "particlemesh/core/error.h"
@@ -23,6 +24,7 @@
 #include "volume/mc_table.h"
 #include "volume/polygonize_finish.h"
 #include "volume/sphere_sampling.h"
+#include "volume/surface_vertices.h"
 
 namespace PM_NAMESPACE {
 
@@ -56,8 +58,6 @@ constexpr int kLN = kL * kL * kL;
 constexpr int kMaskWords = 3 * kBN / 64; // one bit per (node, axis) edge owned by a block
 constexpr int64_t kMaxBlocksPerAxis = (int64_t(1) << 21) - 2;
 constexpr uint32_t kNone = 0xffffffffu;
-// Vertices stay at least this fraction of an edge away from its nodes (no two coincide).
-constexpr double kEdgeClamp = 1e-3;
 
 uint64_t pack(int64_t bx, int64_t by, int64_t bz) {
   return (uint64_t(bz) << 42) | (uint64_t(by) << 21) | uint64_t(bx);
@@ -68,39 +68,15 @@ void unpack(uint64_t k, int64_t* b) {
   b[2] = int64_t(k >> 42);
 }
 
-// Sorted keys -> index, by open addressing.
+// Sorted keys -> index (core/hashing.h's open-addressing table).
 class BlockMap {
  public:
-  explicit BlockMap(const std::vector<uint64_t>& sorted_keys) : keys_(sorted_keys) {
-    uint64_t size = 16;
-    while (size < 2 * uint64_t(keys_.size())) size <<= 1;
-    table_.assign(size, kNone);
-    mask_ = size - 1;
-    for (uint32_t i = 0; i < keys_.size(); ++i) {
-      uint64_t h = mix(keys_[i]) & mask_;
-      while (table_[h] != kNone) h = (h + 1) & mask_;
-      table_[h] = i;
-    }
-  }
-  uint32_t find(uint64_t key) const {
-    uint64_t h = mix(key) & mask_;
-    while (true) {
-      const uint32_t i = table_[h];
-      if (i == kNone || keys_[i] == key) return i;
-      h = (h + 1) & mask_;
-    }
-  }
+  explicit BlockMap(const std::vector<uint64_t>& sorted_keys)
+      : keys_(sorted_keys), mask_(detail::build_key_table(keys_, table_)) {}
+  uint32_t find(uint64_t key) const { return detail::find_key(table_, mask_, keys_, key); }
   size_t bytes() const { return table_.size() * sizeof(uint32_t); }
 
  private:
-  static uint64_t mix(uint64_t h) {
-    h ^= h >> 30;
-    h *= 0xBF58476D1CE4E5B9ull;
-    h ^= h >> 27;
-    h *= 0x94D049BB133111EBull;
-    h ^= h >> 31;
-    return h;
-  }
   const std::vector<uint64_t>& keys_;
   std::vector<uint32_t> table_;
   uint64_t mask_ = 0;
@@ -293,54 +269,6 @@ bool block_reached(const ParticleField& field, const Grid& g, uint64_t key) {
   return reached;
 }
 
-// Place the crossing on the edge from node position a (sample fa) to a + h e_axis (sample
-// fb): linear interpolation of the samples, then safeguarded Newton on the true field.
-struct Crossing {
-  Vec3 position, normal;
-  int evaluations = 0;
-};
-
-Crossing refine_crossing(const ParticleField& field, const Vec3& a, int axis, double h, double fa, double fb,
-                         double T) {
-  Crossing out;
-  double lo = 0, hi = 1;
-  const double phi_lo = fa - T;  // sign at t = 0
-  double t = std::clamp((T - fa) / (fb - fa), kEdgeClamp, 1.0 - kEdgeClamp);
-  Vec3 grad{};
-  auto at = [&](double tt) {
-    Vec3 x = a;
-    (axis == 0 ? x.x : axis == 1 ? x.y : x.z) += tt * h;
-    return x;
-  };
-  for (int it = 0; it < 8; ++it) {
-    const double phi = field.value_and_gradient(at(t), &grad) - T;
-    ++out.evaluations;
-    if (phi == 0) break;
-    if ((phi < 0) == (phi_lo < 0)) lo = t; else hi = t;
-    const double dphi = grad[axis] * h;
-    double next = dphi != 0 ? t - phi / dphi : 0.5 * (lo + hi);
-    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-    const double step = std::abs(next - t);
-    t = next;
-    // Newton converges quadratically (error ~ (g''/2g') step^2, with g''/g' of order h/R):
-    // after a step below 1e-2 of the edge the root is within ~1e-5 h, so that last step is
-    // taken without another evaluation (the normal comes from the gradient that close by).
-    if (step < 1e-2) break;
-  }
-  t = std::clamp(t, kEdgeClamp, 1.0 - kEdgeClamp);
-  out.position = at(t);
-  const double gn = norm(grad);
-  if (gn > 0 && std::isfinite(gn)) {
-    out.normal = grad * (-1.0 / gn);
-  } else {
-    // No gradient (a flat spot): fall back to the edge direction, from inside to outside.
-    Vec3 e{};
-    (axis == 0 ? e.x : axis == 1 ? e.y : e.z) = fa >= T ? 1.0 : -1.0;
-    out.normal = e;
-  }
-  return out;
-}
-
 // Case (bit c set: corner c inside) and decision bits of the cell whose lower corner is
 // local node (x, y, z); its eight samples go to cv.
 inline int cell_case(const float* local, int x, int y, int z, double T, const detail::McTable& table,
@@ -368,41 +296,6 @@ inline int cell_case(const float* local, int x, int y, int z, double T, const de
     ++j;
   }
   return cs;
-}
-
-// A vertex inside a cell for a loop fanned around it: the mean of the loop's linearly
-// interpolated crossings, moved onto the surface along the gradient (kept in the cell).
-Crossing center_vertex(const ParticleField& field, const Vec3& cell_lo, double h, const float cv[8],
-                       const uint8_t* loop, int len, double T) {
-  Crossing out;
-  Vec3 x{};
-  for (int k = 0; k < len; ++k) {
-    const int e = loop[k];
-    const int lc = detail::mc_edge_lower_corner(e), axis = detail::mc_edge_axis(e);
-    const double f0 = cv[lc], f1 = cv[lc + (1 << axis)];
-    const double t = std::clamp((T - f0) / (f1 - f0), 0.0, 1.0);
-    Vec3 p{double(lc & 1), double((lc >> 1) & 1), double((lc >> 2) & 1)};
-    (axis == 0 ? p.x : axis == 1 ? p.y : p.z) += t;
-    x += p;
-  }
-  x = cell_lo + x * (h / len);
-  Vec3 grad{};
-  for (int it = 0; it < 6; ++it) {
-    const double phi = field.value_and_gradient(x, &grad) - T;
-    ++out.evaluations;
-    const double g2 = squared_norm(grad);
-    if (!(g2 > 0) || phi == 0) break;
-    Vec3 next = x - grad * (phi / g2);
-    next = {std::clamp(next.x, cell_lo.x, cell_lo.x + h), std::clamp(next.y, cell_lo.y, cell_lo.y + h),
-            std::clamp(next.z, cell_lo.z, cell_lo.z + h)};
-    const double step = distance(next, x);
-    x = next;
-    if (step < 1e-7 * h) break;
-  }
-  out.position = x;
-  const double gn = norm(grad);
-  out.normal = gn > 0 && std::isfinite(gn) ? grad * (-1.0 / gn) : Vec3{0, 0, 1};
-  return out;
 }
 
 // The distinct blocks of every cell's range (cell_block_range), sorted: marked in a bitmap of
@@ -850,7 +743,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
           const int l = x + kL * (y + kL * z);
           const int step = a == 0 ? 1 : (a == 1 ? kL : kL * kL);
           const Vec3 pa{base[0] + x * h, base[1] + y * h, base[2] + z * h};
-          const Crossing c = refine_crossing(field, pa, a, h, local[l], local[l + step], T);
+          const detail::Crossing c = detail::refine_crossing(field, pa, a, h, local[l], local[l + step], T);
           evals += uint64_t(c.evaluations);
           mesh.positions[v] = c.position;
           mesh.normals[v] = c.normal;
@@ -876,7 +769,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
               const Vec3 cell_lo{base[0] + x * h, base[1] + y * h, base[2] + z * h};
               for (int k = 0; k < nc && k < 4; ++k) {
                 const int len = *cl++;
-                const Crossing c = center_vertex(field, cell_lo, h, cv, cl, len, T);
+                const detail::Crossing c = detail::center_vertex(field, cell_lo, h, cv, cl, len, T);
                 cl += len;
                 evals += uint64_t(c.evaluations);
                 mesh.positions[next_center] = c.position;
