@@ -19,6 +19,12 @@ ZIP="${1:-$(ls "$BUILD"/blender_addon/particlemesh-*-blender-addon.zip 2>/dev/nu
 WORK="${PM_PORTABLE_DIR:-$BUILD/portable}"
 ROOTFS="$WORK/bookworm"
 MIRROR="${PM_DEBIAN_MIRROR:-http://deb.debian.org/debian}"
+# Paths inside the bare root (relative to it: "$ROOTFS/$X" from here, "/$X" in the chroot),
+# and the host's files the chroot needs.
+TEST_DIR="tmp/pm"              # the zip and the check script, inside the root
+BLENDER_BIN="usr/bin/blender"  # Debian's blender, inside the root
+HOST_RESOLV="${PM_HOST_RESOLV_CONF:-/etc/resolv.conf}"  # name resolution for apt in the root
+HOST_DEV="${PM_HOST_DEV:-/dev}"                          # bound into the root for Blender
 
 if [ -z "$ZIP" ] || [ ! -f "$ZIP" ]; then
   echo "test_addon_portable: no add-on zip (build it first: ./scripts/setup.sh)" >&2
@@ -45,17 +51,17 @@ mount_in() {  # mount_in TYPE-OR---bind SOURCE TARGET
 
 start=$(date +%s)
 if [ "${PM_PORTABLE_FRESH:-0}" = 1 ]; then rm -rf "$ROOTFS"; fi
-if [ ! -x "$ROOTFS/usr/bin/blender" ]; then
+if [ ! -x "$ROOTFS/$BLENDER_BIN" ]; then
   rm -rf "$ROOTFS"
   mkdir -p "$WORK"
   echo "test_addon_portable: debootstrap --variant=minbase bookworm ($MIRROR)"
   debootstrap --variant=minbase bookworm "$ROOTFS" "$MIRROR" >"$WORK/debootstrap.log" 2>&1 ||
     { tail -20 "$WORK/debootstrap.log" >&2; exit 1; }
   t=$(date +%s); echo "test_addon_portable: root made in $((t - start)) s"
-  cp /etc/resolv.conf "$ROOTFS/etc/resolv.conf"
+  cp "$HOST_RESOLV" "$ROOTFS/etc/resolv.conf"
   mount_in proc proc "$ROOTFS/proc"
   echo "test_addon_portable: apt-get install --no-install-recommends blender python3-numpy"
-  chroot "$ROOTFS" /usr/bin/env DEBIAN_FRONTEND=noninteractive bash -c \
+  chroot "$ROOTFS" env DEBIAN_FRONTEND=noninteractive bash -c \
     "apt-get update -q && apt-get install -y -q --no-install-recommends blender python3-numpy" \
     >"$WORK/apt.log" 2>&1 || { tail -20 "$WORK/apt.log" >&2; exit 1; }
   chroot "$ROOTFS" apt-get clean
@@ -64,20 +70,20 @@ if [ ! -x "$ROOTFS/usr/bin/blender" ]; then
 fi
 echo "test_addon_portable: the root has $(chroot "$ROOTFS" dpkg-query -W -f='${Package}\n' | wc -l) packages," \
      "$(chroot "$ROOTFS" dpkg-query -W -f='${Version}' blender 2>/dev/null | sed 's/^/blender /')"
-if chroot "$ROOTFS" sh -c 'ls /usr/lib/*/libOpenMeshCore* >/dev/null 2>&1'; then
+if compgen -G "$ROOTFS/usr/lib/*/libOpenMeshCore*" >/dev/null; then
   echo "test_addon_portable: the root has OpenMesh: not a fair test" >&2
   exit 1
 fi
 
 mount_in proc proc "$ROOTFS/proc"
-mount_in --bind /dev "$ROOTFS/dev"
-mkdir -p "$ROOTFS/tmp/pm"
-cp "$ZIP" "$ROOTFS/tmp/pm/addon.zip"
-cp "$ROOT/scripts/portable_addon_check.py" "$ROOTFS/tmp/pm/"
+mount_in --bind "$HOST_DEV" "$ROOTFS/dev"
+mkdir -p "$ROOTFS/$TEST_DIR"
+cp "$ZIP" "$ROOTFS/$TEST_DIR/addon.zip"
+cp "$ROOT/scripts/portable_addon_check.py" "$ROOTFS/$TEST_DIR/"
 rc=0
-chroot "$ROOTFS" /usr/bin/env -i HOME=/tmp/pm PATH=/usr/bin:/bin LANG=C.UTF-8 \
+chroot "$ROOTFS" env -i HOME="/$TEST_DIR" PATH="/${BLENDER_BIN%/*}:/bin" LANG=C.UTF-8 \
   blender --background --factory-startup -noaudio --python-exit-code 1 \
-  --python /tmp/pm/portable_addon_check.py -- /tmp/pm/addon.zip 2>&1 | grep -E "portable check|Error|error" || rc=1
+  --python "/$TEST_DIR/portable_addon_check.py" -- "/$TEST_DIR/addon.zip" 2>&1 | grep -E "portable check|Error|error" || rc=1
 [ "${PIPESTATUS[0]}" -eq 0 ] || rc=1
 echo "test_addon_portable: $([ $rc -eq 0 ] && echo passed || echo FAILED) in $(($(date +%s) - start)) s"
 exit $rc
