@@ -28,12 +28,7 @@ namespace {
 const Vec3* as_vec3(const double* p) { return reinterpret_cast<const Vec3*>(p); }
 
 RaycastOptions to_options(const pm_raycast_options* options) {
-  pm_raycast_options defaults;
-  pm_raycast_options_init(&defaults);
-  const pm_raycast_options o = capi::read_versioned(
-      options, defaults, "options",
-      {offsetof(pm_raycast_options, progress),
-       offsetof(pm_raycast_options, progress_user_data)});
+  const pm_raycast_options o = capi::read_options(options, pm_raycast_options_init);
   RaycastOptions r;
   r.t_min = o.t_min;
   r.t_max = o.t_max;
@@ -57,17 +52,8 @@ void pm_field_options_init(pm_field_options* options) {
   const FieldParams d;
   *options = pm_field_options{};
   options->struct_size = sizeof(pm_field_options);
-  options->kernel = int32_t(d.kernel);
-  options->radius = d.radius;
-  options->threshold = d.threshold;
+  capi::kernel_settings_to_c(d, options);
   options->threads = 0;
-  options->progress = nullptr;
-  options->progress_user_data = nullptr;
-  options->anisotropic = d.anisotropy.enabled ? 1 : 0;
-  options->aniso_neighbor_radius = d.anisotropy.neighbor_radius;
-  options->aniso_max_stretch = d.anisotropy.max_stretch;
-  options->aniso_min_neighbors = d.anisotropy.min_neighbors;
-  options->aniso_smoothing = d.anisotropy.smoothing;
 }
 
 pm_status pm_field_create(const pm_cloud* cloud, const double* radii, const double* strengths,
@@ -75,24 +61,9 @@ pm_status pm_field_create(const pm_cloud* cloud, const double* radii, const doub
   return guarded([&] {
     require(cloud, "cloud");
     require(out_field, "out_field");
-    pm_field_options defaults;
-    pm_field_options_init(&defaults);
-    const pm_field_options o = capi::read_versioned(
-        options, defaults, "options",
-        {offsetof(pm_field_options, progress),
-         offsetof(pm_field_options, progress_user_data)});
+    const pm_field_options o = capi::read_options(options, pm_field_options_init);
     FieldParams p;
-    p.kernel = capi::to_kernel(o.kernel);
-    p.radius = o.radius;
-    p.threshold = o.threshold;
-    p.anisotropy.enabled = o.anisotropic != 0;
-    p.anisotropy.neighbor_radius = o.aniso_neighbor_radius;
-    p.anisotropy.max_stretch = o.aniso_max_stretch;
-    p.anisotropy.min_neighbors = o.aniso_min_neighbors;
-    p.anisotropy.smoothing = o.aniso_smoothing;
-    const size_t n = cloud->cloud.size();
-    if (radii) p.radii.assign(radii, radii + n);
-    if (strengths) p.strengths.assign(strengths, strengths + n);
+    capi::kernel_settings_from_c(o, radii, strengths, cloud->cloud.size(), &p);
     auto handle = std::make_unique<pm_field>();
     handle->caster = RayCaster(ParticleField(cloud->cloud, p, o.threads, wrap_progress(o.progress, o.progress_user_data)));
     *out_field = handle.release();
@@ -135,8 +106,6 @@ void pm_raycast_options_init(pm_raycast_options* options) {
   options->t_min = d.t_min;
   options->t_max = d.t_max;
   options->threads = d.threads;
-  options->progress = nullptr;
-  options->progress_user_data = nullptr;
 }
 
 pm_status pm_raycast_first(const pm_field* field, const double* origins, const double* directions, size_t count,

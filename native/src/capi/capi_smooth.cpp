@@ -39,13 +39,18 @@ VertexAttribute make_attribute(const char* name, int32_t components, const float
   return a;
 }
 
-void store(std::vector<VertexAttribute>& attributes, VertexAttribute a) {
-  for (auto& x : attributes)
+/// Sets (adds or replaces, by name) an attribute of a TriMesh or a PointCloud, `owner` naming
+/// it in errors.
+template <class Vertices>
+void set_attribute(Vertices& v, const char* owner, const char* name, int32_t components, const float* values,
+                   size_t vertex_count) {
+  VertexAttribute a = make_attribute(name, components, values, vertex_count, v.positions.size(), owner);
+  for (auto& x : v.attributes)
     if (x.name == a.name) {
       x = std::move(a);
       return;
     }
-  attributes.push_back(std::move(a));
+  v.attributes.push_back(std::move(a));
 }
 
 const VertexAttribute& find(const pm_mesh* mesh, const char* name) {
@@ -58,14 +63,9 @@ const VertexAttribute& find(const pm_mesh* mesh, const char* name) {
 
 /// The C++ options of a pm_smooth_options (NULL: the defaults), creases checked against `mesh`.
 SmoothOptions smooth_options(const pm_mesh* mesh, const pm_smooth_options* options) {
-  pm_smooth_options defaults;
-  pm_smooth_options_init(&defaults);
-  const pm_smooth_options o = capi::read_versioned(
-      options, defaults, "options",
-      {offsetof(pm_smooth_options, crease_edges),
-       offsetof(pm_smooth_options, crease_sharpness),
-       offsetof(pm_smooth_options, progress),
-       offsetof(pm_smooth_options, progress_user_data)});
+  const pm_smooth_options o =
+      capi::read_options(options, pm_smooth_options_init,
+                         {offsetof(pm_smooth_options, crease_edges), offsetof(pm_smooth_options, crease_sharpness)});
   SmoothOptions opt;
   opt.scheme = static_cast<SmoothScheme>(o.scheme);
   opt.levels = o.levels;
@@ -101,20 +101,12 @@ extern "C" {
 
 pm_status pm_mesh_set_attribute(pm_mesh* mesh, const char* name, int32_t components, const float* values,
                                 size_t vertex_count) {
-  return guarded([&] {
-    require(mesh, "mesh");
-    store(mesh->mesh.attributes,
-          make_attribute(name, components, values, vertex_count, mesh->mesh.positions.size(), "mesh"));
-  });
+  return guarded([&] { set_attribute(capi::deref(mesh, "mesh").mesh, "mesh", name, components, values, vertex_count); });
 }
 
 pm_status pm_cloud_set_attribute(pm_cloud* cloud, const char* name, int32_t components, const float* values,
                                  size_t vertex_count) {
-  return guarded([&] {
-    require(cloud, "cloud");
-    store(cloud->cloud.attributes,
-          make_attribute(name, components, values, vertex_count, cloud->cloud.positions.size(), "cloud"));
-  });
+  return guarded([&] { set_attribute(capi::deref(cloud, "cloud").cloud, "cloud", name, components, values, vertex_count); });
 }
 
 pm_status pm_mesh_get_attribute_components(const pm_mesh* mesh, const char* name, int32_t* out_components) {
@@ -172,8 +164,6 @@ void pm_smooth_options_init(pm_smooth_options* options) {
   options->crease_count = 0;
   options->crease_edges = nullptr;
   options->crease_sharpness = nullptr;
-  options->progress = nullptr;
-  options->progress_user_data = nullptr;
 }
 
 pm_status pm_smooth(const pm_mesh* mesh, const pm_smooth_options* options, pm_mesh** out_mesh) {

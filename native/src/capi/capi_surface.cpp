@@ -25,8 +25,6 @@ void pm_triangulate_options_init(pm_triangulate_options* options) {
   options->threads = d.threads;
   options->max_neighbors = uint32_t(d.max_neighbors);
   options->flags = 0;
-  options->progress = nullptr;
-  options->progress_user_data = nullptr;
   options->normal_angle = d.normal_angle;
   options->fill_holes = uint32_t(d.fill_holes);
   options->fill_edge_factor = d.fill_edge_factor;
@@ -39,12 +37,7 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
   return guarded([&] {
     require(cloud, "cloud");
     require(out_mesh, "out_mesh");
-    pm_triangulate_options defaults;
-    pm_triangulate_options_init(&defaults);
-    const pm_triangulate_options o = capi::read_versioned(
-        options, defaults, "options",
-        {offsetof(pm_triangulate_options, progress),
-         offsetof(pm_triangulate_options, progress_user_data)});
+    const pm_triangulate_options o = capi::read_options(options, pm_triangulate_options_init);
     if (out_stats) capi::check_versioned(out_stats, "out_stats");
     if (o.flags & ~uint32_t(PM_TRIANGULATE_RAW | PM_TRIANGULATE_NO_REPAIR | PM_TRIANGULATE_NO_ORIENT |
                             PM_TRIANGULATE_GLOBAL_SPACING | PM_TRIANGULATE_VIEWPOINT))

@@ -26,19 +26,10 @@ void pm_polygonize_options_init(pm_polygonize_options* options) {
   const PolygonizeOptions d;
   *options = pm_polygonize_options{};
   options->struct_size = sizeof(pm_polygonize_options);
-  options->kernel = int32_t(d.kernel);
-  options->radius = d.radius;
-  options->threshold = d.threshold;
+  capi::kernel_settings_to_c(d, options);
   options->cell_size = d.cell_size;
   options->threads = d.threads;
   options->max_grid_bytes = d.max_grid_bytes;
-  options->progress = nullptr;
-  options->progress_user_data = nullptr;
-  options->anisotropic = d.anisotropy.enabled ? 1 : 0;
-  options->aniso_neighbor_radius = d.anisotropy.neighbor_radius;
-  options->aniso_max_stretch = d.anisotropy.max_stretch;
-  options->aniso_min_neighbors = d.anisotropy.min_neighbors;
-  options->aniso_smoothing = d.anisotropy.smoothing;
   options->min_component_volume = d.min_component_volume;
   options->min_component_particles = d.min_component_particles;
   options->taubin_iterations = d.surface_smoothing.iterations;
@@ -54,26 +45,14 @@ pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii, const dou
   return guarded([&] {
     require(cloud, "cloud");
     require(out_mesh, "out_mesh");
-    pm_polygonize_options defaults;
-    pm_polygonize_options_init(&defaults);
-    const pm_polygonize_options o = capi::read_versioned(
-        options, defaults, "options",
-        {offsetof(pm_polygonize_options, progress),
-         offsetof(pm_polygonize_options, progress_user_data)});
+    const pm_polygonize_options o = capi::read_options(options, pm_polygonize_options_init);
     if (out_stats) capi::check_versioned(out_stats, "out_stats");
     PolygonizeOptions opt;
-    opt.kernel = to_kernel(o.kernel);
-    opt.radius = o.radius;
-    opt.threshold = o.threshold;
+    capi::kernel_settings_from_c(o, radii, strengths, cloud->cloud.size(), &opt);
     opt.cell_size = o.cell_size;
     opt.threads = o.threads;
     opt.max_grid_bytes = o.max_grid_bytes;
     opt.progress = wrap_progress(o.progress, o.progress_user_data);
-    opt.anisotropy.enabled = o.anisotropic != 0;
-    opt.anisotropy.neighbor_radius = o.aniso_neighbor_radius;
-    opt.anisotropy.max_stretch = o.aniso_max_stretch;
-    opt.anisotropy.min_neighbors = o.aniso_min_neighbors;
-    opt.anisotropy.smoothing = o.aniso_smoothing;
     opt.min_component_volume = o.min_component_volume;
     opt.min_component_particles = o.min_component_particles;
     opt.surface_smoothing.iterations = o.taubin_iterations;
@@ -92,9 +71,6 @@ pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii, const dou
       }
       opt.cells = range;
     }
-    const size_t n = cloud->cloud.size();
-    if (radii) opt.radii.assign(radii, radii + n);
-    if (strengths) opt.strengths.assign(strengths, strengths + n);
     PolygonizeResult r = polygonize(cloud->cloud, opt);
     auto handle = std::make_unique<pm_mesh>();
     handle->mesh = std::move(r.mesh);

@@ -34,6 +34,38 @@ inline Kernel to_kernel(int32_t k) {
   return kernel;
 }
 
+/// The kernel settings pm_polygonize_options and pm_field_options share (the same field names)
+/// from those of PolygonizeOptions or FieldParams (`d`: kernel, radius, threshold, anisotropy).
+template <class COptions, class Settings>
+void kernel_settings_to_c(const Settings& d, COptions* o) {
+  o->kernel = int32_t(d.kernel);
+  o->radius = d.radius;
+  o->threshold = d.threshold;
+  o->anisotropic = d.anisotropy.enabled ? 1 : 0;
+  o->aniso_neighbor_radius = d.anisotropy.neighbor_radius;
+  o->aniso_max_stretch = d.anisotropy.max_stretch;
+  o->aniso_min_neighbors = d.anisotropy.min_neighbors;
+  o->aniso_smoothing = d.anisotropy.smoothing;
+}
+
+/// The inverse of kernel_settings_to_c, with the per-particle radii and strengths (either
+/// NULL, or one value for each of `count` particles).
+/// @throws Error(InvalidArgument) for an unknown kernel number.
+template <class COptions, class Settings>
+void kernel_settings_from_c(const COptions& o, const double* radii, const double* strengths, size_t count,
+                            Settings* p) {
+  p->kernel = to_kernel(o.kernel);
+  p->radius = o.radius;
+  p->threshold = o.threshold;
+  p->anisotropy.enabled = o.anisotropic != 0;
+  p->anisotropy.neighbor_radius = o.aniso_neighbor_radius;
+  p->anisotropy.max_stretch = o.aniso_max_stretch;
+  p->anisotropy.min_neighbors = o.aniso_min_neighbors;
+  p->anisotropy.smoothing = o.aniso_smoothing;
+  if (radii) p->radii.assign(radii, radii + count);
+  if (strengths) p->strengths.assign(strengths, strengths + count);
+}
+
 /// @throws Error(InvalidArgument) when caller memory for `capacity` items is short of `needed`.
 inline void check_capacity(size_t capacity, size_t needed, const char* what) {
   if (capacity < needed)

@@ -5,9 +5,10 @@
 
 #include "particlemesh/core/config.h"
 
-#include <initializer_list>
+#include <cstddef>
 #include <new>
 #include <string>
+#include <vector>
 
 #include "particlemesh/core/c_guard.h"
 #include "particlemesh/core/error.h"
@@ -32,14 +33,33 @@ void require(const T* p, const char* name) {
   if (p == nullptr) throw Error(Status::InvalidArgument, std::string(name) + " is NULL");
 }
 
+/// *p, or InvalidArgument naming `name` if p is NULL.
+template <class T>
+T& deref(T* p, const char* name) {
+  require(p, name);
+  return *p;
+}
+
 /// Copy the first min(caller_size, sizeof(T)) bytes of a struct whose first member is
 /// uint32_t struct_size: old callers with smaller structs keep working.
 template <class T>
-T read_versioned(const T* in, const T& defaults, const char* name, std::initializer_list<size_t> pointer_fields);
+T read_versioned(const T* in, const T& defaults, const char* name, const std::vector<size_t>& pointer_fields);
 template <class T>
 void check_versioned(const T* out, const char* name);
 template <class T>
 void write_versioned(T* out, const T& value, const char* name);
+
+/// The caller's options struct `*options` read with read_versioned, what it lacks (all of it
+/// for NULL) from `init`'s defaults. Its progress and progress_user_data are pointer fields,
+/// as are `more_pointer_fields` (offsets).
+template <class T>
+T read_options(const T* options, void (*init)(T*), std::vector<size_t> more_pointer_fields = {}) {
+  T defaults;
+  init(&defaults);
+  more_pointer_fields.push_back(offsetof(T, progress));
+  more_pointer_fields.push_back(offsetof(T, progress_user_data));
+  return read_versioned(options, defaults, "options", more_pointer_fields);
+}
 
 }  // namespace particlemesh::capi
 
@@ -49,7 +69,7 @@ void write_versioned(T* out, const T& value, const char* name);
 namespace PM_NAMESPACE::capi {
 
 template <class T>
-T read_versioned(const T* in, const T& defaults, const char* name, std::initializer_list<size_t> pointer_fields) {
+T read_versioned(const T* in, const T& defaults, const char* name, const std::vector<size_t>& pointer_fields) {
   T out = defaults;
   if (in == nullptr) return out;
   const uint32_t size = in->struct_size;

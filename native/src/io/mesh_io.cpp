@@ -26,17 +26,24 @@ detail::FileContents read_file(const std::string& path, detail::ReadPurpose purp
   return c;
 }
 
+/// Moves what a mesh and a point cloud both hold (positions, normals, attributes) out of `c`.
+template <class Vertices>
+Vertices take_vertices(detail::FileContents& c) {
+  Vertices v;
+  v.positions = std::move(c.positions);
+  v.normals = std::move(c.normals);
+  v.attributes = std::move(c.attributes);
+  return v;
+}
+
 }  // namespace
 
 std::string readable_extensions(bool points) { return detail::known_extensions(points); }
 
 TriMesh read_mesh(const std::string& path) {
   detail::FileContents c = read_file(path, detail::ReadPurpose::Mesh);
-  TriMesh mesh;
-  mesh.positions = std::move(c.positions);
-  mesh.normals = std::move(c.normals);
+  TriMesh mesh = take_vertices<TriMesh>(c);
   mesh.triangles = std::move(c.triangles);
-  mesh.attributes = std::move(c.attributes);
   // Normals that are not finite are no normals (they are only carried, never trusted).
   for (const Vec3& n : mesh.normals)
     if (!is_finite(n)) {
@@ -48,10 +55,7 @@ TriMesh read_mesh(const std::string& path) {
 
 PointCloud read_point_cloud(const std::string& path) {
   detail::FileContents c = read_file(path, detail::ReadPurpose::Points);
-  PointCloud cloud;
-  cloud.positions = std::move(c.positions);
-  cloud.normals = std::move(c.normals);
-  cloud.attributes = std::move(c.attributes);
+  PointCloud cloud = take_vertices<PointCloud>(c);
   if (cloud.positions.empty()) throw Error(Status::InvalidInput, "'" + path + "' holds no points");
   try {
     validate_point_cloud(cloud);

@@ -35,7 +35,7 @@ class ObjReader {
     std::vector<std::string_view> w;
     while (in_.line(line, kMaxLine)) {
       if (const size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
-      split(line, w);
+      split_words(line, w);
       if (w.empty()) continue;
       if (w[0] == "v") vertex(w);
       else if (w[0] == "vn") normal(w);
@@ -61,18 +61,6 @@ class ObjReader {
   }
   [[noreturn]] void fail(const std::string& problem) const {
     fail_file("line " + std::to_string(in_.line_number()) + ": " + problem);
-  }
-
-  static void split(std::string_view line, std::vector<std::string_view>& w) {
-    w.clear();
-    size_t i = 0;
-    while (i < line.size()) {
-      while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
-      size_t j = i;
-      while (j < line.size() && line[j] != ' ' && line[j] != '\t' && line[j] != '\r') ++j;
-      if (j > i) w.push_back(line.substr(i, j - i));
-      i = j;
-    }
   }
 
   double number(std::string_view t, const char* what) const {

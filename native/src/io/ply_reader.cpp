@@ -26,6 +26,7 @@
 
 #include "io/file_reader.h"
 #include "io/formats.h"
+#include "io/scalar_types.h"
 #include "io/text_numbers.h"
 #include "particlemesh/core/error.h"
 
@@ -33,7 +34,7 @@ namespace PM_NAMESPACE::detail {
 
 namespace {
 
-enum class Type : uint8_t { I8, U8, I16, U16, I32, U32, F32, F64, None };
+using Type = ScalarType;  // PLY has no 64-bit integers
 
 Type type_of(std::string_view t) {
   if (t == "char" || t == "int8") return Type::I8;
@@ -46,19 +47,6 @@ Type type_of(std::string_view t) {
   if (t == "double" || t == "float64") return Type::F64;
   return Type::None;
 }
-
-int size_of(Type t) {
-  switch (t) {
-    case Type::I8: case Type::U8: return 1;
-    case Type::I16: case Type::U16: return 2;
-    case Type::I32: case Type::U32: case Type::F32: return 4;
-    case Type::F64: return 8;
-    case Type::None: break;
-  }
-  return 0;
-}
-
-bool is_integer(Type t) { return t != Type::F32 && t != Type::F64; }
 
 // What a property is read into.
 enum Role : int { kSkip = -1, kX = 0, kY, kZ, kNX, kNY, kNZ, kRed, kGreen, kBlue, kIndices, kAttribute };
@@ -84,14 +72,7 @@ enum class Encoding { None, Ascii, BinaryLE, BinaryBE };
 
 std::vector<std::string_view> words(std::string_view line) {
   std::vector<std::string_view> w;
-  size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
-    size_t j = i;
-    while (j < line.size() && line[j] != ' ' && line[j] != '\t' && line[j] != '\r') ++j;
-    if (j > i) w.push_back(line.substr(i, j - i));
-    i = j;
-  }
+  split_words(line, w);
   return w;
 }
 
@@ -196,7 +177,7 @@ class PlyReader {
         for (const Property& q : e.properties)
           if (q.name == p.name) bad("a second property named '" + shown(p.name) + "'");
         e.has_list |= p.list;
-        e.record += uint64_t(p.list ? size_of(p.count_type) : size_of(p.type));
+        e.record += uint64_t(p.list ? scalar_size(p.count_type) : scalar_size(p.type));
         e.properties.push_back(std::move(p));
       } else {
         bad("unknown keyword '" + shown(w[0]) + "'");
@@ -323,7 +304,7 @@ class PlyReader {
           continue;
         }
         const uint64_t n = list_count(e, i, p);
-        if (binary && mul_add(n, uint64_t(size_of(p.type)), 0) > bytes_left())
+        if (binary && mul_add(n, uint64_t(scalar_size(p.type)), 0) > bytes_left())
           fail("'" + e.name + "' element " + std::to_string(i) + " has a list of " + std::to_string(n) +
                " items, more than the rest of the file holds");
         if (p.role == kIndices) {
@@ -344,7 +325,7 @@ class PlyReader {
           for (size_t k = 1; k + 1 < corners_.size(); ++k)
             out_.triangles.push_back({corners_[0], corners_[k], corners_[k + 1]});
         } else if (binary) {
-          if (!in_.skip(mul_add(n, uint64_t(size_of(p.type)), 0))) truncated(e, i);
+          if (!in_.skip(mul_add(n, uint64_t(scalar_size(p.type)), 0))) truncated(e, i);
         } else {
           for (uint64_t k = 0; k < n; ++k) scalar(e, i, p);
         }
@@ -368,7 +349,7 @@ class PlyReader {
       return n;
     }
     unsigned char raw[8];
-    const int size = size_of(p.count_type);
+    const int size = scalar_size(p.count_type);
     if (!in_.read(raw, size_t(size))) truncated(e, i);
     const double n = decode(raw, p.count_type);
     if (n < 0) fail("'" + e.name + "' element " + std::to_string(i) + " has a negative list count");
@@ -394,32 +375,13 @@ class PlyReader {
       return v;
     }
     unsigned char raw[8];
-    if (!in_.read(raw, size_t(size_of(p.type)))) truncated(e, i);
+    if (!in_.read(raw, size_t(scalar_size(p.type)))) truncated(e, i);
     return decode(raw, p.type);
   }
 
   // A binary value in the file's byte order, exactly (every PLY type fits a double).
   double decode(const unsigned char* raw, Type t) const {
-    const int size = size_of(t);
-    unsigned char b[8];
-    const bool swap = encoding_ == Encoding::BinaryBE;  // hosts are little-endian (x86-64, aarch64)
-    for (int k = 0; k < size; ++k) b[k] = raw[swap ? size - 1 - k : k];
-    auto as = [&](auto v) {
-      std::memcpy(&v, b, sizeof v);
-      return double(v);
-    };
-    switch (t) {
-      case Type::I8: return as(int8_t{});
-      case Type::U8: return as(uint8_t{});
-      case Type::I16: return as(int16_t{});
-      case Type::U16: return as(uint16_t{});
-      case Type::I32: return as(int32_t{});
-      case Type::U32: return as(uint32_t{});
-      case Type::F32: return as(float{});
-      case Type::F64: return as(double{});
-      case Type::None: break;
-    }
-    return 0;
+    return decode_scalar(t, raw, encoding_ == Encoding::BinaryBE);
   }
 
   void store(const Property& p, double v) {
@@ -431,7 +393,7 @@ class PlyReader {
       case kNY: out_.normals.back().y = v; return;
       case kNZ: out_.normals.back().z = v; return;
       case kRed: case kGreen: case kBlue: {
-        const double scale = size_of(p.type) == 1 ? 1.0 / 255 : size_of(p.type) == 2 ? 1.0 / 65535
+        const double scale = scalar_size(p.type) == 1 ? 1.0 / 255 : scalar_size(p.type) == 2 ? 1.0 / 65535
                              : is_integer(p.type)   ? 1.0 / 255 : 1.0;
         colors_[colors_.size() - 3 + size_t(p.role - kRed)] = float(v * scale);
         return;

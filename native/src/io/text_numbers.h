@@ -1,4 +1,5 @@
-// Internal: numbers in text files (PLY ASCII, OBJ, OFF, STL ASCII, XYZ), read exactly.
+// Internal: words and numbers in text files (PLY ASCII, OBJ, OFF, STL ASCII, XYZ), numbers
+// read exactly.
 //
 // std::from_chars rounds correctly: a 17-digit coordinate comes back as the double that was
 // written, which is what "coordinates keep their full precision" rests on. (strtod does too,
@@ -14,6 +15,7 @@
 #include <limits>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace PM_NAMESPACE::detail {
 
@@ -22,6 +24,20 @@ enum class NumberText {
   NotANumber,  ///< not a decimal number
   Overflow,    ///< a number beyond +-DBL_MAX (out = +-inf)
 };
+
+/// The words of a line separated by blanks (spaces, tabs, a carriage return), into `out`
+/// (cleared first; the views point into `line`).
+inline void split_words(std::string_view line, std::vector<std::string_view>& out) {
+  out.clear();
+  size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
+    size_t j = i;
+    while (j < line.size() && line[j] != ' ' && line[j] != '\t' && line[j] != '\r') ++j;
+    if (j > i) out.push_back(line.substr(i, j - i));
+    i = j;
+  }
+}
 
 inline bool equals_ignoring_case(std::string_view a, std::string_view b) {
   if (a.size() != b.size()) return false;

@@ -31,6 +31,7 @@
 
 #include "io/file_reader.h"
 #include "io/formats.h"
+#include "io/scalar_types.h"
 #include "io/text_numbers.h"
 #include "particlemesh/core/error.h"
 
@@ -38,7 +39,7 @@ namespace PM_NAMESPACE::detail {
 
 namespace {
 
-enum class Type { U8, I8, U16, I16, U32, I32, U64, I64, F32, F64, Bit, String, None };
+using Type = ScalarType;
 
 Type type_of(const std::string& word) {
   std::string t;
@@ -56,44 +57,6 @@ Type type_of(const std::string& word) {
   if (t == "bit") return Type::Bit;
   if (t == "string" || t == "utf8_string") return Type::String;
   return Type::None;
-}
-
-int size_of(Type t) {
-  switch (t) {
-    case Type::U8: case Type::I8: return 1;
-    case Type::U16: case Type::I16: return 2;
-    case Type::U32: case Type::I32: case Type::F32: return 4;
-    case Type::U64: case Type::I64: case Type::F64: return 8;
-    default: return 0;
-  }
-}
-
-double decode_be(Type t, const unsigned char* b) {
-  uint64_t u = 0;
-  const int n = size_of(t);
-  for (int i = 0; i < n; ++i) u = u << 8 | b[i];
-  switch (t) {
-    case Type::U8: return double(uint8_t(u));
-    case Type::I8: return double(int8_t(uint8_t(u)));
-    case Type::U16: return double(uint16_t(u));
-    case Type::I16: return double(int16_t(uint16_t(u)));
-    case Type::U32: return double(uint32_t(u));
-    case Type::I32: return double(int32_t(uint32_t(u)));
-    case Type::U64: return double(u);
-    case Type::I64: return double(int64_t(u));
-    case Type::F32: {
-      const uint32_t v = uint32_t(u);
-      float f;
-      std::memcpy(&f, &v, 4);
-      return double(f);
-    }
-    case Type::F64: {
-      double d;
-      std::memcpy(&d, &u, 8);
-      return d;
-    }
-    default: return 0;
-  }
 }
 
 std::string upper(std::string s) {
@@ -115,8 +78,6 @@ std::string decode_name(const std::string& s) {
   }
   return out;
 }
-
-uint64_t mul(uint64_t a, uint64_t b) { return b != 0 && a > UINT64_MAX / b ? UINT64_MAX : a * b; }
 
 void set_axis(Vec3& p, int axis, double v) { (axis == 0 ? p.x : axis == 1 ? p.y : p.z) = v; }
 
@@ -226,8 +187,8 @@ class VtkLegacyReader {
       fail(what + ": " + (type == Type::None ? std::string("unknown data type") : "bit and string arrays are not read"));
     if (binary_) {
       end_line();
-      const int size = size_of(type);
-      if (mul(count, uint64_t(size)) > bytes_left())
+      const int size = scalar_size(type);
+      if (saturating_mul(count, uint64_t(size)) > bytes_left())
         fail("truncated: " + what + " needs " + std::to_string(count) + " values of " + std::to_string(size) +
              " bytes, the file has " + std::to_string(bytes_left()) + " bytes left");
       unsigned char buf[4096];
@@ -237,12 +198,12 @@ class VtkLegacyReader {
         if (!in_.read(buf, size_t(k) * size_t(size)))
           fail("truncated: the file ends in " + what + " (value " + std::to_string(i) + " of " + std::to_string(count) + ")");
         if (sink)
-          for (uint64_t j = 0; j < k; ++j) sink(i + j, decode_be(type, buf + j * uint64_t(size)));
+          for (uint64_t j = 0; j < k; ++j) sink(i + j, decode_scalar(type, buf + j * uint64_t(size), true));
         i += k;
       }
       return;
     }
-    if (mul(count, 2) > bytes_left() + 1)
+    if (saturating_mul(count, 2) > bytes_left() + 1)
       fail("truncated: " + what + " needs " + std::to_string(count) + " values, more than the " +
            std::to_string(bytes_left()) + " bytes left can hold");
     std::string t;
@@ -271,8 +232,8 @@ class VtkLegacyReader {
     uint64_t n = 0;
     if (!word(t) || !parse_count(t, n)) fail("POINTS needs a count");
     const Type type = data_type("POINTS");
-    out_.positions.reserve(size_t(std::min<uint64_t>(n, bytes_left() / (binary_ ? 3 * uint64_t(std::max(1, size_of(type))) : 6))));
-    values(type, mul(n, 3), "POINTS", [&](uint64_t i, double v) {
+    out_.positions.reserve(size_t(std::min<uint64_t>(n, bytes_left() / (binary_ ? 3 * uint64_t(std::max(1, scalar_size(type))) : 6))));
+    values(type, saturating_mul(n, 3), "POINTS", [&](uint64_t i, double v) {
       if (i % 3 == 0) out_.positions.emplace_back();
       set_axis(out_.positions.back(), int(i % 3), v);
     });
@@ -389,22 +350,22 @@ class VtkLegacyReader {
     const uint64_t n = count_;
     const bool keep = section_ == Section::Points;
     if (!keep) {
-      values(type, mul(n, uint64_t(components)), what, {});
+      values(type, saturating_mul(n, uint64_t(components)), what, {});
       return;
     }
     const bool as_normals = k == "NORMALS" && out_.normals.empty() && !normals_read_;
     if (as_normals) {
       normals_read_ = true;
       out_.normals.reserve(size_t(std::min<uint64_t>(n, out_.positions.size())));
-      values(type, mul(n, 3), what, [&](uint64_t i, double v) {
+      values(type, saturating_mul(n, 3), what, [&](uint64_t i, double v) {
         if (i % 3 == 0) out_.normals.emplace_back();
         set_axis(out_.normals.back(), int(i % 3), v);
       });
       return;
     }
     VertexAttribute a{unique_attribute_name(out_, name), components, {}};
-    a.values.reserve(size_t(std::min<uint64_t>(mul(n, uint64_t(components)), mul(out_.positions.size(), uint64_t(components)))));
-    values(type, mul(n, uint64_t(components)), what, [&](uint64_t, double v) {
+    a.values.reserve(size_t(std::min<uint64_t>(saturating_mul(n, uint64_t(components)), saturating_mul(out_.positions.size(), uint64_t(components)))));
+    values(type, saturating_mul(n, uint64_t(components)), what, [&](uint64_t, double v) {
       a.values.push_back(unsigned_char_colours ? float(v / 255.0) : float(v));
     });
     out_.attributes.push_back(std::move(a));
@@ -414,7 +375,7 @@ class VtkLegacyReader {
     std::string name, t;
     uint64_t n = 0;
     if (!word(name) || !word(t) || !parse_count(t, n)) fail("LOOKUP_TABLE needs a name and a size");
-    values(binary_ ? Type::U8 : Type::F32, mul(n, 4), "LOOKUP_TABLE '" + shown(name) + "'", {});
+    values(binary_ ? Type::U8 : Type::F32, saturating_mul(n, 4), "LOOKUP_TABLE '" + shown(name) + "'", {});
   }
 
   /// FIELD name count, then per array: name components tuples type, data (or NULL_ARRAY).
@@ -442,12 +403,12 @@ class VtkLegacyReader {
         fail(what + " has " + std::to_string(tuples) + " tuples for " + std::to_string(out_.positions.size()) + " points");
       if (take && (components < 1 || components > 65535)) fail(what + " has " + std::to_string(components) + " components");
       if (!take) {
-        values(type, mul(components, tuples), what, {});
+        values(type, saturating_mul(components, tuples), what, {});
         continue;
       }
       VertexAttribute a{unique_attribute_name(out_, array), int(components), {}};
-      a.values.reserve(size_t(mul(components, tuples)));
-      values(type, mul(components, tuples), what, [&](uint64_t, double v) { a.values.push_back(float(v)); });
+      a.values.reserve(size_t(saturating_mul(components, tuples)));
+      values(type, saturating_mul(components, tuples), what, [&](uint64_t, double v) { a.values.push_back(float(v)); });
       out_.attributes.push_back(std::move(a));
     }
   }

@@ -24,6 +24,7 @@
 #include "io/compressed.h"
 #include "io/file_reader.h"
 #include "io/formats.h"
+#include "io/scalar_types.h"
 #include "io/text_numbers.h"
 #include "particlemesh/core/error.h"
 
@@ -53,7 +54,7 @@ struct Node {
   }
 };
 
-enum class Type { I8, U8, I16, U16, I32, U32, I64, U64, F32, F64, String, None };
+using Type = ScalarType;
 
 Type type_of(const std::string& t) {
   if (t == "Int8" || t == "Char") return Type::I8;
@@ -70,49 +71,11 @@ Type type_of(const std::string& t) {
   return Type::None;
 }
 
-int size_of(Type t) {
-  switch (t) {
-    case Type::I8: case Type::U8: return 1;
-    case Type::I16: case Type::U16: return 2;
-    case Type::I32: case Type::U32: case Type::F32: return 4;
-    case Type::I64: case Type::U64: case Type::F64: return 8;
-    default: return 0;
-  }
-}
-
 /// A value read from the file, for a message: any double (huge, NaN) without a cast.
 std::string shown_number(double v) {
   char text[32];
   std::snprintf(text, sizeof text, "%.17g", v);
   return text;
-}
-
-double decode(Type t, const unsigned char* b, bool big_endian) {
-  const int n = size_of(t);
-  uint64_t u = 0;
-  for (int i = 0; i < n; ++i) u |= uint64_t(b[big_endian ? i : n - 1 - i]) << (8 * (n - 1 - i));
-  switch (t) {
-    case Type::I8: return double(int8_t(uint8_t(u)));
-    case Type::U8: return double(uint8_t(u));
-    case Type::I16: return double(int16_t(uint16_t(u)));
-    case Type::U16: return double(uint16_t(u));
-    case Type::I32: return double(int32_t(uint32_t(u)));
-    case Type::U32: return double(uint32_t(u));
-    case Type::I64: return double(int64_t(u));
-    case Type::U64: return double(u);
-    case Type::F32: {
-      const uint32_t v = uint32_t(u);
-      float f;
-      std::memcpy(&f, &v, 4);
-      return double(f);
-    }
-    case Type::F64: {
-      double d;
-      std::memcpy(&d, &u, 8);
-      return d;
-    }
-    default: return 0;
-  }
 }
 
 int base64_value(char c) {
@@ -125,8 +88,6 @@ int base64_value(char c) {
 }
 
 bool xml_space(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; }
-
-uint64_t mul(uint64_t a, uint64_t b) { return b != 0 && a > UINT64_MAX / b ? UINT64_MAX : a * b; }
 
 class VtkXmlReader {
  public:
@@ -383,7 +344,7 @@ class VtkXmlReader {
     const uint64_t blocks = header_value(b), block = header_value(b + hs), last = header_value(b + 2 * hs);
     if (blocks > size / hs) fail(what + ": its compression header lists " + std::to_string(blocks) + " blocks");
     need((3 + blocks) * hs, "for its compression header");
-    const uint64_t total = blocks == 0 ? 0 : mul(blocks - 1, block) + (last == 0 ? block : last);
+    const uint64_t total = blocks == 0 ? 0 : saturating_mul(blocks - 1, block) + (last == 0 ? block : last);
     if (total != expected || (last > block && blocks > 0))
       fail(what + ": its compressed blocks hold " + std::to_string(total) + " bytes, expected " + std::to_string(expected));
     // The output grows block by block, each checked against what deflate can give from its
@@ -394,7 +355,7 @@ class VtkXmlReader {
       const uint64_t csize = header_value(b + (3 + k) * hs);
       need(at + csize, "for its compressed blocks");
       const uint64_t usize = k + 1 == blocks && last != 0 ? last : block;
-      if (usize > mul(csize, 1032) + 64)
+      if (usize > saturating_mul(csize, 1032) + 64)
         fail(what + ", block " + std::to_string(k) + ": " + std::to_string(csize) + " compressed bytes cannot hold the " +
              std::to_string(usize) + " its header claims");
       out.resize(size_t(made + usize));
@@ -414,7 +375,7 @@ class VtkXmlReader {
     if (a.attribute("NumberOfComponents") && (!parse_count(a.get("NumberOfComponents"), comps) || comps < 1 || comps > 65535))
       fail(what + ": NumberOfComponents '" + shown(a.get("NumberOfComponents")) + "'");
     *components = int(comps);
-    const uint64_t count = mul(tuples, comps);
+    const uint64_t count = saturating_mul(tuples, comps);
     const std::string format = a.get("format", "ascii");
     std::vector<double> out;
     if (format == "ascii") {
@@ -437,8 +398,8 @@ class VtkXmlReader {
              std::to_string(tuples) + " x " + std::to_string(comps) + ")");
       return out;
     }
-    const int size = size_of(type);
-    const uint64_t expected = mul(count, uint64_t(size));
+    const int size = scalar_size(type);
+    const uint64_t expected = saturating_mul(count, uint64_t(size));
     std::vector<unsigned char> bytes;
     if (format == "binary") {
       const std::vector<unsigned char> raw = base64(a.text, what);
@@ -465,7 +426,7 @@ class VtkXmlReader {
       fail(what + ": format '" + shown(format) + "' is not ascii, binary or appended");
     }
     out.resize(size_t(count));
-    for (uint64_t i = 0; i < count; ++i) out[size_t(i)] = decode(type, bytes.data() + i * uint64_t(size), big_endian_);
+    for (uint64_t i = 0; i < count; ++i) out[size_t(i)] = decode_scalar(type, bytes.data() + i * uint64_t(size), big_endian_);
     return out;
   }
 

@@ -136,19 +136,9 @@ void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
   // 2. Interpolate level by level (ping-pong buffers): positions and all attribute channels
   //    in parallel, each through the same refiner (PrimvarRefiner only reads it).
   int channels = 0;
-  for (const auto& a : control.attributes) channels += a.components;
+  std::vector<double> attr = interleave_channels(control.attributes, nv, &channels), attr_next;
   std::vector<Point3> pos(nv), pos_next;
   for (size_t i = 0; i < nv; ++i) pos[i] = {{control.positions[i].x, control.positions[i].y, control.positions[i].z}};
-  std::vector<double> attr(nv * size_t(channels)), attr_next;
-  {
-    int offset = 0;
-    for (const auto& a : control.attributes) {
-      for (size_t i = 0; i < nv; ++i)
-        for (int j = 0; j < a.components; ++j)
-          attr[i * size_t(channels) + size_t(offset + j)] = double(a.values[i * size_t(a.components) + size_t(j)]);
-      offset += a.components;
-    }
-  }
   const PrimvarRefiner primvar(*refiner);
   double total_work = 0, done_work = 0;
   for (int l = 1; l <= levels; ++l) total_work += double(refiner->GetLevel(l).GetNumVertices());
@@ -192,19 +182,21 @@ void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
       out.mesh.triangles[f] = {uint32_t(fv[0]), uint32_t(fv[1]), uint32_t(fv[2])};
     }
   });
+  std::vector<Vec3>& positions = out.mesh.positions;
+  positions.resize(n_out);
+  std::memcpy(static_cast<void*>(positions.data()), pos.data(), n_out * sizeof(Vec3));
+  pos = {};
   LoopRings rings;
   if (own_limit && build_loop_rings(out.mesh.triangles, n_out, &rings)) {
     progress.stage("limit positions and normals", 0.75, 0.85);
     const LoopLimitMasks masks(rings.max_valence);
-    static_assert(sizeof(Point3) == sizeof(Vec3));
-    std::vector<Vec3> src(n_out), lim;
-    std::memcpy(static_cast<void*>(src.data()), pos.data(), n_out * sizeof(Vec3));
+    std::vector<Vec3> lim;
     std::vector<double> attr_lim(n_out * size_t(channels));
-    tbb::parallel_invoke([&] { loop_limit_positions(rings, masks, src, lim, out.mesh.normals); },
+    tbb::parallel_invoke([&] { loop_limit_positions(rings, masks, positions, lim, out.mesh.normals); },
                          [&] {
                            if (channels > 0) loop_limit_channels(rings, masks, attr.data(), channels, attr_lim.data());
                          });
-    std::memcpy(static_cast<void*>(pos.data()), lim.data(), n_out * sizeof(Vec3));
+    positions.swap(lim);
     attr.swap(attr_lim);
     st.limit = true;
     progress.check();
@@ -214,34 +206,8 @@ void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
       // 2-manifold): OpenSubdiv's limit, on a refinement with the full last level.
       refiner = refine(true);
     }
-    const PrimvarRefiner limit_primvar(*refiner);
     progress.stage("limit positions and normals", 0.75, 0.85);
-    std::vector<Point3> lim(n_out), tan1(n_out), tan2(n_out);
-    std::vector<double> attr_lim(n_out * size_t(channels));
-    tbb::parallel_invoke(
-        [&] {
-          const Point3* src = pos.data();
-          Point3 *p = lim.data(), *t1p = tan1.data(), *t2p = tan2.data();
-          limit_primvar.Limit(src, p, t1p, t2p);
-        },
-        [&] {
-          if (channels == 0) return;
-          const ChannelBuffer src{attr.data(), channels};
-          ChannelBuffer dst{attr_lim.data(), channels};
-          limit_primvar.Limit(src, dst);
-        });
-    pos.swap(lim);
-    attr.swap(attr_lim);
-    out.mesh.normals.resize(n_out);
-    parallel_blocks(n_out, 8192, [&](size_t b, size_t e) {
-      for (size_t i = b; i < e; ++i) {
-        const Vec3 a{tan1[i].p[0], tan1[i].p[1], tan1[i].p[2]}, c{tan2[i].p[0], tan2[i].p[1], tan2[i].p[2]};
-        const Vec3 n = cross(a, c);
-        // A vanishing cross product (degenerate control geometry) is marked with a zero
-        // normal; smooth_mesh() replaces those with area-weighted normals.
-        out.mesh.normals[i] = squared_norm(n) > 1e-24 * squared_norm(a) * squared_norm(c) ? normalized(n) : Vec3{};
-      }
-    });
+    opensubdiv_limit(*refiner, positions, attr, channels, out.mesh.normals);
     st.limit = true;
     progress.check();
   }
@@ -250,23 +216,73 @@ void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
   // 4. Output arrays.
   auto t2 = Clock::now();
   progress.stage("output", 0.85, 0.95);
-  out.mesh.positions.resize(n_out);
-  parallel_blocks(n_out, 8192, [&](size_t b, size_t e) {
-    for (size_t i = b; i < e; ++i) out.mesh.positions[i] = {pos[i].p[0], pos[i].p[1], pos[i].p[2]};
-  });
-  out.mesh.attributes.clear();
-  int offset = 0;
-  for (const auto& a : control.attributes) {
-    VertexAttribute o{a.name, a.components, std::vector<float>(n_out * size_t(a.components))};
-    const size_t k = size_t(a.components);
-    parallel_blocks(n_out, 8192, [&](size_t b, size_t e) {
-      for (size_t i = b; i < e; ++i)
-        for (size_t j = 0; j < k; ++j) o.values[i * k + j] = float(attr[i * size_t(channels) + size_t(offset) + j]);
-    });
-    offset += a.components;
-    out.mesh.attributes.push_back(std::move(o));
-  }
+  out.mesh.attributes = split_channels(control.attributes, attr, channels, n_out);
   st.seconds_output = seconds_since(t2);
+}
+
+std::vector<double> interleave_channels(const std::vector<VertexAttribute>& attributes, size_t vertex_count,
+                                        int* channels) {
+  int k = 0;
+  for (const auto& a : attributes) k += a.components;
+  *channels = k;
+  std::vector<double> values(vertex_count * size_t(k));
+  size_t offset = 0;
+  for (const auto& a : attributes) {
+    const size_t c = size_t(a.components);
+    for (size_t i = 0; i < vertex_count; ++i)
+      for (size_t j = 0; j < c; ++j) values[i * size_t(k) + offset + j] = double(a.values[i * c + j]);
+    offset += c;
+  }
+  return values;
+}
+
+std::vector<VertexAttribute> split_channels(const std::vector<VertexAttribute>& like, const std::vector<double>& values,
+                                            int channels, size_t vertex_count) {
+  std::vector<VertexAttribute> out;
+  out.reserve(like.size());
+  size_t offset = 0;
+  for (const auto& a : like) {
+    const size_t c = size_t(a.components);
+    VertexAttribute o{a.name, a.components, std::vector<float>(vertex_count * c)};
+    parallel_blocks(vertex_count, 8192, [&](size_t b, size_t e) {
+      for (size_t i = b; i < e; ++i)
+        for (size_t j = 0; j < c; ++j) o.values[i * c + j] = float(values[i * size_t(channels) + offset + j]);
+    });
+    offset += c;
+    out.push_back(std::move(o));
+  }
+  return out;
+}
+
+void opensubdiv_limit(const TopologyRefiner& refiner, std::vector<Vec3>& positions, std::vector<double>& values,
+                      int channels, std::vector<Vec3>& normals) {
+  const PrimvarRefiner primvar(refiner);
+  const size_t n = positions.size();
+  std::vector<Point3> src(n), lim(n), tan1(n), tan2(n);
+  std::memcpy(static_cast<void*>(src.data()), positions.data(), n * sizeof(Vec3));
+  std::vector<double> values_lim(n * size_t(channels));
+  tbb::parallel_invoke(
+      [&] {
+        const Point3* s = src.data();
+        Point3 *p = lim.data(), *t1p = tan1.data(), *t2p = tan2.data();
+        primvar.Limit(s, p, t1p, t2p);
+      },
+      [&] {
+        if (channels == 0) return;
+        const ChannelBuffer s{values.data(), channels};
+        ChannelBuffer d{values_lim.data(), channels};
+        primvar.Limit(s, d);
+      });
+  std::memcpy(static_cast<void*>(positions.data()), lim.data(), n * sizeof(Vec3));
+  values.swap(values_lim);
+  normals.resize(n);
+  parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i) {
+      const Vec3 a{tan1[i].p[0], tan1[i].p[1], tan1[i].p[2]}, c{tan2[i].p[0], tan2[i].p[1], tan2[i].p[2]};
+      const Vec3 nn = cross(a, c);
+      normals[i] = squared_norm(nn) > 1e-24 * squared_norm(a) * squared_norm(c) ? normalized(nn) : Vec3{};
+    }
+  });
 }
 
 }  // namespace particlemesh::detail

@@ -64,33 +64,6 @@ struct Recorders {
   Recorder operator[](int i) const { return {s, uint32_t(i)}; }
 };
 
-/// As loop_opensubdiv.cpp's Point3: what PrimvarRefiner::Limit is given for OpenSubdiv's limit.
-struct Point3 {
-  double p[3];
-  void Clear() { p[0] = p[1] = p[2] = 0; }
-  void AddWithWeight(const Point3& s, double w) {
-    p[0] += w * s.p[0];
-    p[1] += w * s.p[1];
-    p[2] += w * s.p[2];
-  }
-};
-static_assert(sizeof(Point3) == sizeof(Vec3));
-struct Channels {
-  double* v;
-  int n;
-  void Clear() {
-    for (int i = 0; i < n; ++i) v[i] = 0;
-  }
-  void AddWithWeight(const Channels& s, double w) {
-    for (int i = 0; i < n; ++i) v[i] += w * s.v[i];
-  }
-};
-struct ChannelBuffer {
-  double* data;
-  int n;
-  Channels operator[](int i) const { return Channels{data + size_t(i) * size_t(n), n}; }
-};
-
 }  // namespace
 
 struct Smoother::Impl {
@@ -233,18 +206,8 @@ SmoothResult Smoother::Impl::evaluate_loop(std::vector<Vec3> pos, const std::vec
   const auto t0 = Clock::now();
   // Attribute channels, vertex-major, as loop_subdivide interpolates them.
   int channels = 0;
-  for (const auto& a : attributes) channels += a.components;
+  std::vector<double> attr = detail::interleave_channels(attributes, pos.size(), &channels);
   const size_t k = size_t(channels);
-  std::vector<double> attr(pos.size() * k);
-  {
-    size_t offset = 0;
-    for (const auto& a : attributes) {
-      for (size_t i = 0; i < pos.size(); ++i)
-        for (size_t j = 0; j < size_t(a.components); ++j)
-          attr[i * k + offset + j] = double(a.values[i * size_t(a.components) + j]);
-      offset += size_t(a.components);
-    }
-  }
   // Level by level: each refined vertex the weighted sum PrimvarRefiner forms.
   std::vector<Vec3> pos_next;
   std::vector<double> attr_next;
@@ -296,32 +259,7 @@ SmoothResult Smoother::Impl::evaluate_loop(std::vector<Vec3> pos, const std::vec
     attr.swap(attr_lim);
     out.stats.limit = true;
   } else if (options.limit) {
-    const PrimvarRefiner primvar(*refiner);
-    std::vector<Point3> src(n_out), lim(n_out), tan1(n_out), tan2(n_out);
-    std::memcpy(static_cast<void*>(src.data()), pos.data(), n_out * sizeof(Vec3));
-    std::vector<double> attr_lim(n_out * k);
-    tbb::parallel_invoke(
-        [&] {
-          const Point3* s = src.data();
-          Point3 *p = lim.data(), *t1p = tan1.data(), *t2p = tan2.data();
-          primvar.Limit(s, p, t1p, t2p);
-        },
-        [&] {
-          if (k == 0) return;
-          const ChannelBuffer s{attr.data(), channels};
-          ChannelBuffer d{attr_lim.data(), channels};
-          primvar.Limit(s, d);
-        });
-    std::memcpy(static_cast<void*>(pos.data()), lim.data(), n_out * sizeof(Vec3));
-    attr.swap(attr_lim);
-    mesh.normals.resize(n_out);
-    detail::parallel_blocks(n_out, 8192, [&](size_t b, size_t e) {
-      for (size_t i = b; i < e; ++i) {
-        const Vec3 a{tan1[i].p[0], tan1[i].p[1], tan1[i].p[2]}, c{tan2[i].p[0], tan2[i].p[1], tan2[i].p[2]};
-        const Vec3 nn = cross(a, c);
-        mesh.normals[i] = squared_norm(nn) > 1e-24 * squared_norm(a) * squared_norm(c) ? normalized(nn) : Vec3{};
-      }
-    });
+    detail::opensubdiv_limit(*refiner, pos, attr, channels, mesh.normals);
     out.stats.limit = true;
   }
   out.stats.seconds_limit = seconds_since(t1);
@@ -330,17 +268,7 @@ SmoothResult Smoother::Impl::evaluate_loop(std::vector<Vec3> pos, const std::vec
   const auto t2 = Clock::now();
   mesh.positions = std::move(pos);
   mesh.triangles = triangles;
-  size_t offset = 0;
-  for (const auto& a : attributes) {
-    VertexAttribute o{a.name, a.components, std::vector<float>(n_out * size_t(a.components))};
-    const size_t c = size_t(a.components);
-    detail::parallel_blocks(n_out, 8192, [&](size_t b, size_t e) {
-      for (size_t i = b; i < e; ++i)
-        for (size_t j = 0; j < c; ++j) o.values[i * c + j] = float(attr[i * k + offset + j]);
-    });
-    offset += c;
-    mesh.attributes.push_back(std::move(o));
-  }
+  mesh.attributes = detail::split_channels(attributes, attr, channels, n_out);
   detail::finish_smooth_normals(mesh);
   out.original_vertex = control.original_vertex;
   out.stats.vertices = mesh.positions.size();

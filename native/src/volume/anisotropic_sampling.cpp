@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "volume/field_impl.h"
+#include "volume/sampling_rows.h"
 
 namespace PM_NAMESPACE::detail {
 
@@ -12,35 +13,14 @@ namespace {
 
 constexpr int kB = kSampleBlock;
 
-inline int ifloor(double v) {
-  const int i = int(v);
-  return i - (double(i) > v);
-}
-inline int iceil(double v) {
-  const int i = int(v);
-  return i + (double(i) < v);
-}
-
-typedef float Float4 __attribute__((vector_size(4 * sizeof(float))));
-typedef int32_t Int4 __attribute__((vector_size(4 * sizeof(int32_t))));
-
 // row[x] += w g(s) with s = a2[x] + b dx[x] + c along a row of 8 nodes: the ellipsoid's
 // quadratic form restricted to the row (a2 = M_xx dx^2, b and c from the row's y and z).
-// The same branch-free 4-wide form as the spherical sampler in polygonize.cpp; `wa`, `wb`
-// carry the strength: w g = t^2 (wa + wb t), t = 1 - s clamped at 0.
+// Branch-free and 4-wide as the spherical sampler's rows (sampling_rows.h).
 template <Kernel K>
 inline void add_row(float* row, const float* a2, const float* dx, float b, float c, float wa, float wb) {
   for (int half = 0; half < 2; ++half) {
-    Float4 q, d, r;
-    std::memcpy(&q, a2 + 4 * half, sizeof q);
-    std::memcpy(&d, dx + 4 * half, sizeof d);
-    std::memcpy(&r, row + 4 * half, sizeof r);
-    Float4 t = 1.0f - (q + b * d + c);
-    t = (Float4)((Int4)t & (t > 0.0f));
-    if constexpr (K == Kernel::Wyvill) r += t * t * (wa + wb * t);
-    else if constexpr (K == Kernel::Poly4) r += wa * (t * t);
-    else r += wb * (t * t * t);
-    std::memcpy(row + 4 * half, &r, sizeof r);
+    const Float4 q = load4(a2 + 4 * half), d = load4(dx + 4 * half);
+    store4(row + 4 * half, add_kernel<K>(load4(row + 4 * half), q + b * d + c, wa, wb));
   }
 }
 
@@ -68,8 +48,8 @@ void sample(const ParticleField& field, const Vec3& o, double h, float* out) {
     for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) {
       const float w = ws.empty() ? 1.0f : float(ws[s]);
       if (w == 0.0f) continue;
-      const float wa = K == Kernel::Wyvill ? w * (5.0f / 9.0f) : (K == Kernel::Poly4 ? w : 0.0f);
-      const float wb = K == Kernel::Wyvill ? w * (4.0f / 9.0f) : (K == Kernel::Poly6 ? w : 0.0f);
+      float wa, wb;
+      row_weights<K>(w, &wa, &wb);
       // Centre and half extents in node units, relative to the block's first node.
       const double ux = (P[s].x - o.x) * inv_h, uy = (P[s].y - o.y) * inv_h, uz = (P[s].z - o.z) * inv_h;
       const double ex = double(E[3 * size_t(s)]) * inv_h, ey = double(E[3 * size_t(s) + 1]) * inv_h,

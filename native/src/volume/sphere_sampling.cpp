@@ -6,6 +6,7 @@
 
 #include "volume/anisotropic_sampling.h"
 #include "volume/field_impl.h"
+#include "volume/sampling_rows.h"
 
 namespace PM_NAMESPACE::detail {
 
@@ -13,17 +14,6 @@ namespace {
 
 constexpr int kB = kSampleBlock;
 constexpr int kBN = kB * kB * kB;
-
-// floor / ceil for |v| < 2^31 without a library call (baseline x86-64 has no rounding
-// instruction, and these run several times per particle and block).
-inline int ifloor(double v) {
-  const int i = int(v);
-  return i - (double(i) > v);
-}
-inline int iceil(double v) {
-  const int i = int(v);
-  return i + (double(i) < v);
-}
 
 // g(s) with s clamped to the support, in float: t = max(0, 1 - s), so s >= 1 gives exactly
 // 0 with no branch (the polynomial kernels are written in t).
@@ -36,28 +26,11 @@ inline float kernel_clamped(float s) {
   else return float(kernel_value(Kernel::Blinn, double(s)));
 }
 
-// row[x] += w g(dx2[x] + syz) for the 8 nodes of a row, as two 4-float vectors (GCC/Clang
-// vector extensions: portable, one SSE2 / NEON operation each). Written this way because the
-// plain loop keeps a branch for the clamp and stays scalar, and 8-wide vectors get their
-// comparisons split lane by lane on hardware with 4-wide registers.
-typedef float Float4 __attribute__((vector_size(4 * sizeof(float))));
-typedef int32_t Int4 __attribute__((vector_size(4 * sizeof(int32_t))));
-
-// `a` and `b` carry the strength: w g = t^2 (a + b t) with a = 5w/9, b = 4w/9 for Wyvill,
-// a = w, b = 0 for Poly4, a = 0, b = w for Poly6.
+// row[x] += w g(dx2[x] + syz) for the 8 nodes of a row (sampling_rows.h).
 template <Kernel K>
 inline void add_row(float* row, const float* dx2, float syz, float a, float b) {
-  for (int half = 0; half < 2; ++half) {
-    Float4 d, r;
-    std::memcpy(&d, dx2 + 4 * half, sizeof d);
-    std::memcpy(&r, row + 4 * half, sizeof r);
-    Float4 t = 1.0f - (d + syz);
-    t = (Float4)((Int4)t & (t > 0.0f));  // max(t, 0): outside the support exactly 0
-    if constexpr (K == Kernel::Wyvill) r += t * t * (a + b * t);
-    else if constexpr (K == Kernel::Poly4) r += a * (t * t);
-    else r += b * (t * t * t);
-    std::memcpy(row + 4 * half, &r, sizeof r);
-  }
+  for (int half = 0; half < 2; ++half)
+    store4(row + 4 * half, add_kernel<K>(load4(row + 4 * half), load4(dx2 + 4 * half) + syz, a, b));
 }
 
 // Sum every particle's contribution into the samples of one block, in grid order.
@@ -89,8 +62,8 @@ void sample_block(const ParticleField& field, const Vec3& first, double h, float
     for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) {
       const float w = ws.empty() ? 1.0f : float(ws[s]);
       if (w == 0.0f) continue;
-      const float wa = K == Kernel::Wyvill ? w * (5.0f / 9.0f) : (K == Kernel::Poly4 ? w : 0.0f);
-      const float wb = K == Kernel::Wyvill ? w * (4.0f / 9.0f) : (K == Kernel::Poly6 ? w : 0.0f);
+      float wa, wb;
+      row_weights<K>(w, &wa, &wb);
       if (!uniform) {
         c2 = h * h * inv_r2s[s];
         rn = std::sqrt(1.0 / c2);

@@ -1,0 +1,62 @@
+// Internal: the binary scalar types of the formats read here (PLY, VTK legacy and XML): their
+// sizes and their values, decoded exactly from either byte order. Each reader maps its own
+// type names (PLY's "uchar", legacy VTK's "unsigned_char", VTK XML's "UInt8") onto these.
+#pragma once
+
+#include "particlemesh/core/config.h"
+
+#include <bit>
+#include <cstdint>
+#include <cstring>
+
+namespace PM_NAMESPACE::detail {
+
+static_assert(std::endian::native == std::endian::little, "decode_scalar assumes a little-endian host");
+
+/// Bit and String are VTK array types that are not numbers per value (size 0, like None).
+enum class ScalarType : uint8_t { I8, U8, I16, U16, I32, U32, I64, U64, F32, F64, Bit, String, None };
+
+/// Bytes of one value; 0 for Bit, String and None.
+inline int scalar_size(ScalarType t) {
+  switch (t) {
+    case ScalarType::I8: case ScalarType::U8: return 1;
+    case ScalarType::I16: case ScalarType::U16: return 2;
+    case ScalarType::I32: case ScalarType::U32: case ScalarType::F32: return 4;
+    case ScalarType::I64: case ScalarType::U64: case ScalarType::F64: return 8;
+    default: return 0;
+  }
+}
+
+inline bool is_integer(ScalarType t) { return scalar_size(t) > 0 && t != ScalarType::F32 && t != ScalarType::F64; }
+
+/// The value of scalar_size(t) bytes at `raw`, stored in big- or little-endian order, as a
+/// double: exact for every type but 64-bit integers beyond 2^53 (rounded to nearest). 0 for
+/// the types without a size.
+inline double decode_scalar(ScalarType t, const unsigned char* raw, bool big_endian) {
+  const int size = scalar_size(t);
+  unsigned char b[8];
+  for (int k = 0; k < size; ++k) b[k] = raw[big_endian ? size - 1 - k : k];  // to the host's order (little-endian)
+  auto as = [&](auto v) {
+    std::memcpy(&v, b, sizeof v);
+    return double(v);
+  };
+  switch (t) {
+    case ScalarType::I8: return as(int8_t{});
+    case ScalarType::U8: return as(uint8_t{});
+    case ScalarType::I16: return as(int16_t{});
+    case ScalarType::U16: return as(uint16_t{});
+    case ScalarType::I32: return as(int32_t{});
+    case ScalarType::U32: return as(uint32_t{});
+    case ScalarType::I64: return as(int64_t{});
+    case ScalarType::U64: return as(uint64_t{});
+    case ScalarType::F32: return as(float{});
+    case ScalarType::F64: return as(double{});
+    default: return 0;
+  }
+}
+
+/// a * b, or UINT64_MAX where that overflows: sizes from a file's header compared with what
+/// the file holds.
+inline uint64_t saturating_mul(uint64_t a, uint64_t b) { return b != 0 && a > UINT64_MAX / b ? UINT64_MAX : a * b; }
+
+}  // namespace particlemesh::detail
