@@ -73,16 +73,11 @@ std::vector<OutputSpec> output_specs(const PolygonizeArgs& a) {
 /// Mesh one file; `frame` is null for a single file, the sequence's context for a frame.
 int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
   using Clock = std::chrono::steady_clock;
-  WriteMeshOptions wo;
-  if (a.ascii) wo.format = MeshFormat::PlyAscii;
-  std::vector<OutputSpec> specs = output_specs(a);
-  if (frame) specs.insert(specs.end(), frame->extra_outputs.begin(), frame->extra_outputs.end());
-  RunOutputs outputs(specs, {a.input});
+  RunOutputs outputs(with_frame_outputs(output_specs(a), frame), {a.input});
   const auto t0 = Clock::now();
   ProgressLine progress(a.quiet);
   ParticleInput input = read_particles(a.input, ParticleInputArgs{}, a.threads);
-  select_attributes(input.cloud, a.attributes);
-  if (frame) frame->check_attributes(input.cloud.attributes);
+  settle_attributes(input.cloud, a.attributes, frame);
   const PointCloud& cloud = input.cloud;
   const double t_read = std::chrono::duration<double>(Clock::now() - t0).count();
 
@@ -103,15 +98,15 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
   opt.progress = progress.callback();
   const auto t1 = Clock::now();
   set_phase(Phase::Computing);
-  if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
+  throw_if_interrupted();
   PolygonizeResult result = polygonize(cloud, opt);
   const double t_poly = std::chrono::duration<double>(Clock::now() - t1).count();
   progress.clear();
-  if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
+  throw_if_interrupted();
 
   set_phase(Phase::Writing);
   const auto t2 = Clock::now();
-  write_mesh(result.mesh, outputs.open("-o"), wo);
+  outputs.write_mesh("-o", result.mesh);
   const double t_write = std::chrono::duration<double>(Clock::now() - t2).count();
   // No surface at all: the field never reaches the threshold where it was sampled. The empty
   // mesh is still written (a frame of a sequence may well be empty), with a warning.
@@ -140,10 +135,7 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
     if (!warning.empty()) j["warning"] = warning;
     outputs.open("--report").write(json_text(j));
   }
-  if (frame)
-    for (size_t i = 0; i < frame->extra_outputs.size(); ++i)
-      outputs.open(frame->extra_outputs[i].option).write(frame->extra_contents[i]);
-  outputs.commit_all();
+  commit_outputs(outputs, frame);
   if (!a.quiet && !frame) {
     const auto& s = result.stats;
     std::printf("particlemesh polygonize: %s -> %s\n", a.input.c_str(), a.output.c_str());
@@ -170,9 +162,7 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
                   a.taubin_lambda, a.taubin_mu);
     std::printf("  grid          %zu blocks of 8^3 sampled (%.1f MiB), %zu with surface\n", s.sampled_blocks,
                 double(s.grid_bytes) / double(1 << 20), s.surface_blocks);
-    std::printf("%s", describe(report).c_str());
-    std::printf("  time          %.2f s (read %.2f, polygonize %.2f, write %.2f)\n", t_read + t_poly + t_write, t_read,
-                t_poly, t_write);
+    print_mesh_and_times(report, "polygonize", t_read, t_poly, t_write);
   }
   return 0;
 }
@@ -259,29 +249,11 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
   app->add_flag("-q,--quiet", args->quiet, "No summary and no progress line");
   add_sequence_options(*app, args->sequence);
   commands.push_back({app, [args, app] {
-                        if (!has_frame_field(args->input)) {
-                          check_single_file(*app, output_specs(*args));
-                          return run_polygonize(*args);
-                        }
-                        SequenceSpec spec;
-                        spec.command = "polygonize";
-                        spec.input = args->input;
-                        spec.outputs = output_specs(*args);
-                        spec.sequence = args->sequence;
-                        spec.threads = args->threads;
-                        spec.quiet = args->quiet;
-                        spec.options_text = options_text(*app, kSequenceIgnored);
-                        spec.run_frame = [args](const std::string& in, const std::vector<OutputSpec>& outs, int threads,
-                                                FrameContext& frame) {
-                          PolygonizeArgs a = *args;
-                          a.input = in;
+                        auto for_frame = [](PolygonizeArgs& a, const std::vector<OutputSpec>& outs) {
                           a.output = outs[0].path;
                           a.report = outs[1].path;
-                          a.threads = threads;
-                          a.quiet = true;
-                          run_polygonize(a, &frame);
                         };
-                        return run_sequence(spec);
+                        return run_file_or_sequence("polygonize", *app, *args, output_specs, for_frame, run_polygonize);
                       }});
 }
 

@@ -61,7 +61,7 @@ int run_render(const RenderArgs& a) {
   }
   const RenderResult r = render(caster, o);
   progress.clear();
-  if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
+  throw_if_interrupted();
   set_phase(Phase::Writing);
   write_png(r.image, outputs.open("-o"));
   outputs.commit_all();

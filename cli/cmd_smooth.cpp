@@ -88,9 +88,7 @@ nlohmann::json smooth_stats_json(const SmoothStats& s) {
 
 int run_smooth(const SmoothArgs& a) {
   using Clock = std::chrono::steady_clock;
-  WriteMeshOptions wo;
-  if (a.ascii) wo.format = MeshFormat::PlyAscii;
-  RunOutputs outputs({{"-o", a.output, OutputKind::Mesh, wo.format}, {"--report", a.report, OutputKind::Text}},
+  RunOutputs outputs({{"-o", a.output, OutputKind::Mesh, a.ascii ? MeshFormat::PlyAscii : MeshFormat::Auto}, {"--report", a.report, OutputKind::Text}},
                      {a.input});
   const auto t0 = Clock::now();
   ProgressLine progress(a.quiet);
@@ -109,15 +107,15 @@ int run_smooth(const SmoothArgs& a) {
   opt.progress = progress.callback();
   const auto t1 = Clock::now();
   set_phase(Phase::Computing);
-  if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
+  throw_if_interrupted();
   const SmoothResult result = smooth_mesh(mesh, opt);
   const double t_smooth = std::chrono::duration<double>(Clock::now() - t1).count();
   progress.clear();
-  if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
+  throw_if_interrupted();
 
   set_phase(Phase::Writing);
   const auto t2 = Clock::now();
-  write_mesh(result.mesh, outputs.open("-o"), wo);
+  outputs.write_mesh("-o", result.mesh);
   const double t_write = std::chrono::duration<double>(Clock::now() - t2).count();
 
   const TopologyReport report = topology_report(result.mesh);
@@ -142,9 +140,7 @@ int run_smooth(const SmoothArgs& a) {
     if (s.dropped_vertices) std::printf("  dropped       %zu unreferenced vertices\n", s.dropped_vertices);
     if (s.reoriented_triangles) std::printf("  reoriented    %zu triangles\n", s.reoriented_triangles);
     if (s.creases) std::printf("  creases       %zu edges\n", s.creases);
-    std::printf("%s", describe(report).c_str());
-    std::printf("  time          %.2f s (read %.2f, smooth %.2f, write %.2f)\n", t_read + t_smooth + t_write, t_read,
-                t_smooth, t_write);
+    print_mesh_and_times(report, "smooth", t_read, t_smooth, t_write);
   }
   return 0;
 }
@@ -214,7 +210,7 @@ void apply_smooth_chain(TriMesh& mesh, const SmoothChainArgs& args, int threads,
     throw Error(e.status(), "--smooth " + args.scheme + ": " + e.what());
   }
   progress.clear();
-  if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
+  throw_if_interrupted();
 }
 
 }  // namespace particlemesh::cli

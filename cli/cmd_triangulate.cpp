@@ -121,16 +121,11 @@ std::vector<OutputSpec> output_specs(const TriangulateArgs& a) {
 /// Mesh one file; `frame` is null for a single file, the sequence's context for a frame.
 int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
   using Clock = std::chrono::steady_clock;
-  WriteMeshOptions wo;
-  if (a.ascii) wo.format = MeshFormat::PlyAscii;
-  std::vector<OutputSpec> specs = output_specs(a);
-  if (frame) specs.insert(specs.end(), frame->extra_outputs.begin(), frame->extra_outputs.end());
-  RunOutputs outputs(specs, {a.input});
+  RunOutputs outputs(with_frame_outputs(output_specs(a), frame), {a.input});
   const auto t0 = Clock::now();
   ProgressLine progress(a.quiet);
   ParticleInput input = read_particles(a.input, a.input_options, a.threads);
-  select_attributes(input.cloud, a.attributes);
-  if (frame) frame->check_attributes(input.cloud.attributes);
+  settle_attributes(input.cloud, a.attributes, frame);
   const double t_read = std::chrono::duration<double>(Clock::now() - t0).count();
 
   // --thin: an even subset, no particle within thin x r0 of a kept one (r0 given or
@@ -140,7 +135,7 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
   PointCloud thinned;
   double thin_distance = 0;
   if (a.thin > 1) {
-    if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
+    throw_if_interrupted();
     const Vec3* pts = input.cloud.positions.data();
     const size_t n = input.cloud.size();
     const double given = a.spacing > 0 ? a.spacing : input.spacing_hint;
@@ -177,7 +172,7 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
   opt.progress = progress.callback();
   const auto t1 = Clock::now();
   set_phase(Phase::Computing);
-  if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
+  throw_if_interrupted();
   SurfaceResult result;
   if (a.raw) {
     TriangulateResult r = triangulate_raw(cloud, opt);
@@ -188,13 +183,13 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
   }
   const double t_tri = std::chrono::duration<double>(Clock::now() - t1).count();
   progress.clear();
-  if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
+  throw_if_interrupted();
 
   apply_smooth_chain(result.mesh, a.smooth, a.threads, progress);  // --smooth: after the mesh is made
 
   set_phase(Phase::Writing);
   const auto t2 = Clock::now();
-  write_mesh(result.mesh, outputs.open("-o"), wo);
+  outputs.write_mesh("-o", result.mesh);
   if (outputs.has("--pcl-mesh")) write_pcl_mesh(result.mesh, outputs.open("--pcl-mesh"));
   const double t_write = std::chrono::duration<double>(Clock::now() - t2).count();
 
@@ -220,10 +215,7 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
     }
     outputs.open("--report").write(json_text(j));
   }
-  if (frame)
-    for (size_t i = 0; i < frame->extra_outputs.size(); ++i)
-      outputs.open(frame->extra_outputs[i].option).write(frame->extra_contents[i]);
-  outputs.commit_all();
+  commit_outputs(outputs, frame);
   if (!a.quiet && !frame) {
     const auto& s = result.triangulation;
     std::printf("particlemesh triangulate: %s -> %s\n", a.input.c_str(), a.output.c_str());
@@ -266,9 +258,7 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
       for (const std::string& h : surface_hints(result, a.thin, a.global_spacing))
         std::printf("  hint          %s\n", h.c_str());
     }
-    std::printf("%s", describe(report).c_str());
-    std::printf("  time          %.2f s (read %.2f, triangulate %.2f, write %.2f)\n",
-                t_read + t_tri + t_write, t_read, t_tri, t_write);
+    print_mesh_and_times(report, "triangulate", t_read, t_tri, t_write);
   }
   return 0;
 }
@@ -352,30 +342,12 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
   add_attributes_option(*app, args->attributes);
   add_sequence_options(*app, args->sequence);
   commands.push_back({app, [args, app] {
-                        if (!has_frame_field(args->input)) {
-                          check_single_file(*app, output_specs(*args));
-                          return run_triangulate(*args);
-                        }
-                        SequenceSpec spec;
-                        spec.command = "triangulate";
-                        spec.input = args->input;
-                        spec.outputs = output_specs(*args);
-                        spec.sequence = args->sequence;
-                        spec.threads = args->threads;
-                        spec.quiet = args->quiet;
-                        spec.options_text = options_text(*app, kSequenceIgnored);
-                        spec.run_frame = [args](const std::string& in, const std::vector<OutputSpec>& outs, int threads,
-                                                FrameContext& frame) {
-                          TriangulateArgs a = *args;
-                          a.input = in;
+                        auto for_frame = [](TriangulateArgs& a, const std::vector<OutputSpec>& outs) {
                           a.output = outs[0].path;
                           a.report = outs[1].path;
                           a.input_options.pcl_mesh = outs[2].path;
-                          a.threads = threads;
-                          a.quiet = true;
-                          run_triangulate(a, &frame);
                         };
-                        return run_sequence(spec);
+                        return run_file_or_sequence("triangulate", *app, *args, output_specs, for_frame, run_triangulate);
                       }});
 }
 

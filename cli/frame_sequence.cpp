@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "particlemesh/core/error.h"
+#include "attribute_selection.h"
 #include "particlemesh/version.h"
 #include "progress_line.h"
 
@@ -198,6 +199,23 @@ std::string options_text(const CLI::App& app, const std::vector<std::string>& ig
     text += "\n";
   }
   return text;
+}
+
+std::vector<OutputSpec> with_frame_outputs(std::vector<OutputSpec> specs, const FrameContext* frame) {
+  if (frame) specs.insert(specs.end(), frame->extra_outputs.begin(), frame->extra_outputs.end());
+  return specs;
+}
+
+void settle_attributes(PointCloud& cloud, const std::string& spec, FrameContext* frame) {
+  select_attributes(cloud, spec);
+  if (frame) frame->check_attributes(cloud.attributes);
+}
+
+void commit_outputs(RunOutputs& outputs, const FrameContext* frame) {
+  if (frame)
+    for (size_t i = 0; i < frame->extra_outputs.size(); ++i)
+      outputs.open(frame->extra_outputs[i].option).write(frame->extra_contents[i]);
+  outputs.commit_all();
 }
 
 int run_sequence(const SequenceSpec& spec) {

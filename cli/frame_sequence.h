@@ -86,6 +86,16 @@ struct FrameContext {
   std::function<void(const std::string&)> warn;
 };
 
+/// A run's outputs: `specs` and, for a frame (non-null), its extra outputs too.
+std::vector<OutputSpec> with_frame_outputs(std::vector<OutputSpec> specs, const FrameContext* frame);
+
+/// --attributes (`spec`) applied to the particles read; for a frame, they are then checked
+/// against the sequence's (FrameContext::check_attributes).
+void settle_attributes(PointCloud& cloud, const std::string& spec, FrameContext* frame);
+
+/// Writes a frame's extra outputs (for a non-null `frame`) and commits every output together.
+void commit_outputs(RunOutputs& outputs, const FrameContext* frame);
+
 struct SequenceSpec {
   std::string command;               ///< "polygonize"
   std::string input;                 ///< the input pattern
@@ -104,6 +114,15 @@ struct SequenceSpec {
 /// all checked before any frame is read.
 int run_sequence(const SequenceSpec& spec);
 
+/// A command's action: mesh its input file or, when the input is a frame pattern, every frame
+/// of the sequence. `Args` holds input, threads, quiet and sequence (SequenceArgs);
+/// `outputs(args)` lists the output paths (patterns for a sequence), `for_frame(args, outs)`
+/// sets a copy's output paths to one frame's, and `run(args, frame)` meshes one file (frame
+/// null: a single file) and returns the exit status.
+template <class Args, class Outputs, class ForFrame, class Run>
+int run_file_or_sequence(const std::string& command, const CLI::App& app, const Args& args, Outputs outputs,
+                         ForFrame for_frame, Run run);
+
 /// "name=value" lines of the options given on `app`'s command line, in the order CLI11 lists
 /// them, leaving out `ignored` (paths, threads, output verbosity: what does not change the
 /// output's bytes). The options digest is made from it.
@@ -112,5 +131,32 @@ std::string options_text(const CLI::App& app, const std::vector<std::string>& ig
 /// The sidecar that records how an output of a sequence was made: ".NAME.particlemesh" in
 /// its folder.
 std::string sidecar_path(const std::string& output);
+
+template <class Args, class Outputs, class ForFrame, class Run>
+int run_file_or_sequence(const std::string& command, const CLI::App& app, const Args& args, Outputs outputs,
+                         ForFrame for_frame, Run run) {
+  if (!has_frame_field(args.input)) {
+    check_single_file(app, outputs(args));
+    return run(args, nullptr);
+  }
+  SequenceSpec spec;
+  spec.command = command;
+  spec.input = args.input;
+  spec.outputs = outputs(args);
+  spec.sequence = args.sequence;
+  spec.threads = args.threads;
+  spec.quiet = args.quiet;
+  spec.options_text = options_text(app, kSequenceIgnored);
+  spec.run_frame = [&args, for_frame, run](const std::string& in, const std::vector<OutputSpec>& outs, int threads,
+                                           FrameContext& frame) {
+    Args a = args;
+    a.input = in;
+    for_frame(a, outs);
+    a.threads = threads;
+    a.quiet = true;
+    run(a, &frame);
+  };
+  return run_sequence(spec);
+}
 
 }  // namespace particlemesh::cli

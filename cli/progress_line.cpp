@@ -66,6 +66,10 @@ void install_signal_handlers() {
 
 bool interrupted() { return g_interrupted != 0; }
 
+void throw_if_interrupted() {
+  if (interrupted()) throw Error(Status::Cancelled, "cancelled (interrupted)");
+}
+
 ProgressCallback ProgressLine::callback() {
   tty_ = isatty(STDERR_FILENO) != 0;
   return [this](std::string_view stage, double fraction) {

@@ -21,6 +21,8 @@ namespace particlemesh::cli {
 /// SIGQUIT and SIGPIPE remove the temporaries, then end the process as they would have.
 void install_signal_handlers();
 bool interrupted();
+/// @throws Error(Cancelled) once a SIGINT / SIGTERM has been received (interrupted()).
+void throw_if_interrupted();
 
 enum class Phase { Reading, Computing, Writing, Done };
 /// Tell the handler what the command is doing now.

@@ -1,6 +1,7 @@
 #include "report_json.h"
 
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 
@@ -81,6 +82,12 @@ nlohmann::json to_json(const SurfaceStats& s) {
           {"viewpoint_used", s.viewpoint_used},
           {"rejected_shadow", s.rejected_shadow},
           {"seconds", {{"normals", s.seconds_normals}, {"extraction", s.seconds_extraction}, {"repair", s.seconds_repair}, {"orient", s.seconds_orient}}}};
+}
+
+void print_mesh_and_times(const TopologyReport& r, const char* work, double t_read, double t_work, double t_write) {
+  std::printf("%s", describe(r).c_str());
+  std::printf("  time          %.2f s (read %.2f, %s %.2f, write %.2f)\n", t_read + t_work + t_write, t_read, work, t_work,
+              t_write);
 }
 
 std::string describe(const TopologyReport& r) {

@@ -18,6 +18,10 @@ nlohmann::json to_json(const SurfaceStats& s);
 /// A few lines describing the mesh, for people.
 std::string describe(const TopologyReport& r);
 
+/// The summary's last lines: describe(r), then the time of the run: reading, `work`
+/// ("smooth", ...) and writing, in seconds.
+void print_mesh_and_times(const TopologyReport& r, const char* work, double t_read, double t_work, double t_write);
+
 /// The text of a --report file.
 std::string json_text(const nlohmann::json& j);
 

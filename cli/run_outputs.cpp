@@ -97,6 +97,17 @@ OutputFile& RunOutputs::open(const std::string& option) {
   throw Error(Status::Internal, "no output " + option);
 }
 
+void RunOutputs::write_mesh(const std::string& option, const TriMesh& mesh) {
+  for (const OutputSpec& o : specs_)
+    if (o.option == option) {
+      WriteMeshOptions wo;
+      wo.format = o.format;
+      particlemesh::write_mesh(mesh, open(option), wo);
+      return;
+    }
+  throw Error(Status::Internal, "no output " + option);
+}
+
 void RunOutputs::commit_all() {
   for (auto& [option, file] : open_) file->finish();
   // Hold off the signals while the files go in place: all of them, or none.

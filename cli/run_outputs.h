@@ -48,6 +48,8 @@ class RunOutputs {
   bool has(const std::string& option) const;
   /// Opens `option`'s output for writing (its temporary, or the device / FIFO).
   OutputFile& open(const std::string& option);
+  /// Opens `option`'s output and writes `mesh` into it, in the format its spec asks for.
+  void write_mesh(const std::string& option, const TriMesh& mesh);
   /// Finish every opened output and put them all in place.
   void commit_all();
 
