@@ -39,8 +39,43 @@ def _interactive(context):
     return not bpy.app.background and context.window is not None
 
 
+def _select_only(context, objects):
+    """Select `objects` alone, the last one active."""
+    for selected in context.selected_objects:
+        selected.select_set(False)
+    for obj in objects:
+        obj.select_set(True)
+    context.view_layer.objects.active = objects[-1]
+
+
 class _ModalJob:
-    """Mixin: run a jobs.Job with a progress bar, status text and Esc to cancel."""
+    """Mixin: run a jobs.Job with a progress bar, status text and Esc to cancel.
+
+    The operator defines prepare_work(context), which reads what the work needs from Blender
+    (on the main thread) and returns (function, args, kwargs), and job_finished(context,
+    result), which puts the result into Blender. execute() runs the function at once;
+    invoke() in a worker thread, unless Blender runs in the background."""
+
+    @classmethod
+    def poll(cls, context):
+        return context.active_object is not None and context.mode == "OBJECT"
+
+    def execute(self, context):
+        try:
+            function, args, kwargs = self.prepare_work(context)
+            self.job_finished(context, function(*args, **kwargs))
+        except Exception as e:  # noqa: BLE001
+            return report_failure(self, e)
+        return {"FINISHED"}
+
+    def invoke(self, context, event):
+        if not _interactive(context):
+            return self.execute(context)
+        try:
+            function, args, kwargs = self.prepare_work(context)
+        except Exception as e:  # noqa: BLE001
+            return report_failure(self, e)
+        return self.start_job(context, jobs.Job(function, *args, **kwargs))
 
     def start_job(self, context, job):
         self._job = job.start()
@@ -96,12 +131,8 @@ class _Generate(SourceProps, CommonProps, SmoothProps, _ModalJob):
     method = "TRIANGULATE"
     bl_options = {"REGISTER", "UNDO"}
 
-    @classmethod
-    def poll(cls, context):
-        obj = context.active_object
-        return obj is not None and context.mode == "OBJECT"
-
-    def _prepare(self, context):
+    def prepare_work(self, context):
+        pm.version()  # LibraryNotFoundError saying where it looked
         obj = context.active_object
         sources.check_object(obj)
         kind = sources.resolve_kind(obj, self.source)
@@ -111,31 +142,7 @@ class _Generate(SourceProps, CommonProps, SmoothProps, _ModalJob):
         particles = sources.read(obj, context.evaluated_depsgraph_get(), kind, system,
                                  need_sizes=(self.method == "POLYGONIZE"))
         self._request = (obj.name, kind, system, properties.snapshot(self, self.method))
-        return particles
-
-    def check_available(self):
-        pm.version()  # LibraryNotFoundError saying where it looked
-
-    def execute(self, context):
-        try:
-            self.check_available()
-            particles = self._prepare(context)
-            data = generate.run(self.method, particles, self._request[3])
-            self.job_finished(context, data)
-        except Exception as e:  # noqa: BLE001
-            return report_failure(self, e)
-        return {"FINISHED"}
-
-    def invoke(self, context, event):
-        if not _interactive(context):
-            return self.execute(context)
-        try:
-            self.check_available()
-            particles = self._prepare(context)
-        except Exception as e:  # noqa: BLE001
-            return report_failure(self, e)
-        return self.start_job(context, jobs.Job(generate.run, self.method, particles,
-                                                self._request[3]))
+        return generate.run, (self.method, particles, self._request[3]), {}
 
     def job_finished(self, context, data):
         source_name, kind, system, settings = self._request
@@ -163,10 +170,7 @@ class _Generate(SourceProps, CommonProps, SmoothProps, _ModalJob):
                 live.lock_interface_for_renders(context.scene)
         finally:
             live.suspended.discard(obj.name_full)
-        for selected in context.selected_objects:
-            selected.select_set(False)
-        obj.select_set(True)
-        context.view_layer.objects.active = obj
+        _select_only(context, [obj])
         stats = data.stats
         if self.method == "POLYGONIZE" and "radius" in stats:
             detail = f", radius {stats['radius']:.4g}, cell {stats['cell_size']:.4g}"
@@ -264,12 +268,7 @@ class PARTICLEMESH_OT_smooth(_ModalJob, bpy.types.Operator):
         name="Library Normals", default=True,
         description="Use the library's normals (Loop: exact limit normals) as custom normals")
 
-    @classmethod
-    def poll(cls, context):
-        obj = context.active_object
-        return obj is not None and context.mode == "OBJECT"
-
-    def _prepare(self, context):
+    def prepare_work(self, context):
         obj = context.active_object
         sources.check_object(obj)
         mesh = obj.data
@@ -279,24 +278,7 @@ class PARTICLEMESH_OT_smooth(_ModalJob, bpy.types.Operator):
         source = pm.Mesh(blender_mesh.positions(mesh), triangles,
                          attributes=blender_mesh.float_point_attributes(mesh))
         self._target = obj.name
-        return source, dict(scheme=self.scheme, levels=self.levels)
-
-    def execute(self, context):
-        try:
-            source, kwargs = self._prepare(context)
-            self.job_finished(context, pm.smooth(source, **kwargs))
-        except Exception as e:  # noqa: BLE001
-            return report_failure(self, e)
-        return {"FINISHED"}
-
-    def invoke(self, context, event):
-        if not _interactive(context):
-            return self.execute(context)
-        try:
-            source, kwargs = self._prepare(context)
-        except Exception as e:  # noqa: BLE001
-            return report_failure(self, e)
-        return self.start_job(context, jobs.Job(pm.smooth, source, **kwargs))
+        return pm.smooth, (source,), dict(scheme=self.scheme, levels=self.levels)
 
     def job_finished(self, context, data):
         obj = bpy.data.objects.get(self._target)
@@ -346,11 +328,7 @@ class PARTICLEMESH_OT_import_cloud(bpy.types.Operator, ImportHelper):
         if not made:
             self.report({"ERROR"}, "; ".join(failures) or "nothing to import")
             return {"CANCELLED"}
-        for selected in context.selected_objects:
-            selected.select_set(False)
-        for obj in made:
-            obj.select_set(True)
-        context.view_layer.objects.active = made[-1]
+        _select_only(context, made)
         if failures:
             self.report({"WARNING"}, "not imported: " + "; ".join(failures))
         else:
@@ -583,10 +561,7 @@ class PARTICLEMESH_OT_import_sequence(bpy.types.Operator, ImportHelper):
             finally:
                 live.suspended.discard(obj.name_full)
             live.lock_interface_for_renders(scene)
-            for selected in context.selected_objects:
-                selected.select_set(False)
-            obj.select_set(True)
-            context.view_layer.objects.active = obj
+            _select_only(context, [obj])
             record = live.update_object(obj, context.evaluated_depsgraph_get())
         except Exception as e:  # noqa: BLE001
             return report_failure(self, e)

@@ -12,6 +12,22 @@ class _Panel:
     bl_category = "Particlemesh"
 
 
+class _ObjectSubPanel(_Panel):
+    """A part of the Generated Mesh panel, shown when that panel is."""
+    bl_parent_id = "VIEW3D_PT_particlemesh_object"
+
+    @classmethod
+    def poll(cls, context):
+        return VIEW3D_PT_particlemesh_object.poll(context)
+
+
+def _draw_settings(layout, context, which):
+    """The active object's viewport or render ("which") settings of its method."""
+    state = context.active_object.particlemesh
+    layout.use_property_split = True
+    draw_method_settings(layout, getattr(state, which), state.method)
+
+
 class VIEW3D_PT_particlemesh(_Panel, bpy.types.Panel):
     bl_label = "Particlemesh"
 
@@ -83,47 +99,28 @@ class VIEW3D_PT_particlemesh_object(_Panel, bpy.types.Panel):
         row.operator("particlemesh.clear_cache", text="", icon="TRASH")
 
 
-class VIEW3D_PT_particlemesh_viewport(_Panel, bpy.types.Panel):
+class VIEW3D_PT_particlemesh_viewport(_ObjectSubPanel, bpy.types.Panel):
     bl_label = "Viewport Settings"
-    bl_parent_id = "VIEW3D_PT_particlemesh_object"
-
-    @classmethod
-    def poll(cls, context):
-        return VIEW3D_PT_particlemesh_object.poll(context)
 
     def draw(self, context):
-        state = context.active_object.particlemesh
-        self.layout.use_property_split = True
-        draw_method_settings(self.layout, state.viewport, state.method)
+        _draw_settings(self.layout, context, "viewport")
 
 
-class VIEW3D_PT_particlemesh_render(_Panel, bpy.types.Panel):
+class VIEW3D_PT_particlemesh_render(_ObjectSubPanel, bpy.types.Panel):
     bl_label = "Render Settings"
-    bl_parent_id = "VIEW3D_PT_particlemesh_object"
     bl_options = {"DEFAULT_CLOSED"}
-
-    @classmethod
-    def poll(cls, context):
-        return VIEW3D_PT_particlemesh_object.poll(context)
 
     def draw_header(self, context):
         self.layout.prop(context.active_object.particlemesh, "use_render_settings", text="")
 
     def draw(self, context):
-        state = context.active_object.particlemesh
-        self.layout.use_property_split = True
-        self.layout.active = state.use_render_settings
-        draw_method_settings(self.layout, state.render, state.method)
+        self.layout.active = context.active_object.particlemesh.use_render_settings
+        _draw_settings(self.layout, context, "render")
 
 
-class VIEW3D_PT_particlemesh_bake(_Panel, bpy.types.Panel):
+class VIEW3D_PT_particlemesh_bake(_ObjectSubPanel, bpy.types.Panel):
     bl_label = "Bake"
-    bl_parent_id = "VIEW3D_PT_particlemesh_object"
     bl_options = {"DEFAULT_CLOSED"}
-
-    @classmethod
-    def poll(cls, context):
-        return VIEW3D_PT_particlemesh_object.poll(context)
 
     def draw(self, context):
         state = context.active_object.particlemesh
