@@ -172,7 +172,7 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
 void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
   auto args = std::make_shared<PolygonizeArgs>();
   CLI::App* app = root.add_subcommand(
-      "polygonize", "Volume particles to the mesh of their implicit surface (seed section 5.1, marching cubes)");
+      "polygonize", "Volume particles to the mesh of their implicit surface (summed kernels, marching cubes)");
   app->add_option("input", args->input,
                   "Particles: .ply (x y z ...), .xyz (x y z per line), VTK .vtk/.vtu/.vtp, Houdini .bgeo or, with "
                   "the PCL bridge, .pcd; a path with a frame field ({} or {:04d}, e.g. sim/fluid_{:04d}.vtk) is a "

@@ -105,7 +105,7 @@ int run_render(const RenderArgs& a) {
 void add_render(CLI::App& root, std::vector<Command>& commands) {
   auto args = std::make_shared<RenderArgs>();
   CLI::App* app = root.add_subcommand(
-      "render", "Ray cast the exact iso-surface of volume particles into a PNG (seed section 5.1.3)");
+      "render", "Ray cast the exact iso-surface of volume particles into a PNG");
   app->add_option("input", args->input,
                   "Particles: .ply (x y z ...), .xyz (x y z per line) or, with the PCL bridge, .pcd")
       ->required();

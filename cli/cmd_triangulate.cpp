@@ -267,7 +267,7 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
 
 void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
   auto args = std::make_shared<TriangulateArgs>();
-  CLI::App* app = root.add_subcommand("triangulate", "Surface particles to a triangle mesh (seed section 5.2.3)");
+  CLI::App* app = root.add_subcommand("triangulate", "Surface particles to a triangle mesh (Tonnesen's smallest-sphere test, made into a finished surface)");
   app->add_option("input", args->input,
                   "Particles: .ply (x y z [nx ny nz] ...), .xyz (x y z [nx ny nz] per line), VTK .vtk/.vtu/.vtp, "
                   "Houdini .bgeo or .pcd (PCL: ascii, binary, binary_compressed); a path with a frame field ({} or "

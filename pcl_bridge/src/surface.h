@@ -24,8 +24,8 @@ namespace particlemesh_pcl::detail
     particlemesh::SurfaceStats surface;  ///< zero when raw
   };
 
-  /// The finished surface (particlemesh::reconstruct_surface), or the seed's exact triangle
-  /// set when `raw`. @throws particlemesh::Error as the surface stage does.
+  /// The finished surface (particlemesh::reconstruct_surface), or the smallest-sphere test's
+  /// exact triangle set when `raw`. @throws particlemesh::Error as the surface stage does.
   SurfaceMesh buildSurface (const particlemesh::PointCloud &particles,
                             const particlemesh::SurfaceOptions &options, bool raw);
 }

@@ -612,7 +612,7 @@ std::vector<Vec3> estimate_normals(const PointCloud& cloud, const NormalOptions&
     throw Error(Status::InvalidArgument, "normal radius must be >= 0 (0 = 2 x spacing)");
   detail::ProgressTracker tracker(options.progress);
   return detail::with_threads(options.threads, [&] {
-    // The seed's raw triangles with L = radius give the robust plane fits their candidates.
+    // The raw smallest-sphere triangles with L = radius give the robust plane fits their candidates.
     TriangulateOptions topt;
     topt.spacing = options.radius / 2;
     topt.max_neighbors = size_t(1) << 20;

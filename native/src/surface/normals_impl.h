@@ -18,7 +18,7 @@ namespace PM_NAMESPACE::detail {
 /// the lists' radius; between two points the pair limit of theirs, raw_triangulation.h).
 /// A plain PCA of a point's neighbourhood mixes in a second sheet that passes within the
 /// radius (at a fold, a thin part, the rim of two close surfaces), tilting the normal. So when
-/// `triangles` (the seed's raw triangles, sorted indices) are given, the plane comes from
+/// `triangles` (the raw smallest-sphere triangles, sorted indices) are given, the plane comes from
 /// the raw triangle at the point with the most neighbours within a quarter of the radius of
 /// its plane (the point's own sheet is the denser one near it), refined by a PCA of those
 /// inliers. Without triangles, or where none has three inliers, the plain PCA is used.

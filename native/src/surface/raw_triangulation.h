@@ -1,5 +1,5 @@
-// Internal: the seed's raw test with its working data kept, so that the finishing stages
-// (normals, extraction, hole filling) reuse the grid and the neighbour lists.
+// Internal: the raw smallest-sphere test (Tonnesen) with its working data kept, so that the
+// finishing stages (normals, extraction, hole filling) reuse the grid and the neighbour lists.
 #pragma once
 
 #include "particlemesh/core/config.h"

@@ -1,4 +1,4 @@
-// Internal: the seed's smallest-enclosing-sphere predicate with its symbolic tie-break.
+// Internal: Tonnesen's smallest-enclosing-sphere predicate with its symbolic tie-break.
 // Shared by the fast triangulation and by the brute-force reference in the tests, so the
 // two can only differ in which points they look at, never in how one point is judged.
 #pragma once
