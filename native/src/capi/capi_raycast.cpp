@@ -48,10 +48,8 @@ void check_rays(const double* origins, const double* directions, size_t count) {
 extern "C" {
 
 void pm_field_options_init(pm_field_options* options) {
-  if (options == nullptr) return;
+  if (!capi::reset_versioned(options)) return;
   const FieldParams d;
-  *options = pm_field_options{};
-  options->struct_size = sizeof(pm_field_options);
   capi::kernel_settings_to_c(d, options);
   options->threads = 0;
 }
@@ -99,10 +97,8 @@ pm_status pm_field_values(const pm_field* field, const double* points, size_t co
 void pm_field_destroy(pm_field* field) { delete field; }
 
 void pm_raycast_options_init(pm_raycast_options* options) {
-  if (options == nullptr) return;
+  if (!capi::reset_versioned(options)) return;
   const RaycastOptions d;
-  *options = pm_raycast_options{};
-  options->struct_size = sizeof(pm_raycast_options);
   options->t_min = d.t_min;
   options->t_max = d.t_max;
   options->threads = d.threads;

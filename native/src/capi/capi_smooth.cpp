@@ -150,10 +150,8 @@ pm_status pm_mesh_get_attribute_name(const pm_mesh* mesh, size_t index, const ch
 }
 
 void pm_smooth_options_init(pm_smooth_options* options) {
-  if (options == nullptr) return;
+  if (!capi::reset_versioned(options)) return;
   const SmoothOptions d;
-  *options = pm_smooth_options{};
-  options->struct_size = sizeof(pm_smooth_options);
   options->scheme = int32_t(d.scheme);
   options->levels = d.levels;
   options->limit = d.limit ? 1 : 0;

@@ -16,10 +16,8 @@ using particlemesh::capi::require;
 extern "C" {
 
 void pm_triangulate_options_init(pm_triangulate_options* options) {
-  if (options == nullptr) return;
+  if (!capi::reset_versioned(options)) return;
   const SurfaceOptions d;
-  *options = pm_triangulate_options{};
-  options->struct_size = sizeof(pm_triangulate_options);
   options->spacing = d.spacing;
   options->max_edge_factor = d.max_edge_factor;
   options->threads = d.threads;

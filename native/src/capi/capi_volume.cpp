@@ -22,10 +22,8 @@ static_assert(PM_KERNEL_WYVILL == int(Kernel::Wyvill) && PM_KERNEL_POLY4 == int(
 extern "C" {
 
 void pm_polygonize_options_init(pm_polygonize_options* options) {
-  if (options == nullptr) return;
+  if (!capi::reset_versioned(options)) return;
   const PolygonizeOptions d;
-  *options = pm_polygonize_options{};
-  options->struct_size = sizeof(pm_polygonize_options);
   capi::kernel_settings_to_c(d, options);
   options->cell_size = d.cell_size;
   options->threads = d.threads;

@@ -49,6 +49,15 @@ void check_versioned(const T* out, const char* name);
 template <class T>
 void write_versioned(T* out, const T& value, const char* name);
 
+/// What an _init function starts with: *out zeroed and its struct_size set. False for NULL.
+template <class T>
+bool reset_versioned(T* out) {
+  if (out == nullptr) return false;
+  *out = T{};
+  out->struct_size = sizeof(T);
+  return true;
+}
+
 /// The caller's options struct `*options` read with read_versioned, what it lacks (all of it
 /// for NULL) from `init`'s defaults. Its progress and progress_user_data are pointer fields,
 /// as are `more_pointer_fields` (offsets).
