@@ -37,6 +37,20 @@ PointCloud rows(size_t nx, size_t ny, double along, double across, uint64_t seed
   return c;
 }
 
+// One row of a depth camera at the origin (columns `du` apart in tan(angle), the row at
+// y/z = -0.4) on a plane inclined along the row, its depths rounded to `quantum` as a depth
+// sensor's are: runs of points in line at one depth, each run a step from the next - a curve
+// of samples, nothing beside it (what a voxel grid leaves of a scan where one row remains).
+PointCloud one_depth_row(size_t columns, double du, double quantum) {
+  PointCloud c;
+  for (size_t i = 0; i < columns; ++i) {
+    const double u = (double(i) - 0.5 * double(columns)) * du;
+    const double z = quantum * std::round(1.0 / (1.0 - 0.5 * u) / quantum);
+    c.positions.push_back({u * z, -0.4 * z, z});
+  }
+  return c;
+}
+
 double longest_edge(const TriMesh& m) {
   double longest = 0;
   for (const Triangle& t : m.triangles)
@@ -119,6 +133,22 @@ TEST(UnevenSampling, NoEdgeBeyondThreeTimesTheLimitOfR0) {
   // The cluster's particles (7 apart, beyond 6 r0) stay out; the sheet is whole.
   const TopologyReport t = topology_report(r.mesh);
   EXPECT_EQ(t.vertices_used, sheet);
+}
+
+TEST(UnevenSampling, OneRowOfADepthCameraIsMeshed) {
+  // No plane spans any particle's neighbours (they lie along the row), so no sector reach:
+  // each particle's reach is then that of the shortest non-flat triangle it makes - across a
+  // step to the next run, 2-4 times its nearest-neighbour distance. The row becomes a strip
+  // of triangles through every particle, within the limits.
+  const PointCloud c = one_depth_row(300, 0.002, 0.006);
+  const SurfaceResult r = reconstruct_surface(c);
+  const TopologyReport t = topology_report(r.mesh);
+  EXPECT_TRUE(t.manifold && t.consistently_oriented);
+  EXPECT_EQ(t.nonmanifold_edges, 0u);
+  EXPECT_GE(double(t.vertices_used), 0.95 * double(c.size()));
+  EXPECT_LE(longest_edge(r.mesh), 6.0 * r.triangulation.spacing * (1 + 1e-12));
+  // The runs' steps are longer than 2 r0: one L = 2 r0 leaves the row out.
+  EXPECT_LT(double(topology_report(reconstruct_surface(c, global()).mesh).vertices_used), 0.5 * double(c.size()));
 }
 
 TEST(UnevenSampling, ViewpointTakenWhereTheParticlesLookScannedFromIt) {
