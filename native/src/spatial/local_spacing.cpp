@@ -136,7 +136,8 @@ double triangle_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids,
 /// opening open). Where the nearest
 /// neighbours all lie along one line, the neighbourhood is widened (a ball of twice, then four
 /// times the farthest's distance; only when it is not cut off by a gap) until it spans the
-/// surface. 0 when it never does.
+/// surface. Where it never does (or with fewer than six neighbours, or fewer than four sectors
+/// with one), the triangle reach.
 double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, int m, bool may_widen,
                     std::vector<Vec3>& d) {
   if (m < 6) return triangle_reach(grid, s, ids, m);

@@ -37,20 +37,6 @@ PointCloud rows(size_t nx, size_t ny, double along, double across, uint64_t seed
   return c;
 }
 
-// One row of a depth camera at the origin (columns `du` apart in tan(angle), the row at
-// y/z = -0.4) on a plane inclined along the row, its depths rounded to `quantum` as a depth
-// sensor's are: runs of points in line at one depth, each run a step from the next - a curve
-// of samples, nothing beside it (what a voxel grid leaves of a scan where one row remains).
-PointCloud one_depth_row(size_t columns, double du, double quantum) {
-  PointCloud c;
-  for (size_t i = 0; i < columns; ++i) {
-    const double u = (double(i) - 0.5 * double(columns)) * du;
-    const double z = quantum * std::round(1.0 / (1.0 - 0.5 * u) / quantum);
-    c.positions.push_back({u * z, -0.4 * z, z});
-  }
-  return c;
-}
-
 double longest_edge(const TriMesh& m) {
   double longest = 0;
   for (const Triangle& t : m.triangles)
@@ -140,7 +126,7 @@ TEST(UnevenSampling, OneRowOfADepthCameraIsMeshed) {
   // each particle's reach is then that of the shortest non-flat triangle it makes - across a
   // step to the next run, 2-4 times its nearest-neighbour distance. The row becomes a strip
   // of triangles through every particle, within the limits.
-  const PointCloud c = one_depth_row(300, 0.002, 0.006);
+  const PointCloud c = test::one_depth_row(300, 0.002, 0.006);
   const SurfaceResult r = reconstruct_surface(c);
   const TopologyReport t = topology_report(r.mesh);
   EXPECT_TRUE(t.manifold && t.consistently_oriented);
