@@ -113,7 +113,7 @@ double triangle_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids,
       const Vec3 qb = grid.sorted_point(ids[b]);
       const double pb = distance(p, qb), ab = distance(qa, qb);
       const double longest = std::max({pa, pb, ab});
-      if (longest >= best) continue;
+      if (longest >= best || !(ab > 0)) continue;  // two neighbours may coincide
       // Every corner's cosine above cos(kFlatAngle), by the law of cosines.
       const double cp = (pa * pa + pb * pb - ab * ab) / (2 * pa * pb);
       const double ca = (pa * pa + ab * ab - pb * pb) / (2 * pa * ab);
