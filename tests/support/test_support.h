@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
@@ -62,6 +63,20 @@ inline PointCloud jittered(PointCloud c, double sigma, uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> g(0.0, sigma);
   for (auto& p : c.positions) p += Vec3{g(rng), g(rng), g(rng)};
+  return c;
+}
+
+/// One row of a depth camera at the origin (columns `du` apart in tan(angle), the row at
+/// y/z = -0.4) on a plane inclined along the row, its depths rounded to `quantum` as a depth
+/// sensor's are: runs of points in line at one depth, each run a step from the next - a curve
+/// of samples, nothing beside it (what a voxel grid leaves of a scan where one row remains).
+inline PointCloud one_depth_row(size_t columns, double du, double quantum) {
+  PointCloud c;
+  for (size_t i = 0; i < columns; ++i) {
+    const double u = (double(i) - 0.5 * double(columns)) * du;
+    const double z = quantum * std::round(1.0 / (1.0 - 0.5 * u) / quantum);
+    c.positions.push_back({u * z, -0.4 * z, z});
+  }
   return c;
 }
 

@@ -93,6 +93,37 @@ std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, ProgressTracke
   return out;
 }
 
+/// How far point s must reach to be a corner of any triangle at all, from its m nearest
+/// neighbours `ids`: the longest edge of the shortest triangle it makes with two of them that
+/// is not flat (no angle over kFlatAngle). On an even sampling this is about kSectorReach x its
+/// spacing too (the shortest triangle at a point is about as long as its sector reach), so
+/// where no plane spans the neighbourhood - a curve of samples (one row of a depth camera
+/// after downsampling, a wire), a small cluster - the point still gets the reach that lets
+/// the surface take it in. 0 when no such triangle exists (fewer than two neighbours, or all
+/// in line).
+double triangle_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, int m) {
+  const Vec3 p = grid.sorted_point(s);
+  const double min_cos = std::cos(kFlatAngle * std::numbers::pi / 180.0);
+  double best = INFINITY;
+  for (int a = 0; a < m; ++a) {
+    const Vec3 qa = grid.sorted_point(ids[a]);
+    const double pa = distance(p, qa);
+    if (pa >= best) break;  // the neighbours come nearest first: no shorter triangle is left
+    for (int b = a + 1; b < m; ++b) {
+      const Vec3 qb = grid.sorted_point(ids[b]);
+      const double pb = distance(p, qb), ab = distance(qa, qb);
+      const double longest = std::max({pa, pb, ab});
+      if (longest >= best || !(ab > 0)) continue;  // two neighbours may coincide
+      // Every corner's cosine above cos(kFlatAngle), by the law of cosines.
+      const double cp = (pa * pa + pb * pb - ab * ab) / (2 * pa * pb);
+      const double ca = (pa * pa + ab * ab - pb * pb) / (2 * pa * ab);
+      const double cb = (pb * pb + ab * ab - pa * pa) / (2 * pb * ab);
+      if (cp >= min_cos && ca >= min_cos && cb >= min_cos) best = longest;
+    }
+  }
+  return std::isfinite(best) ? best : 0;
+}
+
 /// How far point s must reach to be connected all around, from its m nearest neighbours `ids`:
 /// in the plane fitted to them, the nearest neighbour in each of six sectors of 60 degrees
 /// (centred on the direction the neighbours spread most along), and the third nearest of those
@@ -105,10 +136,11 @@ std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, ProgressTracke
 /// opening open). Where the nearest
 /// neighbours all lie along one line, the neighbourhood is widened (a ball of twice, then four
 /// times the farthest's distance; only when it is not cut off by a gap) until it spans the
-/// surface. 0 when it never does.
+/// surface. Where it never does (or with fewer than six neighbours, or fewer than four sectors
+/// with one), the triangle reach.
 double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, int m, bool may_widen,
                     std::vector<Vec3>& d) {
-  if (m < 6) return 0;
+  if (m < 6) return triangle_reach(grid, s, ids, m);
   const Vec3 p = grid.sorted_point(s);
   d.clear();
   double farthest = 0;
@@ -131,7 +163,7 @@ double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, i
     u = eig.eigenvectors().col(2);
     w = eig.eigenvectors().col(1);
     if (eig.eigenvalues()(1) >= kElongated * eig.eigenvalues()(2)) break;
-    if (round == 2 || !may_widen) return 0;
+    if (round == 2 || !may_widen) return triangle_reach(grid, s, ids, m);
     const double reach = farthest * double(2 << round);
     d.clear();
     grid.for_each_within(p, reach, [&](uint32_t t, double e2) {
@@ -157,7 +189,7 @@ double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, i
   int f = 0;
   for (double x : nearest)
     if (std::isfinite(x)) found[size_t(f++)] = x;
-  if (f < 4) return 0;
+  if (f < 4) return triangle_reach(grid, s, ids, m);
   std::nth_element(found.begin(), found.begin() + 2, found.begin() + f);
   return found[2];
 }

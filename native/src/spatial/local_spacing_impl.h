@@ -33,6 +33,10 @@ constexpr double kMaxLocalSpacing = 3.0;
 /// fraction of the first (a half disk, at an edge of the surface: about 0.28).
 constexpr double kElongated = 0.05;
 
+/// A triangle with an angle over this many degrees is flat: its corners nearly in line (the
+/// surface's growth takes such triangles last; see surface/candidates.h).
+constexpr double kFlatAngle = 150.0;
+
 /// Per input point (see estimate_local_spacing); r0 = the cloud's median nearest-neighbour
 /// distance (sets the grid). Assumes finite coordinates; runs in the caller's TBB arena.
 std::vector<double> local_spacing_impl(const Vec3* points, size_t n, double r0, ProgressTracker& tracker,

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <numeric>
 #include <random>
 
@@ -102,6 +103,36 @@ TEST(LocalSpacing, AFarClusterKeepsItsOwnSpacing) {
   }
   std::vector<double> own(ls.spacing.begin(), ls.spacing.begin() + long(sheet));
   EXPECT_LT(*std::max_element(own.begin(), own.end()), 2.0);
+}
+
+TEST(LocalSpacing, ACurveOfSamplesReachesItsShortestTriangle) {
+  // One quantized row of a depth camera: runs of collinear points, a step between runs. No
+  // plane spans any point's neighbours, so the spacing comes from the shortest triangle each
+  // point makes with two of its neighbours with no angle over 150 degrees: twice the spacing
+  // (the default edge limit) reaches across that triangle, where the nearest-neighbour
+  // distance alone (twice it: 2 r0) falls short of the steps.
+  const PointCloud c = test::one_depth_row(300, 0.002, 0.006);
+  const std::vector<Vec3>& P = c.positions;
+  const LocalSpacing ls = estimate_local_spacing(P.data(), P.size());
+  const double min_cos = std::cos(150.0 * std::numbers::pi / 180.0);
+  auto corner_ok = [&](const Vec3& a, const Vec3& b, const Vec3& o) {
+    return dot(normalized(a - o), normalized(b - o)) >= min_cos;
+  };
+  size_t reached = 0, beyond_2r0 = 0;
+  for (size_t p = 0; p < P.size(); ++p) {
+    double shortest = INFINITY;
+    for (size_t a = 0; a < P.size(); ++a)
+      for (size_t b = a + 1; b < P.size(); ++b) {
+        if (a == p || b == p) continue;
+        const double longest = std::max({distance(P[p], P[a]), distance(P[p], P[b]), distance(P[a], P[b])});
+        if (longest < shortest && corner_ok(P[a], P[b], P[p]) && corner_ok(P[p], P[b], P[a]) && corner_ok(P[p], P[a], P[b]))
+          shortest = longest;
+      }
+    reached += 2 * ls.spacing[p] >= shortest;
+    beyond_2r0 += shortest > 2 * ls.median_nn;
+  }
+  EXPECT_GT(beyond_2r0 * 2, P.size());        // most points need more than 2 r0
+  EXPECT_GE(reached * 100, P.size() * 95);   // and get it
 }
 
 TEST(LocalSpacing, SameForAnyThreadCountAndInputOrder) {

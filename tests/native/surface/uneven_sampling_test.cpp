@@ -121,6 +121,22 @@ TEST(UnevenSampling, NoEdgeBeyondThreeTimesTheLimitOfR0) {
   EXPECT_EQ(t.vertices_used, sheet);
 }
 
+TEST(UnevenSampling, OneRowOfADepthCameraIsMeshed) {
+  // No plane spans any particle's neighbours (they lie along the row), so no sector reach:
+  // each particle's reach is then that of the shortest non-flat triangle it makes - across a
+  // step to the next run, 2-4 times its nearest-neighbour distance. The row becomes a strip
+  // of triangles through every particle, within the limits.
+  const PointCloud c = test::one_depth_row(300, 0.002, 0.006);
+  const SurfaceResult r = reconstruct_surface(c);
+  const TopologyReport t = topology_report(r.mesh);
+  EXPECT_TRUE(t.manifold && t.consistently_oriented);
+  EXPECT_EQ(t.nonmanifold_edges, 0u);
+  EXPECT_GE(double(t.vertices_used), 0.95 * double(c.size()));
+  EXPECT_LE(longest_edge(r.mesh), 6.0 * r.triangulation.spacing * (1 + 1e-12));
+  // The runs' steps are longer than 2 r0: one L = 2 r0 leaves the row out.
+  EXPECT_LT(double(topology_report(reconstruct_surface(c, global()).mesh).vertices_used), 0.5 * double(c.size()));
+}
+
 TEST(UnevenSampling, ViewpointTakenWhereTheParticlesLookScannedFromIt) {
   // A plate 20 in front of the origin, and behind it, 6 spacings deeper, a wall sampled on the
   // same view rays around it (a depth camera sees no wall behind the plate), meshed with a long

@@ -37,6 +37,12 @@ struct LocalSpacing {
 ///    direction than across it (a depth camera's rows on a surface seen at a grazing angle, a
 ///    line scanner's lines) most sectors' nearest lie across, and the reach is the spacing
 ///    across; neighbours all on one line widen the neighbourhood until it spans the surface.
+///    Where no plane spans it even then - a curve of samples (one row of a depth camera that
+///    the downsampling left on its own, a wire), or fewer than six neighbours (a small
+///    cluster) - the reach is the longest edge of the shortest triangle the point makes with
+///    two of its neighbours with no angle over 150 degrees (on an even sampling about the
+///    sector reach too): the reach that lets a surface take the point in at all. A point whose
+///    neighbours all lie in one line gets none.
 /// An even sampling gets its median nearest-neighbour distance everywhere (within ~15 %).
 /// Deterministic (the same for any thread count and input order) and linear in the points for
 /// surface samplings (a uniform grid); O(N) memory.
