@@ -142,11 +142,22 @@ TEST(TopologyReport, BoundaryLoopSizesComeSmallestFirst) {
   r = topology_report(m);
   EXPECT_FALSE(r.consistently_oriented);
   EXPECT_EQ(r.boundary_loop_edges, (std::vector<size_t>{4, 8, 12, 48}));
-  // Two holes touching at a corner: two loops where traced, one piece of 8 edges where not.
+  // Two holes touching at a corner: traced around the fans, the walk crosses at the shared
+  // vertex (a figure eight), one loop of 8.
   m = grid_with_holes(6, {{1, 1, 1}, {2, 2, 1}});
-  EXPECT_EQ(topology_report(m).boundary_loop_edges, (std::vector<size_t>{4, 4, 24}));
-  std::swap(m.triangles.back()[1], m.triangles.back()[2]);
   EXPECT_EQ(topology_report(m).boundary_loop_edges, (std::vector<size_t>{8, 24}));
+  // Two triangles sharing one vertex: two traced loops of 3; with an inconsistently wound
+  // pair elsewhere, one piece of 6 edges of the boundary graph (and the pair's 4).
+  TriMesh pinch;
+  pinch.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {-1, 0, 0}, {-1, -1, 0}};
+  pinch.triangles = {{0, 1, 2}, {0, 3, 4}};
+  EXPECT_EQ(topology_report(pinch).boundary_loop_edges, (std::vector<size_t>{3, 3}));
+  for (const Vec3& p : {Vec3{5, 0, 0}, Vec3{6, 0, 0}, Vec3{5, 1, 0}, Vec3{5, -1, 0}}) pinch.positions.push_back(p);
+  pinch.triangles.push_back({5, 6, 7});
+  pinch.triangles.push_back({5, 6, 8});
+  r = topology_report(pinch);
+  EXPECT_FALSE(r.consistently_oriented);
+  EXPECT_EQ(r.boundary_loop_edges, (std::vector<size_t>{4, 6}));
   // A closed surface has none.
   EXPECT_TRUE(topology_report(torus_mesh(1, 0.3, 24, 12)).boundary_loop_edges.empty());
 }
@@ -280,7 +291,12 @@ TEST(TopologyReport, AgreesWithTheSerialReferenceForAnyThreadCount) {
     const std::string& name = named.first;
     const TriMesh& m = named.second;  // not a structured binding: clang 14 cannot capture one
     const TopologyReport want = reference::topology_report(m);
-    for (int threads : {1, 2, 3, 8, tbb::this_task_arena::max_concurrency()}) {
+    if (name.rfind("holes", 0) == 0) EXPECT_GE(want.boundary_loop_edges.size(), 7u) << name;  // not vacuous
+    // Every thread count this machine has (more would only idle in the arena).
+    std::vector<int> counts{1};
+    for (int t = 2; t <= tbb::this_task_arena::max_concurrency(); t = t < 4 ? t + 1 : 2 * t) counts.push_back(t);
+    if (counts.back() != tbb::this_task_arena::max_concurrency()) counts.push_back(tbb::this_task_arena::max_concurrency());
+    for (int threads : counts) {
       tbb::task_arena arena(threads);
       const TopologyReport got = arena.execute([&] { return topology_report(m); });
       expect_same_report(got, want, name + ", " + std::to_string(threads) + " threads");
