@@ -17,7 +17,8 @@
 // is a sum of integers. Triangles are joined into components by a concurrent union-find that
 // always links the larger root under the smaller, so each component's root is its lowest
 // triangle whatever the order of the unions. Signed volumes are summed in triangle order, as
-// a serial pass would, so the report is the same for any thread count.
+// a serial pass would, so the report is the same for any thread count. Boundary loops (and
+// their sizes) are walked serially, in edge order: a boundary is small beside the triangles.
 
 namespace PM_NAMESPACE {
 
