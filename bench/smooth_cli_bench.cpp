@@ -1,15 +1,18 @@
 // `particlemesh smooth` as a user runs it (the whole CLI process: start, read, Loop to the
-// limit, write, topology report) beside bare OpenSubdiv refinement of the same mesh in the same
-// run: Far::TopologyRefinerFactory + RefineUniform + PrimvarRefiner::Interpolate of the
-// positions level by level, nothing else (no checks, no limit, no normals, no I/O). Prints a
-// table; numbers and machine go to bench/RESULTS.md.
+// limit, write; with its summary also the topology report of the result, taken while the mesh
+// is written; with -q and no --report none) beside bare OpenSubdiv refinement of the same mesh
+// in the same run: Far::TopologyRefinerFactory + RefineUniform + PrimvarRefiner::Interpolate
+// of the positions level by level, nothing else (no checks, no limit, no normals, no I/O).
+// Prints a table; numbers and machine go to bench/RESULTS.md.
 //
 //   build/bench/smooth_cli_bench [--cli build/cli/particlemesh] [--points 41000] [--levels 2]
 //                                [--reps 7] [--threads N]
 //
 // Input: the finished surface of a Fibonacci sphere of `points` particles (82k triangles for
-// 41 000), written once as binary PLY. The two are run alternately, `reps` times each; the
-// table gives medians. CLI time: wall clock of fork + exec + wait; its CPU time from wait4.
+// 41 000), written once as binary PLY. The three (-q, with the summary, bare) are run in turn,
+// `reps` times each; the table gives medians. The CLI's summary goes to /dev/null. CLI time:
+// wall clock of fork + exec + wait; its CPU time from wait4.
+#include <fcntl.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -18,6 +21,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -47,10 +51,18 @@ struct Point3 {
   }
 };
 
-/// Bare OpenSubdiv: the refined positions of `levels` Loop levels. Returns seconds.
-double bare_opensubdiv(const TriMesh& m, int levels, size_t* out_points) {
+double thread_cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+
+/// Bare OpenSubdiv (one thread, as Far refines): the refined positions of `levels` Loop
+/// levels. Returns wall seconds; its CPU seconds in *cpu.
+double bare_opensubdiv(const TriMesh& m, int levels, size_t* out_points, double* cpu) {
   using namespace OpenSubdiv;
   const auto t0 = Clock::now();
+  const double c0 = thread_cpu_seconds();
   const int nf = int(m.triangles.size());
   std::vector<int> counts(size_t(nf), 3), verts(3 * size_t(nf));
   for (size_t f = 0; f < size_t(nf); ++f)
@@ -75,6 +87,7 @@ double bare_opensubdiv(const TriMesh& m, int levels, size_t* out_points) {
     src.swap(dst);
   }
   *out_points = src.size();
+  *cpu = thread_cpu_seconds() - c0;
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
@@ -88,6 +101,8 @@ Run run_cli(const std::vector<std::string>& args) {
   const auto t0 = Clock::now();
   const pid_t pid = fork();
   if (pid == 0) {
+    const int null = open("/dev/null", O_WRONLY);
+    if (null >= 0) dup2(null, STDOUT_FILENO);
     std::vector<char*> argv;
     for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
@@ -141,22 +156,27 @@ int main(int argc, char** argv) {
   std::printf("CLI: %s smooth IN -o OUT --levels %d -q%s\n", cli.c_str(), levels,
               threads > 0 ? (" --threads " + std::to_string(threads)).c_str() : "");
   std::fflush(stdout);
-  std::vector<double> cli_wall, cli_cpu, bare;
+  std::vector<double> cli_wall, cli_cpu, sum_wall, sum_cpu, bare, bare_cpu;
   size_t refined = 0;
   for (int r = 0; r < reps; ++r) {
-    std::vector<std::string> args{cli, "smooth", in, "-o", out, "--levels", std::to_string(levels), "-q"};
-    if (threads > 0) {
-      args.push_back("--threads");
-      args.push_back(std::to_string(threads));
+    for (const bool quiet : {true, false}) {
+      std::vector<std::string> args{cli, "smooth", in, "-o", out, "--levels", std::to_string(levels)};
+      if (quiet) args.push_back("-q");
+      if (threads > 0) {
+        args.push_back("--threads");
+        args.push_back(std::to_string(threads));
+      }
+      const Run c = run_cli(args);
+      if (!c.ok) {
+        std::printf("the CLI failed\n");
+        return 1;
+      }
+      (quiet ? cli_wall : sum_wall).push_back(c.wall);
+      (quiet ? cli_cpu : sum_cpu).push_back(c.cpu);
     }
-    const Run c = run_cli(args);
-    if (!c.ok) {
-      std::printf("the CLI failed\n");
-      return 1;
-    }
-    cli_wall.push_back(c.wall);
-    cli_cpu.push_back(c.cpu);
-    bare.push_back(bare_opensubdiv(sphere, levels, &refined));
+    double cpu = 0;
+    bare.push_back(bare_opensubdiv(sphere, levels, &refined, &cpu));
+    bare_cpu.push_back(cpu);
   }
   getloadavg(load, 3);
   const TriMesh result = read_mesh(out);
@@ -166,12 +186,16 @@ int main(int argc, char** argv) {
     for (double x : v) std::printf(" %.3f", x);
     std::printf(" |\n");
   };
-  row("particlemesh smooth (CLI, whole process, wall)", cli_wall);
-  row("particlemesh smooth (CLI, whole process, CPU of all threads)", cli_cpu);
+  row("particlemesh smooth -q (CLI, whole process, wall)", cli_wall);
+  row("particlemesh smooth -q (CLI, whole process, CPU of all threads)", cli_cpu);
+  row("particlemesh smooth, summary with topology report (wall)", sum_wall);
+  row("particlemesh smooth, summary with topology report (CPU of all threads)", sum_cpu);
   row("bare OpenSubdiv refinement (wall, in process)", bare);
-  std::printf("-> CLI / bare OpenSubdiv: %.2fx (wall medians); output %zu vertices, %zu triangles; bare %zu points; "
+  row("bare OpenSubdiv refinement (CPU)", bare_cpu);
+  std::printf("-> CLI / bare OpenSubdiv: -q %.2fx (CPU %.2fx), with the summary %.2fx (CPU %.2fx) (medians); output %zu vertices, %zu triangles; bare %zu points; "
               "load %.2f at the end\n",
-              median(cli_wall) / median(bare), result.positions.size(), result.triangles.size(), refined, load[0]);
+              median(cli_wall) / median(bare), median(cli_cpu) / median(bare_cpu), median(sum_wall) / median(bare),
+              median(sum_cpu) / median(bare_cpu), result.positions.size(), result.triangles.size(), refined, load[0]);
   fs::remove_all(dir);
   return 0;
 }

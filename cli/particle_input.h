@@ -1,6 +1,7 @@
-// Reading particles for the CLI, with the PCL bridge when it is built (PM_WITH_PCL): .pcd
-// through PCL's reader (invalid points dropped and reported), optional PCL preprocessing,
-// and a pcl::PolygonMesh PLY beside the normal output. Without PCL: .ply/.xyz only.
+// Reading particles for the CLI (particle_input.cpp), with the PCL bridge when it is built
+// (PM_WITH_PCL): .pcd through PCL's reader (invalid points dropped and reported), optional PCL
+// preprocessing, and a pcl::PolygonMesh PLY beside the normal output, all in the CLI's PCL
+// module (pcl_module.h), loaded only for them. Without PCL: the core reader's formats only.
 #pragma once
 
 #include <string>

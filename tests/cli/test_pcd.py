@@ -1,7 +1,10 @@
 """particlemesh triangulate on PCL's .pcd files, the PCL preprocessing switches and --pcl-mesh."""
 import json
 import math
+import os
+import shutil
 import struct
+import subprocess
 
 import pytest
 
@@ -158,3 +161,57 @@ def test_estimated_normals_face_the_viewpoint(pcl_cli, tmp_path):
         body = lines[len(header) + 1:]
         nz = [float(l.split()[5]) for l in body[:400]]
         assert all(n * sign > 0.99 for n in nz), nz[:5]
+
+
+def _plane_pcd(path, n=20):
+    pts = "".join(f"{0.1 * i} {0.1 * j} 0\n" for i in range(n) for j in range(n))
+    path.write_text(f"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH {n * n}\nHEIGHT 1\n"
+                    f"VIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n * n}\nDATA ascii\n" + pts)
+    return path
+
+
+def test_pcl_is_loaded_only_when_asked_for(pcl_cli, tmp_path):
+    # The dynamic linker lists every library it loads (LD_DEBUG=files): PCL's only for a .pcd
+    # file or a PCL switch, from the CLI's PCL module.
+    exe = os.environ["PARTICLEMESH_CLI"]
+    xyz = tmp_path / "plane.xyz"
+    xyz.write_text("".join(f"{0.1 * i} {0.1 * j} 0\n" for i in range(20) for j in range(20)))
+    pcd = _plane_pcd(tmp_path / "plane.pcd")
+
+    def loaded(*args):
+        env = dict(os.environ, LD_DEBUG="files")
+        proc = subprocess.run([exe, *map(str, args)], capture_output=True, text=True, env=env, timeout=120)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        return proc.stderr
+
+    for args in (["triangulate", xyz, "-o", tmp_path / "a.ply", "-q"], ["smooth", tmp_path / "a.ply", "-o", tmp_path / "b.ply", "-q"]):
+        log = loaded(*args)
+        assert "libpcl_" not in log and "particlemesh_cli_pcl" not in log, args
+    for args in (["triangulate", pcd, "-o", tmp_path / "c.ply", "-q"],
+                 ["triangulate", xyz, "-o", tmp_path / "d.ply", "-q", "--estimate-normals"],
+                 ["triangulate", xyz, "-o", tmp_path / "e.ply", "-q", "--pcl-mesh", tmp_path / "e_pcl.ply"]):
+        log = loaded(*args)
+        assert "particlemesh_cli_pcl" in log and "libpcl_common" in log, args
+
+
+def test_a_missing_pcl_module_is_a_clear_error(pcl_cli, tmp_path):
+    # The program alone, without its PCL module beside it or in ../lib: what needs no PCL
+    # works, what does fails with one line naming the module, and writes nothing.
+    alone = tmp_path / "bin" / "particlemesh"
+    alone.parent.mkdir()
+    shutil.copy2(os.environ["PARTICLEMESH_CLI"], alone)
+    xyz = tmp_path / "plane.xyz"
+    xyz.write_text("".join(f"{0.1 * i} {0.1 * j} 0\n" for i in range(20) for j in range(20)))
+    ok = subprocess.run([alone, "triangulate", xyz, "-o", tmp_path / "a.ply", "-q"], capture_output=True, text=True)
+    assert ok.returncode == 0, ok.stderr
+    pcd = _plane_pcd(tmp_path / "plane.pcd")
+    for args, what in (([pcd], ".pcd input"), ([xyz, "--voxel-grid", "0.2"], "PCL preprocessing"),
+                       ([xyz, "--pcl-mesh", tmp_path / "p.ply"], "--pcl-mesh")):
+        out = tmp_path / "out.ply"
+        proc = subprocess.run([alone, "triangulate", *map(str, args), "-o", out], capture_output=True, text=True)
+        assert proc.returncode == 1, proc.stdout
+        lines = [l for l in proc.stderr.splitlines() if l.strip()]
+        assert len(lines) == 1, proc.stderr
+        assert what in lines[0] and "PCL module" in lines[0] and "libparticlemesh_cli_pcl.so" in lines[0], lines[0]
+        assert str(alone.parent) in lines[0], lines[0]  # where it looked
+        assert not out.exists() and not (tmp_path / "p.ply").exists()

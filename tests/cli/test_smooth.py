@@ -1,6 +1,7 @@
 """particlemesh smooth, and triangulate --smooth, end to end through the binary."""
 import json
 import math
+import os
 
 
 def _octahedron(path):
@@ -61,6 +62,25 @@ def test_loop_counts_topology_and_report(cli, inspect, tmp_path):
     s = json.loads(rep.read_text())["smooth"]
     assert s["levels"] == 2 and s["limit"] is True and s["control_edges"] == len(faces) * 3 // 2
     assert s["triangles"] == f
+
+
+def test_the_summary_and_report_follow_the_written_mesh(cli, inspect, tmp_path):
+    # The topology report is taken while the mesh is written: the summary and --report give
+    # the written mesh's counts (and the same with -q), and a failed write leaves no report.
+    src = tmp_path / "torus.obj"
+    _torus(src)
+    out, rep, rep_q = tmp_path / "s.ply", tmp_path / "r.json", tmp_path / "rq.json"
+    proc = cli("smooth", src, "-o", out, "--levels", "1", "--report", rep)
+    r = inspect(out)
+    assert f"triangles     {r['triangles']}" in proc.stdout and "euler char.   0" in proc.stdout
+    cli("smooth", src, "-o", tmp_path / "q.ply", "--levels", "1", "--report", rep_q, "-q")
+    for path in (rep, rep_q):
+        t = json.loads(path.read_text())["topology"]
+        assert (t["triangles"], t["edges"], t["closed"], t["outward"]) == (r["triangles"], r["edges"], True, True)
+    if os.path.exists("/dev/full"):
+        gone = tmp_path / "gone.json"
+        proc = cli("smooth", src, "-o", "/dev/full", "--levels", "1", "--report", gone, check=False)
+        assert proc.returncode == 1 and "/dev/full" in proc.stderr and not gone.exists()
 
 
 def test_butterfly_keeps_the_original_vertices(cli, tmp_path):

@@ -1,33 +1,216 @@
 #include "particlemesh/mesh/topology_report.h"
 
 #include <algorithm>
+#include <atomic>
 #include <numeric>
 
-#include <tbb/parallel_sort.h>
+#include <tbb/combinable.h>
 
 #include "core/disjoint_sets.h"
 #include "core/parallel.h"
+#include "mesh/corner_buckets.h"
 #include "mesh/orientation.h"
+
+// The report is built vertex by vertex, in parallel. The triangles' corners are bucketed by
+// vertex (a counting sort over fixed chunks of triangles, so each vertex's corners come out
+// in increasing order whatever the thread count); each vertex's corners then give its fan and
+// the edges whose lower endpoint it is, grouped by a local sort: together, in vertex order,
+// exactly the edges a global sort of all half-edges would give, without that sort. Every count
+// is a sum of integers. Triangles are joined into components by a concurrent union-find that
+// always links the larger root under the smaller, so each component's root is its lowest
+// triangle whatever the order of the unions. Signed volumes are summed in triangle order, as
+// a serial pass would, so the report is the same for any thread count. Boundary loops (and
+// their sizes) are walked serially, in edge order: a boundary is small beside the triangles.
 
 namespace PM_NAMESPACE {
 
 namespace {
 
-using UnionFind = detail::DisjointSets;
+constexpr std::memory_order kRelaxed = std::memory_order_relaxed;
 
-struct HalfEdge {
-  uint64_t key;   // (min << 32) | max
-  uint32_t face;
-  uint8_t corner; // the edge runs from corner to corner+1 of the face
-  bool forward;   // from min to max
-  bool operator<(const HalfEdge& o) const {
-    return key != o.key ? key < o.key : (face != o.face ? face < o.face : corner < o.corner);
+/// Adds to per-component counters, one atomic add per run of the same component (a
+/// component's triangles, edges and vertices mostly come in long runs).
+class RunAdder {
+ public:
+  explicit RunAdder(std::vector<std::atomic<uint64_t>>& counters) : c_(counters) {}
+  ~RunAdder() { flush(); }
+  void add(uint32_t comp) {
+    if (comp != comp_) {
+      flush();
+      comp_ = comp;
+    }
+    ++n_;
+  }
+
+ private:
+  void flush() {
+    if (n_ != 0) c_[comp_].fetch_add(n_, kRelaxed);
+    n_ = 0;
+  }
+  std::vector<std::atomic<uint64_t>>& c_;
+  uint32_t comp_ = UINT32_MAX;
+  uint64_t n_ = 0;
+};
+
+/// A small array on the stack that moves to the heap when it outgrows it (a vertex's
+/// corners: about six on a surface, any number on a soup).
+template <class T, size_t N>
+class SmallVector {
+ public:
+  void clear() { size_ = 0; }
+  size_t size() const { return size_; }
+  T* data() { return heap_.empty() ? local_ : heap_.data(); }
+  T& operator[](size_t i) { return data()[i]; }
+  void push_back(const T& v) {
+    if (size_ == N && heap_.empty()) heap_.assign(local_, local_ + N);
+    if (!heap_.empty()) {
+      if (heap_.size() <= size_) heap_.resize(2 * size_);
+      heap_[size_++] = v;
+    } else {
+      local_[size_++] = v;
+    }
+  }
+  /// Sorted in place (insertion sort while small).
+  template <class Less = std::less<T>>
+  void sort(Less less = Less()) {
+    T* d = data();
+    if (size_ > 24) {
+      std::sort(d, d + size_, less);
+      return;
+    }
+    for (size_t i = 1; i < size_; ++i) {
+      const T v = d[i];
+      size_t j = i;
+      for (; j > 0 && less(v, d[j - 1]); --j) d[j] = d[j - 1];
+      d[j] = v;
+    }
+  }
+  void reset() {  // back to the stack buffer
+    size_ = 0;
+    heap_.clear();
+  }
+
+ private:
+  T local_[N];
+  std::vector<T> heap_;
+  size_t size_ = 0;
+};
+
+/// Is the link of a vertex (the opposite edges of its triangles, as vertex pairs) a single
+/// path or a single cycle? Every link vertex in at most two link edges, and all connected
+/// (the edges' components are the vertices' components: every link vertex is on an edge).
+bool link_is_one_fan(std::pair<uint32_t, uint32_t>* link, size_t n) {
+  // The common case first: a closed, consistently oriented fan, whose link edges (next,
+  // previous corner) chain into one directed cycle through every edge, each vertex once as
+  // a start. Anything else takes the general test below.
+  if (n >= 3 && n <= 64) {
+    bool distinct = true;
+    for (size_t i = 0; i < n && distinct; ++i)
+      for (size_t j = i + 1; j < n; ++j)
+        if (link[i].first == link[j].first) {
+          distinct = false;
+          break;
+        }
+    if (distinct) {
+      size_t steps = 0, at = 0;
+      do {
+        const uint32_t want = link[at].second;
+        size_t next = n;
+        for (size_t j = 0; j < n; ++j)
+          if (link[j].first == want) {
+            next = j;
+            break;
+          }
+        if (next == n) break;
+        at = next;
+        ++steps;
+      } while (at != 0 && steps <= n);
+      if (at == 0 && steps == n) return true;
+    }
+  }
+  uint32_t label[64];
+  if (n > 64) {
+    std::vector<uint32_t> ids;
+    for (size_t i = 0; i < n; ++i) {
+      ids.push_back(link[i].first);
+      ids.push_back(link[i].second);
+    }
+    std::sort(ids.begin(), ids.end());
+    for (size_t i = 0; i + 2 < ids.size(); ++i)
+      if (ids[i] == ids[i + 2]) return false;
+    std::vector<uint32_t> parent(n);
+    std::iota(parent.begin(), parent.end(), 0u);
+    auto find = [&](uint32_t x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    // Edges sharing a vertex, through the sorted ids: each id's edges.
+    std::vector<std::pair<uint32_t, uint32_t>> at;  // (id, edge)
+    for (size_t i = 0; i < n; ++i) {
+      at.push_back({link[i].first, uint32_t(i)});
+      at.push_back({link[i].second, uint32_t(i)});
+    }
+    std::sort(at.begin(), at.end());
+    size_t parts = n;
+    for (size_t i = 1; i < at.size(); ++i)
+      if (at[i].first == at[i - 1].first) {
+        const uint32_t a = find(at[i].second), b = find(at[i - 1].second);
+        if (a != b) {
+          parent[a] = b;
+          --parts;
+        }
+      }
+    return parts == 1;
+  }
+  // Degrees: no id more than twice among the 2n endpoints.
+  for (size_t i = 0; i < n; ++i)
+    for (const uint32_t id : {link[i].first, link[i].second}) {
+      int count = 0;
+      for (size_t j = 0; j < n; ++j) count += (link[j].first == id) + (link[j].second == id);
+      if (count > 2) return false;
+    }
+  for (size_t i = 0; i < n; ++i) label[i] = uint32_t(i);
+  auto find = [&](uint32_t x) {
+    while (label[x] != x) x = label[x];
+    return x;
+  };
+  size_t parts = n;
+  for (size_t i = 0; i < n; ++i)
+    for (size_t j = i + 1; j < n; ++j) {
+      const auto a = link[i], b = link[j];
+      if (a.first == b.first || a.first == b.second || a.second == b.first || a.second == b.second) {
+        const uint32_t ri = find(uint32_t(i)), rj = find(uint32_t(j));
+        if (ri != rj) {
+          label[std::max(ri, rj)] = std::min(ri, rj);
+          --parts;
+        }
+      }
+    }
+  return parts == 1;
+}
+
+/// A half-edge seen from its lower endpoint: the higher endpoint, the triangle and the
+/// corner it leaves from, and whether it runs from the lower endpoint to the higher.
+struct LoHalfEdge {
+  uint32_t hi, face;
+  uint8_t corner;
+  bool forward;
+  bool operator<(const LoHalfEdge& o) const {
+    return hi != o.hi ? hi < o.hi : (face != o.face ? face < o.face : corner < o.corner);
   }
 };
 
-uint64_t edge_key(uint32_t a, uint32_t b) {
-  return a < b ? (uint64_t(a) << 32) | b : (uint64_t(b) << 32) | a;
-}
+/// Per-thread scratch of the per-vertex passes.
+struct Scratch {
+  SmallVector<std::pair<uint32_t, uint32_t>, 32> link;
+  SmallVector<uint32_t, 64> others;
+  SmallVector<uint64_t, 32> pairs;
+  SmallVector<LoHalfEdge, 64> half;
+  SmallVector<uint32_t, 32> comps;
+};
+
+// Edge records: kind in the low bits, conflict above.
+constexpr uint8_t kBoundary = 1, kManifold = 2, kNonManifold = 3, kConflict = 4;
 
 }  // namespace
 
@@ -38,212 +221,281 @@ TopologyReport topology_report(const TriMesh& mesh) {
   const size_t V = mesh.positions.size();
   r.vertices = V;
   r.triangles = F;
-  for (const Triangle& t : T)
-    for (uint32_t v : t)
-      if (v >= V) {
-        // A report must not read out of bounds; treat the mesh as unusable.
-        r.degenerate_triangles = F;
-        return r;
+  {
+    std::atomic<bool> out_of_range{false};
+    detail::parallel_blocks(F, 65536, [&](size_t b, size_t e) {
+      for (size_t f = b; f < e; ++f)
+        if (T[f][0] >= V || T[f][1] >= V || T[f][2] >= V) out_of_range.store(true, kRelaxed);
+    });
+    if (out_of_range) {
+      // A report must not read out of bounds; treat the mesh as unusable.
+      r.degenerate_triangles = F;
+      return r;
+    }
+  }
+
+  // Degenerate triangles: a repeated vertex or zero area.
+  {
+    tbb::combinable<size_t> count;
+    detail::parallel_blocks(F, 16384, [&](size_t b, size_t e) {
+      size_t n = 0;
+      for (size_t f = b; f < e; ++f) {
+        const Triangle& t = T[f];
+        if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
+          ++n;
+        } else {
+          const Vec3 c = cross(mesh.positions[t[1]] - mesh.positions[t[0]], mesh.positions[t[2]] - mesh.positions[t[0]]);
+          n += squared_norm(c) == 0;
+        }
       }
-
-  // Degenerate and duplicate triangles.
-  std::vector<uint8_t> degenerate(F, 0);
-  for (size_t f = 0; f < F; ++f) {
-    const Triangle& t = T[f];
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
-      degenerate[f] = 1;
-    } else {
-      const Vec3 n = cross(mesh.positions[t[1]] - mesh.positions[t[0]],
-                           mesh.positions[t[2]] - mesh.positions[t[0]]);
-      if (squared_norm(n) == 0) degenerate[f] = 1;
-    }
-    r.degenerate_triangles += degenerate[f];
-  }
-  {
-    std::vector<Triangle> sorted(T);
-    for (auto& t : sorted) std::sort(t.begin(), t.end());
-    tbb::parallel_sort(sorted.begin(), sorted.end());
-    for (size_t i = 1; i < sorted.size(); ++i) r.duplicate_triangles += sorted[i] == sorted[i - 1];
+      count.local() += n;
+    });
+    r.degenerate_triangles = count.combine(std::plus<size_t>());
   }
 
-  // Undirected edges with their triangles.
-  std::vector<HalfEdge> he;
-  he.reserve(3 * F);
-  for (uint32_t f = 0; f < F; ++f)
-    for (uint8_t c = 0; c < 3; ++c) {
-      const uint32_t a = T[f][c], b = T[f][(c + 1) % 3];
-      if (a == b) continue;
-      he.push_back({edge_key(a, b), f, c, a < b});
-    }
-  tbb::parallel_sort(he.begin(), he.end());
+  // Corners by vertex (corner 3 f + c, with the corner's next and previous vertex, so that
+  // the per-vertex passes read no triangle), each vertex's in increasing order: counted and
+  // placed per fixed chunk of triangles.
+  struct Corner {
+    uint32_t k, to, from;
+  };
+  std::vector<uint32_t> vf_off;
+  std::vector<Corner> vf;
+  detail::bucket_corners_by_vertex(T, V, vf_off, vf, [&](size_t f, uint32_t c) {
+    return Corner{uint32_t(3 * f + c), T[f][(c + 1) % 3], T[f][(c + 2) % 3]};
+  });
 
-  UnionFind faces(F);
-  std::vector<uint8_t> used(V, 0);
-  for (const Triangle& t : T)
-    for (uint32_t v : t) used[v] = 1;
-  r.vertices_used = size_t(std::count(used.begin(), used.end(), uint8_t(1)));
-
-  // Per edge group: multiplicity, orientation, and component joins.
-  std::vector<uint32_t> group_start;
-  for (size_t i = 0; i < he.size(); ++i)
-    if (i == 0 || he[i].key != he[i - 1].key) group_start.push_back(uint32_t(i));
-  group_start.push_back(uint32_t(he.size()));
-  const size_t E = group_start.size() - 1;
-  r.edges = E;
-  std::vector<uint8_t> edge_kind(E);  // 1 boundary, 2 manifold, 3 non-manifold
-  std::vector<uint8_t> edge_conflict(E, 0);
-  for (size_t e = 0; e < E; ++e) {
-    const uint32_t b = group_start[e], en = group_start[e + 1];
-    const uint32_t m = en - b;
-    for (uint32_t i = b + 1; i < en; ++i) faces.unite(he[b].face, he[i].face);
-    if (m == 1) {
-      edge_kind[e] = 1;
-      ++r.boundary_edges;
-    } else if (m == 2) {
-      edge_kind[e] = 2;
-      ++r.manifold_edges;
-      if (he[b].forward == he[b + 1].forward) {
-        edge_conflict[e] = 1;
-        ++r.orientation_conflicts;
-      }
-    } else {
-      edge_kind[e] = 3;
-      ++r.nonmanifold_edges;
-    }
-  }
-
-  // Components, numbered by their lowest triangle.
-  std::vector<uint32_t> comp(F);
-  std::vector<uint32_t> root_to_comp(F, UINT32_MAX);
-  size_t ncomp = 0;
-  for (uint32_t f = 0; f < F; ++f) {
-    const uint32_t root = faces.find(f);
-    if (root_to_comp[root] == UINT32_MAX) root_to_comp[root] = uint32_t(ncomp++);
-    comp[f] = root_to_comp[root];
-  }
-  std::vector<ComponentReport> C(ncomp);
-  for (uint32_t f = 0; f < F; ++f) ++C[comp[f]].triangles;
-  for (size_t e = 0; e < E; ++e) {
-    auto& c = C[comp[he[group_start[e]].face]];
-    ++c.edges;
-    if (edge_kind[e] == 1) ++c.boundary_edges;
-    if (edge_kind[e] == 3) ++c.nonmanifold_edges;
-    if (edge_conflict[e]) c.consistently_oriented = true;  // reused below as "has conflict"
-  }
-  {
-    std::vector<uint64_t> cv;
-    cv.reserve(3 * F);
-    for (uint32_t f = 0; f < F; ++f)
-      for (uint32_t v : T[f]) cv.push_back((uint64_t(comp[f]) << 32) | v);
-    tbb::parallel_sort(cv.begin(), cv.end());
-    cv.erase(std::unique(cv.begin(), cv.end()), cv.end());
-    for (uint64_t x : cv) ++C[x >> 32].vertices;
-  }
-
-  // Vertex fans: the link of a vertex (the opposite edges of its triangles) must be one path
-  // or one cycle.
-  std::vector<uint32_t> vf_off(V + 1, 0);
-  for (const Triangle& t : T)
-    for (uint32_t v : t) ++vf_off[v + 1];
-  std::partial_sum(vf_off.begin(), vf_off.end(), vf_off.begin());
-  std::vector<uint32_t> vf(vf_off[V]);
-  {
-    std::vector<uint32_t> fill(vf_off.begin(), vf_off.end() - 1);
-    for (uint32_t f = 0; f < F; ++f)
-      for (uint32_t v : T[f]) vf[fill[v]++] = f;
-  }
+  // One pass over the vertices: is each used, is its fan one disk or one fan; the edges whose
+  // lower endpoint it is (its half-edges to higher vertices, grouped by a local sort: in
+  // vertex order, the order of a global sort of all edges), each recorded at its first
+  // half-edge's corner (one writer per corner) and joining its triangles; and the triangles
+  // whose lowest vertex it is that repeat an earlier one (duplicates).
   std::vector<uint8_t> vertex_bad(V, 0);
-  detail::parallel_blocks(V, 4096, [&](size_t vb, size_t ve) {
-    std::vector<std::pair<uint32_t, uint32_t>> link;
-    std::vector<uint32_t> ids, parent, degree;
-    for (size_t v = vb; v < ve; ++v) {
-      if (!used[v]) continue;
-      link.clear();
-      ids.clear();
+  std::vector<uint8_t> corner_edge(3 * F, 0);  // edge kind (and conflict) at its first half-edge
+  detail::ConcurrentDisjointSets faces(F);
+  struct BoundaryHalf {
+    uint32_t lo, hi, face;
+    uint8_t corner;
+    bool operator<(const BoundaryHalf& o) const { return lo != o.lo ? lo < o.lo : hi < o.hi; }
+  };
+  struct Counts {
+    size_t duplicates = 0, used = 0, edges = 0, boundary = 0, manifold = 0, nonmanifold = 0, conflicts = 0;
+    std::vector<BoundaryHalf> boundary_halves;
+  };
+  tbb::combinable<Scratch> scratch;
+  tbb::combinable<Counts> counts;
+  detail::parallel_blocks(V, 2048, [&](size_t vb, size_t ve) {
+    Scratch& s = scratch.local();
+    Counts& n = counts.local();
+    for (size_t vi = vb; vi < ve; ++vi) {
+      const uint32_t v = uint32_t(vi);
+      const uint32_t begin = vf_off[v], end = vf_off[v + 1];
+      if (begin == end) continue;
+      ++n.used;
+      s.link.clear();
+      s.pairs.clear();
+      s.half.clear();
       bool bad = false;
-      for (uint32_t i = vf_off[v]; i < vf_off[v + 1]; ++i) {
-        const Triangle& t = T[vf[i]];
-        uint32_t x = UINT32_MAX, y = UINT32_MAX;
-        int self = 0;
-        for (uint32_t w : t) {
-          if (w == v) { ++self; continue; }
-          (x == UINT32_MAX ? x : y) = w;
-        }
-        if (self != 1 || y == UINT32_MAX || x == y) { bad = true; continue; }
-        link.emplace_back(x, y);
-        ids.push_back(x);
-        ids.push_back(y);
-      }
-      std::sort(ids.begin(), ids.end());
-      ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
-      auto local = [&](uint32_t w) {
-        return uint32_t(std::lower_bound(ids.begin(), ids.end(), w) - ids.begin());
-      };
-      parent.resize(ids.size());
-      std::iota(parent.begin(), parent.end(), 0u);
-      degree.assign(ids.size(), 0);
-      auto find = [&](uint32_t x) {
-        while (parent[x] != x) x = parent[x] = parent[parent[x]];
-        return x;
-      };
-      size_t parts = ids.size();
-      for (auto [x, y] : link) {
-        const uint32_t a = local(x), b = local(y);
-        if (++degree[a] > 2 || ++degree[b] > 2) bad = true;
-        const uint32_t ra = find(a), rb = find(b);
-        if (ra != rb) {
-          parent[ra] = rb;
-          --parts;
+      for (uint32_t i = begin; i < end; ++i) {
+        const uint32_t to = vf[i].to, from = vf[i].from, k = vf[i].k;
+        // The fan: the opposite edge of every triangle at v (a triangle with v twice, or
+        // with its other two corners equal, makes v non-manifold).
+        if (to == v || from == v || to == from) bad = true;
+        else s.link.push_back({to, from});
+        // Half-edges at this corner whose lower endpoint is v: out of v and into v.
+        if (to != v && to > v) s.half.push_back({to, k / 3, uint8_t(k % 3), true});
+        if (from != v && from > v) s.half.push_back({from, k / 3, uint8_t((k % 3 + 2) % 3), false});
+        // Duplicates: each triangle once, at its lowest vertex (a triangle with v twice is
+        // counted at the corner followed by v; one with v three times at its first corner).
+        if (to >= v && from >= v) {
+          const bool first = (to != v && from != v) || (to == v && from != v) || (to == v && from == v && k % 3 == 0);
+          if (first) s.pairs.push_back((uint64_t(std::min(to, from)) << 32) | std::max(to, from));
         }
       }
-      if (parts != 1) bad = true;
+      if (!bad) bad = !link_is_one_fan(s.link.data(), s.link.size());
       vertex_bad[v] = bad;
+      if (s.pairs.size() > 1) {
+        s.pairs.sort();
+        for (size_t i = 1; i < s.pairs.size(); ++i) n.duplicates += s.pairs[i] == s.pairs[i - 1];
+      }
+      s.half.sort();
+      for (size_t i = 0; i < s.half.size();) {
+        size_t j = i + 1;
+        while (j < s.half.size() && s.half[j].hi == s.half[i].hi) ++j;
+        const LoHalfEdge& first = s.half[i];
+        for (size_t q = i + 1; q < j; ++q) faces.unite(first.face, s.half[q].face);
+        uint8_t kind;
+        if (j - i == 1) {
+          kind = kBoundary;
+          ++n.boundary;
+          n.boundary_halves.push_back({v, first.hi, first.face, first.corner});
+        } else if (j - i == 2) {
+          const bool conflict = first.forward == s.half[i + 1].forward;
+          kind = kManifold | (conflict ? kConflict : 0);
+          ++n.manifold;
+          n.conflicts += conflict;
+        } else {
+          kind = kNonManifold;
+          ++n.nonmanifold;
+        }
+        corner_edge[3 * size_t(first.face) + first.corner] = kind;
+        ++n.edges;
+        i = j;
+      }
+    }
+  });
+  std::vector<BoundaryHalf> boundary;
+  counts.combine_each([&](const Counts& n) {
+    r.duplicate_triangles += n.duplicates;
+    r.vertices_used += n.used;
+    r.edges += n.edges;
+    r.boundary_edges += n.boundary;
+    r.manifold_edges += n.manifold;
+    r.nonmanifold_edges += n.nonmanifold;
+    r.orientation_conflicts += n.conflicts;
+    boundary.insert(boundary.end(), n.boundary_halves.begin(), n.boundary_halves.end());
+  });
+  std::sort(boundary.begin(), boundary.end());  // edge order: (lower, higher endpoint)
+  std::vector<uint32_t> boundary_off;           // per vertex: its boundary edges (as lower endpoint)
+  if (!boundary.empty()) {
+    boundary_off.assign(V + 1, 0);
+    for (const BoundaryHalf& h : boundary) ++boundary_off[h.lo + 1];
+    for (size_t v = 0; v < V; ++v) boundary_off[v + 1] += boundary_off[v];
+  }
+
+  // Components, numbered by their lowest triangle (each set's root) in triangle order.
+  std::vector<uint32_t> comp(F);
+  std::vector<uint32_t> root_face;  // per component: its lowest triangle
+  size_t ncomp = 0;
+  {
+    constexpr size_t kChunk = 65536;
+    const size_t chunks = (F + kChunk - 1) / kChunk;
+    std::vector<uint32_t> roots_before(chunks + 1, 0);
+    detail::parallel_blocks(chunks, 1, [&](size_t cb, size_t ce) {
+      for (size_t h = cb; h < ce; ++h) {
+        uint32_t n = 0;
+        for (size_t f = h * kChunk; f < std::min(F, (h + 1) * kChunk); ++f) {
+          const uint32_t root = faces.find(uint32_t(f));
+          comp[f] = root;  // the root for now
+          n += root == f;
+        }
+        roots_before[h + 1] = n;
+      }
+    });
+    for (size_t h = 0; h < chunks; ++h) roots_before[h + 1] += roots_before[h];
+    ncomp = roots_before[chunks];
+    root_face.resize(ncomp);
+    detail::parallel_blocks(chunks, 1, [&](size_t cb, size_t ce) {
+      for (size_t h = cb; h < ce; ++h) {
+        uint32_t id = roots_before[h];
+        for (size_t f = h * kChunk; f < std::min(F, (h + 1) * kChunk); ++f)
+          if (comp[f] == f) root_face[id++] = uint32_t(f);
+      }
+    });
+    // Each triangle's root is a lower triangle: its component is the root's rank among the
+    // roots, found by binary search (components are few) or, when many, through a table.
+    if (ncomp < 64) {
+      detail::parallel_blocks(F, 65536, [&](size_t b, size_t e) {
+        for (size_t f = b; f < e; ++f)
+          comp[f] = uint32_t(std::lower_bound(root_face.begin(), root_face.end(), comp[f]) - root_face.begin());
+      });
+    } else {
+      std::vector<uint32_t> id_of_root(F);
+      detail::parallel_blocks(ncomp, 65536, [&](size_t b, size_t e) {
+        for (size_t c = b; c < e; ++c) id_of_root[root_face[c]] = uint32_t(c);
+      });
+      detail::parallel_blocks(F, 65536, [&](size_t b, size_t e) {
+        for (size_t f = b; f < e; ++f) comp[f] = id_of_root[comp[f]];
+      });
+    }
+  }
+
+  // Per component: triangles, edges by kind, orientation conflicts, vertices, bad vertices.
+  std::vector<std::atomic<uint64_t>> c_tris(ncomp), c_edges(ncomp), c_boundary(ncomp), c_nonmanifold(ncomp),
+      c_conflict(ncomp), c_vertices(ncomp), c_bad_vertex(ncomp);  // value-initialised: 0
+  detail::parallel_blocks(F, 16384, [&](size_t b, size_t e) {
+    RunAdder add(c_tris);
+    for (size_t f = b; f < e; ++f) add.add(comp[f]);
+  });
+  detail::parallel_blocks(F, 16384, [&](size_t b, size_t e) {
+    RunAdder edges(c_edges), bnd(c_boundary), nonmanifold(c_nonmanifold), conflict(c_conflict);
+    for (size_t f = b; f < e; ++f)
+      for (size_t c = 0; c < 3; ++c) {
+        const uint8_t info = corner_edge[3 * f + c];
+        if (info == 0) continue;
+        const uint32_t cf = comp[f];
+        edges.add(cf);
+        const uint8_t kind = info & 3;
+        if (kind == kBoundary) bnd.add(cf);
+        if (kind == kNonManifold) nonmanifold.add(cf);
+        if (info & kConflict) conflict.add(cf);
+      }
+  });
+  detail::parallel_blocks(V, 4096, [&](size_t vb, size_t ve) {
+    Scratch& s = scratch.local();
+    RunAdder verts(c_vertices), bad(c_bad_vertex);
+    for (size_t v = vb; v < ve; ++v) {
+      const uint32_t begin = vf_off[v], end = vf_off[v + 1];
+      if (begin == end) continue;
+      // The distinct components of the vertex's triangles (almost always one).
+      const uint32_t c0 = comp[vf[begin].k / 3];
+      bool one = true;
+      for (uint32_t i = begin + 1; i < end && one; ++i) one = comp[vf[i].k / 3] == c0;
+      if (one) {
+        verts.add(c0);
+        if (vertex_bad[v]) bad.add(c0);
+        continue;
+      }
+      s.comps.clear();
+      for (uint32_t i = begin; i < end; ++i) s.comps.push_back(comp[vf[i].k / 3]);
+      s.comps.sort();
+      for (size_t i = 0; i < s.comps.size(); ++i) {
+        if (i > 0 && s.comps[i] == s.comps[i - 1]) continue;
+        verts.add(s.comps[i]);
+        if (vertex_bad[v]) bad.add(s.comps[i]);
+      }
     }
   });
   r.nonmanifold_vertices = size_t(std::count(vertex_bad.begin(), vertex_bad.end(), uint8_t(1)));
-  std::vector<uint8_t> comp_bad_vertex(ncomp, 0);
-  for (uint32_t f = 0; f < F; ++f)
-    for (uint32_t v : T[f])
-      if (vertex_bad[v]) comp_bad_vertex[comp[f]] = 1;
+  std::vector<ComponentReport> C(ncomp);
+  for (size_t c = 0; c < ncomp; ++c) {
+    C[c].triangles = c_tris[c].load(kRelaxed);
+    C[c].edges = c_edges[c].load(kRelaxed);
+    C[c].boundary_edges = c_boundary[c].load(kRelaxed);
+    C[c].nonmanifold_edges = c_nonmanifold[c].load(kRelaxed);
+    C[c].vertices = c_vertices[c].load(kRelaxed);
+  }
 
   // Boundary loops.
   std::vector<uint32_t> loops_per_comp(ncomp, 0);
   const bool traceable = r.nonmanifold_edges == 0 && r.orientation_conflicts == 0;
   if (traceable && r.boundary_edges > 0) {
-    // Directed half-edge (from, to) -> face, for walking around a vertex's fan.
+    // The triangle holding the directed half-edge (from, to), the first in (triangle,
+    // corner) order; -1 if none.
     auto find_half = [&](uint32_t from, uint32_t to) -> int64_t {
-      const uint64_t key = edge_key(from, to);
-      auto it = std::lower_bound(he.begin(), he.end(), key,
-                                 [](const HalfEdge& h, uint64_t k) { return h.key < k; });
-      for (; it != he.end() && it->key == key; ++it) {
-        const Triangle& t = T[it->face];
-        if (t[it->corner] == from && t[(it->corner + 1) % 3] == to) return it->face;
-      }
+      if (from == to) return -1;
+      for (uint32_t i = vf_off[from]; i < vf_off[from + 1]; ++i)
+        if (vf[i].to == to) return vf[i].k / 3;
       return -1;
     };
-    std::vector<size_t> bidx;  // index into he of each boundary half-edge
-    for (size_t e = 0; e < E; ++e)
-      if (edge_kind[e] == 1) bidx.push_back(group_start[e]);
-    // Map directed boundary edge -> position in bidx via the half-edge's start vertex.
-    std::vector<uint8_t> visited(bidx.size(), 0);
+    // The slot of boundary edge {from, to} among the boundary edges (in edge order) if it
+    // runs from `from` to `to`; else -1.
     auto boundary_slot = [&](uint32_t from, uint32_t to) -> int64_t {
-      const uint64_t key = edge_key(from, to);
-      auto it = std::lower_bound(bidx.begin(), bidx.end(), key,
-                                 [&](size_t h, uint64_t k) { return he[h].key < k; });
-      if (it == bidx.end() || he[*it].key != key) return -1;
-      const HalfEdge& h = he[*it];
-      const Triangle& t = T[h.face];
-      if (t[h.corner] != from) return -1;
-      return it - bidx.begin();
+      if (from == to) return -1;
+      const uint32_t lo = std::min(from, to), hi = std::max(from, to);
+      for (uint32_t i = boundary_off[lo]; i < boundary_off[lo + 1]; ++i)
+        if (boundary[i].hi == hi) return T[boundary[i].face][boundary[i].corner] == from ? int64_t(i) : -1;
+      return -1;
     };
-    for (size_t start = 0; start < bidx.size(); ++start) {
+    std::vector<uint8_t> visited(boundary.size(), 0);
+    for (size_t start = 0; start < boundary.size(); ++start) {
       if (visited[start]) continue;
       size_t cur = start;
       size_t guard = 0, edges = 0;
-      while (!visited[cur] && guard++ <= bidx.size()) {
+      while (!visited[cur] && guard++ <= boundary.size()) {
         visited[cur] = 1;
         ++edges;
-        const HalfEdge& h = he[bidx[cur]];
+        const BoundaryHalf& h = boundary[cur];
         const Triangle& t = T[h.face];
         const uint32_t b = t[(h.corner + 1) % 3];
         // Rotate around b from face h.face until an outgoing boundary half-edge appears.
@@ -254,7 +506,10 @@ TopologyReport topology_report(const TriMesh& mesh) {
           const int cb = ft[0] == b ? 0 : (ft[1] == b ? 1 : 2);
           const uint32_t c = ft[(cb + 1) % 3];
           const int64_t slot = boundary_slot(b, c);
-          if (slot >= 0) { next = slot; break; }
+          if (slot >= 0) {
+            next = slot;
+            break;
+          }
           const int64_t g = find_half(c, b);
           if (g < 0) break;
           f = uint32_t(g);
@@ -263,31 +518,35 @@ TopologyReport topology_report(const TriMesh& mesh) {
         cur = size_t(next);
       }
       ++r.boundary_loops;
-      ++loops_per_comp[comp[he[bidx[start]].face]];
+      ++loops_per_comp[comp[boundary[start].face]];
       r.boundary_loop_edges.push_back(edges);
     }
   } else if (r.boundary_edges > 0) {
-    UnionFind verts(V);
-    std::vector<uint8_t> on_boundary(V, 0);
-    for (size_t e = 0; e < E; ++e) {
-      if (edge_kind[e] != 1) continue;
-      const uint32_t a = uint32_t(he[group_start[e]].key >> 32), b = uint32_t(he[group_start[e]].key);
-      verts.unite(a, b);
-      on_boundary[a] = on_boundary[b] = 1;
-    }
+    // Not traceable: the connected components of the boundary-edge graph.
+    std::vector<uint32_t> parent(V);
+    std::iota(parent.begin(), parent.end(), 0u);
+    auto find = [&](uint32_t x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    for (size_t v = 0; v < V; ++v)
+      for (uint32_t i = boundary_off[v]; i < boundary_off[v + 1]; ++i) {
+        const uint32_t a = find(uint32_t(v)), b = find(boundary[i].hi);
+        if (a != b) parent[std::max(a, b)] = std::min(a, b);
+      }
     std::vector<uint8_t> counted(V, 0);
     std::vector<size_t> edges_at(V, 0);
-    for (size_t e = 0; e < E; ++e) {
-      if (edge_kind[e] != 1) continue;
-      const uint32_t root = verts.find(uint32_t(he[group_start[e]].key >> 32));
-      ++edges_at[root];
-      if (!counted[root]) {
-        counted[root] = 1;
-        ++r.boundary_loops;
-        ++loops_per_comp[comp[he[group_start[e]].face]];
+    for (size_t v = 0; v < V; ++v)
+      for (uint32_t i = boundary_off[v]; i < boundary_off[v + 1]; ++i) {
+        const uint32_t root = find(uint32_t(v));
+        ++edges_at[root];
+        if (!counted[root]) {
+          counted[root] = 1;
+          ++r.boundary_loops;
+          ++loops_per_comp[comp[boundary[i].face]];
+        }
       }
-    }
-    for (uint32_t v = 0; v < V; ++v)
+    for (size_t v = 0; v < V; ++v)
       if (counted[v]) r.boundary_loop_edges.push_back(edges_at[v]);
   }
   std::sort(r.boundary_loop_edges.begin(), r.boundary_loop_edges.end());
@@ -295,29 +554,32 @@ TopologyReport topology_report(const TriMesh& mesh) {
   // Finish the per-component records.
   for (size_t c = 0; c < ncomp; ++c) {
     auto& cr = C[c];
-    const bool conflict = cr.consistently_oriented;
+    const bool conflict = c_conflict[c].load(kRelaxed) != 0;
     cr.consistently_oriented = !conflict && cr.nonmanifold_edges == 0;
     cr.boundary_loops = loops_per_comp[c];
     cr.euler_characteristic = int64_t(cr.vertices) - int64_t(cr.edges) + int64_t(cr.triangles);
-    cr.manifold = cr.nonmanifold_edges == 0 && !comp_bad_vertex[c];
+    cr.manifold = cr.nonmanifold_edges == 0 && c_bad_vertex[c].load(kRelaxed) == 0;
     cr.closed = cr.manifold && cr.boundary_edges == 0;
     if (cr.manifold) {
       const int64_t twice = 2 - cr.euler_characteristic - int64_t(cr.boundary_loops);
       cr.genus = twice >= 0 && twice % 2 == 0 ? int(twice / 2) : -1;
     }
   }
-  // Signed volumes of closed components, about each component's first vertex for accuracy.
-  {
-    std::vector<Vec3> anchor(ncomp);
-    std::vector<uint8_t> has_anchor(ncomp, 0);
+  // Signed volumes of closed components, about the first vertex of each one's lowest
+  // triangle for accuracy: the terms in parallel, summed in triangle order.
+  if (std::any_of(C.begin(), C.end(), [](const ComponentReport& c) { return c.closed; })) {
+    std::vector<double> term(F);
+    detail::parallel_blocks(F, 16384, [&](size_t b, size_t e) {
+      for (size_t f = b; f < e; ++f) {
+        const uint32_t c = comp[f];
+        if (!C[c].closed) continue;
+        term[f] = detail::signed_volume6(mesh.positions[T[root_face[c]][0]], mesh.positions[T[f][0]],
+                                         mesh.positions[T[f][1]], mesh.positions[T[f][2]]) / 6.0;
+      }
+    });
     std::vector<double> vol(ncomp, 0.0);
-    for (uint32_t f = 0; f < F; ++f) {
-      const uint32_t c = comp[f];
-      if (!C[c].closed) continue;
-      if (!has_anchor[c]) { anchor[c] = mesh.positions[T[f][0]]; has_anchor[c] = 1; }
-      vol[c] += detail::signed_volume6(anchor[c], mesh.positions[T[f][0]], mesh.positions[T[f][1]],
-                                       mesh.positions[T[f][2]]) / 6.0;
-    }
+    for (size_t f = 0; f < F; ++f)
+      if (C[comp[f]].closed) vol[comp[f]] += term[f];
     for (size_t c = 0; c < ncomp; ++c) C[c].signed_volume = vol[c];
   }
 
@@ -336,8 +598,7 @@ TopologyReport topology_report(const TriMesh& mesh) {
   if (r.closed_components == 0) r.outward = false;
   std::vector<size_t> order(ncomp);
   std::iota(order.begin(), order.end(), size_t(0));
-  std::stable_sort(order.begin(), order.end(),
-                   [&](size_t a, size_t b) { return C[a].triangles > C[b].triangles; });
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return C[a].triangles > C[b].triangles; });
   r.per_component.reserve(ncomp);
   for (size_t i : order) r.per_component.push_back(C[i]);
   return r;

@@ -6,6 +6,7 @@
 #include <opensubdiv/sdc/scheme.h>
 
 #include "core/parallel.h"
+#include "mesh/corner_buckets.h"
 
 namespace PM_NAMESPACE::detail {
 
@@ -59,41 +60,10 @@ bool build_loop_rings(const std::vector<Triangle>& T, size_t V, LoopRings* out) 
     uint32_t to, from;
   };
   std::vector<uint32_t>& off = out->offset;
-  off.assign(V + 1, 0);
-  std::vector<Corner> corners(3 * F);
-  {
-    constexpr size_t kChunks = 8;
-    const size_t per = (F + kChunks - 1) / kChunks;
-    std::vector<uint32_t> at(kChunks * V, 0);
-    parallel_blocks(kChunks, 1, [&](size_t cb, size_t ce) {
-      for (size_t h = cb; h < ce; ++h)
-        for (size_t f = h * per; f < std::min(F, (h + 1) * per); ++f)
-          for (uint32_t v : T[f]) ++at[h * V + v];
-    });
-    parallel_blocks(V, 16384, [&](size_t b, size_t e) {
-      for (size_t v = b; v < e; ++v) {
-        uint32_t n = 0;
-        for (size_t h = 0; h < kChunks; ++h) n += at[h * V + v];
-        off[v + 1] = n;
-      }
-    });
-    for (size_t v = 0; v < V; ++v) off[v + 1] += off[v];
-    parallel_blocks(V, 16384, [&](size_t b, size_t e) {
-      for (size_t v = b; v < e; ++v) {
-        uint32_t slot = off[v];
-        for (size_t h = 0; h < kChunks; ++h) {
-          const uint32_t n = at[h * V + v];
-          at[h * V + v] = slot;
-          slot += n;
-        }
-      }
-    });
-    parallel_blocks(kChunks, 1, [&](size_t cb, size_t ce) {
-      for (size_t h = cb; h < ce; ++h)
-        for (size_t f = h * per; f < std::min(F, (h + 1) * per); ++f)
-          for (int c = 0; c < 3; ++c) corners[at[h * V + T[f][size_t(c)]]++] = {T[f][size_t((c + 1) % 3)], T[f][size_t((c + 2) % 3)]};
-    });
-  }
+  std::vector<Corner> corners;
+  bucket_corners_by_vertex(T, V, off, corners, [&](size_t f, uint32_t c) {
+    return Corner{T[f][(c + 1) % 3], T[f][(c + 2) % 3]};
+  });
   // Each vertex's ring: from its first corner's next vertex, through the corner whose next
   // vertex is the previous corner's previous one (counter-clockwise with the winding).
   out->ring.resize(3 * F);

@@ -5,6 +5,7 @@
 #include <numeric>
 #include <utility>
 
+#include "core/disjoint_sets.h"
 #include "core/parallel.h"
 #include "mesh/orientation.h"
 
@@ -13,39 +14,20 @@ namespace PM_NAMESPACE::detail {
 size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<Triangle>& T,
                                         const std::vector<uint64_t>& boundary, std::vector<Vec3>* vertex_normals) {
   // Components by shared vertices (the same as by shared edges on a manifold without
-  // pinches); a component is open if it holds a boundary half-edge. A concurrent union-find
-  // that always links the higher root under the lower: each component ends at its lowest
-  // point, whatever the threads did (a serial pass is a visible cost at millions of
-  // triangles).
+  // pinches); a component is open if it holds a boundary half-edge. Joined concurrently (a
+  // serial pass is a visible cost at millions of triangles): each component's root is its
+  // lowest point whatever the threads did.
   const size_t n = P.size();
-  std::vector<uint32_t> parent(n);
-  std::iota(parent.begin(), parent.end(), 0u);
-  auto up = [&](uint32_t x) { return std::atomic_ref<uint32_t>(parent[x]).load(std::memory_order_relaxed); };
-  auto find = [&](uint32_t x) {  // halving the path: a parent's parent is an ancestor too
-    for (uint32_t p = up(x); p != x; p = up(x)) {
-      const uint32_t g = up(p);
-      if (g != p) std::atomic_ref<uint32_t>(parent[x]).store(g, std::memory_order_relaxed);
-      x = g;
-    }
-    return x;
-  };
+  ConcurrentDisjointSets sets(n);
   parallel_blocks(T.size(), 8192, [&](size_t b, size_t e) {
-    for (size_t i = b; i < e; ++i)
-      for (int k = 1; k < 3; ++k) {
-        uint32_t a = T[i][0], c = T[i][k];
-        while (true) {
-          a = find(a);
-          c = find(c);
-          if (a == c) break;
-          if (a < c) std::swap(a, c);  // link the higher root a under c
-          uint32_t expected = a;
-          if (std::atomic_ref<uint32_t>(parent[a]).compare_exchange_strong(expected, c, std::memory_order_relaxed)) break;
-        }
-      }
+    for (size_t i = b; i < e; ++i) {
+      sets.unite(T[i][0], T[i][1]);
+      sets.unite(T[i][0], T[i][2]);
+    }
   });
   std::vector<uint32_t> root(n);
   parallel_blocks(n, 8192, [&](size_t b, size_t e) {
-    for (size_t v = b; v < e; ++v) root[v] = find(uint32_t(v));
+    for (size_t v = b; v < e; ++v) root[v] = sets.find(uint32_t(v));
   });
   std::vector<uint8_t> open(n, 0);
   for (uint64_t e : boundary) open[root[uint32_t(e >> 32)]] = 1;

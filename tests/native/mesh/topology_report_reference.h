@@ -1,5 +1,7 @@
-// The topology report as it was first written: serial, global sorts. Kept in the tests only,
-// as the reference the parallel topology_report() must agree with field for field.
+// The topology report written the plain way: serial, one global sort of all half-edges, the
+// boundary loops walked around vertex fans. Kept in the tests only, as the reference the
+// parallel topology_report() (native/src/mesh/topology_report.cpp) must agree with field for
+// field, the loop sizes included.
 #pragma once
 
 #include <algorithm>
@@ -251,9 +253,10 @@ inline TopologyReport topology_report(const TriMesh& mesh) {
     for (size_t start = 0; start < bidx.size(); ++start) {
       if (visited[start]) continue;
       size_t cur = start;
-      size_t guard = 0;
+      size_t guard = 0, edges = 0;
       while (!visited[cur] && guard++ <= bidx.size()) {
         visited[cur] = 1;
+        ++edges;
         const HalfEdge& h = he[bidx[cur]];
         const Triangle& t = T[h.face];
         const uint32_t b = t[(h.corner + 1) % 3];
@@ -275,6 +278,7 @@ inline TopologyReport topology_report(const TriMesh& mesh) {
       }
       ++r.boundary_loops;
       ++loops_per_comp[comp[he[bidx[start]].face]];
+      r.boundary_loop_edges.push_back(edges);
     }
   } else if (r.boundary_edges > 0) {
     UnionFind verts(V);
@@ -286,16 +290,21 @@ inline TopologyReport topology_report(const TriMesh& mesh) {
       on_boundary[a] = on_boundary[b] = 1;
     }
     std::vector<uint8_t> counted(V, 0);
+    std::vector<size_t> edges_at(V, 0);
     for (size_t e = 0; e < E; ++e) {
       if (edge_kind[e] != 1) continue;
       const uint32_t root = verts.find(uint32_t(he[group_start[e]].key >> 32));
+      ++edges_at[root];
       if (!counted[root]) {
         counted[root] = 1;
         ++r.boundary_loops;
         ++loops_per_comp[comp[he[group_start[e]].face]];
       }
     }
+    for (uint32_t v = 0; v < V; ++v)
+      if (counted[v]) r.boundary_loop_edges.push_back(edges_at[v]);
   }
+  std::sort(r.boundary_loop_edges.begin(), r.boundary_loop_edges.end());
 
   // Finish the per-component records.
   for (size_t c = 0; c < ncomp; ++c) {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <array>
 #include <cstring>
 #include <random>
 #include <string>
@@ -107,6 +108,60 @@ TEST(TopologyReport, DegenerateDuplicateAndUnusedAreCounted) {
   EXPECT_EQ(r.degenerate_triangles, 1u);
 }
 
+namespace {
+// An n x n grid of unit squares, two triangles each, consistently wound, without the squares
+// of the given k x k blocks (lower-left square i, j): one hole of 4 k edges per block.
+TriMesh grid_with_holes(uint32_t n, const std::vector<std::array<uint32_t, 3>>& blocks, Vec3 offset = {}) {
+  TriMesh m;
+  for (uint32_t j = 0; j <= n; ++j)
+    for (uint32_t i = 0; i <= n; ++i) m.positions.push_back(offset + Vec3{double(i), double(j), 0});
+  for (uint32_t j = 0; j < n; ++j)
+    for (uint32_t i = 0; i < n; ++i) {
+      bool cut = false;
+      for (const auto& b : blocks) cut |= i >= b[0] && i < b[0] + b[2] && j >= b[1] && j < b[1] + b[2];
+      if (cut) continue;
+      const uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      m.triangles.push_back({a, b, c});
+      m.triangles.push_back({a, c, d});
+    }
+  return m;
+}
+}  // namespace
+
+TEST(TopologyReport, BoundaryLoopSizesComeSmallestFirst) {
+  // Holes of 4, 8 and 12 edges and the grid's rim of 4 x 12.
+  TriMesh m = grid_with_holes(12, {{2, 2, 3}, {8, 8, 1}, {7, 2, 2}});
+  TopologyReport r = topology_report(m);
+  EXPECT_TRUE(r.consistently_oriented);
+  EXPECT_EQ(r.boundary_loops, 4u);
+  EXPECT_EQ(r.boundary_loop_edges, (std::vector<size_t>{4, 8, 12, 48}));
+  EXPECT_EQ(r.per_component[0].genus, 0);
+  // One triangle flipped: the loops are no longer traced around fans but taken as the
+  // connected pieces of the boundary-edge graph, the same four here.
+  std::swap(m.triangles[0][1], m.triangles[0][2]);
+  r = topology_report(m);
+  EXPECT_FALSE(r.consistently_oriented);
+  EXPECT_EQ(r.boundary_loop_edges, (std::vector<size_t>{4, 8, 12, 48}));
+  // Two holes touching at a corner: traced around the fans, the walk crosses at the shared
+  // vertex (a figure eight), one loop of 8.
+  m = grid_with_holes(6, {{1, 1, 1}, {2, 2, 1}});
+  EXPECT_EQ(topology_report(m).boundary_loop_edges, (std::vector<size_t>{8, 24}));
+  // Two triangles sharing one vertex: two traced loops of 3; with an inconsistently wound
+  // pair elsewhere, one piece of 6 edges of the boundary graph (and the pair's 4).
+  TriMesh pinch;
+  pinch.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {-1, 0, 0}, {-1, -1, 0}};
+  pinch.triangles = {{0, 1, 2}, {0, 3, 4}};
+  EXPECT_EQ(topology_report(pinch).boundary_loop_edges, (std::vector<size_t>{3, 3}));
+  for (const Vec3& p : {Vec3{5, 0, 0}, Vec3{6, 0, 0}, Vec3{5, 1, 0}, Vec3{5, -1, 0}}) pinch.positions.push_back(p);
+  pinch.triangles.push_back({5, 6, 7});
+  pinch.triangles.push_back({5, 6, 8});
+  r = topology_report(pinch);
+  EXPECT_FALSE(r.consistently_oriented);
+  EXPECT_EQ(r.boundary_loop_edges, (std::vector<size_t>{4, 6}));
+  // A closed surface has none.
+  EXPECT_TRUE(topology_report(torus_mesh(1, 0.3, 24, 12)).boundary_loop_edges.empty());
+}
+
 TEST(TopologyReport, EmptyMesh) {
   const TopologyReport r = topology_report(TriMesh{});
   EXPECT_EQ(r.triangles, 0u);
@@ -139,6 +194,7 @@ void expect_same_report(const TopologyReport& a, const TopologyReport& b, const 
   EXPECT_EQ(a.closed, b.closed);
   EXPECT_EQ(a.consistently_oriented, b.consistently_oriented);
   EXPECT_EQ(a.outward, b.outward);
+  EXPECT_EQ(a.boundary_loop_edges, b.boundary_loop_edges);
   ASSERT_EQ(a.per_component.size(), b.per_component.size());
   for (size_t i = 0; i < a.per_component.size(); ++i) {
     const ComponentReport &x = a.per_component[i], &y = b.per_component[i];
@@ -211,11 +267,38 @@ TEST(TopologyReport, AgreesWithTheSerialReferenceForAnyThreadCount) {
   for (int i = 0; i < 400; ++i) soup.triangles.push_back({uint32_t(rng() % 30), uint32_t(rng() % 30), uint32_t(rng() % 30)});
   meshes.push_back({"soup", soup});
   meshes.push_back({"empty", TriMesh{}});
+  // Loops of several sizes over several components, traced (consistent winding) and as
+  // pieces of the boundary graph (a flipped triangle, a fin), two holes meeting at a corner.
+  TriMesh holes = grid_with_holes(30, {{2, 2, 1}, {5, 5, 2}, {10, 3, 5}, {20, 20, 3}, {3, 3, 1}});
+  const TriMesh second = grid_with_holes(9, {{1, 1, 1}, {4, 4, 4}}, Vec3{40, 0, 0});
+  for (const Triangle& t : second.triangles) {
+    const uint32_t o = uint32_t(holes.positions.size());
+    holes.triangles.push_back({t[0] + o, t[1] + o, t[2] + o});
+  }
+  holes.positions.insert(holes.positions.end(), second.positions.begin(), second.positions.end());
+  meshes.push_back({"holes", holes});
+  TriMesh flipped = holes;
+  std::swap(flipped.triangles[7][1], flipped.triangles[7][2]);
+  meshes.push_back({"holes, one triangle flipped", flipped});
+  TriMesh finned = holes;
+  finned.positions.push_back({0.5, 0.5, 1});
+  finned.triangles.push_back({finned.triangles[0][0], finned.triangles[0][1], uint32_t(finned.positions.size() - 1)});
+  meshes.push_back({"holes and a fin", finned});
+  TriMesh shuffled = holes;
+  std::shuffle(shuffled.triangles.begin(), shuffled.triangles.end(), rng);
+  meshes.push_back({"holes, triangles shuffled", shuffled});
   for (const auto& named : meshes) {
     const std::string& name = named.first;
     const TriMesh& m = named.second;  // not a structured binding: clang 14 cannot capture one
     const TopologyReport want = reference::topology_report(m);
-    for (int threads : {1, tbb::this_task_arena::max_concurrency()}) {
+    if (name.rfind("holes", 0) == 0) {
+      EXPECT_GE(want.boundary_loop_edges.size(), 7u) << name;  // not vacuous
+    }
+    // Every thread count this machine has (more would only idle in the arena).
+    std::vector<int> counts{1};
+    for (int t = 2; t <= tbb::this_task_arena::max_concurrency(); t = t < 4 ? t + 1 : 2 * t) counts.push_back(t);
+    if (counts.back() != tbb::this_task_arena::max_concurrency()) counts.push_back(tbb::this_task_arena::max_concurrency());
+    for (int threads : counts) {
       tbb::task_arena arena(threads);
       const TopologyReport got = arena.execute([&] { return topology_report(m); });
       expect_same_report(got, want, name + ", " + std::to_string(threads) + " threads");

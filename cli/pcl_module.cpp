@@ -1,11 +1,12 @@
-// particle_input.h with the PCL bridge.
+// The CLI's PCL part (pcl_module.h): .pcd input through the bridge (invalid points dropped and
+// reported), PCL preprocessing, and the pcl::PolygonMesh PLY of --pcl-mesh. Built as a module
+// that the CLI loads only when one of these is asked for.
 #include <cstdio>
 #include <string>
 
 #include <pcl/console/print.h>
 
-#include "commands.h"
-#include "particle_input.h"
+#include "pcl_module.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh_pcl/conversions.h"
 #include "particlemesh_pcl/io.h"
@@ -13,48 +14,9 @@
 
 namespace particlemesh::cli {
 
-void add_particle_input_options(CLI::App& app, ParticleInputArgs& a) {
-  const char* group = "Input preprocessing (PCL; off by default)";
-  auto* us = app.add_option("--uniform-sampling", a.uniform_sampling,
-                            "Downsample with pcl::UniformSampling to this spacing (voxel edge, world units; also r0 unless --spacing)")
-                 ->check(CLI::PositiveNumber)
-                 ->check(finite_number())
-                 ->group(group);
-  auto* vg = app.add_option("--voxel-grid", a.voxel_grid,
-                            "Downsample with pcl::VoxelGrid to this spacing (the input point nearest each voxel's centroid; also r0 unless --spacing)")
-                 ->check(CLI::PositiveNumber)
-                 ->check(finite_number())
-                 ->group(group);
-  us->excludes(vg);
-  app.add_flag("--remove-outliers", a.remove_outliers,
-               "Statistical outlier removal (pcl::StatisticalOutlierRemoval) before downsampling")
-      ->group(group);
-  app.add_option("--outlier-k", a.outlier_k, "Neighbours for the outlier statistics")
-      ->check(CLI::Range(1, 100000))
-      ->capture_default_str()
-      ->group(group);
-  app.add_option("--outlier-std", a.outlier_std, "Outlier threshold: mean + this x stddev")
-      ->check(CLI::Range(0.0, 1e6))
-      ->check(finite_number())
-      ->capture_default_str()
-      ->group(group);
-  app.add_flag("--estimate-normals", a.estimate_normals,
-               "Estimate normals with PCL (replacing the file's), flipped toward the viewpoint")
-      ->group(group);
-  app.add_option("--normal-k", a.normal_k, "Neighbours for normal estimation")
-      ->check(CLI::Range(3, 100000))
-      ->capture_default_str()
-      ->group(group);
-  app.add_option("--viewpoint", a.viewpoint,
-                 "Where the scan was taken from, X Y Z: normals estimated with --estimate-normals face it, and "
-                 "triangulate keeps depth jumps seen from it open (default: a .pcd's VIEWPOINT)")
-      ->expected(3)
-      ->group(group);
-  app.add_option("--pcl-mesh", a.pcl_mesh,
-                 "Also write the mesh as a pcl::PolygonMesh PLY (pcl::io::savePLYFileBinary; with rgb/intensity)");
-}
+namespace {
 
-ParticleInput read_particles(const std::string& path, const ParticleInputArgs& a, int threads) {
+ParticleInput read_with_pcl(const std::string& path, const ParticleInputArgs& a, int threads) {
   // PCL's own console messages would duplicate ours; errors come back as exceptions.
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
   ParticleInput in;
@@ -136,10 +98,19 @@ ParticleInput read_particles(const std::string& path, const ParticleInputArgs& a
   return in;
 }
 
-void write_pcl_mesh(const TriMesh& mesh, OutputFile& out) {
+void write_polygon_mesh(const TriMesh& mesh, OutputFile& out) {
   pcl::PolygonMesh pm;
   particlemesh_pcl::toPolygonMesh(mesh, pm);
   particlemesh_pcl::savePLYFile(out, pm);
 }
 
+}  // namespace
+
 }  // namespace particlemesh::cli
+
+extern "C" __attribute__((visibility("default"))) const particlemesh::cli::PclModule* particlemesh_cli_pcl_module() {
+  static const particlemesh::cli::PclModule module{particlemesh::cli::PclModule::kVersion,
+                                                   &particlemesh::cli::read_with_pcl,
+                                                   &particlemesh::cli::write_polygon_mesh};
+  return &module;
+}

@@ -1,0 +1,174 @@
+// Reading particles for the CLI (particle_input.h). .ply, .xyz and the simulators' formats
+// without preprocessing are read by the core reader; .pcd files, PCL preprocessing and
+// --pcl-mesh go through the CLI's PCL module (pcl_module.h), loaded only then, so that the
+// runs that need no PCL do not pay for linking it at start.
+#include <dlfcn.h>
+
+#include <cctype>
+#include <filesystem>
+#include <mutex>
+#include <string>
+#include <system_error>
+#include <vector>
+
+#include "commands.h"
+#include "particle_input.h"
+#include "particlemesh/core/error.h"
+#include "particlemesh/io/mesh_io.h"
+#include "pcl_module.h"
+
+namespace particlemesh::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  for (char& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+  return ext;
+}
+
+bool wants_pcl(const std::string& path, const ParticleInputArgs& a) {
+  return lower_extension(path) == ".pcd" || a.uniform_sampling > 0 || a.voxel_grid > 0 || a.remove_outliers ||
+         a.estimate_normals;
+}
+
+#ifdef PM_CLI_PCL_MODULE
+/// The PCL module, loaded on first use: beside the executable (the build tree), then where
+/// `cmake --install` puts it relative to the executable (the library folder), then by name on
+/// the library search path. @throws Error saying where it looked and why it did not load.
+const PclModule& pcl_module(const std::string& what) {
+  static std::once_flag once;
+  static const PclModule* module = nullptr;
+  static std::string failure;
+  std::call_once(once, [] {
+    const std::string name = PM_CLI_PCL_MODULE;
+    std::error_code ec;
+    const fs::path exe_dir = fs::read_symlink("/proc/self/exe", ec).parent_path();
+    std::vector<std::string> places;
+    if (!ec) {
+      places.push_back((exe_dir / name).string());
+      places.push_back((exe_dir / PM_CLI_PCL_MODULE_FROM_BINDIR / name).lexically_normal().string());
+    }
+    std::string tried;
+    auto attempt = [&](const std::string& file) {
+      void* handle = dlopen(file.c_str(), RTLD_NOW | RTLD_LOCAL);
+      if (handle == nullptr) {
+        const char* why = dlerror();
+        tried += std::string(tried.empty() ? "" : "; ") + (why ? why : file + ": cannot be loaded");
+        return false;
+      }
+      using Entry = const PclModule* (*)();
+      const auto entry = reinterpret_cast<Entry>(dlsym(handle, PM_CLI_PCL_MODULE_ENTRY));
+      const PclModule* m = entry ? entry() : nullptr;
+      if (m == nullptr || m->version != PclModule::kVersion) {
+        tried += std::string(tried.empty() ? "" : "; ") + file + " is not this version's PCL module";
+        return false;
+      }
+      module = m;
+      return true;
+    };
+    bool present = false;
+    for (const std::string& file : places) {
+      if (!fs::exists(file, ec)) continue;
+      present = true;
+      if (attempt(file)) return;
+    }
+    if (!present && attempt(name)) return;
+    std::string where;
+    for (const std::string& file : places) where += (where.empty() ? "" : " nor ") + fs::path(file).parent_path().string();
+    failure = present ? tried
+                      : name + " is neither beside the program nor in its library folder (" + where +
+                            ") nor on the library path; install particlemesh with the PCL bridge (PM_WITH_PCL=ON)";
+  });
+  if (module == nullptr) throw Error(Status::IoError, what + " needs the CLI's PCL module, which did not load: " + failure);
+  return *module;
+}
+#else
+[[noreturn]] const PclModule& pcl_module(const std::string& what) {
+  throw Error(Status::InvalidArgument, what + " needs the PCL bridge (built with PM_WITH_PCL=OFF)");
+}
+#endif
+
+/// What the bridge would report and print for an input it reads with the core reader.
+ParticleInput read_natively(const std::string& path, const ParticleInputArgs& a) {
+  ParticleInput in;
+  in.cloud = read_point_cloud(path);
+  const std::string ext = lower_extension(path);
+  const size_t n = in.cloud.size();
+  in.report = {{"format", ext.empty() ? "" : ext.substr(1)},
+               {"encoding", ""},
+               {"points", n},
+               {"valid_points", n},
+               {"invalid_points", 0},
+               {"invalid_normals", 0},
+               {"organized", false},
+               {"width", uint32_t(n)},
+               {"height", 1},
+               {"has_normals", in.cloud.has_normals()},
+               {"has_color", false},
+               {"has_intensity", false}};
+  in.has_viewpoint = a.viewpoint.size() == 3;
+  if (in.has_viewpoint) in.viewpoint = Vec3{a.viewpoint[0], a.viewpoint[1], a.viewpoint[2]};
+  return in;
+}
+
+}  // namespace
+
+#ifdef PM_CLI_PCL_MODULE
+void add_particle_input_options(CLI::App& app, ParticleInputArgs& a) {
+  const char* group = "Input preprocessing (PCL; off by default)";
+  auto* us = app.add_option("--uniform-sampling", a.uniform_sampling,
+                            "Downsample with pcl::UniformSampling to this spacing (voxel edge, world units; also r0 unless --spacing)")
+                 ->check(CLI::PositiveNumber)
+                 ->check(finite_number())
+                 ->group(group);
+  auto* vg = app.add_option("--voxel-grid", a.voxel_grid,
+                            "Downsample with pcl::VoxelGrid to this spacing (the input point nearest each voxel's centroid; also r0 unless --spacing)")
+                 ->check(CLI::PositiveNumber)
+                 ->check(finite_number())
+                 ->group(group);
+  us->excludes(vg);
+  app.add_flag("--remove-outliers", a.remove_outliers,
+               "Statistical outlier removal (pcl::StatisticalOutlierRemoval) before downsampling")
+      ->group(group);
+  app.add_option("--outlier-k", a.outlier_k, "Neighbours for the outlier statistics")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str()
+      ->group(group);
+  app.add_option("--outlier-std", a.outlier_std, "Outlier threshold: mean + this x stddev")
+      ->check(CLI::Range(0.0, 1e6))
+      ->check(finite_number())
+      ->capture_default_str()
+      ->group(group);
+  app.add_flag("--estimate-normals", a.estimate_normals,
+               "Estimate normals with PCL (replacing the file's), flipped toward the viewpoint")
+      ->group(group);
+  app.add_option("--normal-k", a.normal_k, "Neighbours for normal estimation")
+      ->check(CLI::Range(3, 100000))
+      ->capture_default_str()
+      ->group(group);
+  app.add_option("--viewpoint", a.viewpoint,
+                 "Where the scan was taken from, X Y Z: normals estimated with --estimate-normals face it, and "
+                 "triangulate keeps depth jumps seen from it open (default: a .pcd's VIEWPOINT)")
+      ->expected(3)
+      ->group(group);
+  app.add_option("--pcl-mesh", a.pcl_mesh,
+                 "Also write the mesh as a pcl::PolygonMesh PLY (pcl::io::savePLYFileBinary; with rgb/intensity)");
+}
+#else
+void add_particle_input_options(CLI::App&, ParticleInputArgs&) {}
+#endif
+
+ParticleInput read_particles(const std::string& path, const ParticleInputArgs& a, int threads) {
+  if (!wants_pcl(path, a)) return read_natively(path, a);
+  const std::string what = lower_extension(path) == ".pcd" ? "'" + path + "': .pcd input" : "PCL preprocessing";
+  return pcl_module(what).read(path, a, threads);
+}
+
+void write_pcl_mesh(const TriMesh& mesh, OutputFile& out) {
+  pcl_module("'" + out.path() + "': --pcl-mesh").write_mesh(mesh, out);
+}
+
+}  // namespace particlemesh::cli

@@ -1,0 +1,69 @@
+// Internal: a triangle mesh's corners bucketed by vertex, in parallel and with the same layout
+// for any thread count: a counting sort over a fixed number of chunks of triangles, so each
+// vertex's corners come out in triangle order. The topology report and Loop's limit rings
+// walk each vertex's fan from it without reading the triangles again.
+#pragma once
+
+#include "particlemesh/core/config.h"
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "core/parallel.h"
+#include "particlemesh/mesh/tri_mesh.h"
+
+namespace PM_NAMESPACE::detail {
+
+/// offset (V + 1 entries) and out (3 F entries): vertex v's corners are out[offset[v] ..
+/// offset[v + 1]), in increasing triangle order; the corner c of triangle f is stored as
+/// make(f, c) (what the caller's passes need of it: its index 3 f + c, its next and previous
+/// vertex, ...). Every vertex index must be below V.
+template <class Corner, class Make>
+void bucket_corners_by_vertex(const std::vector<Triangle>& T, size_t V, std::vector<uint32_t>& offset,
+                              std::vector<Corner>& out, Make make) {
+  const size_t F = T.size();
+  offset.assign(V + 1, 0);
+  out.resize(3 * F);
+  constexpr size_t kChunks = 8;
+  const size_t per = (F + kChunks - 1) / kChunks;
+  std::vector<uint32_t> at(kChunks * V, 0);  // per chunk and vertex: its count, then its slot
+  parallel_blocks(kChunks, 1, [&](size_t cb, size_t ce) {
+    for (size_t h = cb; h < ce; ++h) {
+      uint32_t* a = at.data() + h * V;
+      for (size_t f = h * per; f < std::min(F, (h + 1) * per); ++f) {
+        ++a[T[f][0]];
+        ++a[T[f][1]];
+        ++a[T[f][2]];
+      }
+    }
+  });
+  parallel_blocks(V, 16384, [&](size_t b, size_t e) {
+    for (size_t v = b; v < e; ++v) {
+      uint32_t n = 0;
+      for (size_t h = 0; h < kChunks; ++h) n += at[h * V + v];
+      offset[v + 1] = n;
+    }
+  });
+  for (size_t v = 0; v < V; ++v) offset[v + 1] += offset[v];
+  parallel_blocks(V, 16384, [&](size_t b, size_t e) {
+    for (size_t v = b; v < e; ++v) {
+      uint32_t slot = offset[v];
+      for (size_t h = 0; h < kChunks; ++h) {
+        const uint32_t n = at[h * V + v];
+        at[h * V + v] = slot;
+        slot += n;
+      }
+    }
+  });
+  parallel_blocks(kChunks, 1, [&](size_t cb, size_t ce) {
+    for (size_t h = cb; h < ce; ++h) {
+      uint32_t* a = at.data() + h * V;
+      for (size_t f = h * per; f < std::min(F, (h + 1) * per); ++f)
+        for (uint32_t c = 0; c < 3; ++c) out[a[T[f][c]]++] = make(f, c);
+    }
+  });
+}
+
+}  // namespace particlemesh::detail
