@@ -105,9 +105,11 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
   throw_if_interrupted();
 
   set_phase(Phase::Writing);
-  const auto t2 = Clock::now();
-  outputs.write_mesh("-o", result.mesh);
-  const double t_write = std::chrono::duration<double>(Clock::now() - t2).count();
+  // The topology report (for the summary and --report) is taken while the mesh is written.
+  const WrittenMesh written = write_with_report(result.mesh, !a.quiet || !a.report.empty(),
+                                                [&] { outputs.write_mesh("-o", result.mesh); });
+  const TopologyReport& report = written.report;
+  const double t_write = written.seconds;
   // No surface at all: the field never reaches the threshold where it was sampled. The empty
   // mesh is still written (a frame of a sequence may well be empty), with a warning.
   std::string warning;
@@ -124,7 +126,6 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
       std::fprintf(stderr, "particlemesh polygonize: warning: %s\n", w);
   }
 
-  const TopologyReport report = topology_report(result.mesh);
   if (!a.report.empty()) {
     nlohmann::json j{{"input", a.input},
                      {"output", a.output},

@@ -6,8 +6,6 @@
 #include <memory>
 #include <sstream>
 
-#include <tbb/task_group.h>
-
 #include "commands.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/io/mesh_io.h"
@@ -116,22 +114,11 @@ int run_smooth(const SmoothArgs& a) {
   throw_if_interrupted();
 
   set_phase(Phase::Writing);
-  const auto t2 = Clock::now();
-  // The topology report of the result (for the summary and --report; neither with -q alone)
-  // is taken on the other cores while the mesh is written; both are done before anything is
-  // put in place.
-  TopologyReport report;
-  tbb::task_group beside;
-  if (!a.quiet || !a.report.empty()) beside.run([&] { report = topology_report(result.mesh); });
-  double t_write = 0;
-  try {
-    outputs.write_mesh("-o", result.mesh);
-    t_write = std::chrono::duration<double>(Clock::now() - t2).count();
-  } catch (...) {
-    beside.wait();
-    throw;
-  }
-  beside.wait();
+  // The topology report (for the summary and --report) is taken while the mesh is written.
+  const WrittenMesh written = write_with_report(result.mesh, !a.quiet || !a.report.empty(),
+                                                [&] { outputs.write_mesh("-o", result.mesh); });
+  const TopologyReport& report = written.report;
+  const double t_write = written.seconds;
 
   if (!a.report.empty()) {
     nlohmann::json j{{"input", a.input},

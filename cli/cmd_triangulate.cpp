@@ -188,12 +188,14 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
   apply_smooth_chain(result.mesh, a.smooth, a.threads, progress);  // --smooth: after the mesh is made
 
   set_phase(Phase::Writing);
-  const auto t2 = Clock::now();
-  outputs.write_mesh("-o", result.mesh);
-  if (outputs.has("--pcl-mesh")) write_pcl_mesh(result.mesh, outputs.open("--pcl-mesh"));
-  const double t_write = std::chrono::duration<double>(Clock::now() - t2).count();
+  // The topology report (for the summary and --report) is taken while the mesh is written.
+  const WrittenMesh written = write_with_report(result.mesh, !a.quiet || !a.report.empty(), [&] {
+    outputs.write_mesh("-o", result.mesh);
+    if (outputs.has("--pcl-mesh")) write_pcl_mesh(result.mesh, outputs.open("--pcl-mesh"));
+  });
+  const TopologyReport& report = written.report;
+  const double t_write = written.seconds;
 
-  const TopologyReport report = topology_report(result.mesh);
   if (!a.report.empty()) {
     nlohmann::json j{{"input", a.input},
                      {"output", a.output},

@@ -1,10 +1,13 @@
 #include "run_outputs.h"
 
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <fcntl.h>
 #include <unistd.h>
 #include <sys/stat.h>
+
+#include <tbb/task_group.h>
 
 #include "particlemesh/core/error.h"
 #include "progress_line.h"
@@ -123,6 +126,22 @@ void RunOutputs::commit_all() {
   }
   set_phase(Phase::Done);  // a signal from now on ends the process as usual: the outputs are complete
   sigprocmask(SIG_SETMASK, &old, nullptr);
+}
+
+WrittenMesh write_with_report(const TriMesh& mesh, bool want_report, const std::function<void()>& write) {
+  WrittenMesh w;
+  tbb::task_group beside;
+  if (want_report) beside.run([&] { w.report = topology_report(mesh); });
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    write();
+  } catch (...) {
+    beside.wait();
+    throw;
+  }
+  w.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  beside.wait();
+  return w;
 }
 
 }  // namespace particlemesh::cli

@@ -6,6 +6,7 @@
 // of them: a run's outputs appear together or not at all.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -13,6 +14,7 @@
 
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/io/output_file.h"
+#include "particlemesh/mesh/topology_report.h"
 
 namespace particlemesh::cli {
 
@@ -57,5 +59,17 @@ class RunOutputs {
   std::vector<OutputSpec> specs_;
   std::vector<std::pair<std::string, std::unique_ptr<OutputFile>>> open_;
 };
+
+/// What the mesh outputs' writing gives the summary and --report: the written mesh's topology
+/// report (empty when not asked for) and the seconds the writing took.
+struct WrittenMesh {
+  TopologyReport report;
+  double seconds = 0;
+};
+
+/// Runs `write` (the mesh outputs) while, when `want_report` (a summary or --report will show
+/// it), the topology report of `mesh` is taken on the other cores; both are done before it
+/// returns, also when `write` throws.
+WrittenMesh write_with_report(const TriMesh& mesh, bool want_report, const std::function<void()>& write);
 
 }  // namespace particlemesh::cli

@@ -274,3 +274,19 @@ def test_sph_frames_anisotropic(cli, inspect, data_dir, tmp_path, name):
     # (The splashy dam break has a few small closed cavities inside its sheets: not "outward".)
     assert mesh["closed"] and mesh["manifold"] and mesh["consistently_oriented"]
     assert mesh["triangles"] > 1000
+
+
+@pytest.mark.parametrize("command", ["polygonize", "triangulate"])
+def test_report_and_summary_describe_the_written_mesh(cli, inspect, tmp_path, command):
+    # The topology report is taken while the mesh is written (and not at all with -q alone):
+    # the report and the summary must still describe exactly the mesh in the file.
+    pts = tmp_path / "sphere.ply"
+    cli("sample", "fibonacci", "--points", "4000", "-o", pts)
+    out, rep = tmp_path / "out.ply", tmp_path / "r.json"
+    cli(command, pts, "-o", out, "--report", rep, "-q")
+    mesh = inspect(out)
+    topo = json.loads(rep.read_text())["topology"]
+    assert topo["triangles"] == mesh["triangles"] > 1000
+    assert topo["vertices"] == mesh["vertices"] and topo["closed"] == mesh["closed"] is True
+    proc = cli(command, pts, "-o", out)
+    assert f"triangles     {mesh['triangles']}\n" in proc.stdout
