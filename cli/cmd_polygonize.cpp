@@ -104,12 +104,8 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
   progress.clear();
   throw_if_interrupted();
 
-  set_phase(Phase::Writing);
-  // The topology report (for the summary and --report) is taken while the mesh is written.
   const WrittenMesh written = write_with_report(result.mesh, !a.quiet || !a.report.empty(),
                                                 [&] { outputs.write_mesh("-o", result.mesh); });
-  const TopologyReport& report = written.report;
-  const double t_write = written.seconds;
   // No surface at all: the field never reaches the threshold where it was sampled. The empty
   // mesh is still written (a frame of a sequence may well be empty), with a warning.
   std::string warning;
@@ -131,8 +127,8 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
                      {"output", a.output},
                      {"read", input.report},
                      {"polygonize", stats_json(result.stats)},
-                     {"topology", to_json(report)},
-                     {"seconds", {{"read", t_read}, {"polygonize", t_poly}, {"write", t_write}}}};
+                     {"topology", to_json(written.report)},
+                     {"seconds", {{"read", t_read}, {"polygonize", t_poly}, {"write", written.seconds}}}};
     if (!warning.empty()) j["warning"] = warning;
     outputs.open("--report").write(json_text(j));
   }
@@ -163,7 +159,7 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
                   a.taubin_lambda, a.taubin_mu);
     std::printf("  grid          %zu blocks of 8^3 sampled (%.1f MiB), %zu with surface\n", s.sampled_blocks,
                 double(s.grid_bytes) / double(1 << 20), s.surface_blocks);
-    print_mesh_and_times(report, "polygonize", t_read, t_poly, t_write);
+    print_mesh_and_times(written.report, "polygonize", t_read, t_poly, written.seconds);
   }
   return 0;
 }

@@ -113,12 +113,8 @@ int run_smooth(const SmoothArgs& a) {
   progress.clear();
   throw_if_interrupted();
 
-  set_phase(Phase::Writing);
-  // The topology report (for the summary and --report) is taken while the mesh is written.
   const WrittenMesh written = write_with_report(result.mesh, !a.quiet || !a.report.empty(),
                                                 [&] { outputs.write_mesh("-o", result.mesh); });
-  const TopologyReport& report = written.report;
-  const double t_write = written.seconds;
 
   if (!a.report.empty()) {
     nlohmann::json j{{"input", a.input},
@@ -126,8 +122,8 @@ int run_smooth(const SmoothArgs& a) {
                      {"scheme", a.scheme},
                      {"boundary", a.boundary},
                      {"smooth", smooth_stats_json(result.stats)},
-                     {"topology", to_json(report)},
-                     {"seconds", {{"read", t_read}, {"smooth", t_smooth}, {"write", t_write}}}};
+                     {"topology", to_json(written.report)},
+                     {"seconds", {{"read", t_read}, {"smooth", t_smooth}, {"write", written.seconds}}}};
     outputs.open("--report").write(json_text(j));
   }
   outputs.commit_all();
@@ -141,7 +137,7 @@ int run_smooth(const SmoothArgs& a) {
     if (s.dropped_vertices) std::printf("  dropped       %zu unreferenced vertices\n", s.dropped_vertices);
     if (s.reoriented_triangles) std::printf("  reoriented    %zu triangles\n", s.reoriented_triangles);
     if (s.creases) std::printf("  creases       %zu edges\n", s.creases);
-    print_mesh_and_times(report, "smooth", t_read, t_smooth, t_write);
+    print_mesh_and_times(written.report, "smooth", t_read, t_smooth, written.seconds);
   }
   return 0;
 }

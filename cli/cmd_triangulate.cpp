@@ -187,14 +187,10 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
 
   apply_smooth_chain(result.mesh, a.smooth, a.threads, progress);  // --smooth: after the mesh is made
 
-  set_phase(Phase::Writing);
-  // The topology report (for the summary and --report) is taken while the mesh is written.
   const WrittenMesh written = write_with_report(result.mesh, !a.quiet || !a.report.empty(), [&] {
     outputs.write_mesh("-o", result.mesh);
     if (outputs.has("--pcl-mesh")) write_pcl_mesh(result.mesh, outputs.open("--pcl-mesh"));
   });
-  const TopologyReport& report = written.report;
-  const double t_write = written.seconds;
 
   if (!a.report.empty()) {
     nlohmann::json j{{"input", a.input},
@@ -203,8 +199,8 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
                      {"triangulation", to_json(result.triangulation)},
                      {"surface", a.raw ? nlohmann::json(nullptr) : to_json(result.surface)},
                      {"spacing", a.raw || a.global_spacing ? "global" : "local"},
-                     {"topology", to_json(report)},
-                     {"seconds", {{"read", t_read}, {"triangulate", t_tri}, {"write", t_write}}}};
+                     {"topology", to_json(written.report)},
+                     {"seconds", {{"read", t_read}, {"triangulate", t_tri}, {"write", written.seconds}}}};
     if (!input.report.is_null()) j["input_cloud"] = input.report;
     if (a.thin > 1)
       j["thin"] = {{"factor", a.thin}, {"local", !a.global_spacing}, {"distance", thin_distance}, {"kept", cloud.size()}, {"of", input.cloud.size()}};
@@ -260,7 +256,7 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
       for (const std::string& h : surface_hints(result, a.thin, a.global_spacing))
         std::printf("  hint          %s\n", h.c_str());
     }
-    print_mesh_and_times(report, "triangulate", t_read, t_tri, t_write);
+    print_mesh_and_times(written.report, "triangulate", t_read, t_tri, written.seconds);
   }
   return 0;
 }

@@ -129,6 +129,7 @@ void RunOutputs::commit_all() {
 }
 
 WrittenMesh write_with_report(const TriMesh& mesh, bool want_report, const std::function<void()>& write) {
+  set_phase(Phase::Writing);
   WrittenMesh w;
   tbb::task_group beside;
   if (want_report) beside.run([&] { w.report = topology_report(mesh); });

@@ -67,9 +67,10 @@ struct WrittenMesh {
   double seconds = 0;
 };
 
-/// Runs `write` (the mesh outputs) while, when `want_report` (a summary or --report will show
-/// it), the topology report of `mesh` is taken on the other cores; both are done before it
-/// returns, also when `write` throws.
+/// The writing phase of a command (set_phase(Phase::Writing)): runs `write` (the mesh outputs)
+/// while, when `want_report` (a summary or --report will show it), the topology report of
+/// `mesh` is taken on the other cores; both are done before it returns, also when `write`
+/// throws.
 WrittenMesh write_with_report(const TriMesh& mesh, bool want_report, const std::function<void()>& write);
 
 }  // namespace particlemesh::cli

@@ -20,6 +20,7 @@
 #include "particlemesh/core/error.h"
 #include "particlemesh/core/progress.h"
 #include "particlemesh/mesh/tri_mesh.h"
+#include "support/test_support.h"
 
 namespace particlemesh::test {
 
@@ -36,15 +37,6 @@ inline constexpr bool kSanitized = false;
 #endif
 
 /// Status of a call (Ok if it returns); the message into *message.
-inline Status status_of(const std::function<void()>& f, std::string* message = nullptr) {
-  try {
-    f();
-  } catch (const Error& e) {
-    if (message) *message = e.what();
-    return e.status();
-  }
-  return Status::Ok;
-}
 
 #define PM_EXPECT_ERROR(call, status, text)                                                   \
   do {                                                                                        \

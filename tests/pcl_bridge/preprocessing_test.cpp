@@ -14,6 +14,7 @@
 #include "support/test_support.h"
 
 using namespace particlemesh;
+using particlemesh::test::status_of;
 using particlemesh_pcl::Downsampling;
 using particlemesh_pcl::PreprocessOptions;
 
@@ -34,14 +35,6 @@ PointCloud sphere_with_strays(size_t n, std::vector<uint32_t>* strays) {
   return c;
 }
 
-Status status_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const particlemesh::Error& e) {
-    return e.status();
-  }
-  return Status::Ok;
-}
 
 }  // namespace
 

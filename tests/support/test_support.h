@@ -7,16 +7,30 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <random>
 #include <set>
 #include <string>
 #include <vector>
 
+#include "particlemesh/core/error.h"
 #include "particlemesh/mesh/point_cloud.h"
 #include "particlemesh/mesh/tri_mesh.h"
+#include "particlemesh/sample/shapes.h"
 
 namespace particlemesh::test {
+
+/// The status a call ends with: Ok, or the Error it throws (its message into *message).
+inline Status status_of(const std::function<void()>& f, std::string* message = nullptr) {
+  try {
+    f();
+  } catch (const Error& e) {
+    if (message) *message = e.what();
+    return e.status();
+  }
+  return Status::Ok;
+}
 
 /// Path of a file in the shared data folder (PM_TEST_DATA, set by CTest), or "" when the
 /// folder is absent; use PM_REQUIRE_DATA to skip with a message.
@@ -63,6 +77,33 @@ inline PointCloud jittered(PointCloud c, double sigma, uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> g(0.0, sigma);
   for (auto& p : c.positions) p += Vec3{g(rng), g(rng), g(rng)};
+  return c;
+}
+
+/// A Fibonacci sphere with its lower half `dense` points' worth and its upper half `sparse`'s.
+inline PointCloud two_density_sphere(size_t dense, size_t sparse) {
+  PointCloud out;
+  for (const Vec3& p : fibonacci_sphere(dense).positions)
+    if (p.z < 0) out.positions.push_back(p);
+  for (const Vec3& p : fibonacci_sphere(sparse).positions)
+    if (p.z >= 0) out.positions.push_back(p);
+  return out;
+}
+
+/// A sheet near z = 0 sampled in rows: `along` apart within a row, rows `across` apart,
+/// alternate rows shifted by half a step (a depth camera's rows on a surface seen at a grazing
+/// angle), jittered by up to 5 % of the steps in x and y, and by up to 5 % of `along` in z when
+/// `jitter_z` (else exactly flat).
+inline PointCloud row_sheet(size_t nx, size_t ny, double along, double across, uint64_t seed, bool jitter_z) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-0.05, 0.05);
+  PointCloud c;
+  for (size_t j = 0; j < ny; ++j)
+    for (size_t i = 0; i < nx; ++i) {
+      const double x = (double(i) + 0.5 * double(j % 2) + u(rng)) * along;
+      const double y = (double(j) + u(rng)) * across;
+      c.positions.push_back({x, y, jitter_z ? u(rng) * along : 0.0});
+    }
   return c;
 }
 

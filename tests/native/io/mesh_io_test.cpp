@@ -18,20 +18,12 @@
 #include "support/test_support.h"
 
 using namespace particlemesh;
+using particlemesh::test::status_of;
 namespace fs = std::filesystem;
 
 namespace {
 void write_text(const fs::path& p, const std::string& s) { std::ofstream(p, std::ios::binary) << s; }
 
-Status status_of(const std::function<void()>& f, std::string* message = nullptr) {
-  try {
-    f();
-  } catch (const Error& e) {
-    if (message) *message = e.what();
-    return e.status();
-  }
-  return Status::Ok;
-}
 }  // namespace
 
 TEST(MeshIO, NonManifoldRawTrianglesRoundTripInEveryFormat) {

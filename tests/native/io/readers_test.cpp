@@ -19,6 +19,7 @@
 #include "support/test_support.h"
 
 using namespace particlemesh;
+using particlemesh::test::status_of;
 namespace fs = std::filesystem;
 
 namespace {
@@ -33,15 +34,6 @@ void append(std::string& s, T v) {
   s.append(reinterpret_cast<const char*>(&v), sizeof v);
 }
 
-Status status_of(const std::function<void()>& f, std::string* message) {
-  try {
-    f();
-  } catch (const Error& e) {
-    *message = e.what();
-    return e.status();
-  }
-  return Status::Ok;
-}
 
 #define EXPECT_REFUSED(call, status, text)                                   \
   do {                                                                       \

@@ -8,25 +8,12 @@
 #include <numeric>
 #include <vector>
 
+#include "core/disjoint_sets.h"
 #include "particlemesh/mesh/topology_report.h"
 
 namespace particlemesh::reference {
 
 namespace ref_detail {
-
-struct UnionFind {
-  std::vector<uint32_t> parent;
-  explicit UnionFind(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  uint32_t find(uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(uint32_t a, uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);  // the root is the lowest index
-  }
-};
 
 struct HalfEdge {
   uint64_t key;   // (min << 32) | max
@@ -91,7 +78,7 @@ inline TopologyReport topology_report(const TriMesh& mesh) {
     }
   std::sort(he.begin(), he.end());
 
-  UnionFind faces(F);
+  particlemesh::detail::DisjointSets faces(F);
   std::vector<uint8_t> used(V, 0);
   for (const Triangle& t : T)
     for (uint32_t v : t) used[v] = 1;
@@ -281,7 +268,7 @@ inline TopologyReport topology_report(const TriMesh& mesh) {
       r.boundary_loop_edges.push_back(edges);
     }
   } else if (r.boundary_edges > 0) {
-    UnionFind verts(V);
+    particlemesh::detail::DisjointSets verts(V);
     std::vector<uint8_t> on_boundary(V, 0);
     for (size_t e = 0; e < E; ++e) {
       if (edge_kind[e] != 1) continue;

@@ -14,8 +14,10 @@
 
 #include "particlemesh/core/error.h"
 #include "particlemesh/sample/shapes.h"
+#include "support/test_support.h"
 
 using namespace particlemesh;
+using particlemesh::test::status_of;
 
 namespace {
 
@@ -207,15 +209,6 @@ TEST(Smoother, RepairedOrientationStillAgreesWhenTheSurfaceTurnsInsideOut) {
 TEST(Smoother, RefusesWhatSmoothMeshRefuses) {
   const TriMesh sphere = bumpy_sphere(9);
   const Smoother smoother(sphere, levels(1));
-  auto status_of = [](const std::function<void()>& f, std::string* message = nullptr) {
-    try {
-      f();
-    } catch (const Error& e) {
-      if (message) *message = e.what();
-      return e.status();
-    }
-    return Status::Ok;
-  };
   std::string message;
   std::vector<Vec3> short_positions(sphere.positions.begin(), sphere.positions.end() - 1);
   EXPECT_EQ(status_of([&] { smoother.evaluate(short_positions); }, &message), Status::InvalidInput);

@@ -40,6 +40,7 @@
 #include "support/test_support.h"
 
 using namespace particlemesh;
+using particlemesh::test::status_of;
 
 namespace {
 
@@ -175,16 +176,6 @@ SmoothOptions butterfly(int levels) {
   o.scheme = SmoothScheme::Butterfly;
   o.levels = levels;
   return o;
-}
-
-template <class F>
-Status status_of(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.status();
-  }
-  return Status::Ok;
 }
 
 template <class F>

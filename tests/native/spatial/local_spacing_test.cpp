@@ -15,31 +15,10 @@
 #include "support/test_support.h"
 
 using namespace particlemesh;
+using particlemesh::test::row_sheet;
+using particlemesh::test::two_density_sphere;
 
 namespace test_local {
-
-// A Fibonacci sphere with its lower half `dense` points' worth and its upper half `sparse`'s.
-PointCloud two_density_sphere(size_t dense, size_t sparse) {
-  PointCloud out;
-  for (const Vec3& p : fibonacci_sphere(dense).positions)
-    if (p.z < 0) out.positions.push_back(p);
-  for (const Vec3& p : fibonacci_sphere(sparse).positions)
-    if (p.z >= 0) out.positions.push_back(p);
-  return out;
-}
-
-// A flat sheet in z = 0 sampled in rows: `along` apart within a row, rows `across` apart,
-// alternate rows shifted by half a step (a depth camera's rows on a surface seen at a grazing
-// angle), with a little jitter.
-PointCloud rows(size_t nx, size_t ny, double along, double across, uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(-0.05, 0.05);
-  PointCloud c;
-  for (size_t j = 0; j < ny; ++j)
-    for (size_t i = 0; i < nx; ++i)
-      c.positions.push_back({(double(i) + 0.5 * double(j % 2) + u(rng)) * along, (double(j) + u(rng)) * across, 0});
-  return c;
-}
 
 double median(std::vector<double> v) {
   std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
@@ -77,13 +56,13 @@ TEST(LocalSpacing, FollowsTheDensity) {
 TEST(LocalSpacing, RowsGiveTheSpacingAcrossThem) {
   // Rows 3 apart, points 1 apart along them: the nearest-neighbour distance is 1, but a
   // surface through the rows needs edges across them (3 and more).
-  const PointCloud c = rows(60, 20, 1.0, 3.0, 7);
+  const PointCloud c = row_sheet(60, 20, 1.0, 3.0, 7, false);
   const LocalSpacing ls = estimate_local_spacing(c.positions.data(), c.size());
   EXPECT_NEAR(ls.median_nn, 1.0, 0.1);
   EXPECT_GT(median(ls.spacing), 1.6);  // x 2 = an edge limit past 3
   EXPECT_LT(median(ls.spacing), 3.5);
   // The same rows 1.2 apart are an even sampling.
-  const PointCloud even = rows(60, 20, 1.0, 1.2, 7);
+  const PointCloud even = row_sheet(60, 20, 1.0, 1.2, 7, false);
   const LocalSpacing le = estimate_local_spacing(even.positions.data(), even.size());
   EXPECT_NEAR(median(le.spacing) / le.median_nn, 1.0, 0.15);
 }
@@ -92,7 +71,7 @@ TEST(LocalSpacing, AFarClusterKeepsItsOwnSpacing) {
   // A dense sheet (spacing 1) and, 500 away, a small cluster of particles 10 apart: the
   // cluster's neighbourhood ends at the gap, so its spacing is its own, and the sheet's
   // is not raised by the cluster.
-  PointCloud c = rows(40, 40, 1.0, 1.0, 3);
+  PointCloud c = row_sheet(40, 40, 1.0, 1.0, 3, false);
   const size_t sheet = c.size();
   for (int i = 0; i < 5; ++i)
     for (int j = 0; j < 5; ++j) c.positions.push_back({500.0 + 10.0 * i, 10.0 * j, 0});

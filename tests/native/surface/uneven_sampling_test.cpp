@@ -14,28 +14,10 @@
 #include "support/test_support.h"
 
 using namespace particlemesh;
+using particlemesh::test::row_sheet;
+using particlemesh::test::two_density_sphere;
 
 namespace {
-
-PointCloud two_density_sphere(size_t dense, size_t sparse) {
-  PointCloud out;
-  for (const Vec3& p : fibonacci_sphere(dense).positions)
-    if (p.z < 0) out.positions.push_back(p);
-  for (const Vec3& p : fibonacci_sphere(sparse).positions)
-    if (p.z >= 0) out.positions.push_back(p);
-  return out;
-}
-
-// A flat sheet sampled in rows `along` apart within a row and `across` between rows.
-PointCloud rows(size_t nx, size_t ny, double along, double across, uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(-0.05, 0.05);
-  PointCloud c;
-  for (size_t j = 0; j < ny; ++j)
-    for (size_t i = 0; i < nx; ++i)
-      c.positions.push_back({(double(i) + 0.5 * double(j % 2) + u(rng)) * along, (double(j) + u(rng)) * across, u(rng) * along});
-  return c;
-}
 
 double longest_edge(const TriMesh& m) {
   double longest = 0;
@@ -72,7 +54,7 @@ TEST(UnevenSampling, TwoDensitiesCloseWithLocalSpacingOnly) {
 TEST(UnevenSampling, RowsJoinAcross) {
   // A depth camera's rows on a surface seen at a grazing angle: 3 times farther apart across
   // than along. One L from the nearest-neighbour distance cannot reach across the rows.
-  const PointCloud c = rows(60, 24, 1.0, 3.0, 5);
+  const PointCloud c = row_sheet(60, 24, 1.0, 3.0, 5, true);
   const SurfaceResult local = reconstruct_surface(c);
   const TopologyReport t = topology_report(local.mesh);
   EXPECT_TRUE(t.manifold && t.consistently_oriented);
@@ -109,7 +91,7 @@ TEST(UnevenSampling, SpacingGivenScalesTheLocalSpacings) {
 TEST(UnevenSampling, NoEdgeBeyondThreeTimesTheLimitOfR0) {
   // A sparse stray cluster beside a dense sheet: local spacings stop at 3 r0, and no triangle,
   // whichever stage made it, has an edge over 3 x 2 r0.
-  PointCloud c = rows(50, 50, 1.0, 1.0, 3);
+  PointCloud c = row_sheet(50, 50, 1.0, 1.0, 3, true);
   const size_t sheet = c.size();
   for (int i = 0; i < 8; ++i)
     for (int j = 0; j < 8; ++j) c.positions.push_back({80.0 + 7.0 * i, 7.0 * j, 0});

@@ -26,6 +26,7 @@
 #include "volume/mc_table.h"
 
 using namespace particlemesh;
+using particlemesh::test::status_of;
 
 namespace {
 
@@ -116,15 +117,6 @@ double enclosed_volume(const TriMesh& m) {
   return v;
 }
 
-Status status_of(const std::function<void()>& f, std::string* message = nullptr) {
-  try {
-    f();
-  } catch (const Error& e) {
-    if (message) *message = e.what();
-    return e.status();
-  }
-  return Status::Ok;
-}
 
 PointCloud one_particle(const Vec3& p) {
   PointCloud c;

@@ -20,6 +20,7 @@
 #include "support/test_support.h"
 
 using namespace particlemesh;
+using particlemesh::test::status_of;
 
 namespace {
 
@@ -28,15 +29,6 @@ using Face = std::array<Corner, 3>;
 
 Corner key(const Vec3& v) { return {v.x, v.y, v.z}; }
 
-Status status_of(const std::function<void()>& f, std::string* message = nullptr) {
-  try {
-    f();
-  } catch (const Error& e) {
-    if (message) *message = e.what();
-    return e.status();
-  }
-  return Status::Ok;
-}
 
 // Each triangle as its three corner positions, sorted (order and numbering aside).
 std::multiset<Face> faces(const TriMesh& m) {
