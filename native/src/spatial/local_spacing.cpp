@@ -13,6 +13,7 @@
 #include "particlemesh/core/error.h"
 #include "particlemesh/spatial/neighbor_grid.h"
 #include "spatial/local_spacing_impl.h"
+#include "spatial/nearest_neighbors.h"
 #include "spatial/spacing_impl.h"
 
 namespace PM_NAMESPACE {
@@ -22,75 +23,12 @@ namespace {
 
 constexpr int kK = kLocalSpacingNeighbors;
 
-constexpr uint32_t kNone = 0xffffffffu;
-/// Rings of cells searched at most around a point (a point farther than this from its
-/// neighbours' cells keeps what it found).
-constexpr int32_t kMaxRing = 24;
+constexpr uint32_t kNone = kNoNeighbor;
 
 /// The median of v (the upper one of an even count).
 double median_of(double* v, int count) {
   std::nth_element(v, v + count / 2, v + count);
   return v[count / 2];
-}
-
-/// The k nearest distinct neighbours (at a distance > 0) of each point, as sorted indices of
-/// `grid`, nearest first (ties by distance, then index); kNone where a point has fewer within
-/// reach. Written over the library's own grid rather than with a k-d tree: the grid is the
-/// neighbour structure of every other stage, and on surface samplings the 5^3 cells around a
-/// point's cell hold its nearest (cells of 2 r0), gathered once for all the cell's points.
-
-std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, ProgressTracker& tracker) {
-  const size_t n = grid.point_count();
-  const double h = grid.cell_size();
-  std::vector<uint32_t> out(n * kK, kNone);
-  parallel_blocks(grid.cell_count(), 256, [&](size_t cb, size_t ce) {
-    if (tracker.cancelled()) return;
-    std::vector<uint32_t> block;  // the points of the cells within `ring` of the cell
-    std::vector<uint32_t> open;   // the cell's points whose k nearest are not all found yet
-    std::vector<std::pair<double, uint32_t>> found;
-    for (size_t c = cb; c < ce; ++c) {
-      const auto cc = grid.cell_coord(uint32_t(c));
-      block.clear();
-      open.clear();
-      for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) open.push_back(s);
-      // Rings of cells around the cell, gathered once for all its points: after ring r the
-      // block holds every point within r h of any of them. The first two rings at once.
-      for (int32_t ring = 2; !open.empty(); ++ring) {
-        grid.for_each_cell_in({cc[0] - ring, cc[1] - ring, cc[2] - ring}, {cc[0] + ring, cc[1] + ring, cc[2] + ring},
-                              [&](uint32_t b) {
-                                const auto bc = grid.cell_coord(b);
-                                if (ring > 2 &&
-                                    std::max({std::abs(bc[0] - cc[0]), std::abs(bc[1] - cc[1]), std::abs(bc[2] - cc[2])}) != ring)
-                                  return;
-                                for (uint32_t t = grid.cell_begin(b); t < grid.cell_end(b); ++t) block.push_back(t);
-                              });
-        const double reach2 = double(ring) * h * double(ring) * h;
-        size_t still = 0;
-        for (uint32_t s : open) {
-          const Vec3 p = grid.sorted_point(s);
-          // Only the points within the rings' reach count now (every one of them is in the
-          // block); the k nearest are done when there are k (or no more rings will come).
-          found.clear();
-          for (uint32_t t : block) {
-            const double e2 = squared_distance(grid.sorted_point(t), p);
-            if (e2 > 0 && (e2 <= reach2 || ring == kMaxRing)) found.push_back({e2, t});
-          }
-          const size_t k = std::min<size_t>(kK, found.size());
-          if (k == kK || ring == kMaxRing) {
-            std::nth_element(found.begin(), found.begin() + ptrdiff_t(k), found.end());
-            std::sort(found.begin(), found.begin() + ptrdiff_t(k));
-            for (size_t i = 0; i < k; ++i) out[size_t(s) * kK + i] = found[i].second;
-          } else {
-            open[still++] = s;
-          }
-        }
-        open.resize(still);
-      }
-      tracker.tick(grid.cell_end(uint32_t(c)) - grid.cell_begin(uint32_t(c)));
-    }
-  });
-  tracker.check();
-  return out;
 }
 
 /// How far point s must reach to be a corner of any triangle at all, from its m nearest
@@ -201,7 +139,7 @@ std::vector<double> local_spacing_impl(const Vec3* points, size_t n, double r0, 
                                        double begin, double end) {
   tracker.stage("local spacing", begin, end, n);
   const NeighborGrid grid(points, n, 2 * r0);
-  const std::vector<uint32_t> knn = nearest_neighbors(grid, tracker);
+  const std::vector<uint32_t> knn = nearest_neighbors(grid, kK, tracker);
   auto dist = [&](uint32_t s, int k) {
     const uint32_t t = knn[size_t(s) * kK + size_t(k)];
     return t == kNone ? INFINITY : distance(grid.sorted_point(s), grid.sorted_point(t));
