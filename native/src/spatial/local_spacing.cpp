@@ -81,21 +81,25 @@ double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, i
   if (m < 6) return triangle_reach(grid, s, ids, m);
   const Vec3 p = grid.sorted_point(s);
   d.clear();
-  double farthest = 0;
+  double farthest2 = 0;  // squared: the square root of the largest is the largest root
   for (int k = 0; k < m; ++k) {
     d.push_back(grid.sorted_point(ids[k]) - p);
-    farthest = std::max(farthest, norm(d.back()));
+    farthest2 = std::max(farthest2, squared_norm(d.back()));
   }
+  const double farthest = std::sqrt(farthest2);
   Eigen::Vector3d u, w;
   for (int round = 0;; ++round) {
     Vec3 c;
     for (const Vec3& x : d) c += x;
     c = c * (1.0 / double(d.size()));
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    // The covariance's six distinct sums (y_i y_j = y_j y_i exactly).
+    double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
     for (const Vec3& x : d) {
-      const Eigen::Vector3d y(x.x - c.x, x.y - c.y, x.z - c.z);
-      cov += y * y.transpose();
+      const double a = x.x - c.x, b = x.y - c.y, e = x.z - c.z;
+      xx += a * a, xy += a * b, xz += a * e, yy += b * b, yz += b * e, zz += e * e;
     }
+    Eigen::Matrix3d cov;
+    cov << xx, xy, xz, xy, yy, yz, xz, yz, zz;
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
     eig.computeDirect(cov);
     u = eig.eigenvectors().col(2);
@@ -108,7 +112,7 @@ double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, i
       if (e2 > 0) d.push_back(grid.sorted_point(t) - p);
     });
   }
-  std::array<double, 6> nearest;
+  std::array<double, 6> nearest;  // squared until the end (the root of the least is the least root)
   nearest.fill(INFINITY);
   constexpr double kHalfSqrt3 = 0.8660254037844386;
   for (const Vec3& x : d) {
@@ -121,12 +125,12 @@ double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, i
     for (int j = 1; j < 3; ++j)
       if (std::abs(c[j]) > std::abs(c[best])) best = j;
     const int sector = c[best] >= 0 ? best : best + 3;
-    nearest[size_t(sector)] = std::min(nearest[size_t(sector)], norm(x));
+    nearest[size_t(sector)] = std::min(nearest[size_t(sector)], squared_norm(x));
   }
   std::array<double, 6> found;
   int f = 0;
   for (double x : nearest)
-    if (std::isfinite(x)) found[size_t(f++)] = x;
+    if (std::isfinite(x)) found[size_t(f++)] = std::sqrt(x);
   if (f < 4) return triangle_reach(grid, s, ids, m);
   std::nth_element(found.begin(), found.begin() + 2, found.begin() + f);
   return found[2];

@@ -42,18 +42,23 @@ struct Columns {
   }
 };
 
-/// The points of a block of cells, coordinates apart so that distances to all of them are one
-/// loop the compiler vectorises.
-struct Block {
-  std::vector<double> x, y, z;
-  std::vector<uint32_t> index;  // sorted index in the grid
-  void clear() { x.clear(), y.clear(), z.clear(), index.clear(); }
-};
+/// Runs [begin, end) of sorted indices: the points of a block of cells (cells next to each other
+/// along z are one run of the grid's points).
+using Ranges = std::vector<std::pair<uint32_t, uint32_t>>;
 
-/// Appends to `block` the points of the cells whose coordinates differ from `cc` by at most
-/// `ring` along every axis and by more than `inner` along some (inner = -1: all of them).
+void append(Ranges& ranges, uint32_t begin, uint32_t end) {
+  if (begin == end) return;
+  if (!ranges.empty() && ranges.back().second == begin)
+    ranges.back().second = end;
+  else
+    ranges.push_back({begin, end});
+}
+
+/// Appends the points of the cells whose coordinates differ from `cc` by at most `ring` along
+/// every axis and by more than `inner` along some (inner = -1: all of them): those within
+/// `near` of `cc` (Chebyshev) to `first`, the others to `rest`.
 void gather(const NeighborGrid& grid, const Columns& cols, const NeighborGrid::CellCoord& cc, int32_t ring,
-            int32_t inner, Block& block) {
+            int32_t inner, int32_t near, Ranges& first, Ranges& rest) {
   constexpr int32_t kTop = NeighborGrid::kMaxCellsPerAxis + 3;
   for (int32_t x = std::max(cc[0] - ring, 0); x <= std::min(cc[0] + ring, kTop); ++x)
     for (int32_t y = std::max(cc[1] - ring, 0); y <= std::min(cc[1] + ring, kTop); ++y) {
@@ -61,24 +66,21 @@ void gather(const NeighborGrid& grid, const Columns& cols, const NeighborGrid::C
       if (col == kNoKey) continue;
       const int32_t dxy = std::max(std::abs(x - cc[0]), std::abs(y - cc[1]));
       // The column's cells with z in [cc.z - ring, cc.z + ring]: z increases along the run.
-      const uint32_t* first = cols.start.data() + col;
-      uint32_t lo = first[0], hi = first[1];
+      uint32_t lo = cols.start[col], hi = cols.start[col + 1];
+      const uint32_t end = hi;
       while (lo < hi) {  // the first cell with z >= cc.z - ring
         const uint32_t mid = lo + (hi - lo) / 2;
-        if (grid.cell_coord(mid)[2] < cc[2] - ring) lo = mid + 1;
-        else hi = mid;
+        if (grid.cell_coord(mid)[2] < cc[2] - ring)
+          lo = mid + 1;
+        else
+          hi = mid;
       }
-      for (uint32_t c = lo; c < first[1]; ++c) {
+      for (uint32_t c = lo; c < end; ++c) {
         const int32_t dz = grid.cell_coord(c)[2] - cc[2];
         if (dz > ring) break;
-        if (std::max(dxy, std::abs(dz)) <= inner) continue;
-        for (uint32_t t = grid.cell_begin(c); t < grid.cell_end(c); ++t) {
-          const Vec3& q = grid.sorted_point(t);
-          block.x.push_back(q.x);
-          block.y.push_back(q.y);
-          block.z.push_back(q.z);
-          block.index.push_back(t);
-        }
+        const int32_t d = std::max(dxy, std::abs(dz));
+        if (d <= inner) continue;
+        append(d <= near ? first : rest, grid.cell_begin(c), grid.cell_end(c));
       }
     }
 }
@@ -94,61 +96,52 @@ std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, int k, Progres
   const Columns cols(grid);
   parallel_blocks(grid.cell_count(), 256, [&](size_t cb, size_t ce) {
     if (tracker.cancelled()) return;
-    Block block;               // the points of the cells within `ring` of the cell
-    std::vector<double> e2;    // their squared distances to the point at hand
+    Ranges block, rest;  // the points of the cells within `ring` of the cell
     std::vector<uint32_t> open;  // the cell's points whose k nearest are not all found yet
     double best_e2[64];
     uint32_t best_t[64];
+    const Vec3* P = grid.sorted_points().data();
     for (size_t c = cb; c < ce; ++c) {
       const auto cc = grid.cell_coord(uint32_t(c));
       block.clear();
+      rest.clear();
       open.clear();
       for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) open.push_back(s);
       // The first two rings at once, the nearer cells first (the running k nearest then
       // settle early and the farther points are mostly turned away by one comparison).
-      gather(grid, cols, cc, 1, -1, block);
-      gather(grid, cols, cc, 2, 1, block);
+      gather(grid, cols, cc, 2, -1, 1, block, rest);
+      block.insert(block.end(), rest.begin(), rest.end());
       for (int32_t ring = 2; !open.empty(); ++ring) {
-        if (ring > 2) gather(grid, cols, cc, ring, ring - 1, block);
+        if (ring > 2) gather(grid, cols, cc, ring, ring - 1, ring, block, block);
         // After ring r the block holds every point within r h of any of the cell's points.
         const double reach2 = double(ring) * h * double(ring) * h;
-        const size_t m = block.index.size();
-        e2.resize(m);
         size_t still = 0;
         for (uint32_t s : open) {
-          const Vec3 p = grid.sorted_point(s);
-          const double* bx = block.x.data();
-          const double* by = block.y.data();
-          const double* bz = block.z.data();
-          double* d = e2.data();
-          for (size_t i = 0; i < m; ++i) {
-            const double dx = bx[i] - p.x, dy = by[i] - p.y, dz = bz[i] - p.z;
-            d[i] = dx * dx + dy * dy + dz * dz;
-          }
+          const Vec3 p = P[s];
           // The k smallest (distance, index) among the block's points at a distance > 0, kept
           // sorted; and how many lie within the rings' reach. When k do, the k smallest are
           // all within it, and every point within it is in the block: they are the k nearest.
           size_t count = 0, within = 0;
-          for (size_t i = 0; i < m; ++i) {
-            const double e = d[i];
-            if (!(e > 0)) continue;
-            within += e <= reach2;
-            const uint32_t t = block.index[i];
-            size_t pos;
-            if (count < K) {
-              pos = count++;
-            } else {
-              if (e > best_e2[K - 1] || (e == best_e2[K - 1] && t > best_t[K - 1])) continue;
-              pos = K - 1;
+          for (const auto& [tb, te] : block)
+            for (uint32_t t = tb; t < te; ++t) {
+              const double e = squared_distance(P[t], p);
+              if (!(e > 0)) continue;
+              within += e <= reach2;
+              size_t pos;
+              if (count < K) {
+                pos = count++;
+              } else {
+                if (e > best_e2[K - 1] || (e == best_e2[K - 1] && t > best_t[K - 1])) continue;
+                pos = K - 1;
+              }
+              while (pos > 0 && (e < best_e2[pos - 1] || (e == best_e2[pos - 1] && t < best_t[pos - 1]))) {
+                best_e2[pos] = best_e2[pos - 1];
+                best_t[pos] = best_t[pos - 1];
+                --pos;
+              }
+              best_e2[pos] = e;
+              best_t[pos] = t;
             }
-            while (pos > 0 && (e < best_e2[pos - 1] || (e == best_e2[pos - 1] && t < best_t[pos - 1]))) {
-              best_e2[pos] = best_e2[pos - 1];
-              best_t[pos] = best_t[pos - 1];
-              --pos;
-            }
-            best_e2[pos] = e;
-            best_t[pos] = t;
-          }
           // At the last ring whatever the block holds.
           if (within >= K || ring == kMaxNeighborRing) {
             std::copy(best_t, best_t + count, out.begin() + ptrdiff_t(size_t(s) * K));
