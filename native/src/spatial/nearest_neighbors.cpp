@@ -1,6 +1,7 @@
 #include "spatial/nearest_neighbors.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 
 #include "core/hashing.h"
@@ -100,6 +101,7 @@ std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, int k, Progres
     std::vector<uint32_t> open;  // the cell's points whose k nearest are not all found yet
     double best_e2[64];
     uint32_t best_t[64];
+    double guess = 0;  // the last point's k-th nearest squared distance (0: none yet)
     const Vec3* P = grid.sorted_points().data();
     for (size_t c = cb; c < ce; ++c) {
       const auto cc = grid.cell_coord(uint32_t(c));
@@ -121,27 +123,36 @@ std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, int k, Progres
           // The k smallest (distance, index) among the block's points at a distance > 0, kept
           // sorted; and how many lie within the rings' reach. When k do, the k smallest are
           // all within it, and every point within it is in the block: they are the k nearest.
+          // Kept first only among the points within a little over the last point's k-th
+          // nearest (neighbours are spaced alike), so that most of the block is turned away by
+          // one comparison; when fewer than k lie that near, again with no bound.
           size_t count = 0, within = 0;
-          for (const auto& [tb, te] : block)
-            for (uint32_t t = tb; t < te; ++t) {
-              const double e = squared_distance(P[t], p);
-              if (!(e > 0)) continue;
-              within += e <= reach2;
-              size_t pos;
-              if (count < K) {
-                pos = count++;
-              } else {
-                if (e > best_e2[K - 1] || (e == best_e2[K - 1] && t > best_t[K - 1])) continue;
-                pos = K - 1;
+          for (double bound = guess > 0 ? 1.3 * guess : INFINITY;; bound = INFINITY) {
+            count = within = 0;
+            for (const auto& [tb, te] : block)
+              for (uint32_t t = tb; t < te; ++t) {
+                const double e = squared_distance(P[t], p);
+                if (!(e > 0)) continue;
+                within += e <= reach2;
+                if (e > bound) continue;
+                size_t pos;
+                if (count < K) {
+                  pos = count++;
+                } else {
+                  if (e > best_e2[K - 1] || (e == best_e2[K - 1] && t > best_t[K - 1])) continue;
+                  pos = K - 1;
+                }
+                while (pos > 0 && (e < best_e2[pos - 1] || (e == best_e2[pos - 1] && t < best_t[pos - 1]))) {
+                  best_e2[pos] = best_e2[pos - 1];
+                  best_t[pos] = best_t[pos - 1];
+                  --pos;
+                }
+                best_e2[pos] = e;
+                best_t[pos] = t;
               }
-              while (pos > 0 && (e < best_e2[pos - 1] || (e == best_e2[pos - 1] && t < best_t[pos - 1]))) {
-                best_e2[pos] = best_e2[pos - 1];
-                best_t[pos] = best_t[pos - 1];
-                --pos;
-              }
-              best_e2[pos] = e;
-              best_t[pos] = t;
-            }
+            if (count == K || bound == INFINITY || (within < K && ring < kMaxNeighborRing)) break;
+          }
+          if (count == K) guess = best_e2[K - 1];
           // At the last ring whatever the block holds.
           if (within >= K || ring == kMaxNeighborRing) {
             std::copy(best_t, best_t + count, out.begin() + ptrdiff_t(size_t(s) * K));
