@@ -13,6 +13,7 @@
 #include "particlemesh/core/error.h"
 #include "particlemesh/spatial/neighbor_grid.h"
 #include "spatial/local_spacing_impl.h"
+#include "spatial/nearest_neighbors.h"
 #include "spatial/spacing_impl.h"
 
 namespace PM_NAMESPACE {
@@ -22,75 +23,12 @@ namespace {
 
 constexpr int kK = kLocalSpacingNeighbors;
 
-constexpr uint32_t kNone = 0xffffffffu;
-/// Rings of cells searched at most around a point (a point farther than this from its
-/// neighbours' cells keeps what it found).
-constexpr int32_t kMaxRing = 24;
+constexpr uint32_t kNone = kNoNeighbor;
 
 /// The median of v (the upper one of an even count).
 double median_of(double* v, int count) {
   std::nth_element(v, v + count / 2, v + count);
   return v[count / 2];
-}
-
-/// The k nearest distinct neighbours (at a distance > 0) of each point, as sorted indices of
-/// `grid`, nearest first (ties by distance, then index); kNone where a point has fewer within
-/// reach. Written over the library's own grid rather than with a k-d tree: the grid is the
-/// neighbour structure of every other stage, and on surface samplings the 5^3 cells around a
-/// point's cell hold its nearest (cells of 2 r0), gathered once for all the cell's points.
-
-std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, ProgressTracker& tracker) {
-  const size_t n = grid.point_count();
-  const double h = grid.cell_size();
-  std::vector<uint32_t> out(n * kK, kNone);
-  parallel_blocks(grid.cell_count(), 256, [&](size_t cb, size_t ce) {
-    if (tracker.cancelled()) return;
-    std::vector<uint32_t> block;  // the points of the cells within `ring` of the cell
-    std::vector<uint32_t> open;   // the cell's points whose k nearest are not all found yet
-    std::vector<std::pair<double, uint32_t>> found;
-    for (size_t c = cb; c < ce; ++c) {
-      const auto cc = grid.cell_coord(uint32_t(c));
-      block.clear();
-      open.clear();
-      for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) open.push_back(s);
-      // Rings of cells around the cell, gathered once for all its points: after ring r the
-      // block holds every point within r h of any of them. The first two rings at once.
-      for (int32_t ring = 2; !open.empty(); ++ring) {
-        grid.for_each_cell_in({cc[0] - ring, cc[1] - ring, cc[2] - ring}, {cc[0] + ring, cc[1] + ring, cc[2] + ring},
-                              [&](uint32_t b) {
-                                const auto bc = grid.cell_coord(b);
-                                if (ring > 2 &&
-                                    std::max({std::abs(bc[0] - cc[0]), std::abs(bc[1] - cc[1]), std::abs(bc[2] - cc[2])}) != ring)
-                                  return;
-                                for (uint32_t t = grid.cell_begin(b); t < grid.cell_end(b); ++t) block.push_back(t);
-                              });
-        const double reach2 = double(ring) * h * double(ring) * h;
-        size_t still = 0;
-        for (uint32_t s : open) {
-          const Vec3 p = grid.sorted_point(s);
-          // Only the points within the rings' reach count now (every one of them is in the
-          // block); the k nearest are done when there are k (or no more rings will come).
-          found.clear();
-          for (uint32_t t : block) {
-            const double e2 = squared_distance(grid.sorted_point(t), p);
-            if (e2 > 0 && (e2 <= reach2 || ring == kMaxRing)) found.push_back({e2, t});
-          }
-          const size_t k = std::min<size_t>(kK, found.size());
-          if (k == kK || ring == kMaxRing) {
-            std::nth_element(found.begin(), found.begin() + ptrdiff_t(k), found.end());
-            std::sort(found.begin(), found.begin() + ptrdiff_t(k));
-            for (size_t i = 0; i < k; ++i) out[size_t(s) * kK + i] = found[i].second;
-          } else {
-            open[still++] = s;
-          }
-        }
-        open.resize(still);
-      }
-      tracker.tick(grid.cell_end(uint32_t(c)) - grid.cell_begin(uint32_t(c)));
-    }
-  });
-  tracker.check();
-  return out;
 }
 
 /// How far point s must reach to be a corner of any triangle at all, from its m nearest
@@ -143,21 +81,25 @@ double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, i
   if (m < 6) return triangle_reach(grid, s, ids, m);
   const Vec3 p = grid.sorted_point(s);
   d.clear();
-  double farthest = 0;
+  double farthest2 = 0;  // squared: the square root of the largest is the largest root
   for (int k = 0; k < m; ++k) {
     d.push_back(grid.sorted_point(ids[k]) - p);
-    farthest = std::max(farthest, norm(d.back()));
+    farthest2 = std::max(farthest2, squared_norm(d.back()));
   }
+  const double farthest = std::sqrt(farthest2);
   Eigen::Vector3d u, w;
   for (int round = 0;; ++round) {
     Vec3 c;
     for (const Vec3& x : d) c += x;
     c = c * (1.0 / double(d.size()));
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    // The covariance's six distinct sums (y_i y_j = y_j y_i exactly).
+    double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
     for (const Vec3& x : d) {
-      const Eigen::Vector3d y(x.x - c.x, x.y - c.y, x.z - c.z);
-      cov += y * y.transpose();
+      const double a = x.x - c.x, b = x.y - c.y, e = x.z - c.z;
+      xx += a * a, xy += a * b, xz += a * e, yy += b * b, yz += b * e, zz += e * e;
     }
+    Eigen::Matrix3d cov;
+    cov << xx, xy, xz, xy, yy, yz, xz, yz, zz;
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
     eig.computeDirect(cov);
     u = eig.eigenvectors().col(2);
@@ -170,7 +112,7 @@ double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, i
       if (e2 > 0) d.push_back(grid.sorted_point(t) - p);
     });
   }
-  std::array<double, 6> nearest;
+  std::array<double, 6> nearest;  // squared until the end (the root of the least is the least root)
   nearest.fill(INFINITY);
   constexpr double kHalfSqrt3 = 0.8660254037844386;
   for (const Vec3& x : d) {
@@ -183,12 +125,12 @@ double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, i
     for (int j = 1; j < 3; ++j)
       if (std::abs(c[j]) > std::abs(c[best])) best = j;
     const int sector = c[best] >= 0 ? best : best + 3;
-    nearest[size_t(sector)] = std::min(nearest[size_t(sector)], norm(x));
+    nearest[size_t(sector)] = std::min(nearest[size_t(sector)], squared_norm(x));
   }
   std::array<double, 6> found;
   int f = 0;
   for (double x : nearest)
-    if (std::isfinite(x)) found[size_t(f++)] = x;
+    if (std::isfinite(x)) found[size_t(f++)] = std::sqrt(x);
   if (f < 4) return triangle_reach(grid, s, ids, m);
   std::nth_element(found.begin(), found.begin() + 2, found.begin() + f);
   return found[2];
@@ -201,7 +143,7 @@ std::vector<double> local_spacing_impl(const Vec3* points, size_t n, double r0, 
                                        double begin, double end) {
   tracker.stage("local spacing", begin, end, n);
   const NeighborGrid grid(points, n, 2 * r0);
-  const std::vector<uint32_t> knn = nearest_neighbors(grid, tracker);
+  const std::vector<uint32_t> knn = nearest_neighbors(grid, kK, tracker);
   auto dist = [&](uint32_t s, int k) {
     const uint32_t t = knn[size_t(s) * kK + size_t(k)];
     return t == kNone ? INFINITY : distance(grid.sorted_point(s), grid.sorted_point(t));

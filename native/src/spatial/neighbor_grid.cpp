@@ -137,14 +137,32 @@ uint32_t NeighborGrid::find_key(uint64_t key) const {
 
 int NeighborGrid::neighbor_cells(uint32_t c, uint32_t out[27]) const {
   const CellCoord cc = cell_coord(c);
+  const auto cells = uint32_t(cell_keys_.size());
   int count = 0;
+  // Along a column (x, y) the keys of z and z + 1 are next to each other in the sorted keys
+  // when both cells are occupied (and when z + 1's is not the next key, that cell is empty):
+  // one hash look-up per run of occupied cells, none in c's own column. (The lowest point's
+  // cell can round to coordinate 0: the cells below it are then skipped; a coordinate -1
+  // along x or y packs to a key no cell has.)
+  const uint64_t first_dz = cc[2] == 0 ? 1 : 0;
   for (int dx = -1; dx <= 1; ++dx)
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dz = -1; dz <= 1; ++dz) {
-        // Occupied cells are never on the outermost layer, so the neighbours are in range.
-        const uint32_t nc = find_key(pack({cc[0] + dx, cc[1] + dy, cc[2] + dz}));
-        if (nc != kNoCell) out[count++] = nc;
+    for (int dy = -1; dy <= 1; ++dy) {
+      // The key of z - 1 (wrapped when z is 0, and then unused); z and z + 1 follow.
+      const uint64_t base = pack({cc[0] + dx, cc[1] + dy, cc[2]}) - 1;
+      const bool own = dx == 0 && dy == 0;
+      for (uint64_t dz = first_dz; dz < 3; ++dz) {
+        uint32_t nc;
+        if (own)
+          nc = dz == 1 ? c : dz == 0 ? (c > 0 && cell_keys_[c - 1] == base ? c - 1 : kNoCell)
+                                     : (c + 1 < cells && cell_keys_[c + 1] == base + 2 ? c + 1 : kNoCell);
+        else
+          nc = find_key(base + dz);
+        if (nc == kNoCell) continue;
+        out[count++] = nc;
+        while (dz + 1 < 3 && nc + 1 < cells && cell_keys_[nc + 1] == base + dz + 1) out[count++] = ++nc, ++dz;
+        ++dz;  // the cell after the run is empty
       }
+    }
   return count;
 }
 

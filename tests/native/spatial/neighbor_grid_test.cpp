@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "particlemesh/core/error.h"
+#include "particlemesh/sample/shapes.h"
 #include "support/test_support.h"
 
 using namespace particlemesh;
@@ -26,6 +27,38 @@ TEST(NeighborGrid, RadiusQueriesMatchBruteForce) {
       std::sort(got.begin(), got.end());
       EXPECT_EQ(got, want) << "cell " << cell << " query " << q;
     }
+  }
+}
+
+TEST(NeighborGrid, CellQueriesMatchALookUpPerCell) {
+  // neighbor_cells and for_each_cell_in walk runs of cells along z; both must give exactly
+  // the occupied cells a look-up per coordinate finds, in that order. The sphere's cell sizes
+  // include one where a lowest point's cell rounds to coordinate 0 along z.
+  const PointCloud c = fibonacci_sphere(100000);
+  for (double h : {0.0246, 0.1}) {
+    const NeighborGrid grid(c.positions.data(), c.size(), h);
+    size_t differ = 0;
+    for (uint32_t cell = 0; cell < grid.cell_count(); ++cell) {
+      const auto cc = grid.cell_coord(cell);
+      for (int32_t ring : {1, 2}) {
+        std::vector<uint32_t> want, got;
+        for (int32_t dx = -ring; dx <= ring; ++dx)
+          for (int32_t dy = -ring; dy <= ring; ++dy)
+            for (int32_t dz = -ring; dz <= ring; ++dz) {
+              const uint32_t b = grid.find_cell({cc[0] + dx, cc[1] + dy, cc[2] + dz});
+              if (b != NeighborGrid::kNoCell) want.push_back(b);
+            }
+        if (ring == 1) {
+          uint32_t around[27];
+          got.assign(around, around + grid.neighbor_cells(cell, around));
+        } else {
+          grid.for_each_cell_in({cc[0] - 2, cc[1] - 2, cc[2] - 2}, {cc[0] + 2, cc[1] + 2, cc[2] + 2},
+                                [&](uint32_t b) { got.push_back(b); });
+        }
+        differ += got != want;
+      }
+    }
+    EXPECT_EQ(differ, 0u) << "cell size " << h;
   }
 }
 

@@ -86,11 +86,16 @@ class PM_EXPORT NeighborGrid {
     }
     const double box = double(hi[0] - lo[0] + 1) * double(hi[1] - lo[1] + 1) * double(hi[2] - lo[2] + 1);
     if (box <= double(cell_keys_.size())) {
+      // Along z a run of occupied cells is a run of the sorted keys: one look-up per run (and
+      // the cell after a run is empty).
       for (int32_t x = lo[0]; x <= hi[0]; ++x)
         for (int32_t y = lo[1]; y <= hi[1]; ++y)
           for (int32_t z = lo[2]; z <= hi[2]; ++z) {
-            const uint32_t c = find_key(pack({x, y, z}));
-            if (c != kNoCell) f(c);
+            uint32_t c = find_key(pack({x, y, z}));
+            if (c == kNoCell) continue;
+            f(c);
+            for (; z < hi[2] && c + 1 < cell_keys_.size() && cell_keys_[c + 1] == pack({x, y, z + 1}); ++z) f(++c);
+            ++z;
           }
       return;
     }

@@ -1,0 +1,174 @@
+#include "spatial/nearest_neighbors.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <utility>
+#include <vector>
+
+#include "core/hashing.h"
+#include "core/parallel.h"
+#include "particlemesh/core/error.h"
+
+namespace PM_NAMESPACE::detail {
+
+// Written over the library's own grid rather than with a k-d tree (nanoflann, PCL's FLANN): the
+// grid is the neighbour structure of every other stage, its sorted order breaks ties, and on
+// surface samplings the 5^3 cells around a point's cell hold its nearest, gathered once for all
+// the cell's points. The cells are found by column (x, y): one hash look-up per column and a
+// run of its cells, where a look-up per cell cost 125 random reads per cell.
+
+namespace {
+
+constexpr uint64_t column_key(int32_t x, int32_t y) { return (uint64_t(uint32_t(x)) << 21) | uint64_t(uint32_t(y)); }
+
+/// The grid's occupied cells grouped by column: cells (x, y, *) are one run of the grid's
+/// (lexicographic) cell order, z increasing.
+struct Columns {
+  std::vector<uint64_t> keys;    // column_key per column, increasing
+  std::vector<uint32_t> start;   // first cell of each column; start.back() = cell count
+  std::vector<uint32_t> table;   // keys' hash table (build_key_table)
+  uint64_t mask = 0;
+
+  explicit Columns(const NeighborGrid& grid) {
+    const auto cells = uint32_t(grid.cell_count());
+    for (uint32_t c = 0; c < cells; ++c) {
+      const auto cc = grid.cell_coord(c);
+      const uint64_t key = column_key(cc[0], cc[1]);
+      if (keys.empty() || keys.back() != key) {
+        keys.push_back(key);
+        start.push_back(c);
+      }
+    }
+    start.push_back(cells);
+    mask = build_key_table(keys, table);
+  }
+};
+
+/// Runs [begin, end) of sorted indices: the points of a block of cells (cells next to each other
+/// along z are one run of the grid's points).
+using Ranges = std::vector<std::pair<uint32_t, uint32_t>>;
+
+void append(Ranges& ranges, uint32_t begin, uint32_t end) {
+  if (begin == end) return;
+  if (!ranges.empty() && ranges.back().second == begin)
+    ranges.back().second = end;
+  else
+    ranges.push_back({begin, end});
+}
+
+/// Appends the points of the cells whose coordinates differ from `cc` by at most `ring` along
+/// every axis and by more than `inner` along some (inner = -1: all of them): those within
+/// `near` of `cc` (Chebyshev) to `first`, the others to `rest`.
+void gather(const NeighborGrid& grid, const Columns& cols, const NeighborGrid::CellCoord& cc, int32_t ring,
+            int32_t inner, int32_t near, Ranges& first, Ranges& rest) {
+  constexpr int32_t kTop = NeighborGrid::kMaxCellsPerAxis + 3;
+  for (int32_t x = std::max(cc[0] - ring, 0); x <= std::min(cc[0] + ring, kTop); ++x)
+    for (int32_t y = std::max(cc[1] - ring, 0); y <= std::min(cc[1] + ring, kTop); ++y) {
+      const uint32_t col = find_key(cols.table, cols.mask, cols.keys, column_key(x, y));
+      if (col == kNoKey) continue;
+      const int32_t dxy = std::max(std::abs(x - cc[0]), std::abs(y - cc[1]));
+      // The column's cells with z in [cc.z - ring, cc.z + ring]: z increases along the run.
+      uint32_t lo = cols.start[col], hi = cols.start[col + 1];
+      const uint32_t end = hi;
+      while (lo < hi) {  // the first cell with z >= cc.z - ring
+        const uint32_t mid = lo + (hi - lo) / 2;
+        if (grid.cell_coord(mid)[2] < cc[2] - ring)
+          lo = mid + 1;
+        else
+          hi = mid;
+      }
+      for (uint32_t c = lo; c < end; ++c) {
+        const int32_t dz = grid.cell_coord(c)[2] - cc[2];
+        if (dz > ring) break;
+        const int32_t d = std::max(dxy, std::abs(dz));
+        if (d <= inner) continue;
+        append(d <= near ? first : rest, grid.cell_begin(c), grid.cell_end(c));
+      }
+    }
+}
+
+}  // namespace
+
+std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, int k, ProgressTracker& tracker) {
+  if (k < 1 || k > 64) throw Error(Status::InvalidArgument, "the neighbour count must be 1 to 64");
+  const size_t n = grid.point_count();
+  const double h = grid.cell_size();
+  const auto K = size_t(k);
+  std::vector<uint32_t> out(n * K, kNoNeighbor);
+  const Columns cols(grid);
+  parallel_blocks(grid.cell_count(), 256, [&](size_t cb, size_t ce) {
+    if (tracker.cancelled()) return;
+    Ranges block, rest;  // the points of the cells within `ring` of the cell
+    std::vector<uint32_t> open;  // the cell's points whose k nearest are not all found yet
+    double best_e2[64];
+    uint32_t best_t[64];
+    double guess = 0;  // the last point's k-th nearest squared distance (0: none yet)
+    const Vec3* P = grid.sorted_points().data();
+    for (size_t c = cb; c < ce; ++c) {
+      const auto cc = grid.cell_coord(uint32_t(c));
+      block.clear();
+      rest.clear();
+      open.clear();
+      for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) open.push_back(s);
+      // The first two rings at once, the nearer cells first (the running k nearest then
+      // settle early and the farther points are mostly turned away by one comparison).
+      gather(grid, cols, cc, 2, -1, 1, block, rest);
+      block.insert(block.end(), rest.begin(), rest.end());
+      for (int32_t ring = 2; !open.empty(); ++ring) {
+        if (ring > 2) gather(grid, cols, cc, ring, ring - 1, ring, block, block);
+        // After ring r the block holds every point within r h of any of the cell's points.
+        const double reach2 = double(ring) * h * double(ring) * h;
+        size_t still = 0;
+        for (uint32_t s : open) {
+          const Vec3 p = P[s];
+          // The k smallest (distance, index) among the block's points at a distance > 0, kept
+          // sorted; and how many lie within the rings' reach. When k do, the k smallest are
+          // all within it, and every point within it is in the block: they are the k nearest.
+          // Kept first only among the points within a little over the last point's k-th
+          // nearest (neighbours are spaced alike), so that most of the block is turned away by
+          // one comparison; when fewer than k lie that near, again with no bound.
+          size_t count = 0, within = 0;
+          for (double bound = guess > 0 ? 1.3 * guess : INFINITY;; bound = INFINITY) {
+            count = within = 0;
+            for (const auto& [tb, te] : block)
+              for (uint32_t t = tb; t < te; ++t) {
+                const double e = squared_distance(P[t], p);
+                if (!(e > 0)) continue;
+                within += e <= reach2;
+                if (e > bound) continue;
+                size_t pos;
+                if (count < K) {
+                  pos = count++;
+                } else {
+                  if (e > best_e2[K - 1] || (e == best_e2[K - 1] && t > best_t[K - 1])) continue;
+                  pos = K - 1;
+                }
+                while (pos > 0 && (e < best_e2[pos - 1] || (e == best_e2[pos - 1] && t < best_t[pos - 1]))) {
+                  best_e2[pos] = best_e2[pos - 1];
+                  best_t[pos] = best_t[pos - 1];
+                  --pos;
+                }
+                best_e2[pos] = e;
+                best_t[pos] = t;
+              }
+            if (count == K || bound == INFINITY || (within < K && ring < kMaxNeighborRing)) break;
+          }
+          if (count == K) guess = best_e2[K - 1];
+          // At the last ring whatever the block holds.
+          if (within >= K || ring == kMaxNeighborRing) {
+            std::copy(best_t, best_t + count, out.begin() + ptrdiff_t(size_t(s) * K));
+          } else {
+            open[still++] = s;
+          }
+        }
+        open.resize(still);
+      }
+      tracker.tick(grid.cell_end(uint32_t(c)) - grid.cell_begin(uint32_t(c)));
+    }
+  });
+  tracker.check();
+  return out;
+}
+
+}  // namespace particlemesh::detail
