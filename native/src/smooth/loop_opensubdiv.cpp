@@ -44,6 +44,25 @@ struct Point3 {
 };
 static_assert(sizeof(Point3) == sizeof(Vec3));
 
+/// One Vec3 of a buffer, viewed as a Point3 (the same sums, in the same order): the refined
+/// levels are interpolated straight into Vec3 arrays, which the limit and the output take
+/// as they are.
+struct PointRef {
+  Vec3* v;
+  void Clear() { *v = Vec3{}; }
+  void AddWithWeight(const PointRef& s, double w) {
+    v->x += w * s.v->x;
+    v->y += w * s.v->y;
+    v->z += w * s.v->z;
+  }
+};
+
+/// The buffer PrimvarRefiner indexes: operator[] hands out a view (PointRef) by value.
+struct PointBuffer {
+  Vec3* data;
+  PointRef operator[](int i) const { return PointRef{data + i}; }
+};
+
 /// All attribute channels of one vertex (n doubles), viewed in a vertex-major buffer.
 struct Channels {
   double* v;
@@ -137,8 +156,7 @@ void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
   //    in parallel, each through the same refiner (PrimvarRefiner only reads it).
   int channels = 0;
   std::vector<double> attr = interleave_channels(control.attributes, nv, &channels), attr_next;
-  std::vector<Point3> pos(nv), pos_next;
-  for (size_t i = 0; i < nv; ++i) pos[i] = {{control.positions[i].x, control.positions[i].y, control.positions[i].z}};
+  std::vector<Vec3> pos = control.positions, pos_next;
   const PrimvarRefiner primvar(*refiner);
   double total_work = 0, done_work = 0;
   for (int l = 1; l <= levels; ++l) total_work += double(refiner->GetLevel(l).GetNumVertices());
@@ -152,8 +170,8 @@ void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
     attr_next.resize(n * size_t(channels));
     tbb::parallel_invoke(
         [&] {
-          const Point3* src = pos.data();
-          Point3* dst = pos_next.data();
+          const PointBuffer src{pos.data()};
+          PointBuffer dst{pos_next.data()};
           primvar.Interpolate(l, src, dst);
         },
         [&] {
@@ -183,34 +201,47 @@ void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
     }
   });
   std::vector<Vec3>& positions = out.mesh.positions;
-  positions.resize(n_out);
-  std::memcpy(static_cast<void*>(positions.data()), pos.data(), n_out * sizeof(Vec3));
-  pos = {};
-  LoopRings rings;
-  if (own_limit && build_loop_rings(out.mesh.triangles, n_out, &rings)) {
+  bool limit_done = false;
+  if (own_limit) {
     progress.stage("limit positions and normals", 0.75, 0.85);
-    const LoopLimitMasks masks(rings.max_valence);
-    std::vector<Vec3> lim;
     std::vector<double> attr_lim(n_out * size_t(channels));
-    tbb::parallel_invoke([&] { loop_limit_positions(rings, masks, positions, lim, out.mesh.normals); },
-                         [&] {
-                           if (channels > 0) loop_limit_channels(rings, masks, attr.data(), channels, attr_lim.data());
-                         });
-    positions.swap(lim);
-    attr.swap(attr_lim);
-    st.limit = true;
-    progress.check();
-  } else if (options.limit) {
-    if (own_limit) {
-      // Not one closed fan at every vertex after all (cannot happen on a checked closed
-      // 2-manifold): OpenSubdiv's limit, on a refinement with the full last level.
-      refiner = refine(true);
+    if (levels > 0) {
+      // The rings from the level before the last (its full topology).
+      limit_done = loop_limit_refined(refiner->GetLevel(levels - 1), last, pos, attr.data(), channels, positions,
+                                      out.mesh.normals, attr_lim.data());
+    } else {
+      LoopRings rings;
+      if (build_loop_rings(out.mesh.triangles, n_out, &rings)) {
+        const LoopLimitMasks masks(rings.max_valence);
+        tbb::parallel_invoke([&] { loop_limit_positions(rings, masks, pos, positions, out.mesh.normals); },
+                             [&] {
+                               if (channels > 0) loop_limit_channels(rings, masks, attr.data(), channels, attr_lim.data());
+                             });
+        limit_done = true;
+      }
     }
-    progress.stage("limit positions and normals", 0.75, 0.85);
-    opensubdiv_limit(*refiner, positions, attr, channels, out.mesh.normals);
-    st.limit = true;
-    progress.check();
+    if (limit_done) {
+      attr.swap(attr_lim);
+      st.limit = true;
+      progress.check();
+    }
   }
+  if (!limit_done) {
+    positions = std::move(pos);
+    out.mesh.normals.clear();
+    if (options.limit) {
+      if (own_limit) {
+        // Not one closed fan at every vertex after all (cannot happen on a checked closed
+        // 2-manifold): OpenSubdiv's limit, on a refinement with the full last level.
+        refiner = refine(true);
+      }
+      progress.stage("limit positions and normals", 0.75, 0.85);
+      opensubdiv_limit(*refiner, positions, attr, channels, out.mesh.normals);
+      st.limit = true;
+      progress.check();
+    }
+  }
+  pos = {};
   st.seconds_limit = seconds_since(t1);
 
   // 4. Output arrays.
