@@ -85,6 +85,19 @@ bool walk_fan(const Corner* corners, uint32_t n, uint32_t* ring, uint8_t* used) 
   return true;
 }
 
+/// walk_fan's ring when the corners come in its order already (each one's previous vertex
+/// the next one's next: OpenSubdiv orders a manifold vertex's faces so, and an edge's
+/// corners are gathered so), checked in one pass; false (ring unspecified) otherwise. The
+/// neighbours of a refined vertex are distinct, so the walk would find the same cycle.
+bool chained_fan(const Corner* corners, uint32_t n, uint32_t* ring) {
+  for (uint32_t i = 0; i < n; ++i) {
+    if (corners[i].from != corners[i + 1 == n ? 0 : i + 1].to) return false;
+    ring[i] = corners[i].to;
+  }
+  std::rotate(ring, std::min_element(ring, ring + n), ring + n);
+  return true;
+}
+
 /// Vertex v's limit position and unit normal (zero where the tangents' cross product
 /// vanishes) from its ring r of n neighbours, in the order PrimvarRefiner::Limit sums them:
 /// each output cleared, then the edge weights in ring order, then the vertex weight (the
@@ -268,8 +281,10 @@ bool loop_limit_refined(const OpenSubdiv::Far::TopologyLevel& parent, const Open
     }
     if (n < 3 || n > uint32_t(max_valence)) return false;
     w.ring.resize(n);
-    w.used.resize(n);
-    if (!walk_fan(w.corners.data(), n, w.ring.data(), w.used.data())) return false;
+    if (!chained_fan(w.corners.data(), n, w.ring.data())) {
+      w.used.resize(n);
+      if (!walk_fan(w.corners.data(), n, w.ring.data(), w.used.data())) return false;
+    }
     limit_point(w.ring.data(), int(n), v, src.data(), masks, pos[v], normals[v]);
     if (k > 0) limit_channels(w.ring.data(), int(n), v, channels_src, k, masks, channels_dst + v * k);
     return true;
@@ -319,6 +334,12 @@ bool loop_limit_refined(const OpenSubdiv::Far::TopologyLevel& parent, const Open
         w.corners.push_back(Corner{ca, vertex_child(fv[j])});
         w.corners.push_back(Corner{vertex_child(fv[(j + 1) % 3]), bc});
         w.corners.push_back(Corner{bc, ca});
+      }
+      // Two faces A and B (B runs the edge the other way): in walking order A's first corner,
+      // B's second, third and first, A's second and third.
+      if (w.corners.size() == 6) {
+        const Corner c[6] = {w.corners[0], w.corners[4], w.corners[5], w.corners[3], w.corners[1], w.corners[2]};
+        std::copy(c, c + 6, w.corners.begin());
       }
       if (!ok.load(std::memory_order_relaxed) || !finish(parent.GetEdgeChildVertex(Index(i)), w)) ok = false;
     }

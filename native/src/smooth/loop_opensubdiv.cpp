@@ -92,6 +92,29 @@ Sdc::Options::VtxBoundaryInterpolation to_sdc(BoundaryRule b) {
 
 }  // namespace
 
+void copy_triangles(const OpenSubdiv::Far::TopologyLevel& level, std::vector<Triangle>& out) {
+  const size_t nf = size_t(level.GetNumFaces());
+  out.resize(nf);
+  if (nf == 0) return;
+  // OpenSubdiv keeps a level's face-vertex indices in one array, face after face: a level of
+  // triangles is the triangle array as it is (int and uint32_t alike for indices >= 0).
+  const auto first = level.GetFaceVertices(0), end = level.GetFaceVertices(int(nf - 1));
+  static_assert(sizeof(Triangle) == 3 * sizeof(OpenSubdiv::Far::Index));
+  if (first.size() == 3 && end.size() == 3 && &end[0] == &first[0] + 3 * (nf - 1)) {
+    const OpenSubdiv::Far::Index* src = &first[0];
+    parallel_blocks(nf, 65536, [&](size_t b, size_t e) {
+      std::memcpy(static_cast<void*>(out.data() + b), src + 3 * b, (e - b) * sizeof(Triangle));
+    });
+    return;
+  }
+  parallel_blocks(nf, 8192, [&](size_t b, size_t e) {
+    for (size_t f = b; f < e; ++f) {
+      const auto fv = level.GetFaceVertices(int(f));
+      out[f] = {uint32_t(fv[0]), uint32_t(fv[1]), uint32_t(fv[2])};
+    }
+  });
+}
+
 std::unique_ptr<TopologyRefiner> loop_refiner(const ControlMesh& control, const SmoothOptions& options,
                                               const std::vector<std::pair<uint32_t, uint32_t>>& crease_pairs,
                                               const std::vector<float>& crease_sharpness, bool full_last_level) {
@@ -192,14 +215,7 @@ void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
   const size_t n_out = pos.size();
   auto t1 = Clock::now();
   const auto last = refiner->GetLevel(levels);
-  const size_t nf_out = size_t(last.GetNumFaces());
-  out.mesh.triangles.resize(nf_out);
-  parallel_blocks(nf_out, 8192, [&](size_t b, size_t e) {
-    for (size_t f = b; f < e; ++f) {
-      const auto fv = last.GetFaceVertices(int(f));
-      out.mesh.triangles[f] = {uint32_t(fv[0]), uint32_t(fv[1]), uint32_t(fv[2])};
-    }
-  });
+  copy_triangles(last, out.mesh.triangles);
   std::vector<Vec3>& positions = out.mesh.positions;
   bool limit_done = false;
   if (own_limit) {
