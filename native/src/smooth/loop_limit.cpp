@@ -263,12 +263,30 @@ bool loop_limit_refined(const OpenSubdiv::Far::TopologyLevel& parent, const Open
   std::atomic<bool> ok{true};
   using OpenSubdiv::Far::ConstIndexArray;
   using OpenSubdiv::Far::Index;
+  // The refined vertices are taken in batches: their rings first (and their neighbours'
+  // points prefetched), then their limits, so that the neighbours' cache misses overlap.
+  constexpr size_t kBatch = 32;
   struct Scratch {
-    std::vector<Corner> corners;
-    std::vector<uint32_t> ring;
+    std::vector<Corner> corners;  // of the vertex being gathered
     std::vector<uint8_t> used;
+    std::vector<uint32_t> ring;   // the batch's rings, one after another
+    std::vector<uint32_t> end;    // each batch vertex's ring ends here
+    std::vector<uint32_t> child;  // the batch's vertices
   };
-  // Child vertex cv's corners are gathered in w.corners; its ring, then its limit.
+  auto flush = [&](Scratch& w) {
+    uint32_t begin = 0;
+    for (size_t q = 0; q < w.child.size(); ++q) {
+      const size_t v = w.child[q];
+      const int n = int(w.end[q] - begin);
+      limit_point(w.ring.data() + begin, n, v, src.data(), masks, pos[v], normals[v]);
+      if (k > 0) limit_channels(w.ring.data() + begin, n, v, channels_src, k, masks, channels_dst + v * k);
+      begin = w.end[q];
+    }
+    w.ring.clear();
+    w.end.clear();
+    w.child.clear();
+  };
+  // Child vertex cv's corners are gathered in w.corners: its ring joins the batch.
   auto finish = [&](Index cv, Scratch& w) {
     if (cv < 0 || size_t(cv) >= V) return false;
     const uint32_t n = uint32_t(w.corners.size());
@@ -280,13 +298,17 @@ bool loop_limit_refined(const OpenSubdiv::Far::TopologyLevel& parent, const Open
       return true;
     }
     if (n < 3 || n > uint32_t(max_valence)) return false;
-    w.ring.resize(n);
-    if (!chained_fan(w.corners.data(), n, w.ring.data())) {
+    const size_t at = w.ring.size();
+    w.ring.resize(at + n);
+    uint32_t* r = w.ring.data() + at;
+    if (!chained_fan(w.corners.data(), n, r)) {
       w.used.resize(n);
-      if (!walk_fan(w.corners.data(), n, w.ring.data(), w.used.data())) return false;
+      if (!walk_fan(w.corners.data(), n, r, w.used.data())) return false;
     }
-    limit_point(w.ring.data(), int(n), v, src.data(), masks, pos[v], normals[v]);
-    if (k > 0) limit_channels(w.ring.data(), int(n), v, channels_src, k, masks, channels_dst + v * k);
+    for (uint32_t i = 0; i < n; ++i) __builtin_prefetch(&src[r[i]]);
+    w.end.push_back(uint32_t(at + n));
+    w.child.push_back(uint32_t(v));
+    if (w.child.size() == kBatch) flush(w);
     return true;
   };
   // Loop splits a triangle (a, b, c) with edges ab, bc, ca (face-edge i runs from face-vertex
@@ -314,6 +336,7 @@ bool loop_limit_refined(const OpenSubdiv::Far::TopologyLevel& parent, const Open
       }
       if (!ok.load(std::memory_order_relaxed) || !finish(parent.GetVertexChildVertex(Index(v)), w)) ok = false;
     }
+    flush(w);
   });
   parallel_blocks(size_t(parent.GetNumEdges()), 4096, [&](size_t b, size_t e) {
     Scratch w;
@@ -343,6 +366,7 @@ bool loop_limit_refined(const OpenSubdiv::Far::TopologyLevel& parent, const Open
       }
       if (!ok.load(std::memory_order_relaxed) || !finish(parent.GetEdgeChildVertex(Index(i)), w)) ok = false;
     }
+    flush(w);
   });
   return ok.load() && size_t(parent.GetNumVertices()) + size_t(parent.GetNumEdges()) == V;
 }
