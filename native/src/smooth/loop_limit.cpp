@@ -7,6 +7,7 @@
 #include <opensubdiv/sdc/loopScheme.h>
 #include <opensubdiv/sdc/scheme.h>
 
+#include "core/huge_pages.h"
 #include "core/parallel.h"
 #include "mesh/corner_buckets.h"
 
@@ -258,8 +259,8 @@ bool loop_limit_refined(const OpenSubdiv::Far::TopologyLevel& parent, const Open
   int max_valence = 6;
   for (int v = 0; v < parent.GetNumVertices(); ++v) max_valence = std::max(max_valence, parent.GetVertexFaces(v).size());
   const LoopLimitMasks masks(max_valence);
-  pos.resize(V);
-  normals.resize(V);
+  resize_huge(pos, V);
+  resize_huge(normals, V);
   std::atomic<bool> ok{true};
   using OpenSubdiv::Far::ConstIndexArray;
   using OpenSubdiv::Far::Index;

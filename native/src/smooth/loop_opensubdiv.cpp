@@ -12,6 +12,7 @@
 #include <opensubdiv/far/topologyRefinerFactory.h>
 #include <tbb/parallel_invoke.h>
 
+#include "core/huge_pages.h"
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
 #include "smooth/loop_limit.h"
@@ -94,7 +95,7 @@ Sdc::Options::VtxBoundaryInterpolation to_sdc(BoundaryRule b) {
 
 void copy_triangles(const OpenSubdiv::Far::TopologyLevel& level, std::vector<Triangle>& out) {
   const size_t nf = size_t(level.GetNumFaces());
-  out.resize(nf);
+  resize_huge(out, nf);
   if (nf == 0) return;
   // OpenSubdiv keeps a level's face-vertex indices in one array, face after face: a level of
   // triangles is the triangle array as it is (int and uint32_t alike for indices >= 0).
