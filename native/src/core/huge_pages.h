@@ -1,11 +1,12 @@
 // Internal: ask the kernel for transparent huge pages under a large, fresh buffer.
 //
 // A buffer of tens of MB written once costs the kernel one page fault per 4 KiB page (its
-// memory-cgroup charge, its zeroing, its page-table locks): for Loop's level-2 output of a
-// 82k-triangle mesh, about a fifth of the process's CPU time. Where transparent huge pages
-// are enabled "madvise" (the default of many distributions), madvise(MADV_HUGEPAGE) on the
-// buffer's 2 MiB-aligned interior before it is first touched turns 512 such faults into one.
-// Elsewhere (THP "never" or "always", other systems) the call changes nothing.
+// memory-cgroup charge, its zeroing, its page-table locks), a large share of a pass that
+// only fills it (Loop's limit positions and normals, the refined triangles). Where
+// transparent huge pages are enabled "madvise" (the default of many distributions),
+// madvise(MADV_HUGEPAGE) on the buffer's 2 MiB-aligned interior before it is first touched
+// turns 512 such faults into one. Elsewhere (THP "never" or "always", other systems) the
+// call changes nothing; the contents never depend on it.
 #pragma once
 
 #include "particlemesh/core/config.h"

@@ -6,9 +6,12 @@
 // than its face-vertex lists). On a closed 2-manifold without creases every vertex follows
 // the smooth rule, whose masks depend on the valence only: so here the masks come from the
 // same Sdc::Scheme, once per valence, and are applied over each vertex's ring of neighbours
-// (counter-clockwise, from the last level's triangles) on all cores. The positions agree with
-// PrimvarRefiner::Limit to rounding (the sums may start at another neighbour); the normals are
-// normalize(T1 x T2) as there. Meshes with a boundary or a crease keep OpenSubdiv's own limit.
+// (counter-clockwise, from its lowest neighbour) on all cores. The rings come from the level
+// before the last, which OpenSubdiv keeps whole (loop_limit_refined: smooth_mesh), or from the
+// last level's triangles (build_loop_rings: the Smoother, which keeps them, and level 0);
+// both give the same rings, so the same bits. The positions agree with PrimvarRefiner::Limit
+// to rounding (the sums may start at another neighbour); the normals are normalize(T1 x T2)
+// as there. Meshes with a boundary or a crease keep OpenSubdiv's own limit.
 #pragma once
 
 #include <cstdint>

@@ -166,8 +166,8 @@ void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
   auto t0 = Clock::now();
 
   // 1. The topology, refined by OpenSubdiv. On a closed surface without creases the limit is
-  // taken here, in parallel, from the last level's triangles (loop_limit.h); otherwise by
-  // OpenSubdiv, which needs the last level's full topology.
+  // taken here, in parallel, with the rings read from the level before the last
+  // (loop_limit.h); otherwise by OpenSubdiv, which needs the last level's full topology.
   progress.stage("refining topology (OpenSubdiv)", 0.05, 0.25);
   const bool own_limit = own_loop_limit(control, options, crease_pairs.size());
   auto refine = [&](bool full_last_level) {
