@@ -203,6 +203,16 @@ void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
           const ChannelBuffer src{attr.data(), channels};
           ChannelBuffer dst{attr_next.data(), channels};
           primvar.Interpolate(l, src, dst);
+        },
+        [&] {
+          // Beside the last level's interpolation (one thread each): the output triangles,
+          // and the limit's fresh output arrays (their page faults off the critical path).
+          if (l != levels) return;
+          copy_triangles(refiner->GetLevel(levels), out.mesh.triangles);
+          if (own_limit) {
+            resize_huge(out.mesh.positions, n);
+            resize_huge(out.mesh.normals, n);
+          }
         });
     pos.swap(pos_next);
     attr.swap(attr_next);
@@ -216,7 +226,7 @@ void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
   const size_t n_out = pos.size();
   auto t1 = Clock::now();
   const auto last = refiner->GetLevel(levels);
-  copy_triangles(last, out.mesh.triangles);
+  if (levels == 0) copy_triangles(last, out.mesh.triangles);
   std::vector<Vec3>& positions = out.mesh.positions;
   bool limit_done = false;
   if (own_limit) {
