@@ -55,6 +55,15 @@ class Text {
     std::memcpy(p_, s.data(), s.size());
     p_ += s.size();
   }
+  /// Room for n bytes (at most the buffer's size), to be filled by the caller.
+  char* span(size_t n) {
+    room(n);
+    char* p = p_;
+    p_ += n;
+    return p;
+  }
+  /// Bytes left before the buffer must be flushed.
+  size_t space() const { return size_t(buf_ + sizeof buf_ - p_); }
   void flush() {
     out_.write(buf_, size_t(p_ - buf_));
     p_ = buf_;
@@ -98,10 +107,10 @@ bool needs_double_positions(const std::vector<Vec3>& positions) {
   for (const Vec3& p : positions) {
     lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
     hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    const double m[3] = {std::abs(p.x), std::abs(p.y), std::abs(p.z)};
     for (int a = 0; a < 3; ++a) {
-      const double m = std::abs(p[a]);
-      largest = std::max(largest, m);
-      if (m > 0) smallest = std::min(smallest, m);
+      largest = std::max(largest, m[a]);
+      smallest = std::min(smallest, m[a] > 0 ? m[a] : DBL_MAX);  // zeros (and NaN) left out
     }
   }
   if (largest > FLT_MAX) return true;  // float32 would make it inf
@@ -151,9 +160,11 @@ void write_ply(const TriMesh& mesh, OutputFile& out, bool binary, bool normals, 
   t.integer(mesh.triangles.size());
   t.put("\nproperty list uchar int vertex_indices\nend_header\n");
   // Binary: little-endian, as the header says (x86-64 and aarch64 hosts are).
-  for (size_t i = 0; i < P.size(); ++i) {
-    if (binary) {
-      char rec[64];
+  if (binary) {
+    // One fixed-size record per vertex (position, normal, color), then the extra attributes;
+    // records are filled in place in the output buffer, as many as fit at a time.
+    const size_t fixed = (doubles ? 24 : 12) + (normals ? 12 : 0) + (color ? 3 : 0);
+    auto record = [&](size_t i, char* rec) {
       size_t k = 0;
       auto f32 = [&](double v) {
         const float f = float(v);
@@ -170,52 +181,76 @@ void write_ply(const TriMesh& mesh, OutputFile& out, bool binary, bool normals, 
       if (normals) f32(N[i].x), f32(N[i].y), f32(N[i].z);
       if (color)
         for (int c = 0; c < 3; ++c) rec[k++] = char(color_byte(color->values[3 * i + size_t(c)]));
-      t.put(std::string_view(rec, k));
+    };
+    for (size_t i = 0; i < P.size();) {
+      if (extra.empty()) {
+        const size_t fit = std::min(P.size() - i, t.space() / fixed);
+        if (fit == 0) {
+          t.flush();
+          continue;
+        }
+        char* r = t.span(fit * fixed);
+        for (size_t j = 0; j < fit; ++j) record(i + j, r + j * fixed);
+        i += fit;
+        continue;
+      }
+      record(i, t.span(fixed));
       for (const VertexAttribute* a : extra)
         for (int c = 0; c < a->components; ++c) {
           const float f = a->values[i * size_t(a->components) + size_t(c)];
           t.put(std::string_view(reinterpret_cast<const char*>(&f), 4));
         }
-    } else {
-      const int digits = doubles ? 17 : 9;
-      auto value = [&](double v, bool first) {
-        if (!first) t.put(' ');
-        t.number(doubles ? v : double(float(v)), digits);
-      };
-      value(P[i].x, true), value(P[i].y, false), value(P[i].z, false);
-      if (normals)
-        for (int a = 0; a < 3; ++a) {
-          t.put(' ');
-          t.number(doubles ? N[i][a] : double(float(N[i][a])), 9);
-        }
-      if (color)
-        for (int c = 0; c < 3; ++c) {
-          t.put(' ');
-          t.integer(color_byte(color->values[3 * i + size_t(c)]));
-        }
-      for (const VertexAttribute* a : extra)
-        for (int c = 0; c < a->components; ++c) {
-          t.put(' ');
-          t.number(double(a->values[i * size_t(a->components) + size_t(c)]), 9);
-        }
-      t.put('\n');
+      ++i;
     }
+    const auto& T = mesh.triangles;
+    for (size_t i = 0; i < T.size();) {
+      const size_t fit = std::min(T.size() - i, t.space() / 13);
+      if (fit == 0) {
+        t.flush();
+        continue;
+      }
+      char* r = t.span(fit * 13);
+      for (size_t j = 0; j < fit; ++j, r += 13) {
+        r[0] = 3;
+        std::memcpy(r + 1, T[i + j].data(), 12);
+      }
+      i += fit;
+    }
+    t.flush();
+    return;
+  }
+  for (size_t i = 0; i < P.size(); ++i) {
+    const int digits = doubles ? 17 : 9;
+    auto value = [&](double v, bool first) {
+      if (!first) t.put(' ');
+      t.number(doubles ? v : double(float(v)), digits);
+    };
+    value(P[i].x, true), value(P[i].y, false), value(P[i].z, false);
+    if (normals)
+      for (int a = 0; a < 3; ++a) {
+        t.put(' ');
+        t.number(doubles ? N[i][a] : double(float(N[i][a])), 9);
+      }
+    if (color)
+      for (int c = 0; c < 3; ++c) {
+        t.put(' ');
+        t.integer(color_byte(color->values[3 * i + size_t(c)]));
+      }
+    for (const VertexAttribute* a : extra)
+      for (int c = 0; c < a->components; ++c) {
+        t.put(' ');
+        t.number(double(a->values[i * size_t(a->components) + size_t(c)]), 9);
+      }
+    t.put('\n');
   }
   for (const Triangle& tri : mesh.triangles) {
-    if (binary) {
-      char face[13];
-      face[0] = 3;
-      std::memcpy(face + 1, tri.data(), 12);
-      t.put(std::string_view(face, 13));
-    } else {
-      t.put("3 ");
-      t.integer(tri[0]);
-      t.put(' ');
-      t.integer(tri[1]);
-      t.put(' ');
-      t.integer(tri[2]);
-      t.put('\n');
-    }
+    t.put("3 ");
+    t.integer(tri[0]);
+    t.put(' ');
+    t.integer(tri[1]);
+    t.put(' ');
+    t.integer(tri[2]);
+    t.put('\n');
   }
   t.flush();
 }

@@ -6,13 +6,18 @@
 // than its face-vertex lists). On a closed 2-manifold without creases every vertex follows
 // the smooth rule, whose masks depend on the valence only: so here the masks come from the
 // same Sdc::Scheme, once per valence, and are applied over each vertex's ring of neighbours
-// (counter-clockwise, from the last level's triangles) on all cores. The positions agree with
-// PrimvarRefiner::Limit to rounding (the sums may start at another neighbour); the normals are
-// normalize(T1 x T2) as there. Meshes with a boundary or a crease keep OpenSubdiv's own limit.
+// (counter-clockwise, from its lowest neighbour) on all cores. The rings come from the level
+// before the last, which OpenSubdiv keeps whole (loop_limit_refined: smooth_mesh), or from the
+// last level's triangles (build_loop_rings: the Smoother, which keeps them, and level 0);
+// both give the same rings, so the same bits. The positions agree with PrimvarRefiner::Limit
+// to rounding (the sums may start at another neighbour); the normals are normalize(T1 x T2)
+// as there. Meshes with a boundary or a crease keep OpenSubdiv's own limit.
 #pragma once
 
 #include <cstdint>
 #include <vector>
+
+#include <opensubdiv/far/topologyLevel.h>
 
 #include "particlemesh/core/vec3.h"
 #include "particlemesh/mesh/tri_mesh.h"
@@ -59,5 +64,19 @@ void loop_limit_positions(const LoopRings& rings, const LoopLimitMasks& masks, c
 /// The same for `channels` doubles per vertex (attributes): positions' masks only.
 void loop_limit_channels(const LoopRings& rings, const LoopLimitMasks& masks, const double* src, int channels,
                          double* dst);
+
+/// The limit of the last level of a uniform Loop refinement of a closed surface without
+/// creases, each vertex's ring read from the level before it (`parent`, which OpenSubdiv
+/// keeps with its full topology): a refined vertex's triangles are among the child faces
+/// of its parent vertex's or parent edge's faces. No bucketing of all the last level's
+/// triangles, no ring arrays: one pass over the parent's vertices and edges gives the
+/// limit positions, unit normals (zero where the tangents' cross product vanishes) and
+/// `channels` limit channels per vertex, exactly as loop_limit_positions and
+/// loop_limit_channels do with build_loop_rings' rings. `src` (and `channels_src`) are the
+/// last level's points; `pos` and `normals` are resized, `channels_dst` has room for them.
+/// Returns false (outputs unspecified) when some vertex's triangles are not one closed fan.
+bool loop_limit_refined(const OpenSubdiv::Far::TopologyLevel& parent, const OpenSubdiv::Far::TopologyLevel& last,
+                        const std::vector<Vec3>& src, const double* channels_src, int channels, std::vector<Vec3>& pos,
+                        std::vector<Vec3>& normals, double* channels_dst);
 
 }  // namespace particlemesh::detail

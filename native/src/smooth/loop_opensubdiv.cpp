@@ -12,6 +12,7 @@
 #include <opensubdiv/far/topologyRefinerFactory.h>
 #include <tbb/parallel_invoke.h>
 
+#include "core/huge_pages.h"
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
 #include "smooth/loop_limit.h"
@@ -44,6 +45,25 @@ struct Point3 {
 };
 static_assert(sizeof(Point3) == sizeof(Vec3));
 
+/// One Vec3 of a buffer, viewed as a Point3 (the same sums, in the same order): the refined
+/// levels are interpolated straight into Vec3 arrays, which the limit and the output take
+/// as they are.
+struct PointRef {
+  Vec3* v;
+  void Clear() { *v = Vec3{}; }
+  void AddWithWeight(const PointRef& s, double w) {
+    v->x += w * s.v->x;
+    v->y += w * s.v->y;
+    v->z += w * s.v->z;
+  }
+};
+
+/// The buffer PrimvarRefiner indexes: operator[] hands out a view (PointRef) by value.
+struct PointBuffer {
+  Vec3* data;
+  PointRef operator[](int i) const { return PointRef{data + i}; }
+};
+
 /// All attribute channels of one vertex (n doubles), viewed in a vertex-major buffer.
 struct Channels {
   double* v;
@@ -72,6 +92,29 @@ Sdc::Options::VtxBoundaryInterpolation to_sdc(BoundaryRule b) {
 }
 
 }  // namespace
+
+void copy_triangles(const OpenSubdiv::Far::TopologyLevel& level, std::vector<Triangle>& out) {
+  const size_t nf = size_t(level.GetNumFaces());
+  resize_huge(out, nf);
+  if (nf == 0) return;
+  // OpenSubdiv keeps a level's face-vertex indices in one array, face after face: a level of
+  // triangles is the triangle array as it is (int and uint32_t alike for indices >= 0).
+  const auto first = level.GetFaceVertices(0), end = level.GetFaceVertices(int(nf - 1));
+  static_assert(sizeof(Triangle) == 3 * sizeof(OpenSubdiv::Far::Index));
+  if (first.size() == 3 && end.size() == 3 && &end[0] == &first[0] + 3 * (nf - 1)) {
+    const OpenSubdiv::Far::Index* src = &first[0];
+    parallel_blocks(nf, 65536, [&](size_t b, size_t e) {
+      std::memcpy(static_cast<void*>(out.data() + b), src + 3 * b, (e - b) * sizeof(Triangle));
+    });
+    return;
+  }
+  parallel_blocks(nf, 8192, [&](size_t b, size_t e) {
+    for (size_t f = b; f < e; ++f) {
+      const auto fv = level.GetFaceVertices(int(f));
+      out[f] = {uint32_t(fv[0]), uint32_t(fv[1]), uint32_t(fv[2])};
+    }
+  });
+}
 
 std::unique_ptr<TopologyRefiner> loop_refiner(const ControlMesh& control, const SmoothOptions& options,
                                               const std::vector<std::pair<uint32_t, uint32_t>>& crease_pairs,
@@ -123,8 +166,8 @@ void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
   auto t0 = Clock::now();
 
   // 1. The topology, refined by OpenSubdiv. On a closed surface without creases the limit is
-  // taken here, in parallel, from the last level's triangles (loop_limit.h); otherwise by
-  // OpenSubdiv, which needs the last level's full topology.
+  // taken here, in parallel, with the rings read from the level before the last
+  // (loop_limit.h); otherwise by OpenSubdiv, which needs the last level's full topology.
   progress.stage("refining topology (OpenSubdiv)", 0.05, 0.25);
   const bool own_limit = own_loop_limit(control, options, crease_pairs.size());
   auto refine = [&](bool full_last_level) {
@@ -137,8 +180,7 @@ void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
   //    in parallel, each through the same refiner (PrimvarRefiner only reads it).
   int channels = 0;
   std::vector<double> attr = interleave_channels(control.attributes, nv, &channels), attr_next;
-  std::vector<Point3> pos(nv), pos_next;
-  for (size_t i = 0; i < nv; ++i) pos[i] = {{control.positions[i].x, control.positions[i].y, control.positions[i].z}};
+  std::vector<Vec3> pos = control.positions, pos_next;
   const PrimvarRefiner primvar(*refiner);
   double total_work = 0, done_work = 0;
   for (int l = 1; l <= levels; ++l) total_work += double(refiner->GetLevel(l).GetNumVertices());
@@ -152,8 +194,8 @@ void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
     attr_next.resize(n * size_t(channels));
     tbb::parallel_invoke(
         [&] {
-          const Point3* src = pos.data();
-          Point3* dst = pos_next.data();
+          const PointBuffer src{pos.data()};
+          PointBuffer dst{pos_next.data()};
           primvar.Interpolate(l, src, dst);
         },
         [&] {
@@ -161,6 +203,16 @@ void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
           const ChannelBuffer src{attr.data(), channels};
           ChannelBuffer dst{attr_next.data(), channels};
           primvar.Interpolate(l, src, dst);
+        },
+        [&] {
+          // Beside the last level's interpolation (one thread each): the output triangles,
+          // and the limit's fresh output arrays (their page faults off the critical path).
+          if (l != levels) return;
+          copy_triangles(refiner->GetLevel(levels), out.mesh.triangles);
+          if (own_limit) {
+            resize_huge(out.mesh.positions, n);
+            resize_huge(out.mesh.normals, n);
+          }
         });
     pos.swap(pos_next);
     attr.swap(attr_next);
@@ -174,43 +226,49 @@ void loop_subdivide(const ControlMesh& control, const SmoothOptions& options,
   const size_t n_out = pos.size();
   auto t1 = Clock::now();
   const auto last = refiner->GetLevel(levels);
-  const size_t nf_out = size_t(last.GetNumFaces());
-  out.mesh.triangles.resize(nf_out);
-  parallel_blocks(nf_out, 8192, [&](size_t b, size_t e) {
-    for (size_t f = b; f < e; ++f) {
-      const auto fv = last.GetFaceVertices(int(f));
-      out.mesh.triangles[f] = {uint32_t(fv[0]), uint32_t(fv[1]), uint32_t(fv[2])};
-    }
-  });
+  if (levels == 0) copy_triangles(last, out.mesh.triangles);
   std::vector<Vec3>& positions = out.mesh.positions;
-  positions.resize(n_out);
-  std::memcpy(static_cast<void*>(positions.data()), pos.data(), n_out * sizeof(Vec3));
-  pos = {};
-  LoopRings rings;
-  if (own_limit && build_loop_rings(out.mesh.triangles, n_out, &rings)) {
+  bool limit_done = false;
+  if (own_limit) {
     progress.stage("limit positions and normals", 0.75, 0.85);
-    const LoopLimitMasks masks(rings.max_valence);
-    std::vector<Vec3> lim;
     std::vector<double> attr_lim(n_out * size_t(channels));
-    tbb::parallel_invoke([&] { loop_limit_positions(rings, masks, positions, lim, out.mesh.normals); },
-                         [&] {
-                           if (channels > 0) loop_limit_channels(rings, masks, attr.data(), channels, attr_lim.data());
-                         });
-    positions.swap(lim);
-    attr.swap(attr_lim);
-    st.limit = true;
-    progress.check();
-  } else if (options.limit) {
-    if (own_limit) {
-      // Not one closed fan at every vertex after all (cannot happen on a checked closed
-      // 2-manifold): OpenSubdiv's limit, on a refinement with the full last level.
-      refiner = refine(true);
+    if (levels > 0) {
+      // The rings from the level before the last (its full topology).
+      limit_done = loop_limit_refined(refiner->GetLevel(levels - 1), last, pos, attr.data(), channels, positions,
+                                      out.mesh.normals, attr_lim.data());
+    } else {
+      LoopRings rings;
+      if (build_loop_rings(out.mesh.triangles, n_out, &rings)) {
+        const LoopLimitMasks masks(rings.max_valence);
+        tbb::parallel_invoke([&] { loop_limit_positions(rings, masks, pos, positions, out.mesh.normals); },
+                             [&] {
+                               if (channels > 0) loop_limit_channels(rings, masks, attr.data(), channels, attr_lim.data());
+                             });
+        limit_done = true;
+      }
     }
-    progress.stage("limit positions and normals", 0.75, 0.85);
-    opensubdiv_limit(*refiner, positions, attr, channels, out.mesh.normals);
-    st.limit = true;
-    progress.check();
+    if (limit_done) {
+      attr.swap(attr_lim);
+      st.limit = true;
+      progress.check();
+    }
   }
+  if (!limit_done) {
+    positions = std::move(pos);
+    out.mesh.normals.clear();
+    if (options.limit) {
+      if (own_limit) {
+        // Not one closed fan at every vertex after all (cannot happen on a checked closed
+        // 2-manifold): OpenSubdiv's limit, on a refinement with the full last level.
+        refiner = refine(true);
+      }
+      progress.stage("limit positions and normals", 0.75, 0.85);
+      opensubdiv_limit(*refiner, positions, attr, channels, out.mesh.normals);
+      st.limit = true;
+      progress.check();
+    }
+  }
+  pos = {};
   st.seconds_limit = seconds_since(t1);
 
   // 4. Output arrays.

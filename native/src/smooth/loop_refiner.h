@@ -26,6 +26,9 @@ std::unique_ptr<OpenSubdiv::Far::TopologyRefiner> loop_refiner(const ControlMesh
                                                                const std::vector<float>& crease_sharpness,
                                                                bool full_last_level);
 
+/// The triangles of a refined level (all Loop's levels are triangles), in its face order.
+void copy_triangles(const OpenSubdiv::Far::TopologyLevel& level, std::vector<Triangle>& out);
+
 /// Whether the limit is taken by loop_limit.h (a closed surface without creases) rather than
 /// by OpenSubdiv's PrimvarRefiner::Limit.
 inline bool own_loop_limit(const ControlMesh& control, const SmoothOptions& options, size_t creases) {

@@ -137,13 +137,7 @@ Smoother::Smoother(const TriMesh& mesh, const SmoothOptions& options) : impl_(st
       tracker.check();
     }
     const auto last = refiner->GetLevel(options.levels);
-    m.triangles.resize(size_t(last.GetNumFaces()));
-    detail::parallel_blocks(m.triangles.size(), 8192, [&](size_t b, size_t e) {
-      for (size_t f = b; f < e; ++f) {
-        const auto fv = last.GetFaceVertices(int(f));
-        m.triangles[f] = {uint32_t(fv[0]), uint32_t(fv[1]), uint32_t(fv[2])};
-      }
-    });
+    detail::copy_triangles(last, m.triangles);
     const size_t n_out = size_t(last.GetNumVertices());
     if (m.own_limit) {
       tracker.stage("limit rings", 0.8, 1.0);

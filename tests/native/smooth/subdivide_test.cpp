@@ -37,6 +37,7 @@
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
 #include "particlemesh/sample/shapes.h"
+#include "smooth/loop_limit.h"  // private: the rings built from the refined triangles, as a reference
 #include "support/test_support.h"
 
 using namespace particlemesh;
@@ -454,6 +455,52 @@ TEST(SmoothLimit, ClosedSurfacesMatchOpenSubdivsLimit) {
       ASSERT_LT(distance(r.mesh.positions[i], want_pos[i]), 1e-14) << "level " << levels << " vertex " << i;
       ASSERT_GT(dot(r.mesh.normals[i], want_normals[i]), 1 - 1e-12) << "level " << levels << " vertex " << i;
     }
+  }
+}
+
+/// A closed bipyramid over a regular n-gon: two apexes of valence n, the rest of valence 4.
+TriMesh bipyramid(int n) {
+  TriMesh m;
+  m.positions = {{0, 0, 1.3}, {0, 0, -0.9}};
+  for (int i = 0; i < n; ++i)
+    m.positions.push_back({std::cos(2 * kPi * i / n), std::sin(2 * kPi * i / n), 0.1 * (i % 3)});
+  for (int i = 0; i < n; ++i) {
+    const uint32_t a = uint32_t(2 + i), b = uint32_t(2 + (i + 1) % n);
+    m.triangles.push_back({0, a, b});
+    m.triangles.push_back({1, b, a});
+  }
+  return m;
+}
+
+TEST(SmoothLimit, OwnLimitIsTheLimitOverTheRefinedTrianglesRingsBitForBit) {
+  // smooth_mesh reads each refined vertex's ring from the level before the last (OpenSubdiv's
+  // parent faces and edges), never from the refined triangles. The reference here builds the
+  // rings from the refined triangles themselves (build_loop_rings: every vertex's corners
+  // bucketed and walked) and applies the same masks to the same refined points: the same
+  // limit positions and normals, bit for bit, at every level, valence and thread count.
+  for (const TriMesh& m : {irregular_sphere(1, 20, 0.05, 13), bipyramid(13)}) {
+    for (int levels : {1, 2, 3})
+      for (int threads : {1, 2, 3}) {
+        SmoothOptions o = loop(levels, false);
+        o.threads = threads;
+        const SmoothResult refined = smooth_mesh(m, o);  // the last level's points, before the limit
+        const size_t n = refined.mesh.positions.size();
+        detail::LoopRings rings;
+        ASSERT_TRUE(detail::build_loop_rings(refined.mesh.triangles, n, &rings));
+        const detail::LoopLimitMasks masks(rings.max_valence);
+        std::vector<Vec3> want_pos, want_normals;
+        detail::loop_limit_positions(rings, masks, refined.mesh.positions, want_pos, want_normals);
+        o.limit = true;
+        const SmoothResult r = smooth_mesh(m, o);
+        const std::string at = "level " + std::to_string(levels) + ", " + std::to_string(threads) + " threads";
+        ASSERT_EQ(r.mesh.triangles, refined.mesh.triangles) << at;
+        ASSERT_EQ(r.mesh.positions.size(), n) << at;
+        for (size_t i = 0; i < n; ++i) {
+          ASSERT_EQ(r.mesh.positions[i], want_pos[i]) << at << ", vertex " << i;
+          ASSERT_NE(want_normals[i], Vec3{}) << at << ", vertex " << i;
+          ASSERT_EQ(r.mesh.normals[i], want_normals[i]) << at << ", vertex " << i;
+        }
+      }
   }
 }
 
