@@ -2,13 +2,15 @@
 
 Swapping an object's mesh makes Blender evaluate the object anew: copy the mesh, compute its
 normals and, with custom split normals, its loop-normal spaces (0.35 s for 1.5M triangles
-with Blender's own normals, 1.1 s with custom normals; bench/RESULTS.md). An object hidden in
-the viewport with the eye (hide_set) stays in the depsgraph with its evaluated mesh, so each
-frame the live cache keeps as a mesh gets a *holder*: a hidden, unselectable, unrendered
-object whose mesh is that frame's mesh. The generated object shows the current frame's holder
-through a viewport-only Geometry Nodes modifier (Object Info, As Instance, Original space):
-changing frames changes the modifier's object, nothing is evaluated again, and the instance
-draws with the holder's evaluated mesh.
+with Blender's own normals, 1.1 s with custom normals; bench/RESULTS.md), and so does pointing
+a Geometry Nodes Object Info at another object. An object hidden in the viewport with the eye
+(hide_set) stays in the depsgraph with its evaluated mesh, and showing it again evaluates
+nothing (a base flag). So each frame the live cache keeps as a mesh gets a *holder*: a child
+of the generated object (it follows its transform), unselectable, unrendered, whose mesh is
+that frame's mesh; the current frame's holder is the one not hidden. While holders show its
+frames, the generated object itself shows nothing in the viewport, through a viewport-only
+Geometry Nodes modifier with an empty output (select it in the Outliner, where its holders
+sit under it).
 
 Used only where it shows the same thing as the object's own mesh would: no other modifier on
 the object, no material linked to the object, not in edit mode; elsewhere the mesh is swapped
@@ -22,11 +24,15 @@ the tag the live cache gave the frame (live.FRAME_TAG on the holder and on its m
 
 import bpy
 
-#: The viewport-only modifier that shows a holder, and its node group.
+#: The viewport-only modifier that hides the object's own mesh while a holder shows its frame,
+#: and its node group (nothing linked to the output: empty geometry).
 MODIFIER = "particlemesh frame"
 NODE_GROUP = "particlemesh frame display"
 #: The custom property that marks a holder object (its value: the frame's tag).
 HOLDER_TAG = "particlemesh_live_holder"
+#: On the generated object: the tag of the holder it shows (stored in the file's data, so
+#: that undo restores it with the holders).
+SHOWN_TAG = "particlemesh_live_shown"
 
 
 def usable(obj):
@@ -43,28 +49,13 @@ def _node_group():
     group = bpy.data.node_groups.new(NODE_GROUP, "GeometryNodeTree")
     if hasattr(group, "interface"):  # Blender 4.0+
         group.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
-        group.interface.new_socket("Frame", in_out="INPUT", socket_type="NodeSocketObject")
         group.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
     else:
         group.inputs.new("NodeSocketGeometry", "Geometry")
-        group.inputs.new("NodeSocketObject", "Frame")
         group.outputs.new("NodeSocketGeometry", "Geometry")
-    group_in = group.nodes.new("NodeGroupInput")
-    group_out = group.nodes.new("NodeGroupOutput")
-    info = group.nodes.new("GeometryNodeObjectInfo")
-    info.transform_space = "ORIGINAL"  # the holder's mesh in the object's own space
-    info.inputs["As Instance"].default_value = True  # drawn from the holder's evaluation
-    group.links.new(group_in.outputs[1], info.inputs["Object"])
-    group.links.new(info.outputs["Geometry"], group_out.inputs[0])
+    group.nodes.new("NodeGroupInput")
+    group.nodes.new("NodeGroupOutput")  # its Geometry unlinked: empty
     return group
-
-
-def _frame_input(group):
-    if hasattr(group, "interface"):
-        return next(item.identifier for item in group.interface.items_tree
-                    if item.item_type == "SOCKET" and item.in_out == "INPUT"
-                    and item.socket_type == "NodeSocketObject")
-    return group.inputs[1].identifier
 
 
 def _modifier(obj):
@@ -75,10 +66,10 @@ def _modifier(obj):
 def shown_holder(obj):
     """The holder the object's display shows now, or None (the object shows its own mesh)."""
     modifier = _modifier(obj)
-    if modifier is None or not modifier.show_viewport or modifier.node_group is None:
+    tag = obj.get(SHOWN_TAG)
+    if modifier is None or not modifier.show_viewport or tag is None:
         return None
-    holder = modifier.get(_frame_input(modifier.node_group))
-    return holder if isinstance(holder, bpy.types.Object) and HOLDER_TAG in holder else None
+    return next((child for child in obj.children if child.get(HOLDER_TAG) == tag), None)
 
 
 def shown_mesh(obj):
@@ -102,7 +93,10 @@ def _holder(obj, mesh, tag):
             collection.objects.link(holder)
         if not holder.users_collection:
             bpy.context.scene.collection.objects.link(holder)
-        _hide(holder)
+        _hide(holder, True)
+    if holder.parent != obj:
+        holder.parent = obj  # the mesh is in the object's space: the identity below it
+        holder.matrix_parent_inverse.identity()
     return holder
 
 
@@ -114,18 +108,21 @@ def find_holder(name, tag):
     return next((o for o in bpy.data.objects if o.get(HOLDER_TAG) == tag), None)
 
 
-def _hide(holder):
-    """Hide in every view layer (the eye: still evaluated, unlike Disable in Viewports)."""
+def _hide(holder, hide):
+    """Hide or show in every view layer (the eye: a hidden object stays evaluated, unlike one
+    disabled in viewports, and showing it again evaluates nothing)."""
     for scene in bpy.data.scenes:
         for view_layer in scene.view_layers:
             try:
-                holder.hide_set(True, view_layer=view_layer)
+                if holder.hide_get(view_layer=view_layer) != hide:
+                    holder.hide_set(hide, view_layer=view_layer)
             except RuntimeError:  # not in that view layer's collections
                 pass
 
 
 def show(obj, mesh, tag):
     """Show `mesh` (a frame the cache keeps, tagged `tag`) on `obj` through its holder."""
+    old = shown_holder(obj)
     holder = _holder(obj, mesh, tag)
     modifier = _modifier(obj)
     if modifier is None:
@@ -133,18 +130,24 @@ def show(obj, mesh, tag):
         modifier.node_group = _node_group()
         modifier.show_render = False
         modifier.show_in_editmode = False
-    key = _frame_input(modifier.node_group)
-    if modifier.get(key) != holder:
-        modifier[key] = holder
-        obj.update_tag()  # an ID property set from Python tags nothing by itself
     if not modifier.show_viewport:
         modifier.show_viewport = True
+    if obj.get(SHOWN_TAG) != tag:
+        obj[SHOWN_TAG] = tag
+    _hide(holder, False)
+    for child in obj.children:  # the one shown before, and any undo brought back unhidden
+        if child != holder and HOLDER_TAG in child:
+            _hide(child, True)
+    return old
 
 
 def hide(obj):
     """Let the object show its own mesh (before writing it in place); holders stay."""
     modifier = _modifier(obj)
     if modifier is not None and modifier.show_viewport:
+        holder = shown_holder(obj)
+        if holder is not None:
+            _hide(holder, True)
         modifier.show_viewport = False
 
 
@@ -155,9 +158,13 @@ def stop(obj):
     if modifier is None:
         return False
     holder = shown_holder(obj)
-    if holder is not None and obj.data != holder.data:
-        obj.data = holder.data
+    if holder is not None:
+        _hide(holder, True)
+        if obj.data != holder.data:
+            obj.data = holder.data
     obj.modifiers.remove(modifier)
+    if SHOWN_TAG in obj:
+        del obj[SHOWN_TAG]
     return True
 
 

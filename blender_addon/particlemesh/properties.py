@@ -141,7 +141,11 @@ class CommonProps:
     custom_normals: BoolProperty(
         name="Library Normals", default=True, update=_settings_changed,
         description="Use the library's normals as custom split normals when it gives them "
-                    "(slower to set on big meshes than Blender's own smooth shading)")
+                    "(Loop limit normals, a field's gradient). They shade a polygonized "
+                    "surface smoother than Blender's own normals but take about 4 times as "
+                    "long to write on big meshes: off in the Viewport Settings (with Separate "
+                    "Render Settings on) makes a big live preview faster while renders keep "
+                    "them")
 
 
 class SourceProps:

@@ -2,6 +2,7 @@
 with a per-frame cache, render settings while rendering) and baking (one mesh per frame,
 swapped in as the frame changes; PLY sequence)."""
 import os
+import sys
 
 import bpy
 import numpy as np
@@ -144,12 +145,16 @@ def holders(pm):
 
 
 def shown_instance(obj):
-    """What the viewport's depsgraph draws for `obj`: the object its display instances (a
-    holder) and that object's evaluated mesh, or None when it draws its own mesh."""
+    """What the viewport's depsgraph draws for `obj`'s frame: the visible holder under it and
+    the holder's evaluated mesh (the object itself drawing nothing), or None when the object
+    draws its own mesh."""
+    tag = sys.modules["particlemesh"].frame_display.HOLDER_TAG
     depsgraph = bpy.context.evaluated_depsgraph_get()
-    found = [(i.instance_object.original, i.instance_object.data) for i in depsgraph.object_instances
-             if i.is_instance and i.parent is not None and i.parent.original == obj]
+    found = [(i.object.original, i.object.data) for i in depsgraph.object_instances
+             if not i.is_instance and i.object.original.parent == obj and tag in i.object.original]
     assert len(found) <= 1, found
+    if found:
+        assert len(obj.evaluated_get(depsgraph).data.vertices) == 0
     return found[0] if found else None
 
 
@@ -165,7 +170,8 @@ def test_cached_frames_show_through_hidden_holders(pm, clean_scene):
     assert len(holders(pm)) == 3
     for name in holders(pm):
         holder = bpy.data.objects[name]
-        assert holder.hide_get() and holder.hide_render and holder.hide_select
+        assert holder.parent == obj and holder.hide_render and holder.hide_select
+        assert holder.hide_get() == (holder.data != shown_mesh(obj))  # only the frame's shows
     modifier = obj.modifiers[pm.frame_display.MODIFIER]
     assert modifier.show_viewport and not modifier.show_render
     depsgraph = bpy.context.evaluated_depsgraph_get()
@@ -183,8 +189,8 @@ def test_cached_frames_show_through_hidden_holders(pm, clean_scene):
     depsgraph = bpy.context.evaluated_depsgraph_get()
     assert {n: bpy.data.objects[n].evaluated_get(depsgraph).data.as_pointer()
             for n in holders(pm)} == evaluated
-    # Renders never see holders: the modifier is off there and the holders hidden.
-    assert not any(bpy.data.objects[n].visible_get() for n in holders(pm))
+    # Renders never see holders: the modifier is off there and the holders hidden in renders.
+    assert all(bpy.data.objects[n].hide_render for n in holders(pm))
     # Another modifier on the object: frames are swapped in as its own mesh instead.
     obj.modifiers.new("weld", "WELD")
     clean_scene.frame_set(2)
