@@ -238,12 +238,16 @@ def time_swaps(data, custom_normals, holders=False):
         else:
             obj.data = meshes[1] if obj.data == meshes[0] else meshes[0]
 
+    # Only this handler: the add-on's own would sweep holders that no cache keeps.
+    others = list(bpy.app.handlers.frame_change_post)
+    bpy.app.handlers.frame_change_post.clear()
     bpy.app.handlers.frame_change_post.append(swap)
     try:
         # The first two evaluate (and with holders make) both.
         costs = step(list(range(2, 2 + max(5, args.repeat + 3))))[2:]
     finally:
         bpy.app.handlers.frame_change_post.remove(swap)
+        bpy.app.handlers.frame_change_post.extend(others)
         emitter.hide_viewport = False
         bpy.data.objects.remove(obj)
         for holder in [o for o in bpy.data.objects if holders and pm.frame_display.HOLDER_TAG in o]:

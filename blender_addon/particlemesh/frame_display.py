@@ -134,7 +134,7 @@ def show(obj, mesh, tag):
         modifier.show_viewport = True
     if obj.get(SHOWN_TAG) != tag:
         obj[SHOWN_TAG] = tag
-    _hide(holder, False)
+    _hide(holder, obj.hide_viewport or obj.hide_get())  # the object hidden: its frame too
     for child in obj.children:  # the one shown before, and any undo brought back unhidden
         if child != holder and HOLDER_TAG in child:
             _hide(child, True)

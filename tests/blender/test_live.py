@@ -191,6 +191,13 @@ def test_cached_frames_show_through_hidden_holders(pm, clean_scene):
             for n in holders(pm)} == evaluated
     # Renders never see holders: the modifier is off there and the holders hidden in renders.
     assert all(bpy.data.objects[n].hide_render for n in holders(pm))
+    # The object hidden with the eye: its frames too, from the next frame change on.
+    obj.hide_set(True)
+    clean_scene.frame_set(4)
+    assert shown_instance(obj) is None and all(bpy.data.objects[n].hide_get() for n in holders(pm))
+    obj.hide_set(False)
+    clean_scene.frame_set(3)
+    assert shown_instance(obj)[0].data == shown_mesh(obj)
     # Another modifier on the object: frames are swapped in as its own mesh instead.
     obj.modifiers.new("weld", "WELD")
     clean_scene.frame_set(2)
