@@ -22,7 +22,8 @@ class _Cache:
     least recently used first out, bounded by the preference's megabytes. Each entry may
     also keep the Blender mesh datablock written from it (by name, with a tag: Python
     references to IDs do not survive undo), so that showing a cached frame again shows that
-    mesh (frame_display) instead of writing a new one; such an entry counts twice its bytes."""
+    mesh (frame_display) instead of writing a new one; such an entry counts KEPT_MESH_COST
+    times its bytes."""
 
     def __init__(self):
         self.entries = OrderedDict()
@@ -55,11 +56,11 @@ class _Cache:
         if data is None or key in self.meshes:
             return False
         self.meshes[key] = (mesh.name, tag)
-        self.bytes += data.nbytes
+        self.bytes += _mesh_bytes(data)
         self._trim(limit, keep=key)
         if self.bytes > limit:  # too big beside its data on its own: not kept
             self.meshes.pop(key)
-            self.bytes -= data.nbytes
+            self.bytes -= _mesh_bytes(data)
             return False
         return True
 
@@ -71,7 +72,7 @@ class _Cache:
         if mesh is None or mesh.get(FRAME_TAG) != tag:
             if name is not None:
                 self.meshes.pop(key)
-                self.bytes -= self.entries[key].nbytes
+                self.bytes -= _mesh_bytes(self.entries[key])
             return None
         return mesh
 
@@ -88,7 +89,7 @@ class _Cache:
         self.bytes -= data.nbytes
         kept = self.meshes.pop(key, None)
         if kept is not None:
-            self.bytes -= data.nbytes
+            self.bytes -= _mesh_bytes(data)
             _remove_unused(kept[0], kept[1])
 
     def _trim(self, limit, keep=None):
@@ -109,6 +110,17 @@ class _Cache:
         self.entries.clear()
         self.meshes.clear()
         self.bytes = 0
+
+
+#: What a frame kept as a Blender mesh costs, in multiples of its data's bytes, data included:
+#: the mesh (1.6-2.7 times the data for a 1.5M-triangle polygonized frame, custom normals the
+#: most) and its holder's evaluation in the depsgraph (1.2-2.1 times; bench/RESULTS.md).
+KEPT_MESH_COST = 5
+
+
+def _mesh_bytes(data):
+    """What keeping entry `data` as a mesh adds to the bytes its data counts already."""
+    return (KEPT_MESH_COST - 1) * data.nbytes
 
 
 #: The custom property that marks a mesh datablock as a live frame kept by the cache (its
@@ -292,7 +304,7 @@ def show_frame(obj, data, settings, key, cached, keep=True):
             _show(obj, mesh, cache, display=keep)
             return True
     limit = _cache_limit()
-    if not keep or key not in cache.entries or 2 * data.nbytes > limit:
+    if not keep or key not in cache.entries or KEPT_MESH_COST * data.nbytes > limit:
         apply(obj, data, settings)
         return False
     mesh = bpy.data.meshes.new(f"{obj.name}.pm_live")

@@ -255,7 +255,8 @@ class PARTICLEMESH_AP_preferences(bpy.types.AddonPreferences):
     cache_megabytes: IntProperty(
         name="Live Cache (MB)", default=512, min=0, soft_max=8192,
         description="Memory for meshes of frames already generated in live mode, per session "
-                    "(0 = no cache). A frame kept as a mesh to swap in again counts twice")
+                    "(0 = no cache). A frame kept as a mesh to show again, with its hidden "
+                    "holder object evaluated, counts five times its data")
 
     def draw(self, context):
         from . import generate

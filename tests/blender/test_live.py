@@ -103,7 +103,8 @@ def test_kept_meshes_go_with_their_frames(pm, clean_scene, monkeypatch):
     clean_scene.frame_set(2)
     entry = pm.live.cache_for(obj).entries
     frame_bytes = next(reversed(entry.values())).nbytes
-    monkeypatch.setattr(pm.live, "_cache_limit", lambda: int(4.5 * frame_bytes))  # 2 kept frames
+    limit = (2 * pm.live.KEPT_MESH_COST + 0.5) * frame_bytes  # 2 kept frames
+    monkeypatch.setattr(pm.live, "_cache_limit", lambda: int(limit))
     for frame in range(3, 10):
         clean_scene.frame_set(frame)
         kept = [m for m in bpy.data.meshes if pm.live.FRAME_TAG in m]
@@ -111,7 +112,7 @@ def test_kept_meshes_go_with_their_frames(pm, clean_scene, monkeypatch):
         positions, _ = living_particles(em)
         np.testing.assert_allclose(mesh_arrays(shown_mesh(obj))[0], positions, atol=1e-5)
     entries, size = pm.live.cache_info(obj)
-    assert entries >= 2 and size <= 4.5 * frame_bytes
+    assert entries >= 2 and size <= limit
     clean_scene.frame_set(8)  # still cached and kept
     assert pm.live.last_update[obj.name]["swapped"]
 
