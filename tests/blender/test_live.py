@@ -374,6 +374,30 @@ def render_animation_settings(scene, tmp_path, frames):
         scene.camera = cam
 
 
+def test_a_still_render_shows_the_frame_on_screen(pm, clean_scene, tmp_path):
+    """A still render (F12) of a frame the viewport shows through a holder renders that frame's
+    geometry: the object's own mesh, since renders never see holders."""
+    em = emitter(speed=1.0)
+    obj = live_object(pm)
+    for frame in (2, 3, 2):
+        clean_scene.frame_set(frame)
+    assert shown_instance(obj) is not None
+    seen = []
+
+    def watch(scene, *_):
+        seen.append(mesh_arrays(obj.data)[0].copy())
+
+    render_animation_settings(clean_scene, tmp_path, (2, 2))
+    bpy.app.handlers.render_post.append(watch)
+    try:
+        assert bpy.ops.render.render(write_still=False) == {"FINISHED"}
+    finally:
+        bpy.app.handlers.render_post.remove(watch)
+    positions, _ = living_particles(em)
+    assert len(seen) == 1
+    np.testing.assert_allclose(seen[0], positions, atol=1e-5)
+
+
 def test_render_uses_the_render_settings(pm, clean_scene, tmp_path):
     emitter()
     obj = live_object(pm)
