@@ -100,6 +100,20 @@ def _holder(obj, mesh, tag):
     return holder
 
 
+#: The object's viewport display settings that its holders take on (a holder shows the frame
+#: as the object would).
+_DISPLAY = ("display_type", "show_wire", "show_all_edges", "show_in_front")
+
+
+def _copy_display(obj, holder):
+    for attribute in _DISPLAY:
+        value = getattr(obj, attribute)
+        if getattr(holder, attribute) != value:
+            setattr(holder, attribute, value)
+    if tuple(holder.color) != tuple(obj.color):
+        holder.color = obj.color
+
+
 def find_holder(name, tag):
     """The holder tagged `tag` (named `name` unless that name was taken), or None."""
     holder = bpy.data.objects.get(name)
@@ -134,6 +148,7 @@ def show(obj, mesh, tag):
         modifier.show_viewport = True
     if obj.get(SHOWN_TAG) != tag:
         obj[SHOWN_TAG] = tag
+    _copy_display(obj, holder)
     _hide(holder, obj.hide_viewport or obj.hide_get())  # the object hidden: its frame too
     for child in obj.children:  # the one shown before, and any undo brought back unhidden
         if child != holder and HOLDER_TAG in child:

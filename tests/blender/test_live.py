@@ -192,6 +192,11 @@ def test_cached_frames_show_through_hidden_holders(pm, clean_scene):
             for n in holders(pm)} == evaluated
     # Renders never see holders: the modifier is off there and the holders hidden in renders.
     assert all(bpy.data.objects[n].hide_render for n in holders(pm))
+    # The object's viewport display (wireframe, colour) carries over to its frames.
+    obj.display_type, obj.color = "WIRE", (1.0, 0.0, 0.0, 1.0)
+    clean_scene.frame_set(2)
+    holder = shown_instance(obj)[0]
+    assert holder.display_type == "WIRE" and tuple(holder.color) == (1.0, 0.0, 0.0, 1.0)
     # The object hidden with the eye: its frames too, from the next frame change on.
     obj.hide_set(True)
     clean_scene.frame_set(4)
