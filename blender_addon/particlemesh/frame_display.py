@@ -13,8 +13,8 @@ Geometry Nodes modifier with an empty output (select it in the Outliner, where i
 sit under it).
 
 Used only where it shows the same thing as the object's own mesh would: no other modifier on
-the object, no material linked to the object, not in edit mode; elsewhere the mesh is swapped
-as before. Renders never see holders (hidden in renders, the modifier off in renders: the
+the object, no material linked to the object, not in edit mode, no other data using the object
+(an emitter, a modifier's target); elsewhere the mesh is swapped as before. Renders never see holders (hidden in renders, the modifier off in renders: the
 render handler writes the object's own mesh). Holders and the modifier are never saved: before
 a save (and when live mode stops, the cache is cleared or a bake begins) the shown mesh becomes
 the object's own mesh again and they are removed.
@@ -36,10 +36,21 @@ SHOWN_TAG = "particlemesh_live_shown"
 
 
 def usable(obj):
-    """Whether the display shows exactly what the object's own mesh would."""
+    """Whether the display shows exactly what the object's own mesh would, to the viewport
+    and to anything that reads the object's evaluated geometry (nothing else may use it: a
+    particle system emitting from it, another object's modifier or constraint aiming at it
+    would see the emptied mesh)."""
     return (obj.mode != "EDIT"
             and all(m.name == MODIFIER for m in obj.modifiers)
-            and all(slot.link == "DATA" for slot in obj.material_slots))
+            and all(slot.link == "DATA" for slot in obj.material_slots)
+            and not _used_by_others(obj))
+
+
+def _used_by_others(obj):
+    users = bpy.data.user_map(subset=[obj]).get(obj, ())
+    return any(not isinstance(user, (bpy.types.Collection, bpy.types.Scene))
+               and not (isinstance(user, bpy.types.Object) and HOLDER_TAG in user)
+               for user in users)
 
 
 def _node_group():

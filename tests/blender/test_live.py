@@ -204,6 +204,19 @@ def test_cached_frames_show_through_hidden_holders(pm, clean_scene):
     obj.hide_set(False)
     clean_scene.frame_set(3)
     assert shown_instance(obj)[0].data == shown_mesh(obj)
+    # Another object aiming at it (it would see the emptied mesh): frames are swapped in as
+    # the object's own mesh instead, and likewise with another modifier on the object.
+    other = bpy.data.objects.new("other", bpy.data.meshes.new("other"))
+    clean_scene.collection.objects.link(other)
+    other.modifiers.new("shrink", "SHRINKWRAP").target = obj
+    clean_scene.frame_set(4)
+    assert pm.frame_display.MODIFIER not in obj.modifiers and shown_instance(obj) is None
+    assert holders(pm) == [] and pm.live.last_update[obj.name]["swapped"]
+    positions, _ = living_particles(em)
+    np.testing.assert_allclose(mesh_arrays(obj.data)[0], positions, atol=1e-5)
+    bpy.data.objects.remove(other)
+    clean_scene.frame_set(3)
+    assert shown_instance(obj)[0].data == shown_mesh(obj) != obj.data
     # Another modifier on the object: frames are swapped in as its own mesh instead.
     obj.modifiers.new("weld", "WELD")
     clean_scene.frame_set(2)
