@@ -61,9 +61,8 @@ os.environ.pop("PARTICLEMESH_LIBRARY", None)
 bpy.ops.preferences.addon_install(filepath=os.path.abspath(args.zip), overwrite=True)
 bpy.ops.preferences.addon_enable(module="particlemesh")
 pm = sys.modules["particlemesh"]
-# Room for every frame of the live runs (a 1.5M-triangle polygonized frame kept as a mesh
-# counts ~100 MB): the cached pass measures frames shown again, not the cache's bound.
-pm.properties.preferences().cache_megabytes = 4096
+# The add-on's default Live Cache (2048 MB) keeps every frame of these runs as a mesh.
+assert pm.properties.preferences().cache_megabytes == pm.properties.CACHE_MEGABYTES
 scene = bpy.context.scene
 for obj in list(bpy.data.objects):
     bpy.data.objects.remove(obj)

@@ -189,7 +189,7 @@ def cache_info(obj):
 
 def _cache_limit():
     prefs = properties.preferences()
-    megabytes = prefs.cache_megabytes if prefs else 512
+    megabytes = prefs.cache_megabytes if prefs else properties.CACHE_MEGABYTES
     return megabytes * 1024 * 1024
 
 
