@@ -9,7 +9,8 @@ Modules: particlemesh (the particlemesh Python package, the same as outside Blen
 particlemesh/lib/: libparticlemesh.so and the libraries it needs, and for .pcd files the PCL
 bridge libparticlemesh_pcl.so, loaded on the first .pcd), generate / mesh_arrays / jobs
 (bpy-free work), sources (particles out of Blender), blender_mesh (bulk mesh IO), properties,
-operators, live (frame handler, cache), bake, ui."""
+operators, live (frame handler, cache), frame_display (cached frames shown without Blender
+evaluating them again), bake, ui."""
 
 bl_info = {
     "name": "particlemesh",
@@ -25,7 +26,7 @@ bl_info = {
 if "bpy" in locals():  # Reload Scripts (F3 > Reload Scripts) re-imports the modules.
     import importlib
     for _name in ("particlemesh", "mesh_arrays", "jobs", "generate", "blender_mesh", "sources",
-                  "properties", "live", "bake", "operators", "ui"):
+                  "properties", "frame_display", "live", "bake", "operators", "ui"):
         if _name in locals():
             importlib.reload(locals()[_name])
 

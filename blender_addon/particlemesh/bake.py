@@ -19,6 +19,7 @@ def ply_path(directory, obj, frame):
 
 def begin(obj):
     """Free an older bake and remember the mesh shown before baking."""
+    live.stop_display(obj)
     free(obj)
     state = obj.particlemesh
     state.base_mesh = obj.data

@@ -13,7 +13,7 @@ from collections import OrderedDict, deque
 import bpy
 from bpy.app.handlers import persistent
 
-from . import blender_mesh, generate, properties, sources
+from . import blender_mesh, frame_display, generate, properties, sources
 from . import particlemesh as pm
 
 
@@ -21,8 +21,9 @@ class _Cache:
     """Meshes already made, per object: (frame, mode, settings, particle digest) -> Mesh,
     least recently used first out, bounded by the preference's megabytes. Each entry may
     also keep the Blender mesh datablock written from it (by name, with a tag: Python
-    references to IDs do not survive undo), so that showing a cached frame again only swaps
-    the object's mesh instead of writing a new one; such an entry counts twice its bytes."""
+    references to IDs do not survive undo), so that showing a cached frame again shows that
+    mesh (frame_display) instead of writing a new one; such an entry counts KEPT_MESH_COST
+    times its bytes."""
 
     def __init__(self):
         self.entries = OrderedDict()
@@ -55,11 +56,11 @@ class _Cache:
         if data is None or key in self.meshes:
             return False
         self.meshes[key] = (mesh.name, tag)
-        self.bytes += data.nbytes
+        self.bytes += _mesh_bytes(data)
         self._trim(limit, keep=key)
         if self.bytes > limit:  # too big beside its data on its own: not kept
             self.meshes.pop(key)
-            self.bytes -= data.nbytes
+            self.bytes -= _mesh_bytes(data)
             return False
         return True
 
@@ -71,12 +72,14 @@ class _Cache:
         if mesh is None or mesh.get(FRAME_TAG) != tag:
             if name is not None:
                 self.meshes.pop(key)
-                self.bytes -= self.entries[key].nbytes
+                self.bytes -= _mesh_bytes(self.entries[key])
             return None
         return mesh
 
     def holds(self, mesh):
-        tag = mesh.get(FRAME_TAG)
+        return self.holds_tag(mesh.get(FRAME_TAG))
+
+    def holds_tag(self, tag):
         return tag is not None and any(t == tag for _, t in self.meshes.values())
 
     def _pop(self, key):
@@ -86,7 +89,7 @@ class _Cache:
         self.bytes -= data.nbytes
         kept = self.meshes.pop(key, None)
         if kept is not None:
-            self.bytes -= data.nbytes
+            self.bytes -= _mesh_bytes(data)
             _remove_unused(kept[0], kept[1])
 
     def _trim(self, limit, keep=None):
@@ -109,6 +112,17 @@ class _Cache:
         self.bytes = 0
 
 
+#: What a frame kept as a Blender mesh costs, in multiples of its data's bytes, data included:
+#: the mesh (1.6-2.7 times the data for a 1.5M-triangle polygonized frame, custom normals the
+#: most) and its holder's evaluation in the depsgraph (1.2-2.1 times; bench/RESULTS.md).
+KEPT_MESH_COST = 5
+
+
+def _mesh_bytes(data):
+    """What keeping entry `data` as a mesh adds to the bytes its data counts already."""
+    return (KEPT_MESH_COST - 1) * data.nbytes
+
+
 #: The custom property that marks a mesh datablock as a live frame kept by the cache (its
 #: value says which entry wrote it).
 FRAME_TAG = "particlemesh_live_frame"
@@ -123,7 +137,9 @@ def _new_tag():
 
 
 def _remove_unused(name, tag):
-    """Delete a kept frame's mesh once nothing uses it (the one on screen stays)."""
+    """Delete a kept frame's holder and mesh once nothing shows them (the one on screen
+    stays)."""
+    frame_display.remove_holder(name, tag)
     mesh = bpy.data.meshes.get(name)
     if mesh is not None and mesh.get(FRAME_TAG) == tag and mesh.users == 0:
         bpy.data.meshes.remove(mesh)
@@ -146,7 +162,12 @@ def cache_for(obj):
 
 def clear_cache(obj=None, remove_meshes=True):
     """Forget the cached frames of `obj` (of every object when None) and delete their kept
-    meshes that nothing uses (not after loading a file: those names belong to the old one)."""
+    meshes that nothing uses (not after loading a file: those names belong to the old one).
+    The object shows the mesh on screen as its own mesh again."""
+    if remove_meshes:
+        for o in [obj] if obj is not None else [o for o in bpy.data.objects
+                                                if frame_display.MODIFIER in o.modifiers]:
+            stop_display(o)
     caches = list(_caches.values()) if obj is None else [_caches.get(obj.name_full)]
     for cache in caches:
         if cache is not None:
@@ -168,7 +189,7 @@ def cache_info(obj):
 
 def _cache_limit():
     prefs = properties.preferences()
-    megabytes = prefs.cache_megabytes if prefs else 512
+    megabytes = prefs.cache_megabytes if prefs else properties.CACHE_MEGABYTES
     return megabytes * 1024 * 1024
 
 
@@ -231,52 +252,64 @@ def properties_key(settings):
 
 
 def apply(obj, data, settings):
-    """Write mesh data into the generated object's own mesh, in place (materials stay). A
-    mesh the cache kept for a frame stops being that frame's."""
+    """Write mesh data into the generated object's own mesh, in place (materials stay), and
+    show it. A mesh the cache kept for a frame stops being that frame's."""
+    frame_display.hide(obj)
     mesh = obj.data
     if FRAME_TAG in mesh:
         del mesh[FRAME_TAG]
     blender_mesh.write(mesh, data, custom_normals=settings.get("custom_normals", True))
 
 
-def _show(obj, mesh, cache):
-    """Make `mesh` the object's mesh, with the materials of the one it replaces; a kept frame
-    mesh that the cache no longer holds goes once nothing uses it."""
-    old = obj.data
+def _show(obj, mesh, cache, display=True):
+    """Show the kept frame `mesh` on the object, with the materials of the object's own mesh:
+    through its holder where frame_display can and `display` (not in renders: they show the
+    object's own mesh), else by making it the object's mesh. A kept frame mesh that the cache
+    no longer holds goes once nothing shows it."""
+    own = obj.data
+    if list(mesh.materials) != list(own.materials):
+        mesh.materials.clear()
+        for material in own.materials:
+            mesh.materials.append(material)
+    old_holder = frame_display.shown_holder(obj)
+    old = old_holder.data if old_holder is not None else own
+    if display and frame_display.usable(obj):
+        frame_display.show(obj, mesh, mesh[FRAME_TAG])
+    else:
+        if display:  # another modifier, an object material, edit mode
+            stop_display(obj)
+        else:  # a render: it shows the object's own mesh, the viewport's display stays
+            frame_display.hide(obj)
+        if obj.data != mesh:
+            obj.data = mesh
     if old == mesh:
         return
-    if list(mesh.materials) != list(old.materials):
-        mesh.materials.clear()
-        for material in old.materials:
-            mesh.materials.append(material)
-    obj.data = mesh
-    tag = old.get(FRAME_TAG)
-    if tag is not None and not cache.holds(old):
-        _remove_unused(old.name, tag)
+    for gone in {old, own} - {mesh}:
+        tag = gone.get(FRAME_TAG)
+        if tag is not None and not cache.holds(gone) and gone != obj.data:
+            _remove_unused(gone.name, tag)
 
 
 def show_frame(obj, data, settings, key, cached, keep=True):
     """Put the frame `key` (mesh data `data`) on the object. With the cache on, each frame is
     written once into a mesh datablock of its own that the cache keeps, and a frame seen
-    again swaps that mesh in (no write: a 1.5M-triangle mesh with custom normals takes about
-    a second to write). With the cache off, the frame too big for it or `keep` false
-    (renders: frames are rarely seen twice), the object's mesh is rewritten in place.
-    Returns whether a kept mesh was swapped in."""
+    again shows that mesh (no write: a 1.5M-triangle mesh with custom normals takes about
+    a second to write; through frame_display, no evaluation either). With the cache off,
+    the frame too big for it or `keep` false (renders: frames are rarely seen twice), the
+    object's mesh is rewritten in place. Returns whether a kept mesh was shown again."""
     cache = cache_for(obj)
     if cached:
         mesh = cache.mesh(key)
         if mesh is not None:
-            _show(obj, mesh, cache)
+            _show(obj, mesh, cache, display=keep)
             return True
     limit = _cache_limit()
-    if not keep or key not in cache.entries or 2 * data.nbytes > limit:
+    if not keep or key not in cache.entries or KEPT_MESH_COST * data.nbytes > limit:
         apply(obj, data, settings)
         return False
     mesh = bpy.data.meshes.new(f"{obj.name}.pm_live")
     tag = _new_tag()
     mesh[FRAME_TAG] = tag
-    for material in obj.data.materials:
-        mesh.materials.append(material)
     blender_mesh.write(mesh, data, custom_normals=settings.get("custom_normals", True))
     if not cache.put_mesh(key, mesh, tag, limit):
         # Too big to keep beside its data: write the object's own mesh instead.
@@ -319,6 +352,7 @@ def show_baked_frame(obj, frame):
     if not len(state.bake_frames):
         return
     frame = min(max(frame, state.bake_start), state.bake_end)
+    stop_display(obj)
     for item in state.bake_frames:
         if item.frame == frame and item.mesh is not None:
             if obj.data != item.mesh:
@@ -343,6 +377,8 @@ def on_frame_change_post(scene, depsgraph=None):
     try:
         for name in [n for n in _caches if n not in bpy.data.objects]:
             _caches.pop(name).clear()  # renamed or deleted objects
+        frame_display.sweep({tag for cache in _caches.values()
+                             for _, tag in cache.meshes.values()})
         if depsgraph is None:
             depsgraph = bpy.context.evaluated_depsgraph_get()
         for obj in generated_objects(scene):
@@ -356,8 +392,15 @@ def on_frame_change_post(scene, depsgraph=None):
 
 
 @persistent
+def on_save_pre(*_args):
+    """A saved file holds each object with the mesh it shows, no holders (frame_display)."""
+    frame_display.stop_all()
+
+
+@persistent
 def on_load_post(*_args):
     clear_cache(remove_meshes=False)
+    frame_display.stop_all()  # a file saved without the add-on's save handler
     last_update.clear()
     history.clear()
     suspended.clear()
@@ -373,10 +416,26 @@ def lock_interface_for_renders(scene):
 
 def live_toggled(obj, context):
     state = obj.particlemesh
+    if not state.live:
+        stop_display(obj)
     if state.live:
         lock_interface_for_renders(context.scene)
     if state.live and state.is_generated and not state.baked and obj.name_full not in suspended:
         update_object(obj, context.evaluated_depsgraph_get())
+
+
+def stop_display(obj):
+    """The object shows its frame as its own mesh again; the holders of its cache go (the
+    cached frames stay, as data and meshes, bounded by the cache)."""
+    own = obj.data
+    if not frame_display.stop(obj):
+        return
+    cache = _caches.get(obj.name_full)
+    for name, tag in cache.meshes.values() if cache else ():
+        frame_display.remove_holder(name, tag)
+    tag = own.get(FRAME_TAG)
+    if own != obj.data and tag is not None and not (cache and cache.holds(own)):
+        _remove_unused(own.name, tag)
 
 
 def settings_changed(obj, context):
@@ -387,17 +446,20 @@ def settings_changed(obj, context):
 
 def register():
     bpy.app.handlers.frame_change_post.append(on_frame_change_post)
+    bpy.app.handlers.save_pre.append(on_save_pre)
     bpy.app.handlers.load_post.append(on_load_post)
 
 
 def unregister():
     for handlers, fn in ((bpy.app.handlers.frame_change_post, on_frame_change_post),
+                         (bpy.app.handlers.save_pre, on_save_pre),
                          (bpy.app.handlers.load_post, on_load_post)):
         # Remove by name too: a reloaded module has new function objects.
         for h in [h for h in handlers if getattr(h, "__name__", "") == fn.__name__
                   and getattr(h, "__module__", "") == fn.__module__]:
             handlers.remove(h)
     clear_cache()
+    frame_display.stop_all()
     last_update.clear()
     history.clear()
     suspended.clear()

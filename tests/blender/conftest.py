@@ -143,6 +143,12 @@ def _override():
                                      area=window.screen.areas[0])
 
 
+def shown_mesh(obj):
+    """The mesh the viewport shows for a live object: a cached frame's (shown through its
+    hidden holder object, frame_display) or the object's own."""
+    return sys.modules[ADDON].frame_display.shown_mesh(obj)
+
+
 def undo():
     """Edit > Undo. In background mode Blender needs an explicit ed.undo_push() first, and
     operators push undo steps only when called with undo=True (as the UI does)."""

@@ -2,12 +2,13 @@
 with a per-frame cache, render settings while rendering) and baking (one mesh per frame,
 swapped in as the frame changes; PLY sequence)."""
 import os
+import sys
 
 import bpy
 import numpy as np
 import pytest
 
-from conftest import emitter, living_particles, make_active, mesh_arrays, undo
+from conftest import emitter, living_particles, make_active, mesh_arrays, shown_mesh, undo
 
 
 def live_object(pm, **kwargs):
@@ -29,12 +30,12 @@ def test_live_mesh_follows_the_particles(pm, clean_scene):
         assert record["frame"] == frame and record["mode"] == "VIEWPORT"
         assert "error" not in record, record
         positions, velocities = living_particles(em)
-        co, tris = mesh_arrays(obj.data)
+        co, tris = mesh_arrays(shown_mesh(obj))
         np.testing.assert_allclose(co, positions, atol=1e-5)  # vertex i is particle i, now
-        np.testing.assert_allclose(pm.blender_mesh.get_point_attribute(obj.data, "velocity"),
+        np.testing.assert_allclose(pm.blender_mesh.get_point_attribute(shown_mesh(obj), "velocity"),
                                    velocities, atol=1e-5)
         assert 2 * 642 * 0.95 <= len(tris) <= 2 * 642 * 1.35
-        assert not obj.data.validate(verbose=False)
+        assert not shown_mesh(obj).validate(verbose=False)
         radii.append(float(np.linalg.norm(co, axis=1).mean()))
     assert radii == sorted(radii) and radii[-1] > radii[0] + 0.5  # the sphere expands
     # The same frame again comes from the cache.
@@ -58,24 +59,24 @@ def test_cached_frames_swap_in_their_kept_mesh(pm, clean_scene):
         clean_scene.frame_set(frame)
         record = pm.live.last_update[obj.name]
         assert not record["cached"] and not record["swapped"], record
-        assert pm.live.FRAME_TAG in obj.data and list(obj.data.materials) == [material]
-        shown[frame] = obj.data.name
+        assert pm.live.FRAME_TAG in shown_mesh(obj) and list(shown_mesh(obj).materials) == [material]
+        shown[frame] = shown_mesh(obj).name
     assert len(set(shown.values())) == 3
     for frame in (3, 2, 4, 3):
         clean_scene.frame_set(frame)
         record = pm.live.last_update[obj.name]
         assert record["cached"] and record["swapped"], record
-        assert obj.data.name == shown[frame]
-        assert list(obj.data.materials) == [material]
+        assert shown_mesh(obj).name == shown[frame]
+        assert list(shown_mesh(obj).materials) == [material]
         positions, _ = living_particles(em)
-        co, tris = mesh_arrays(obj.data)
+        co, tris = mesh_arrays(shown_mesh(obj))
         np.testing.assert_allclose(co, positions, atol=1e-5)
-        assert not obj.data.validate(verbose=False)
+        assert not shown_mesh(obj).validate(verbose=False)
     # A material added later follows to the frames swapped in.
     other = bpy.data.materials.new("Other")
     obj.data.materials.append(other)
     clean_scene.frame_set(2)
-    assert list(obj.data.materials) == [material, other]
+    assert list(shown_mesh(obj).materials) == [material, other]
     # Clearing the cache deletes the kept meshes but the one on screen.
     assert bpy.ops.particlemesh.clear_cache() == {"FINISHED"}
     assert [n for n in shown.values() if n in bpy.data.meshes] == [shown[2]]
@@ -88,6 +89,7 @@ def test_cached_frames_swap_in_their_kept_mesh(pm, clean_scene):
         clean_scene.frame_set(6)
         assert obj.data == mesh and pm.live.FRAME_TAG not in mesh
         positions, _ = living_particles(em)
+        assert shown_mesh(obj) == obj.data
         np.testing.assert_allclose(mesh_arrays(obj.data)[0], positions, atol=1e-5)
     finally:
         prefs.cache_megabytes = old
@@ -101,15 +103,16 @@ def test_kept_meshes_go_with_their_frames(pm, clean_scene, monkeypatch):
     clean_scene.frame_set(2)
     entry = pm.live.cache_for(obj).entries
     frame_bytes = next(reversed(entry.values())).nbytes
-    monkeypatch.setattr(pm.live, "_cache_limit", lambda: int(4.5 * frame_bytes))  # 2 kept frames
+    limit = (2 * pm.live.KEPT_MESH_COST + 0.5) * frame_bytes  # 2 kept frames
+    monkeypatch.setattr(pm.live, "_cache_limit", lambda: int(limit))
     for frame in range(3, 10):
         clean_scene.frame_set(frame)
         kept = [m for m in bpy.data.meshes if pm.live.FRAME_TAG in m]
-        assert obj.data in kept and len(kept) <= 3, [m.name for m in kept]
+        assert shown_mesh(obj) in kept and len(kept) <= 3, [m.name for m in kept]
         positions, _ = living_particles(em)
-        np.testing.assert_allclose(mesh_arrays(obj.data)[0], positions, atol=1e-5)
+        np.testing.assert_allclose(mesh_arrays(shown_mesh(obj))[0], positions, atol=1e-5)
     entries, size = pm.live.cache_info(obj)
-    assert entries >= 2 and size <= 4.5 * frame_bytes
+    assert entries >= 2 and size <= limit
     clean_scene.frame_set(8)  # still cached and kept
     assert pm.live.last_update[obj.name]["swapped"]
 
@@ -123,7 +126,7 @@ def test_cached_frames_survive_their_meshes_going(pm, clean_scene):
     names = {}
     for frame in (2, 3, 4):
         clean_scene.frame_set(frame)
-        names[frame] = obj.data.name
+        names[frame] = shown_mesh(obj).name
     bpy.data.meshes.remove(bpy.data.meshes[names[2]])
     impostor = bpy.data.meshes[names[3]]
     impostor.name = "elsewhere"
@@ -133,9 +136,173 @@ def test_cached_frames_survive_their_meshes_going(pm, clean_scene):
         record = pm.live.last_update[obj.name]
         assert record["cached"] and not record["swapped"], record
         positions, _ = living_particles(em)
-        np.testing.assert_allclose(mesh_arrays(obj.data)[0], positions, atol=1e-5)
+        np.testing.assert_allclose(mesh_arrays(shown_mesh(obj))[0], positions, atol=1e-5)
     clean_scene.frame_set(4)
-    assert pm.live.last_update[obj.name]["swapped"] and obj.data.name == names[4]
+    assert pm.live.last_update[obj.name]["swapped"] and shown_mesh(obj).name == names[4]
+
+
+def holders(pm):
+    return sorted(o.name for o in bpy.data.objects if pm.frame_display.HOLDER_TAG in o)
+
+
+def shown_instance(obj):
+    """What the viewport's depsgraph draws for `obj`'s frame: the visible holder under it and
+    the holder's evaluated mesh (the object itself drawing nothing), or None when the object
+    draws its own mesh."""
+    tag = sys.modules["particlemesh"].frame_display.HOLDER_TAG
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    found = [(i.object.original, i.object.data) for i in depsgraph.object_instances
+             if not i.is_instance and i.object.original.parent == obj and tag in i.object.original]
+    assert len(found) <= 1, found
+    if found:
+        assert len(obj.evaluated_get(depsgraph).data.vertices) == 0
+    return found[0] if found else None
+
+
+def test_cached_frames_show_through_hidden_holders(pm, clean_scene):
+    """A frame the cache keeps is shown through its holder (a hidden, unselectable,
+    unrendered object with the frame's mesh) instanced by the object's viewport-only
+    modifier: the depsgraph draws the frame's geometry, and going back to a cached frame
+    evaluates no holder again (their evaluated meshes stay the same)."""
+    em = emitter(speed=1.0)
+    obj = live_object(pm)
+    for frame in (2, 3, 4):
+        clean_scene.frame_set(frame)
+    assert len(holders(pm)) == 3
+    for name in holders(pm):
+        holder = bpy.data.objects[name]
+        assert holder.parent == obj and holder.hide_render and holder.hide_select
+        assert holder.hide_get() == (holder.data != shown_mesh(obj))  # only the frame's shows
+    modifier = obj.modifiers[pm.frame_display.MODIFIER]
+    assert modifier.show_viewport and not modifier.show_render
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    evaluated = {n: bpy.data.objects[n].evaluated_get(depsgraph).data.as_pointer()
+                 for n in holders(pm)}
+    for frame in (3, 2, 4, 3):
+        clean_scene.frame_set(frame)
+        assert pm.live.last_update[obj.name]["swapped"]
+        holder, mesh = shown_instance(obj)
+        assert pm.frame_display.HOLDER_TAG in holder and holder.data == shown_mesh(obj)
+        positions, _ = living_particles(em)
+        co, tris = mesh_arrays(mesh)  # the evaluated mesh the viewport draws
+        np.testing.assert_allclose(co, positions, atol=1e-5)
+        np.testing.assert_array_equal(tris, mesh_arrays(holder.data)[1])
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    assert {n: bpy.data.objects[n].evaluated_get(depsgraph).data.as_pointer()
+            for n in holders(pm)} == evaluated
+    # Renders never see holders: the modifier is off there and the holders hidden in renders.
+    assert all(bpy.data.objects[n].hide_render for n in holders(pm))
+    # The object's viewport display (wireframe, colour) carries over to its frames.
+    obj.display_type, obj.color = "WIRE", (1.0, 0.0, 0.0, 1.0)
+    clean_scene.frame_set(2)
+    holder = shown_instance(obj)[0]
+    assert holder.display_type == "WIRE" and tuple(holder.color) == (1.0, 0.0, 0.0, 1.0)
+    # The object hidden with the eye: its frames too, from the next frame change on.
+    obj.hide_set(True)
+    clean_scene.frame_set(4)
+    assert shown_instance(obj) is None and all(bpy.data.objects[n].hide_get() for n in holders(pm))
+    obj.hide_set(False)
+    clean_scene.frame_set(3)
+    assert shown_instance(obj)[0].data == shown_mesh(obj)
+    # Another object aiming at it (it would see the emptied mesh): frames are swapped in as
+    # the object's own mesh instead, and likewise with another modifier on the object.
+    other = bpy.data.objects.new("other", bpy.data.meshes.new("other"))
+    clean_scene.collection.objects.link(other)
+    other.modifiers.new("shrink", "SHRINKWRAP").target = obj
+    clean_scene.frame_set(4)
+    assert pm.frame_display.MODIFIER not in obj.modifiers and shown_instance(obj) is None
+    assert holders(pm) == [] and pm.live.last_update[obj.name]["swapped"]
+    positions, _ = living_particles(em)
+    np.testing.assert_allclose(mesh_arrays(obj.data)[0], positions, atol=1e-5)
+    bpy.data.objects.remove(other)
+    clean_scene.frame_set(3)
+    assert shown_instance(obj)[0].data == shown_mesh(obj) != obj.data
+    # Another modifier on the object: frames are swapped in as its own mesh instead.
+    obj.modifiers.new("weld", "WELD")
+    clean_scene.frame_set(2)
+    assert pm.frame_display.MODIFIER not in obj.modifiers and shown_instance(obj) is None
+    positions, _ = living_particles(em)
+    np.testing.assert_allclose(mesh_arrays(obj.data)[0], positions, atol=1e-5)
+    assert pm.live.FRAME_TAG in obj.data and shown_mesh(obj) == obj.data
+
+
+def test_stopping_live_mode_leaves_no_holders(pm, clean_scene):
+    """Live mode off: the frame on screen becomes the object's own mesh; no holder, no
+    modifier is left, and the only meshes besides it are the frames the cache keeps (bounded);
+    Clear Cache deletes those too. Deleting the object takes its holders with it."""
+    em = emitter(speed=1.0)
+    obj = live_object(pm)
+    for frame in (2, 3, 4, 3):
+        clean_scene.frame_set(frame)
+    shown = shown_mesh(obj)
+    obj.particlemesh.live = False
+    assert holders(pm) == [] and pm.frame_display.MODIFIER not in obj.modifiers
+    assert obj.data == shown and shown_instance(obj) is None
+    positions, _ = living_particles(em)
+    np.testing.assert_allclose(mesh_arrays(obj.data)[0], positions, atol=1e-5)
+    kept = {m.name for m in bpy.data.meshes if pm.live.FRAME_TAG in m}
+    held = {name for name, _ in pm.live.cache_for(obj).meshes.values()}
+    assert kept <= held | {obj.data.name} and len(kept) == 3, (kept, held)
+    assert bpy.ops.particlemesh.clear_cache() == {"FINISHED"}
+    assert [m.name for m in bpy.data.meshes if pm.live.FRAME_TAG in m] == [obj.data.name]
+    # Live again, then the object deleted: its holders go at the next frame change.
+    obj.particlemesh.live = True  # regenerates frame 3 at once
+    for frame in (5, 6):
+        clean_scene.frame_set(frame)
+    assert len(holders(pm)) == 3
+    bpy.data.objects.remove(obj)
+    clean_scene.frame_set(7)
+    assert holders(pm) == []
+    assert em.name in bpy.data.objects
+
+
+def test_holders_are_never_saved(pm, clean_scene, tmp_path):
+    """Saving puts the frame on screen on the object as its own mesh and removes holders and
+    the modifier first: the file holds the object and that mesh only."""
+    em = emitter(speed=1.0)
+    obj = live_object(pm)
+    for frame in (2, 3):
+        clean_scene.frame_set(frame)
+    shown = shown_mesh(obj)
+    blend = tmp_path / "live.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    assert holders(pm) == [] and obj.data == shown
+    with bpy.data.libraries.load(str(blend)) as (data_from, _):
+        saved_objects, saved_groups = list(data_from.objects), list(data_from.node_groups)
+    assert sorted(saved_objects) == sorted([obj.name, em.name]), saved_objects
+    assert pm.frame_display.NODE_GROUP not in saved_groups
+    # The session goes on showing cached frames through holders.
+    clean_scene.frame_set(2)
+    assert pm.live.last_update[obj.name]["swapped"] and len(holders(pm)) == 1
+    positions, _ = living_particles(em)
+    np.testing.assert_allclose(mesh_arrays(shown_instance(obj)[1])[0], positions, atol=1e-5)
+
+
+def test_cached_frames_after_undo(pm, clean_scene):
+    """Undo brings back the holders and meshes of its step and drops later ones: every frame
+    still shows its own geometry afterwards, and holders the cache no longer keeps go."""
+    em = emitter(speed=1.0)
+    obj = live_object(pm)
+    name, em_name = obj.name, em.name
+    for frame in (2, 3):
+        clean_scene.frame_set(frame)
+    bpy.ops.ed.undo_push(message="frames 2, 3")
+    for frame in (4, 5):
+        clean_scene.frame_set(frame)
+    bpy.ops.ed.undo_push(message="frames 4, 5")
+    undo()
+    # References die with undo.
+    obj, em, scene = bpy.data.objects[name], bpy.data.objects[em_name], bpy.context.scene
+    for frame in (4, 2, 5, 3, 4):
+        scene.frame_set(frame)
+        record = pm.live.last_update[name]
+        assert "error" not in record, record  # (undo resets the particle cache: maybe re-made)
+        positions, _ = living_particles(em)
+        np.testing.assert_allclose(mesh_arrays(shown_mesh(obj))[0], positions, atol=1e-5)
+        holder, mesh = shown_instance(obj)
+        np.testing.assert_allclose(mesh_arrays(mesh)[0], positions, atol=1e-5)
+    held = {tag for _, tag in pm.live.cache_for(obj).meshes.values()}
+    assert {bpy.data.objects[n][pm.frame_display.HOLDER_TAG] for n in holders(pm)} <= held
 
 
 def test_live_loop_smoothing_refines_once_while_the_triangles_stay(pm, clean_scene):
@@ -173,22 +340,22 @@ def test_live_off_leaves_the_mesh_alone(pm, clean_scene):
     emitter()
     assert bpy.ops.particlemesh.triangulate() == {"FINISHED"}
     obj = bpy.context.active_object
-    before, _ = mesh_arrays(obj.data)
+    before, _ = mesh_arrays(shown_mesh(obj))
     clean_scene.frame_set(8)
-    after, _ = mesh_arrays(obj.data)
+    after, _ = mesh_arrays(shown_mesh(obj))
     np.testing.assert_array_equal(before, after)
     # Switching it on regenerates at once.
     obj.particlemesh.live = True
-    now, _ = mesh_arrays(obj.data)
+    now, _ = mesh_arrays(shown_mesh(obj))
     assert np.linalg.norm(now, axis=1).mean() > np.linalg.norm(before, axis=1).mean() + 0.2
 
 
 def test_settings_change_regenerates(pm, clean_scene):
     emitter()
     obj = live_object(pm)
-    faces = len(obj.data.polygons)
+    faces = len(shown_mesh(obj).polygons)
     obj.particlemesh.viewport.max_edge_factor = 1.05  # tighter than the icosphere's edges
-    assert len(obj.data.polygons) < faces
+    assert len(shown_mesh(obj).polygons) < faces
     assert pm.live.last_update[obj.name]["cached"] is False
 
 
@@ -225,13 +392,37 @@ def render_animation_settings(scene, tmp_path, frames):
         scene.camera = cam
 
 
+def test_a_still_render_shows_the_frame_on_screen(pm, clean_scene, tmp_path):
+    """A still render (F12) of a frame the viewport shows through a holder renders that frame's
+    geometry: the object's own mesh, since renders never see holders."""
+    em = emitter(speed=1.0)
+    obj = live_object(pm)
+    for frame in (2, 3, 2):
+        clean_scene.frame_set(frame)
+    assert shown_instance(obj) is not None
+    seen = []
+
+    def watch(scene, *_):
+        seen.append(mesh_arrays(obj.data)[0].copy())
+
+    render_animation_settings(clean_scene, tmp_path, (2, 2))
+    bpy.app.handlers.render_post.append(watch)
+    try:
+        assert bpy.ops.render.render(write_still=False) == {"FINISHED"}
+    finally:
+        bpy.app.handlers.render_post.remove(watch)
+    positions, _ = living_particles(em)
+    assert len(seen) == 1
+    np.testing.assert_allclose(seen[0], positions, atol=1e-5)
+
+
 def test_render_uses_the_render_settings(pm, clean_scene, tmp_path):
     emitter()
     obj = live_object(pm)
     state = obj.particlemesh
     state.use_render_settings = True
     state.render.raw = True  # the seed's raw triangles: more than the viewport's surface
-    viewport_triangles = len(obj.data.polygons)
+    viewport_triangles = len(shown_mesh(obj).polygons)
     assert viewport_triangles == 2 * 642 - 4
     pm.live.history.clear()
     render_animation(clean_scene, tmp_path, (2, 3))
@@ -264,7 +455,7 @@ def test_viewport_thins_out_while_renders_use_every_particle(pm, clean_scene):
         clean_scene.frame_set(frame)
         record = pm.live.last_update[obj.name]
         assert "error" not in record and record["cached"] is False, record
-        co, tris = mesh_arrays(obj.data)
+        co, tris = mesh_arrays(shown_mesh(obj))
         assert 2562 / 8 < len(co) < 2562 / 3, len(co)
         positions, _ = living_particles(em)
         # Each vertex is one of the particles, and they are at least the thinning apart.
@@ -284,7 +475,7 @@ def test_viewport_thins_out_while_renders_use_every_particle(pm, clean_scene):
     assert settings["thin"] == 1.0 and data.vertex_count == 2562
     # The thinning is part of the cache key: back to 1, the full mesh, not the cached preview.
     state.viewport.thin = 1.0
-    assert len(obj.data.vertices) == 2562
+    assert len(shown_mesh(obj).vertices) == 2562
 
 
 def test_viewport_budget_previews_a_big_system_while_renders_mesh_it_whole(pm, clean_scene):
@@ -294,13 +485,13 @@ def test_viewport_budget_previews_a_big_system_while_renders_mesh_it_whole(pm, c
     obj = live_object(pm)
     state = obj.particlemesh
     assert state.viewport_budget == 8000  # the documented default: over 2562, so no thinning
-    assert len(obj.data.vertices) == 2562  # the operator meshes every particle
+    assert len(shown_mesh(obj).vertices) == 2562  # the operator meshes every particle
     state.viewport_budget = 600  # regenerates at once
     for frame in (3, 6):
         clean_scene.frame_set(frame)
         record = pm.live.last_update[obj.name]
         assert "error" not in record and record["mode"] == "VIEWPORT", record
-        co, tris = mesh_arrays(obj.data)
+        co, tris = mesh_arrays(shown_mesh(obj))
         assert 600 / 2 <= len(co) <= 600 * pm.generate.BUDGET_SLACK, len(co)
         assert record["thin"] > 1.0
         positions, _ = living_particles(em)
@@ -316,13 +507,13 @@ def test_viewport_budget_previews_a_big_system_while_renders_mesh_it_whole(pm, c
     data, settings, _ = pm.live.compute(obj, depsgraph, mode="RENDER", use_cache=False)
     assert data.vertex_count == 2562 and "viewport_budget" not in settings
     assert bpy.ops.particlemesh.update() == {"FINISHED"}
-    assert len(obj.data.vertices) == 2562
+    assert len(shown_mesh(obj).vertices) == 2562
     # The budget is part of the cache key: scrubbing back shows the cached preview ...
     clean_scene.frame_set(3)
-    assert pm.live.last_update[obj.name]["cached"] and len(obj.data.vertices) < 2562
+    assert pm.live.last_update[obj.name]["cached"] and len(shown_mesh(obj).vertices) < 2562
     # ... and with no budget the viewport meshes every particle too.
     state.viewport_budget = 0
-    assert len(obj.data.vertices) == 2562
+    assert len(shown_mesh(obj).vertices) == 2562
 
 
 def test_bake_five_frames_and_step_through(pm, clean_scene, tmp_path):
@@ -560,8 +751,8 @@ def test_import_particle_sequence_follows_the_scene_frame(pm, clean_scene, tmp_p
         scene.frame_set(frame)
         record = pm.live.last_update[obj.name_full]
         assert "error" not in record, record
-        co = np.empty(3 * len(obj.data.vertices), dtype=np.float32)
-        obj.data.vertices.foreach_get("co", co)
+        co = np.empty(3 * len(shown_mesh(obj).vertices), dtype=np.float32)
+        shown_mesh(obj).vertices.foreach_get("co", co)
         co = co.reshape(-1, 3)
         # the mesh is that file's, meshed with the object's settings
         expected = pm.generate.run("POLYGONIZE",
@@ -569,7 +760,7 @@ def test_import_particle_sequence_follows_the_scene_frame(pm, clean_scene, tmp_p
                                    pm.live.settings_for(obj, "VIEWPORT"))
         assert len(co) == expected.vertex_count > 0
         np.testing.assert_allclose(co, expected.vertices, atol=1e-6)
-        velocity = obj.data.attributes["velocity"]
+        velocity = shown_mesh(obj).attributes["velocity"]
         assert velocity.data_type == "FLOAT_VECTOR" and velocity.domain == "POINT"
         centres[file_frame] = co.mean(axis=0)
     # the particles move 1/64 along x per frame: so does the mesh

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from conftest import (emitter, living_particles, make_active, mesh_arrays, point_cloud_object,
-                      redo, undo)
+                      redo, shown_mesh, undo)
 
 
 def fibonacci_sphere(n, radius=1.0):
@@ -220,11 +220,12 @@ def test_materials_kept_when_regenerated(pm, clean_scene):
     assert pm.live.last_update[result.name]["frame"] == 4
     assert "error" not in pm.live.last_update[result.name]
     # The frame's own mesh (kept by the live cache), with the object's materials.
-    assert result.data != mesh_before and list(result.data.materials) == [material]
-    # Update Now writes the mesh on screen in place, materials and all.
+    assert shown_mesh(result) != mesh_before and list(shown_mesh(result).materials) == [material]
+    # Update Now writes the object's own mesh in place, materials and all, and shows it.
     mesh_now = result.data
     assert bpy.ops.particlemesh.update() == {"FINISHED"}
-    assert result.data == mesh_now and list(result.data.materials) == [material]
+    assert result.data == mesh_now and shown_mesh(result) == mesh_now
+    assert list(result.data.materials) == [material]
     assert em.name in bpy.data.objects
 
 
@@ -559,7 +560,7 @@ def test_polygonize_particle_system_with_sizes(pm, clean_scene):
     clean_scene.frame_set(6)  # live: follows the expanding shell
     record = pm.live.last_update[result.name]
     assert "error" not in record, record
-    r6 = np.linalg.norm(mesh_arrays(result.data)[0], axis=1).mean()
+    r6 = np.linalg.norm(mesh_arrays(shown_mesh(result))[0], axis=1).mean()
     assert r6 > r.mean() + 0.05
 
 
