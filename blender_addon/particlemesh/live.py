@@ -273,10 +273,10 @@ def _show(obj, mesh, cache, display=True):
             mesh.materials.append(material)
     old_holder = frame_display.shown_holder(obj)
     old = old_holder.data if old_holder is not None else own
-    if display and frame_display.usable(obj):
+    if display and obj.particlemesh.instant_frames and frame_display.usable(obj):
         frame_display.show(obj, mesh, mesh[FRAME_TAG])
     else:
-        if display:  # another modifier, an object material, edit mode
+        if display:  # turned off; another modifier, an object material, edit mode
             stop_display(obj)
         else:  # a render: it shows the object's own mesh, the viewport's display stays
             frame_display.hide(obj)

@@ -76,6 +76,9 @@ class VIEW3D_PT_particlemesh_object(_Panel, bpy.types.Panel):
             row = layout.row()
             row.active = state.live and not state.baked
             row.prop(state, "viewport_budget")
+        row = layout.row()
+        row.active = state.live and not state.baked
+        row.prop(state, "instant_frames")
         layout.operator("particlemesh.update", icon="FILE_REFRESH")
         record = live.last_update.get(obj.name_full)
         if record:

@@ -226,6 +226,31 @@ def test_cached_frames_show_through_hidden_holders(pm, clean_scene):
     assert pm.live.FRAME_TAG in obj.data and shown_mesh(obj) == obj.data
 
 
+def test_instant_cached_frames_off_swaps_frames_in(pm, clean_scene):
+    """Instant Cached Frames off (for scripts and exporters that read the object's mesh):
+    turning it off while a holder shows a frame makes that frame the object's own mesh and
+    removes the holders; cached frames are then swapped in as the object's mesh."""
+    em = emitter(speed=1.0)
+    obj = live_object(pm)
+    for frame in (2, 3, 4, 3):
+        clean_scene.frame_set(frame)
+    assert shown_instance(obj) is not None and shown_mesh(obj) != obj.data
+    shown = shown_mesh(obj)
+    obj.particlemesh.instant_frames = False
+    assert holders(pm) == [] and pm.frame_display.MODIFIER not in obj.modifiers
+    assert obj.data == shown and shown_instance(obj) is None
+    for frame in (2, 4):
+        clean_scene.frame_set(frame)
+        assert pm.live.last_update[obj.name]["swapped"]
+        assert holders(pm) == [] and shown_instance(obj) is None
+        assert pm.frame_display.MODIFIER not in obj.modifiers and shown_mesh(obj) == obj.data
+        positions, _ = living_particles(em)
+        np.testing.assert_allclose(mesh_arrays(obj.data)[0], positions, atol=1e-5)
+    obj.particlemesh.instant_frames = True
+    clean_scene.frame_set(3)
+    assert shown_instance(obj)[0].data == shown_mesh(obj) != obj.data
+
+
 def test_stopping_live_mode_leaves_no_holders(pm, clean_scene):
     """Live mode off: the frame on screen becomes the object's own mesh; no holder, no
     modifier is left, and the only meshes besides it are the frames the cache keeps (bounded);
