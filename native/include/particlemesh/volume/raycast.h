@@ -62,6 +62,10 @@
 
 namespace PM_NAMESPACE {
 
+namespace detail {
+struct RayCasterAccess;
+}
+
 /// See the tangent rule at the top of this file.
 inline constexpr double kTangentTolerance = 1e-12;
 /// Blinn's kernel: the shortest marching step, as a fraction of the smallest radius.
@@ -122,6 +126,7 @@ class PM_EXPORT RayCaster {
   struct Impl;
 
  private:
+  friend struct detail::RayCasterAccess;
   std::unique_ptr<Impl> impl_;
 };
 
