@@ -144,7 +144,7 @@ struct TileSource {
     }
     return next < tile.list.size() ? tile.list[next].key : kInf;
   }
-  void advance(RayCaster::Impl::Query& q, std::vector<Event>& events) { q.offer(tile.list[next++].k, events); }
+  void advance(RayCaster::Impl::Query& q, Scratch& sc) { q.offer(tile.list[next++].k, sc); }
 };
 
 }  // namespace

@@ -196,7 +196,7 @@ void interval_polynomial(const RayCaster::Impl& im, double ta, double L, const s
   for (int j = 0; j <= 2 * Deg; ++j) c[j] = 0;
   const double d1 = im.d[1], d2 = im.d[2], d3 = Deg >= 3 ? im.d[3] : 0.0;
   for (const Active& a : active) {
-    const double ir2 = a.ir2, wk = im.w[a.k];
+    const double ir2 = a.ir2, wk = a.w;
     const double delta = ta - a.tstar;  // from the closest approach to the interval's start
     const double A = 1.0 - (a.e2 + delta * delta) * ir2;
     const double B = -2.0 * L * delta * ir2;
@@ -222,6 +222,23 @@ void interval_polynomial(const RayCaster::Impl& im, double ta, double L, const s
   c[0] -= im.threshold;
 }
 
+// sum over the positive strengths of w g(s_min), s_min the particle's smallest s on [ta, tb],
+// in the order of `active`; the sum so far once it reaches `stop` (no term is negative, so
+// the whole sum reaches it too).
+template <Kernel K>
+double field_upper_bound(double ta, double tb, const std::vector<Active>& active, double stop) {
+  double ub = 0;
+  for (const Active& a : active) {
+    const double wk = a.w;
+    if (wk <= 0) continue;
+    const double d0 = ta - a.tstar, d1 = tb - a.tstar;
+    const double dmin = (d0 <= 0 && d1 >= 0) ? 0.0 : std::min(std::abs(d0), std::abs(d1));
+    ub += wk * kernel_value(K, (a.e2 + dmin * dmin) * a.ir2);
+    if (ub >= stop) break;
+  }
+  return ub;
+}
+
 }  // namespace
 
 void RayCaster::Impl::Query::interval(double ta, double tb, const std::vector<Active>& active) {
@@ -237,12 +254,11 @@ void RayCaster::Impl::Query::interval(double ta, double tb, const std::vector<Ac
     // Cheap certified exclusion: F is at most sum over positive strengths of w g(s_min), s_min
     // the particle's smallest s on the interval (g decreases). Below T: outside throughout.
     double ub = 0;
-    for (const Active& a : active) {
-      const double wk = im.w[a.k];
-      if (wk <= 0) continue;
-      const double d0 = ta - a.tstar, d1 = tb - a.tstar;
-      const double dmin = (d0 <= 0 && d1 >= 0) ? 0.0 : std::min(std::abs(d0), std::abs(d1));
-      ub += wk * kernel_value(im.kernel, (a.e2 + dmin * dmin) * a.ir2);
+    switch (im.kernel) {
+      case Kernel::Wyvill: ub = field_upper_bound<Kernel::Wyvill>(ta, tb, active, im.threshold); break;
+      case Kernel::Poly4: ub = field_upper_bound<Kernel::Poly4>(ta, tb, active, im.threshold); break;
+      case Kernel::Poly6: ub = field_upper_bound<Kernel::Poly6>(ta, tb, active, im.threshold); break;
+      case Kernel::Blinn: ub = field_upper_bound<Kernel::Blinn>(ta, tb, active, im.threshold); break;
     }
     if (ub < im.threshold) {
       if (!started && ta <= tlo) starts_inside = false;
@@ -300,7 +316,7 @@ void RayCaster::Impl::Query::interval_blinn(double ta, double tb, const std::vec
   double lip = 0;
   // Along the ray |d/dt g(s)| = |g'(s)| 2 ir2 |t - tstar| <= |g'(s)| 2 sqrt(s ir2): the bound
   // of a sphere of radius 1 / sqrt(ir2).
-  for (const Active& a : active) lip += std::abs(im.w[a.k]) * kBlinnSlope * std::sqrt(a.ir2);
+  for (const Active& a : active) lip += std::abs(a.w) * kBlinnSlope * std::sqrt(a.ir2);
   auto f = [&](double t, double* df) {
     const Vec3 x = o + dn * t;
     double v = 0, dv = 0;
@@ -372,7 +388,7 @@ void RayCaster::Impl::Query::interval_blinn(double ta, double tb, const std::vec
   inside = ft >= 0;
 }
 
-void RayCaster::Impl::Query::offer(uint32_t k, std::vector<Event>& events) {
+void RayCaster::Impl::Query::offer(uint32_t k, Scratch& sc) {
   const Vec3 q = o - im.pos[k];
   Active a;
   double h2;
@@ -384,13 +400,13 @@ void RayCaster::Impl::Query::offer(uint32_t k, std::vector<Event>& events) {
     const double tstar = -dot(q, Md) / ir2;
     // The smallest s from the closest point itself (no cancellation for a far origin).
     const double smin = detail::metric_norm2(m, q + dn * tstar);
-    a = Active{k, tstar, smin / ir2, ir2};
+    a = Active{k, tstar, smin / ir2, ir2, im.w[k]};
     h2 = (1.0 - smin) / ir2;
   } else {
     const double b = dot(q, dn);
     const Vec3 e = q - dn * b;  // from the centre to the closest point of the line
     const double e2 = squared_norm(e);
-    a = Active{k, -b, e2, im.inv_r2[k]};
+    a = Active{k, -b, e2, im.inv_r2[k], im.w[k]};
     h2 = im.r2[k] - e2;
   }
   if (!(h2 > 0)) return;
@@ -399,9 +415,12 @@ void RayCaster::Impl::Query::offer(uint32_t k, std::vector<Event>& events) {
   if (t_out <= tlo || t_in >= thi) return;
   ++stats.spheres_entered;
   auto event_cmp = [](const Event& x, const Event& y) { return x.t > y.t; };
-  events.push_back({std::max(t_in, tlo), a, false});
+  const uint32_t slot = uint32_t(sc.offered.size());
+  sc.offered.push_back(a);
+  auto& events = sc.events;
+  events.push_back({std::max(t_in, tlo), slot, false});
   std::push_heap(events.begin(), events.end(), event_cmp);
-  events.push_back({std::min(t_out, thi), a, true});
+  events.push_back({std::min(t_out, thi), slot, true});
   std::push_heap(events.begin(), events.end(), event_cmp);
 }
 
@@ -419,7 +438,7 @@ struct HierarchySource {
     std::push_heap(heap.begin(), heap.end(), cmp);
   }
   double horizon() const { return heap.empty() ? kInf : heap.front().t; }
-  void advance(RayCaster::Impl::Query& query, std::vector<Event>& events) {
+  void advance(RayCaster::Impl::Query& query, Scratch& sc) {
     const NodeEntry ne = heap.front();
     std::pop_heap(heap.begin(), heap.end(), cmp);
     heap.pop_back();
@@ -432,7 +451,7 @@ struct HierarchySource {
       }
       return;
     }
-    for (uint32_t k = nd.first; k < nd.first + nd.count; ++k) query.offer(k, events);
+    for (uint32_t k = nd.first; k < nd.first + nd.count; ++k) query.offer(k, sc);
   }
 };
 

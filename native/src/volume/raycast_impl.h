@@ -31,11 +31,12 @@ struct Node {
 struct Active {
   uint32_t k;
   double tstar, e2, ir2;
+  double w;  // the particle's strength
 };
 
 struct Event {
   double t;
-  Active a;
+  uint32_t slot;  // the particle in Scratch::offered
   bool exit;
 };
 
@@ -47,7 +48,8 @@ struct NodeEntry {
 // Per-thread scratch, so queries allocate nothing once warm.
 struct Scratch {
   std::vector<NodeEntry> nodes;  // min-heap of nodes to visit, by entry t
-  std::vector<Event> events;
+  std::vector<Event> events;     // min-heap by t
+  std::vector<Active> offered;   // the particles whose supports the ray meets, as found
   std::vector<Event> batch;      // the events at one t, applied in a canonical order
   std::vector<Active> active;
   std::vector<RayHit> hits;
@@ -177,10 +179,10 @@ struct RayCaster::Impl {
     void interval(double ta, double tb, const std::vector<Active>& active);
     void interval_blinn(double ta, double tb, const std::vector<Active>& active);
     // The sphere (or ellipsoid) of particle k: its entry and exit events, if the ray meets it.
-    void offer(uint32_t k, std::vector<Event>& events);
+    void offer(uint32_t k, Scratch& sc);
     // The front-to-back sweep (below), fed by a source of particles: source.horizon() is a
     // lower bound of the entry of every particle it has not offered yet (+inf when none are
-    // left), source.advance(query, events) offers some more through offer().
+    // left), source.advance(query, scratch) offers some more through offer().
     template <class Source>
     void sweep(Scratch& sc, Source& source);
     // The sweep fed by the hierarchy, walked for this ray alone.
@@ -222,8 +224,10 @@ void RayCaster::Impl::Query::sweep(Scratch& sc, Source& source) {
   auto& eheap = sc.events;
   auto& batch = sc.batch;
   auto& active = sc.active;
+  const auto& offered = sc.offered;
   eheap.clear();
   active.clear();
+  sc.offered.clear();
   auto event_cmp = [](const Event& a, const Event& b) { return a.t > b.t; };
   double cur = tlo;
   uint32_t since_check = 0;  // intervals and particle offers since the last cancellation check
@@ -252,24 +256,25 @@ void RayCaster::Impl::Query::sweep(Scratch& sc, Source& source) {
         eheap.pop_back();
       }
       if (batch.size() > 1)
-        std::sort(batch.begin(), batch.end(), [](const Event& a, const Event& b) {
-          return a.exit != b.exit ? b.exit : a.a.k < b.a.k;
+        std::sort(batch.begin(), batch.end(), [&](const Event& a, const Event& b) {
+          return a.exit != b.exit ? b.exit : offered[a.slot].k < offered[b.slot].k;
         });
       for (const Event& e : batch) {
+        const Active& a = offered[e.slot];
         if (e.exit) {
           for (size_t i = 0; i < active.size(); ++i)
-            if (active[i].k == e.a.k) {
+            if (active[i].k == a.k) {
               active[i] = active.back();
               active.pop_back();
               break;
             }
         } else {
-          active.push_back(e.a);
+          active.push_back(a);
         }
       }
     }
     if (done || horizon == std::numeric_limits<double>::infinity()) break;  // (events are finite)
-    source.advance(*this, eheap);
+    source.advance(*this, sc);
   }
   if (!done) {
     // Past the last support (F = 0 < T), unless the range ended inside one first.
