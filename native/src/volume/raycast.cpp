@@ -414,14 +414,18 @@ void RayCaster::Impl::Query::offer(uint32_t k, Scratch& sc) {
   const double t_in = a.tstar - hh, t_out = a.tstar + hh;
   if (t_out <= tlo || t_in >= thi) return;
   ++stats.spheres_entered;
-  auto event_cmp = [](const Event& x, const Event& y) { return x.t > y.t; };
   const uint32_t slot = uint32_t(sc.offered.size());
   sc.offered.push_back(a);
+  // Kept sorted by decreasing t (the next at the back): a few dozen at a time, where moving
+  // a few hundred bytes costs less than a heap's sifting.
   auto& events = sc.events;
-  events.push_back({std::max(t_in, tlo), slot, false});
-  std::push_heap(events.begin(), events.end(), event_cmp);
-  events.push_back({std::min(t_out, thi), slot, true});
-  std::push_heap(events.begin(), events.end(), event_cmp);
+  auto insert = [&](const Event& ev) {
+    events.insert(std::upper_bound(events.begin(), events.end(), ev,
+                                   [](const Event& x, const Event& y) { return x.t > y.t; }),
+                  ev);
+  };
+  insert({std::max(t_in, tlo), slot, false});
+  insert({std::min(t_out, thi), slot, true});
 }
 
 namespace {

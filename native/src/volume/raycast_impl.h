@@ -48,7 +48,7 @@ struct NodeEntry {
 // Per-thread scratch, so queries allocate nothing once warm.
 struct Scratch {
   std::vector<NodeEntry> nodes;  // min-heap of nodes to visit, by entry t
-  std::vector<Event> events;     // min-heap by t
+  std::vector<Event> events;     // by decreasing t
   std::vector<Active> offered;   // the particles whose supports the ray meets, as found
   std::vector<Event> batch;      // the events at one t, applied in a canonical order
   std::vector<Active> active;
@@ -228,7 +228,6 @@ void RayCaster::Impl::Query::sweep(Scratch& sc, Source& source) {
   eheap.clear();
   active.clear();
   sc.offered.clear();
-  auto event_cmp = [](const Event& a, const Event& b) { return a.t > b.t; };
   double cur = tlo;
   uint32_t since_check = 0;  // intervals and particle offers since the last cancellation check
   while (!done) {
@@ -238,8 +237,8 @@ void RayCaster::Impl::Query::sweep(Scratch& sc, Source& source) {
     }
     // Strictly before the horizon: events at it may have partners (the same t) not yet found.
     const double horizon = source.horizon();
-    while (!eheap.empty() && eheap.front().t < horizon && !done) {
-      const double te = eheap.front().t;
+    while (!eheap.empty() && eheap.back().t < horizon && !done) {
+      const double te = eheap.back().t;
       if (te > cur) {
         interval(cur, te, active);
         cur = te;
@@ -250,9 +249,8 @@ void RayCaster::Impl::Query::sweep(Scratch& sc, Source& source) {
         }
       }
       batch.clear();
-      while (!eheap.empty() && eheap.front().t == te) {
-        batch.push_back(eheap.front());
-        std::pop_heap(eheap.begin(), eheap.end(), event_cmp);
+      while (!eheap.empty() && eheap.back().t == te) {
+        batch.push_back(eheap.back());
         eheap.pop_back();
       }
       if (batch.size() > 1)

@@ -117,28 +117,32 @@ RenderResult render(const RayCaster& caster, const RenderOptions& options) {
   r.image.height = H;
   r.image.rgb.assign(size_t(W) * size_t(H) * 3, 0);
   std::vector<uint8_t> hit_at(size_t(W) * size_t(H), 0);
+  // Linear to display (gamma 2.2).
+  auto display = [](const Vec3& c, uint8_t* out) {
+    out[0] = to_byte(std::pow(c.x, 1.0 / 2.2));
+    out[1] = to_byte(std::pow(c.y, 1.0 / 2.2));
+    out[2] = to_byte(std::pow(c.z, 1.0 / 2.2));
+  };
+  uint8_t background_bytes[3];
+  display(background, background_bytes);
   tracker.stage("rendering", 0.0, 1.0, uint64_t(H));
   detail::trace_camera(caster, rays, options.threads, tracker, [&](int x, int y, const RayHit* hit) {
     uint8_t* out = r.image.pixel(x, y);
-    Vec3 color = background;
-    if (hit) {
-      hit_at[size_t(y) * size_t(W) + size_t(x)] = 1;
-      Vec3 n = hit->normal;
-      if (dot(n, rays.direction(x, y)) > 0) n = -n;  // seen from inside: shade the side facing the camera
-      if (options.shading == Shading::Normal) {
-        const Vec3 c = (hit->normal + Vec3{1, 1, 1}) * 0.5;
-        out[0] = to_byte(c.x);
-        out[1] = to_byte(c.y);
-        out[2] = to_byte(c.z);
-        return;
-      }
-      const double shade = 0.18 + 0.82 * std::max(0.0, dot(n, light));
-      color = albedo * shade;
+    if (!hit) {
+      std::copy(background_bytes, background_bytes + 3, out);
+      return;
     }
-    // Linear to display (gamma 2.2).
-    out[0] = to_byte(std::pow(color.x, 1.0 / 2.2));
-    out[1] = to_byte(std::pow(color.y, 1.0 / 2.2));
-    out[2] = to_byte(std::pow(color.z, 1.0 / 2.2));
+    hit_at[size_t(y) * size_t(W) + size_t(x)] = 1;
+    Vec3 n = hit->normal;
+    if (dot(n, rays.direction(x, y)) > 0) n = -n;  // seen from inside: shade the side facing the camera
+    if (options.shading == Shading::Normal) {
+      const Vec3 c = (hit->normal + Vec3{1, 1, 1}) * 0.5;
+      out[0] = to_byte(c.x);
+      out[1] = to_byte(c.y);
+      out[2] = to_byte(c.z);
+      return;
+    }
+    display(albedo * (0.18 + 0.82 * std::max(0.0, dot(n, light))), out);
   });
   tracker.check();
   for (uint8_t h : hit_at) r.hits += h;
