@@ -107,6 +107,10 @@ struct RayCaster::Impl {
     RayHit pending;
     double height = 0;   // max |F - T| sampled since the pending crossing
     bool done = false;
+    // Sum over the active particles of positive strength of their largest value along the
+    // whole ray, w g(e2 ir2), kept as they enter and leave; and the sum of every value
+    // added since the active list was last empty (bounds the rounding of the former).
+    double peak_sum = 0, peak_added = 0;
     std::vector<RayHit>* out = nullptr;
 
     bool box(const Node& n, double* t_enter) const {
@@ -259,15 +263,20 @@ void RayCaster::Impl::Query::sweep(Scratch& sc, Source& source) {
         });
       for (const Event& e : batch) {
         const Active& a = offered[e.slot];
+        const double peak = a.w > 0 ? a.w * kernel_value(im.kernel, a.e2 * a.ir2) : 0.0;
         if (e.exit) {
           for (size_t i = 0; i < active.size(); ++i)
             if (active[i].k == a.k) {
               active[i] = active.back();
               active.pop_back();
+              peak_sum -= peak;
               break;
             }
+          if (active.empty()) peak_sum = peak_added = 0;
         } else {
           active.push_back(a);
+          peak_sum += peak;
+          peak_added += peak;
         }
       }
     }
