@@ -400,27 +400,23 @@ void RayCaster::Impl::Query::interval_blinn(double ta, double tb, const std::vec
 }
 
 void RayCaster::Impl::Query::offer(uint32_t k, Scratch& sc) {
-  const Vec3 q = o - im.pos[k];
-  Active a;
-  double h2;
-  if (im.aniso) {
-    // s(t) = (q + t dn)^T M (q + t dn) = ir2 (t - tstar)^2 + smin.
-    const double* m = &im.metric[6 * size_t(k)];
-    const Vec3 Md = detail::metric_apply(m, dn);
-    const double ir2 = dot(dn, Md);
-    const double tstar = -dot(q, Md) / ir2;
-    // The smallest s from the closest point itself (no cancellation for a far origin).
-    const double smin = detail::metric_norm2(m, q + dn * tstar);
-    a = Active{k, tstar, smin / ir2, ir2, im.w[k]};
-    h2 = (1.0 - smin) / ir2;
-  } else {
-    const double b = dot(q, dn);
-    const Vec3 e = q - dn * b;  // from the centre to the closest point of the line
-    const double e2 = squared_norm(e);
-    a = Active{k, -b, e2, im.inv_r2[k], im.w[k]};
-    h2 = im.r2[k] - e2;
+  if (!im.aniso) {
+    offer_sphere(k, im.pos[k], im.r2[k], im.inv_r2[k], im.w[k], sc);
+    return;
   }
-  if (!(h2 > 0)) return;
+  // s(t) = (q + t dn)^T M (q + t dn) = ir2 (t - tstar)^2 + smin.
+  const Vec3 q = o - im.pos[k];
+  const double* m = &im.metric[6 * size_t(k)];
+  const Vec3 Md = detail::metric_apply(m, dn);
+  const double ir2 = dot(dn, Md);
+  const double tstar = -dot(q, Md) / ir2;
+  // The smallest s from the closest point itself (no cancellation for a far origin).
+  const double smin = detail::metric_norm2(m, q + dn * tstar);
+  const double h2 = (1.0 - smin) / ir2;
+  if (h2 > 0) enter(Active{k, tstar, smin / ir2, ir2, im.w[k]}, h2, sc);
+}
+
+void RayCaster::Impl::Query::enter(const Active& a, double h2, Scratch& sc) {
   const double hh = std::sqrt(h2);
   const double t_in = a.tstar - hh, t_out = a.tstar + hh;
   if (t_out <= tlo || t_in >= thi) return;
@@ -428,15 +424,17 @@ void RayCaster::Impl::Query::offer(uint32_t k, Scratch& sc) {
   const uint32_t slot = uint32_t(sc.offered.size());
   sc.offered.push_back(a);
   // Kept sorted by decreasing t (the next at the back): a few dozen at a time, where moving
-  // a few hundred bytes costs less than a heap's sifting.
+  // a few hundred bytes costs less than a heap's sifting. An entry is mostly among the next
+  // few events (searched from the back), an exit anywhere (bisected).
   auto& events = sc.events;
-  auto insert = [&](const Event& ev) {
-    events.insert(std::upper_bound(events.begin(), events.end(), ev,
-                                   [](const Event& x, const Event& y) { return x.t > y.t; }),
-                  ev);
-  };
-  insert({std::max(t_in, tlo), slot, false});
-  insert({std::min(t_out, thi), slot, true});
+  const Event in{std::max(t_in, tlo), slot, false};
+  size_t i = events.size();
+  while (i > 0 && events[i - 1].t < in.t) --i;
+  events.insert(events.begin() + ptrdiff_t(i), in);
+  const Event out{std::min(t_out, thi), slot, true};
+  events.insert(std::upper_bound(events.begin(), events.end(), out,
+                                 [](const Event& x, const Event& y) { return x.t > y.t; }),
+                out);
 }
 
 namespace {

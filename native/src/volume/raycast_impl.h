@@ -184,6 +184,18 @@ struct RayCaster::Impl {
     void interval_blinn(double ta, double tb, const std::vector<Active>& active);
     // The sphere (or ellipsoid) of particle k: its entry and exit events, if the ray meets it.
     void offer(uint32_t k, Scratch& sc);
+    // The same for a sphere given by its centre, R^2, 1 / R^2 and strength (as offer()
+    // reads them from the caster).
+    void offer_sphere(uint32_t k, const Vec3& p, double r2, double ir2, double w, Scratch& sc) {
+      const Vec3 q = o - p;
+      const double b = dot(q, dn);
+      const Vec3 e = q - dn * b;  // from the centre to the closest point of the line
+      const double e2 = squared_norm(e);
+      const double h2 = r2 - e2;
+      if (h2 > 0) enter(Active{k, -b, e2, ir2, w}, h2, sc);
+    }
+    // A support the line meets (half chord h2 > 0): its events, if within [tlo, thi].
+    void enter(const Active& a, double h2, Scratch& sc);
     // The front-to-back sweep (below), fed by a source of particles: source.horizon() is a
     // lower bound of the entry of every particle it has not offered yet (+inf when none are
     // left), source.advance(query, scratch) offers some more through offer().
