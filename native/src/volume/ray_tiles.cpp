@@ -25,12 +25,10 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // entry and direction (~1e-15), far below anything that costs work.
 constexpr double kSlack = 1e-9;
 
+// 16 bytes: a tile whose rays go through every particle (a huge radius) holds them all.
 struct Candidate {
   double key;  // lower bound of the entry t of every ray of the tile (unit directions)
   uint32_t k;
-  // A sphere's data, copied from the caster so that each ray reads one cache line.
-  Vec3 p;
-  double r2, ir2, w;
 };
 
 class TileCandidates {
@@ -70,7 +68,7 @@ class TileCandidates {
         const double d = norm(q);
         if (!ball_in(q, r, d)) continue;
         // On a unit ray from the eye, t >= 0 at a point of the ball: t >= |q| - r.
-        pending_.push_back({std::max(d - r - kSlack * (d + r), ne.t), k, im_.pos[k], im_.r2[k], im_.inv_r2[k], im_.w[k]});
+        pending_.push_back({std::max(d - r - kSlack * (d + r), ne.t), k});
         std::push_heap(pending_.begin(), pending_.end(), cand_cmp);
       }
     }
@@ -148,9 +146,7 @@ struct TileSource {
     return next < tile.list.size() ? tile.list[next].key : kInf;
   }
   void advance(RayCaster::Impl::Query& q, Scratch& sc) {
-    const Candidate& c = tile.list[next++];
-    if (q.im.aniso) q.offer(c.k, sc);
-    else q.offer_sphere(c.k, c.p, c.r2, c.ir2, c.w, sc);
+    q.offer(tile.list[next++].k, sc);
   }
 };
 
