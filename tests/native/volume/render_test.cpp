@@ -187,7 +187,7 @@ TEST(Render, PngRoundTripAndErrors) {
 // rays cast one by one through the hierarchy (RayCaster::first_hit): the same hits, bit for
 // bit, on scenes built to catch a particle a tile forgets: random clouds, the eye inside the
 // supports, a thin line and a sheet seen nearly edge-on (rays grazing supports), two clumps
-// far apart, anisotropic kernels, every kernel. 45 x 31 pixels: tiles cut by the image's edge.
+// far apart, a lattice whose events tie, anisotropic kernels, every kernel. 45 x 31 pixels: tiles cut by the image's edge.
 namespace {
 
 struct TileScene {
@@ -243,6 +243,15 @@ std::vector<TileScene> tile_scenes() {
     for (int j = 0; j < 30; ++j) sheet.positions.push_back({0.02 * i, 0.0005 * u(rng), 0.02 * j});
   p.radius = 0.04;
   s.push_back({"a sheet seen nearly edge-on", sheet, p, camera({0.3, 0.03, -1.5}, {0.3, 0.0, 0.3}, 25)});
+  // A perfect lattice seen along a symmetry axis: the middle pixel's ray (45 x 31: px = py = 0
+  // exactly) enters mirrored spheres at the same t, so events tie.
+  PointCloud lattice;
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j)
+      for (int k = 0; k < 6; ++k) lattice.positions.push_back({0.1 * i, 0.1 * j, 0.1 * k});
+  p = FieldParams{};
+  p.radius = 0.2;
+  s.push_back({"a lattice seen along an axis", lattice, p, camera({0.25, 0.25, -1.0}, {0.25, 0.25, 0.25}, 40)});
   p = FieldParams{};
   p.radius = 0.8;
   p.threshold = 0.5;
