@@ -10,6 +10,7 @@
 #include "volume/anisotropy_impl.h"
 #include "volume/ray_cancel.h"
 #include "volume/ray_roots.h"
+#include "volume/raycast_impl.h"
 
 namespace PM_NAMESPACE {
 
@@ -27,45 +28,14 @@ std::string num(double v) {
   return buf;
 }
 
-struct Node {
-  double lo[3], hi[3];
-  uint32_t first = 0;  // leaf: first particle; inner: first child (the second is first + 1)
-  uint32_t count = 0;  // leaf: particles (> 0); inner: 0
-};
 
-// A particle whose support the ray is in, with the ray's closest approach to its centre:
-// s(t) = (e2 + (t - tstar)^2) ir2 (unit direction), so an interval's polynomial needs no
-// vector arithmetic. A sphere: ir2 = 1 / R^2 and e2 the squared distance of the centre from
-// the line. An ellipsoid (s = d^T M d): ir2 = dn^T M dn, the same form with tstar where s is
-// smallest along the line and e2 = that smallest s / ir2.
-struct Active {
-  uint32_t k;
-  double tstar, e2, ir2;
-};
+using detail::Active;
+using detail::Event;
+using detail::Node;
+using detail::NodeEntry;
+using detail::Scratch;
 
-struct Event {
-  double t;
-  Active a;
-  bool exit;
-};
-
-struct NodeEntry {
-  double t;
-  uint32_t node;
-};
-
-// Per-thread scratch, so queries allocate nothing once warm.
-struct Scratch {
-  std::vector<NodeEntry> nodes;  // min-heap of nodes to visit, by entry t
-  std::vector<Event> events;
-  std::vector<Active> active;
-  std::vector<RayHit> hits;
-};
-
-Scratch& scratch() {
-  thread_local Scratch s;
-  return s;
-}
+Scratch& scratch() { return detail::ray_scratch(); }
 
 void check_ray(const Vec3& o, const Vec3& d, size_t i, bool indexed) {
   auto name = [&](const char* base) {
@@ -90,116 +60,6 @@ void check_range(double t_min, double t_max) {
 
 }  // namespace
 
-struct RayCaster::Impl {
-  ParticleField field;
-  Kernel kernel = Kernel::Wyvill;
-  bool blinn = false;
-  int kdeg = 0;                  // degree of the kernel in s
-  double d[kKernelMaxDegree + 1]{};  // the kernel in tau = 1 - s: g = sum d_i tau^i
-  double threshold = 0;
-  double eps_f = 0;              // tangent tolerance in units of F
-  double r_min = 0;
-  bool aniso = false;            // ellipsoidal kernels (metric per particle)
-  std::vector<Vec3> pos;         // kernel centres in hierarchy order
-  std::vector<double> r2, inv_r2, w;
-  std::vector<double> metric;    // anisotropic: 6 per particle, hierarchy order
-  std::vector<Node> nodes;
-
-  void build();
-
-  // ---- one query ------------------------------------------------------------------------
-  struct Query {
-    explicit Query(const Impl& impl) : im(impl) {}
-    const Impl& im;
-    Vec3 o, dn;          // origin, unit direction
-    double len = 1;      // |direction| as given: t_user = t / len
-    double tlo = 0, thi = 0;
-    double inv[3]{};
-    bool zero[3]{};
-    bool first_only = false;
-    RayStats stats;
-    // sweep state
-    bool started = false;
-    bool inside = false;
-    bool starts_inside = false;
-    bool has_pending = false;
-    RayHit pending;
-    double height = 0;   // max |F - T| sampled since the pending crossing
-    bool done = false;
-    std::vector<RayHit>* out = nullptr;
-
-    bool box(const Node& n, double* t_enter) const {
-      double t0 = tlo, t1 = thi;
-      for (int a = 0; a < 3; ++a) {
-        const double oa = o[a];
-        if (zero[a]) {
-          if (oa < n.lo[a] || oa > n.hi[a]) return false;
-          continue;
-        }
-        double ta = (n.lo[a] - oa) * inv[a], tb = (n.hi[a] - oa) * inv[a];
-        if (ta > tb) std::swap(ta, tb);
-        t0 = std::max(t0, ta);
-        t1 = std::min(t1, tb);
-        if (t0 > t1) return false;
-      }
-      *t_enter = t0;
-      return true;
-    }
-
-    void finalize() {
-      if (!has_pending) return;
-      has_pending = false;
-      out->push_back(pending);
-      if (first_only) done = true;
-    }
-
-    void observe(double h) {
-      height = std::max(height, h);
-      if (has_pending && height > im.eps_f) finalize();
-    }
-
-    // A change of state at internal t, with `gap` the largest |F - T| sampled since the
-    // previous sample (tangent rule: a pair with nothing above eps_f between them is a touch).
-    void emit(double t, double gap, const std::vector<Active>& active) {
-      const double h = std::max(height, gap);
-      const bool entering = !inside;
-      inside = !inside;
-      if (has_pending && h <= im.eps_f) {
-        has_pending = false;  // the pair is a touch: drop both
-        height = 0;
-        return;
-      }
-      finalize();
-      if (done) return;
-      RayHit hit;
-      hit.t = t / len;
-      hit.position = o + dn * t;
-      Vec3 g{};
-      for (const Active& a : active) {
-        const uint32_t k = a.k;
-        const Vec3 q = hit.position - im.pos[k];
-        if (im.aniso) {
-          const double* m = &im.metric[6 * size_t(k)];
-          const double dg = kernel_derivative(im.kernel, detail::metric_norm2(m, q));
-          g += detail::metric_apply(m, q) * (2.0 * im.w[k] * dg);
-          continue;
-        }
-        const double s = squared_norm(q) * im.inv_r2[k];
-        const double dg = kernel_derivative(im.kernel, s);
-        g += q * (2.0 * im.w[k] * im.inv_r2[k] * dg);
-      }
-      hit.normal = normalized(-g);
-      hit.entering = entering;
-      pending = hit;
-      has_pending = true;
-      height = 0;
-    }
-
-    void interval(double ta, double tb, const std::vector<Active>& active);
-    void interval_blinn(double ta, double tb, const std::vector<Active>& active);
-    void run(Scratch& sc);
-  };
-};
 
 void RayCaster::Impl::build() {
   kernel = field.kernel();
@@ -308,6 +168,7 @@ void RayCaster::Impl::build() {
   r2.resize(idx.size());
   inv_r2.resize(idx.size());
   w.resize(idx.size());
+  bound_r.resize(idx.size());
   if (aniso) metric.resize(6 * idx.size());
   for (size_t k = 0; k < idx.size(); ++k) {
     const size_t i = idx[k];
@@ -316,6 +177,8 @@ void RayCaster::Impl::build() {
     r2[k] = r * r;
     inv_r2[k] = 1.0 / (r * r);
     w[k] = field.strength(i);
+    // The support's box holds it: its half diagonal bounds the ellipsoid.
+    bound_r[k] = aniso ? norm(ext[i]) : r;
     if (aniso) {
       const std::array<double, 6> m = field.metric(i);
       std::copy(m.begin(), m.end(), metric.begin() + 6 * ptrdiff_t(k));
@@ -333,7 +196,7 @@ void interval_polynomial(const RayCaster::Impl& im, double ta, double L, const s
   for (int j = 0; j <= 2 * Deg; ++j) c[j] = 0;
   const double d1 = im.d[1], d2 = im.d[2], d3 = Deg >= 3 ? im.d[3] : 0.0;
   for (const Active& a : active) {
-    const double ir2 = a.ir2, wk = im.w[a.k];
+    const double ir2 = a.ir2, wk = a.w;
     const double delta = ta - a.tstar;  // from the closest approach to the interval's start
     const double A = 1.0 - (a.e2 + delta * delta) * ir2;
     const double B = -2.0 * L * delta * ir2;
@@ -359,6 +222,23 @@ void interval_polynomial(const RayCaster::Impl& im, double ta, double L, const s
   c[0] -= im.threshold;
 }
 
+// sum over the positive strengths of w g(s_min), s_min the particle's smallest s on [ta, tb],
+// in the order of `active`; the sum so far once it reaches `stop` (no term is negative, so
+// the whole sum reaches it too).
+template <Kernel K>
+double field_upper_bound(double ta, double tb, const std::vector<Active>& active, double stop) {
+  double ub = 0;
+  for (const Active& a : active) {
+    const double wk = a.w;
+    if (wk <= 0) continue;
+    const double d0 = ta - a.tstar, d1 = tb - a.tstar;
+    const double dmin = (d0 <= 0 && d1 >= 0) ? 0.0 : std::min(std::abs(d0), std::abs(d1));
+    ub += wk * kernel_value(K, (a.e2 + dmin * dmin) * a.ir2);
+    if (ub >= stop) break;
+  }
+  return ub;
+}
+
 }  // namespace
 
 void RayCaster::Impl::Query::interval(double ta, double tb, const std::vector<Active>& active) {
@@ -371,15 +251,25 @@ void RayCaster::Impl::Query::interval(double ta, double tb, const std::vector<Ac
   }
   ++stats.intervals;
   if (!started || !inside) {
+    // Cheaper still, where no crossing waits for the tangent rule (so that the size of the
+    // margin observed does not matter): the sum of the active particles' peaks bounds the
+    // sum below term by term (both rounded upwards alike, in the same order), with room for
+    // the rounding of its running total. Below T: excluded, as the sum below would have been.
+    if (!has_pending && peak_sum + 1e-9 * peak_added < im.threshold) {
+      if (!started && ta <= tlo) starts_inside = false;
+      started = true;
+      inside = false;
+      observe(im.threshold - peak_sum);
+      return;
+    }
     // Cheap certified exclusion: F is at most sum over positive strengths of w g(s_min), s_min
     // the particle's smallest s on the interval (g decreases). Below T: outside throughout.
     double ub = 0;
-    for (const Active& a : active) {
-      const double wk = im.w[a.k];
-      if (wk <= 0) continue;
-      const double d0 = ta - a.tstar, d1 = tb - a.tstar;
-      const double dmin = (d0 <= 0 && d1 >= 0) ? 0.0 : std::min(std::abs(d0), std::abs(d1));
-      ub += wk * kernel_value(im.kernel, (a.e2 + dmin * dmin) * a.ir2);
+    switch (im.kernel) {
+      case Kernel::Wyvill: ub = field_upper_bound<Kernel::Wyvill>(ta, tb, active, im.threshold); break;
+      case Kernel::Poly4: ub = field_upper_bound<Kernel::Poly4>(ta, tb, active, im.threshold); break;
+      case Kernel::Poly6: ub = field_upper_bound<Kernel::Poly6>(ta, tb, active, im.threshold); break;
+      case Kernel::Blinn: ub = field_upper_bound<Kernel::Blinn>(ta, tb, active, im.threshold); break;
     }
     if (ub < im.threshold) {
       if (!started && ta <= tlo) starts_inside = false;
@@ -437,7 +327,7 @@ void RayCaster::Impl::Query::interval_blinn(double ta, double tb, const std::vec
   double lip = 0;
   // Along the ray |d/dt g(s)| = |g'(s)| 2 ir2 |t - tstar| <= |g'(s)| 2 sqrt(s ir2): the bound
   // of a sphere of radius 1 / sqrt(ir2).
-  for (const Active& a : active) lip += std::abs(im.w[a.k]) * kBlinnSlope * std::sqrt(a.ir2);
+  for (const Active& a : active) lip += std::abs(a.w) * kBlinnSlope * std::sqrt(a.ir2);
   auto f = [&](double t, double* df) {
     const Vec3 x = o + dn * t;
     double v = 0, dv = 0;
@@ -509,118 +399,93 @@ void RayCaster::Impl::Query::interval_blinn(double ta, double tb, const std::vec
   inside = ft >= 0;
 }
 
-void RayCaster::Impl::Query::run(Scratch& sc) {
-  auto& nheap = sc.nodes;
-  auto& eheap = sc.events;
-  auto& active = sc.active;
-  nheap.clear();
-  eheap.clear();
-  active.clear();
-  auto node_cmp = [](const NodeEntry& a, const NodeEntry& b) { return a.t > b.t; };
-  auto push_node = [&](double t, uint32_t node) {
-    nheap.push_back({t, node});
-    std::push_heap(nheap.begin(), nheap.end(), node_cmp);
-  };
-  auto event_cmp = [](const Event& a, const Event& b) { return a.t > b.t; };
-  if (im.nodes.empty()) return;
-  double t_root;
-  if (!box(im.nodes[0], &t_root)) return;
-  push_node(t_root, 0);
-  double cur = tlo;
-  uint32_t since_check = 0;  // intervals and nodes since the last cancellation check
-  while (!done) {
-    if (++since_check >= 32) {
-      since_check = 0;
-      if (detail::ray_cancelled()) return;  // abandoned: the batch throws Cancelled
-    }
-    // No unvisited sphere begins before the smallest entry of the nodes still to visit: the
-    // intervals up to there are final.
-    const double horizon = nheap.empty() ? kInf : nheap.front().t;
-    while (!eheap.empty() && eheap.front().t <= horizon && !done) {
-      const double te = eheap.front().t;
-      if (te > cur) {
-        interval(cur, te, active);
-        cur = te;
-        if (done) break;
-        if (++since_check >= 32) {
-          since_check = 0;
-          if (detail::ray_cancelled()) return;
-        }
-      }
-      while (!eheap.empty() && eheap.front().t == te) {
-        const Event e = eheap.front();
-        std::pop_heap(eheap.begin(), eheap.end(), event_cmp);
-        eheap.pop_back();
-        if (e.exit) {
-          for (size_t i = 0; i < active.size(); ++i)
-            if (active[i].k == e.a.k) {
-              active[i] = active.back();
-              active.pop_back();
-              break;
-            }
-        } else {
-          active.push_back(e.a);
-        }
-      }
-    }
-    if (done || nheap.empty()) break;
-    // The node the ray enters first. (A depth-first stack is cheaper per step but walks
-    // whole subtrees along the ray: three times the nodes before a first hit, measured.)
-    const NodeEntry ne = nheap.front();
-    std::pop_heap(nheap.begin(), nheap.end(), node_cmp);
-    nheap.pop_back();
-    ++stats.nodes_visited;
-    const Node& nd = im.nodes[ne.node];
+void RayCaster::Impl::Query::offer(uint32_t k, Scratch& sc) {
+  if (!im.aniso) {
+    offer_sphere(k, im.pos[k], im.r2[k], im.inv_r2[k], im.w[k], sc);
+    return;
+  }
+  // s(t) = (q + t dn)^T M (q + t dn) = ir2 (t - tstar)^2 + smin.
+  const Vec3 q = o - im.pos[k];
+  const double* m = &im.metric[6 * size_t(k)];
+  const Vec3 Md = detail::metric_apply(m, dn);
+  const double ir2 = dot(dn, Md);
+  const double tstar = -dot(q, Md) / ir2;
+  // The smallest s from the closest point itself (no cancellation for a far origin).
+  const double smin = detail::metric_norm2(m, q + dn * tstar);
+  const double h2 = (1.0 - smin) / ir2;
+  if (h2 > 0) enter(Active{k, tstar, smin / ir2, ir2, im.w[k]}, h2, sc);
+}
+
+void RayCaster::Impl::Query::enter(const Active& a, double h2, Scratch& sc) {
+  const double hh = std::sqrt(h2);
+  const double t_in = a.tstar - hh, t_out = a.tstar + hh;
+  if (t_out <= tlo || t_in >= thi) return;
+  ++stats.spheres_entered;
+  const uint32_t slot = uint32_t(sc.offered.size());
+  sc.offered.push_back(a);
+  // Kept sorted by decreasing t (the next at the back): a few dozen at a time, where moving
+  // a few hundred bytes costs less than a heap's sifting. An entry is mostly among the next
+  // few events (searched from the back), an exit anywhere (bisected).
+  auto& events = sc.events;
+  const Event in{std::max(t_in, tlo), slot, false};
+  size_t i = events.size();
+  while (i > 0 && events[i - 1].t < in.t) --i;
+  events.insert(events.begin() + ptrdiff_t(i), in);
+  const Event out{std::min(t_out, thi), slot, true};
+  events.insert(std::upper_bound(events.begin(), events.end(), out,
+                                 [](const Event& x, const Event& y) { return x.t > y.t; }),
+                out);
+}
+
+namespace {
+
+// The hierarchy walked front to back for one ray, with a priority queue of nodes ordered by
+// where the ray enters their boxes: its smallest entry is the horizon. (A depth-first stack
+// is cheaper per step but walks whole subtrees along the ray: three times the nodes before a
+// first hit, measured.)
+struct HierarchySource {
+  std::vector<NodeEntry>& heap;
+  static bool cmp(const NodeEntry& a, const NodeEntry& b) { return a.t > b.t; }
+  void push(double t, uint32_t node) {
+    heap.push_back({t, node});
+    std::push_heap(heap.begin(), heap.end(), cmp);
+  }
+  double horizon() const { return heap.empty() ? kInf : heap.front().t; }
+  void advance(RayCaster::Impl::Query& query, Scratch& sc) {
+    const NodeEntry ne = heap.front();
+    std::pop_heap(heap.begin(), heap.end(), cmp);
+    heap.pop_back();
+    ++query.stats.nodes_visited;
+    const Node& nd = query.im.nodes[ne.node];
     if (nd.count == 0) {
       for (uint32_t c = nd.first; c < nd.first + 2; ++c) {
         double tc;
-        if (box(im.nodes[c], &tc)) push_node(tc, c);
+        if (query.box(query.im.nodes[c], &tc)) push(tc, c);
       }
-      continue;
+      return;
     }
-    for (uint32_t k = nd.first; k < nd.first + nd.count; ++k) {
-      const Vec3 q = o - im.pos[k];
-      Active a;
-      double h2;
-      if (im.aniso) {
-        // s(t) = (q + t dn)^T M (q + t dn) = ir2 (t - tstar)^2 + smin.
-        const double* m = &im.metric[6 * size_t(k)];
-        const Vec3 Md = detail::metric_apply(m, dn);
-        const double ir2 = dot(dn, Md);
-        const double tstar = -dot(q, Md) / ir2;
-        // The smallest s from the closest point itself (no cancellation for a far origin).
-        const double smin = detail::metric_norm2(m, q + dn * tstar);
-        a = Active{k, tstar, smin / ir2, ir2};
-        h2 = (1.0 - smin) / ir2;
-      } else {
-        const double b = dot(q, dn);
-        const Vec3 e = q - dn * b;  // from the centre to the closest point of the line
-        const double e2 = squared_norm(e);
-        a = Active{k, -b, e2, im.inv_r2[k]};
-        h2 = im.r2[k] - e2;
-      }
-      if (!(h2 > 0)) continue;
-      const double hh = std::sqrt(h2);
-      const double t_in = a.tstar - hh, t_out = a.tstar + hh;
-      if (t_out <= tlo || t_in >= thi) continue;
-      ++stats.spheres_entered;
-      eheap.push_back({std::max(t_in, tlo), a, false});
-      std::push_heap(eheap.begin(), eheap.end(), event_cmp);
-      eheap.push_back({std::min(t_out, thi), a, true});
-      std::push_heap(eheap.begin(), eheap.end(), event_cmp);
-    }
+    for (uint32_t k = nd.first; k < nd.first + nd.count; ++k) query.offer(k, sc);
   }
-  if (!done) {
-    // Past the last support (F = 0 < T), unless the range ended inside one first.
-    if (cur < thi) {
-      if (started && inside) emit(cur, 0.0, active);
-      observe(im.threshold);
-    }
-    finalize();
-  }
+};
+
+}  // namespace
+
+void RayCaster::Impl::Query::run(Scratch& sc) {
+  HierarchySource source{sc.nodes};
+  source.heap.clear();
+  if (im.nodes.empty()) return;
+  double t_root;
+  if (!box(im.nodes[0], &t_root)) return;
+  source.push(t_root, 0);
+  sweep(sc, source);
 }
 
 namespace detail {
+Scratch& ray_scratch() {
+  thread_local Scratch s;
+  return s;
+}
+
 ProgressTracker*& ray_tracker() {
   thread_local ProgressTracker* tracker = nullptr;
   return tracker;
@@ -643,23 +508,6 @@ size_t RayCaster::node_count() const { return impl_->nodes.size(); }
 
 namespace {
 
-RayCaster::Impl::Query make_query(const RayCaster::Impl& im, const Vec3& origin, const Vec3& direction,
-                                  double t_min, double t_max, bool first_only, std::vector<RayHit>* out) {
-  RayCaster::Impl::Query q(im);
-  q.o = origin;
-  q.len = norm(direction);
-  q.dn = direction / q.len;
-  q.tlo = t_min * q.len;
-  q.thi = t_max * q.len;
-  for (int a = 0; a < 3; ++a) {
-    q.zero[a] = q.dn[a] == 0;
-    q.inv[a] = q.zero[a] ? 0.0 : 1.0 / q.dn[a];
-  }
-  q.first_only = first_only;
-  q.out = out;
-  return q;
-}
-
 void add_stats(RayStats* to, const RayStats& s) {
   if (!to) return;
   to->nodes_visited += s.nodes_visited;
@@ -676,7 +524,7 @@ RayHits RayCaster::all_hits(const Vec3& origin, const Vec3& direction, double t_
   check_range(t_min, t_max);
   RayHits r;
   if (!impl_) return r;
-  auto q = make_query(*impl_, origin, direction, t_min, t_max, false, &r.hits);
+  auto q = detail::make_query(*impl_, origin, direction, t_min, t_max, false, &r.hits);
   q.run(scratch());
   r.starts_inside = q.starts_inside;
   add_stats(stats, q.stats);
@@ -691,7 +539,7 @@ std::optional<RayHit> RayCaster::first_hit(const Vec3& origin, const Vec3& direc
   Scratch& sc = scratch();
   auto& hits = sc.hits;
   hits.clear();
-  auto q = make_query(*impl_, origin, direction, t_min, t_max, true, &hits);
+  auto q = detail::make_query(*impl_, origin, direction, t_min, t_max, true, &hits);
   q.run(sc);
   add_stats(stats, q.stats);
   if (hits.empty()) return std::nullopt;

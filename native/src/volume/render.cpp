@@ -10,7 +10,7 @@
 #include "core/parallel.h"
 #include "core/progress_tracker.h"
 #include "core/format_number.h"
-#include "volume/ray_cancel.h"
+#include "volume/camera_rays.h"
 #include "particlemesh/core/error.h"
 
 namespace PM_NAMESPACE {
@@ -19,11 +19,16 @@ namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-struct Frame {
-  Vec3 forward, right, up;  // orthonormal; right = forward x up
-};
+uint8_t to_byte(double v) { return uint8_t(std::lround(std::clamp(v, 0.0, 1.0) * 255.0)); }
 
-Frame camera_frame(const Camera& c) {
+}  // namespace
+
+namespace detail {
+
+CameraRays::CameraRays(const Camera& c, int W, int H) : eye(c.eye), width(W), height(H) {
+  if (W < 1 || H < 1 || W > 16384 || H > 16384)
+    throw Error(Status::InvalidArgument, "image size " + std::to_string(W) + " x " + std::to_string(H) +
+                                             " is out of range (1..16384 each way)");
   for (int a = 0; a < 3; ++a)
     if (!std::isfinite(c.eye[a]) || !std::isfinite(c.target[a]) || !std::isfinite(c.up[a]))
       throw Error(Status::InvalidArgument, "camera eye, target and up must be finite");
@@ -31,19 +36,17 @@ Frame camera_frame(const Camera& c) {
     throw Error(Status::InvalidArgument, "camera fov is " + detail::format_number(c.fov_degrees) + " degrees (must be in (0, 180))");
   const Vec3 f = c.target - c.eye;
   if (!(norm(f) > 0)) throw Error(Status::InvalidArgument, "camera eye and target coincide");
-  Frame fr;
-  fr.forward = normalized(f);
-  const Vec3 r = cross(fr.forward, c.up);
+  forward = normalized(f);
+  const Vec3 r = cross(forward, c.up);
   if (!(norm(r) > 1e-9 * norm(c.up)) || !(norm(c.up) > 0))
     throw Error(Status::InvalidArgument, "camera up is zero or parallel to the view direction");
-  fr.right = normalized(r);
-  fr.up = cross(fr.right, fr.forward);
-  return fr;
+  right = normalized(r);
+  up = cross(right, forward);
+  tv = std::tan(0.5 * c.fov_degrees * kDeg);
+  th = tv * double(W) / double(H);
 }
 
-uint8_t to_byte(double v) { return uint8_t(std::lround(std::clamp(v, 0.0, 1.0) * 255.0)); }
-
-}  // namespace
+}  // namespace detail
 
 const char* shading_name(Shading shading) {
   switch (shading) {
@@ -105,60 +108,80 @@ RenderResult render(const RayCaster& caster, const RenderOptions& options) {
   detail::ProgressTracker tracker(options.progress);
   RenderResult r;
   r.camera = options.camera ? *options.camera : default_camera(caster.field(), double(W) / double(H));
-  const Frame fr = camera_frame(r.camera);
-  const double tv = std::tan(0.5 * r.camera.fov_degrees * kDeg);
-  const double th = tv * double(W) / double(H);
+  const detail::CameraRays rays(r.camera, W, H);
   // Key light from the camera's upper left (and a little behind it), plus ambient.
-  const Vec3 light = normalized(-fr.forward * 1.0 + fr.up * 0.7 - fr.right * 0.5);
+  const Vec3 light = normalized(-rays.forward * 1.0 + rays.up * 0.7 - rays.right * 0.5);
   const Vec3 albedo{0.85, 0.70, 0.52};
   const Vec3 background{0.93, 0.94, 0.96};
   r.image.width = W;
   r.image.height = H;
   r.image.rgb.assign(size_t(W) * size_t(H) * 3, 0);
-  std::vector<uint32_t> row_hits(size_t(H), 0);
+  std::vector<uint8_t> hit_at(size_t(W) * size_t(H), 0);
+  // Linear to display (gamma 2.2).
+  auto display = [](const Vec3& c, uint8_t* out) {
+    out[0] = to_byte(std::pow(c.x, 1.0 / 2.2));
+    out[1] = to_byte(std::pow(c.y, 1.0 / 2.2));
+    out[2] = to_byte(std::pow(c.z, 1.0 / 2.2));
+  };
+  uint8_t background_bytes[3];
+  display(background, background_bytes);
   tracker.stage("rendering", 0.0, 1.0, uint64_t(H));
-  detail::with_threads(options.threads, [&] {
-    detail::parallel_blocks(size_t(H), 1, [&](size_t y0, size_t y1) {
-      const detail::RayCancelScope scope(&tracker);  // a long ray checks it too
-      for (size_t y = y0; y < y1; ++y) {
-        if (tracker.cancelled()) return;
-        const double py = 1.0 - 2.0 * (double(y) + 0.5) / double(H);
-        for (int x = 0; x < W; ++x) {
-          // Every pixel: with a huge radius a row of rays takes seconds.
-          if (tracker.cancelled()) return;
-          tracker.tick(0);
-          const double px = 2.0 * (double(x) + 0.5) / double(W) - 1.0;
-          const Vec3 dir = fr.forward + fr.right * (px * th) + fr.up * (py * tv);
-          const auto hit = caster.first_hit(r.camera.eye, dir);
-          uint8_t* out = r.image.pixel(x, int(y));
-          Vec3 color = background;
-          if (hit) {
-            ++row_hits[y];
-            Vec3 n = hit->normal;
-            if (dot(n, dir) > 0) n = -n;  // seen from inside: shade the side facing the camera
-            if (options.shading == Shading::Normal) {
-              const Vec3 c = (hit->normal + Vec3{1, 1, 1}) * 0.5;
-              out[0] = to_byte(c.x);
-              out[1] = to_byte(c.y);
-              out[2] = to_byte(c.z);
-              continue;
-            }
-            const double shade = 0.18 + 0.82 * std::max(0.0, dot(n, light));
-            color = albedo * shade;
-          }
-          // Linear to display (gamma 2.2).
-          out[0] = to_byte(std::pow(color.x, 1.0 / 2.2));
-          out[1] = to_byte(std::pow(color.y, 1.0 / 2.2));
-          out[2] = to_byte(std::pow(color.z, 1.0 / 2.2));
-        }
-        tracker.tick();
-      }
-    });
+  detail::trace_camera(caster, rays, options.threads, tracker, [&](int x, int y, const RayHit* hit) {
+    uint8_t* out = r.image.pixel(x, y);
+    if (!hit) {
+      std::copy(background_bytes, background_bytes + 3, out);
+      return;
+    }
+    hit_at[size_t(y) * size_t(W) + size_t(x)] = 1;
+    Vec3 n = hit->normal;
+    if (dot(n, rays.direction(x, y)) > 0) n = -n;  // seen from inside: shade the side facing the camera
+    if (options.shading == Shading::Normal) {
+      const Vec3 c = (hit->normal + Vec3{1, 1, 1}) * 0.5;
+      out[0] = to_byte(c.x);
+      out[1] = to_byte(c.y);
+      out[2] = to_byte(c.z);
+      return;
+    }
+    display(albedo * (0.18 + 0.82 * std::max(0.0, dot(n, light))), out);
   });
   tracker.check();
-  for (uint32_t h : row_hits) r.hits += h;
+  for (uint8_t h : hit_at) r.hits += h;
   r.rays = uint64_t(W) * uint64_t(H);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  tracker.finish();
+  return r;
+}
+
+Vec3 camera_ray_direction(const Camera& camera, int width, int height, int x, int y) {
+  const detail::CameraRays rays(camera, width, height);
+  if (x < 0 || y < 0 || x >= width || y >= height)
+    throw Error(Status::InvalidArgument, "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+                                             ") is outside the " + std::to_string(width) + " x " +
+                                             std::to_string(height) + " image");
+  return rays.direction(x, y);
+}
+
+FirstHits cast_camera_rays(const RayCaster& caster, const Camera& camera, int width, int height, int threads,
+                           const ProgressCallback& progress) {
+  const detail::CameraRays rays(camera, width, height);
+  detail::ProgressTracker tracker(progress);
+  const size_t n = size_t(width) * size_t(height);
+  FirstHits r;
+  r.t.assign(n, std::numeric_limits<double>::infinity());
+  r.positions.assign(n, Vec3{});
+  r.normals.assign(n, Vec3{});
+  r.entering.assign(n, 0);
+  tracker.stage("ray casting", 0.0, 1.0, uint64_t(height));
+  detail::trace_camera(caster, rays, threads, tracker, [&](int x, int y, const RayHit* hit) {
+    if (!hit) return;
+    const size_t i = size_t(y) * size_t(width) + size_t(x);
+    r.t[i] = hit->t;
+    r.positions[i] = hit->position;
+    r.normals[i] = hit->normal;
+    r.entering[i] = hit->entering ? 1 : 0;
+  });
+  tracker.check();
+  for (size_t i = 0; i < n; ++i) r.hit_count += r.t[i] < std::numeric_limits<double>::infinity();
   tracker.finish();
   return r;
 }

@@ -16,7 +16,8 @@
 //   (splashes, separate bodies; a grid walk pays for every empty cell, the hierarchy skips
 //   the gap in one step), and the queue says at every moment how far along the ray no
 //   unvisited sphere begins: the intervals before that point are final, so the first hit
-//   is found without visiting the spheres behind it.
+//   is found without visiting the spheres behind it. (A camera's rays share one walk per
+//   tile of pixels instead: cast_camera_rays in render.h, the same hits.)
 // - Intervals: each is solved in its own variable u = (t - t0) / (t1 - t0) in [0, 1], with
 //   the particles' offsets taken from the interval's start, so the coefficients stay of the
 //   order of the kernel whatever the distance to the ray's origin (a polynomial in the global
@@ -61,6 +62,10 @@
 #include "particlemesh/volume/field.h"
 
 namespace PM_NAMESPACE {
+
+namespace detail {
+struct RayCasterAccess;
+}
 
 /// See the tangent rule at the top of this file.
 inline constexpr double kTangentTolerance = 1e-12;
@@ -122,6 +127,7 @@ class PM_EXPORT RayCaster {
   struct Impl;
 
  private:
+  friend struct detail::RayCasterAccess;
   std::unique_ptr<Impl> impl_;
 };
 

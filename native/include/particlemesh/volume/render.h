@@ -58,7 +58,22 @@ struct RenderResult {
   double seconds = 0;     ///< ray casting and shading (wall clock)
 };
 
-/// Render the iso-surface of the caster's field. Cost: one first-hit query per pixel.
+/// The direction (not unit length) of the camera's primary ray through the centre of pixel
+/// (x, y) of a width x height image, x to the right and y down: the ray render() casts from
+/// camera.eye for that pixel. @throws Error(InvalidArgument) a degenerate camera, a size out
+/// of 1..16384 or a pixel outside the image.
+PM_EXPORT Vec3 camera_ray_direction(const Camera& camera, int width, int height, int x, int y);
+
+/// First hits of the camera's primary rays, pixel i = y * width + x (t in units of
+/// camera_ray_direction's length): RayCaster::first_hit of each ray, bit for bit, but traced
+/// in tiles of 8 x 8 pixels that share one walk of the hierarchy (render() uses it). threads:
+/// 0 = all cores; the result does not depend on it. @throws as camera_ray_direction;
+/// Error(Cancelled) from the progress callback.
+PM_EXPORT FirstHits cast_camera_rays(const RayCaster& caster, const Camera& camera, int width, int height,
+                                     int threads = 0, const ProgressCallback& progress = {});
+
+/// Render the iso-surface of the caster's field. Cost: one first-hit query per pixel (traced
+/// in tiles, as cast_camera_rays).
 /// @throws Error(InvalidArgument) a size out of 1..16384, a degenerate camera (eye at the
 ///         target, up parallel to the view, fov out of range, non-finite values);
 ///         Error(Cancelled) from the progress callback.
