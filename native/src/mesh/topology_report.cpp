@@ -200,8 +200,42 @@ struct LoHalfEdge {
   }
 };
 
+/// A corner at a vertex: its index 3 f + c, and its triangle's next and previous vertex.
+struct Corner {
+  uint32_t k, to, from;
+};
+
+/// Do the n corners at v form a closed, consistently oriented fan: no corner with v twice
+/// or its other two vertices equal, every corner's next vertex distinct, and following each
+/// corner to the one whose next vertex is its previous vertex a single cycle through all n?
+/// If so, cycle[0..n) lists the corners in that order. Fans of more than 32 corners take
+/// the general test.
+bool closed_fan_cycle(const Corner* c, size_t n, uint32_t v, uint8_t* cycle) {
+  if (n < 3 || n > 32) return false;
+  for (size_t i = 0; i < n; ++i) {
+    if (c[i].to == v || c[i].from == v || c[i].to == c[i].from) return false;
+    for (size_t j = i + 1; j < n; ++j)
+      if (c[i].to == c[j].to) return false;
+  }
+  size_t at = 0;
+  for (size_t step = 0; step < n; ++step) {
+    cycle[step] = uint8_t(at);
+    const uint32_t want = c[at].from;
+    size_t next = n;
+    for (size_t j = 0; j < n; ++j)
+      if (c[j].to == want) {
+        next = j;
+        break;
+      }
+    if (next == n || (next == 0) != (step + 1 == n)) return false;
+    at = next;
+  }
+  return true;
+}
+
 /// Per-thread scratch of the per-vertex passes.
 struct Scratch {
+  uint8_t cycle[32];
   SmallVector<std::pair<uint32_t, uint32_t>, 32> link;
   SmallVector<uint32_t, 64> others;
   SmallVector<uint64_t, 32> pairs;
@@ -256,9 +290,6 @@ TopologyReport topology_report(const TriMesh& mesh) {
   // Corners by vertex (corner 3 f + c, with the corner's next and previous vertex, so that
   // the per-vertex passes read no triangle), each vertex's in increasing order: counted and
   // placed per fixed chunk of triangles.
-  struct Corner {
-    uint32_t k, to, from;
-  };
   std::vector<uint32_t> vf_off;
   std::vector<Corner> vf;
   detail::bucket_corners_by_vertex(T, V, vf_off, vf, [&](size_t f, uint32_t c) {
@@ -292,6 +323,31 @@ TopologyReport topology_report(const TriMesh& mesh) {
       const uint32_t begin = vf_off[v], end = vf_off[v + 1];
       if (begin == end) continue;
       ++n.used;
+      // The common case: a closed, consistently oriented fan. Each neighbour w is the next
+      // vertex of exactly one corner and the previous vertex of exactly one, and the corners
+      // chain (a corner's previous vertex is the next one's next vertex) into one cycle through
+      // all of them: each edge {v, w} is then manifold, without conflict, its two half-edges
+      // those of two consecutive corners, and no triangle at v repeats another. Anything else
+      // (a boundary, a flip, a pinch, a repeated corner or triangle) takes the general pass.
+      if (closed_fan_cycle(&vf[begin], end - begin, v, s.cycle)) {
+        const size_t deg = end - begin;
+        for (size_t q = 0; q < deg; ++q) {
+          const Corner& in = vf[begin + s.cycle[q]];                       // the half-edge into v from w
+          const Corner& out = vf[begin + s.cycle[q + 1 == deg ? 0 : q + 1]];  // out of v to w
+          const uint32_t w = out.to;
+          if (w < v) continue;
+          const uint32_t fi = in.k / 3, fo = out.k / 3;
+          const uint32_t ci = (in.k % 3 + 2) % 3, co = out.k % 3;
+          // Recorded at the edge's first half-edge in (triangle, corner) order.
+          const size_t first = fi < fo ? 3 * size_t(fi) + ci : 3 * size_t(fo) + co;
+          corner_edge[first] = kManifold;
+          faces.unite(fi, fo);
+          ++n.manifold;
+          ++n.edges;
+        }
+        vertex_bad[v] = 0;
+        continue;
+      }
       s.link.clear();
       s.pairs.clear();
       s.half.clear();
@@ -437,10 +493,12 @@ TopologyReport topology_report(const TriMesh& mesh) {
     for (size_t v = vb; v < ve; ++v) {
       const uint32_t begin = vf_off[v], end = vf_off[v + 1];
       if (begin == end) continue;
-      // The distinct components of the vertex's triangles (almost always one).
+      // The distinct components of the vertex's triangles: one where its fan is one disk or
+      // one fan (consecutive triangles share an edge), else almost always one.
       const uint32_t c0 = comp[vf[begin].k / 3];
       bool one = true;
-      for (uint32_t i = begin + 1; i < end && one; ++i) one = comp[vf[i].k / 3] == c0;
+      if (vertex_bad[v])
+        for (uint32_t i = begin + 1; i < end && one; ++i) one = comp[vf[i].k / 3] == c0;
       if (one) {
         verts.add(c0);
         if (vertex_bad[v]) bad.add(c0);
