@@ -243,8 +243,15 @@ struct Scratch {
   SmallVector<uint32_t, 32> comps;
 };
 
-// Edge records: kind in the low bits, conflict above.
+// Per corner, at the corner's vertex v, a record of the edges whose lower endpoint is v and
+// whose first triangle (the lowest) this corner's is: the edge out of v (to the corner's next
+// vertex) in the low three bits, the edge into v (from the previous vertex) in the next three,
+// each its kind and whether it has an orientation conflict; and whether this is the first
+// corner of a vertex whose triangles are all one component (it counts that vertex). Each
+// corner's record is written by its own vertex's pass only.
 constexpr uint8_t kBoundary = 1, kManifold = 2, kNonManifold = 3, kConflict = 4;
+constexpr int kInEdgeShift = 3;
+constexpr uint8_t kCountsVertex = 0x40;
 
 }  // namespace
 
@@ -302,7 +309,7 @@ TopologyReport topology_report(const TriMesh& mesh) {
   // half-edge's corner (one writer per corner) and joining its triangles; and the triangles
   // whose lowest vertex it is that repeat an earlier one (duplicates).
   std::vector<uint8_t> vertex_bad(V, 0);
-  std::vector<uint8_t> corner_edge(3 * F, 0);  // edge kind (and conflict) at its first half-edge
+  std::vector<uint8_t> corner_edge(3 * F, 0);  // see kInEdgeShift
   detail::ConcurrentDisjointSets faces(F);
   struct BoundaryHalf {
     uint32_t lo, hi, face;
@@ -337,15 +344,15 @@ TopologyReport topology_report(const TriMesh& mesh) {
           const uint32_t w = out.to;
           if (w < v) continue;
           const uint32_t fi = in.k / 3, fo = out.k / 3;
-          const uint32_t ci = (in.k % 3 + 2) % 3, co = out.k % 3;
-          // Recorded at the edge's first half-edge in (triangle, corner) order.
-          const size_t first = fi < fo ? 3 * size_t(fi) + ci : 3 * size_t(fo) + co;
-          corner_edge[first] = kManifold;
+          // Recorded at v's corner of the edge's lower triangle.
+          if (fi < fo) corner_edge[in.k] |= kManifold << kInEdgeShift;
+          else corner_edge[out.k] |= kManifold;
           faces.unite(fi, fo);
           ++n.manifold;
           ++n.edges;
         }
         vertex_bad[v] = 0;
+        corner_edge[vf[begin].k] |= kCountsVertex;
         continue;
       }
       s.link.clear();
@@ -370,6 +377,7 @@ TopologyReport topology_report(const TriMesh& mesh) {
       }
       if (!bad) bad = !link_is_one_fan(s.link.data(), s.link.size());
       vertex_bad[v] = bad;
+      if (!bad) corner_edge[vf[begin].k] |= kCountsVertex;
       if (s.pairs.size() > 1) {
         s.pairs.sort();
         for (size_t i = 1; i < s.pairs.size(); ++i) n.duplicates += s.pairs[i] == s.pairs[i - 1];
@@ -394,7 +402,10 @@ TopologyReport topology_report(const TriMesh& mesh) {
           kind = kNonManifold;
           ++n.nonmanifold;
         }
-        corner_edge[3 * size_t(first.face) + first.corner] = kind;
+        // At v's corner of the first triangle: the half-edge's own corner if it leaves v, the
+        // next one if it enters v.
+        if (first.forward) corner_edge[3 * size_t(first.face) + first.corner] |= kind;
+        else corner_edge[3 * size_t(first.face) + (first.corner + 1) % 3] |= uint8_t(kind << kInEdgeShift);
         ++n.edges;
         i = j;
       }
@@ -469,52 +480,48 @@ TopologyReport topology_report(const TriMesh& mesh) {
   // Per component: triangles, edges by kind, orientation conflicts, vertices, bad vertices.
   std::vector<std::atomic<uint64_t>> c_tris(ncomp), c_edges(ncomp), c_boundary(ncomp), c_nonmanifold(ncomp),
       c_conflict(ncomp), c_vertices(ncomp), c_bad_vertex(ncomp);  // value-initialised: 0
+  r.nonmanifold_vertices = size_t(std::count(vertex_bad.begin(), vertex_bad.end(), uint8_t(1)));
+  // Triangles, edges and the vertices whose triangles are one component, from the corners'
+  // records in triangle order.
   detail::parallel_blocks(F, 16384, [&](size_t b, size_t e) {
-    RunAdder add(c_tris);
-    for (size_t f = b; f < e; ++f) add.add(comp[f]);
-  });
-  detail::parallel_blocks(F, 16384, [&](size_t b, size_t e) {
-    RunAdder edges(c_edges), bnd(c_boundary), nonmanifold(c_nonmanifold), conflict(c_conflict);
-    for (size_t f = b; f < e; ++f)
+    RunAdder tris(c_tris), edges(c_edges), bnd(c_boundary), nonmanifold(c_nonmanifold), conflict(c_conflict),
+        verts(c_vertices);
+    for (size_t f = b; f < e; ++f) {
+      const uint32_t cf = comp[f];
+      tris.add(cf);
       for (size_t c = 0; c < 3; ++c) {
         const uint8_t info = corner_edge[3 * f + c];
         if (info == 0) continue;
-        const uint32_t cf = comp[f];
-        edges.add(cf);
-        const uint8_t kind = info & 3;
-        if (kind == kBoundary) bnd.add(cf);
-        if (kind == kNonManifold) nonmanifold.add(cf);
-        if (info & kConflict) conflict.add(cf);
-      }
-  });
-  detail::parallel_blocks(V, 4096, [&](size_t vb, size_t ve) {
-    Scratch& s = scratch.local();
-    RunAdder verts(c_vertices), bad(c_bad_vertex);
-    for (size_t v = vb; v < ve; ++v) {
-      const uint32_t begin = vf_off[v], end = vf_off[v + 1];
-      if (begin == end) continue;
-      // The distinct components of the vertex's triangles: one where its fan is one disk or
-      // one fan (consecutive triangles share an edge), else almost always one.
-      const uint32_t c0 = comp[vf[begin].k / 3];
-      bool one = true;
-      if (vertex_bad[v])
-        for (uint32_t i = begin + 1; i < end && one; ++i) one = comp[vf[i].k / 3] == c0;
-      if (one) {
-        verts.add(c0);
-        if (vertex_bad[v]) bad.add(c0);
-        continue;
-      }
-      s.comps.clear();
-      for (uint32_t i = begin; i < end; ++i) s.comps.push_back(comp[vf[i].k / 3]);
-      s.comps.sort();
-      for (size_t i = 0; i < s.comps.size(); ++i) {
-        if (i > 0 && s.comps[i] == s.comps[i - 1]) continue;
-        verts.add(s.comps[i]);
-        if (vertex_bad[v]) bad.add(s.comps[i]);
+        if (info & kCountsVertex) verts.add(cf);
+        for (const uint8_t edge : {uint8_t(info & 7), uint8_t((info >> kInEdgeShift) & 7)}) {
+          if (edge == 0) continue;
+          edges.add(cf);
+          const uint8_t kind = edge & 3;
+          if (kind == kBoundary) bnd.add(cf);
+          if (kind == kNonManifold) nonmanifold.add(cf);
+          if (edge & kConflict) conflict.add(cf);
+        }
       }
     }
   });
-  r.nonmanifold_vertices = size_t(std::count(vertex_bad.begin(), vertex_bad.end(), uint8_t(1)));
+  // The non-manifold vertices: in each of their triangles' components, a vertex and a bad one.
+  if (r.nonmanifold_vertices > 0) {
+    detail::parallel_blocks(V, 4096, [&](size_t vb, size_t ve) {
+      Scratch& s = scratch.local();
+      RunAdder verts(c_vertices), bad(c_bad_vertex);
+      for (size_t v = vb; v < ve; ++v) {
+        if (!vertex_bad[v]) continue;
+        s.comps.clear();
+        for (uint32_t i = vf_off[v]; i < vf_off[v + 1]; ++i) s.comps.push_back(comp[vf[i].k / 3]);
+        s.comps.sort();
+        for (size_t i = 0; i < s.comps.size(); ++i) {
+          if (i > 0 && s.comps[i] == s.comps[i - 1]) continue;
+          verts.add(s.comps[i]);
+          bad.add(s.comps[i]);
+        }
+      }
+    });
+  }
   std::vector<ComponentReport> C(ncomp);
   for (size_t c = 0; c < ncomp; ++c) {
     C[c].triangles = c_tris[c].load(kRelaxed);
