@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <memory>
 #include <numeric>
 
 #include <tbb/combinable.h>
@@ -273,25 +274,6 @@ TopologyReport topology_report(const TriMesh& mesh) {
       r.degenerate_triangles = F;
       return r;
     }
-  }
-
-  // Degenerate triangles: a repeated vertex or zero area.
-  {
-    tbb::combinable<size_t> count;
-    detail::parallel_blocks(F, 16384, [&](size_t b, size_t e) {
-      size_t n = 0;
-      for (size_t f = b; f < e; ++f) {
-        const Triangle& t = T[f];
-        if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
-          ++n;
-        } else {
-          const Vec3 c = cross(mesh.positions[t[1]] - mesh.positions[t[0]], mesh.positions[t[2]] - mesh.positions[t[0]]);
-          n += squared_norm(c) == 0;
-        }
-      }
-      count.local() += n;
-    });
-    r.degenerate_triangles = count.combine(std::plus<size_t>());
   }
 
   // Corners by vertex (corner 3 f + c, with the corner's next and previous vertex, so that
@@ -630,18 +612,33 @@ TopologyReport topology_report(const TriMesh& mesh) {
       cr.genus = twice >= 0 && twice % 2 == 0 ? int(twice / 2) : -1;
     }
   }
-  // Signed volumes of closed components, about the first vertex of each one's lowest
-  // triangle for accuracy: the terms in parallel, summed in triangle order.
-  if (std::any_of(C.begin(), C.end(), [](const ComponentReport& c) { return c.closed; })) {
-    std::vector<double> term(F);
+  // The one pass that reads the positions: degenerate triangles (a repeated vertex or zero
+  // area), and the signed volumes of closed components, about the first vertex of each one's
+  // lowest triangle for accuracy: the terms in parallel (each written before it is read),
+  // summed in triangle order.
+  const bool any_closed = std::any_of(C.begin(), C.end(), [](const ComponentReport& c) { return c.closed; });
+  std::unique_ptr<double[]> term(any_closed ? new double[F] : nullptr);
+  {
+    tbb::combinable<size_t> count;
     detail::parallel_blocks(F, 16384, [&](size_t b, size_t e) {
+      size_t n = 0;
       for (size_t f = b; f < e; ++f) {
-        const uint32_t c = comp[f];
-        if (!C[c].closed) continue;
-        term[f] = detail::signed_volume6(mesh.positions[T[root_face[c]][0]], mesh.positions[T[f][0]],
-                                         mesh.positions[T[f][1]], mesh.positions[T[f][2]]) / 6.0;
+        const Triangle& t = T[f];
+        if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
+          ++n;
+        } else {
+          const Vec3 c = cross(mesh.positions[t[1]] - mesh.positions[t[0]], mesh.positions[t[2]] - mesh.positions[t[0]]);
+          n += squared_norm(c) == 0;
+        }
+        if (any_closed && C[comp[f]].closed)
+          term[f] = detail::signed_volume6(mesh.positions[T[root_face[comp[f]]][0]], mesh.positions[t[0]],
+                                           mesh.positions[t[1]], mesh.positions[t[2]]) / 6.0;
       }
+      count.local() += n;
     });
+    r.degenerate_triangles = count.combine(std::plus<size_t>());
+  }
+  if (any_closed) {
     std::vector<double> vol(ncomp, 0.0);
     for (size_t f = 0; f < F; ++f)
       if (C[comp[f]].closed) vol[comp[f]] += term[f];
