@@ -1,6 +1,7 @@
 #include "particlemesh/mesh/topology_report.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <memory>
 #include <numeric>
@@ -35,12 +36,12 @@ class RunAdder {
  public:
   explicit RunAdder(std::vector<std::atomic<uint64_t>>& counters) : c_(counters) {}
   ~RunAdder() { flush(); }
-  void add(uint32_t comp) {
+  void add(uint32_t comp, uint32_t n = 1) {
     if (comp != comp_) {
       flush();
       comp_ = comp;
     }
-    ++n_;
+    n_ += n;
   }
 
  private:
@@ -465,25 +466,36 @@ TopologyReport topology_report(const TriMesh& mesh) {
   r.nonmanifold_vertices = size_t(std::count(vertex_bad.begin(), vertex_bad.end(), uint8_t(1)));
   // Triangles, edges and the vertices whose triangles are one component, from the corners'
   // records in triangle order.
+  // What a corner's record counts, by record: edges, boundary, non-manifold, conflicts,
+  // vertices (a byte each).
+  std::array<uint64_t, 128> counts_of{};
+  for (uint32_t info = 0; info < 128; ++info) {
+    uint64_t n = (info & kCountsVertex) ? uint64_t(1) << 32 : 0;
+    for (const uint32_t edge : {info & 7, (info >> kInEdgeShift) & 7}) {
+      if (edge == 0) continue;
+      n += 1;
+      if ((edge & 3) == kBoundary) n += uint64_t(1) << 8;
+      if ((edge & 3) == kNonManifold) n += uint64_t(1) << 16;
+      if (edge & kConflict) n += uint64_t(1) << 24;
+    }
+    counts_of[info] = n;
+  }
   detail::parallel_blocks(F, 16384, [&](size_t b, size_t e) {
     RunAdder tris(c_tris), edges(c_edges), bnd(c_boundary), nonmanifold(c_nonmanifold), conflict(c_conflict),
         verts(c_vertices);
     for (size_t f = b; f < e; ++f) {
       const uint32_t cf = comp[f];
       tris.add(cf);
-      for (size_t c = 0; c < 3; ++c) {
-        const uint8_t info = corner_edge[3 * f + c];
-        if (info == 0) continue;
-        if (info & kCountsVertex) verts.add(cf);
-        for (const uint8_t edge : {uint8_t(info & 7), uint8_t((info >> kInEdgeShift) & 7)}) {
-          if (edge == 0) continue;
-          edges.add(cf);
-          const uint8_t kind = edge & 3;
-          if (kind == kBoundary) bnd.add(cf);
-          if (kind == kNonManifold) nonmanifold.add(cf);
-          if (edge & kConflict) conflict.add(cf);
-        }
+      const uint64_t n = counts_of[corner_edge[3 * f] & 127] + counts_of[corner_edge[3 * f + 1] & 127] +
+                         counts_of[corner_edge[3 * f + 2] & 127];  // each byte at most 6: no carries
+      if (n == 0) continue;
+      edges.add(cf, uint32_t(n & 255));
+      if (n & 0xffffff00) {
+        bnd.add(cf, uint32_t((n >> 8) & 255));
+        nonmanifold.add(cf, uint32_t((n >> 16) & 255));
+        conflict.add(cf, uint32_t((n >> 24) & 255));
       }
+      verts.add(cf, uint32_t(n >> 32));
     }
   });
   // The non-manifold vertices: in each of their triangles' components, a vertex and a bad one.
