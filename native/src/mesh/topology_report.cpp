@@ -14,11 +14,13 @@
 #include "mesh/orientation.h"
 
 // The report is built vertex by vertex, in parallel. The triangles' corners are bucketed by
-// vertex (a counting sort over fixed chunks of triangles, so each vertex's corners come out
+// vertex (a stable counting sort over chunks of triangles, so each vertex's corners come out
 // in increasing order whatever the thread count); each vertex's corners then give its fan and
-// the edges whose lower endpoint it is, grouped by a local sort: together, in vertex order,
-// exactly the edges a global sort of all half-edges would give, without that sort. Every count
-// is a sum of integers. Triangles are joined into components by a concurrent union-find that
+// the edges whose lower endpoint it is: paired along the fan where it is a closed, consistently
+// oriented disk (the common case), else grouped by a local sort; together, in vertex order,
+// exactly the edges a global sort of all half-edges would give, without that sort. Each edge
+// is recorded at a corner of its lower endpoint, and the per-component counts are summed from
+// those records in triangle order. Every count is a sum of integers. Triangles are joined into components by a concurrent union-find that
 // always links the larger root under the smaller, so each component's root is its lowest
 // triangle whatever the order of the unions. Signed volumes are summed in triangle order, as
 // a serial pass would, so the report is the same for any thread count. Boundary loops (and
