@@ -1,5 +1,5 @@
 // Internal: a triangle mesh's corners bucketed by vertex, in parallel and with the same layout
-// for any thread count: a counting sort over a fixed number of chunks of triangles, so each
+// for any thread count: a counting sort over chunks of triangles (one a thread), so each
 // vertex's corners come out in triangle order. The topology report and Loop's limit rings
 // walk each vertex's fan from it without reading the triangles again.
 #pragma once
@@ -10,6 +10,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <vector>
+
+#include <tbb/task_arena.h>
 
 #include "core/parallel.h"
 #include "particlemesh/mesh/tri_mesh.h"
@@ -26,7 +28,9 @@ void bucket_corners_by_vertex(const std::vector<Triangle>& T, size_t V, std::vec
   const size_t F = T.size();
   offset.assign(V + 1, 0);
   out.resize(3 * F);
-  constexpr size_t kChunks = 8;
+  // A counting sort is stable: each vertex's corners come out in triangle order however the
+  // triangles are chunked, so the chunks may follow the threads (one count array of V each).
+  const size_t kChunks = std::clamp<size_t>(size_t(tbb::this_task_arena::max_concurrency()), 1, 8);
   const size_t per = (F + kChunks - 1) / kChunks;
   std::vector<uint32_t> at(kChunks * V, 0);  // per chunk and vertex: its count, then its slot
   parallel_blocks(kChunks, 1, [&](size_t cb, size_t ce) {

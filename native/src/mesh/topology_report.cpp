@@ -1,7 +1,9 @@
 #include "particlemesh/mesh/topology_report.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
+#include <memory>
 #include <numeric>
 
 #include <tbb/combinable.h>
@@ -12,11 +14,13 @@
 #include "mesh/orientation.h"
 
 // The report is built vertex by vertex, in parallel. The triangles' corners are bucketed by
-// vertex (a counting sort over fixed chunks of triangles, so each vertex's corners come out
+// vertex (a stable counting sort over chunks of triangles, so each vertex's corners come out
 // in increasing order whatever the thread count); each vertex's corners then give its fan and
-// the edges whose lower endpoint it is, grouped by a local sort: together, in vertex order,
-// exactly the edges a global sort of all half-edges would give, without that sort. Every count
-// is a sum of integers. Triangles are joined into components by a concurrent union-find that
+// the edges whose lower endpoint it is: paired along the fan where it is a closed, consistently
+// oriented disk (the common case), else grouped by a local sort; together, in vertex order,
+// exactly the edges a global sort of all half-edges would give, without that sort. Each edge
+// is recorded at a corner of its lower endpoint, and the per-component counts are summed from
+// those records in triangle order. Every count is a sum of integers. Triangles are joined into components by a concurrent union-find that
 // always links the larger root under the smaller, so each component's root is its lowest
 // triangle whatever the order of the unions. Signed volumes are summed in triangle order, as
 // a serial pass would, so the report is the same for any thread count. Boundary loops (and
@@ -34,12 +38,12 @@ class RunAdder {
  public:
   explicit RunAdder(std::vector<std::atomic<uint64_t>>& counters) : c_(counters) {}
   ~RunAdder() { flush(); }
-  void add(uint32_t comp) {
+  void add(uint32_t comp, uint32_t n = 1) {
     if (comp != comp_) {
       flush();
       comp_ = comp;
     }
-    ++n_;
+    n_ += n;
   }
 
  private:
@@ -200,8 +204,42 @@ struct LoHalfEdge {
   }
 };
 
+/// A corner at a vertex: its index 3 f + c, and its triangle's next and previous vertex.
+struct Corner {
+  uint32_t k, to, from;
+};
+
+/// Do the n corners at v form a closed, consistently oriented fan: no corner with v twice
+/// or its other two vertices equal, every corner's next vertex distinct, and following each
+/// corner to the one whose next vertex is its previous vertex a single cycle through all n?
+/// If so, cycle[0..n) lists the corners in that order. Fans of more than 32 corners take
+/// the general test.
+bool closed_fan_cycle(const Corner* c, size_t n, uint32_t v, uint8_t* cycle) {
+  if (n < 3 || n > 32) return false;
+  for (size_t i = 0; i < n; ++i) {
+    if (c[i].to == v || c[i].from == v || c[i].to == c[i].from) return false;
+    for (size_t j = i + 1; j < n; ++j)
+      if (c[i].to == c[j].to) return false;
+  }
+  size_t at = 0;
+  for (size_t step = 0; step < n; ++step) {
+    cycle[step] = uint8_t(at);
+    const uint32_t want = c[at].from;
+    size_t next = n;
+    for (size_t j = 0; j < n; ++j)
+      if (c[j].to == want) {
+        next = j;
+        break;
+      }
+    if (next == n || (next == 0) != (step + 1 == n)) return false;
+    at = next;
+  }
+  return true;
+}
+
 /// Per-thread scratch of the per-vertex passes.
 struct Scratch {
+  uint8_t cycle[32];
   SmallVector<std::pair<uint32_t, uint32_t>, 32> link;
   SmallVector<uint32_t, 64> others;
   SmallVector<uint64_t, 32> pairs;
@@ -209,8 +247,15 @@ struct Scratch {
   SmallVector<uint32_t, 32> comps;
 };
 
-// Edge records: kind in the low bits, conflict above.
+// Per corner, at the corner's vertex v, a record of the edges whose lower endpoint is v and
+// whose first triangle (the lowest) this corner's is: the edge out of v (to the corner's next
+// vertex) in the low three bits, the edge into v (from the previous vertex) in the next three,
+// each its kind and whether it has an orientation conflict; and whether this is the first
+// corner of a vertex whose triangles are all one component (it counts that vertex). Each
+// corner's record is written by its own vertex's pass only.
 constexpr uint8_t kBoundary = 1, kManifold = 2, kNonManifold = 3, kConflict = 4;
+constexpr int kInEdgeShift = 3;
+constexpr uint8_t kCountsVertex = 0x40;
 
 }  // namespace
 
@@ -234,31 +279,9 @@ TopologyReport topology_report(const TriMesh& mesh) {
     }
   }
 
-  // Degenerate triangles: a repeated vertex or zero area.
-  {
-    tbb::combinable<size_t> count;
-    detail::parallel_blocks(F, 16384, [&](size_t b, size_t e) {
-      size_t n = 0;
-      for (size_t f = b; f < e; ++f) {
-        const Triangle& t = T[f];
-        if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
-          ++n;
-        } else {
-          const Vec3 c = cross(mesh.positions[t[1]] - mesh.positions[t[0]], mesh.positions[t[2]] - mesh.positions[t[0]]);
-          n += squared_norm(c) == 0;
-        }
-      }
-      count.local() += n;
-    });
-    r.degenerate_triangles = count.combine(std::plus<size_t>());
-  }
-
   // Corners by vertex (corner 3 f + c, with the corner's next and previous vertex, so that
   // the per-vertex passes read no triangle), each vertex's in increasing order: counted and
   // placed per fixed chunk of triangles.
-  struct Corner {
-    uint32_t k, to, from;
-  };
   std::vector<uint32_t> vf_off;
   std::vector<Corner> vf;
   detail::bucket_corners_by_vertex(T, V, vf_off, vf, [&](size_t f, uint32_t c) {
@@ -271,7 +294,7 @@ TopologyReport topology_report(const TriMesh& mesh) {
   // half-edge's corner (one writer per corner) and joining its triangles; and the triangles
   // whose lowest vertex it is that repeat an earlier one (duplicates).
   std::vector<uint8_t> vertex_bad(V, 0);
-  std::vector<uint8_t> corner_edge(3 * F, 0);  // edge kind (and conflict) at its first half-edge
+  std::vector<uint8_t> corner_edge(3 * F, 0);  // see kInEdgeShift
   detail::ConcurrentDisjointSets faces(F);
   struct BoundaryHalf {
     uint32_t lo, hi, face;
@@ -292,6 +315,31 @@ TopologyReport topology_report(const TriMesh& mesh) {
       const uint32_t begin = vf_off[v], end = vf_off[v + 1];
       if (begin == end) continue;
       ++n.used;
+      // The common case: a closed, consistently oriented fan. Each neighbour w is the next
+      // vertex of exactly one corner and the previous vertex of exactly one, and the corners
+      // chain (a corner's previous vertex is the next one's next vertex) into one cycle through
+      // all of them: each edge {v, w} is then manifold, without conflict, its two half-edges
+      // those of two consecutive corners, and no triangle at v repeats another. Anything else
+      // (a boundary, a flip, a pinch, a repeated corner or triangle) takes the general pass.
+      if (closed_fan_cycle(&vf[begin], end - begin, v, s.cycle)) {
+        const size_t deg = end - begin;
+        for (size_t q = 0; q < deg; ++q) {
+          const Corner& in = vf[begin + s.cycle[q]];                       // the half-edge into v from w
+          const Corner& out = vf[begin + s.cycle[q + 1 == deg ? 0 : q + 1]];  // out of v to w
+          const uint32_t w = out.to;
+          if (w < v) continue;
+          const uint32_t fi = in.k / 3, fo = out.k / 3;
+          // Recorded at v's corner of the edge's lower triangle.
+          if (fi < fo) corner_edge[in.k] |= kManifold << kInEdgeShift;
+          else corner_edge[out.k] |= kManifold;
+          faces.unite(fi, fo);
+          ++n.manifold;
+          ++n.edges;
+        }
+        vertex_bad[v] = 0;
+        corner_edge[vf[begin].k] |= kCountsVertex;
+        continue;
+      }
       s.link.clear();
       s.pairs.clear();
       s.half.clear();
@@ -314,6 +362,7 @@ TopologyReport topology_report(const TriMesh& mesh) {
       }
       if (!bad) bad = !link_is_one_fan(s.link.data(), s.link.size());
       vertex_bad[v] = bad;
+      if (!bad) corner_edge[vf[begin].k] |= kCountsVertex;
       if (s.pairs.size() > 1) {
         s.pairs.sort();
         for (size_t i = 1; i < s.pairs.size(); ++i) n.duplicates += s.pairs[i] == s.pairs[i - 1];
@@ -338,7 +387,10 @@ TopologyReport topology_report(const TriMesh& mesh) {
           kind = kNonManifold;
           ++n.nonmanifold;
         }
-        corner_edge[3 * size_t(first.face) + first.corner] = kind;
+        // At v's corner of the first triangle: the half-edge's own corner if it leaves v, the
+        // next one if it enters v.
+        if (first.forward) corner_edge[3 * size_t(first.face) + first.corner] |= kind;
+        else corner_edge[3 * size_t(first.face) + (first.corner + 1) % 3] |= uint8_t(kind << kInEdgeShift);
         ++n.edges;
         i = j;
       }
@@ -413,50 +465,59 @@ TopologyReport topology_report(const TriMesh& mesh) {
   // Per component: triangles, edges by kind, orientation conflicts, vertices, bad vertices.
   std::vector<std::atomic<uint64_t>> c_tris(ncomp), c_edges(ncomp), c_boundary(ncomp), c_nonmanifold(ncomp),
       c_conflict(ncomp), c_vertices(ncomp), c_bad_vertex(ncomp);  // value-initialised: 0
+  r.nonmanifold_vertices = size_t(std::count(vertex_bad.begin(), vertex_bad.end(), uint8_t(1)));
+  // Triangles, edges and the vertices whose triangles are one component, from the corners'
+  // records in triangle order.
+  // What a corner's record counts, by record: edges, boundary, non-manifold, conflicts,
+  // vertices (a byte each).
+  std::array<uint64_t, 128> counts_of{};
+  for (uint32_t info = 0; info < 128; ++info) {
+    uint64_t n = (info & kCountsVertex) ? uint64_t(1) << 32 : 0;
+    for (const uint32_t edge : {info & 7, (info >> kInEdgeShift) & 7}) {
+      if (edge == 0) continue;
+      n += 1;
+      if ((edge & 3) == kBoundary) n += uint64_t(1) << 8;
+      if ((edge & 3) == kNonManifold) n += uint64_t(1) << 16;
+      if (edge & kConflict) n += uint64_t(1) << 24;
+    }
+    counts_of[info] = n;
+  }
   detail::parallel_blocks(F, 16384, [&](size_t b, size_t e) {
-    RunAdder add(c_tris);
-    for (size_t f = b; f < e; ++f) add.add(comp[f]);
-  });
-  detail::parallel_blocks(F, 16384, [&](size_t b, size_t e) {
-    RunAdder edges(c_edges), bnd(c_boundary), nonmanifold(c_nonmanifold), conflict(c_conflict);
-    for (size_t f = b; f < e; ++f)
-      for (size_t c = 0; c < 3; ++c) {
-        const uint8_t info = corner_edge[3 * f + c];
-        if (info == 0) continue;
-        const uint32_t cf = comp[f];
-        edges.add(cf);
-        const uint8_t kind = info & 3;
-        if (kind == kBoundary) bnd.add(cf);
-        if (kind == kNonManifold) nonmanifold.add(cf);
-        if (info & kConflict) conflict.add(cf);
+    RunAdder tris(c_tris), edges(c_edges), bnd(c_boundary), nonmanifold(c_nonmanifold), conflict(c_conflict),
+        verts(c_vertices);
+    for (size_t f = b; f < e; ++f) {
+      const uint32_t cf = comp[f];
+      tris.add(cf);
+      const uint64_t n = counts_of[corner_edge[3 * f] & 127] + counts_of[corner_edge[3 * f + 1] & 127] +
+                         counts_of[corner_edge[3 * f + 2] & 127];  // each byte at most 6: no carries
+      if (n == 0) continue;
+      edges.add(cf, uint32_t(n & 255));
+      if (n & 0xffffff00) {
+        bnd.add(cf, uint32_t((n >> 8) & 255));
+        nonmanifold.add(cf, uint32_t((n >> 16) & 255));
+        conflict.add(cf, uint32_t((n >> 24) & 255));
       }
-  });
-  detail::parallel_blocks(V, 4096, [&](size_t vb, size_t ve) {
-    Scratch& s = scratch.local();
-    RunAdder verts(c_vertices), bad(c_bad_vertex);
-    for (size_t v = vb; v < ve; ++v) {
-      const uint32_t begin = vf_off[v], end = vf_off[v + 1];
-      if (begin == end) continue;
-      // The distinct components of the vertex's triangles (almost always one).
-      const uint32_t c0 = comp[vf[begin].k / 3];
-      bool one = true;
-      for (uint32_t i = begin + 1; i < end && one; ++i) one = comp[vf[i].k / 3] == c0;
-      if (one) {
-        verts.add(c0);
-        if (vertex_bad[v]) bad.add(c0);
-        continue;
-      }
-      s.comps.clear();
-      for (uint32_t i = begin; i < end; ++i) s.comps.push_back(comp[vf[i].k / 3]);
-      s.comps.sort();
-      for (size_t i = 0; i < s.comps.size(); ++i) {
-        if (i > 0 && s.comps[i] == s.comps[i - 1]) continue;
-        verts.add(s.comps[i]);
-        if (vertex_bad[v]) bad.add(s.comps[i]);
-      }
+      verts.add(cf, uint32_t(n >> 32));
     }
   });
-  r.nonmanifold_vertices = size_t(std::count(vertex_bad.begin(), vertex_bad.end(), uint8_t(1)));
+  // The non-manifold vertices: in each of their triangles' components, a vertex and a bad one.
+  if (r.nonmanifold_vertices > 0) {
+    detail::parallel_blocks(V, 4096, [&](size_t vb, size_t ve) {
+      Scratch& s = scratch.local();
+      RunAdder verts(c_vertices), bad(c_bad_vertex);
+      for (size_t v = vb; v < ve; ++v) {
+        if (!vertex_bad[v]) continue;
+        s.comps.clear();
+        for (uint32_t i = vf_off[v]; i < vf_off[v + 1]; ++i) s.comps.push_back(comp[vf[i].k / 3]);
+        s.comps.sort();
+        for (size_t i = 0; i < s.comps.size(); ++i) {
+          if (i > 0 && s.comps[i] == s.comps[i - 1]) continue;
+          verts.add(s.comps[i]);
+          bad.add(s.comps[i]);
+        }
+      }
+    });
+  }
   std::vector<ComponentReport> C(ncomp);
   for (size_t c = 0; c < ncomp; ++c) {
     C[c].triangles = c_tris[c].load(kRelaxed);
@@ -565,18 +626,33 @@ TopologyReport topology_report(const TriMesh& mesh) {
       cr.genus = twice >= 0 && twice % 2 == 0 ? int(twice / 2) : -1;
     }
   }
-  // Signed volumes of closed components, about the first vertex of each one's lowest
-  // triangle for accuracy: the terms in parallel, summed in triangle order.
-  if (std::any_of(C.begin(), C.end(), [](const ComponentReport& c) { return c.closed; })) {
-    std::vector<double> term(F);
+  // The one pass that reads the positions: degenerate triangles (a repeated vertex or zero
+  // area), and the signed volumes of closed components, about the first vertex of each one's
+  // lowest triangle for accuracy: the terms in parallel (each written before it is read),
+  // summed in triangle order.
+  const bool any_closed = std::any_of(C.begin(), C.end(), [](const ComponentReport& c) { return c.closed; });
+  std::unique_ptr<double[]> term(any_closed ? new double[F] : nullptr);
+  {
+    tbb::combinable<size_t> count;
     detail::parallel_blocks(F, 16384, [&](size_t b, size_t e) {
+      size_t n = 0;
       for (size_t f = b; f < e; ++f) {
-        const uint32_t c = comp[f];
-        if (!C[c].closed) continue;
-        term[f] = detail::signed_volume6(mesh.positions[T[root_face[c]][0]], mesh.positions[T[f][0]],
-                                         mesh.positions[T[f][1]], mesh.positions[T[f][2]]) / 6.0;
+        const Triangle& t = T[f];
+        if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
+          ++n;
+        } else {
+          const Vec3 c = cross(mesh.positions[t[1]] - mesh.positions[t[0]], mesh.positions[t[2]] - mesh.positions[t[0]]);
+          n += squared_norm(c) == 0;
+        }
+        if (any_closed && C[comp[f]].closed)
+          term[f] = detail::signed_volume6(mesh.positions[T[root_face[comp[f]]][0]], mesh.positions[t[0]],
+                                           mesh.positions[t[1]], mesh.positions[t[2]]) / 6.0;
       }
+      count.local() += n;
     });
+    r.degenerate_triangles = count.combine(std::plus<size_t>());
+  }
+  if (any_closed) {
     std::vector<double> vol(ncomp, 0.0);
     for (size_t f = 0; f < F; ++f)
       if (C[comp[f]].closed) vol[comp[f]] += term[f];

@@ -4,6 +4,7 @@
 #include <tbb/task_arena.h>
 
 #include <array>
+#include <cmath>
 #include <cstring>
 #include <random>
 #include <string>
@@ -287,6 +288,45 @@ TEST(TopologyReport, AgreesWithTheSerialReferenceForAnyThreadCount) {
   TriMesh shuffled = holes;
   std::shuffle(shuffled.triangles.begin(), shuffled.triangles.end(), rng);
   meshes.push_back({"holes, triangles shuffled", shuffled});
+  // Closed meshes with one flaw each, where most vertices are closed, consistently oriented
+  // fans (the report's common case) and a few must fall back to the general pass: a flipped
+  // triangle, a repeated triangle, a repeated triangle reversed, a triangle with a corner
+  // repeated, two closed fans meeting at one vertex (a figure eight: both cones share the
+  // apex), and a vertex of more corners than the fast test takes.
+  const TriMesh sphere = icosphere_mesh(3);
+  TriMesh flip = sphere;
+  std::swap(flip.triangles[5][1], flip.triangles[5][2]);
+  meshes.push_back({"icosphere, one triangle flipped", flip});
+  TriMesh twice = sphere;
+  twice.triangles.push_back(twice.triangles[9]);
+  meshes.push_back({"icosphere, one triangle twice", twice});
+  TriMesh reversed = sphere;
+  reversed.triangles.push_back({sphere.triangles[9][0], sphere.triangles[9][2], sphere.triangles[9][1]});
+  meshes.push_back({"icosphere, one triangle twice, reversed", reversed});
+  TriMesh repeated = sphere;
+  repeated.triangles[3] = {repeated.triangles[3][0], repeated.triangles[3][0], repeated.triangles[3][1]};
+  meshes.push_back({"icosphere, one corner repeated", repeated});
+  auto cone = [](TriMesh& m, uint32_t apex, int sides, double z) {
+    const uint32_t ring = uint32_t(m.positions.size());
+    for (int i = 0; i < sides; ++i)
+      m.positions.push_back({std::cos(6.283185307179586 * i / sides), std::sin(6.283185307179586 * i / sides), z});
+    m.positions.push_back({0, 0, 2 * z});  // the cap's centre
+    const uint32_t cap = uint32_t(m.positions.size() - 1);
+    for (int i = 0; i < sides; ++i) {
+      const uint32_t a = ring + uint32_t(i), b = ring + uint32_t((i + 1) % sides);
+      m.triangles.push_back(z > 0 ? Triangle{apex, a, b} : Triangle{apex, b, a});
+      m.triangles.push_back(z > 0 ? Triangle{cap, b, a} : Triangle{cap, a, b});
+    }
+  };
+  TriMesh eight;  // two closed double cones sharing their apex: a pinched vertex of two disks
+  eight.positions.push_back({0, 0, 0});
+  cone(eight, 0, 5, 1);
+  cone(eight, 0, 7, -1);
+  meshes.push_back({"figure eight at a vertex", eight});
+  TriMesh wide;  // one closed cone of 40 sides: its apex and cap centre have 40 corners
+  wide.positions.push_back({0, 0, 0});
+  cone(wide, 0, 40, 1);
+  meshes.push_back({"wide cone", wide});
   for (const auto& named : meshes) {
     const std::string& name = named.first;
     const TriMesh& m = named.second;  // not a structured binding: clang 14 cannot capture one
