@@ -58,9 +58,6 @@ void append(Ranges& ranges, uint32_t begin, uint32_t end) {
     ranges.push_back({begin, end});
 }
 
-/// Appends the points of the cells whose coordinates differ from `cc` by at most `ring` along
-/// every axis and by more than `inner` along some (inner = -1: all of them): those within
-/// `near` of `cc` (Chebyshev) to `first`, the others to `rest`.
 /// Appends the points of column `col`'s cells with z in [cc.z - ring, cc.z + ring] whose
 /// coordinates differ from `cc` by more than `inner` along some axis (dxy: the column's
 /// distance in x, y): those within `near` of `cc` (Chebyshev) to `first`, the others to `rest`.
