@@ -1,6 +1,7 @@
 #include "spatial/nearest_neighbors.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <utility>
@@ -57,9 +58,34 @@ void append(Ranges& ranges, uint32_t begin, uint32_t end) {
     ranges.push_back({begin, end});
 }
 
+/// Appends the points of column `col`'s cells with z in [cc.z - ring, cc.z + ring] whose
+/// coordinates differ from `cc` by more than `inner` along some axis (dxy: the column's
+/// distance in x, y): those within `near` of `cc` (Chebyshev) to `first`, the others to `rest`.
+void gather_column(const NeighborGrid& grid, const Columns& cols, uint32_t col, int32_t dxy,
+                   const NeighborGrid::CellCoord& cc, int32_t ring, int32_t inner, int32_t near, Ranges& first,
+                   Ranges& rest) {
+  // z increases along the column's run of cells.
+  uint32_t lo = cols.start[col], hi = cols.start[col + 1];
+  const uint32_t end = hi;
+  while (lo < hi) {  // the first cell with z >= cc.z - ring
+    const uint32_t mid = lo + (hi - lo) / 2;
+    if (grid.cell_coord(mid)[2] < cc[2] - ring)
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  for (uint32_t c = lo; c < end; ++c) {
+    const int32_t dz = grid.cell_coord(c)[2] - cc[2];
+    if (dz > ring) break;
+    const int32_t d = std::max(dxy, std::abs(dz));
+    if (d <= inner) continue;
+    append(d <= near ? first : rest, grid.cell_begin(c), grid.cell_end(c));
+  }
+}
+
 /// Appends the points of the cells whose coordinates differ from `cc` by at most `ring` along
 /// every axis and by more than `inner` along some (inner = -1: all of them): those within
-/// `near` of `cc` (Chebyshev) to `first`, the others to `rest`.
+/// `near` of `cc` (Chebyshev) to `first`, the others to `rest`. Columns in increasing (x, y).
 void gather(const NeighborGrid& grid, const Columns& cols, const NeighborGrid::CellCoord& cc, int32_t ring,
             int32_t inner, int32_t near, Ranges& first, Ranges& rest) {
   constexpr int32_t kTop = NeighborGrid::kMaxCellsPerAxis + 3;
@@ -68,25 +94,44 @@ void gather(const NeighborGrid& grid, const Columns& cols, const NeighborGrid::C
       const uint32_t col = find_key(cols.table, cols.mask, cols.keys, column_key(x, y));
       if (col == kNoKey) continue;
       const int32_t dxy = std::max(std::abs(x - cc[0]), std::abs(y - cc[1]));
-      // The column's cells with z in [cc.z - ring, cc.z + ring]: z increases along the run.
-      uint32_t lo = cols.start[col], hi = cols.start[col + 1];
-      const uint32_t end = hi;
-      while (lo < hi) {  // the first cell with z >= cc.z - ring
-        const uint32_t mid = lo + (hi - lo) / 2;
-        if (grid.cell_coord(mid)[2] < cc[2] - ring)
-          lo = mid + 1;
-        else
-          hi = mid;
-      }
-      for (uint32_t c = lo; c < end; ++c) {
-        const int32_t dz = grid.cell_coord(c)[2] - cc[2];
-        if (dz > ring) break;
-        const int32_t d = std::max(dxy, std::abs(dz));
-        if (d <= inner) continue;
-        append(d <= near ? first : rest, grid.cell_begin(c), grid.cell_end(c));
-      }
+      gather_column(grid, cols, col, dxy, cc, ring, inner, near, first, rest);
     }
 }
+
+/// The first gather (ring 2, every cell) for the cells of one block taken in increasing
+/// order: the same columns, in the same order, as gather, found without a hash look-up. The
+/// cells' columns never decrease, so for each x offset a cursor into the sorted column keys
+/// only moves forward, and the columns (x + dx, y - 2 .. y + 2) are the keys it passes over.
+class RingTwoColumns {
+ public:
+  explicit RingTwoColumns(const Columns& cols) : cols_(cols) {}
+
+  void gather(const NeighborGrid& grid, const NeighborGrid::CellCoord& cc, int32_t near, Ranges& first,
+              Ranges& rest) {
+    constexpr int32_t kRing = 2;
+    const auto& keys = cols_.keys;
+    for (int32_t dx = -kRing; dx <= kRing; ++dx) {
+      const int32_t x = cc[0] + dx;
+      if (x < 0) continue;
+      const uint64_t from = column_key(x, std::max(cc[1] - kRing, 0));
+      const uint64_t to = column_key(x, std::min(cc[1] + kRing, NeighborGrid::kMaxCellsPerAxis + 3));
+      uint32_t& at = cursor_[size_t(dx + kRing)];
+      if (!started_) at = uint32_t(std::lower_bound(keys.begin(), keys.end(), from) - keys.begin());
+      while (at < keys.size() && keys[at] < from) ++at;
+      for (uint32_t col = at; col < keys.size() && keys[col] <= to; ++col) {
+        const auto y = int32_t(keys[col] & 0x1fffff);
+        const int32_t dxy = std::max(std::abs(dx), std::abs(y - cc[1]));
+        gather_column(grid, cols_, col, dxy, cc, kRing, -1, near, first, rest);
+      }
+    }
+    started_ = true;
+  }
+
+ private:
+  const Columns& cols_;
+  std::array<uint32_t, 5> cursor_{};
+  bool started_ = false;
+};
 
 }  // namespace
 
@@ -104,6 +149,7 @@ std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, int k, Progres
     double best_e2[64];
     uint32_t best_t[64];
     double guess = 0;  // the last point's k-th nearest squared distance (0: none yet)
+    RingTwoColumns ring_two(cols);
     const Vec3* P = grid.sorted_points().data();
     for (size_t c = cb; c < ce; ++c) {
       const auto cc = grid.cell_coord(uint32_t(c));
@@ -113,7 +159,7 @@ std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, int k, Progres
       for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) open.push_back(s);
       // The first two rings at once, the nearer cells first (the running k nearest then
       // settle early and the farther points are mostly turned away by one comparison).
-      gather(grid, cols, cc, 2, -1, 1, block, rest);
+      ring_two.gather(grid, cc, 1, block, rest);
       block.insert(block.end(), rest.begin(), rest.end());
       for (int32_t ring = 2; !open.empty(); ++ring) {
         if (ring > 2) gather(grid, cols, cc, ring, ring - 1, ring, block, block);

@@ -67,9 +67,27 @@ void NeighborGrid::build(const Vec3* points, size_t n, double cell_size, const V
   Vec3 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
           std::numeric_limits<double>::infinity()};
   Vec3 hi = -lo;
-  for (size_t i = 0; i < n; ++i) {
-    lo = {std::min(lo.x, points[i].x), std::min(lo.y, points[i].y), std::min(lo.z, points[i].z)};
-    hi = {std::max(hi.x, points[i].x), std::max(hi.y, points[i].y), std::max(hi.z, points[i].z)};
+  // Per fixed block of points, then the blocks in order: the same bounds (even the sign of a
+  // zero: the first of equal values is kept, as one pass would) for any thread count.
+  constexpr size_t kBlock = 65536;
+  const size_t blocks = (n + kBlock - 1) / kBlock;
+  {
+    std::vector<Vec3> block_lo(blocks, lo), block_hi(blocks, hi);
+    detail::parallel_blocks(blocks, 1, [&](size_t kb, size_t ke) {
+      for (size_t k = kb; k < ke; ++k) {
+        Vec3 l = block_lo[k], h = block_hi[k];
+        for (size_t i = k * kBlock; i < std::min(n, (k + 1) * kBlock); ++i) {
+          l = {std::min(l.x, points[i].x), std::min(l.y, points[i].y), std::min(l.z, points[i].z)};
+          h = {std::max(h.x, points[i].x), std::max(h.y, points[i].y), std::max(h.z, points[i].z)};
+        }
+        block_lo[k] = l, block_hi[k] = h;
+      }
+    });
+    for (size_t k = 0; k < blocks; ++k) {
+      const Vec3 &l = block_lo[k], &h = block_hi[k];
+      lo = {std::min(lo.x, l.x), std::min(lo.y, l.y), std::min(lo.z, l.z)};
+      hi = {std::max(hi.x, h.x), std::max(hi.y, h.y), std::max(hi.z, h.z)};
+    }
   }
   if (n == 0) lo = hi = Vec3{};
   if (lower) {
@@ -107,15 +125,27 @@ void NeighborGrid::build(const Vec3* points, size_t n, double cell_size, const V
       sorted_points_[s] = points[entries[s].index];
     }
   });
-  cell_start_.clear();
-  cell_keys_.clear();
-  for (size_t s = 0; s < n; ++s) {
-    if (s == 0 || entries[s].key != entries[s - 1].key) {
-      cell_start_.push_back(uint32_t(s));
-      cell_keys_.push_back(entries[s].key);
+  // The cells: where the key changes. Counted per fixed block, then written at each block's
+  // offset.
+  std::vector<size_t> first_cell(blocks + 1, 0);
+  const auto starts_cell = [&](size_t s) { return s == 0 || entries[s].key != entries[s - 1].key; };
+  detail::parallel_blocks(blocks, 1, [&](size_t kb, size_t ke) {
+    for (size_t k = kb; k < ke; ++k)
+      for (size_t s = k * kBlock; s < std::min(n, (k + 1) * kBlock); ++s) first_cell[k + 1] += starts_cell(s);
+  });
+  for (size_t k = 0; k < blocks; ++k) first_cell[k + 1] += first_cell[k];
+  cell_start_.assign(first_cell[blocks] + 1, uint32_t(n));
+  cell_keys_.resize(first_cell[blocks]);
+  detail::parallel_blocks(blocks, 1, [&](size_t kb, size_t ke) {
+    for (size_t k = kb; k < ke; ++k) {
+      size_t c = first_cell[k];
+      for (size_t s = k * kBlock; s < std::min(n, (k + 1) * kBlock); ++s)
+        if (starts_cell(s)) {
+          cell_start_[c] = uint32_t(s);
+          cell_keys_[c++] = entries[s].key;
+        }
     }
-  }
-  cell_start_.push_back(uint32_t(n));
+  });
 
   table_mask_ = detail::build_key_table(cell_keys_, table_);
 }

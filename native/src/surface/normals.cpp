@@ -272,68 +272,101 @@ bool orient_normals_by_reference(const NeighborGrid& grid, const std::vector<uin
   // 0 = undecided, 1 = decided. Where the reference clearly says which way a point faces it
   // decides; elsewhere (reference nearly in the tangent plane, or missing) the neighbours
   // of the same sheet that are decided vote, round after round.
+  // Each pass is parallel over fixed blocks of points; what a pass decides is applied after
+  // it, and the counts are integers: the same whatever the thread count.
+  constexpr size_t kGrain = 8192;
   std::vector<uint8_t> decided(n, 0);
-  std::vector<uint32_t> open;
-  for (size_t s = 0; s < n; ++s) {
-    if ((s & 0xffff) == 0) tracker.check();
-    if (rep[s] != s || !(squared_norm(normals[s]) > 0)) continue;
-    const Vec3 r = reference[s];
-    const double len = norm(r);
-    const double c = len > 0 ? dot(normals[s], r) / len : 0.0;
-    if (std::abs(c) >= 0.3) {
-      if (c < 0) normals[s] = -normals[s];
-      decided[s] = 1;
-    } else {
-      open.push_back(uint32_t(s));
+  std::vector<uint8_t> undecided(n, 0);  // the first pass's open points
+  parallel_blocks(n, kGrain, [&](size_t b, size_t e) {
+    if (tracker.cancelled()) return;
+    for (size_t s = b; s < e; ++s) {
+      if (rep[s] != s || !(squared_norm(normals[s]) > 0)) continue;
+      const Vec3 r = reference[s];
+      const double len = norm(r);
+      const double c = len > 0 ? dot(normals[s], r) / len : 0.0;
+      if (std::abs(c) >= 0.3) {
+        if (c < 0) normals[s] = -normals[s];
+        decided[s] = 1;
+      } else {
+        undecided[s] = 1;
+      }
     }
-  }
+  });
+  tracker.check();
+  std::vector<uint32_t> open;
+  for (size_t s = 0; s < n; ++s)
+    if (undecided[s]) open.push_back(uint32_t(s));
+  std::vector<uint8_t>().swap(undecided);
+  std::vector<double> votes;
   for (int round = 0; round < 64 && !open.empty(); ++round) {
     tracker.check();
-    std::vector<uint32_t> still;
-    std::vector<std::pair<uint32_t, bool>> flips;
-    for (uint32_t s : open) {
-      double vote = 0;
-      const Vec3 p = grid.sorted_point(s);
-      for (const uint32_t* q = lists.begin(s); q != lists.end(s); ++q) {
-        if (!decided[*q]) continue;
-        const Vec3 d = grid.sorted_point(*q) - p;
-        if (squared_norm(d) > r2(s, *q)) continue;
-        // Same-sheet neighbours (the edge in both tangent planes) count, gap-crossing ones
-        // count reversed, like the spanning tree's signed edges.
-        const double slope = (std::abs(dot(d, normals[s])) + std::abs(dot(d, normals[*q]))) / (2 * norm(d));
-        const double agree = dot(normals[s], normals[*q]);
-        vote += slope > 0.5 ? -agree : agree;
+    votes.assign(open.size(), 0.0);
+    parallel_blocks(open.size(), 1024, [&](size_t b, size_t e) {
+      if (tracker.cancelled()) return;
+      for (size_t i = b; i < e; ++i) {
+        const uint32_t s = open[i];
+        double vote = 0;
+        const Vec3 p = grid.sorted_point(s);
+        for (const uint32_t* q = lists.begin(s); q != lists.end(s); ++q) {
+          if (!decided[*q]) continue;
+          const Vec3 d = grid.sorted_point(*q) - p;
+          if (squared_norm(d) > r2(s, *q)) continue;
+          // Same-sheet neighbours (the edge in both tangent planes) count, gap-crossing ones
+          // count reversed, like the spanning tree's signed edges.
+          const double slope = (std::abs(dot(d, normals[s])) + std::abs(dot(d, normals[*q]))) / (2 * norm(d));
+          const double agree = dot(normals[s], normals[*q]);
+          vote += slope > 0.5 ? -agree : agree;
+        }
+        votes[i] = vote;
       }
-      if (vote == 0) still.push_back(s);
-      else flips.push_back({s, vote < 0});
-    }
-    if (flips.empty()) break;
-    for (auto [s, flip] : flips) {
-      if (flip) normals[s] = -normals[s];
+    });
+    tracker.check();
+    std::vector<uint32_t> still;
+    bool any = false;
+    for (size_t i = 0; i < open.size(); ++i) {
+      const uint32_t s = open[i];
+      if (votes[i] == 0) {
+        still.push_back(s);
+        continue;
+      }
+      if (votes[i] < 0) normals[s] = -normals[s];
       decided[s] = 1;
+      any = true;
     }
+    if (!any) break;
     open.swap(still);
   }
   // Are the references consistent? Neighbours of one sheet (the edge lies in both tangent
   // planes) should agree. Normals turned toward a scanner's viewpoint on a closed object, for
   // instance, face inward on its far side, and disagree along the silhouette.
-  size_t pairs = 0, disagree = 0;
-  for (size_t s = 0; s < n; ++s) {
-    if ((s & 0xffff) == 0) tracker.check();  // a serial pass: let a cancel request in
-    if (rep[s] != s || !decided[s]) continue;
-    const Vec3 p = grid.sorted_point(uint32_t(s));
-    for (const uint32_t* q = lists.begin(uint32_t(s)); q != lists.end(uint32_t(s)); ++q) {
-      if (*q <= s || !decided[*q]) continue;
-      const Vec3 d = grid.sorted_point(*q) - p;
-      if (squared_norm(d) > r2(uint32_t(s), *q)) continue;
-      const double slope = (std::abs(dot(d, normals[s])) + std::abs(dot(d, normals[*q]))) / (2 * norm(d));
-      if (slope > 0.3) continue;
-      ++pairs;
-      disagree += dot(normals[s], normals[*q]) < 0;
+  const size_t blocks = (n + kGrain - 1) / kGrain;
+  std::vector<size_t> block_pairs(blocks, 0), block_disagree(blocks, 0);
+  parallel_blocks(blocks, 1, [&](size_t kb, size_t ke) {
+    for (size_t k = kb; k < ke; ++k) {
+      if (tracker.cancelled()) return;
+      for (size_t s = k * kGrain; s < std::min(n, (k + 1) * kGrain); ++s) {
+        if (rep[s] != s || !decided[s]) continue;
+        const Vec3 p = grid.sorted_point(uint32_t(s));
+        for (const uint32_t* q = lists.begin(uint32_t(s)); q != lists.end(uint32_t(s)); ++q) {
+          if (*q <= s || !decided[*q]) continue;
+          const Vec3 d = grid.sorted_point(*q) - p;
+          if (squared_norm(d) > r2(uint32_t(s), *q)) continue;
+          const double slope = (std::abs(dot(d, normals[s])) + std::abs(dot(d, normals[*q]))) / (2 * norm(d));
+          if (slope > 0.3) continue;
+          ++block_pairs[k];
+          block_disagree[k] += dot(normals[s], normals[*q]) < 0;
+        }
+      }
     }
-  }
-  for (size_t s = 0; s < n; ++s)
-    if (rep[s] != s) normals[s] = normals[rep[s]];
+  });
+  tracker.check();
+  size_t pairs = 0, disagree = 0;
+  for (size_t k = 0; k < blocks; ++k) pairs += block_pairs[k], disagree += block_disagree[k];
+  // Duplicates take their representative's normal (a representative is its own).
+  parallel_blocks(n, kGrain, [&](size_t b, size_t e) {
+    for (size_t s = b; s < e; ++s)
+      if (rep[s] != s) normals[s] = normals[rep[s]];
+  });
   return pairs == 0 || double(disagree) <= kMaxReferenceDisagreement * double(pairs);
 }
 

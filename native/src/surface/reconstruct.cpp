@@ -1,6 +1,7 @@
 #include "particlemesh/surface/reconstruct.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -113,13 +114,17 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
         // A normal without a direction (zero, or subnormal) is a particle without a normal:
         // it does not vote, its neighbours decide. None with a direction: no reference at all.
         reference.resize(n);
-        size_t usable = 0;
-        for (uint32_t s = 0; s < n; ++s) {
-          const Vec3& r = cloud.normals[original[s]];
-          reference[s] = usable_normal(r) ? r : Vec3{};
-          usable += usable_normal(r);
-        }
-        if (usable == 0) reference.clear();
+        std::atomic<bool> usable{false};
+        detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+          bool any = false;
+          for (size_t s = b; s < e; ++s) {
+            const Vec3& r = cloud.normals[original[s]];
+            reference[s] = usable_normal(r) ? r : Vec3{};
+            any = any || usable_normal(r);
+          }
+          if (any) usable.store(true, std::memory_order_relaxed);
+        });
+        if (!usable.load()) reference.clear();
       }
       tracker.stage("orienting normals", 0.65, 0.7);
       // The cloud's normals orient directly when they are consistent; otherwise (or without

@@ -151,6 +151,34 @@ TEST(ReconstructSurface, NormalsTurnedTowardAViewpointStillGiveOutwardSurfaces) 
   expect_closed_surfaces(pretzel, reconstruct_surface(pretzel), 1, 2, "double torus, viewpoint normals");
 }
 
+// Particles whose normal gives no direction (none, or one in the tangent plane) are decided by
+// their oriented neighbours' votes, round after round; the votes, like the consistency count
+// of the given normals, are taken in parallel over blocks of points.
+TEST(ReconstructSurface, NormalsDecidedByNeighbourVotesAreTheSameForAnyThreadCount) {
+  PointCloud c = fibonacci_sphere(30000);
+  size_t voting = 0;
+  for (size_t i = 0; i < c.size(); ++i) {
+    if (i % 3 == 0) {
+      c.normals[i] = {};
+      ++voting;
+    } else if (i % 5 == 0) {
+      c.normals[i] = normalized(cross(c.normals[i], Vec3{0.3, 0.1, 1.0}));
+      ++voting;
+    }
+  }
+  ASSERT_GT(voting, 10000u);
+  SurfaceOptions o;
+  o.threads = 1;
+  const SurfaceResult one = reconstruct_surface(c, o);
+  expect_closed_surfaces(c, one, 1, 0, "sphere, a third of its normals missing");
+  for (int threads : {2, 5}) {
+    o.threads = threads;
+    const SurfaceResult r = reconstruct_surface(c, o);
+    EXPECT_EQ(r.mesh.triangles, one.mesh.triangles) << threads;
+    EXPECT_EQ(r.mesh.normals, one.mesh.normals) << threads;
+  }
+}
+
 TEST(ReconstructSurface, ResampledRealModels) {
   PM_REQUIRE_DATA(spot, "meshes/spot.obj");
   PM_REQUIRE_DATA(rocker, "meshes/rocker_arm.obj");
