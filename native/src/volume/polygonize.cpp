@@ -424,6 +424,19 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
                         "): use a larger cell size or a domain_min closer to the particles");
     }
     st.bounding_box_nodes = box_nodes < 1.8e19 ? uint64_t(box_nodes) : std::numeric_limits<uint64_t>::max();
+    // The lattice's nodes are origin + i h in doubles: where the coordinates are as large as
+    // 2^52 cells, neighbouring nodes round to one position and every triangle is a point.
+    // Keep 12 bits below a cell for the crossings between nodes.
+    constexpr double kMaxCellsFromZero = 1099511627776.0;  // 2^40
+    for (int a = 0; a < 3; ++a) {
+      const double far = std::max({std::fabs(g.origin[a]), std::fabs(field.support_min()[a]),
+                                   std::fabs(field.support_max()[a])});
+      if (!(far / h < kMaxCellsFromZero))
+        throw Error(Status::LimitExceeded,
+                    "cell size " + num(h) + " is too small for coordinates as large as " + num(far) + " along " +
+                        std::string(1, "xyz"[a]) + ": the grid's nodes there would not be distinct in double precision "
+                        "(at most 2^40 cells from the origin; move the particles nearer the origin or use a larger cell size)");
+    }
   }
 
   // A tile (options.cells): only its cells are meshed, with the nodes and edges they use.

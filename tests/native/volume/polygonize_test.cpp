@@ -511,6 +511,16 @@ TEST(Polygonize, AbsurdGridsFailBeforeAllocating) {
   o.max_grid_bytes = kDefaultMaxGridBytes;
   EXPECT_EQ(status_of([&] { polygonize(far, o); }, &msg), Status::LimitExceeded);
   EXPECT_NE(msg.find("along x"), std::string::npos) << msg;
+  // A small cloud so far from the origin that neighbouring grid nodes round to one position
+  // (each triangle would be a point): refused, naming the axis.
+  PointCloud shifted = test::random_cloud(200, 2);
+  for (Vec3& p : shifted.positions) p = p + Vec3{0, 1e15, 0};
+  EXPECT_EQ(status_of([&] { polygonize(shifted, o); }, &msg), Status::LimitExceeded);
+  EXPECT_NE(msg.find("not be distinct in double precision"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("along y"), std::string::npos) << msg;
+  // Far, but within 2^40 cells: meshed as at the origin, shifted.
+  for (Vec3& p : shifted.positions) p = p - Vec3{0, 1e15 - 1e6, 0};
+  EXPECT_EQ(status_of([&] { polygonize(shifted, o); }), Status::Ok);
 }
 
 TEST(Polygonize, ProgressIsReportedAndCancels) {
