@@ -5,7 +5,7 @@
 // the kernel one page fault per 4 KiB page first written (its memory-cgroup charge, its
 // zeroing, its page-table locks). Where transparent huge pages are enabled "madvise" (the
 // default of many distributions), madvise(MADV_HUGEPAGE) on a block before it is first touched
-// turns 512 of those faults into one: the command's page faults fall from 44 000 to 29 000 and
+// turns 512 of those faults into one: the command's page faults fall from 44 000 to about 27 000 and
 // its CPU time by 5-10 % (bench/RESULTS.md). glibc's own switch (the glibc.malloc.hugetlb
 // tunable) is read only from the environment at start-up, and those vectors are allocated
 // inside OpenSubdiv, so the advice is given here, in the operator new every library of the
