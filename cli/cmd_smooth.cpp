@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "commands.h"
+#include "large_allocations.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
@@ -90,6 +91,7 @@ int run_smooth(const SmoothArgs& a) {
   using Clock = std::chrono::steady_clock;
   RunOutputs outputs({{"-o", a.output, OutputKind::Mesh, a.ascii ? MeshFormat::PlyAscii : MeshFormat::Auto}, {"--report", a.report, OutputKind::Text}},
                      {a.input});
+  huge_pages_for_large_blocks();  // OpenSubdiv's refined levels, the output, its report
   const auto t0 = Clock::now();
   ProgressLine progress(a.quiet);
   const TriMesh mesh = read_mesh(a.input);

@@ -1,5 +1,6 @@
 #include "particlemesh/io/mesh_io.h"
 
+#include <algorithm>
 #include <string>
 
 #include "io/formats.h"
@@ -90,11 +91,16 @@ MeshFormat mesh_output_format(const std::string& path, MeshFormat format) {
 
 void write_mesh(const TriMesh& mesh, OutputFile& out, const WriteMeshOptions& options) {
   const MeshFormat format = mesh_output_format(out.path(), options.format);
-  for (const Triangle& t : mesh.triangles)
-    for (uint32_t v : t)
-      if (v >= mesh.positions.size())
-        throw Error(Status::InvalidArgument, "mesh has a triangle index " + std::to_string(v) + " beyond its " +
-                                                 std::to_string(mesh.positions.size()) + " vertices");
+  // The largest index first (a loop without branches), the message's index only if it is bad.
+  uint32_t largest = 0;
+  const uint32_t* index = mesh.triangles.empty() ? nullptr : mesh.triangles.data()->data();
+  for (size_t i = 0; i < 3 * mesh.triangles.size(); ++i) largest = std::max(largest, index[i]);
+  if (largest >= mesh.positions.size())
+    for (const Triangle& t : mesh.triangles)
+      for (uint32_t v : t)
+        if (v >= mesh.positions.size())
+          throw Error(Status::InvalidArgument, "mesh has a triangle index " + std::to_string(v) + " beyond its " +
+                                                   std::to_string(mesh.positions.size()) + " vertices");
   const bool normals = options.write_normals && !mesh.normals.empty() && mesh.normals.size() == mesh.positions.size();
   switch (format) {
     case MeshFormat::Obj: detail::write_obj(mesh, out, normals, options.comment); break;

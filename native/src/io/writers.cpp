@@ -18,6 +18,7 @@
 #include <cfloat>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <string>
 
 #include "particlemesh/core/error.h"
@@ -30,7 +31,7 @@ namespace {
 /// so), several times faster.
 class Text {
  public:
-  explicit Text(OutputFile& out) : out_(out) {}
+  explicit Text(OutputFile& out) : out_(out), buf_(new char[kSize]), p_(buf_.get()) {}
   ~Text() = default;
   void number(double v, int digits) {
     room(40);
@@ -46,7 +47,7 @@ class Text {
     *p_++ = c;
   }
   void put(std::string_view s) {
-    if (s.size() > sizeof buf_ / 2) {
+    if (s.size() > kSize / 2) {
       flush();
       out_.write(s);
       return;
@@ -63,19 +64,22 @@ class Text {
     return p;
   }
   /// Bytes left before the buffer must be flushed.
-  size_t space() const { return size_t(buf_ + sizeof buf_ - p_); }
+  size_t space() const { return size_t(buf_.get() + kSize - p_); }
   void flush() {
-    out_.write(buf_, size_t(p_ - buf_));
-    p_ = buf_;
+    out_.write(buf_.get(), size_t(p_ - buf_.get()));
+    p_ = buf_.get();
   }
 
  private:
+  // As large as OutputFile's own buffer: a full one goes straight to write(2), not copied
+  // into that buffer first.
+  static constexpr size_t kSize = size_t(1) << 20;
   void room(size_t n) {
-    if (size_t(buf_ + sizeof buf_ - p_) < n) flush();
+    if (space() < n) flush();
   }
   OutputFile& out_;
-  char buf_[1 << 16];
-  char* p_ = buf_;
+  std::unique_ptr<char[]> buf_;
+  char* p_;
 };
 
 uint8_t color_byte(float c) {
@@ -102,22 +106,46 @@ const VertexAttribute* color_of(const TriMesh& mesh) {
 
 bool needs_double_positions(const std::vector<Vec3>& positions) {
   if (positions.empty()) return false;
-  Vec3 lo = positions[0], hi = positions[0];
-  double largest = 0, smallest = DBL_MAX;
-  for (const Vec3& p : positions) {
-    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
-    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
-    const double m[3] = {std::abs(p.x), std::abs(p.y), std::abs(p.z)};
-    for (int a = 0; a < 3; ++a) {
-      largest = std::max(largest, m[a]);
-      smallest = std::min(smallest, m[a] > 0 ? m[a] : DBL_MAX);  // zeros (and NaN) left out
-    }
+  // Four independent running extremes (lanes), merged at the end: min and max are exact, so
+  // the result is the serial loop's. Every lane starts from the first point, and a NaN
+  // coordinate never replaces a running value (b < a and a < b are false), as in std::min/max.
+  constexpr size_t kLanes = 4;
+  double lo[3][kLanes], hi[3][kLanes], largest[kLanes], smallest[kLanes];
+  for (size_t l = 0; l < kLanes; ++l) {
+    for (int a = 0; a < 3; ++a) lo[a][l] = hi[a][l] = positions[0][a];
+    largest[l] = 0;
+    smallest[l] = DBL_MAX;
   }
-  if (largest > FLT_MAX) return true;  // float32 would make it inf
-  const double size = norm(hi - lo);
+  auto take = [&](size_t l, const Vec3& p) {
+    for (int a = 0; a < 3; ++a) {
+      const double v = p[a];
+      lo[a][l] = v < lo[a][l] ? v : lo[a][l];
+      hi[a][l] = hi[a][l] < v ? v : hi[a][l];
+      const double m = std::abs(v);
+      largest[l] = largest[l] < m ? m : largest[l];
+      const double pos = m > 0 ? m : DBL_MAX;  // zeros (and NaN) left out
+      smallest[l] = pos < smallest[l] ? pos : smallest[l];
+    }
+  };
+  const size_t n = positions.size(), whole = n - n % kLanes;
+  for (size_t i = 0; i < whole; i += kLanes)
+    for (size_t l = 0; l < kLanes; ++l) take(l, positions[i + l]);
+  for (size_t i = whole; i < n; ++i) take(0, positions[i]);
+  for (size_t l = 1; l < kLanes; ++l) {
+    for (int a = 0; a < 3; ++a) {
+      lo[a][0] = std::min(lo[a][0], lo[a][l]);
+      hi[a][0] = std::max(hi[a][0], hi[a][l]);
+    }
+    largest[0] = std::max(largest[0], largest[l]);
+    smallest[0] = std::min(smallest[0], smallest[l]);
+  }
+  const double largest_all = largest[0], smallest_all = smallest[0];
+  const Vec3 box_lo{lo[0][0], lo[1][0], lo[2][0]}, box_hi{hi[0][0], hi[1][0], hi[2][0]};
+  if (largest_all > FLT_MAX) return true;  // float32 would make it inf
+  const double size = norm(box_hi - box_lo);
   // float32 rounds by up to 2^-24 of a value, and by up to 2^-150 below FLT_MIN (subnormals).
-  double rounding = largest * 0x1p-24;
-  if (smallest < FLT_MIN) rounding = std::max(rounding, 0x1p-150);
+  double rounding = largest_all * 0x1p-24;
+  if (smallest_all < FLT_MIN) rounding = std::max(rounding, 0x1p-150);
   return rounding > 1e-6 * size;
 }
 
@@ -190,7 +218,16 @@ void write_ply(const TriMesh& mesh, OutputFile& out, bool binary, bool normals, 
           continue;
         }
         char* r = t.span(fit * fixed);
-        for (size_t j = 0; j < fit; ++j) record(i + j, r + j * fixed);
+        if (!doubles && normals && !color) {
+          // The common record (what smooth and triangulate write), in a loop of its own.
+          for (size_t j = 0; j < fit; ++j) {
+            const Vec3 &p = P[i + j], &q = N[i + j];
+            const float rec[6] = {float(p.x), float(p.y), float(p.z), float(q.x), float(q.y), float(q.z)};
+            std::memcpy(r + j * 24, rec, 24);
+          }
+        } else {
+          for (size_t j = 0; j < fit; ++j) record(i + j, r + j * fixed);
+        }
         i += fit;
         continue;
       }

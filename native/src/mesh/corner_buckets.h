@@ -9,25 +9,32 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #include <tbb/task_arena.h>
 
+#include "core/huge_pages.h"
 #include "core/parallel.h"
 #include "particlemesh/mesh/tri_mesh.h"
 
 namespace PM_NAMESPACE::detail {
 
-/// offset (V + 1 entries) and out (3 F entries): vertex v's corners are out[offset[v] ..
+/// offset (V + 1 entries) and out (3 F entries, resized to that; a std::vector, or a
+/// FreshArray that is not filled first): vertex v's corners are out[offset[v] ..
 /// offset[v + 1]), in increasing triangle order; the corner c of triangle f is stored as
 /// make(f, c) (what the caller's passes need of it: its index 3 f + c, its next and previous
 /// vertex, ...). Every vertex index must be below V.
-template <class Corner, class Make>
-void bucket_corners_by_vertex(const std::vector<Triangle>& T, size_t V, std::vector<uint32_t>& offset,
-                              std::vector<Corner>& out, Make make) {
+template <class Out, class Make>
+void bucket_corners_by_vertex(const std::vector<Triangle>& T, size_t V, std::vector<uint32_t>& offset, Out& out,
+                              Make make) {
   const size_t F = T.size();
   offset.assign(V + 1, 0);
-  out.resize(3 * F);
+  if constexpr (std::is_same_v<Out, FreshArray<typename std::remove_reference_t<decltype(out[0])>>>) {
+    out = Out(3 * F);
+  } else {
+    out.resize(3 * F);
+  }
   // A counting sort is stable: each vertex's corners come out in triangle order however the
   // triangles are chunked, so the chunks may follow the threads (one count array of V each).
   const size_t kChunks = std::clamp<size_t>(size_t(tbb::this_task_arena::max_concurrency()), 1, 8);

@@ -9,6 +9,7 @@
 #include <tbb/combinable.h>
 
 #include "core/disjoint_sets.h"
+#include "core/huge_pages.h"
 #include "core/parallel.h"
 #include "mesh/corner_buckets.h"
 #include "mesh/orientation.h"
@@ -256,7 +257,7 @@ TopologyReport topology_report(const TriMesh& mesh) {
   // the per-vertex passes read no triangle), each vertex's in increasing order: counted and
   // placed per fixed chunk of triangles.
   std::vector<uint32_t> vf_off;
-  std::vector<Corner> vf;
+  detail::FreshArray<Corner> vf;
   detail::bucket_corners_by_vertex(T, V, vf_off, vf, [&](size_t f, uint32_t c) {
     return Corner{uint32_t(3 * f + c), T[f][(c + 1) % 3], T[f][(c + 2) % 3]};
   });
@@ -389,7 +390,7 @@ TopologyReport topology_report(const TriMesh& mesh) {
   }
 
   // Components, numbered by their lowest triangle (each set's root) in triangle order.
-  std::vector<uint32_t> comp(F);
+  detail::FreshArray<uint32_t> comp(F);  // every entry written by the first pass below
   std::vector<uint32_t> root_face;  // per component: its lowest triangle
   size_t ncomp = 0;
   {

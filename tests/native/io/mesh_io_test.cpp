@@ -3,11 +3,15 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <cfloat>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <random>
 
 #include "particlemesh/core/error.h"
 #include "particlemesh/io/atomic_write.h"
@@ -298,4 +302,56 @@ TEST(MeshIO, BinaryPlyHasOpenMeshsLayoutByteForByte) {
   const std::string bytes2((std::istreambuf_iterator<char>(in2)), std::istreambuf_iterator<char>());
   EXPECT_EQ(bytes2.find("property float nx"), std::string::npos);
   EXPECT_EQ(bytes2.size(), header.size() - 3 * std::string("property float nx\n").size() + 800 * 12 + 1600 * 13);
+}
+
+// The writers' choice of float64 positions (where float32 would round them by more than 1e-6
+// of the mesh's size, or overflow) against a plain serial statement of the rule, on small
+// meshes where the deciding point may be anywhere (the first, the last, a leftover of the
+// writer's four-at-a-time scan) and with NaN, signed zeros, subnormals and huge values.
+TEST(MeshIO, Float64PositionsExactlyWhereFloat32WouldRoundThem) {
+  auto reference = [](const std::vector<Vec3>& P) {
+    if (P.empty()) return false;
+    Vec3 lo = P[0], hi = P[0];
+    double largest = 0, smallest = DBL_MAX;
+    for (const Vec3& p : P) {
+      lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+      hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+      for (const double v : {p.x, p.y, p.z}) {
+        largest = std::max(largest, std::abs(v));
+        smallest = std::min(smallest, std::abs(v) > 0 ? std::abs(v) : DBL_MAX);
+      }
+    }
+    if (largest > FLT_MAX) return true;
+    double rounding = largest * 0x1p-24;
+    if (smallest < FLT_MIN) rounding = std::max(rounding, 0x1p-150);
+    return rounding > 1e-6 * norm(hi - lo);
+  };
+  const fs::path dir = test::scratch_dir("float64");
+  const std::string path = (dir / "m.ply").string();
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  const double specials[] = {std::nan(""), -0.0, 0.0, 1e-39, 1e39, -1e39, 1e-300};
+  int doubles = 0, floats = 0;
+  for (size_t n = 1; n <= 11; ++n)
+    for (int trial = 0; trial < 36; ++trial) {
+      const double base = std::array<double, 4>{0, 1, 1000, 1e6}[rng() % 4];
+      const double spread = std::pow(10.0, double(rng() % 9) - 4);
+      TriMesh m;
+      for (size_t i = 0; i < n; ++i) m.positions.push_back({base + spread * unit(rng), base, base - spread * unit(rng)});
+      if (trial % 3 == 1) {  // one far or odd coordinate, anywhere
+        const size_t i = rng() % n;
+        const double v = trial % 2 ? specials[rng() % 7] : base + 1e3 * spread * unit(rng);
+        Vec3& p = m.positions[i];
+        (rng() % 3 == 0 ? p.x : rng() % 2 ? p.y : p.z) = v;
+      }
+      write_mesh(m, path);
+      std::ifstream in(path);
+      std::string line;
+      for (int k = 0; k < 4; ++k) std::getline(in, line);  // ply, format, element vertex, first property
+      const bool want = reference(m.positions);
+      EXPECT_EQ(line, want ? "property double x" : "property float x") << n << " points, trial " << trial;
+      (want ? doubles : floats) += 1;
+    }
+  EXPECT_GT(doubles, 60);  // both answers are exercised
+  EXPECT_GT(floats, 60);
 }

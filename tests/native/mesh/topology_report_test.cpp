@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <numeric>
 #include <random>
 #include <string>
 
@@ -327,12 +328,47 @@ TEST(TopologyReport, AgreesWithTheSerialReferenceForAnyThreadCount) {
   wide.positions.push_back({0, 0, 0});
   cone(wide, 0, 40, 1);
   meshes.push_back({"wide cone", wide});
+  // Manifold at every vertex (the report then joins components over vertices): closed and
+  // open pieces of equal triangle counts (their order in the report is their numbering, by
+  // lowest triangle), vertices renumbered at random and triangles shuffled, so that a
+  // component's lowest vertex is not in its lowest triangle.
+  TriMesh pieces;
+  for (int i = 0; i < 6; ++i) {
+    TriMesh piece = icosphere_mesh(2, 0.5 + 0.1 * i);
+    if (i % 3 == 2) piece.triangles.resize(piece.triangles.size() - 1);  // open: one boundary loop
+    const uint32_t o = uint32_t(pieces.positions.size());
+    for (const Vec3& p : piece.positions) pieces.positions.push_back(p + Vec3{3.0 * i, 0, 0});
+    for (const Triangle& t : piece.triangles) pieces.triangles.push_back({t[0] + o, t[1] + o, t[2] + o});
+  }
+  TriMesh torus_piece = torus_mesh(1, 0.3, 10, 8);
+  for (const Triangle& t : torus_piece.triangles) {
+    const uint32_t o = uint32_t(pieces.positions.size());
+    pieces.triangles.push_back({t[0] + o, t[1] + o, t[2] + o});
+  }
+  for (const Vec3& p : torus_piece.positions) pieces.positions.push_back(p + Vec3{0, 5, 0});
+  {
+    std::vector<uint32_t> renumber(pieces.positions.size());
+    std::iota(renumber.begin(), renumber.end(), 0u);
+    std::shuffle(renumber.begin(), renumber.end(), rng);
+    std::vector<Vec3> moved(pieces.positions.size());
+    for (size_t v = 0; v < moved.size(); ++v) moved[renumber[v]] = pieces.positions[v];
+    pieces.positions = moved;
+    for (Triangle& t : pieces.triangles)
+      for (uint32_t& v : t) v = renumber[v];
+    std::shuffle(pieces.triangles.begin(), pieces.triangles.end(), rng);
+  }
+  meshes.push_back({"manifold pieces, renumbered and shuffled", pieces});
   for (const auto& named : meshes) {
     const std::string& name = named.first;
     const TriMesh& m = named.second;  // not a structured binding: clang 14 cannot capture one
     const TopologyReport want = reference::topology_report(m);
     if (name.rfind("holes", 0) == 0) {
       EXPECT_GE(want.boundary_loop_edges.size(), 7u) << name;  // not vacuous
+    }
+    if (name.rfind("manifold pieces", 0) == 0) {  // not vacuous: many pieces, each vertex a fan
+      EXPECT_EQ(want.components, 7u);
+      EXPECT_EQ(want.nonmanifold_vertices, 0u);
+      EXPECT_EQ(want.boundary_loops, 2u);
     }
     // Every thread count this machine has (more would only idle in the arena).
     std::vector<int> counts{1};
