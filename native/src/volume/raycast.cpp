@@ -441,11 +441,13 @@ void RayCaster::Impl::Query::enter(uint32_t k, double tstar, double e2, double i
   const uint32_t slot = uint32_t(sc.offered.size());
   Active& a = sc.offered.emplace_back();
   a.k = k;
+  a.slot = slot;
   a.tstar = tstar;
   a.e2 = e2;
   a.ir2 = ir2;
   a.w = wk;
   sc.peaks.push_back(wk > 0 ? wk * kernel_value(im.kernel, e2 * ir2) : 0.0);
+  sc.where.push_back(0);
   sc.entries.insert(std::max(t_in, tlo), slot, 0);
   sc.exits.insert(std::min(t_out, thi), slot, 1);
 }

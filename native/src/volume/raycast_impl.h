@@ -30,6 +30,7 @@ struct Node {
 // smallest along the line and e2 = that smallest s / ir2.
 struct Active {
   uint32_t k;
+  uint32_t slot;  // its place in Scratch::offered
   double tstar, e2, ir2;
   double w;  // the particle's strength
 };
@@ -80,6 +81,7 @@ struct Scratch {
   EventQueue entries, exits;
   std::vector<Active> offered;   // the particles whose supports the ray meets, as found
   std::vector<double> peaks;     // per offered particle: w g(e2 ir2) if w > 0, else 0
+  std::vector<uint32_t> where;   // per offered particle: its place in `active` while there
   std::vector<Event> batch;      // the events at one t, applied in a canonical order
   std::vector<Active> active;
   std::vector<RayHit> hits;
@@ -279,25 +281,26 @@ void RayCaster::Impl::Query::sweep(Scratch& sc, Source& source) {
   active.clear();
   sc.offered.clear();
   sc.peaks.clear();
+  sc.where.clear();
   constexpr double kNone = std::numeric_limits<double>::infinity();
   // The running sums in locals, handed to interval() through the members (updating the
   // members as a pair and alone stalled the loads that forward them).
   double psum = 0, padded = 0;
-  // One event applied: an entry appends the particle, an exit swaps it out.
+  auto& where = sc.where;
+  // One event applied: an entry appends the particle, an exit moves the last one into its
+  // place (each particle is offered once, so its exit follows its entry).
   auto apply = [&](const Event& e) {
-    const Active& a = offered[e.slot];
     const double peak = peaks[e.slot];
     if (e.exit) {
-      for (size_t i = 0; i < active.size(); ++i)
-        if (active[i].k == a.k) {
-          active[i] = active.back();
-          active.pop_back();
-          psum -= peak;
-          break;
-        }
+      const uint32_t i = where[e.slot];
+      active[i] = active.back();
+      where[active[i].slot] = i;
+      active.pop_back();
+      psum -= peak;
       if (active.empty()) psum = padded = 0;
     } else {
-      active.push_back(a);
+      where[e.slot] = uint32_t(active.size());
+      active.push_back(offered[e.slot]);
       psum += peak;
       padded += peak;
     }
