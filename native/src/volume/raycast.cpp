@@ -222,9 +222,6 @@ void interval_polynomial(const RayCaster::Impl& im, double ta, double L, const s
   c[0] -= im.threshold;
 }
 
-// sum over the positive strengths of w g(s_min), s_min the particle's smallest s on [ta, tb],
-// in the order of `active`; the sum so far once it reaches `stop` (no term is negative, so
-// the whole sum reaches it too).
 // kernel_value(K, s), the same bits, without its branch for s >= 1 (t clamped at 0 instead).
 template <Kernel K>
 inline double kernel_value_clamped(double s) {
@@ -239,6 +236,9 @@ inline double kernel_value_clamped(double s) {
   }
 }
 
+// sum over the positive strengths of w g(s_min), s_min the particle's smallest s on [ta, tb],
+// in the order of `active`; the sum so far once it reaches `stop` (no term is negative, so
+// the whole sum reaches it too).
 template <Kernel K>
 double field_upper_bound(double ta, double tb, const std::vector<Active>& active, double stop) {
   double ub = 0;
