@@ -146,7 +146,10 @@ struct TileSource {
     return next < tile.list.size() ? tile.list[next].key : kInf;
   }
   void advance(RayCaster::Impl::Query& q, Scratch& sc) {
-    q.offer(tile.list[next++].k, sc);
+    const uint32_t k = tile.list[next++].k;
+    const RayCaster::Impl& im = q.im;
+    if (im.aniso) q.offer(k, sc);
+    else q.offer_sphere(k, im.pos[k], im.r2[k], im.inv_r2[k], im.w[k], sc);  // offer()'s own call
   }
 };
 

@@ -222,6 +222,20 @@ void interval_polynomial(const RayCaster::Impl& im, double ta, double L, const s
   c[0] -= im.threshold;
 }
 
+// kernel_value(K, s), the same bits, without its branch for s >= 1 (t clamped at 0 instead).
+template <Kernel K>
+inline double kernel_value_clamped(double s) {
+  if constexpr (K == Kernel::Blinn) {
+    return kernel_value(K, s);
+  } else {
+    double t = 1.0 - s;
+    t = t > 0.0 ? t : 0.0;
+    if constexpr (K == Kernel::Wyvill) return t * t * (5.0 + 4.0 * t) * (1.0 / 9.0);
+    if constexpr (K == Kernel::Poly4) return t * t;
+    return t * t * t;
+  }
+}
+
 // sum over the positive strengths of w g(s_min), s_min the particle's smallest s on [ta, tb],
 // in the order of `active`; the sum so far once it reaches `stop` (no term is negative, so
 // the whole sum reaches it too).
@@ -231,9 +245,11 @@ double field_upper_bound(double ta, double tb, const std::vector<Active>& active
   for (const Active& a : active) {
     const double wk = a.w;
     if (wk <= 0) continue;
+    // The distance from the closest approach to [ta, tb] (d0 <= d1: at most one term is
+    // not zero), without branches.
     const double d0 = ta - a.tstar, d1 = tb - a.tstar;
-    const double dmin = (d0 <= 0 && d1 >= 0) ? 0.0 : std::min(std::abs(d0), std::abs(d1));
-    ub += wk * kernel_value(K, (a.e2 + dmin * dmin) * a.ir2);
+    const double dmin = std::max(d0, 0.0) - std::min(d1, 0.0);
+    ub += wk * kernel_value_clamped<K>((a.e2 + dmin * dmin) * a.ir2);
     if (ub >= stop) break;
   }
   return ub;
@@ -413,28 +429,27 @@ void RayCaster::Impl::Query::offer(uint32_t k, Scratch& sc) {
   // The smallest s from the closest point itself (no cancellation for a far origin).
   const double smin = detail::metric_norm2(m, q + dn * tstar);
   const double h2 = (1.0 - smin) / ir2;
-  if (h2 > 0) enter(Active{k, tstar, smin / ir2, ir2, im.w[k]}, h2, sc);
+  if (h2 > 0) enter(k, tstar, smin / ir2, ir2, im.w[k], h2, sc);
 }
 
-void RayCaster::Impl::Query::enter(const Active& a, double h2, Scratch& sc) {
+void RayCaster::Impl::Query::enter(uint32_t k, double tstar, double e2, double ir2, double wk, double h2,
+                                   Scratch& sc) {
   const double hh = std::sqrt(h2);
-  const double t_in = a.tstar - hh, t_out = a.tstar + hh;
+  const double t_in = tstar - hh, t_out = tstar + hh;
   if (t_out <= tlo || t_in >= thi) return;
   ++stats.spheres_entered;
   const uint32_t slot = uint32_t(sc.offered.size());
-  sc.offered.push_back(a);
-  // Kept sorted by decreasing t (the next at the back): a few dozen at a time, where moving
-  // a few hundred bytes costs less than a heap's sifting. An entry is mostly among the next
-  // few events (searched from the back), an exit anywhere (bisected).
-  auto& events = sc.events;
-  const Event in{std::max(t_in, tlo), slot, false};
-  size_t i = events.size();
-  while (i > 0 && events[i - 1].t < in.t) --i;
-  events.insert(events.begin() + ptrdiff_t(i), in);
-  const Event out{std::min(t_out, thi), slot, true};
-  events.insert(std::upper_bound(events.begin(), events.end(), out,
-                                 [](const Event& x, const Event& y) { return x.t > y.t; }),
-                out);
+  Active& a = sc.offered.emplace_back();
+  a.k = k;
+  a.slot = slot;
+  a.tstar = tstar;
+  a.e2 = e2;
+  a.ir2 = ir2;
+  a.w = wk;
+  sc.peaks.push_back(wk > 0 ? wk * kernel_value(im.kernel, e2 * ir2) : 0.0);
+  sc.where.push_back(0);
+  sc.entries.insert(std::max(t_in, tlo), slot, 0);
+  sc.exits.insert(std::min(t_out, thi), slot, 1);
 }
 
 namespace {

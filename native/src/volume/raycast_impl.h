@@ -30,6 +30,7 @@ struct Node {
 // smallest along the line and e2 = that smallest s / ir2.
 struct Active {
   uint32_t k;
+  uint32_t slot;  // its place in Scratch::offered
   double tstar, e2, ir2;
   double w;  // the particle's strength
 };
@@ -37,7 +38,7 @@ struct Active {
 struct Event {
   double t;
   uint32_t slot;  // the particle in Scratch::offered
-  bool exit;
+  uint32_t exit;  // 0 or 1 (a whole word: no partial store to stall the copy of an event)
 };
 
 struct NodeEntry {
@@ -45,11 +46,42 @@ struct NodeEntry {
   uint32_t node;
 };
 
+// Events not yet applied, by increasing t from `head` on. A support found later mostly
+// begins and ends later than those found before it (the sources offer them roughly front to
+// back), so an event is inserted by a search from the end, moving few or none.
+struct EventQueue {
+  std::vector<Event> v;
+  size_t head = 0;
+  bool empty() const { return head == v.size(); }
+  size_t size() const { return v.size() - head; }
+  const Event& front() const { return v[head]; }
+  const Event& second() const { return v[head + 1]; }
+  void pop() {
+    if (++head == v.size()) clear();
+  }
+  void clear() {
+    v.clear();
+    head = 0;
+  }
+  void insert(double t, uint32_t slot, uint32_t exit) {
+    size_t i = v.size();
+    v.emplace_back();
+    for (; i > head && v[i - 1].t > t; --i) v[i] = v[i - 1];
+    v[i].t = t;  // field by field: a whole event assembled first would stall its copy
+    v[i].slot = slot;
+    v[i].exit = exit;
+  }
+};
+
 // Per-thread scratch, so queries allocate nothing once warm.
 struct Scratch {
   std::vector<NodeEntry> nodes;  // min-heap of nodes to visit, by entry t
-  std::vector<Event> events;     // by decreasing t
+  // The events not yet applied, entries and exits apart (the entries wait only for the
+  // horizon, the exits are the active particles').
+  EventQueue entries, exits;
   std::vector<Active> offered;   // the particles whose supports the ray meets, as found
+  std::vector<double> peaks;     // per offered particle: w g(e2 ir2) if w > 0, else 0
+  std::vector<uint32_t> where;   // per offered particle: its place in `active` while there
   std::vector<Event> batch;      // the events at one t, applied in a canonical order
   std::vector<Active> active;
   std::vector<RayHit> hits;
@@ -192,10 +224,11 @@ struct RayCaster::Impl {
       const Vec3 e = q - dn * b;  // from the centre to the closest point of the line
       const double e2 = squared_norm(e);
       const double h2 = r2 - e2;
-      if (h2 > 0) enter(Active{k, -b, e2, ir2, w}, h2, sc);
+      if (h2 > 0) enter(k, -b, e2, ir2, w, h2, sc);
     }
-    // A support the line meets (half chord h2 > 0): its events, if within [tlo, thi].
-    void enter(const Active& a, double h2, Scratch& sc);
+    // A support the line meets (half chord h2 > 0; the Active's fields): its events, if
+    // within [tlo, thi].
+    void enter(uint32_t k, double tstar, double e2, double ir2, double w, double h2, Scratch& sc);
     // The front-to-back sweep (below), fed by a source of particles: source.horizon() is a
     // lower bound of the entry of every particle it has not offered yet (+inf when none are
     // left), source.advance(query, scratch) offers some more through offer().
@@ -237,13 +270,41 @@ inline RayCaster::Impl::Query make_query(const RayCaster::Impl& im, const Vec3& 
 // that order either: every source gives the same hits, bit for bit.
 template <class Source>
 void RayCaster::Impl::Query::sweep(Scratch& sc, Source& source) {
-  auto& eheap = sc.events;
+  auto& entries = sc.entries;
+  auto& exits = sc.exits;
   auto& batch = sc.batch;
   auto& active = sc.active;
   const auto& offered = sc.offered;
-  eheap.clear();
+  const auto& peaks = sc.peaks;
+  entries.clear();
+  exits.clear();
   active.clear();
   sc.offered.clear();
+  sc.peaks.clear();
+  sc.where.clear();
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  // The running sums in locals, handed to interval() through the members (updating the
+  // members as a pair and alone stalled the loads that forward them).
+  double psum = 0, padded = 0;
+  auto& where = sc.where;
+  // One event applied: an entry appends the particle, an exit moves the last one into its
+  // place (each particle is offered once, so its exit follows its entry).
+  auto apply = [&](const Event& e) {
+    const double peak = peaks[e.slot];
+    if (e.exit) {
+      const uint32_t i = where[e.slot];
+      active[i] = active.back();
+      where[active[i].slot] = i;
+      active.pop_back();
+      psum -= peak;
+      if (active.empty()) psum = padded = 0;
+    } else {
+      where[e.slot] = uint32_t(active.size());
+      active.push_back(offered[e.slot]);
+      psum += peak;
+      padded += peak;
+    }
+  };
   double cur = tlo;
   uint32_t since_check = 0;  // intervals and particle offers since the last cancellation check
   while (!done) {
@@ -253,9 +314,14 @@ void RayCaster::Impl::Query::sweep(Scratch& sc, Source& source) {
     }
     // Strictly before the horizon: events at it may have partners (the same t) not yet found.
     const double horizon = source.horizon();
-    while (!eheap.empty() && eheap.back().t < horizon && !done) {
-      const double te = eheap.back().t;
+    while (!done) {
+      const double tn = entries.empty() ? kNone : entries.front().t;
+      const double tx = exits.empty() ? kNone : exits.front().t;
+      const double te = std::min(tn, tx);
+      if (!(te < horizon)) break;
       if (te > cur) {
+        peak_sum = psum;
+        peak_added = padded;
         interval(cur, te, active);
         cur = te;
         if (done) break;
@@ -264,33 +330,29 @@ void RayCaster::Impl::Query::sweep(Scratch& sc, Source& source) {
           if (detail::ray_cancelled()) return;
         }
       }
+      // The events at te: one alone (the common case) is applied as it is; several in the
+      // canonical order.
+      const bool more_n = tn == te && entries.size() > 1 && entries.second().t == te;
+      const bool more_x = tx == te && exits.size() > 1 && exits.second().t == te;
+      if (!more_n && !more_x && !(tn == te && tx == te)) {
+        auto& from = tn == te ? entries : exits;
+        apply(from.front());
+        from.pop();
+        continue;
+      }
       batch.clear();
-      while (!eheap.empty() && eheap.back().t == te) {
-        batch.push_back(eheap.back());
-        eheap.pop_back();
+      while (!entries.empty() && entries.front().t == te) {
+        batch.push_back(entries.front());
+        entries.pop();
       }
-      if (batch.size() > 1)
-        std::sort(batch.begin(), batch.end(), [&](const Event& a, const Event& b) {
-          return a.exit != b.exit ? b.exit : offered[a.slot].k < offered[b.slot].k;
-        });
-      for (const Event& e : batch) {
-        const Active& a = offered[e.slot];
-        const double peak = a.w > 0 ? a.w * kernel_value(im.kernel, a.e2 * a.ir2) : 0.0;
-        if (e.exit) {
-          for (size_t i = 0; i < active.size(); ++i)
-            if (active[i].k == a.k) {
-              active[i] = active.back();
-              active.pop_back();
-              peak_sum -= peak;
-              break;
-            }
-          if (active.empty()) peak_sum = peak_added = 0;
-        } else {
-          active.push_back(a);
-          peak_sum += peak;
-          peak_added += peak;
-        }
+      while (!exits.empty() && exits.front().t == te) {
+        batch.push_back(exits.front());
+        exits.pop();
       }
+      std::sort(batch.begin(), batch.end(), [&](const Event& a, const Event& b) {
+        return a.exit != b.exit ? b.exit : offered[a.slot].k < offered[b.slot].k;
+      });
+      for (const Event& e : batch) apply(e);
     }
     if (done || horizon == std::numeric_limits<double>::infinity()) break;  // (events are finite)
     source.advance(*this, sc);
