@@ -4,6 +4,7 @@
 #include <string>
 
 #include "core/parallel.h"
+#include "spatial/neighbor_cell_walk.h"
 
 namespace PM_NAMESPACE::detail {
 
@@ -42,8 +43,9 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
       const size_t cb = k * chunk_cells, ce = std::min(cells, cb + chunk_cells);
       out.reserve((grid.cell_begin(uint32_t(std::min(ce, cells - 1))) - grid.cell_begin(uint32_t(cb)) + 1) * 16);
       uint32_t around[27];
+      NeighborCellWalk walk(grid);
       for (size_t c = cb; c < ce; ++c) {
-        const int na = grid.neighbor_cells(uint32_t(c), around);
+        const int na = walk.around(uint32_t(c), around);
         for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) {
           if (rep[s] != s) continue;
           const Vec3 p = grid.sorted_point(s);
