@@ -3,7 +3,7 @@
 // prepared as such a user would.
 //
 //   scan_bench [shared/data folder] [--scan FILE.pcd|.ply]... [--runs N] [--write-prepared DIR]
-//              [--no-peers] [--write-meshes DIR] [--viewpoint]
+//              [--no-peers] [--no-gp3] [--as-is] [--write-meshes DIR] [--viewpoint]
 //
 // Without --scan it runs the scans of the shared data (pcd/bun0, milk, the Kinect frame,
 // colored_cloud; bunny.pcd holds bun0's points and the *_binary files re-encode others, so
@@ -20,6 +20,9 @@
 //                  (mu 2.5, 100 neighbours, 45 deg surface angle, 10..120 deg angles), search
 //                  radius 4.16 r0 (the tutorial's 0.025 on bun0), normals by NormalEstimation
 //                  with k = 20 (their time is included)
+// --as-is skips the preparation (the finite points as they are, r0 their median nearest-neighbour
+// distance): an evenly sampled cloud, e.g. a 1M-point sphere, meshed by each method as given.
+// --no-gp3 leaves PCL's greedy projection out (CGAL's advancing front still runs).
 // --viewpoint adds particlemesh given the file's sensor origin (PCD VIEWPOINT), where it is
 // taken (SurfaceOptions::viewpoint). Printed per scan and method: small holes (boundary loops of fewer than 10 edges), all
 // boundary loops, the share of the prepared points in a triangle, the longest triangle edge
@@ -31,6 +34,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <functional>
 #include <string>
@@ -65,12 +69,17 @@ constexpr int kMethods = 5;
 
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-double best_of(int runs, const std::function<void()>& f) {
+/// The best wall time of `runs` calls; each call's wall and process CPU time (user + system,
+/// all threads: on a loaded machine the fairer figure) to stderr, labelled `what`.
+double best_of(int runs, const std::function<void()>& f, const char* what = "") {
   double best = 1e300;
   for (int i = 0; i < runs; ++i) {
     const auto t = Clock::now();
+    const std::clock_t c = std::clock();
     f();
-    best = std::min(best, seconds_since(t));
+    const double wall = seconds_since(t);
+    std::fprintf(stderr, "%s: wall %.3f s, CPU %.3f s\n", what, wall, double(std::clock() - c) / CLOCKS_PER_SEC);
+    best = std::min(best, wall);
   }
   return best;
 }
@@ -104,7 +113,7 @@ XYZ::Ptr read_scan(const std::string& path) {
   return c;
 }
 
-Scan prepare(const std::string& name, const XYZ& input) {
+Scan prepare(const std::string& name, const XYZ& input, bool as_is) {
   Scan s;
   s.name = name;
   s.origin = {input.sensor_origin_.x(), input.sensor_origin_.y(), input.sensor_origin_.z()};
@@ -113,6 +122,11 @@ Scan prepare(const std::string& name, const XYZ& input) {
   pcl::removeNaNFromPointCloud(input, *finite, kept);
   s.raw_points = finite->size();
   s.raw_r0 = median_nn(*finite);
+  if (as_is) {
+    s.prepared = finite;
+    s.r0 = s.raw_r0;
+    return s;
+  }
   XYZ::Ptr voxel(new XYZ);
   pcl::VoxelGrid<pcl::PointXYZ> vg;
   vg.setInputCloud(finite);
@@ -194,7 +208,7 @@ int main(int argc, char** argv) {
   std::string data = "../shared/data", prepared_dir, meshes_dir;
   std::vector<std::string> scans;
   int runs = 3;
-  bool peers = true, viewpoint = false;
+  bool peers = true, gp3_too = true, viewpoint = false, as_is = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--scan" && i + 1 < argc) scans.push_back(argv[++i]);
@@ -202,11 +216,13 @@ int main(int argc, char** argv) {
     else if (a == "--write-prepared" && i + 1 < argc) prepared_dir = argv[++i];
     else if (a == "--write-meshes" && i + 1 < argc) meshes_dir = argv[++i];
     else if (a == "--no-peers") peers = false;
+    else if (a == "--no-gp3") gp3_too = false;
+    else if (a == "--as-is") as_is = true;
     else if (a == "--viewpoint") viewpoint = true;
     else if (!a.empty() && a[0] != '-') data = a;
     else {
       std::fprintf(stderr, "usage: scan_bench [data folder] [--scan FILE]... [--runs N] [--write-prepared DIR] "
-                           "[--write-meshes DIR] [--no-peers] [--viewpoint]\n");
+                           "[--write-meshes DIR] [--no-peers] [--no-gp3] [--as-is] [--viewpoint]\n");
       return 2;
     }
   }
@@ -235,10 +251,14 @@ int main(int argc, char** argv) {
   std::vector<std::string> notes;
   for (const std::string& path : scans) {
     const std::string name = std::filesystem::path(path).stem().string();
-    Scan s = prepare(name, *read_scan(path));
+    Scan s = prepare(name, *read_scan(path), as_is);
     char note[400];
-    std::snprintf(note, sizeof note, "%s: %zu finite points, raw median NN %.4g, leaf %.4g; prepared %zu, r0 %.4g",
-                  name.c_str(), s.raw_points, s.raw_r0, 1.5 * s.raw_r0, s.prepared->size(), s.r0);
+    if (as_is)
+      std::snprintf(note, sizeof note, "%s: %zu finite points, taken as they are (--as-is), r0 %.4g", name.c_str(),
+                    s.raw_points, s.r0);
+    else
+      std::snprintf(note, sizeof note, "%s: %zu finite points, raw median NN %.4g, leaf %.4g; prepared %zu, r0 %.4g",
+                    name.c_str(), s.raw_points, s.raw_r0, 1.5 * s.raw_r0, s.prepared->size(), s.r0);
     notes.push_back(note);
     if (!prepared_dir.empty()) pcl::io::savePLYFileBinary(prepared_dir + "/" + name + ".ply", *s.prepared);
     const std::vector<particlemesh::Vec3> P = positions_of(*s.prepared);
@@ -253,7 +273,7 @@ int main(int argc, char** argv) {
       o.has_viewpoint = k == 4;
       o.viewpoint = s.origin;
       particlemesh::SurfaceResult r;
-      const double t = best_of(runs, [&] { r = particlemesh::reconstruct_surface(cloud, o); });
+      const double t = best_of(runs, [&] { r = particlemesh::reconstruct_surface(cloud, o); }, "particlemesh");
       m[k] = measure(P, r.mesh.triangles, s.r0, t);
       if (k == 4 && !r.surface.viewpoint_used) m[k].ran = false;
       write_mesh(meshes_dir, name + (k == 4 ? "_particlemesh_viewpoint" : "_particlemesh"), P, r.mesh.triangles);
@@ -267,7 +287,7 @@ int main(int argc, char** argv) {
       const double t = best_of(runs, [&] {
         facets.clear();
         CGAL::advancing_front_surface_reconstruction(pts.begin(), pts.end(), std::back_inserter(facets));
-      });
+      }, "CGAL advancing front");
       std::vector<particlemesh::Triangle> tris;
       for (const auto& f : facets) tris.push_back({uint32_t(f[0]), uint32_t(f[1]), uint32_t(f[2])});
       const auto short_tris = cut(P, tris, 6 * s.r0);
@@ -275,6 +295,8 @@ int main(int argc, char** argv) {
       m[2] = measure(P, tris, s.r0, t);
       write_mesh(meshes_dir, name + "_cgal_af", P, tris);
 #endif
+    }
+    if (peers && gp3_too) {
       pcl::PointCloud<pcl::PointNormal>::Ptr pn(new pcl::PointCloud<pcl::PointNormal>);
       std::vector<pcl::Vertices> polygons;
       const double tg = best_of(runs, [&] {
@@ -301,7 +323,7 @@ int main(int argc, char** argv) {
         gp3.setSearchMethod(tree2);
         polygons.clear();
         gp3.reconstruct(polygons);
-      });
+      }, "PCL greedy projection");
       std::vector<particlemesh::Triangle> gp3;
       for (const auto& p : polygons)
         if (p.vertices.size() == 3) gp3.push_back({uint32_t(p.vertices[0]), uint32_t(p.vertices[1]), uint32_t(p.vertices[2])});

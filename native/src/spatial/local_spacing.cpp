@@ -157,7 +157,13 @@ std::vector<double> local_spacing_impl(const Vec3* points, size_t n, double r0, 
     for (size_t s = b; s < e; ++s) {
       nn[s] = dist(uint32_t(s), 0);
       int k = std::isfinite(nn[s]) ? 1 : 0;
-      while (k < kK && knn[s * kK + size_t(k)] != kNone && (k < 2 || dist(uint32_t(s), k) <= kGap * dist(uint32_t(s), k - 1))) ++k;
+      double previous = nn[s];  // dist(s, k - 1), each distance taken once
+      while (k < kK && knn[s * kK + size_t(k)] != kNone) {
+        const double d = dist(uint32_t(s), k);
+        if (k >= 2 && !(d <= kGap * previous)) break;
+        previous = d;
+        ++k;
+      }
       size[s] = uint8_t(k);
     }
   });

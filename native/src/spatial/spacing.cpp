@@ -10,6 +10,7 @@
 #include "particlemesh/core/error.h"
 #include "particlemesh/spatial/neighbor_grid.h"
 #include "spatial/grid_search.h"
+#include "spatial/neighbor_cell_walk.h"
 #include "spatial/spacing_impl.h"
 
 namespace PM_NAMESPACE {
@@ -81,6 +82,7 @@ SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTrac
     parallel_blocks(grid.cell_count(), 512, [&](size_t cb, size_t ce) {
       if (tracker.cancelled()) return;
       uint32_t around[27];
+      NeighborCellWalk walk(grid);
       for (size_t c = cb; c < ce; ++c) {
         bool any = false;
         for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)) && !any; ++s) any = counted(s);
@@ -88,7 +90,7 @@ SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTrac
           tracker.tick(1);
           continue;
         }
-        const int na = grid.neighbor_cells(uint32_t(c), around);
+        const int na = walk.around(uint32_t(c), around);
         for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) {
           if (!counted(s)) continue;
           const Vec3 p = grid.sorted_point(s);

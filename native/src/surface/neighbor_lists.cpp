@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <string>
+#include <utility>
 
 #include "core/parallel.h"
+#include "spatial/neighbor_cell_walk.h"
 
 namespace PM_NAMESPACE::detail {
 
@@ -35,22 +37,37 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
   size_t cap_point = SIZE_MAX;  // lowest input index over the cap (written under no race:
   std::vector<uint32_t> chunk_over(chunks, UINT32_MAX);  // per chunk, joined below)
 
-  parallel_blocks(chunks, 1, [&](size_t kb, size_t ke) {
+  // Without duplicates (most clouds) every point is its own representative: the loop then
+  // skips the check per candidate.
+  bool duplicates = false;
+  for (size_t s = 0; s < n && !duplicates; ++s) duplicates = rep[s] != s;
+  const auto fill = [&]<bool kDuplicates>(size_t kb, size_t ke) {
     for (size_t k = kb; k < ke; ++k) {
       if (tracker.cancelled()) return;
       auto& out = chunk_index[k];
       const size_t cb = k * chunk_cells, ce = std::min(cells, cb + chunk_cells);
       out.reserve((grid.cell_begin(uint32_t(std::min(ce, cells - 1))) - grid.cell_begin(uint32_t(cb)) + 1) * 16);
       uint32_t around[27];
+      NeighborCellWalk walk(grid);
+      std::pair<uint32_t, uint32_t> runs[27];  // the cells' points: runs of sorted indices
       for (size_t c = cb; c < ce; ++c) {
-        const int na = grid.neighbor_cells(uint32_t(c), around);
+        const int na = walk.around(uint32_t(c), around);
+        // Cells next to each other in the grid's order (along z) are one run of points.
+        int nr = 0;
+        for (int a = 0; a < na; ++a) {
+          const uint32_t b = grid.cell_begin(around[a]), e = grid.cell_end(around[a]);
+          if (nr > 0 && runs[nr - 1].second == b)
+            runs[nr - 1].second = e;
+          else
+            runs[nr++] = {b, e};
+        }
         for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) {
-          if (rep[s] != s) continue;
+          if (kDuplicates && rep[s] != s) continue;
           const Vec3 p = grid.sorted_point(s);
           const size_t before = out.size();
-          for (int a = 0; a < na; ++a) {
-            for (uint32_t t = grid.cell_begin(around[a]); t < grid.cell_end(around[a]); ++t) {
-              if (t == s || rep[t] != t) continue;
+          for (int r = 0; r < nr; ++r) {
+            for (uint32_t t = runs[r].first; t < runs[r].second; ++t) {
+              if (t == s || (kDuplicates && rep[t] != t)) continue;
               if (squared_distance(grid.sorted_point(t), p) <= r2) out.push_back(t);
             }
           }
@@ -60,7 +77,11 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
         tracker.tick(grid.cell_end(uint32_t(c)) - grid.cell_begin(uint32_t(c)));
       }
     }
-  });
+  };
+  if (duplicates)
+    parallel_blocks(chunks, 1, [&](size_t kb, size_t ke) { fill.template operator()<true>(kb, ke); });
+  else
+    parallel_blocks(chunks, 1, [&](size_t kb, size_t ke) { fill.template operator()<false>(kb, ke); });
   tracker.check();
   for (size_t k = 0; k < chunks; ++k)
     if (chunk_over[k] != UINT32_MAX) cap_point = std::min<size_t>(cap_point, chunk_over[k]);
