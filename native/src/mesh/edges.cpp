@@ -82,11 +82,11 @@ size_t number_edges(const uint32_t* triangles, size_t m, size_t n, int threads, 
         for (size_t v = b * kBlock; v < std::min(n, (b + 1) * kBlock); ++v) {
           uint64_t* p = pairs.data() + start[v];
           uint64_t* end = pairs.data() + start[v + 1];
-          if (end - p <= 16) {  // the common few: insertion sort
+          if (end - p > 16) {
+            std::sort(p, end);
+          } else if (end - p > 1) {  // the common few: insertion sort
             for (uint64_t* i = p + 1; i < end; ++i)
               for (uint64_t* j = i; j > p && j[-1] > *j; --j) std::swap(j[-1], *j);
-          } else {
-            std::sort(p, end);
           }
           for (uint64_t* i = p; i < end; ++i) edges += (i == p || (i[-1] >> 32) != (*i >> 32));
         }
