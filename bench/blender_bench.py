@@ -7,8 +7,9 @@
 
 1. A 1M-triangle result into a Blender mesh (the add-on's bulk foreach_set path), with and
    without the library's normals as custom split normals; beside Mesh.from_pydata.
-2. Live mode on a 100k-particle system: the cost of a frame change with the mesh regenerated
-   from the evaluated particles (source read, triangulation, mesh write), beside the same
+2. Live mode on a 100k-particle system: the cost of a frame change (wall time, and the CPU
+   time of Blender's process, all threads: the fairer figure on a shared machine) with the
+   mesh regenerated from the evaluated particles (source read, triangulation, mesh write), beside the same
    frame change with live mode off, and revisiting cached frames: with every particle (Viewport
    Budget 0), with the default Viewport Budget (8 000: a bigger system is thinned to at most
    about that many while scrubbing), and with the viewport's Thin Out set by hand. A cached
@@ -167,12 +168,18 @@ def make_emitter(count):
     return emitter
 
 
+#: The CPU time (user + sys, all of Blender's threads) of every step() frame change, in order:
+#: on a shared machine the fairer figure beside the wall times.
+cpu_costs = []
+
+
 def step(frames):
     costs = []
     for f in frames:
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         scene.frame_set(f)
         costs.append(time.perf_counter() - t)
+        cpu_costs.append(time.process_time() - c)
     return costs
 
 
@@ -182,6 +189,7 @@ if "live" not in args.skip or "peers" not in args.skip:
     emitter = make_emitter(args.particles)
     frames = list(range(2, args.frames + 2))
     baseline = step(frames)  # the particle simulation alone (fills Blender's point cache)
+    baseline_cpu = cpu_costs[-len(frames):]
 
 def live_run(method, budget=0, **props):
     """Live mode with `method` on the emitter (the generated object's Viewport Budget set to
@@ -200,6 +208,7 @@ def live_run(method, budget=0, **props):
     name = generated.name
     pm.live.history.clear()
     live_costs = step(frames)
+    run_cpu.append(statistics.median(cpu_costs[-len(frames):]))
     records = [r for n, r in pm.live.history if n == name]
     assert len(records) == len(frames) and not any("error" in r for r in records), records
     cached_costs = step(frames)
@@ -213,6 +222,7 @@ def live_run(method, budget=0, **props):
 
 
 last_data = {}
+run_cpu = []  # per live_run, in order: the median CPU of its new frames' changes
 
 
 def time_swaps(data, custom_normals, holders=False):
@@ -280,6 +290,11 @@ if "live" not in args.skip:
     row("triangles", lambda lc, rec, cc, cr: str(rec[0]["triangles"]))
     row("frame change, live mode off (Blender's particle step only)", lambda *a: ms(med(baseline)))
     row("frame change, live mode on", lambda lc, rec, cc, cr: ms(med(lc)))
+    cpu_of = dict(zip(methods, run_cpu))
+    out("| frame change, live mode on: CPU time of Blender's process (all threads) | "
+        + " | ".join(ms(cpu_of[m]) for m in methods) + " |")
+    out("| frame change, live mode off: CPU time | "
+        + " | ".join(ms(med(baseline_cpu)) for m in methods) + " |")
     row("- the add-on's handler", lambda lc, rec, cc, cr: ms(med([r["seconds"] for r in rec])))
     row("-- read the evaluated particles", lambda lc, rec, cc, cr: ms(med([r["source"] for r in rec])))
     row("-- mesh them (library)", lambda lc, rec, cc, cr: ms(med([r["mesh"] for r in rec])))

@@ -1,6 +1,8 @@
 """Blender meshes from and to numpy arrays, in bulk (foreach_get / foreach_set; no per-vertex
 Python), as io_mesh_ply does."""
 
+import threading
+
 import bpy
 import numpy as np
 
@@ -41,22 +43,32 @@ def write(mesh, data, *, custom_normals=True, attributes=True):
     if not rebuild:
         mesh.vertices.foreach_set("co", positions.ravel())
     else:
-        mesh.clear_geometry()
-        mesh.vertices.add(nv)
-        mesh.vertices.foreach_set("co", positions.ravel())
-        if nt:
-            mesh.loops.add(3 * nt)
-            mesh.loops.foreach_set("vertex_index", triangles.ravel().astype(INDEX))
-            mesh.polygons.add(nt)
-            mesh.polygons.foreach_set("loop_start", mesh_arrays.loop_starts(nt))
-            if _SET_LOOP_TOTAL:
-                mesh.polygons.foreach_set("loop_total", np.full(nt, 3, dtype=INDEX))
-            mesh.polygons.foreach_set("use_smooth", np.ones(nt, dtype=bool))
-            # The library numbers the edges; Blender's own edge pass, which
-            # update(calc_edges=True) runs, was most of the time of writing a mesh.
-            edges, corner_edges = pm.triangle_edges(triangles, nv)
-            mesh.edges.add(len(edges))
-            mesh.edges.foreach_set("vertices", edges.ravel())
+        # The same bits as unsigned (the library's indices are >= 0): no copy for Blender's
+        # unsigned corners or the library's edge numbering.
+        corners = triangles.view(INDEX)
+        # The library numbers the edges in a thread of its own (ctypes lets go of the GIL)
+        # while Blender takes the vertices, corners and faces. Blender's own edge pass, which
+        # update(calc_edges=True) runs, was most of the time of writing a mesh.
+        edges = _InThread(pm.triangle_edges, corners, nv) if nt else None
+        try:
+            mesh.clear_geometry()
+            mesh.vertices.add(nv)
+            mesh.vertices.foreach_set("co", positions.ravel())
+            if nt:
+                mesh.loops.add(3 * nt)
+                mesh.loops.foreach_set("vertex_index", corners.ravel())
+                mesh.polygons.add(nt)
+                mesh.polygons.foreach_set("loop_start", mesh_arrays.loop_starts(nt))
+                if _SET_LOOP_TOTAL:
+                    mesh.polygons.foreach_set("loop_total", np.full(nt, 3, dtype=INDEX))
+                mesh.polygons.foreach_set("use_smooth", np.ones(nt, dtype=bool))
+        finally:
+            if edges is not None:
+                edges.join()
+        if edges is not None:
+            edge_vertices, corner_edges = edges.result()
+            mesh.edges.add(len(edge_vertices))
+            mesh.edges.foreach_set("vertices", edge_vertices.ravel())
             mesh.loops.foreach_set("edge_index", corner_edges)
             calc_edges = False
     mesh.update(calc_edges=calc_edges)
@@ -74,6 +86,30 @@ def write(mesh, data, *, custom_normals=True, attributes=True):
         for name, values in data.attributes.items():
             set_point_attribute(mesh, name, values)
     return mesh
+
+
+class _InThread(threading.Thread):
+    """fn(*args) run in a thread of its own; result() waits for it and returns its value or
+    raises its exception."""
+
+    def __init__(self, fn, *args):
+        super().__init__(name="particlemesh", daemon=True)
+        self._call = (fn, args)
+        self._value = self._error = None
+        self.start()
+
+    def run(self):
+        fn, args = self._call
+        try:
+            self._value = fn(*args)
+        except BaseException as e:  # handed to the caller by result()
+            self._error = e
+
+    def result(self):
+        self.join()
+        if self._error is not None:
+            raise self._error
+        return self._value
 
 
 def _same_triangles(mesh, nv, triangles):

@@ -461,6 +461,16 @@ def test_index_buffers_have_the_format_blender_copies_in_bulk(pm):
     bpy.data.meshes.remove(mesh)
 
 
+def test_write_raises_what_the_edge_numbering_refuses(pm):
+    """The edges are numbered in a thread of their own while Blender takes the rest: an index
+    beyond the vertices still reaches the caller as the library's error, naming it."""
+    data = pm.particlemesh.Mesh(np.zeros((3, 3), np.float32), np.array([[0, 1, 2], [0, 2, 5]], np.int32))
+    mesh = bpy.data.meshes.new("bad indices")
+    with pytest.raises(pm.particlemesh.Error, match="triangle 1 has vertex index 5"):
+        pm.blender_mesh.write(mesh, data)
+    bpy.data.meshes.remove(mesh)
+
+
 # ---- smooth and polygonize (C ABI from issues 4 and 7) ----------------------------------------
 
 def icosphere_object():

@@ -8,6 +8,7 @@
 #include "capi/conversions.h"
 #include "capi/firewall.h"
 #include "capi/handles.h"
+#include "mesh/edges_impl.h"
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/edges.h"
 #include "particlemesh/mesh/topology_report.h"
@@ -149,19 +150,15 @@ pm_status pm_triangle_edges(const uint32_t* triangles, size_t triangle_count, si
       require(out_edges, "out_edges");
       require(out_corner_edges, "out_corner_edges");
     }
-    if (triangle_count >= (size_t(1) << 30)) throw Error(Status::LimitExceeded, "more than 2^30 triangles");
-    std::vector<Triangle> tris(triangle_count);
-    for (size_t t = 0; t < triangle_count; ++t) tris[t] = {triangles[3 * t], triangles[3 * t + 1], triangles[3 * t + 2]};
-    const MeshEdges e = mesh_edges(tris, vertex_count, threads);
-    *out_edge_count = e.edges.size();
-    if (edge_capacity < e.edges.size())
-      throw Error(Status::InvalidArgument, "edge_capacity " + std::to_string(edge_capacity) + " is less than the " +
-                                               std::to_string(e.edges.size()) + " edges");
-    for (size_t i = 0; i < e.edges.size(); ++i) {
-      out_edges[2 * i] = e.edges[i][0];
-      out_edges[2 * i + 1] = e.edges[i][1];
-    }
-    std::copy(e.corner_edges.begin(), e.corner_edges.end(), out_corner_edges);
+    *out_edge_count = detail::number_edges(triangles, triangle_count, vertex_count, threads, out_corner_edges,
+                                           [&](size_t count) {
+                                             *out_edge_count = count;
+                                             if (edge_capacity < count)
+                                               throw Error(Status::InvalidArgument,
+                                                           "edge_capacity " + std::to_string(edge_capacity) +
+                                                               " is less than the " + std::to_string(count) + " edges");
+                                             return out_edges;
+                                           });
   });
 }
 

@@ -2,78 +2,134 @@
 
 #include <algorithm>
 #include <atomic>
-#include <numeric>
+#include <limits>
 #include <string>
 
 #include "core/parallel.h"
+#include "mesh/edges_impl.h"
 #include "particlemesh/core/error.h"
 
 namespace PM_NAMESPACE {
 
+namespace detail {
+
+namespace {
+
+/// The error for triangle t, which has an index >= vertex_count or a repeated vertex.
+[[noreturn]] void bad_triangle(const uint32_t* T, size_t t, size_t vertex_count) {
+  for (int k = 0; k < 3; ++k)
+    if (T[k] >= vertex_count)
+      throw Error(Status::InvalidArgument, "triangle " + std::to_string(t) + " has vertex index " +
+                                               std::to_string(T[k]) + ", beyond the " +
+                                               std::to_string(vertex_count) + " vertices");
+  throw Error(Status::InvalidArgument, "triangle " + std::to_string(t) + " repeats a vertex");
+}
+
+}  // namespace
+
 // Hand-written: OpenMesh builds its half-edge structure (and refuses non-manifold input) to
 // get edges, and Blender's own edge pass was most of the time of writing a mesh into it
-// (bench/RESULTS.md): here each edge belongs to its lower vertex, whose few
-// higher neighbours are sorted in place.
-MeshEdges mesh_edges(const std::vector<Triangle>& triangles, size_t vertex_count, int threads) {
-  if (vertex_count >= (size_t(1) << 32)) throw Error(Status::LimitExceeded, "more than 2^32 - 1 vertices");
-  if (triangles.size() >= (size_t(1) << 30)) throw Error(Status::LimitExceeded, "more than 2^30 triangles");
-  for (size_t t = 0; t < triangles.size(); ++t) {
-    const Triangle& T = triangles[t];
-    for (uint32_t v : T)
-      if (v >= vertex_count)
-        throw Error(Status::InvalidArgument, "triangle " + std::to_string(t) + " has vertex index " + std::to_string(v) +
-                                                 ", beyond the " + std::to_string(vertex_count) + " vertices");
-    if (T[0] == T[1] || T[1] == T[2] || T[0] == T[2])
-      throw Error(Status::InvalidArgument, "triangle " + std::to_string(t) + " repeats a vertex");
-  }
-  MeshEdges out;
-  detail::with_threads(threads, [&] {
-    const size_t n = vertex_count, m = triangles.size();
-    // Per lower vertex, the higher ends of its corners' edges (with repeats), then sorted and
-    // made unique in place: [off[v], end[v]).
-    std::vector<uint32_t> off(n + 1, 0);
-    detail::parallel_blocks(m, 8192, [&](size_t b, size_t e) {
-      for (size_t t = b; t < e; ++t)
-        for (int k = 0; k < 3; ++k) {
-          const uint32_t x = triangles[t][k], y = triangles[t][(k + 1) % 3];
-          std::atomic_ref<uint32_t>(off[std::min(x, y) + 1]).fetch_add(1, std::memory_order_relaxed);
+// (bench/RESULTS.md). Each edge belongs to its lower vertex: the corners are bucketed by
+// their edge's lower vertex as (higher vertex, corner) pairs, each vertex's few pairs are
+// sorted (so the order of the parallel fill is gone), and one walk over the sorted pairs
+// numbers the edges and gives every corner its edge.
+size_t number_edges(const uint32_t* triangles, size_t m, size_t n, int threads, uint32_t* corner_edges,
+                    const std::function<uint32_t*(size_t)>& edges_at) {
+  if (n >= (size_t(1) << 32)) throw Error(Status::LimitExceeded, "more than 2^32 - 1 vertices");
+  if (m >= (size_t(1) << 30)) throw Error(Status::LimitExceeded, "more than 2^30 triangles");
+  size_t count = 0;
+  with_threads(threads, [&] {
+    // Per lower vertex v, its corners' slots [start[v], start[v + 1]); counted, checking
+    // every triangle on the way (the first bad one is named).
+    std::vector<uint32_t> start(n + 1, 0);
+    std::atomic<size_t> first_bad{std::numeric_limits<size_t>::max()};
+    parallel_blocks(m, 8192, [&](size_t b, size_t e) {
+      for (size_t t = b; t < e; ++t) {
+        const uint32_t* T = triangles + 3 * t;
+        if (T[0] >= n || T[1] >= n || T[2] >= n || T[0] == T[1] || T[1] == T[2] || T[0] == T[2]) {
+          size_t seen = first_bad.load(std::memory_order_relaxed);
+          while (t < seen && !first_bad.compare_exchange_weak(seen, t, std::memory_order_relaxed)) {
+          }
+          return;  // the rest of the block can only be later
         }
-    });
-    std::partial_sum(off.begin(), off.end(), off.begin());
-    std::vector<uint32_t> higher(off[n]);
-    std::vector<uint32_t> end(off.begin(), off.end() - 1);  // fill cursors first
-    detail::parallel_blocks(m, 8192, [&](size_t b, size_t e) {
-      for (size_t t = b; t < e; ++t)
-        for (int k = 0; k < 3; ++k) {
-          const uint32_t x = triangles[t][k], y = triangles[t][(k + 1) % 3];
-          higher[std::atomic_ref<uint32_t>(end[std::min(x, y)]).fetch_add(1, std::memory_order_relaxed)] = std::max(x, y);
-        }
-    });
-    // Sorted, so the order of the fill (which depends on the threads) is gone.
-    std::vector<uint32_t> first(n + 1, 0);  // the id of v's first edge, then the total
-    detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
-      for (size_t v = b; v < e; ++v) {
-        std::sort(higher.begin() + off[v], higher.begin() + end[v]);
-        end[v] = uint32_t(std::unique(higher.begin() + off[v], higher.begin() + end[v]) - higher.begin());
-        first[v + 1] = end[v] - off[v];
+        for (int k = 0; k < 3; ++k)
+          std::atomic_ref<uint32_t>(start[std::min(T[k], T[(k + 1) % 3]) + 1]).fetch_add(1, std::memory_order_relaxed);
       }
     });
-    std::partial_sum(first.begin(), first.end(), first.begin());
-    out.edges.resize(first[n]);
-    detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
-      for (size_t v = b; v < e; ++v)
-        for (uint32_t i = off[v]; i < end[v]; ++i) out.edges[first[v] + (i - off[v])] = {uint32_t(v), higher[i]};
-    });
-    out.corner_edges.resize(3 * m);
-    detail::parallel_blocks(m, 8192, [&](size_t b, size_t e) {
-      for (size_t t = b; t < e; ++t)
-        for (int k = 0; k < 3; ++k) {
-          const uint32_t x = triangles[t][k], y = triangles[t][(k + 1) % 3], lo = std::min(x, y);
-          const auto at = std::lower_bound(higher.begin() + off[lo], higher.begin() + end[lo], std::max(x, y));
-          out.corner_edges[3 * t + size_t(k)] = first[lo] + uint32_t(at - (higher.begin() + off[lo]));
+    if (const size_t t = first_bad.load(); t < m) bad_triangle(triangles + 3 * t, t, n);
+    for (size_t v = 0; v < n; ++v) start[v + 1] += start[v];
+    // (higher vertex << 32 | corner) per slot; 3 m < 2^32.
+    std::vector<uint64_t> pairs(3 * m);
+    {
+      std::vector<uint32_t> cursor(start.begin(), start.end() - 1);
+      parallel_blocks(m, 8192, [&](size_t b, size_t e) {
+        for (size_t t = b; t < e; ++t)
+          for (int k = 0; k < 3; ++k) {
+            const uint32_t x = triangles[3 * t + size_t(k)], y = triangles[3 * t + size_t((k + 1) % 3)];
+            const uint32_t slot = std::atomic_ref<uint32_t>(cursor[std::min(x, y)]).fetch_add(1, std::memory_order_relaxed);
+            pairs[slot] = (uint64_t(std::max(x, y)) << 32) | uint64_t(3 * t + size_t(k));
+          }
+      });
+    }
+    // Fixed blocks of vertices: each sorts its vertices' pairs and counts its edges, then,
+    // from its first edge's number, numbers them.
+    constexpr size_t kBlock = 4096;
+    const size_t blocks = (n + kBlock - 1) / kBlock;
+    std::vector<size_t> first(blocks + 1, 0);
+    parallel_blocks(blocks, 1, [&](size_t bb, size_t be) {
+      for (size_t b = bb; b < be; ++b) {
+        size_t edges = 0;
+        for (size_t v = b * kBlock; v < std::min(n, (b + 1) * kBlock); ++v) {
+          uint64_t* p = pairs.data() + start[v];
+          uint64_t* end = pairs.data() + start[v + 1];
+          if (end - p > 16) {
+            std::sort(p, end);
+          } else if (end - p > 1) {  // the common few: insertion sort
+            for (uint64_t* i = p + 1; i < end; ++i)
+              for (uint64_t* j = i; j > p && j[-1] > *j; --j) std::swap(j[-1], *j);
+          }
+          for (uint64_t* i = p; i < end; ++i) edges += (i == p || (i[-1] >> 32) != (*i >> 32));
         }
+        first[b + 1] = edges;
+      }
+    });
+    for (size_t b = 0; b < blocks; ++b) first[b + 1] += first[b];
+    count = first[blocks];
+    uint32_t* out = edges_at(count);
+    parallel_blocks(blocks, 1, [&](size_t bb, size_t be) {
+      for (size_t b = bb; b < be; ++b) {
+        size_t next = first[b];
+        for (size_t v = b * kBlock; v < std::min(n, (b + 1) * kBlock); ++v) {
+          const uint64_t* p = pairs.data() + start[v];
+          const uint64_t* end = pairs.data() + start[v + 1];
+          size_t current = 0;
+          for (const uint64_t* i = p; i < end; ++i) {
+            const uint32_t higher = uint32_t(*i >> 32);
+            if (i == p || uint32_t(i[-1] >> 32) != higher) {
+              current = next++;
+              out[2 * current] = uint32_t(v);
+              out[2 * current + 1] = higher;
+            }
+            corner_edges[uint32_t(*i)] = uint32_t(current);
+          }
+        }
+      }
     });
   });
+  return count;
+}
+
+}  // namespace detail
+
+MeshEdges mesh_edges(const std::vector<Triangle>& triangles, size_t vertex_count, int threads) {
+  static_assert(sizeof(Triangle) == 3 * sizeof(uint32_t) && sizeof(std::array<uint32_t, 2>) == 2 * sizeof(uint32_t));
+  MeshEdges out;
+  out.corner_edges.resize(3 * triangles.size());
+  detail::number_edges(reinterpret_cast<const uint32_t*>(triangles.data()), triangles.size(), vertex_count, threads,
+                       out.corner_edges.data(), [&](size_t count) {
+                         out.edges.resize(count);
+                         return reinterpret_cast<uint32_t*>(out.edges.data());
+                       });
   return out;
 }
 

@@ -66,4 +66,27 @@ TEST(MeshEdges, BadTrianglesAreNamed) {
   };
   EXPECT_NE(message({{0, 1, 2}, {1, 2, 7}}, 5).find("triangle 1 has vertex index 7"), std::string::npos);
   EXPECT_NE(message({{0, 1, 1}}, 5).find("triangle 0 repeats a vertex"), std::string::npos);
+  // Checked in parallel blocks: the first bad triangle is named whichever block finds one first.
+  std::vector<Triangle> many(100000, Triangle{0, 1, 2});
+  many[90000] = {0, 1, 9};
+  many[70001] = {4, 4, 2};
+  many[20000] = {0, 7, 2};
+  for (int threads : {1, 2, 3}) {
+    try {
+      mesh_edges(many, 5, threads);
+      ADD_FAILURE() << "no error at " << threads << " threads";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("triangle 20000 has vertex index 7"), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(MeshEdges, VerticesWithManyCornersAndRepeatedTriangles) {
+  // A fan of 60 triangles about vertex 0 (its corners sorted the long way), the same fan
+  // again reversed, and a strip whose vertices have a handful each.
+  std::vector<Triangle> tris;
+  for (uint32_t i = 1; i <= 60; ++i) tris.push_back({0, i, i % 60 + 1});
+  for (uint32_t i = 1; i <= 60; ++i) tris.push_back({0, i % 60 + 1, i});
+  for (uint32_t i = 61; i < 200; ++i) tris.push_back({i, i + 1, i + 2});
+  for (int threads : {1, 2, 3}) expect_edges_of(tris, mesh_edges(tris, 202, threads));
 }
