@@ -118,24 +118,7 @@ struct RayCaster::Impl {
   std::vector<double> bound_r;   // radius of a ball around the support (spheres: R)
   std::vector<Node> nodes;
 
-  // Where a ray may start its sweep (build_skip_grid, skip_start in raycast.cpp): cubes of
-  // side h over the supports' box, each marked when an upper bound of the field over it
-  // (every positive term at its largest value in the cube) reaches T. Everywhere in an
-  // unmarked cube F < T, so no crossing lies there; a ray walks the cubes it passes through
-  // and starts its exact sweep where it enters the first marked one.
-  struct SkipGrid {
-    Vec3 org;                      // corner of cube (0, 0, 0)
-    double h = 0, inv_h = 0;
-    int n[3]{};
-    double reach = 0;              // |org|_inf + the grid's diagonal (for the rounding guard)
-    std::vector<uint8_t> marked;   // x fastest; empty: no grid, every ray starts at t_min
-  } skip;
-
   void build();
-  void build_skip_grid();
-  /// The t from which the sweep of the ray o + t dn (unit dn) over [tlo, thi] must run:
-  /// F < T on [tlo, result) (thi or more: on the whole range).
-  double skip_start(const Vec3& o, const Vec3& dn, double tlo, double thi) const;
 
   // ---- one query ------------------------------------------------------------------------
   struct Query {
@@ -227,21 +210,6 @@ struct RayCaster::Impl {
       pending = hit;
       has_pending = true;
       height = 0;
-    }
-
-    // A late start: F < T on [tlo, ts) (skip_start's proof), so the range starts outside and
-    // the sweep begins at ts as if the range began there. Every query of this ray (a single
-    // ray, a tile's, a batch's, at any thread count) starts at the same ts, so sums in the
-    // same order and gives the same bits. (Called by the sweep once it knows the source has a
-    // particle: a ray that meets none has no hit wherever it starts.)
-    void late_start() {
-      const double ts = im.skip_start(o, dn, tlo, thi);
-      if (!(ts > tlo)) return;
-      started = true;
-      inside = false;
-      starts_inside = false;
-      if (ts >= thi) done = true;  // no crossing in the range
-      else tlo = ts;
     }
 
     void interval(double ta, double tb, const std::vector<Active>& active);
@@ -337,7 +305,6 @@ void RayCaster::Impl::Query::sweep(Scratch& sc, Source& source) {
       padded += peak;
     }
   };
-  if (source.horizon() < thi) late_start();
   double cur = tlo;
   uint32_t since_check = 0;  // intervals and particle offers since the last cancellation check
   while (!done) {
