@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 
@@ -552,6 +553,94 @@ TEST(RayCaster, BatchesAreDeterministicAndMatchSingleQueries) {
       EXPECT_EQ(h.hits[0].position, a.positions[i]);
     } else {
       EXPECT_TRUE(std::isinf(a.t[i]));
+    }
+  }
+}
+
+// The first crossing must be found wherever it lies, however small the part of the surface
+// it belongs to: a caster may start a ray's exact sweep late only where it has proved F < T
+// before the start. Small isolated blobs (one particle whose peak is just above T: a sphere of
+// a tenth of the radius or less) and a thin, holed sheet in front of a big block, met head on
+// and grazed, with every kernel, spheres and ellipsoids: the first hit is the blob's analytic
+// sphere (when the ray meets it), the first sign change of densely sampled F, and all_hits'
+// first, on the same ray.
+TEST(RayCaster, FirstCrossingsOfSmallBlobsAndThinSheetsInFrontOfABlock) {
+  for (const Kernel k : kAll) {
+    for (const bool aniso : {false, true}) {
+      const double T = 0.45;
+      std::vector<Vec3> p;
+      FieldParams fp = params(k, 1.0, T);
+      // The block behind: 8 x 8 x 8 particles, spacing 0.5, from x = 3.
+      for (int x = 0; x < 8; ++x)
+        for (int y = 0; y < 8; ++y)
+          for (int z = 0; z < 8; ++z) {
+            p.push_back({3.0 + 0.5 * x, -1.75 + 0.5 * y, -1.75 + 0.5 * z});
+            fp.strengths.push_back(1.0);
+          }
+      // Blobs: one particle each, peak w = T / 0.98, 0.96, 0.9, far from every other support.
+      const double peaks[] = {0.98, 0.96, 0.9};
+      const Vec3 blob[] = {{0, 0, 0}, {0, 2.6, 0}, {0, 0, 2.6}};
+      for (int b = 0; b < 3; ++b) {
+        p.push_back(blob[b]);
+        fp.strengths.push_back(T / peaks[b]);
+      }
+      // A sheet at x = -4.5: 9 x 9 particles of spacing 0.5 whose summed peak barely reaches T
+      // (holes between the particles for some kernels).
+      for (int y = 0; y < 9; ++y)
+        for (int z = 0; z < 9; ++z) {
+          p.push_back({-4.5, -2.0 + 0.5 * y, -2.0 + 0.5 * z});
+          fp.strengths.push_back(T / 3.0);
+        }
+      if (aniso) {
+        fp.anisotropy.enabled = true;
+        fp.anisotropy.min_neighbors = 3;
+        fp.anisotropy.max_stretch = 4;
+      }
+      const ParticleField field(p, fp);
+      const RayCaster caster(field);
+      const std::string what = std::string(kernel_name(k)) + (aniso ? " anisotropic" : "");
+      // The first hit of o + t d, checked against the reference on [0, t_end]; inf for none.
+      auto check = [&](const Vec3& o, const Vec3& d, double t_end, const char* ray) {
+        const auto first = caster.first_hit(o, d);
+        const RayHits all = caster.all_hits(o, d);
+        const auto ref = brute_force(field, o, d, 0.0, t_end, 16000);
+        EXPECT_EQ(first.has_value(), !ref.empty()) << what << " " << ray;
+        EXPECT_EQ(all.hits.empty(), ref.empty()) << what << " " << ray;
+        if (!first || ref.empty() || all.hits.empty()) return std::numeric_limits<double>::infinity();
+        EXPECT_NEAR(first->t, ref[0].first, 1e-7) << what << " " << ray;
+        EXPECT_EQ(first->t, all.hits[0].t) << what << " " << ray;
+        return first->t;
+      };
+      // Each blob met at offsets 0 .. 1.02 of its iso-sphere's radius, from the front and
+      // obliquely, then the block.
+      for (int b = 0; b < 3; ++b) {
+        const double rs = std::sqrt(kernel_inverse(k, peaks[b]));  // the blob's iso-sphere (spheres)
+        for (const double f : {0.0, 0.5, 0.9, 0.99, 1.02}) {
+          for (const Vec3& dir : {Vec3{1, 0, 0}, normalized(Vec3{1, 0.3, -0.2})}) {
+            const Vec3 side = normalized(cross(dir, Vec3{0, 0.6, 0.8}));
+            const Vec3 o = blob[b] - dir * 2.5 + side * (f * rs);
+            const double t = check(o, dir, 9.0, "blob ray");
+            if (!aniso && f < 1) {
+              EXPECT_NEAR(t, 2.5 - rs * std::sqrt(1 - f * f), 1e-9) << what << " blob " << b << " offset " << f;
+            } else if (!aniso) {
+              EXPECT_GT(t, 4.0) << what << " blob " << b << " offset " << f;  // missed: the block or none
+            }
+          }
+        }
+      }
+      // The sheet, across and nearly along it.
+      std::mt19937_64 rng(3);
+      std::uniform_real_distribution<double> u(-1.0, 1.0);
+      for (int r = 0; r < 16; ++r) {
+        const Vec3 dir = normalized(Vec3{1, 0.15 * u(rng), 0.15 * u(rng)});
+        const Vec3 o{-6.5, 0.8 * u(rng), 0.8 * u(rng)};
+        check(o, dir, 12.0, "sheet ray");
+      }
+      for (int r = 0; r < 12; ++r) {
+        const Vec3 dir = normalized(Vec3{0.05 * u(rng), 1, 0.3 * u(rng)});
+        const Vec3 o{-4.5 + 0.4 * u(rng), -3.5, 0.5 * u(rng)};
+        check(o, dir, 8.0, "ray along the sheet");
+      }
     }
   }
 }
