@@ -128,11 +128,12 @@ void RunOutputs::commit_all() {
   sigprocmask(SIG_SETMASK, &old, nullptr);
 }
 
-WrittenMesh write_with_report(const TriMesh& mesh, bool want_report, const std::function<void()>& write) {
+WrittenMesh write_with_report(const TriMesh& mesh, bool want_report, const std::function<void()>& write,
+                              const std::function<TopologyReport()>& report) {
   set_phase(Phase::Writing);
   WrittenMesh w;
   tbb::task_group beside;
-  if (want_report) beside.run([&] { w.report = topology_report(mesh); });
+  if (want_report) beside.run([&] { w.report = report ? report() : topology_report(mesh); });
   const auto t0 = std::chrono::steady_clock::now();
   try {
     write();

@@ -69,8 +69,10 @@ struct WrittenMesh {
 
 /// The writing phase of a command (set_phase(Phase::Writing)): runs `write` (the mesh outputs)
 /// while, when `want_report` (a summary or --report will show it), the topology report of
-/// `mesh` is taken on the other cores; both are done before it returns, also when `write`
-/// throws.
-WrittenMesh write_with_report(const TriMesh& mesh, bool want_report, const std::function<void()>& write);
+/// `mesh` is taken on the other cores (by `report` when given: a cheaper way to the same
+/// report, such as subdivided_topology_report); both are done before it returns, also when
+/// `write` throws.
+WrittenMesh write_with_report(const TriMesh& mesh, bool want_report, const std::function<void()>& write,
+                              const std::function<TopologyReport()>& report = {});
 
 }  // namespace particlemesh::cli

@@ -28,7 +28,7 @@ from ctypes import c_double, c_size_t, c_uint32
 import numpy as np
 
 from . import _abi, _library, _options
-from ._data import (Mesh, Points, new_cloud, new_mesh, path_bytes, per_point, ptr,
+from ._data import (Mesh, Points, new_cloud, new_mesh, path_bytes, per_point, ptr, vertex_indices,
                     read_cloud_handle, read_mesh_handle, struct_dict)
 from ._errors import CancelledError, Error, LibraryNotFoundError, PclBridgeNotFoundError
 from ._progress import Hook, Progress
@@ -293,11 +293,8 @@ def _smooth_options(lib, mesh, scheme, levels, crease_edges, crease_sharpness, o
     if crease_edges is not None:
         edges = np.asarray(crease_edges)
         if edges.size == 0:
-            edges = edges.reshape(0, 2)
-        if edges.ndim != 2 or edges.shape[1] != 2 or edges.dtype.kind not in "iu":
-            raise Error(f"crease_edges must be (K, 2) vertex indices, got {edges.shape} "
-                        f"{edges.dtype}", _abi.PM_STATUS_INVALID_ARGUMENT)
-        edges = np.ascontiguousarray(edges, dtype=np.int32)
+            edges = edges.reshape(0, 2).astype(np.int32)
+        edges = vertex_indices(edges, "crease_edges", 2, rows="K", item=("crease edge", "end"))
         opt.crease_count = len(edges)
         opt.crease_edges = ptr(edges, ctypes.c_int32)
         if crease_sharpness is not None:
@@ -485,11 +482,12 @@ def triangle_edges(triangles, vertex_count, threads=0):
     ordered; and (3 T,) uint32, per triangle corner the edge to the next corner (what hosts
     that store edges, such as Blender, need)."""
     lib = _library.load()
-    tris = np.asarray(triangles)
-    if tris.ndim != 2 or tris.shape[1] != 3:
-        raise Error(f"triangles must have shape (T, 3), got {tris.shape}",
+    # Unsigned like the C ABI (and Blender's corner arrays), checked here so that a negative
+    # index is named as passed, not as its 32-bit wrap.
+    tris = vertex_indices(triangles, "triangles", 3, dtype=np.uint32)
+    if int(vertex_count) < 0:
+        raise Error(f"vertex_count must not be negative, got {int(vertex_count)}",
                     _abi.PM_STATUS_INVALID_ARGUMENT)
-    tris = np.ascontiguousarray(tris, dtype=np.uint32)
     nt = len(tris)
     edges = np.empty((3 * nt, 2), dtype=np.uint32)
     corners = np.empty(3 * nt, dtype=np.uint32)

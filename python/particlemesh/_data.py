@@ -51,6 +51,27 @@ def channels(values, name, count):
     return np.ascontiguousarray(a)
 
 
+def vertex_indices(array, name, columns, dtype=np.int32, rows="T", item=("triangle", "corner")):
+    """A C-contiguous (N, columns) array of `dtype` vertex indices: `rows` names N in messages,
+    `item` what a row and a column are (a triangle and its corners, an edge and its ends).
+    Checked before the conversion so that an error names the value the caller passed: numpy
+    would wrap -1 to 4294967295 in an unsigned array and 2^32 to 0 in any 32-bit one, and
+    the library would then name, or accept, the wrapped value."""
+    a = np.asarray(array)
+    if a.ndim != 2 or a.shape[1] != columns:
+        raise _invalid(f"{name} must have shape ({rows}, {columns}), got {a.shape}")
+    if a.dtype.kind not in "iu":
+        raise _invalid(f"{name} must hold integer vertex indices, not {a.dtype}")
+    limits = np.iinfo(dtype)
+    if a.size and a.dtype != dtype and (a.min() < limits.min or a.max() > limits.max):
+        i, j = (int(k[0]) for k in np.nonzero((a < limits.min) | (a > limits.max)))
+        v = int(a[i, j])
+        why = "negative" if v < 0 else f"beyond the largest index {limits.max}"
+        raise _invalid(f"{item[0]} {i} {item[1]} {j} ({name}[{i}][{j}]) has vertex index {v}, "
+                       f"which is {why}")
+    return np.ascontiguousarray(a, dtype=dtype)
+
+
 def ptr(array, ctype):
     return array.ctypes.data_as(POINTER(ctype)) if array is not None else None
 
@@ -160,15 +181,7 @@ def new_mesh(lib, mesh, with_attributes=True):
     t = np.asarray(triangles)
     if t.ndim == 1 and t.size % 3 == 0:
         t = t.reshape(-1, 3)
-    if t.ndim != 2 or t.shape[1] != 3:
-        raise _invalid(f"triangles must have shape (T, 3), got {t.shape}")
-    if t.dtype.kind not in "iu":
-        raise _invalid(f"triangles must hold integer vertex indices, not {t.dtype}")
-    limits = np.iinfo(np.int32)
-    if t.size and (t.min() < limits.min or t.max() > limits.max):
-        i = int(np.argmax(((t < limits.min) | (t > limits.max)).any(axis=1)))
-        raise _invalid(f"triangles[{i}] has a vertex index out of range: {t[i].tolist()}")
-    t = np.ascontiguousarray(t, dtype=np.int32)
+    t = vertex_indices(t, "triangles", 3)
     n = vec3(normals, "normals") if normals is not None else None
     handle = _abi.pm_mesh_p()
     lib.check(lib.pm_mesh_create(ptr(v, c_double), len(v), ptr(t, c_int32), len(t),

@@ -83,6 +83,36 @@ def test_the_summary_and_report_follow_the_written_mesh(cli, inspect, tmp_path):
         assert proc.returncode == 1 and "/dev/full" in proc.stderr and not gone.exists()
 
 
+def _write_obj(path, verts, faces):
+    path.write_text("".join("v %r %r %r\n" % tuple(p) for p in verts) +
+                    "".join("f %d %d %d\n" % (a + 1, b + 1, c + 1) for a, b, c in faces))
+
+
+def test_the_loop_report_is_the_written_mesh_report(cli, inspect, tmp_path):
+    # For one clean closed piece, smooth derives the report of its Loop result from the
+    # control mesh's; elsewhere (two pieces, a hole) it measures the output. Either way it is
+    # what inspect measures on the written mesh (the signed volume to float32's precision:
+    # the PLY stores float32 positions).
+    octa = tmp_path / "octa.obj"
+    v, f = _octahedron(octa)
+    torus = tmp_path / "torus.obj"
+    _torus(torus)
+    inward = tmp_path / "inward.obj"
+    _write_obj(inward, v, [(a, c, b) for a, b, c in f])
+    two = tmp_path / "two.obj"
+    _write_obj(two, v + [(x + 3, y, z) for x, y, z in v], f + [(a + 6, b + 6, c + 6) for a, b, c in f])
+    hole = tmp_path / "hole.obj"
+    _write_obj(hole, v, f[:-1])
+    for src in (octa, torus, inward, two, hole):
+        out, rep = tmp_path / (src.stem + "_s.ply"), tmp_path / (src.stem + ".json")
+        cli("smooth", src, "-o", out, "--levels", "2", "--report", rep)
+        got, want = json.loads(rep.read_text())["topology"], inspect(out)
+        for c in got["per_component"] + want["per_component"]:
+            c["signed_volume"] = round(c["signed_volume"], 5)
+        assert got == want, src.stem
+    assert len(want["per_component"]) == 1 and want["boundary_loops"] == 1  # the hole
+
+
 def test_butterfly_keeps_the_original_vertices(cli, tmp_path):
     src = tmp_path / "oct.obj"
     verts, faces = _octahedron(src)

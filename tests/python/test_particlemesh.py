@@ -497,6 +497,29 @@ def test_triangle_edges_number_every_corner(pm):
         pm.triangle_edges(np.array([[0, 1, 2000]]), 2000)
 
 
+def test_index_arrays_name_the_index_as_passed(pm):
+    # The C ABI takes unsigned (or 32-bit) indices: -1 and 2^32 must be named as passed, not
+    # as their 32-bit wraps (4294967295, 0), with the triangle and the corner that hold them.
+    tris = np.array([[0, 1, 2], [0, 2, -1]])
+    with pytest.raises(pm.Error, match=r"^triangle 1 corner 2 \(triangles\[1\]\[2\]\) has "
+                       r"vertex index -1, which is negative$") as e:
+        pm.triangle_edges(tris, 3)
+    assert e.value.status == pm.STATUS_INVALID_ARGUMENT
+    with pytest.raises(pm.Error, match=r"triangle 0 corner 1 .* vertex index 4294967296, "
+                       r"which is beyond the largest index 4294967295"):
+        pm.triangle_edges(np.array([[0, 2 ** 32, 1]]), 3)
+    with pytest.raises(pm.Error, match="must hold integer vertex indices"):
+        pm.triangle_edges(np.array([[0, 1, 2.5]]), 3)
+    with pytest.raises(pm.Error, match="vertex_count must not be negative, got -1"):
+        pm.triangle_edges(np.array([[0, 1, 2]]), -1)
+    p = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+    with pytest.raises(pm.Error, match=r"triangle 0 corner 2 .* vertex index 2147483648"):
+        pm.topology(pm.Mesh(p, np.array([[0, 1, 2 ** 31]])))
+    t = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])
+    with pytest.raises(pm.Error, match=r"crease edge 0 end 1 .* vertex index 4294967296"):
+        pm.smooth(pm.Mesh(p, t), crease_edges=[[0, 2 ** 32]])
+
+
 # ---- polygonize and smooth ----------------------------------------------------------------------
 
 def test_polygonize_one_particle_is_a_sphere(pm):
@@ -586,7 +609,7 @@ def test_smooth_loop_butterfly_creases_attributes(pm):
     assert not np.allclose(loop.vertices, creased.vertices)
     soft = pm.smooth(pm.Mesh(p, t), limit=False, crease_edges=[[0, 1]], crease_sharpness=[0.0])
     np.testing.assert_allclose(soft.vertices, loop.vertices, atol=1e-12)
-    with pytest.raises(pm.Error, match="crease_edges must be"):
+    with pytest.raises(pm.Error, match=r"crease_edges must have shape \(K, 2\)"):
         pm.smooth(pm.Mesh(p, t), crease_edges=[0, 1])
     with pytest.raises(pm.Error, match=r"levels"):
         pm.smooth(pm.Mesh(p, t), levels=11)

@@ -231,6 +231,21 @@ constexpr uint8_t kBoundary = 1, kManifold = 2, kNonManifold = 3, kConflict = 4;
 constexpr int kInEdgeShift = 3;
 constexpr uint8_t kCountsVertex = 0x40;
 
+/// A triangle's term of its closed component's signed volume, about the first vertex of the
+/// component's lowest triangle (for accuracy); both reports sum these in triangle order.
+inline double volume_term(const TriMesh& mesh, uint32_t origin, const Triangle& t) {
+  return detail::signed_volume6(mesh.positions[origin], mesh.positions[t[0]], mesh.positions[t[1]],
+                                mesh.positions[t[2]]) /
+         6.0;
+}
+
+/// A degenerate triangle: a repeated vertex index or zero area.
+inline bool degenerate(const TriMesh& mesh, const Triangle& t) {
+  if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) return true;
+  const Vec3 c = cross(mesh.positions[t[1]] - mesh.positions[t[0]], mesh.positions[t[2]] - mesh.positions[t[0]]);
+  return squared_norm(c) == 0;
+}
+
 }  // namespace
 
 TopologyReport topology_report(const TriMesh& mesh) {
@@ -612,15 +627,8 @@ TopologyReport topology_report(const TriMesh& mesh) {
       size_t n = 0;
       for (size_t f = b; f < e; ++f) {
         const Triangle& t = T[f];
-        if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
-          ++n;
-        } else {
-          const Vec3 c = cross(mesh.positions[t[1]] - mesh.positions[t[0]], mesh.positions[t[2]] - mesh.positions[t[0]]);
-          n += squared_norm(c) == 0;
-        }
-        if (any_closed && C[comp[f]].closed)
-          term[f] = detail::signed_volume6(mesh.positions[T[root_face[comp[f]]][0]], mesh.positions[t[0]],
-                                           mesh.positions[t[1]], mesh.positions[t[2]]) / 6.0;
+        n += degenerate(mesh, t);
+        if (any_closed && C[comp[f]].closed) term[f] = volume_term(mesh, T[root_face[comp[f]]][0], t);
       }
       count.local() += n;
     });
@@ -651,6 +659,82 @@ TopologyReport topology_report(const TriMesh& mesh) {
   std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return C[a].triangles > C[b].triangles; });
   r.per_component.reserve(ncomp);
   for (size_t i : order) r.per_component.push_back(C[i]);
+  return r;
+}
+
+// The report of a subdivided mesh from its control mesh's. One round of 1-to-4 splits of a
+// mesh M that is one closed, manifold (every vertex's link one cycle through distinct
+// vertices), consistently oriented component without duplicate triangles (no two with the
+// same three vertices) and without unused vertices gives a mesh M' that is all of that too:
+//  - counts: every vertex stays and every edge gets one new vertex (V' = V + E); every edge
+//    becomes two and every triangle gets three inner edges (E' = 2E + 3F); F' = 4F. So
+//    V' - E' + F' = V - E + F (the Euler characteristic and, one closed component, the genus).
+//  - each old vertex of valence n has the n new vertices of its edges as its link, in the
+//    order of its old link: one cycle through distinct vertices. The new vertex e(ab) of
+//    edge ab (triangles abx and aby, x != y since they are not duplicates) has the link
+//    cycle a, e(ax), e(bx), b, e(by), e(ay): six distinct vertices. So every vertex is
+//    manifold, every edge has two triangles (closed), and no triangle repeats a vertex.
+//  - a corner triangle (v, e(va), e(vb)) repeats another's vertices only if both come from
+//    triangles with the vertices v, a, b, a middle one (e(ab), e(bc), e(ca)) only if both
+//    come from triangles with a, b, c: neither can happen without an earlier duplicate, and
+//    corner and middle triangles never share their vertex sets (a corner has an old vertex).
+//  - each child triangle is wound like its parent, so two children sharing an edge traverse
+//    it in opposite directions (inside one parent by construction; across a parent edge
+//    because the parents did), and children of edge-adjacent parents share an edge, so the
+//    result is one consistently oriented component.
+// By induction over the levels, the refined mesh's report is the one written below; only the
+// degenerate triangles (zero area: the positions) and the signed volume are measured, with
+// the same expressions as topology_report, the volume summed in triangle order from the
+// first vertex of triangle 0 (the component's lowest), so every value is the same bits.
+std::optional<TopologyReport> subdivided_topology_report(const TopologyReport& control, const TriMesh& refined,
+                                                         int levels) {
+  const TopologyReport& c = control;
+  if (levels < 0 || levels > 16 || c.triangles == 0 || c.components != 1 || !c.closed || !c.manifold ||
+      !c.consistently_oriented || c.nonmanifold_vertices != 0 || c.duplicate_triangles != 0 ||
+      c.vertices_used != c.vertices || c.boundary_edges != 0)
+    return std::nullopt;
+  uint64_t V = c.vertices, E = c.edges, F = c.triangles;
+  for (int l = 0; l < levels; ++l) {
+    V += E;
+    E = 2 * E + 3 * F;
+    F = 4 * F;
+  }
+  const auto& T = refined.triangles;
+  if (refined.positions.size() != V || T.size() != F || int64_t(V) - int64_t(E) + int64_t(F) != c.euler_characteristic)
+    return std::nullopt;
+
+  // The one pass over the positions, serial: the volume is summed in triangle order anyway.
+  const size_t nv = refined.positions.size();
+  size_t degenerate_triangles = 0;
+  double volume = 0.0;
+  const uint32_t origin = T[0][0];
+  if (origin >= nv) return std::nullopt;
+  for (size_t f = 0; f < T.size(); ++f) {
+    const Triangle& t = T[f];
+    if (t[0] >= nv || t[1] >= nv || t[2] >= nv) return std::nullopt;  // not a subdivision after all
+    degenerate_triangles += degenerate(refined, t);
+    volume += volume_term(refined, origin, t);
+  }
+
+  TopologyReport r;
+  r.vertices = r.vertices_used = V;
+  r.triangles = F;
+  r.edges = r.manifold_edges = E;
+  r.degenerate_triangles = degenerate_triangles;
+  r.components = r.closed_components = 1;
+  r.euler_characteristic = int64_t(V) - int64_t(E) + int64_t(F);
+  r.manifold = r.closed = r.consistently_oriented = true;
+  r.outward = detail::faces_outward(volume);
+  ComponentReport cr;
+  cr.triangles = F;
+  cr.vertices = V;
+  cr.edges = E;
+  cr.euler_characteristic = r.euler_characteristic;
+  cr.closed = cr.manifold = cr.consistently_oriented = true;
+  const int64_t twice = 2 - cr.euler_characteristic;
+  cr.genus = twice >= 0 && twice % 2 == 0 ? int(twice / 2) : -1;
+  cr.signed_volume = volume;
+  r.per_component.push_back(cr);
   return r;
 }
 

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "particlemesh/sample/shapes.h"
+#include "particlemesh/smooth/subdivide.h"
 #include "support/test_support.h"
 #include "topology_report_reference.h"
 
@@ -380,4 +381,81 @@ TEST(TopologyReport, AgreesWithTheSerialReferenceForAnyThreadCount) {
       expect_same_report(got, want, name + ", " + std::to_string(threads) + " threads");
     }
   }
+}
+
+// The report of a Loop result derived from its control mesh's (what `particlemesh smooth`
+// prints) is the full report of the result, bit for bit, wherever it is given; and it is not
+// given where the control mesh is not one clean closed piece.
+TEST(TopologyReport, SubdividedReportIsTheFullReportOfTheLoopResult) {
+  TriMesh inward = icosphere_mesh(2);
+  for (auto& t : inward.triangles) std::swap(t[1], t[2]);
+  TriMesh collapsed = tetrahedron();  // every vertex at one point: every refined triangle has zero area
+  for (auto& p : collapsed.positions) p = {0.5, 0.5, 0.5};
+  struct Case {
+    std::string name;
+    TriMesh mesh;
+    int levels;
+    bool limit;
+    std::vector<CreaseEdge> creases;
+  };
+  const TriMesh torus = torus_mesh(1, 0.3, 24, 12);
+  const std::vector<Case> cases{
+      {"icosphere, level 0", icosphere_mesh(1), 0, true, {}},
+      {"icosphere, level 1", icosphere_mesh(1), 1, true, {}},
+      {"icosphere, level 3", icosphere_mesh(1), 3, true, {}},
+      {"torus, level 2", torus, 2, true, {}},
+      {"torus, level 2, no limit", torus, 2, false, {}},
+      {"torus, level 2, a crease", torus, 2, true, {{torus.triangles[0][0], torus.triangles[0][1]}}},
+      {"icosphere wound inward, level 2", inward, 2, true, {}},
+      {"tetrahedron collapsed to a point, level 1, no limit", collapsed, 1, false, {}},
+  };
+  for (const Case& c : cases) {
+    SmoothOptions opt;
+    opt.levels = c.levels;
+    opt.limit = c.limit;
+    opt.creases = c.creases;
+    const TriMesh out = smooth_mesh(c.mesh, opt).mesh;
+    const std::optional<TopologyReport> got = subdivided_topology_report(topology_report(c.mesh), out, c.levels);
+    ASSERT_TRUE(got.has_value()) << c.name;
+    const TopologyReport want = topology_report(out);
+    expect_same_report(*got, want, c.name);
+    if (c.name.rfind("tetrahedron", 0) == 0) {  // not vacuous: zero areas and no volume
+      EXPECT_EQ(want.degenerate_triangles, want.triangles);
+      EXPECT_FALSE(want.outward);
+    }
+    if (c.name.rfind("torus", 0) == 0) {
+      EXPECT_EQ(want.per_component[0].genus, 1);
+    }
+    // Counts that are not those of `levels` splits: not a subdivision of this control mesh.
+    EXPECT_FALSE(subdivided_topology_report(topology_report(c.mesh), out, c.levels + 1).has_value()) << c.name;
+  }
+
+  // Control meshes whose refinement the report is not derived for.
+  auto not_derived = [](const TriMesh& control, const std::string& name) {
+    SCOPED_TRACE(name);
+    SmoothOptions opt;
+    opt.levels = 1;
+    const TriMesh out = smooth_mesh(control, opt).mesh;
+    EXPECT_FALSE(subdivided_topology_report(topology_report(control), out, 1).has_value());
+  };
+  TriMesh two = icosphere_mesh(1);
+  const uint32_t n = uint32_t(two.positions.size());
+  for (uint32_t i = 0; i < n; ++i) two.positions.push_back(two.positions[i] + Vec3{3, 0, 0});
+  for (size_t f = 0, nf = two.triangles.size(); f < nf; ++f)
+    two.triangles.push_back({two.triangles[f][0] + n, two.triangles[f][1] + n, two.triangles[f][2] + n});
+  not_derived(two, "two components");
+  TriMesh open = icosphere_mesh(1);
+  open.triangles.pop_back();
+  not_derived(open, "a hole");
+  TriMesh unused = icosphere_mesh(1);
+  unused.positions.push_back({5, 5, 5});
+  not_derived(unused, "an unused vertex");
+  TriMesh flipped = icosphere_mesh(1);
+  std::swap(flipped.triangles[3][1], flipped.triangles[3][2]);
+  not_derived(flipped, "one triangle wound against its neighbours");
+
+  // An index out of range in the refined triangles: the full report's business.
+  TriMesh bad = smooth_mesh(icosphere_mesh(1), SmoothOptions{}).mesh;
+  bad.triangles.back()[2] = uint32_t(bad.positions.size());
+  EXPECT_FALSE(subdivided_topology_report(topology_report(icosphere_mesh(1)), bad, 1).has_value());
 }

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "particlemesh/core/export.h"
@@ -62,5 +63,19 @@ struct TopologyReport {
 /// oriented (so two loops that touch at a pinched vertex count as two); elsewhere they are the
 /// connected components of the boundary-edge graph.
 PM_EXPORT TopologyReport topology_report(const TriMesh& mesh);
+
+/// topology_report(refined), derived from the report of the mesh it was subdivided from,
+/// when `refined` is `levels` rounds of uniform 1-to-4 splits of that mesh (Loop
+/// subdivision: each edge halved by a new vertex, each triangle into its three corner
+/// triangles and the middle one, every vertex kept; smooth_mesh's output of a mesh that
+/// had no unreferenced vertex). Only the positions decide what is left to measure on
+/// `refined` (zero-area triangles, the signed volume: one O(F) pass instead of the full
+/// report's), so it is exactly the report topology_report(refined) gives. Returns nullopt,
+/// and the caller takes the full report, unless `control` is one closed, manifold,
+/// consistently oriented component whose every vertex is used and without duplicate
+/// triangles (then one split keeps all of that, by induction: see the source), and the
+/// refined vertex and triangle counts are those of such splits, and every index is in range.
+PM_EXPORT std::optional<TopologyReport> subdivided_topology_report(const TopologyReport& control,
+                                                                   const TriMesh& refined, int levels);
 
 }  // namespace particlemesh
