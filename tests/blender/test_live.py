@@ -410,6 +410,8 @@ def test_viewport_frames_get_their_normals_once_frames_rest(pm, clean_scene, def
     mesh = shown_mesh(obj)
     assert not mesh.has_custom_normals and live.UNFINISHED_TAG in mesh
     assert live.last_update[obj.name]["unfinished"]
+    assert any(kind == "label" and "normals at rest" in text
+               for kind, text in draw_panels(pm, bpy.context))
     assert bpy.app.timers.is_registered(live.finish_frames)
     # Not yet at rest: the timer looks again later and leaves the frame as it is.
     wait = live.finish_frames()
@@ -876,7 +878,8 @@ def test_panels_draw(pm, clean_scene):
     clean_scene.frame_set(3)
     log = draw_panels(pm, bpy.context)
     props = [name for kind, name in log if kind == "prop"]
-    for name in ("source", "live", "auto_spacing", "max_edge_factor", "smooth", "use_render_settings"):
+    for name in ("source", "live", "auto_spacing", "max_edge_factor", "smooth", "use_render_settings",
+                 "instant_frames", "finish_every_frame"):
         assert name in props, name
     assert any(kind == "label" and "frame 3" in text for kind, text in log)
     assert ("operator", "particlemesh.bake") in log
