@@ -351,6 +351,7 @@ def finish_pending():
     """Finish every pending frame now, where its object still shows it (an object deleted,
     a frame no longer on screen, a mesh gone with an undo: nothing to do). Errors are
     printed, never raised (a timer)."""
+    finished = False
     while _pending:
         name, pending = _pending.popitem()
         obj = bpy.data.objects.get(name)
@@ -363,9 +364,11 @@ def finish_pending():
             _finish(mesh, pending.data, pending.custom_normals)
         except (RuntimeError, ValueError, ReferenceError) as e:
             print(f"particlemesh: {name}: the frame's normals: {e}")
+        finished = True
         record = last_update.get(name)
         if record is not None and record.get("unfinished"):
             record["unfinished"] = False
+    if finished:
         _redraw()
 
 

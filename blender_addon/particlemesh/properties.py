@@ -257,7 +257,7 @@ class PARTICLEMESH_PG_object(bpy.types.PropertyGroup):
                     "viewport render of the animation. Off: while frames change, a new frame "
                     "shows Blender's own normals and gets the library's once it rests "
                     "(about 0.3 s without a frame change, not during playback), which makes "
-                    "new frames of a big polygonized mesh about twice as fast")
+                    "new frames of a big polygonized mesh almost twice as fast")
     use_render_settings: BoolProperty(
         name="Separate Render Settings", default=False, update=_settings_changed,
         description="Use the Render settings (e.g. finer, smoothed) when rendering and the "
