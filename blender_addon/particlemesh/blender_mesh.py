@@ -72,8 +72,25 @@ def write(mesh, data, *, custom_normals=True, attributes=True):
             mesh.loops.foreach_set("edge_index", corner_edges)
             calc_edges = False
     mesh.update(calc_edges=calc_edges)
-    if (custom_normals and data.normals is not None and nt
-            and not data.stats.get("normals_are_face_weighted", False)):
+    set_normals(mesh, data, custom_normals=custom_normals)
+    if attributes:
+        for name, values in data.attributes.items():
+            set_point_attribute(mesh, name, values)
+    return mesh
+
+
+def has_custom_normals(data, custom_normals=True):
+    """Whether write() gives a mesh of `data` the library's normals as custom split normals
+    (what makes writing and evaluating a big mesh about four times slower)."""
+    return bool(custom_normals and data.normals is not None and data.triangle_count
+                and not data.stats.get("normals_are_face_weighted", False))
+
+
+def set_normals(mesh, data, *, custom_normals=True):
+    """The library's normals of `data` as the custom split normals of `mesh` (written from
+    `data`), or Blender's own normals, as write() leaves them. Live mode calls it on its own
+    to finish a frame first written with custom_normals=False."""
+    if has_custom_normals(data, custom_normals):
         if hasattr(mesh, "use_auto_smooth"):
             mesh.use_auto_smooth = True
             mesh.auto_smooth_angle = np.pi
@@ -82,10 +99,6 @@ def write(mesh, data, *, custom_normals=True, attributes=True):
         _clear_custom_normals(mesh)
         if hasattr(mesh, "use_auto_smooth"):
             mesh.use_auto_smooth = False
-    if attributes:
-        for name, values in data.attributes.items():
-            set_point_attribute(mesh, name, values)
-    return mesh
 
 
 class _InThread(threading.Thread):

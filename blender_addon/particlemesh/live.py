@@ -4,7 +4,16 @@ during renders, with a per-frame cache.
 
 No operator runs in here: only module functions on data, so it is safe in a background
 animation render. The depsgraph handed to the handler says whether this is a render
-(depsgraph.mode == 'RENDER'), which picks the object's render settings."""
+(depsgraph.mode == 'RENDER'), which picks the object's render settings.
+
+In the viewport a new frame is first written without the library's normals (Blender's own
+smooth normals): setting them as custom split normals, and Blender evaluating a mesh that has
+them, is most of a big polygonized frame's time (bench/RESULTS.md). Such an *unfinished*
+frame's mesh carries UNFINISHED_TAG; once frames rest (no frame change for REST_SECONDS, no
+playback), a timer (finish_frames) gives the frame on screen its custom normals, so that
+what shows at rest is what a one-shot generation gives. Renders, Update Now, Bake and the
+operators write finished frames at once, as does the viewport with the object's Finish
+Every Frame on."""
 
 import time
 import uuid
@@ -126,6 +135,16 @@ def _mesh_bytes(data):
 #: The custom property that marks a mesh datablock as a live frame kept by the cache (its
 #: value says which entry wrote it).
 FRAME_TAG = "particlemesh_live_frame"
+#: The custom property on a live frame's mesh written without its custom split normals (its
+#: value names the pending finish; finish_frames sets them and removes it).
+UNFINISHED_TAG = "particlemesh_live_unfinished"
+#: Seconds without a frame change (and no playback) before the frame on screen is finished.
+REST_SECONDS = 0.3
+#: Viewport frames are finished at once in background mode (no one looks, timers do not run
+#: while a script does, and a script that exports the frame needs its normals); the tests and
+#: the benchmark set this to see the viewport's deferral there, calling finish_frames
+#: themselves.
+defer_in_background = False
 _session = uuid.uuid4().hex[:12]
 _tags = 0
 
@@ -251,14 +270,114 @@ def properties_key(settings):
     return tuple(sorted(settings.items()))
 
 
-def apply(obj, data, settings):
+def apply(obj, data, settings, defer=False):
     """Write mesh data into the generated object's own mesh, in place (materials stay), and
-    show it. A mesh the cache kept for a frame stops being that frame's."""
+    show it. A mesh the cache kept for a frame stops being that frame's. `defer`: without
+    its custom normals until the frame rests (finish_frames)."""
     frame_display.hide(obj)
     mesh = obj.data
     if FRAME_TAG in mesh:
         del mesh[FRAME_TAG]
-    blender_mesh.write(mesh, data, custom_normals=settings.get("custom_normals", True))
+    _write(obj, mesh, data, settings, defer)
+
+
+def _write(obj, mesh, data, settings, defer):
+    """blender_mesh.write of a frame that `obj` shows next; with `defer`, the custom normals
+    are left for finish_frames (the mesh marked unfinished, the frame pending)."""
+    custom = settings.get("custom_normals", True)
+    later = defer and blender_mesh.has_custom_normals(data, custom)
+    blender_mesh.write(mesh, data, custom_normals=custom and not later)
+    if later:
+        token = _new_tag()
+        mesh[UNFINISHED_TAG] = token
+        _pend(obj, mesh, token, data, custom)
+    elif UNFINISHED_TAG in mesh:
+        del mesh[UNFINISHED_TAG]
+
+
+class _Pending:
+    """A frame on screen waiting for its custom normals: its mesh by name and tag (Python
+    references to IDs do not survive undo) and the data it was written from."""
+
+    __slots__ = ("mesh", "token", "data", "custom_normals")
+
+    def __init__(self, mesh, token, data, custom_normals):
+        self.mesh, self.token, self.data, self.custom_normals = mesh, token, data, custom_normals
+
+
+#: Per object name: its unfinished frame on screen.
+_pending = {}
+_last_change = 0.0
+
+
+def _pend(obj, mesh, token, data, custom):
+    _pending[obj.name_full] = _Pending(mesh.name, token, data, custom)
+    if not bpy.app.timers.is_registered(finish_frames):
+        bpy.app.timers.register(finish_frames, first_interval=REST_SECONDS)
+
+
+def _finish(mesh, data, custom):
+    blender_mesh.set_normals(mesh, data, custom_normals=custom)
+    if UNFINISHED_TAG in mesh:
+        del mesh[UNFINISHED_TAG]
+
+
+def _busy():
+    """Whether frames may change any moment: playback in some window, or a render running
+    (it reads the meshes the finishing would change)."""
+    windows = bpy.context.window_manager.windows if bpy.context.window_manager else ()
+    if any(w.screen is not None and w.screen.is_animation_playing for w in windows):
+        return True
+    running = getattr(bpy.app, "is_job_running", None)
+    return bool(running and running("RENDER"))
+
+
+def finish_frames():
+    """The timer (bpy.app.timers) that finishes the unfinished frames on screen once frames
+    rest: no frame change for REST_SECONDS, no playback, no render. Returns the seconds until
+    it looks again, or None (done: it is registered again by the next unfinished frame)."""
+    if not _pending:
+        return None
+    wait = REST_SECONDS - (time.monotonic() - _last_change)
+    if wait > 0:
+        return wait
+    if _busy() or _in_handler or any(name in suspended for name in _pending):
+        return REST_SECONDS
+    finish_pending()
+    return None
+
+
+def finish_pending():
+    """Finish every pending frame now, where its object still shows it (an object deleted,
+    a frame no longer on screen, a mesh gone with an undo: nothing to do). Errors are
+    printed, never raised (a timer)."""
+    finished = False
+    while _pending:
+        name, pending = _pending.popitem()
+        obj = bpy.data.objects.get(name)
+        if obj is None or obj.type != "MESH":
+            continue
+        mesh = frame_display.shown_mesh(obj)
+        if mesh is None or mesh.name != pending.mesh or mesh.get(UNFINISHED_TAG) != pending.token:
+            continue
+        try:
+            _finish(mesh, pending.data, pending.custom_normals)
+        except (RuntimeError, ValueError, ReferenceError) as e:
+            print(f"particlemesh: {name}: the frame's normals: {e}")
+        finished = True
+        record = last_update.get(name)
+        if record is not None and record.get("unfinished"):
+            record["unfinished"] = False
+    if finished:
+        _redraw()
+
+
+def _redraw():
+    """Redraw the 3D views and their sidebars (a timer's change draws at the next event)."""
+    for window in bpy.context.window_manager.windows if bpy.context.window_manager else ():
+        for area in window.screen.areas if window.screen else ():
+            if area.type == "VIEW_3D":
+                area.tag_redraw()
 
 
 def _show(obj, mesh, cache, display=True):
@@ -290,39 +409,58 @@ def _show(obj, mesh, cache, display=True):
             _remove_unused(gone.name, tag)
 
 
-def show_frame(obj, data, settings, key, cached, keep=True):
+def show_frame(obj, data, settings, key, cached, keep=True, defer=False):
     """Put the frame `key` (mesh data `data`) on the object. With the cache on, each frame is
     written once into a mesh datablock of its own that the cache keeps, and a frame seen
     again shows that mesh (no write: a 1.5M-triangle mesh with custom normals takes about
     a second to write; through frame_display, no evaluation either). With the cache off,
     the frame too big for it or `keep` false (renders: frames are rarely seen twice), the
-    object's mesh is rewritten in place. Returns whether a kept mesh was shown again."""
+    object's mesh is rewritten in place. `defer`: a new frame's custom normals wait until
+    frames rest (finish_frames), and so do those of a kept frame shown again unfinished;
+    without it such a frame is finished before it shows. Returns whether a kept mesh was
+    shown again."""
     cache = cache_for(obj)
+    _pending.pop(obj.name_full, None)  # the frame on screen changes
     if cached:
         mesh = cache.mesh(key)
         if mesh is not None:
+            token = mesh.get(UNFINISHED_TAG)
+            if token is not None:
+                custom = settings.get("custom_normals", True)
+                if defer:
+                    _pend(obj, mesh, token, data, custom)
+                else:
+                    _finish(mesh, data, custom)
             _show(obj, mesh, cache, display=keep)
             return True
     limit = _cache_limit()
     if not keep or key not in cache.entries or KEPT_MESH_COST * data.nbytes > limit:
-        apply(obj, data, settings)
+        apply(obj, data, settings, defer)
         return False
     mesh = bpy.data.meshes.new(f"{obj.name}.pm_live")
     tag = _new_tag()
     mesh[FRAME_TAG] = tag
-    blender_mesh.write(mesh, data, custom_normals=settings.get("custom_normals", True))
     if not cache.put_mesh(key, mesh, tag, limit):
         # Too big to keep beside its data: write the object's own mesh instead.
         bpy.data.meshes.remove(mesh)
-        apply(obj, data, settings)
+        apply(obj, data, settings, defer)
         return False
+    _write(obj, mesh, data, settings, defer)
     _show(obj, mesh, cache)
     return False
 
 
-def update_object(obj, depsgraph, mode=None):
+def defers(obj, mode):
+    """Whether a new frame of `obj` in `mode` waits for rest to get its custom normals: in
+    the viewport, unless the object's Finish Every Frame is on (or in background mode)."""
+    return (mode != "RENDER" and not obj.particlemesh.finish_every_frame
+            and (defer_in_background or not bpy.app.background))
+
+
+def update_object(obj, depsgraph, mode=None, defer=False):
     """Regenerate one live object for the current frame. Errors are recorded, never raised:
-    a frame handler must not stop playback or a render."""
+    a frame handler must not stop playback or a render. `defer`: a viewport frame may wait
+    for rest to get its custom normals (defers())."""
     start = time.perf_counter()
     mode = mode or depsgraph.mode
     record = {"frame": depsgraph.scene.frame_current, "mode": mode}
@@ -333,8 +471,10 @@ def update_object(obj, depsgraph, mode=None):
                                          keys=keys)
         t = time.perf_counter()
         record["swapped"] = show_frame(obj, data, settings, keys[0], cached,
-                                       keep=(mode != "RENDER"))
+                                       keep=(mode != "RENDER"),
+                                       defer=defer and defers(obj, mode))
         record["write"] = time.perf_counter() - t
+        record["unfinished"] = obj.name_full in _pending
         record.update(cached=cached, vertices=data.vertex_count, triangles=data.triangle_count)
         if "thin_factor" in data.stats:
             record["thin"] = data.stats["thin_factor"]
@@ -370,7 +510,8 @@ def generated_objects(scene):
 
 @persistent
 def on_frame_change_post(scene, depsgraph=None):
-    global _in_handler
+    global _in_handler, _last_change
+    _last_change = time.monotonic()
     if _in_handler:
         return
     _in_handler = True
@@ -386,19 +527,33 @@ def on_frame_change_post(scene, depsgraph=None):
             if state.baked:
                 show_baked_frame(obj, scene.frame_current)
             elif state.live:
-                update_object(obj, depsgraph)
+                update_object(obj, depsgraph, defer=True)
     finally:
         _in_handler = False
+        _last_change = time.monotonic()
+
+
+@persistent
+def on_depsgraph_update_post(*_args):
+    """Frames rest from the end of Blender's evaluation of the last change on: evaluating a
+    big new frame takes about as long as the rest, and a held arrow key's next frame change
+    comes after it."""
+    global _last_change
+    if _pending:
+        _last_change = time.monotonic()
 
 
 @persistent
 def on_save_pre(*_args):
-    """A saved file holds each object with the mesh it shows, no holders (frame_display)."""
+    """A saved file holds each object with the mesh it shows, finished, no holders
+    (frame_display)."""
+    finish_pending()
     frame_display.stop_all()
 
 
 @persistent
 def on_load_post(*_args):
+    _pending.clear()  # (Blender drops the timer with the old file)
     clear_cache(remove_meshes=False)
     frame_display.stop_all()  # a file saved without the add-on's save handler
     last_update.clear()
@@ -421,7 +576,7 @@ def live_toggled(obj, context):
     if state.live:
         lock_interface_for_renders(context.scene)
     if state.live and state.is_generated and not state.baked and obj.name_full not in suspended:
-        update_object(obj, context.evaluated_depsgraph_get())
+        update_object(obj, context.evaluated_depsgraph_get(), defer=True)
 
 
 def stop_display(obj):
@@ -441,23 +596,28 @@ def stop_display(obj):
 def settings_changed(obj, context):
     state = obj.particlemesh
     if state.is_generated and state.live and not state.baked and obj.name_full not in suspended:
-        update_object(obj, context.evaluated_depsgraph_get())
+        update_object(obj, context.evaluated_depsgraph_get(), defer=True)
 
 
 def register():
     bpy.app.handlers.frame_change_post.append(on_frame_change_post)
     bpy.app.handlers.save_pre.append(on_save_pre)
     bpy.app.handlers.load_post.append(on_load_post)
+    bpy.app.handlers.depsgraph_update_post.append(on_depsgraph_update_post)
 
 
 def unregister():
     for handlers, fn in ((bpy.app.handlers.frame_change_post, on_frame_change_post),
+                         (bpy.app.handlers.depsgraph_update_post, on_depsgraph_update_post),
                          (bpy.app.handlers.save_pre, on_save_pre),
                          (bpy.app.handlers.load_post, on_load_post)):
         # Remove by name too: a reloaded module has new function objects.
         for h in [h for h in handlers if getattr(h, "__name__", "") == fn.__name__
                   and getattr(h, "__module__", "") == fn.__module__]:
             handlers.remove(h)
+    if bpy.app.timers.is_registered(finish_frames):
+        bpy.app.timers.unregister(finish_frames)
+    _pending.clear()
     clear_cache()
     frame_display.stop_all()
     last_update.clear()

@@ -79,6 +79,9 @@ class VIEW3D_PT_particlemesh_object(_Panel, bpy.types.Panel):
         row = layout.row()
         row.active = state.live and not state.baked
         row.prop(state, "instant_frames")
+        row = layout.row()
+        row.active = state.live and not state.baked
+        row.prop(state, "finish_every_frame")
         layout.operator("particlemesh.update", icon="FILE_REFRESH")
         record = live.last_update.get(obj.name_full)
         if record:
@@ -90,7 +93,8 @@ class VIEW3D_PT_particlemesh_object(_Panel, bpy.types.Panel):
             else:
                 layout.label(text=f"frame {record['frame']} ({record['mode'].lower()}): "
                                   f"{1000 * record['seconds']:.0f} ms"
-                                  + (", cached" if record.get("cached") else ""))
+                                  + (", cached" if record.get("cached") else "")
+                                  + (", normals at rest" if record.get("unfinished") else ""))
                 meshed, read = record.get("vertices"), record.get("particles")
                 if state.method == "TRIANGULATE" and meshed and read and meshed < read:
                     factor = record.get("thin")

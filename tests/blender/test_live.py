@@ -361,6 +361,159 @@ def test_live_loop_smoothing_refines_once_while_the_triangles_stay(pm, clean_sce
         assert not reuse.pop("reused", False) and "smoother" not in reuse
 
 
+def corner_normals(mesh):
+    """The normals Blender shades each face corner with (custom split normals if any)."""
+    out = np.empty(3 * len(mesh.loops), np.float32)
+    if hasattr(mesh, "corner_normals"):  # Blender 4.1+
+        mesh.corner_normals.foreach_get("vector", out)
+    else:
+        mesh.calc_normals_split()
+        mesh.loops.foreach_get("normal", out)
+    return out.reshape(-1, 3)
+
+
+@pytest.fixture
+def deferring(pm, monkeypatch):
+    """Viewport frames wait for rest to get their custom normals, as in the UI (background
+    mode finishes them at once); finish_frames is called by hand (no timers run here)."""
+    monkeypatch.setattr(pm.live, "defer_in_background", True)
+    yield pm.live
+    pm.live.finish_pending()
+
+
+def rest(live, monkeypatch):
+    """The frames rest: the timer's function, as Blender calls it once no frame changed for
+    REST_SECONDS. Returns what it returned (None: done)."""
+    monkeypatch.setattr(live, "REST_SECONDS", 0.0)
+    return live.finish_frames()
+
+
+def one_shot(pm, em, frame):
+    """The polygonize operator's mesh of the emitter's particles at `frame` (no live mode)."""
+    bpy.context.scene.frame_set(frame)
+    make_active(em)
+    assert bpy.ops.particlemesh.polygonize() == {"FINISHED"}
+    return bpy.context.active_object.data
+
+
+def test_viewport_frames_get_their_normals_once_frames_rest(pm, clean_scene, deferring,
+                                                              monkeypatch):
+    """While frames change, a new viewport frame shows Blender's own normals; once frames rest
+    the timer gives the frame on screen the library's normals as custom split normals: then
+    it is what a one-shot polygonize gives, and the cache shows it finished from then on."""
+    live = deferring
+    em = emitter(speed=1.0)
+    make_active(em)
+    assert bpy.ops.particlemesh.polygonize(live=True) == {"FINISHED"}
+    obj = bpy.context.active_object
+    clean_scene.frame_set(4)
+    mesh = shown_mesh(obj)
+    assert not mesh.has_custom_normals and live.UNFINISHED_TAG in mesh
+    assert live.last_update[obj.name]["unfinished"]
+    assert any(kind == "label" and "normals at rest" in text
+               for kind, text in draw_panels(pm, bpy.context))
+    assert bpy.app.timers.is_registered(live.finish_frames)
+    # Not yet at rest: the timer looks again later and leaves the frame as it is.
+    wait = live.finish_frames()
+    assert wait is not None and 0 < wait <= live.REST_SECONDS
+    assert not shown_mesh(obj).has_custom_normals
+    clean_scene.frame_set(5)  # the next new frame: frame 4 (cached, unfinished) is left alone
+    assert live.UNFINISHED_TAG in shown_mesh(obj) and list(live._pending) == [obj.name]
+    assert rest(live, monkeypatch) is None
+    mesh = shown_mesh(obj)
+    assert mesh.has_custom_normals and live.UNFINISHED_TAG not in mesh
+    assert not live.last_update[obj.name]["unfinished"]
+    finished_5 = mesh.name
+    reference = one_shot(pm, em, 5)
+    np.testing.assert_array_equal(mesh_arrays(mesh)[0], mesh_arrays(reference)[0])
+    np.testing.assert_array_equal(mesh_arrays(mesh)[1], mesh_arrays(reference)[1])
+    np.testing.assert_allclose(corner_normals(mesh), corner_normals(reference), atol=1e-6)
+    np.testing.assert_array_equal(
+        pm.blender_mesh.get_point_attribute(mesh, "velocity"),
+        pm.blender_mesh.get_point_attribute(reference, "velocity"))
+    # Frame 4 shown again from the cache: still unfinished, so it waits for rest again.
+    clean_scene.frame_set(4)
+    assert live.last_update[obj.name]["cached"] and live.last_update[obj.name]["unfinished"]
+    assert not shown_mesh(obj).has_custom_normals
+    assert rest(live, monkeypatch) is None and shown_mesh(obj).has_custom_normals
+    # The finished frame 5 from the cache: its kept mesh, finished, nothing left to do.
+    clean_scene.frame_set(5)
+    record = live.last_update[obj.name]
+    assert record["cached"] and record["swapped"] and not record["unfinished"]
+    assert shown_mesh(obj).name == finished_5 and shown_mesh(obj).has_custom_normals
+    assert not live._pending
+
+
+def test_renders_update_now_and_finish_every_frame_have_normals_at_once(pm, clean_scene,
+                                                                        deferring):
+    live = deferring
+    em = emitter(speed=1.0)
+    make_active(em)
+    assert bpy.ops.particlemesh.polygonize(live=True) == {"FINISHED"}
+    obj = bpy.context.active_object
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    clean_scene.frame_set(3)
+    assert not shown_mesh(obj).has_custom_normals
+    # A render's frame (the handler with a render depsgraph) is finished as it is written.
+    record = live.update_object(obj, depsgraph, mode="RENDER", defer=True)
+    assert not record["unfinished"] and obj.data.has_custom_normals
+    assert live.UNFINISHED_TAG not in obj.data and not live._pending
+    # Update Now writes the object's own mesh with its normals.
+    clean_scene.frame_set(6)
+    with bpy.context.temp_override(active_object=obj, object=obj):
+        assert bpy.ops.particlemesh.update() == {"FINISHED"}
+    assert obj.data.has_custom_normals and live.UNFINISHED_TAG not in obj.data
+    # Finish Every Frame: viewport frames too, new ones and unfinished cached ones.
+    clean_scene.frame_set(7)
+    assert live.UNFINISHED_TAG in shown_mesh(obj)
+    clean_scene.frame_set(8)
+    obj.particlemesh.finish_every_frame = True
+    for frame in (7, 9):
+        clean_scene.frame_set(frame)
+        assert shown_mesh(obj).has_custom_normals and live.UNFINISHED_TAG not in shown_mesh(obj)
+        assert not live.last_update[obj.name]["unfinished"] and not live._pending
+
+
+def test_the_finishing_timer_copes_with_objects_gone_and_live_mode_off(pm, clean_scene,
+                                                                      deferring, monkeypatch,
+                                                                      tmp_path):
+    live = deferring
+    em = emitter(speed=1.0)
+    make_active(em)
+    assert bpy.ops.particlemesh.polygonize(live=True) == {"FINISHED"}
+    obj = bpy.context.active_object
+    # A save finishes the frame on screen first (a file holds finished meshes only).
+    clean_scene.frame_set(2)
+    assert live._pending
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "live.blend"), copy=True)
+    assert not live._pending and obj.data.has_custom_normals
+    assert live.UNFINISHED_TAG not in obj.data
+    clean_scene.frame_set(3)
+    assert live._pending
+    # Live mode off: the frame on screen becomes the object's mesh and is finished at rest.
+    obj.particlemesh.live = False
+    assert live.UNFINISHED_TAG in obj.data
+    assert rest(live, monkeypatch) is None
+    assert obj.data.has_custom_normals and live.UNFINISHED_TAG not in obj.data
+    # The object deleted before the frames rest: nothing to finish, no error.
+    obj.particlemesh.live = True
+    clean_scene.frame_set(4)
+    assert live._pending
+    mesh_name = shown_mesh(obj).name
+    bpy.data.objects.remove(obj)
+    assert rest(live, monkeypatch) is None and not live._pending
+    mesh = bpy.data.meshes.get(mesh_name)
+    assert mesh is None or not mesh.has_custom_normals
+    # The frame's mesh replaced under the same name (as an undo can): left alone.
+    em2 = emitter("Emitter2", speed=1.0)
+    make_active(em2)
+    assert bpy.ops.particlemesh.polygonize(live=True) == {"FINISHED"}
+    obj = bpy.context.active_object
+    clean_scene.frame_set(6)
+    del shown_mesh(obj)[live.UNFINISHED_TAG]
+    assert rest(live, monkeypatch) is None and not shown_mesh(obj).has_custom_normals
+
+
 def test_live_off_leaves_the_mesh_alone(pm, clean_scene):
     emitter()
     assert bpy.ops.particlemesh.triangulate() == {"FINISHED"}
@@ -725,7 +878,8 @@ def test_panels_draw(pm, clean_scene):
     clean_scene.frame_set(3)
     log = draw_panels(pm, bpy.context)
     props = [name for kind, name in log if kind == "prop"]
-    for name in ("source", "live", "auto_spacing", "max_edge_factor", "smooth", "use_render_settings"):
+    for name in ("source", "live", "auto_spacing", "max_edge_factor", "smooth", "use_render_settings",
+                 "instant_frames", "finish_every_frame"):
         assert name in props, name
     assert any(kind == "label" and "frame 3" in text for kind, text in log)
     assert ("operator", "particlemesh.bake") in log

@@ -23,6 +23,7 @@ def test_disable_and_enable_cleanly(clean_scene):
     assert not hasattr(bpy.types.Object, "particlemesh")
     assert "on_frame_change_post" not in handler_names(bpy.app.handlers.frame_change_post)
     assert "on_load_post" not in handler_names(bpy.app.handlers.load_post)
+    assert "on_depsgraph_update_post" not in handler_names(bpy.app.handlers.depsgraph_update_post)
     clean_scene.frame_set(4)  # no handler left behind to fail
 
     assert bpy.ops.preferences.addon_enable(module=ADDON) == {"FINISHED"}
@@ -41,5 +42,6 @@ def test_disable_and_enable_cleanly(clean_scene):
         bpy.ops.preferences.addon_disable(module=ADDON)
         bpy.ops.preferences.addon_enable(module=ADDON)
     assert handler_names(bpy.app.handlers.frame_change_post).count("on_frame_change_post") == 1
+    assert handler_names(bpy.app.handlers.depsgraph_update_post).count("on_depsgraph_update_post") == 1
     assert np.isfinite(sys.modules[ADDON].particlemesh.triangulate(np.eye(3, dtype=np.float32) +
                                                                    [[0, 0, 0]]).vertices).all()
