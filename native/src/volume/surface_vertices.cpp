@@ -3,12 +3,93 @@
 #include <algorithm>
 #include <cmath>
 
+#include "volume/field_impl.h"
 #include "volume/mc_table.h"
 
 namespace PM_NAMESPACE::detail {
 
-Crossing refine_crossing(const ParticleField& field, const Vec3& a, int axis, double h, double fa, double fb,
-                         double T) {
+void EdgeNeighbours::gather(const ParticleField& field, const Vec3& a, int axis, double h) {
+  field_ = &field;
+  axis_ = axis;
+  const double R = field.params().radius;
+  inv_r2_ = 1.0 / (R * R);  // as the field's own
+  const double r = field.max_radius();
+  const double r2 = r * r;
+  const NeighborGrid& grid = field.grid();
+  // The points on the edge are a + t h e_axis, 0 <= t <= 1, computed as at() in refine():
+  // their query boxes [x - r, x + r] lie in the box of the two ends' (rounding is monotone).
+  Vec3 b = a;
+  (axis == 0 ? b.x : axis == 1 ? b.y : b.z) += h;
+  const Vec3 rv{r, r, r};
+  // A particle is kept if its distance to the segment is within r: any point of the edge
+  // that has it within r (by the field's rounded test) has it within r (1 + 1e-12) exactly.
+  const double keep2 = r2 * (1.0 + 1e-12);
+  const double lo_a = a[axis], hi_a = b[axis];
+  // The cells first, then their particles into room for all of them, each written and kept
+  // or not without a branch (about half are dropped, in no predictable pattern).
+  cells_.clear();
+  size_t room = 0;
+  field.for_each_cell_in(grid.coord_of(a - rv), grid.coord_of(b + rv), [&](uint32_t c) {
+    cells_.push_back(c);
+    room += grid.cell_end(c) - grid.cell_begin(c);
+  });
+  if (near_.size() < room) near_.resize(room);
+  size_t n = 0;
+  const int u = (axis + 1) % 3, w = (axis + 2) % 3;
+  const double au = a[u], aw = a[w];
+  for (const uint32_t c : cells_) {
+    const int32_t cell = grid.cell_coord(c)[size_t(axis)];
+    for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) {
+      const Vec3& p = grid.sorted_point(s);
+      const double pa = p[axis];
+      const double da = pa - std::clamp(pa, lo_a, hi_a), du = p[u] - au, dw = p[w] - aw;
+      near_[n] = {p, cell, s};
+      n += da * da + du * du + dw * dw <= keep2;
+    }
+  }
+  count_ = n;
+}
+
+template <Kernel K>
+double EdgeNeighbours::sum(const Vec3& x, Vec3* gradient) const {
+  // ParticleField::value_and_gradient's spherical branch, over the gathered particles that
+  // its query at x would visit (the cells along the other axes are the edge's).
+  const ParticleField& field = *field_;
+  const double r = field.max_radius();
+  const double r2 = r * r;
+  const NeighborGrid& grid = field.grid();
+  const int32_t lo = grid.coord_on_axis(x[axis_] - r, axis_), hi = grid.coord_on_axis(x[axis_] + r, axis_);
+  const bool uniform = field.uniform_radius();
+  const std::vector<double>& inv_r2s = field.sorted_inverse_squared_radii();
+  const std::vector<double>& ws = field.sorted_strengths();
+  const bool unit = ws.empty();
+  double v = 0;
+  Vec3 g{};
+  for (size_t k = 0; k < count_; ++k) {
+    const Near& n = near_[k];
+    if (n.cell < lo || n.cell > hi) continue;
+    const double d2 = squared_distance(n.p, x);
+    if (!(d2 <= r2)) continue;
+    const double inv_r2 = uniform ? inv_r2_ : inv_r2s[n.sorted];
+    const double q = d2 * inv_r2;
+    if (!(q < 1.0)) continue;
+    const double w = unit ? 1.0 : ws[n.sorted];
+    v += w * kernel_value_t<K>(q);
+    if (gradient) g += (x - n.p) * (2.0 * w * inv_r2 * kernel_derivative_t<K>(q));
+  }
+  if (gradient) *gradient = g;
+  return v;
+}
+
+double EdgeNeighbours::value_and_gradient(const Vec3& x, Vec3* gradient) const {
+  return dispatch_kernel(field_->kernel(), [&]<Kernel K>() { return sum<K>(x, gradient); });
+}
+
+namespace {
+
+// Safeguarded Newton along the edge; eval(x, &gradient) is F(x).
+template <class Eval>
+Crossing refine(const Eval& eval, const Vec3& a, int axis, double h, double fa, double fb, double T) {
   Crossing out;
   double lo = 0, hi = 1;
   const double phi_lo = fa - T;  // sign at t = 0
@@ -20,7 +101,7 @@ Crossing refine_crossing(const ParticleField& field, const Vec3& a, int axis, do
     return x;
   };
   for (int it = 0; it < 8; ++it) {
-    const double phi = field.value_and_gradient(at(t), &grad) - T;
+    const double phi = eval(at(t), &grad) - T;
     ++out.evaluations;
     if (phi == 0) break;
     if ((phi < 0) == (phi_lo < 0)) lo = t; else hi = t;
@@ -46,6 +127,18 @@ Crossing refine_crossing(const ParticleField& field, const Vec3& a, int axis, do
     out.normal = e;
   }
   return out;
+}
+
+}  // namespace
+
+Crossing refine_crossing(const ParticleField& field, const Vec3& a, int axis, double h, double fa, double fb,
+                         double T) {
+  return refine([&](const Vec3& x, Vec3* g) { return field.value_and_gradient(x, g); }, a, axis, h, fa, fb, T);
+}
+
+Crossing refine_crossing(const EdgeNeighbours& near, const Vec3& a, int axis, double h, double fa, double fb,
+                         double T) {
+  return refine([&](const Vec3& x, Vec3* g) { return near.value_and_gradient(x, g); }, a, axis, h, fa, fb, T);
 }
 
 Crossing center_vertex(const ParticleField& field, const Vec3& cell_lo, double h, const float cv[8],

@@ -407,6 +407,94 @@ TEST(Polygonize, OutputDoesNotDependOnTheThreadCount) {
   }
 }
 
+// Every vertex on a lattice edge sits on the iso-surface of the true field (to the first-order
+// distance |F - T| / |grad F|), its normal is -grad F there, and the particles' attributes
+// at it are the field's normalised kernel weights summed in the field's own order, bit for
+// bit; the same at any thread count. With one radius, with per-particle radii and strengths
+// (negative ones too), and with every kernel.
+TEST(Polygonize, VerticesOnTheFieldAndAttributesAsItsWeights) {
+  struct Case {
+    Kernel kernel;
+    bool radii, strengths;
+  };
+  for (const Case cs : {Case{Kernel::Wyvill, false, false}, Case{Kernel::Poly6, true, true}, Case{Kernel::Blinn, false, true},
+                        Case{Kernel::Poly4, true, false}}) {
+    const PointCloud base = test::random_cloud(4000, 31, 1.6);
+    PointCloud c = base;
+    std::mt19937_64 rng(7);
+    auto u = [&] { return double(rng() >> 11) * 0x1.0p-53; };
+    PolygonizeOptions o;
+    o.kernel = cs.kernel;
+    o.radius = 0.16;
+    o.threshold = 0.8;
+    o.cell_size = 0.03;
+    if (cs.radii)
+      for (size_t i = 0; i < c.positions.size(); ++i) o.radii.push_back(0.12 + 0.08 * u());
+    if (cs.strengths)
+      for (size_t i = 0; i < c.positions.size(); ++i) o.strengths.push_back(i % 50 == 0 ? -0.5 : 0.7 + 0.6 * u());
+    VertexAttribute a{"velocity", 3, {}}, b{"heat", 1, {}};
+    for (size_t i = 0; i < c.positions.size(); ++i) {
+      for (int k = 0; k < 3; ++k) a.values.push_back(float(u() - 0.5));
+      b.values.push_back(float(10 * u()));
+    }
+    c.attributes = {a, b};
+    o.threads = 1;
+    const PolygonizeResult r = polygonize(c, o);
+    ASSERT_GT(r.mesh.positions.size(), 1000u) << kernel_name(cs.kernel);
+    ASSERT_EQ(r.mesh.attributes.size(), 2u);
+    const ParticleField f(c.positions, FieldParams{cs.kernel, o.radius, o.threshold, o.radii, o.strengths, {}});
+    const double T = o.threshold, h = o.cell_size;
+    const Vec3 O = r.stats.origin;
+    size_t on_edges = 0, mismatched = 0;
+    double worst = 0, nmin = 1;
+    for (size_t v = 0; v < r.mesh.positions.size(); ++v) {
+      const Vec3& x = r.mesh.positions[v];
+      // The attributes: sum_i w_i a_i / sum_i w_i, w_i = |strength_i| g(s_i), in the field's order.
+      double total = 0, sum[4] = {0, 0, 0, 0};
+      f.for_each_contributor(x, [&](size_t i, double s) {
+        const double w = std::abs(f.strength(i)) * kernel_value(cs.kernel, s);
+        if (!(w > 0)) return;
+        total += w;
+        for (int k = 0; k < 3; ++k) sum[k] += w * double(a.values[3 * i + size_t(k)]);
+        sum[3] += w * double(b.values[i]);
+      });
+      for (int k = 0; k < 4; ++k) {
+        const float want = total > 0 ? float(sum[k] / total) : 0.0f;
+        const float got = k < 3 ? r.mesh.attributes[0].values[3 * v + size_t(k)] : r.mesh.attributes[1].values[v];
+        mismatched += std::bit_cast<uint32_t>(want) != std::bit_cast<uint32_t>(got);
+      }
+      // On a lattice edge: two coordinates on nodes (the cells' inside vertices are not).
+      int off = 0;
+      for (int k = 0; k < 3; ++k) {
+        const double n = (x[k] - O[k]) / h;
+        off += std::abs(n - std::round(n)) > 1e-9;
+      }
+      if (off != 1) continue;
+      ++on_edges;
+      Vec3 g;
+      const double F = f.value_and_gradient(x, &g);
+      // Vertices are kept 1e-3 of an edge from its nodes (kEdgeClamp): up to that far off.
+      worst = std::max(worst, std::abs(F - T) / norm(g) / h);
+      nmin = std::min(nmin, dot(r.mesh.normals[v], normalized(-g)));
+    }
+    EXPECT_EQ(mismatched, 0u) << kernel_name(cs.kernel);
+    EXPECT_GT(on_edges, r.mesh.positions.size() * 9 / 10);
+    EXPECT_LT(worst, 1.1e-3) << kernel_name(cs.kernel);
+    EXPECT_GT(nmin, 0.99) << kernel_name(cs.kernel);
+    for (int threads : {2, 3, 0}) {
+      o.threads = threads;
+      const PolygonizeResult t = polygonize(c, o);
+      EXPECT_TRUE(t.mesh.positions == r.mesh.positions) << threads << " threads";
+      EXPECT_TRUE(t.mesh.normals == r.mesh.normals) << threads << " threads";
+      EXPECT_TRUE(t.mesh.triangles == r.mesh.triangles) << threads << " threads";
+      ASSERT_EQ(t.mesh.attributes.size(), 2u);
+      for (size_t k = 0; k < 2; ++k)
+        EXPECT_TRUE(t.mesh.attributes[k].values == r.mesh.attributes[k].values) << threads << " threads";
+      EXPECT_EQ(t.stats.field_evaluations, r.stats.field_evaluations);
+    }
+  }
+}
+
 TEST(Polygonize, FieldOverloadGivesTheSameMesh) {
   const PointCloud c = test::random_cloud(3000, 5, 1.4);
   PolygonizeOptions o;
