@@ -70,7 +70,8 @@ class EdgeNeighbours {
 };
 
 /// The crossing on the edge from node position a (sample fa) to a + h e_axis (sample fb):
-/// linear interpolation of the samples, then safeguarded Newton on the true field.
+/// linear interpolation of the samples, then safeguarded Newton steps corrected for the
+/// curvature (a quadratic through what is known) on the true field.
 Crossing refine_crossing(const ParticleField& field, const Vec3& a, int axis, double h, double fa, double fb,
                          double T);
 /// The same, bit for bit, evaluated through `near` gathered for that edge.
