@@ -43,7 +43,7 @@ void EdgeNeighbours::gather(const ParticleField& field, const Vec3& a, int axis,
       const Vec3& p = grid.sorted_point(s);
       const double pa = p[axis];
       const double da = pa - std::clamp(pa, lo_a, hi_a), du = p[u] - au, dw = p[w] - aw;
-      near_[n] = {p, cell, s};
+      near_[n] = {s, cell};
       n += da * da + du * du + dw * dw <= keep2;
     }
   }
@@ -68,14 +68,15 @@ double EdgeNeighbours::sum(const Vec3& x, Vec3* gradient) const {
   for (size_t k = 0; k < count_; ++k) {
     const Near& n = near_[k];
     if (n.cell < lo || n.cell > hi) continue;
-    const double d2 = squared_distance(n.p, x);
+    const Vec3& p = grid.sorted_point(n.sorted);
+    const double d2 = squared_distance(p, x);
     if (!(d2 <= r2)) continue;
     const double inv_r2 = uniform ? inv_r2_ : inv_r2s[n.sorted];
     const double q = d2 * inv_r2;
     if (!(q < 1.0)) continue;
     const double w = unit ? 1.0 : ws[n.sorted];
     v += w * kernel_value_t<K>(q);
-    if (gradient) g += (x - n.p) * (2.0 * w * inv_r2 * kernel_derivative_t<K>(q));
+    if (gradient) g += (x - p) * (2.0 * w * inv_r2 * kernel_derivative_t<K>(q));
   }
   if (gradient) *gradient = g;
   return v;

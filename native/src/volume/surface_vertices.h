@@ -45,7 +45,7 @@ class EdgeNeighbours {
     for (size_t k = 0; k < count_; ++k) {
       const Near& n = near_[k];
       if (n.cell < lo || n.cell > hi) continue;
-      const double d2 = squared_distance(n.p, x);
+      const double d2 = squared_distance(grid.sorted_point(n.sorted), x);
       if (!(d2 <= r2)) continue;
       const double s = d2 * (uniform ? inv_r2_ : inv_r2s[n.sorted]);
       if (s < 1.0) f(size_t(grid.original_index(n.sorted)), s);
@@ -53,10 +53,11 @@ class EdgeNeighbours {
   }
 
  private:
+  // A gathered particle: 8 bytes, its centre read from the grid (just read by the gather,
+  // so still in cache) rather than copied.
   struct Near {
-    Vec3 p;            // the particle's centre
-    int32_t cell;      // its grid cell's coordinate along the edge's axis
-    uint32_t sorted;   // its grid (sorted) index
+    uint32_t sorted;  // its grid (sorted) index
+    int32_t cell;     // its grid cell's coordinate along the edge's axis
   };
   template <Kernel K>
   double sum(const Vec3& x, Vec3* gradient) const;
