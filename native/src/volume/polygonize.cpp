@@ -736,15 +736,20 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   std::optional<detail::AttributeSums> attribute_shape;
   if (attributes && !attributes->empty()) attribute_shape.emplace(mesh, field, *attributes);
   const bool with_attributes = attribute_shape && attribute_shape->any();
-  // Spherical kernels: each crossing's evaluations go through the particles gathered for its
-  // edge (the same values bit for bit, a third of the particles tested).
-  const bool gather_edges = !field.anisotropic();
+  // Spherical kernels: a crossing's evaluations can go through the particles gathered for its
+  // edge (the same values bit for bit, a third of the particles tested each time). Gathering
+  // costs about one evaluation of the field, so it pays where a crossing takes two or more:
+  // with attributes (one more query at the vertex), or where the field bends (a thin layer
+  // of particles: ~2.3 evaluations a crossing), not in a dense block (~1.25). Each task
+  // follows the evaluations per crossing it has seen so far; either way the mesh is the same.
+  const bool can_gather = !field.anisotropic();
   std::vector<uint64_t> block_evals(nm, 0);
   std::atomic<bool> broken{false};
   detail::parallel_blocks(nm, 4, [&](size_t bb, size_t be) {
     if (tracker.cancelled()) return;
     std::unique_ptr<float[]> local(new float[kLN]);
     detail::EdgeNeighbours near;
+    uint64_t seen_crossings = 0, seen_evals = 0;  // this task's, for choosing to gather
     std::optional<detail::AttributeSums> sums;
     if (with_attributes) sums.emplace(*attribute_shape);
     for (size_t i = bb; i < be; ++i) {
@@ -769,6 +774,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
           const int step = a == 0 ? 1 : (a == 1 ? kL : kL * kL);
           const Vec3 pa{base[0] + x * h, base[1] + y * h, base[2] + z * h};
           detail::Crossing c;
+          const bool gather_edges = can_gather && (with_attributes || 2 * seen_evals >= 3 * seen_crossings);
           if (gather_edges) {
             near.gather(field, pa, a, h);
             c = detail::refine_crossing(near, pa, a, h, local[l], local[l + step], T);
@@ -776,6 +782,8 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
             c = detail::refine_crossing(field, pa, a, h, local[l], local[l + step], T);
           }
           evals += uint64_t(c.evaluations);
+          ++seen_crossings;
+          seen_evals += uint64_t(c.evaluations);
           mesh.positions[v] = c.position;
           mesh.normals[v] = c.normal;
           if (sums) {
