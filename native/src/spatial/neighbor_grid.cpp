@@ -150,16 +150,6 @@ void NeighborGrid::build(const Vec3* points, size_t n, double cell_size, const V
   table_mask_ = detail::build_key_table(cell_keys_, table_);
 }
 
-NeighborGrid::CellCoord NeighborGrid::coord_of(const Vec3& p) const {
-  // Clamped so that queries far outside the data stay inside the key range.
-  auto axis = [&](double v, double o) {
-    const double f = std::floor((v - o) * inv_cell_);
-    if (!(f > 0)) return int32_t(0);  // also NaN: a converted NaN is undefined behaviour
-    return int32_t(std::min(f, double(kMaxCellsPerAxis + 3)));
-  };
-  return {axis(p.x, origin_.x), axis(p.y, origin_.y), axis(p.z, origin_.z)};
-}
-
 uint32_t NeighborGrid::find_key(uint64_t key) const {
   static_assert(kNoCell == detail::kNoKey);
   return detail::find_key(table_, table_mask_, cell_keys_, key);

@@ -40,37 +40,31 @@ void validate_finishing(const PolygonizeOptions& o) {
                 "min_component_volume, min_component_particles and taubin_iterations need the whole surface");
 }
 
-void interpolate_attributes(TriMesh& mesh, const ParticleField& field, const std::vector<VertexAttribute>& attributes) {
+AttributeSums::AttributeSums(TriMesh& mesh, const ParticleField& field, const std::vector<VertexAttribute>& attributes)
+    : mesh_(mesh), field_(field), attributes_(attributes), kernel_(field.kernel()) {
   mesh.attributes.clear();
   const size_t nv = mesh.positions.size(), np = field.size();
-  size_t channels = 0;
   for (const VertexAttribute& a : attributes) {
     if (a.components < 1 || a.values.size() != np * size_t(a.components))
       throw Error(Status::InvalidInput, "attribute '" + a.name + "' has " + std::to_string(a.values.size()) +
                                             " values for " + std::to_string(np) + " particles x " +
                                             std::to_string(a.components) + " components");
-    channels += size_t(a.components);
+    channels_ += size_t(a.components);
   }
-  if (channels == 0) return;
+  if (channels_ == 0) return;
   for (const VertexAttribute& a : attributes) mesh.attributes.push_back({a.name, a.components, std::vector<float>(nv * size_t(a.components))});
-  const Kernel kernel = field.kernel();
-  parallel_blocks(nv, 256, [&](size_t b, size_t e) {
-    std::vector<double> sum(channels);
+  sum_.resize(channels_);
+}
+
+void interpolate_attributes(TriMesh& mesh, const ParticleField& field, const std::vector<VertexAttribute>& attributes) {
+  const AttributeSums shape(mesh, field, attributes);
+  if (!shape.any()) return;
+  parallel_blocks(mesh.positions.size(), 256, [&](size_t b, size_t e) {
+    AttributeSums sums = shape;
     for (size_t v = b; v < e; ++v) {
-      std::fill(sum.begin(), sum.end(), 0.0);
-      double total = 0;
-      field.for_each_contributor(mesh.positions[v], [&](size_t i, double s) {
-        const double w = std::abs(field.strength(i)) * kernel_value(kernel, s);
-        if (!(w > 0)) return;
-        total += w;
-        size_t c = 0;
-        for (const VertexAttribute& a : attributes)
-          for (int k = 0; k < a.components; ++k) sum[c++] += w * double(a.values[i * size_t(a.components) + size_t(k)]);
-      });
-      size_t c = 0;
-      for (VertexAttribute& a : mesh.attributes)
-        for (int k = 0; k < a.components; ++k, ++c)
-          a.values[v * size_t(a.components) + size_t(k)] = total > 0 ? float(sum[c] / total) : 0.0f;
+      sums.reset();
+      field.for_each_contributor(mesh.positions[v], [&](size_t i, double s) { sums.add(i, s); });
+      sums.store(v);
     }
   });
 }

@@ -4,6 +4,10 @@
 
 #include "particlemesh/core/config.h"
 
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
 #include "core/progress_tracker.h"
 #include "particlemesh/volume/polygonize.h"
 
@@ -31,5 +35,46 @@ void finish_polygonized(PolygonizeResult& r, const PolygonizeOptions& options, c
 /// values do not depend on the thread count, and the tiles of a cloud get the whole cloud's
 /// values bit for bit. A vertex no kernel reaches (none on a polygonized surface) gets 0.
 void interpolate_attributes(TriMesh& mesh, const ParticleField& field, const std::vector<VertexAttribute>& attributes);
+
+/// interpolate_attributes in pieces, for a caller that finds each vertex's contributors
+/// itself (polygonize, with the particles it gathered for the vertex): check `attributes`
+/// against the field's particles and make mesh.attributes (zeros, one value per vertex and
+/// component), then per vertex reset(), add() each contributor in the field's order, store().
+class AttributeSums {
+ public:
+  /// @throws Error(InvalidInput) an attribute whose values do not match the particles.
+  AttributeSums(TriMesh& mesh, const ParticleField& field, const std::vector<VertexAttribute>& attributes);
+  /// Whether there is any channel to interpolate.
+  bool any() const { return channels_ > 0; }
+  void reset() {
+    std::fill(sum_.begin(), sum_.end(), 0.0);
+    total_ = 0;
+  }
+  /// Particle i (input order) at scaled squared distance s (as for_each_contributor gives).
+  void add(size_t i, double s) {
+    const double w = std::abs(field_.strength(i)) * kernel_value(kernel_, s);
+    if (!(w > 0)) return;
+    total_ += w;
+    size_t c = 0;
+    for (const VertexAttribute& a : attributes_)
+      for (int k = 0; k < a.components; ++k) sum_[c++] += w * double(a.values[i * size_t(a.components) + size_t(k)]);
+  }
+  /// Vertex v's values into mesh.attributes.
+  void store(size_t v) const {
+    size_t c = 0;
+    for (VertexAttribute& a : mesh_.attributes)
+      for (int k = 0; k < a.components; ++k, ++c)
+        a.values[v * size_t(a.components) + size_t(k)] = total_ > 0 ? float(sum_[c] / total_) : 0.0f;
+  }
+
+ private:
+  TriMesh& mesh_;
+  const ParticleField& field_;
+  const std::vector<VertexAttribute>& attributes_;
+  Kernel kernel_;
+  size_t channels_ = 0;
+  std::vector<double> sum_;
+  double total_ = 0;
+};
 
 }  // namespace particlemesh::detail

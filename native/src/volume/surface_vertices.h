@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "particlemesh/core/vec3.h"
 #include "particlemesh/volume/field.h"
@@ -18,9 +19,64 @@ struct Crossing {
 /// Vertices stay at least this fraction of an edge away from its nodes (no two coincide).
 constexpr double kEdgeClamp = 1e-3;
 
+/// The particles whose spheres can reach one lattice edge, gathered once from the field's
+/// grid for all the evaluations on that edge (its Newton steps, then its vertex's attributes).
+/// A query of the field visits the 27 grid cells around its point and tests every particle
+/// in them; the particles near an edge are about a third of those, so each evaluation here
+/// tests only them. Every result is bit for bit the field's own: the same particles (those
+/// in the cells the field's query would visit and within its radius), in the same order
+/// (increasing grid index), with the same arithmetic. Spherical kernels only
+/// (ParticleField::anisotropic() false); one per thread, reused from edge to edge.
+class EdgeNeighbours {
+ public:
+  /// Gather the particles for the edge from node position a to a + h e_axis.
+  void gather(const ParticleField& field, const Vec3& a, int axis, double h);
+  /// As ParticleField::value_and_gradient(x, gradient), for x on the gathered edge.
+  double value_and_gradient(const Vec3& x, Vec3* gradient) const;
+  /// As ParticleField::for_each_contributor(x, f) (f(input index, s)), for x on the edge.
+  template <class F>
+  void for_each_contributor(const Vec3& x, F&& f) const {
+    const double r = field_->max_reach();  // = max_radius() for spheres
+    const double r2 = r * r;
+    const NeighborGrid& grid = field_->grid();
+    const int32_t lo = grid.coord_on_axis(x[axis_] - r, axis_), hi = grid.coord_on_axis(x[axis_] + r, axis_);
+    const bool uniform = field_->uniform_radius();
+    const std::vector<double>& inv_r2s = field_->sorted_inverse_squared_radii();
+    for (size_t k = 0; k < count_; ++k) {
+      const Near& n = near_[k];
+      if (n.cell < lo || n.cell > hi) continue;
+      const double d2 = squared_distance(grid.sorted_point(n.sorted), x);
+      if (!(d2 <= r2)) continue;
+      const double s = d2 * (uniform ? inv_r2_ : inv_r2s[n.sorted]);
+      if (s < 1.0) f(size_t(grid.original_index(n.sorted)), s);
+    }
+  }
+
+ private:
+  // A gathered particle: 8 bytes, its centre read from the grid (just read by the gather,
+  // so still in cache) rather than copied.
+  struct Near {
+    uint32_t sorted;  // its grid (sorted) index
+    int32_t cell;     // its grid cell's coordinate along the edge's axis
+  };
+  template <Kernel K>
+  double sum(const Vec3& x, Vec3* gradient) const;
+
+  const ParticleField* field_ = nullptr;
+  int axis_ = 0;
+  double inv_r2_ = 0;
+  std::vector<Near> near_;  // the first count_ are the edge's
+  size_t count_ = 0;
+  std::vector<uint32_t> cells_;
+};
+
 /// The crossing on the edge from node position a (sample fa) to a + h e_axis (sample fb):
-/// linear interpolation of the samples, then safeguarded Newton on the true field.
+/// linear interpolation of the samples, then safeguarded Newton steps corrected for the
+/// curvature (a quadratic through what is known) on the true field.
 Crossing refine_crossing(const ParticleField& field, const Vec3& a, int axis, double h, double fa, double fb,
+                         double T);
+/// The same, bit for bit, evaluated through `near` gathered for that edge.
+Crossing refine_crossing(const EdgeNeighbours& near, const Vec3& a, int axis, double h, double fa, double fb,
                          double T);
 
 /// A vertex inside the cell with lower corner cell_lo (edge h, corner samples cv) for the

@@ -407,6 +407,138 @@ TEST(Polygonize, OutputDoesNotDependOnTheThreadCount) {
   }
 }
 
+// Every vertex on a lattice edge sits on the iso-surface of the true field (to the first-order
+// distance |F - T| / |grad F|), its normal is -grad F there, and the particles' attributes
+// at it are the field's normalised kernel weights summed in the field's own order, bit for
+// bit; the same at any thread count. With one radius, with per-particle radii and strengths
+// (negative ones too), and with every kernel.
+TEST(Polygonize, VerticesOnTheFieldAndAttributesAsItsWeights) {
+  struct Case {
+    Kernel kernel;
+    bool radii, strengths;
+  };
+  for (const Case cs : {Case{Kernel::Wyvill, false, false}, Case{Kernel::Poly6, true, true}, Case{Kernel::Blinn, false, true},
+                        Case{Kernel::Poly4, true, false}}) {
+    const PointCloud base = test::random_cloud(4000, 31, 1.6);
+    PointCloud c = base;
+    std::mt19937_64 rng(7);
+    auto u = [&] { return double(rng() >> 11) * 0x1.0p-53; };
+    PolygonizeOptions o;
+    o.kernel = cs.kernel;
+    o.radius = 0.16;
+    o.threshold = 0.8;
+    o.cell_size = 0.03;
+    if (cs.radii)
+      for (size_t i = 0; i < c.positions.size(); ++i) o.radii.push_back(0.12 + 0.08 * u());
+    if (cs.strengths)
+      for (size_t i = 0; i < c.positions.size(); ++i) o.strengths.push_back(i % 50 == 0 ? -0.5 : 0.7 + 0.6 * u());
+    VertexAttribute a{"velocity", 3, {}}, b{"heat", 1, {}};
+    for (size_t i = 0; i < c.positions.size(); ++i) {
+      for (int k = 0; k < 3; ++k) a.values.push_back(float(u() - 0.5));
+      b.values.push_back(float(10 * u()));
+    }
+    c.attributes = {a, b};
+    o.threads = 1;
+    const PolygonizeResult r = polygonize(c, o);
+    ASSERT_GT(r.mesh.positions.size(), 1000u) << kernel_name(cs.kernel);
+    ASSERT_EQ(r.mesh.attributes.size(), 2u);
+    const ParticleField f(c.positions, FieldParams{cs.kernel, o.radius, o.threshold, o.radii, o.strengths, {}});
+    const double T = o.threshold, h = o.cell_size;
+    const Vec3 O = r.stats.origin;
+    size_t on_edges = 0, mismatched = 0;
+    std::vector<double> off_surface;  // |F - T| / |grad F| in cells
+    double nmin = 1;
+    for (size_t v = 0; v < r.mesh.positions.size(); ++v) {
+      const Vec3& x = r.mesh.positions[v];
+      // The attributes: sum_i w_i a_i / sum_i w_i, w_i = |strength_i| g(s_i), in the field's order.
+      double total = 0, sum[4] = {0, 0, 0, 0};
+      f.for_each_contributor(x, [&](size_t i, double s) {
+        const double w = std::abs(f.strength(i)) * kernel_value(cs.kernel, s);
+        if (!(w > 0)) return;
+        total += w;
+        for (int k = 0; k < 3; ++k) sum[k] += w * double(a.values[3 * i + size_t(k)]);
+        sum[3] += w * double(b.values[i]);
+      });
+      for (int k = 0; k < 4; ++k) {
+        const float want = total > 0 ? float(sum[k] / total) : 0.0f;
+        const float got = k < 3 ? r.mesh.attributes[0].values[3 * v + size_t(k)] : r.mesh.attributes[1].values[v];
+        mismatched += std::bit_cast<uint32_t>(want) != std::bit_cast<uint32_t>(got);
+      }
+      // On a lattice edge: two coordinates on nodes (the cells' inside vertices are not).
+      // Vertices kept 1e-3 of an edge from a node (kEdgeClamp) are left out: they stop there.
+      int off = 0;
+      bool clamped = false;
+      for (int k = 0; k < 3; ++k) {
+        const double n = (x[k] - O[k]) / h, frac = n - std::floor(n);
+        if (std::abs(n - std::round(n)) <= 1e-9) continue;
+        ++off;
+        clamped = frac < 1.001e-3 || frac > 1 - 1.001e-3;
+      }
+      if (off != 1) continue;
+      ++on_edges;
+      Vec3 g;
+      const double F = f.value_and_gradient(x, &g);
+      nmin = std::min(nmin, dot(r.mesh.normals[v], normalized(-g)));
+      if (!clamped) off_surface.push_back(std::abs(F - T) / norm(g) / h);
+    }
+    EXPECT_EQ(mismatched, 0u) << kernel_name(cs.kernel);
+    EXPECT_GT(on_edges, r.mesh.positions.size() * 9 / 10);
+    // The refinement's tolerance: half the vertices within 1e-6 of a cell of the surface,
+    // all but one in a thousand within 1e-4 (a few, where the field along the edge bends back
+    // or flattens out, stop farther: up to a tenth of a cell in these clouds).
+    std::sort(off_surface.begin(), off_surface.end());
+    EXPECT_LT(off_surface[off_surface.size() / 2], 1e-6) << kernel_name(cs.kernel);
+    EXPECT_LT(off_surface[off_surface.size() * 999 / 1000], 1e-4) << kernel_name(cs.kernel);
+    EXPECT_GT(nmin, 0.99) << kernel_name(cs.kernel);
+    for (int threads : {2, 3, 0}) {
+      o.threads = threads;
+      const PolygonizeResult t = polygonize(c, o);
+      EXPECT_TRUE(t.mesh.positions == r.mesh.positions) << threads << " threads";
+      EXPECT_TRUE(t.mesh.normals == r.mesh.normals) << threads << " threads";
+      EXPECT_TRUE(t.mesh.triangles == r.mesh.triangles) << threads << " threads";
+      ASSERT_EQ(t.mesh.attributes.size(), 2u);
+      for (size_t k = 0; k < 2; ++k)
+        EXPECT_TRUE(t.mesh.attributes[k].values == r.mesh.attributes[k].values) << threads << " threads";
+      EXPECT_EQ(t.stats.field_evaluations, r.stats.field_evaluations);
+    }
+  }
+}
+
+// A crossing's evaluations go through the particles gathered for its edge where that pays
+// (attributes asked for, or crossings taking several evaluations) and through the field's own
+// queries elsewhere: the two give the same mesh bit for bit. A jittered lattice (about 1.25
+// evaluations a crossing: the field's queries without attributes) and a thin shell (more: the
+// gathered particles both ways), each with and without an attribute.
+TEST(Polygonize, GatheredAndDirectEvaluationsGiveTheSameMesh) {
+  PointCloud lattice;
+  for (int z = 0; z < 14; ++z)
+    for (int y = 0; y < 14; ++y)
+      for (int x = 0; x < 14; ++x) lattice.positions.push_back({0.02 * x, 0.02 * y, 0.02 * z});
+  lattice = test::jittered(lattice, 0.001, 3);
+  const PointCloud shell = fibonacci_sphere(20000);
+  for (const PointCloud* c : {static_cast<const PointCloud*>(&lattice), &shell}) {
+    PointCloud with = *c;
+    VertexAttribute a{"heat", 1, {}};
+    for (size_t i = 0; i < with.positions.size(); ++i) a.values.push_back(float(i % 7));
+    with.attributes = {a};
+    for (int threads : {1, 0}) {
+      PolygonizeOptions o;
+      o.threads = threads;
+      const PolygonizeResult plain = polygonize(*c, o), attributed = polygonize(with, o);
+      ASSERT_GT(plain.mesh.positions.size(), 1000u);
+      // Below 1.5 evaluations a crossing the lattice's run without attributes queries the
+      // field; the shell's gathers.
+      const double per = double(plain.stats.field_evaluations) / double(plain.stats.vertices);
+      if (c == &lattice) EXPECT_LT(per, 1.4);
+      else EXPECT_GT(per, 1.6);
+      EXPECT_TRUE(plain.mesh.positions == attributed.mesh.positions) << threads << " threads";
+      EXPECT_TRUE(plain.mesh.normals == attributed.mesh.normals) << threads << " threads";
+      EXPECT_TRUE(plain.mesh.triangles == attributed.mesh.triangles) << threads << " threads";
+      EXPECT_EQ(plain.stats.field_evaluations, attributed.stats.field_evaluations);
+    }
+  }
+}
+
 TEST(Polygonize, FieldOverloadGivesTheSameMesh) {
   const PointCloud c = test::random_cloud(3000, 5, 1.4);
   PolygonizeOptions o;

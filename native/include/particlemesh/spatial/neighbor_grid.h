@@ -59,7 +59,19 @@ class PM_EXPORT NeighborGrid {
   CellCoord cell_coord(uint32_t c) const { return unpack(cell_keys_[c]); }
 
   /// Cell coordinate of a position (may lie outside the occupied cells).
-  CellCoord coord_of(const Vec3& p) const;
+  CellCoord coord_of(const Vec3& p) const {
+    return {coord_on_axis(p.x, 0), coord_on_axis(p.y, 1), coord_on_axis(p.z, 2)};
+  }
+  /// Its component along `axis` (0 x, 1 y, 2 z): floor((v - origin) / cell), clamped to
+  /// [0, kMaxCellsPerAxis + 3] so that queries far outside the data stay inside the key
+  /// range. Inline and without a call to floor (baseline x86-64 has no rounding instruction):
+  /// every field evaluation takes two of these per axis.
+  int32_t coord_on_axis(double v, int axis) const {
+    const double f = (v - origin_[axis]) * inv_cell_;
+    if (!(f >= 1.0)) return 0;  // below the first cell's end (also NaN)
+    if (!(f < double(kMaxCellsPerAxis + 4))) return kMaxCellsPerAxis + 3;
+    return int32_t(f);  // truncation is the floor of a positive value
+  }
   /// Index of the occupied cell at `coord`, or kNoCell.
   uint32_t find_cell(const CellCoord& coord) const {
     if (coord[0] < 0 || coord[1] < 0 || coord[2] < 0 || coord[0] > kMaxCellsPerAxis + 3 ||
