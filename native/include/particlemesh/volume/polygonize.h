@@ -18,9 +18,10 @@
 // 2. Classification: a node is inside when F >= T.
 // 3. Crossings: a vertex on every grid edge between an inside and an outside node, first by
 //    linear interpolation of the samples, then refined on the true field F along the edge
-//    (safeguarded Newton), so vertices lie on the iso-surface, not on its trilinear
-//    approximation; each vertex is created once (by the block owning the edge's lower node)
-//    and shared by the four cells around its edge: an indexed mesh without duplicates.
+//    (safeguarded Newton, each step corrected for the field's curvature along the edge), so
+//    vertices lie on the iso-surface, not on its trilinear approximation; each vertex is
+//    created once (by the block owning the edge's lower node) and shared by the four cells
+//    around its edge: an indexed mesh without duplicates.
 //    Vertex normals are -grad F / |grad F| at the vertex (outward).
 // 4. Polygons: marching cubes with every ambiguous face resolved by the asymptotic decider
 //    (Nielsen and Hamann 1991), computed from that face's four samples only, so the two cells
