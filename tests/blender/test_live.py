@@ -11,8 +11,9 @@ import pytest
 from conftest import emitter, living_particles, make_active, mesh_arrays, shown_mesh, undo
 
 
-def live_object(pm, **kwargs):
-    assert bpy.ops.particlemesh.triangulate(live=True, **kwargs) == {"FINISHED"}
+def live_object(pm, method="triangulate", **kwargs):
+    """The active object's particles meshed in live mode by `method` (an operator's name)."""
+    assert getattr(bpy.ops.particlemesh, method)(live=True, **kwargs) == {"FINISHED"}
     obj = bpy.context.active_object
     assert obj.particlemesh.live
     assert bpy.context.scene.render.use_lock_interface  # safe renders from the UI
@@ -404,8 +405,7 @@ def test_viewport_frames_get_their_normals_once_frames_rest(pm, clean_scene, def
     live = deferring
     em = emitter(speed=1.0)
     make_active(em)
-    assert bpy.ops.particlemesh.polygonize(live=True) == {"FINISHED"}
-    obj = bpy.context.active_object
+    obj = live_object(pm, "polygonize")
     clean_scene.frame_set(4)
     mesh = shown_mesh(obj)
     assert not mesh.has_custom_normals and live.UNFINISHED_TAG in mesh
@@ -449,8 +449,7 @@ def test_renders_update_now_and_finish_every_frame_have_normals_at_once(pm, clea
     live = deferring
     em = emitter(speed=1.0)
     make_active(em)
-    assert bpy.ops.particlemesh.polygonize(live=True) == {"FINISHED"}
-    obj = bpy.context.active_object
+    obj = live_object(pm, "polygonize")
     depsgraph = bpy.context.evaluated_depsgraph_get()
     clean_scene.frame_set(3)
     assert not shown_mesh(obj).has_custom_normals
@@ -480,8 +479,7 @@ def test_the_finishing_timer_copes_with_objects_gone_and_live_mode_off(pm, clean
     live = deferring
     em = emitter(speed=1.0)
     make_active(em)
-    assert bpy.ops.particlemesh.polygonize(live=True) == {"FINISHED"}
-    obj = bpy.context.active_object
+    obj = live_object(pm, "polygonize")
     # A save finishes the frame on screen first (a file holds finished meshes only).
     clean_scene.frame_set(2)
     assert live._pending
@@ -507,8 +505,7 @@ def test_the_finishing_timer_copes_with_objects_gone_and_live_mode_off(pm, clean
     # The frame's mesh replaced under the same name (as an undo can): left alone.
     em2 = emitter("Emitter2", speed=1.0)
     make_active(em2)
-    assert bpy.ops.particlemesh.polygonize(live=True) == {"FINISHED"}
-    obj = bpy.context.active_object
+    obj = live_object(pm, "polygonize")
     clean_scene.frame_set(6)
     del shown_mesh(obj)[live.UNFINISHED_TAG]
     assert rest(live, monkeypatch) is None and not shown_mesh(obj).has_custom_normals
