@@ -731,8 +731,8 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   mesh.positions.resize(total_vertices);
   mesh.normals.resize(total_vertices);
   mesh.triangles.resize(total_triangles);
-  // The particles' attributes at the vertices (interpolate_attributes), each summed right
-  // after its vertex is placed: a crossing's from the particles gathered for its edge.
+  // The particles' attributes at the vertices (AttributeSums), each summed right after its
+  // vertex is placed: a crossing's from the particles gathered for its edge.
   std::optional<detail::AttributeSums> attribute_shape;
   if (attributes && !attributes->empty()) attribute_shape.emplace(mesh, field, *attributes);
   const bool with_attributes = attribute_shape && attribute_shape->any();
@@ -787,11 +787,8 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
           mesh.positions[v] = c.position;
           mesh.normals[v] = c.normal;
           if (sums) {
-            sums->reset();
-            auto add = [&](size_t p, double s) { sums->add(p, s); };
-            if (gather_edges) near.for_each_contributor(c.position, add);
-            else field.for_each_contributor(c.position, add);
-            sums->store(v);
+            if (gather_edges) sums->interpolate(v, near, c.position);
+            else sums->interpolate(v, field, c.position);
           }
           ++v;
         }
@@ -820,11 +817,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
                 evals += uint64_t(c.evaluations);
                 mesh.positions[next_center] = c.position;
                 mesh.normals[next_center] = c.normal;
-                if (sums) {
-                  sums->reset();
-                  field.for_each_contributor(c.position, [&](size_t p, double s) { sums->add(p, s); });
-                  sums->store(next_center);
-                }
+                if (sums) sums->interpolate(next_center, field, c.position);
                 center_id[k] = next_center++;
               }
             }

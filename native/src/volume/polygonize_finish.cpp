@@ -7,7 +7,6 @@
 #include <string>
 #include <vector>
 
-#include "core/parallel.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/mesh/components.h"
 #include "particlemesh/smooth/taubin.h"
@@ -56,28 +55,9 @@ AttributeSums::AttributeSums(TriMesh& mesh, const ParticleField& field, const st
   sum_.resize(channels_);
 }
 
-void interpolate_attributes(TriMesh& mesh, const ParticleField& field, const std::vector<VertexAttribute>& attributes) {
-  const AttributeSums shape(mesh, field, attributes);
-  if (!shape.any()) return;
-  parallel_blocks(mesh.positions.size(), 256, [&](size_t b, size_t e) {
-    AttributeSums sums = shape;
-    for (size_t v = b; v < e; ++v) {
-      sums.reset();
-      field.for_each_contributor(mesh.positions[v], [&](size_t i, double s) { sums.add(i, s); });
-      sums.store(v);
-    }
-  });
-}
-
 void finish_polygonized(PolygonizeResult& r, const PolygonizeOptions& o, const ParticleField& field,
-                        const Vec3* positions, size_t n, ProgressTracker& tracker,
-                        const std::vector<VertexAttribute>* attributes) {
+                        const Vec3* positions, size_t n, ProgressTracker& tracker) {
   const auto t0 = std::chrono::steady_clock::now();
-  if (attributes && !attributes->empty()) {
-    tracker.stage("interpolating attributes", 1.0, 1.0);
-    interpolate_attributes(r.mesh, field, *attributes);
-    tracker.check();
-  }
   double limit = o.min_component_volume;
   if (o.min_component_particles > 0) {
     double s = field.spacing();

@@ -19,37 +19,43 @@ void validate_finishing(const PolygonizeOptions& options);
 
 /// Apply the finishing options to r.mesh and fill their statistics. The particle spacing for
 /// min_component_particles is the field's when it estimated one, else it is estimated from
-/// `positions` (the input particles; the field's centres when null). `attributes` (the
-/// particles' channels, in input order; may be null) are interpolated onto the vertices
-/// first (interpolate_attributes), so that dropped pieces take theirs with them.
+/// `positions` (the input particles; the field's centres when null). The mesh's attributes,
+/// interpolated while its vertices were placed (AttributeSums), go with their vertices:
+/// dropped pieces take theirs with them.
 void finish_polygonized(PolygonizeResult& r, const PolygonizeOptions& options, const ParticleField& field,
-                        const Vec3* positions, size_t n, ProgressTracker& tracker,
-                        const std::vector<VertexAttribute>* attributes = nullptr);
+                        const Vec3* positions, size_t n, ProgressTracker& tracker);
 
-/// Each vertex x of `mesh` gets, for each attribute, the particles' values weighted by their
-/// normalised kernel weights at x: a(x) = sum_i w_i a_i / sum_i w_i with w_i = |strength_i|
-/// g(s_i(x)), s_i the particle's scaled squared distance (its sphere's, or its ellipsoid's
-/// with anisotropic kernels): the same weights that sum to F(x) = T there, so a particle
-/// counts in proportion to its share of the surface at x (Shepard interpolation with the
-/// field's kernel). Summed in the field's fixed particle order (for_each_contributor): the
-/// values do not depend on the thread count, and the tiles of a cloud get the whole cloud's
-/// values bit for bit. A vertex no kernel reaches (none on a polygonized surface) gets 0.
-void interpolate_attributes(TriMesh& mesh, const ParticleField& field, const std::vector<VertexAttribute>& attributes);
-
-/// interpolate_attributes in pieces, for a caller that finds each vertex's contributors
-/// itself (polygonize, with the particles it gathered for the vertex): check `attributes`
-/// against the field's particles and make mesh.attributes (zeros, one value per vertex and
-/// component), then per vertex reset(), add() each contributor in the field's order, store().
+/// The particles' attributes interpolated at the vertices of `mesh`: each vertex x gets, for
+/// each attribute, the particles' values weighted by their normalised kernel weights at x:
+/// a(x) = sum_i w_i a_i / sum_i w_i with w_i = |strength_i| g(s_i(x)), s_i the particle's
+/// scaled squared distance (its sphere's, or its ellipsoid's with anisotropic kernels): the
+/// same weights that sum to F(x) = T there, so a particle counts in proportion to its share
+/// of the surface at x (Shepard interpolation with the field's kernel). Summed in the field's
+/// fixed particle order (for_each_contributor): the values do not depend on the thread
+/// count, and the tiles of a cloud get the whole cloud's values bit for bit. A vertex no
+/// kernel reaches (none on a polygonized surface) gets 0.
+///
+/// The constructor checks `attributes` against the field's particles and makes
+/// mesh.attributes (zeros, one value per vertex and component); each thread then works on
+/// a copy of its own and calls interpolate() for each vertex it places.
 class AttributeSums {
  public:
   /// @throws Error(InvalidInput) an attribute whose values do not match the particles.
   AttributeSums(TriMesh& mesh, const ParticleField& field, const std::vector<VertexAttribute>& attributes);
   /// Whether there is any channel to interpolate.
   bool any() const { return channels_ > 0; }
-  void reset() {
+  /// Vertex v at x: its values from the contributors at x that `from` gives, in the field's
+  /// order (a ParticleField, or an EdgeNeighbours gathered for the vertex's edge: the same
+  /// contributors).
+  template <class Contributors>
+  void interpolate(size_t v, const Contributors& from, const Vec3& x) {
     std::fill(sum_.begin(), sum_.end(), 0.0);
     total_ = 0;
+    from.for_each_contributor(x, [&](size_t i, double s) { add(i, s); });
+    store(v);
   }
+
+ private:
   /// Particle i (input order) at scaled squared distance s (as for_each_contributor gives).
   void add(size_t i, double s) {
     const double w = std::abs(field_.strength(i)) * kernel_value(kernel_, s);
@@ -67,7 +73,6 @@ class AttributeSums {
         a.values[v * size_t(a.components) + size_t(k)] = total_ > 0 ? float(sum_[c] / total_) : 0.0f;
   }
 
- private:
   TriMesh& mesh_;
   const ParticleField& field_;
   const std::vector<VertexAttribute>& attributes_;

@@ -1,6 +1,7 @@
 // The vertices of polygonize's mesh, placed on the true field: a crossing on a lattice edge
-// (Newton's method safeguarded by bisection), and the vertex inside a cell that a loop of
-// crossings is fanned around. Both return the field's gradient direction as the normal.
+// (Newton steps corrected for the curvature, safeguarded by bisection), and the vertex inside
+// a cell that a loop of crossings is fanned around. Both return the field's gradient
+// direction as the normal.
 #pragma once
 
 #include <cstdint>
@@ -34,6 +35,8 @@ class EdgeNeighbours {
   /// As ParticleField::value_and_gradient(x, gradient), for x on the gathered edge.
   double value_and_gradient(const Vec3& x, Vec3* gradient) const;
   /// As ParticleField::for_each_contributor(x, f) (f(input index, s)), for x on the edge.
+  /// The particles' test is sum()'s, written out again: sharing one visitor between the two
+  /// measured 3-4 % slower polygonize (sum() is its innermost loop).
   template <class F>
   void for_each_contributor(const Vec3& x, F&& f) const {
     const double r = field_->max_reach();  // = max_radius() for spheres

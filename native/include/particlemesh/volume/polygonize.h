@@ -201,7 +201,7 @@ struct PolygonizeResult {
   /// counter-clockwise seen from outside. Empty (no vertex) when F >= T nowhere on the grid.
   /// The cloud's attributes (velocity, density, ...) are interpolated onto the vertices with
   /// the normalised kernel weights, sum_i w_i a_i / sum_i w_i (isotropic and anisotropic
-  /// kernels alike; detail::interpolate_attributes in polygonize_finish.h says more).
+  /// kernels alike; detail::AttributeSums in polygonize_finish.h says more).
   TriMesh mesh;
   PolygonizeStats stats;
 };
