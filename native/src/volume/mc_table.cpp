@@ -23,6 +23,19 @@ void other_axes(int a, int* o1, int* o2) {
 
 int corner_of(const int coord[3]) { return coord[0] + 2 * coord[1] + 4 * coord[2]; }
 
+// The header's table of edges' lower corners is the numbering's: edge 4 axis + u + 2v runs
+// from the corner with coordinate 0 on the axis and u, v on the other two (in axis order).
+static_assert([] {
+  for (int e = 0; e < 12; ++e) {
+    const int a = e >> 2, o1 = a == 0 ? 1 : 0, o2 = a == 2 ? 1 : 2;
+    int coord[3] = {0, 0, 0};
+    coord[o1] = e & 1;
+    coord[o2] = (e >> 1) & 1;
+    if (mc_edge_lower_corner(e) != coord[0] + 2 * coord[1] + 4 * coord[2]) return false;
+  }
+  return true;
+}());
+
 int edge_index(int axis, int u, int v) { return 4 * axis + u + 2 * v; }
 
 P3 edge_mid(int e) {
@@ -173,17 +186,6 @@ void triangulate_loop(const int* loop, int len, std::vector<uint8_t>& out, int* 
 }
 
 }  // namespace
-
-int mc_edge_lower_corner(int e) {
-  const int a = e >> 2;
-  int o1, o2;
-  other_axes(a, &o1, &o2);
-  int coord[3];
-  coord[a] = 0;
-  coord[o1] = e & 1;
-  coord[o2] = (e >> 1) & 1;
-  return corner_of(coord);
-}
 
 const std::array<int, 4>& mc_face_corners(int f) { return kFaceCorners[f]; }
 

@@ -34,7 +34,11 @@ namespace PM_NAMESPACE::detail {
 
 /// Corner index (c = x + 2y + 4z) of the lower end of edge e, and the edge's axis.
 constexpr int mc_edge_axis(int e) { return e >> 2; }
-int mc_edge_lower_corner(int e);
+constexpr int mc_edge_lower_corner(int e) {
+  // Along x the corner is (0, u, v), along y (u, 0, v), along z (u, v, 0).
+  constexpr int kLower[12] = {0, 2, 4, 6, 0, 1, 4, 5, 0, 1, 2, 3};
+  return kLower[e];
+}
 
 /// The four corners of face f in cyclic order around the face.
 const std::array<int, 4>& mc_face_corners(int f);

@@ -1,6 +1,7 @@
 #include "particlemesh/volume/polygonize.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <bit>
 #include <chrono>
@@ -21,6 +22,7 @@
 #include "particlemesh/core/error.h"
 #include "volume/anisotropic_sampling.h"
 #include "volume/block_proofs.h"
+#include "volume/cell_bits.h"
 #include "volume/field_impl.h"
 #include "volume/mc_table.h"
 #include "volume/polygonize_finish.h"
@@ -54,9 +56,11 @@ std::string bytes_text(double b) {
 // axis; block coordinates are packed 21 bits per axis (z highest), so key order is z, y, x.
 constexpr int kB = detail::kSampleBlock;
 constexpr int kBN = kB * kB * kB;        // nodes per block
-constexpr int kL = kB + 1;               // the local gather spans one more node per axis
+using detail::kL;                        // the local gather spans one more node per axis
 constexpr int kLN = kL * kL * kL;
-constexpr int kMaskWords = 3 * kBN / 64; // one bit per (node, axis) edge owned by a block
+using detail::kMaskWords;                // one bit per (node, axis) edge owned by a block
+using detail::BlockRange;
+using detail::bit_count;
 constexpr int64_t kMaxBlocksPerAxis = (int64_t(1) << 21) - 2;
 constexpr uint32_t kNone = 0xffffffffu;
 
@@ -229,7 +233,7 @@ bool uniform_unsampled(const Grid& g, const MeshBlock& mb) {
 
 inline uint32_t rank_of(const MeshBlock& mb, int bit) {
   const int w = bit >> 6, b = bit & 63;
-  return mb.prefix[w] + uint32_t(std::popcount(mb.mask[w] & ((uint64_t(1) << b) - 1)));
+  return mb.prefix[w] + bit_count(mb.mask[w] & ((uint64_t(1) << b) - 1));
 }
 
 // Does some particle's support reach a node of block `key`? (A cheap superset test: the
@@ -270,17 +274,13 @@ bool block_reached(const ParticleField& field, const Grid& g, uint64_t key) {
   return reached;
 }
 
-// Case (bit c set: corner c inside) and decision bits of the cell whose lower corner is
-// local node (x, y, z); its eight samples go to cv.
-inline int cell_case(const float* local, int x, int y, int z, double T, const detail::McTable& table,
-                     float cv[8], unsigned* decisions) {
-  int cs = 0;
-  for (int c = 0; c < 8; ++c) {
+// The decision bits of the cell with case cs (both states) whose lower corner is local node
+// (x, y, z); its eight samples go to cv.
+inline unsigned cell_decisions(const float* local, int x, int y, int z, int cs, double T,
+                               const detail::McTable& table, float cv[8]) {
+  for (int c = 0; c < 8; ++c)
     cv[c] = local[(x + (c & 1)) + kL * ((y + ((c >> 1) & 1)) + kL * (z + ((c >> 2) & 1)))];
-    if (double(cv[c]) >= T) cs |= 1 << c;
-  }
-  *decisions = 0;
-  if (cs == 0 || cs == 255) return cs;
+  unsigned decisions = 0;
   const uint8_t amb = table.ambiguous_faces(cs);
   int j = 0;
   for (int f = 0; amb && f < 6; ++f) {
@@ -293,10 +293,10 @@ inline int cell_case(const float* local, int x, int y, int z, double T, const de
     // (va vc - vb vd) / ((va + vc) - (vb + vd)) >= T joins the inside corners. Products of
     // floats are exact in double and the sums commute, so both cells sharing this face
     // compute the same bit.
-    if (va * vc - vb * vd >= T * ((va + vc) - (vb + vd))) *decisions |= 1u << j;
+    if (va * vc - vb * vd >= T * ((va + vc) - (vb + vd))) decisions |= 1u << j;
     ++j;
   }
-  return cs;
+  return decisions;
 }
 
 // The distinct blocks of every cell's range (cell_block_range), sorted: marked in a bitmap of
@@ -463,19 +463,8 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
       if (b[a] * kB > cmax[a] || b[a] * kB + (kB - 1) < cmin[a]) return false;
     return true;
   };
-  auto cell_in_range = [&](const int64_t* b, int x, int y, int z) {
-    const int64_t c[3] = {b[0] * kB + x, b[1] * kB + y, b[2] * kB + z};
-    for (int a = 0; a < 3; ++a)
-      if (c[a] < cmin[a] || c[a] >= cmax[a]) return false;
-    return true;
-  };
-  // Is the edge from node (x, y, z) of block b along `axis` an edge of a cell in the range?
-  auto edge_in_range = [&](const int64_t* b, int x, int y, int z, int axis) {
-    const int64_t c[3] = {b[0] * kB + x, b[1] * kB + y, b[2] * kB + z};
-    for (int a = 0; a < 3; ++a)
-      if (c[a] < cmin[a] || c[a] > (a == axis ? cmax[a] - 1 : cmax[a])) return false;
-    return true;
-  };
+  // The cells and nodes of block b in the range (all of them without one).
+  auto block_range = [&](const int64_t* b) { return ranged ? detail::block_range(b, cmin, cmax) : BlockRange{}; };
 
   const NeighborGrid& pgrid = field.grid();
   const auto& P = pgrid.sorted_points();
@@ -628,6 +617,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   tracker.stage("classifying", begin + 0.6 * (1 - begin), begin + 0.7 * (1 - begin), nm);
   g.mesh.resize(nm);
   const detail::McTable& table = detail::McTable::get();
+  const float Tf = detail::float_threshold(T);
   {
     const BlockMap mesh_map(g.mesh_keys);
     const BlockMap sampled_map(g.sampled_keys);
@@ -644,6 +634,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
     detail::parallel_blocks(nm, 16, [&](size_t bb, size_t be) {
       if (tracker.cancelled()) return;
       std::unique_ptr<float[]> local(new float[kLN]);
+      uint16_t rows[kL * kL];
       for (size_t i = bb; i < be; ++i) {
         MeshBlock& mb = g.mesh[i];
         int64_t b[3];
@@ -651,47 +642,30 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
         bool any_in = false, any_out = false;
         if (!uniform_unsampled(g, mb)) {
           gather(g, mb, local.get());
-          for (int k = 0; k < kLN; ++k) {
-            if (double(local[k]) >= T) any_in = true; else any_out = true;
+          detail::inside_rows(local.get(), Tf, rows);
+          for (int r = 0; r < kL * kL; ++r) {
+            any_in |= rows[r] != 0;
+            any_out |= rows[r] != (1u << kL) - 1;
           }
         }
         mb.mixed = any_in && any_out;
-        std::memset(mb.mask, 0, sizeof mb.mask);
-        if (mb.mixed) {
-          for (int z = 0; z < kB; ++z)
-            for (int y = 0; y < kB; ++y)
-              for (int x = 0; x < kB; ++x) {
-                const int l = x + kL * (y + kL * z);
-                const bool in = double(local[l]) >= T;
-                const int li = x + kB * (y + kB * z);
-                const int steps[3] = {1, kL, kL * kL};
-                for (int a = 0; a < 3; ++a) {
-                  if ((double(local[l + steps[a]]) >= T) != in && (!ranged || edge_in_range(b, x, y, z, a))) {
-                    const int bit = 3 * li + a;
-                    mb.mask[bit >> 6] |= uint64_t(1) << (bit & 63);
-                  }
-                }
-              }
-        }
+        const BlockRange rg = block_range(b);
+        if (mb.mixed) detail::crossing_mask(rows, rg, mb.mask);
+        else std::memset(mb.mask, 0, sizeof mb.mask);
         uint32_t count = 0;
         for (int w = 0; w < kMaskWords; ++w) {
           mb.prefix[w] = uint16_t(count);
-          count += uint32_t(std::popcount(mb.mask[w]));
+          count += bit_count(mb.mask[w]);
         }
         mb.edge_vertices = count;
         uint32_t centers = 0, triangles = 0;
         if (mb.mixed) {
           float cv[8];
-          unsigned d;
-          for (int z = 0; z < kB; ++z)
-            for (int y = 0; y < kB; ++y)
-              for (int x = 0; x < kB; ++x) {
-                if (ranged && !cell_in_range(b, x, y, z)) continue;
-                const int cs = cell_case(local.get(), x, y, z, T, table, cv, &d);
-                if (cs == 0 || cs == 255) continue;
-                centers += uint32_t(table.center_count(cs, d));
-                triangles += uint32_t(table.triangle_count(cs, d));
-              }
+          detail::for_each_mixed_cell(rows, rg, [&](int x, int y, int z, int cs) {
+            const unsigned d = cell_decisions(local.get(), x, y, z, cs, T, table, cv);
+            centers += uint32_t(table.center_count(cs, d));
+            triangles += uint32_t(table.triangle_count(cs, d));
+          });
         }
         mb.center_vertices = centers;
         mb.triangle_count = triangles;
@@ -748,6 +722,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   detail::parallel_blocks(nm, 4, [&](size_t bb, size_t be) {
     if (tracker.cancelled()) return;
     std::unique_ptr<float[]> local(new float[kLN]);
+    uint16_t rows[kL * kL];
     detail::EdgeNeighbours near;
     uint64_t seen_crossings = 0, seen_evals = 0;  // this task's, for choosing to gather
     std::optional<detail::AttributeSums> sums;
@@ -797,62 +772,58 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
       Triangle* tris = mesh.triangles.data() + mb.triangle_offset;
       Triangle* const tris_end = tris + mb.triangle_count;
       uint32_t next_center = mb.vertex_offset + mb.edge_vertices;
-      for (int z = 0; z < kB; ++z)
-        for (int y = 0; y < kB; ++y)
-          for (int x = 0; x < kB; ++x) {
-            if (ranged && !cell_in_range(b, x, y, z)) continue;
-            float cv[8];
-            unsigned decisions;
-            const int cs = cell_case(local.get(), x, y, z, T, table, cv, &decisions);
-            if (cs == 0 || cs == 255) continue;
-            uint32_t center_id[4] = {0, 0, 0, 0};
-            const int nc = table.center_count(cs, decisions);
-            if (nc > 0) {
-              const uint8_t* cl = table.center_loops_begin(cs, decisions);
-              const Vec3 cell_lo{base[0] + x * h, base[1] + y * h, base[2] + z * h};
-              for (int k = 0; k < nc && k < 4; ++k) {
-                const int len = *cl++;
-                const detail::Crossing c = detail::center_vertex(field, cell_lo, h, cv, cl, len, T);
-                cl += len;
-                evals += uint64_t(c.evaluations);
-                mesh.positions[next_center] = c.position;
-                mesh.normals[next_center] = c.normal;
-                if (sums) sums->interpolate(next_center, field, c.position);
-                center_id[k] = next_center++;
-              }
-            }
-            const uint8_t* e = table.triangles_begin(cs, decisions);
-            const uint8_t* ee = table.triangles_end(cs, decisions);
-            for (; e != ee; e += 3) {
-              Triangle t;
-              for (int k = 0; k < 3; ++k) {
-                const int edge = e[k];
-                if (edge >= detail::kCenterBase) {
-                  t[k] = center_id[(edge - detail::kCenterBase) & 3];
-                  continue;
-                }
-                const int lc = detail::mc_edge_lower_corner(edge);
-                const int axis = detail::mc_edge_axis(edge);
-                const int nx = x + (lc & 1), ny = y + ((lc >> 1) & 1), nz = z + ((lc >> 2) & 1);
-                const int d = (nx >> 3) | ((ny >> 3) << 1) | ((nz >> 3) << 2);
-                const uint32_t owner = d == 0 ? uint32_t(i) : mb.up[d - 1];
-                if (owner == kNone) {
-                  broken = true;
-                  t[k] = 0;
-                  continue;
-                }
-                const MeshBlock& ob = g.mesh[owner];
-                const int bit = 3 * ((nx & 7) + kB * ((ny & 7) + kB * (nz & 7))) + axis;
-                if (!((ob.mask[bit >> 6] >> (bit & 63)) & 1)) broken = true;
-                t[k] = ob.vertex_offset + rank_of(ob, bit);
-              }
-              if (tris == tris_end) {
-                broken = true;  // cannot happen: both passes classify the cells alike
-                continue;
-              }
-              *tris++ = t;
-            }
+      detail::inside_rows(local.get(), Tf, rows);
+      detail::for_each_mixed_cell(rows, block_range(b), [&](int x, int y, int z, int cs) {
+        float cv[8];
+        const unsigned decisions = cell_decisions(local.get(), x, y, z, cs, T, table, cv);
+        uint32_t center_id[4] = {0, 0, 0, 0};
+        const int nc = table.center_count(cs, decisions);
+        if (nc > 0) {
+          const uint8_t* cl = table.center_loops_begin(cs, decisions);
+          const Vec3 cell_lo{base[0] + x * h, base[1] + y * h, base[2] + z * h};
+          for (int k = 0; k < nc && k < 4; ++k) {
+            const int len = *cl++;
+            const detail::Crossing c = detail::center_vertex(field, cell_lo, h, cv, cl, len, T);
+            cl += len;
+            evals += uint64_t(c.evaluations);
+            mesh.positions[next_center] = c.position;
+            mesh.normals[next_center] = c.normal;
+            if (sums) sums->interpolate(next_center, field, c.position);
+            center_id[k] = next_center++;
           }
+        }
+        const uint8_t* e = table.triangles_begin(cs, decisions);
+        const uint8_t* ee = table.triangles_end(cs, decisions);
+        for (; e != ee; e += 3) {
+          Triangle t;
+          for (int k = 0; k < 3; ++k) {
+            const int edge = e[k];
+            if (edge >= detail::kCenterBase) {
+              t[k] = center_id[(edge - detail::kCenterBase) & 3];
+              continue;
+            }
+            const int lc = detail::mc_edge_lower_corner(edge);
+            const int axis = detail::mc_edge_axis(edge);
+            const int nx = x + (lc & 1), ny = y + ((lc >> 1) & 1), nz = z + ((lc >> 2) & 1);
+            const int d = (nx >> 3) | ((ny >> 3) << 1) | ((nz >> 3) << 2);
+            const uint32_t owner = d == 0 ? uint32_t(i) : mb.up[d - 1];
+            if (owner == kNone) {
+              broken = true;
+              t[k] = 0;
+              continue;
+            }
+            const MeshBlock& ob = g.mesh[owner];
+            const int bit = 3 * ((nx & 7) + kB * ((ny & 7) + kB * (nz & 7))) + axis;
+            if (!((ob.mask[bit >> 6] >> (bit & 63)) & 1)) broken = true;
+            t[k] = ob.vertex_offset + rank_of(ob, bit);
+          }
+          if (tris == tris_end) {
+            broken = true;  // cannot happen: both passes classify the cells alike
+            continue;
+          }
+          *tris++ = t;
+        }
+      });
       block_evals[i] = evals;
       if (tris != tris_end) broken = true;
     }

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/progress_tracker.h"
+#include "volume/field_impl.h"
 #include "particlemesh/volume/polygonize.h"
 
 namespace PM_NAMESPACE::detail {
@@ -49,6 +50,19 @@ class AttributeSums {
   /// contributors).
   template <class Contributors>
   void interpolate(size_t v, const Contributors& from, const Vec3& x) {
+    // One attribute of up to four components (a velocity, a colour): the same sums in
+    // locals, with the kernel known at compile time (the bits are the general loop's).
+    if (attributes_.size() == 1 && attributes_[0].components <= 4) {
+      dispatch_kernel(kernel_, [&]<Kernel K>() {
+        switch (attributes_[0].components) {
+          case 1: interpolate_one<K, 1>(v, from, x); break;
+          case 2: interpolate_one<K, 2>(v, from, x); break;
+          case 3: interpolate_one<K, 3>(v, from, x); break;
+          default: interpolate_one<K, 4>(v, from, x); break;
+        }
+      });
+      return;
+    }
     std::fill(sum_.begin(), sum_.end(), 0.0);
     total_ = 0;
     from.for_each_contributor(x, [&](size_t i, double s) { add(i, s); });
@@ -64,6 +78,19 @@ class AttributeSums {
     size_t c = 0;
     for (const VertexAttribute& a : attributes_)
       for (int k = 0; k < a.components; ++k) sum_[c++] += w * double(a.values[i * size_t(a.components) + size_t(k)]);
+  }
+  template <Kernel K, int C, class Contributors>
+  void interpolate_one(size_t v, const Contributors& from, const Vec3& x) {
+    const float* values = attributes_[0].values.data();
+    double total = 0, sum[C] = {};
+    from.for_each_contributor(x, [&](size_t i, double s) {
+      const double w = std::abs(field_.strength(i)) * kernel_value_t<K>(s);
+      if (!(w > 0)) return;
+      total += w;
+      for (int k = 0; k < C; ++k) sum[k] += w * double(values[i * C + size_t(k)]);
+    });
+    float* out = mesh_.attributes[0].values.data() + v * C;
+    for (int k = 0; k < C; ++k) out[k] = total > 0 ? float(sum[k] / total) : 0.0f;
   }
   /// Vertex v's values into mesh.attributes.
   void store(size_t v) const {

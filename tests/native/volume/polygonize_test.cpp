@@ -490,6 +490,30 @@ TEST(Polygonize, VerticesOnTheFieldAndAttributesAsItsWeights) {
     EXPECT_LT(off_surface[off_surface.size() / 2], 1e-6) << kernel_name(cs.kernel);
     EXPECT_LT(off_surface[off_surface.size() * 999 / 1000], 1e-4) << kernel_name(cs.kernel);
     EXPECT_GT(nmin, 0.99) << kernel_name(cs.kernel);
+    // One attribute alone (summed in locals, the kernel known at compile time): the values
+    // of the two together, bit for bit, also as one attribute of four components.
+    {
+      VertexAttribute ab{"both", 4, {}};
+      for (size_t i = 0; i < c.positions.size(); ++i) {
+        for (int k = 0; k < 3; ++k) ab.values.push_back(a.values[3 * i + size_t(k)]);
+        ab.values.push_back(b.values[i]);
+      }
+      std::vector<float> want_ab;
+      for (size_t v = 0; v < r.mesh.positions.size(); ++v) {
+        for (int k = 0; k < 3; ++k) want_ab.push_back(r.mesh.attributes[0].values[3 * v + size_t(k)]);
+        want_ab.push_back(r.mesh.attributes[1].values[v]);
+      }
+      const std::vector<float>* want[3] = {&r.mesh.attributes[0].values, &r.mesh.attributes[1].values, &want_ab};
+      const VertexAttribute* alone[3] = {&a, &b, &ab};
+      for (int j = 0; j < 3; ++j) {
+        PointCloud c1 = c;
+        c1.attributes = {*alone[j]};
+        const PolygonizeResult r1 = polygonize(c1, o);
+        ASSERT_EQ(r1.mesh.attributes.size(), 1u);
+        EXPECT_TRUE(r1.mesh.positions == r.mesh.positions);
+        EXPECT_TRUE(r1.mesh.attributes[0].values == *want[j]) << kernel_name(cs.kernel) << " " << alone[j]->name;
+      }
+    }
     for (int threads : {2, 3, 0}) {
       o.threads = threads;
       const PolygonizeResult t = polygonize(c, o);
