@@ -281,31 +281,113 @@ def polygonize_threshold(settings, from_sizes):
     return 0.5 * pm.lattice_field(settings.get("kernel", "WYVILL"), factor, 2.0)
 
 
-def polygonize(particles, settings, progress=None, reuse=None):
+def polygonize(particles, settings, progress=None, reuse=None, defer_attributes=False):
+    """The polygonized surface. `defer_attributes`: leave the particles' channels (velocity)
+    for finish_attributes() (live mode's viewport frames, until frames rest): their
+    interpolation is a fifth of the library's time on a 100k-particle frame. Not with
+    smoothing (it carries the channels: they would have to be smoothed again)."""
     radius, radii = polygonize_radii(particles, settings)
     from_sizes = settings.get("radius_mode") == "PARTICLE_SIZE" and (radius > 0 or radii is not None)
     # 0 is the library's "automatic" for radius, threshold and cell.
-    mesh = pm.polygonize(
-        particles.positions, radii=radii, kernel=settings.get("kernel"),
+    arguments = dict(
+        radii=radii, kernel=settings.get("kernel"),
         radius=radius, threshold=polygonize_threshold(settings, from_sizes),
         cell=0.0 if settings.get("auto_cell", True) else float(settings["cell_size"]),
-        threads=int(settings.get("threads", 0)), attributes=_attributes(particles),
-        progress=progress, anisotropic=bool(settings.get("anisotropic", False)))
+        threads=int(settings.get("threads", 0)),
+        anisotropic=bool(settings.get("anisotropic", False)))
+    attributes = _attributes(particles)
+    later = bool(defer_attributes and attributes and not _smooths(settings))
+    mesh = pm.polygonize(particles.positions, attributes=None if later else attributes,
+                         progress=progress, **arguments)
     mesh.stats["global_spacing"] = not bool(settings.get("local_spacing", True))
     if mesh.triangle_count == 0:
         raise EmptyResult("no surface: the summed field stays below the threshold everywhere "
                           "(raise the radius or lower the threshold)")
+    if later:
+        mesh.stats[PENDING_ATTRIBUTES] = _PendingAttributes(particles.positions, attributes,
+                                                            arguments, mesh.vertices)
     return _smooth(mesh, settings, progress, reuse)
+
+
+def _smooths(settings):
+    return settings.get("smooth", "NONE") != "NONE" and int(settings.get("smooth_levels", 1)) > 0
+
+
+#: The stats key of a mesh whose channels wait (polygonize(defer_attributes=True)).
+PENDING_ATTRIBUTES = "pending_attributes"
+
+
+class _PendingAttributes:
+    """What pm.polygonize_attributes needs to give a mesh the channels polygonize would have
+    given it: the particles, their channels, polygonize's arguments and the library's own
+    float64 vertices (the float32 ones Blender keeps are other points: their values would
+    differ in the last bits)."""
+
+    __slots__ = ("positions", "attributes", "arguments", "vertices")
+
+    def __init__(self, positions, attributes, arguments, vertices):
+        self.positions, self.attributes = positions, attributes
+        self.arguments, self.vertices = arguments, vertices
+
+    @property
+    def nbytes(self):
+        arrays = [self.positions, self.vertices, self.arguments.get("radii"),
+                  *self.attributes.values()]
+        return sum(np.asarray(a).nbytes for a in arrays if a is not None)
+
+    def finished_nbytes(self):
+        """The bytes of the channels once interpolated (float32, per vertex)."""
+        return sum(4 * len(self.vertices) * (np.asarray(a).size // max(len(a), 1))
+                   for a in self.attributes.values())
+
+
+def attributes_pending(mesh):
+    """The names of the channels `mesh` still waits for (finish_attributes), or ()."""
+    pending = mesh.stats.get(PENDING_ATTRIBUTES)
+    return tuple(pending.attributes) if pending is not None else ()
+
+
+def pending_nbytes(mesh):
+    """Bytes `mesh` holds or will hold beyond mesh.nbytes for its waiting channels: the
+    larger of what waits (particles, float64 vertices) and the channels it will get."""
+    pending = mesh.stats.get(PENDING_ATTRIBUTES)
+    return 0 if pending is None else max(pending.nbytes, pending.finished_nbytes())
+
+
+def pending_finished_nbytes(mesh):
+    """Bytes the channels `mesh` waits for will hold (0 when none wait)."""
+    pending = mesh.stats.get(PENDING_ATTRIBUTES)
+    return 0 if pending is None else pending.finished_nbytes()
+
+
+def finish_attributes(mesh):
+    """Give `mesh` the channels it waits for (polygonize(defer_attributes=True)): the values
+    pm.polygonize would have given it, bit for bit. Returns the names set (() when nothing
+    waited)."""
+    pending = mesh.stats.get(PENDING_ATTRIBUTES)
+    if pending is None:
+        return ()
+    values = pm.polygonize_attributes(pending.positions, pending.vertices,
+                                      attributes=pending.attributes, **pending.arguments)
+    mesh.attributes.update(values)
+    del mesh.stats[PENDING_ATTRIBUTES]
+    return tuple(values)
 
 
 METHODS = {"TRIANGULATE": triangulate, "POLYGONIZE": polygonize}
 
 
-def run(method, particles, settings, progress=None, reuse=None):
+def run(method, particles, settings, progress=None, reuse=None, defer_attributes=False):
     """The mesh of `particles` by `method` with `settings`. `reuse`: a dict the caller keeps
     from one call to the next on the same object (live mode), where Loop smoothing keeps its
-    refinement while the triangles stay the same; the result is the same without it."""
-    mesh = METHODS[method](particles, settings, progress=progress, reuse=reuse)
+    refinement while the triangles stay the same; the result is the same without it.
+    `defer_attributes`: polygonize may leave the channels for finish_attributes() (a
+    triangulation's channels are the particles' own: nothing to wait for)."""
+    if method == "POLYGONIZE":
+        mesh = polygonize(particles, settings, progress=progress, reuse=reuse,
+                          defer_attributes=defer_attributes)
+    else:
+        mesh = METHODS[method](particles, settings, progress=progress, reuse=reuse)
     # Blender stores float32: convert once here (it also halves the live cache's memory).
     mesh.vertices = mesh.vertices.astype(np.float32)
     if mesh.normals is not None:

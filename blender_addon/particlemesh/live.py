@@ -8,10 +8,12 @@ animation render. The depsgraph handed to the handler says whether this is a ren
 
 In the viewport a new frame is first written without the library's normals (Blender's own
 smooth normals): setting them as custom split normals, and Blender evaluating a mesh that has
-them, is most of a big polygonized frame's time (bench/RESULTS.md). Such an *unfinished*
-frame's mesh carries UNFINISHED_TAG; once frames rest (no frame change for REST_SECONDS, no
-playback), a timer (finish_frames) gives the frame on screen its custom normals, so that
-what shows at rest is what a one-shot generation gives. Renders, Update Now, Bake and the
+them, is most of a big polygonized frame's time (bench/RESULTS.md). A polygonized frame's
+channels (velocity) wait too: their interpolation is a fifth of the library's time
+(generate.finish_attributes). Such an *unfinished* frame's mesh carries UNFINISHED_TAG; once
+frames rest (no frame change for REST_SECONDS, no playback), a timer (finish_frames) gives
+the frame on screen its custom normals and channels, so that what shows at rest is what a
+one-shot generation gives. Renders, Update Now, Bake and the
 operators write finished frames at once, as does the viewport with the object's Finish
 Every Frame on."""
 
@@ -36,6 +38,7 @@ class _Cache:
 
     def __init__(self):
         self.entries = OrderedDict()
+        self.counted = {}  # key -> _data_bytes(data) when put (its data can change later)
         self.meshes = {}  # key -> (mesh name, tag)
         self.reuse = {}  # what generate.run keeps from frame to frame (a Smoother)
         self.bytes = 0
@@ -56,7 +59,8 @@ class _Cache:
             return
         self._pop(key)
         self.entries[key] = data
-        self.bytes += data.nbytes
+        self.counted[key] = _data_bytes(data)
+        self.bytes += self.counted[key][0]
         self._trim(limit)
 
     def put_mesh(self, key, mesh, tag, limit):
@@ -65,11 +69,11 @@ class _Cache:
         if data is None or key in self.meshes:
             return False
         self.meshes[key] = (mesh.name, tag)
-        self.bytes += _mesh_bytes(data)
+        self.bytes += _mesh_bytes(self.counted[key])
         self._trim(limit, keep=key)
         if self.bytes > limit:  # too big beside its data on its own: not kept
             self.meshes.pop(key)
-            self.bytes -= _mesh_bytes(data)
+            self.bytes -= _mesh_bytes(self.counted[key])
             return False
         return True
 
@@ -81,7 +85,7 @@ class _Cache:
         if mesh is None or mesh.get(FRAME_TAG) != tag:
             if name is not None:
                 self.meshes.pop(key)
-                self.bytes -= _mesh_bytes(self.entries[key])
+                self.bytes -= _mesh_bytes(self.counted[key])
             return None
         return mesh
 
@@ -95,10 +99,11 @@ class _Cache:
         data = self.entries.pop(key, None)
         if data is None:
             return
-        self.bytes -= data.nbytes
+        counted = self.counted.pop(key)
+        self.bytes -= counted[0]
         kept = self.meshes.pop(key, None)
         if kept is not None:
-            self.bytes -= _mesh_bytes(data)
+            self.bytes -= _mesh_bytes(counted)
             _remove_unused(kept[0], kept[1])
 
     def _trim(self, limit, keep=None):
@@ -117,6 +122,7 @@ class _Cache:
         for name, tag in self.meshes.values():
             _remove_unused(name, tag)
         self.entries.clear()
+        self.counted.clear()
         self.meshes.clear()
         self.bytes = 0
 
@@ -127,9 +133,18 @@ class _Cache:
 KEPT_MESH_COST = 5
 
 
-def _mesh_bytes(data):
-    """What keeping entry `data` as a mesh adds to the bytes its data counts already."""
-    return (KEPT_MESH_COST - 1) * data.nbytes
+def _data_bytes(data):
+    """(the bytes a cache entry counts for mesh data `data`, those its finished frame will
+    hold): its arrays, and for a frame whose channels wait, the larger of what waits (the
+    particles, float64 vertices) and the channels to come; the second with the channels."""
+    entry = data.nbytes + generate.pending_nbytes(data)
+    return entry, data.nbytes + generate.pending_finished_nbytes(data)
+
+
+def _mesh_bytes(counted):
+    """What keeping an entry that counts `counted` (_data_bytes) as a mesh adds to its bytes:
+    the Blender mesh of the finished frame and its evaluation."""
+    return (KEPT_MESH_COST - 1) * counted[1]
 
 
 #: The custom property that marks a mesh datablock as a live frame kept by the cache (its
@@ -219,12 +234,13 @@ def settings_for(obj, mode):
 
 
 def compute(obj, depsgraph, mode=None, use_cache=True, progress=None, timings=None, budget=0,
-            keys=None):
+            keys=None, defer_attributes=False):
     """Mesh data of generated object `obj` for the depsgraph's frame (from the cache when it
     was made before). Returns (particlemesh.Mesh, settings, cached). `timings` (a dict), if given,
     receives the seconds spent reading the source and meshing. `budget` > 0: triangulate at
     most about that many particles (live mode's Viewport Budget). `keys` (a list), if given,
-    receives the frame's cache key."""
+    receives the frame's cache key. `defer_attributes`: a new polygonized frame may leave its
+    channels for generate.finish_attributes (a viewport frame that waits for rest)."""
     state = obj.particlemesh
     mode = mode or depsgraph.mode
     source = state.source
@@ -257,7 +273,8 @@ def compute(obj, depsgraph, mode=None, use_cache=True, progress=None, timings=No
     if use_cache:
         cache.reuse["max_bytes"] = _cache_limit()  # a kept Smoother fits in the cache's memory
     data = generate.run(state.method, particles, settings, progress=progress,
-                        reuse=cache.reuse if use_cache else None)
+                        reuse=cache.reuse if use_cache else None,
+                        defer_attributes=defer_attributes)
     if timings is not None:
         timings["mesh"] = time.perf_counter() - t1
         timings["smoother_reused"] = cache.reuse.pop("reused", False) if use_cache else False
@@ -283,10 +300,19 @@ def apply(obj, data, settings, defer=False):
 
 def _write(obj, mesh, data, settings, defer):
     """blender_mesh.write of a frame that `obj` shows next; with `defer`, the custom normals
-    are left for finish_frames (the mesh marked unfinished, the frame pending)."""
+    and the channels still to interpolate are left for finish_frames (the mesh marked
+    unfinished, the frame pending). Without, the frame is written finished."""
     custom = settings.get("custom_normals", True)
-    later = defer and blender_mesh.has_custom_normals(data, custom)
+    waiting = generate.attributes_pending(data)
+    if not defer:
+        generate.finish_attributes(data)
+        waiting = ()
+    later = defer and (blender_mesh.has_custom_normals(data, custom) or bool(waiting))
     blender_mesh.write(mesh, data, custom_normals=custom and not later)
+    for name in waiting:  # an earlier frame's values (a mesh rewritten in place)
+        attribute = mesh.attributes.get(name)
+        if attribute is not None:
+            mesh.attributes.remove(attribute)
     if later:
         token = _new_tag()
         mesh[UNFINISHED_TAG] = token
@@ -317,6 +343,10 @@ def _pend(obj, mesh, token, data, custom):
 
 
 def _finish(mesh, data, custom):
+    """The frame's custom normals and its channels that waited, on its mesh: what a one-shot
+    generation gives."""
+    for name in generate.finish_attributes(data):
+        blender_mesh.set_point_attribute(mesh, name, data.attributes[name])
     blender_mesh.set_normals(mesh, data, custom_normals=custom)
     if UNFINISHED_TAG in mesh:
         del mesh[UNFINISHED_TAG]
@@ -362,8 +392,8 @@ def finish_pending():
             continue
         try:
             _finish(mesh, pending.data, pending.custom_normals)
-        except (RuntimeError, ValueError, ReferenceError) as e:
-            print(f"particlemesh: {name}: the frame's normals: {e}")
+        except (RuntimeError, ValueError, ReferenceError, pm.Error) as e:
+            print(f"particlemesh: {name}: finishing the frame: {e}")
         finished = True
         record = last_update.get(name)
         if record is not None and record.get("unfinished"):
@@ -434,7 +464,8 @@ def show_frame(obj, data, settings, key, cached, keep=True, defer=False):
             _show(obj, mesh, cache, display=keep)
             return True
     limit = _cache_limit()
-    if not keep or key not in cache.entries or KEPT_MESH_COST * data.nbytes > limit:
+    counted = _data_bytes(data)
+    if not keep or key not in cache.entries or counted[0] + _mesh_bytes(counted) > limit:
         apply(obj, data, settings, defer)
         return False
     mesh = bpy.data.meshes.new(f"{obj.name}.pm_live")
@@ -467,12 +498,13 @@ def update_object(obj, depsgraph, mode=None, defer=False):
     budget = obj.particlemesh.viewport_budget if mode != "RENDER" else 0
     try:
         keys = []
+        deferring = defer and defers(obj, mode)
         data, settings, cached = compute(obj, depsgraph, mode, timings=record, budget=budget,
-                                         keys=keys)
+                                         keys=keys, defer_attributes=deferring)
         t = time.perf_counter()
         record["swapped"] = show_frame(obj, data, settings, keys[0], cached,
                                        keep=(mode != "RENDER"),
-                                       defer=defer and defers(obj, mode))
+                                       defer=deferring)
         record["write"] = time.perf_counter() - t
         record["unfinished"] = obj.name_full in _pending
         record.update(cached=cached, vertices=data.vertex_count, triangles=data.triangle_count)

@@ -23,18 +23,19 @@ lib/ folder, at $PARTICLEMESH_LIBRARY, or on the system's library path. It never
 the Blender add-on carries this same package."""
 
 import ctypes
-from ctypes import c_double, c_size_t, c_uint32
+from ctypes import c_double, c_float, c_size_t, c_uint32
 
 import numpy as np
 
 from . import _abi, _library, _options
-from ._data import (Mesh, Points, new_cloud, new_mesh, path_bytes, per_point, ptr, vertex_indices,
-                    read_cloud_handle, read_mesh_handle, struct_dict)
+from ._data import (Mesh, Points, channels, new_cloud, new_mesh, path_bytes, per_point, ptr, vec3,
+                    vertex_indices, read_cloud_handle, read_mesh_handle, struct_dict)
 from ._errors import CancelledError, Error, LibraryNotFoundError, PclBridgeNotFoundError
 from ._progress import Hook, Progress
 
 __all__ = [
-    "read_points", "read_mesh", "write_mesh", "triangulate", "polygonize", "smooth", "Smoother",
+    "read_points", "read_mesh", "write_mesh", "triangulate", "polygonize", "polygonize_attributes",
+    "smooth", "Smoother",
     "topology",
     "estimate_spacing", "thin", "triangle_edges", "lattice_field", "defaults", "version",
     "library_path", "pcl_bridge_path", "Mesh", "Points", "Progress", "Error", "CancelledError",
@@ -229,6 +230,24 @@ def _tile_options(opt, domain_min, cells):
         opt.cell_max[:] = [int(v) for v in high]
 
 
+def _polygonize_options(lib, function, radius, threshold, kernel, cell, domain_min, cells,
+                        lattice_anchor, options):
+    """pm_polygonize_options from polygonize()'s keywords (`function` names the caller)."""
+    if cell is not None:
+        if options.get("cell_size") is not None:
+            raise TypeError(f"{function}() got both cell and cell_size (the same option)")
+        options["cell_size"] = cell
+    options.update(radius=radius, threshold=threshold, kernel=kernel)
+    opt = _options.POLYGONIZE.build(lib, options)
+    _tile_options(opt, domain_min, cells)
+    if lattice_anchor not in ("particles", "space"):
+        raise Error(f"lattice_anchor must be 'particles' or 'space', not {lattice_anchor!r}",
+                    _abi.PM_STATUS_INVALID_ARGUMENT)
+    if lattice_anchor == "space":
+        opt.flags |= _abi.PM_POLYGONIZE_ANCHOR_IN_SPACE
+    return opt
+
+
 def polygonize(positions, radius=None, threshold=None, kernel=None, cell=None, *, radii=None,
                strengths=None, attributes=None, domain_min=None, cells=None,
                lattice_anchor="particles", progress=None, **options):
@@ -252,18 +271,8 @@ def polygonize(positions, radius=None, threshold=None, kernel=None, cell=None, *
     lattice's node 0). Returns Mesh; mesh.stats holds pm_polygonize_stats."""
     lib = _library.load()
     positions, _, attributes = _points_args(positions, None, attributes)
-    if cell is not None:
-        if options.get("cell_size") is not None:
-            raise TypeError("polygonize() got both cell and cell_size (the same option)")
-        options["cell_size"] = cell
-    options.update(radius=radius, threshold=threshold, kernel=kernel)
-    opt = _options.POLYGONIZE.build(lib, options)
-    _tile_options(opt, domain_min, cells)
-    if lattice_anchor not in ("particles", "space"):
-        raise Error(f"lattice_anchor must be 'particles' or 'space', not {lattice_anchor!r}",
-                    _abi.PM_STATUS_INVALID_ARGUMENT)
-    if lattice_anchor == "space":
-        opt.flags |= _abi.PM_POLYGONIZE_ANCHOR_IN_SPACE
+    opt = _polygonize_options(lib, "polygonize", radius, threshold, kernel, cell, domain_min,
+                              cells, lattice_anchor, options)
     stats = _abi.pm_polygonize_stats(struct_size=ctypes.sizeof(_abi.pm_polygonize_stats))
     cloud = new_cloud(lib, positions, None, attributes)
     mesh = _abi.pm_mesh_p()
@@ -282,6 +291,47 @@ def polygonize(positions, radius=None, threshold=None, kernel=None, cell=None, *
     finally:
         lib.pm_cloud_destroy(cloud)
         lib.pm_mesh_destroy(mesh)
+
+
+def polygonize_attributes(positions, points, radius=None, threshold=None, kernel=None, cell=None,
+                          *, radii=None, strengths=None, attributes=None, domain_min=None,
+                          cells=None, lattice_anchor="particles", progress=None, **options):
+    """The particles' attributes at `points` ((M, 3)), interpolated exactly as polygonize()
+    interpolates them at its vertices (sum_i w_i a_i / sum_i w_i with the field's kernel
+    weights; 0 where no kernel reaches): called with polygonize()'s arguments and the float64
+    vertices of its mesh, it gives that mesh's attributes bit for bit. So a caller can mesh
+    without attributes first and ask for them later. Takes every argument polygonize() takes
+    (only those of the field, threads and progress matter here). attributes {name: (N, C)}
+    (or those of `positions` given as Points). Returns {name: (M, C) float32}, empty
+    without attributes."""
+    lib = _library.load()
+    positions, _, attributes = _points_args(positions, None, attributes)
+    points = vec3(points, "points")
+    opt = _polygonize_options(lib, "polygonize_attributes", radius, threshold, kernel, cell,
+                              domain_min, cells, lattice_anchor, options)
+    cloud = new_cloud(lib, positions, None, attributes)
+    try:
+        count = c_size_t(0)
+        lib.check(lib.pm_cloud_get_count(cloud, ctypes.byref(count)))
+        r = per_point(radii, "radii", count.value)
+        s = per_point(strengths, "strengths", count.value)
+        shapes = [(name, channels(values, name, count.value).shape[1])
+                  for name, values in (attributes or {}).items()]
+        out = np.empty(len(points) * sum(c for _, c in shapes), dtype=np.float32)
+        with Hook(progress) as hook:
+            opt.progress = hook.c_function
+            status = lib.pm_polygonize_attributes(cloud, ptr(r, c_double), ptr(s, c_double),
+                                                  ctypes.byref(opt), ptr(points, c_double),
+                                                  len(points), ptr(out, c_float), out.size)
+        hook.finish(lib, status)
+    finally:
+        lib.pm_cloud_destroy(cloud)
+    values, start = {}, 0
+    for name, components in shapes:
+        end = start + len(points) * components
+        values[name] = out[start:end].reshape(len(points), components)
+        start = end
+    return values
 
 
 def _smooth_options(lib, mesh, scheme, levels, crease_edges, crease_sharpness, options):

@@ -305,6 +305,9 @@ FUNCTIONS = {
                                   _meshpp]),
     "pm_polygonize_ex": (pm_status, [pm_cloud_p, _f64p, _f64p, POINTER(pm_polygonize_options),
                                      _meshpp, POINTER(pm_polygonize_stats)]),
+    "pm_polygonize_attributes": (pm_status, [pm_cloud_p, _f64p, _f64p,
+                                             POINTER(pm_polygonize_options), _f64p, c_size_t,
+                                             _f32p, c_size_t]),
     "pm_lattice_field": (pm_status, [c_int32, c_double, c_double, _f64p]),
     # volume particles: ray casting
     "pm_field_options_init": (None, [POINTER(pm_field_options)]),

@@ -397,11 +397,25 @@ def one_shot(pm, em, frame):
     return bpy.context.active_object.data
 
 
+def same_velocity(pm, mesh, reference):
+    """The `velocity` attributes of the two meshes are the same bits."""
+    got = pm.blender_mesh.get_point_attribute(mesh, "velocity")
+    want = pm.blender_mesh.get_point_attribute(reference, "velocity")
+    assert got is not None and want is not None
+    assert got.shape == want.shape and got.tobytes() == want.tobytes()
+
+
+def cached_data(live, obj, frame):
+    """The live cache's mesh data of `obj` at `frame`."""
+    return next(d for k, d in live.cache_for(obj).entries.items() if k[0] == frame)
+
+
 def test_viewport_frames_get_their_normals_once_frames_rest(pm, clean_scene, deferring,
                                                               monkeypatch):
-    """While frames change, a new viewport frame shows Blender's own normals; once frames rest
-    the timer gives the frame on screen the library's normals as custom split normals: then
-    it is what a one-shot polygonize gives, and the cache shows it finished from then on."""
+    """While frames change, a new viewport frame shows Blender's own normals and no channels
+    (velocity); once frames rest the timer gives the frame on screen the library's normals as
+    custom split normals and its channels: then it is what a one-shot polygonize gives, bit
+    for bit, and the cache shows it finished from then on."""
     live = deferring
     em = emitter(speed=1.0)
     make_active(em)
@@ -409,6 +423,8 @@ def test_viewport_frames_get_their_normals_once_frames_rest(pm, clean_scene, def
     clean_scene.frame_set(4)
     mesh = shown_mesh(obj)
     assert not mesh.has_custom_normals and live.UNFINISHED_TAG in mesh
+    assert pm.blender_mesh.get_point_attribute(mesh, "velocity") is None
+    assert pm.generate.attributes_pending(cached_data(live, obj, 4)) == ("velocity",)
     assert live.last_update[obj.name]["unfinished"]
     assert any(kind == "label" and "normals at rest" in text
                for kind, text in draw_panels(pm, bpy.context))
@@ -419,23 +435,29 @@ def test_viewport_frames_get_their_normals_once_frames_rest(pm, clean_scene, def
     assert not shown_mesh(obj).has_custom_normals
     clean_scene.frame_set(5)  # the next new frame: frame 4 (cached, unfinished) is left alone
     assert live.UNFINISHED_TAG in shown_mesh(obj) and list(live._pending) == [obj.name]
+    assert pm.blender_mesh.get_point_attribute(shown_mesh(obj), "velocity") is None
+    cache = live.cache_for(obj)
+    counted = cache.bytes
     assert rest(live, monkeypatch) is None
     mesh = shown_mesh(obj)
     assert mesh.has_custom_normals and live.UNFINISHED_TAG not in mesh
     assert not live.last_update[obj.name]["unfinished"]
+    assert not pm.generate.attributes_pending(cached_data(live, obj, 5))
+    assert pm.generate.attributes_pending(cached_data(live, obj, 4)) == ("velocity",)
+    assert cache.bytes == counted  # entries count what they hold or will hold, once
     finished_5 = mesh.name
     reference = one_shot(pm, em, 5)
     np.testing.assert_array_equal(mesh_arrays(mesh)[0], mesh_arrays(reference)[0])
     np.testing.assert_array_equal(mesh_arrays(mesh)[1], mesh_arrays(reference)[1])
     np.testing.assert_allclose(corner_normals(mesh), corner_normals(reference), atol=1e-6)
-    np.testing.assert_array_equal(
-        pm.blender_mesh.get_point_attribute(mesh, "velocity"),
-        pm.blender_mesh.get_point_attribute(reference, "velocity"))
+    same_velocity(pm, mesh, reference)
     # Frame 4 shown again from the cache: still unfinished, so it waits for rest again.
     clean_scene.frame_set(4)
     assert live.last_update[obj.name]["cached"] and live.last_update[obj.name]["unfinished"]
     assert not shown_mesh(obj).has_custom_normals
+    assert pm.blender_mesh.get_point_attribute(shown_mesh(obj), "velocity") is None
     assert rest(live, monkeypatch) is None and shown_mesh(obj).has_custom_normals
+    same_velocity(pm, shown_mesh(obj), one_shot(pm, em, 4))
     # The finished frame 5 from the cache: its kept mesh, finished, nothing left to do.
     clean_scene.frame_set(5)
     record = live.last_update[obj.name]
@@ -457,11 +479,18 @@ def test_renders_update_now_and_finish_every_frame_have_normals_at_once(pm, clea
     record = live.update_object(obj, depsgraph, mode="RENDER", defer=True)
     assert not record["unfinished"] and obj.data.has_custom_normals
     assert live.UNFINISHED_TAG not in obj.data and not live._pending
-    # Update Now writes the object's own mesh with its normals.
+    assert pm.blender_mesh.get_point_attribute(obj.data, "velocity") is not None
+    # Update Now writes the object's own mesh with its normals and channels (from the cached
+    # frame 6, written unfinished: its channels interpolated now).
     clean_scene.frame_set(6)
+    assert pm.generate.attributes_pending(cached_data(live, obj, 6))
     with bpy.context.temp_override(active_object=obj, object=obj):
         assert bpy.ops.particlemesh.update() == {"FINISHED"}
     assert obj.data.has_custom_normals and live.UNFINISHED_TAG not in obj.data
+    assert not pm.generate.attributes_pending(cached_data(live, obj, 6))
+    own = obj.data
+    same_velocity(pm, own, one_shot(pm, em, 6))
+    make_active(obj)
     # Finish Every Frame: viewport frames too, new ones and unfinished cached ones.
     clean_scene.frame_set(7)
     assert live.UNFINISHED_TAG in shown_mesh(obj)
@@ -471,6 +500,7 @@ def test_renders_update_now_and_finish_every_frame_have_normals_at_once(pm, clea
         clean_scene.frame_set(frame)
         assert shown_mesh(obj).has_custom_normals and live.UNFINISHED_TAG not in shown_mesh(obj)
         assert not live.last_update[obj.name]["unfinished"] and not live._pending
+        assert pm.blender_mesh.get_point_attribute(shown_mesh(obj), "velocity") is not None
 
 
 def test_the_finishing_timer_copes_with_objects_gone_and_live_mode_off(pm, clean_scene,

@@ -461,6 +461,43 @@ def test_index_buffers_have_the_format_blender_copies_in_bulk(pm):
     bpy.data.meshes.remove(mesh)
 
 
+def test_shade_smooth_sets_every_face_and_nothing_else(pm, monkeypatch):
+    """write()'s faces are smooth shaded in bulk (the faces' flag bits, where their layout is
+    checked): every face smooth, the loops and flags otherwise as the one-face-at-a-time path
+    leaves them, a mesh that validates; and the checked layout is refused when it differs."""
+    p = np.random.default_rng(1).random((3000, 3)).astype(np.float32)
+    data = pm.particlemesh.triangulate(p)
+    meshes = []
+    for bulk in (True, False):
+        if not bulk:
+            monkeypatch.setattr(pm.blender_mesh, "_mpoly_flags", lambda mesh, nt: None)
+        mesh = pm.blender_mesh.write(bpy.data.meshes.new(f"bulk {bulk}"), data)
+        meshes.append(mesh)
+        smooth = np.zeros(len(mesh.polygons), bool)
+        mesh.polygons.foreach_get("use_smooth", smooth)
+        assert len(smooth) == data.triangle_count and smooth.all()
+        assert not mesh.validate(verbose=False)
+    for prop in ("loop_start", "loop_total", "material_index"):
+        a, b = (np.empty(data.triangle_count, np.int32) for _ in range(2))
+        meshes[0].polygons.foreach_get(prop, a)
+        meshes[1].polygons.foreach_get(prop, b)
+        np.testing.assert_array_equal(a, b)
+    for prop in ("select", "hide"):
+        a, b = (np.empty(data.triangle_count, bool) for _ in range(2))
+        meshes[0].polygons.foreach_get(prop, a)
+        meshes[1].polygons.foreach_get(prop, b)
+        np.testing.assert_array_equal(a, b)
+    monkeypatch.undo()
+    if bpy.app.version < (3, 6, 0):
+        # The layout check: a face's loop fields that disagree with the bytes read.
+        mesh = meshes[1]
+        assert pm.blender_mesh._mpoly_flags(mesh, len(mesh.polygons)) is not None
+        monkeypatch.setattr(pm.blender_mesh, "_MPOLY_SIZE", 16)
+        assert pm.blender_mesh._mpoly_flags(mesh, len(mesh.polygons)) is None
+    for mesh in meshes:
+        bpy.data.meshes.remove(mesh)
+
+
 def test_write_raises_what_the_edge_numbering_refuses(pm):
     """The edges are numbered in a thread of their own while Blender takes the rest: an index
     beyond the vertices still reaches the caller as the library's error, naming it."""

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -308,4 +309,87 @@ TEST(CApiPolygonize, LatticeField) {
   EXPECT_EQ(pm_lattice_field(9, 0.1, 0.05, &v), PM_STATUS_INVALID_ARGUMENT);
   EXPECT_EQ(pm_lattice_field(PM_KERNEL_POLY6, -1, 0.05, &v), PM_STATUS_INVALID_ARGUMENT);
   EXPECT_EQ(pm_lattice_field(PM_KERNEL_POLY6, 0.1, 0.05, nullptr), PM_STATUS_INVALID_ARGUMENT);
+}
+
+// pm_polygonize_attributes at the vertices of a mesh made without attributes: the values
+// pm_polygonize gives its vertices, bit for bit, laid out attribute after attribute; the usual
+// statuses and messages for misuse, and the output untouched on failure.
+TEST(CApiPolygonize, AttributesAtTheVerticesOfAMeshMadeWithout) {
+  const PointCloud c = test::random_cloud(3000, 7, 1.4);
+  Cloud bare(c), with(c);
+  std::vector<float> velocity, heat;
+  for (size_t i = 0; i < c.size(); ++i) {
+    for (int k = 0; k < 3; ++k) velocity.push_back(float(std::sin(double(3 * i + size_t(k)))));
+    heat.push_back(float(i % 11));
+  }
+  ASSERT_EQ(pm_cloud_set_attribute(with.handle, "velocity", 3, velocity.data(), c.size()), PM_OK);
+  ASSERT_EQ(pm_cloud_set_attribute(with.handle, "heat", 1, heat.data(), c.size()), PM_OK);
+  pm_polygonize_options opt;
+  pm_polygonize_options_init(&opt);
+  opt.kernel = PM_KERNEL_POLY6;
+  opt.threads = 2;
+  pm_mesh *plain = nullptr, *full = nullptr;
+  ASSERT_EQ(pm_polygonize(bare.handle, nullptr, nullptr, &opt, &plain), PM_OK) << last();
+  ASSERT_EQ(pm_polygonize(with.handle, nullptr, nullptr, &opt, &full), PM_OK) << last();
+  size_t nv = 0, nt = 0;
+  ASSERT_EQ(pm_mesh_get_counts(plain, &nv, &nt), PM_OK);
+  ASSERT_GT(nv, 500u);
+  std::vector<double> points(3 * nv);
+  ASSERT_EQ(pm_mesh_copy_positions(plain, points.data(), nv), PM_OK);
+  std::vector<float> want(4 * nv);
+  ASSERT_EQ(pm_mesh_copy_attribute(full, "velocity", want.data(), nv), PM_OK);
+  ASSERT_EQ(pm_mesh_copy_attribute(full, "heat", want.data() + 3 * nv, nv), PM_OK);
+  std::vector<float> got(4 * nv, -1.0f);
+  ASSERT_EQ(pm_polygonize_attributes(with.handle, nullptr, nullptr, &opt, points.data(), nv, got.data(), got.size()),
+            PM_OK)
+      << last();
+  EXPECT_EQ(std::memcmp(got.data(), want.data(), got.size() * sizeof(float)), 0);
+  // NULL options: the defaults (here the Wyvill kernel), as pm_polygonize.
+  pm_mesh* defaults = nullptr;
+  ASSERT_EQ(pm_polygonize(with.handle, nullptr, nullptr, nullptr, &defaults), PM_OK);
+  size_t dv = 0;
+  ASSERT_EQ(pm_mesh_get_counts(defaults, &dv, &nt), PM_OK);
+  std::vector<double> dpoints(3 * dv);
+  ASSERT_EQ(pm_mesh_copy_positions(defaults, dpoints.data(), dv), PM_OK);
+  std::vector<float> dwant(dv), dgot(4 * dv);
+  ASSERT_EQ(pm_mesh_copy_attribute(defaults, "heat", dwant.data(), dv), PM_OK);
+  ASSERT_EQ(pm_polygonize_attributes(with.handle, nullptr, nullptr, nullptr, dpoints.data(), dv, dgot.data(),
+                                     dgot.size()),
+            PM_OK);
+  EXPECT_EQ(std::memcmp(dgot.data() + 3 * dv, dwant.data(), dv * sizeof(float)), 0);
+  pm_mesh_destroy(defaults);
+  // Misuse.
+  std::vector<float> untouched(got.size(), 7.0f);
+  EXPECT_EQ(pm_polygonize_attributes(with.handle, nullptr, nullptr, &opt, points.data(), nv, untouched.data(),
+                                     4 * nv - 1),
+            PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("capacity " + std::to_string(4 * nv - 1) + " is less than the " + std::to_string(4 * nv)),
+            std::string::npos)
+      << last();
+  EXPECT_EQ(pm_polygonize_attributes(nullptr, nullptr, nullptr, &opt, points.data(), nv, untouched.data(), 4 * nv),
+            PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("cloud"), std::string::npos) << last();
+  EXPECT_EQ(pm_polygonize_attributes(with.handle, nullptr, nullptr, &opt, nullptr, nv, untouched.data(), 4 * nv),
+            PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("points"), std::string::npos) << last();
+  EXPECT_EQ(pm_polygonize_attributes(with.handle, nullptr, nullptr, &opt, points.data(), nv, nullptr, 4 * nv),
+            PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("out_values"), std::string::npos) << last();
+  std::vector<double> bad = points;
+  bad[3 * 5 + 2] = std::nan("");
+  EXPECT_EQ(pm_polygonize_attributes(with.handle, nullptr, nullptr, &opt, bad.data(), nv, untouched.data(), 4 * nv),
+            PM_STATUS_INVALID_INPUT);
+  EXPECT_NE(last().find("points[5].z is NaN"), std::string::npos) << last();
+  pm_polygonize_options wrong = opt;
+  wrong.radius = -2;
+  EXPECT_EQ(pm_polygonize_attributes(with.handle, nullptr, nullptr, &wrong, points.data(), nv, untouched.data(),
+                                     4 * nv),
+            PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("radius"), std::string::npos) << last();
+  EXPECT_EQ(untouched, std::vector<float>(got.size(), 7.0f));
+  // A cloud without attributes writes nothing, and needs no output.
+  EXPECT_EQ(pm_polygonize_attributes(bare.handle, nullptr, nullptr, &opt, points.data(), nv, nullptr, 0), PM_OK)
+      << last();
+  pm_mesh_destroy(plain);
+  pm_mesh_destroy(full);
 }

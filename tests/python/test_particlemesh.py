@@ -587,6 +587,50 @@ def test_polygonize_anisotropic_and_finishing(pm):
     assert dropped.stats["components_removed"] == 1
 
 
+def test_polygonize_attributes_are_polygonizes_own(pm):
+    """Meshed without attributes, then interpolated at the float64 vertices: the values
+    polygonize gives them itself, bit for bit, with the same keywords (float32 particles as
+    Blender gives them, per-particle radii, a tile's domain); clear errors for bad points."""
+    rng = np.random.default_rng(3)
+    cloud = fibonacci_sphere(20000, dtype=np.float32)
+    velocity = rng.uniform(-1, 1, (len(cloud), 3)).astype(np.float32)
+    heat = rng.uniform(0, 10, len(cloud)).astype(np.float32)
+    for kwargs in ({}, {"kernel": "poly6", "threads": 1},
+                   {"radii": rng.uniform(0.03, 0.05, len(cloud)), "threshold": 0.6},
+                   {"radius": 0.05, "domain_min": (-1.5, -1.5, -1.5), "domain_max_radius": 0.08}):
+        attrs = {"velocity": velocity, "heat": heat}
+        full = pm.polygonize(cloud, attributes=attrs, **kwargs)
+        plain = pm.polygonize(cloud, **kwargs)
+        np.testing.assert_array_equal(plain.vertices, full.vertices)
+        assert plain.attributes == {}
+        got = pm.polygonize_attributes(cloud, plain.vertices, attributes=attrs, **kwargs)
+        assert list(got) == ["velocity", "heat"]
+        assert got["velocity"].shape == (plain.vertex_count, 3) and got["velocity"].dtype == np.float32
+        assert got["heat"].shape == (plain.vertex_count, 1)
+        for name in attrs:
+            want = full.attributes[name].reshape(got[name].shape)
+            assert got[name].tobytes() == want.tobytes(), (kwargs, name)
+    # Points: the cloud's own Points carry their attributes; no attributes, nothing.
+    points = pm.Points(cloud, attributes={"heat": heat})
+    again = pm.polygonize_attributes(points, plain.vertices[:10], radius=0.05,
+                                     domain_min=(-1.5, -1.5, -1.5), domain_max_radius=0.08)
+    assert again["heat"].tobytes() == got["heat"][:10].tobytes()
+    assert pm.polygonize_attributes(cloud, plain.vertices[:10]) == {}
+    # float32 vertices are other points: their values differ from the mesh's.
+    rounded = pm.polygonize_attributes(cloud, plain.vertices.astype(np.float32),
+                                       attributes={"heat": heat}, radius=0.05,
+                                       domain_min=(-1.5, -1.5, -1.5), domain_max_radius=0.08)
+    assert rounded["heat"].tobytes() != got["heat"].tobytes()
+    with pytest.raises(pm.Error, match=r"points\[1\]\.y is NaN"):
+        pm.polygonize_attributes(cloud, [[0, 0, 0], [0, np.nan, 0]], attributes={"heat": heat})
+    with pytest.raises(pm.Error, match=r"points must have shape \(N, 3\)"):
+        pm.polygonize_attributes(cloud, np.zeros((4, 2)), attributes={"heat": heat})
+    with pytest.raises(pm.Error, match="attribute 'heat' has shape"):
+        pm.polygonize_attributes(cloud, np.zeros((4, 3)), attributes={"heat": heat[:5]})
+    with pytest.raises(pm.Error, match="radius"):
+        pm.polygonize_attributes(cloud, np.zeros((4, 3)), radius=-1.0, attributes={"heat": heat})
+
+
 def test_lattice_field(pm):
     # Half the lattice field at R = 2 spacings is the default threshold (3.33 for Wyvill).
     assert 0.5 * pm.lattice_field("wyvill", 2.0, 1.0) == pytest.approx(3.33, abs=0.01)

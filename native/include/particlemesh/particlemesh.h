@@ -414,6 +414,23 @@ PM_EXPORT pm_status pm_polygonize(const pm_cloud* cloud, const double* radii, co
 PM_EXPORT pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii, const double* strengths,
                                      const pm_polygonize_options* options, pm_mesh** out_mesh,
                                      pm_polygonize_stats* out_stats);
+/** The cloud's attributes at `count` points (count x 3 doubles), interpolated exactly as
+ *  pm_polygonize interpolates them at its vertices (sum w_i a_i / sum w_i in the field's
+ *  particle order; 0 where no kernel reaches): given the vertices pm_polygonize placed (before
+ *  taubin_iterations move them), the values are bit for bit its own. For a caller that meshes
+ *  without attributes first (a cloud without them) and asks for them later. `cloud`, `radii`,
+ *  `strengths` and `options` as given to pm_polygonize: the field is built from its field
+ *  options (kernel, radius, threshold, the anisotropic ones, PM_POLYGONIZE_DOMAIN_MIN with
+ *  domain_min, domain_max_radius) as pm_polygonize builds it, with `threads` and `progress`;
+ *  the others are checked as there but not used. out_values receives the cloud's attributes
+ *  one after the other in the cloud's order (pm_cloud_get_attribute_name), count x components
+ *  floats each, point by point; out_capacity is the number of floats out_values holds, at
+ *  least count x the sum of the components (PM_STATUS_INVALID_ARGUMENT otherwise). A cloud
+ *  without attributes writes nothing. PM_STATUS_INVALID_INPUT for a non-finite point (named)
+ *  and as pm_polygonize for the cloud; the results do not depend on the thread count. */
+PM_EXPORT pm_status pm_polygonize_attributes(const pm_cloud* cloud, const double* radii, const double* strengths,
+                                             const pm_polygonize_options* options, const double* points,
+                                             size_t count, float* out_values, size_t out_capacity);
 /** The field deep inside a simple cubic lattice of unit-strength particles with the given
  *  spacing and radius (the sum of g over the lattice points within R). The default threshold
  *  is half of it; an SPH iso level given as a fraction of the rest density maps to

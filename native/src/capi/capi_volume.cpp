@@ -1,4 +1,6 @@
 // C ABI: volume particles (kernels, lattice field, polygonization).
+#include <cstdint>
+#include <cstring>
 #include <memory>
 #include <string>
 
@@ -8,6 +10,7 @@
 #include "particlemesh/volume/field.h"
 #include "particlemesh/volume/kernel.h"
 #include "particlemesh/volume/polygonize.h"
+#include "particlemesh/volume/polygonize_attributes.h"
 
 using namespace particlemesh;
 using particlemesh::capi::guarded;
@@ -37,6 +40,45 @@ void pm_polygonize_options_init(pm_polygonize_options* options) {
   options->domain_max_radius = d.domain_max_radius;
 }
 
+}  // extern "C"
+
+namespace {
+
+// PolygonizeOptions from the C options (checked), as pm_polygonize and
+// pm_polygonize_attributes read them.
+PolygonizeOptions polygonize_options_from_c(const pm_polygonize_options& o, const double* radii,
+                                            const double* strengths, size_t count) {
+  PolygonizeOptions opt;
+  capi::kernel_settings_from_c(o, radii, strengths, count, &opt);
+  opt.cell_size = o.cell_size;
+  opt.threads = o.threads;
+  opt.max_grid_bytes = o.max_grid_bytes;
+  opt.progress = wrap_progress(o.progress, o.progress_user_data);
+  opt.min_component_volume = o.min_component_volume;
+  opt.min_component_particles = o.min_component_particles;
+  opt.surface_smoothing.iterations = o.taubin_iterations;
+  opt.surface_smoothing.lambda = o.taubin_lambda;
+  opt.surface_smoothing.mu = o.taubin_mu;
+  if (o.flags & ~uint32_t(PM_POLYGONIZE_DOMAIN_MIN | PM_POLYGONIZE_CELL_RANGE | PM_POLYGONIZE_ANCHOR_IN_SPACE))
+    throw Error(Status::InvalidArgument, "options->flags has unknown bits: " + std::to_string(o.flags));
+  if (o.flags & PM_POLYGONIZE_ANCHOR_IN_SPACE) opt.lattice_anchor = LatticeAnchor::Space;
+  if (o.flags & PM_POLYGONIZE_DOMAIN_MIN) opt.domain_min = Vec3{o.domain_min[0], o.domain_min[1], o.domain_min[2]};
+  opt.domain_max_radius = o.domain_max_radius;
+  if (o.flags & PM_POLYGONIZE_CELL_RANGE) {
+    PolygonizeOptions::CellRange range;
+    for (int a = 0; a < 3; ++a) {
+      range.min[a] = o.cell_min[a];
+      range.max[a] = o.cell_max[a];
+    }
+    opt.cells = range;
+  }
+  return opt;
+}
+
+}  // namespace
+
+extern "C" {
+
 pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii, const double* strengths,
                            const pm_polygonize_options* options, pm_mesh** out_mesh,
                            pm_polygonize_stats* out_stats) {
@@ -45,30 +87,7 @@ pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii, const dou
     require(out_mesh, "out_mesh");
     const pm_polygonize_options o = capi::read_options(options, pm_polygonize_options_init);
     if (out_stats) capi::check_versioned(out_stats, "out_stats");
-    PolygonizeOptions opt;
-    capi::kernel_settings_from_c(o, radii, strengths, cloud->cloud.size(), &opt);
-    opt.cell_size = o.cell_size;
-    opt.threads = o.threads;
-    opt.max_grid_bytes = o.max_grid_bytes;
-    opt.progress = wrap_progress(o.progress, o.progress_user_data);
-    opt.min_component_volume = o.min_component_volume;
-    opt.min_component_particles = o.min_component_particles;
-    opt.surface_smoothing.iterations = o.taubin_iterations;
-    opt.surface_smoothing.lambda = o.taubin_lambda;
-    opt.surface_smoothing.mu = o.taubin_mu;
-    if (o.flags & ~uint32_t(PM_POLYGONIZE_DOMAIN_MIN | PM_POLYGONIZE_CELL_RANGE | PM_POLYGONIZE_ANCHOR_IN_SPACE))
-      throw Error(Status::InvalidArgument, "options->flags has unknown bits: " + std::to_string(o.flags));
-    if (o.flags & PM_POLYGONIZE_ANCHOR_IN_SPACE) opt.lattice_anchor = LatticeAnchor::Space;
-    if (o.flags & PM_POLYGONIZE_DOMAIN_MIN) opt.domain_min = Vec3{o.domain_min[0], o.domain_min[1], o.domain_min[2]};
-    opt.domain_max_radius = o.domain_max_radius;
-    if (o.flags & PM_POLYGONIZE_CELL_RANGE) {
-      PolygonizeOptions::CellRange range;
-      for (int a = 0; a < 3; ++a) {
-        range.min[a] = o.cell_min[a];
-        range.max[a] = o.cell_max[a];
-      }
-      opt.cells = range;
-    }
+    const PolygonizeOptions opt = polygonize_options_from_c(o, radii, strengths, cloud->cloud.size());
     PolygonizeResult r = polygonize(cloud->cloud, opt);
     auto handle = std::make_unique<pm_mesh>();
     handle->mesh = std::move(r.mesh);
@@ -98,6 +117,32 @@ pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii, const dou
 pm_status pm_polygonize(const pm_cloud* cloud, const double* radii, const double* strengths,
                         const pm_polygonize_options* options, pm_mesh** out_mesh) {
   return pm_polygonize_ex(cloud, radii, strengths, options, out_mesh, nullptr);
+}
+
+pm_status pm_polygonize_attributes(const pm_cloud* cloud, const double* radii, const double* strengths,
+                                   const pm_polygonize_options* options, const double* points, size_t count,
+                                   float* out_values, size_t out_capacity) {
+  return guarded([&] {
+    require(cloud, "cloud");
+    const pm_polygonize_options o = capi::read_options(options, pm_polygonize_options_init);
+    const PolygonizeOptions opt = polygonize_options_from_c(o, radii, strengths, cloud->cloud.size());
+    size_t channels = 0;
+    for (const VertexAttribute& a : cloud->cloud.attributes) channels += size_t(a.components);
+    if (channels != 0 && count > SIZE_MAX / channels)
+      throw Error(Status::LimitExceeded, "count x the attributes' components overflows");
+    const size_t needed = count * channels;
+    if (count > 0) require(points, "points");
+    if (needed > 0) require(out_values, "out_values");
+    capi::check_capacity(out_capacity, needed, "floats of the attributes at the points");
+    std::vector<Vec3> p(count);
+    for (size_t i = 0; i < count; ++i) p[i] = {points[3 * i], points[3 * i + 1], points[3 * i + 2]};
+    const std::vector<VertexAttribute> values = polygonize_attributes(cloud->cloud, opt, p.data(), count);
+    float* out = out_values;
+    for (const VertexAttribute& a : values) {
+      std::memcpy(out, a.values.data(), a.values.size() * sizeof(float));
+      out += a.values.size();
+    }
+  });
 }
 
 pm_status pm_lattice_field(int32_t kernel, double radius, double spacing, double* out_value) {
