@@ -41,15 +41,13 @@ struct SmallestSphere {
 };
 
 /// The corners are put in rank order first, so the result (and its rounding) depends only on
-/// the three points, never on the order in which a caller lists them.
+/// the three points, never on the order in which a caller lists them. The result is written
+/// once, as a whole (the triangle test calls this for every candidate triplet, and a
+/// default-built result zeroed every field before setting it: a fifth of the function's time).
 inline SmallestSphere smallest_sphere(Vec3 a, Vec3 b, Vec3 c) {
   if (lex_less(b, a)) std::swap(a, b);
   if (lex_less(c, b)) std::swap(b, c);
   if (lex_less(b, a)) std::swap(a, b);
-  SmallestSphere s;
-  s.a = a;
-  s.b = b;
-  s.c = c;
   const Vec3 u = b - a, v = c - a, w = c - b;
   const double luu = squared_norm(u), lvv = squared_norm(v), lww = squared_norm(w);
   const Vec3 n = cross(u, v);
@@ -60,32 +58,38 @@ inline SmallestSphere smallest_sphere(Vec3 a, Vec3 b, Vec3 c) {
   const double lmid = luu + lvv + lww - lmax - std::min({luu, lvv, lww});
   if (!(luu > 0 && lvv > 0 && lww > 0) ||
       n2 <= kDegenerateSine * kDegenerateSine * lmax * lmid) {
+    SmallestSphere s;
+    s.a = a;
+    s.b = b;
+    s.c = c;
     s.degenerate = true;
     return s;
   }
-  s.normal = n;
-  s.inv_normal2 = 1.0 / n2;
   // Obtuse corner: the dot product of its two edges is clearly negative.
   const double da = dot(u, v);             // at a
   const double db = dot(a - b, c - b);     // at b
   const double dc = dot(a - c, b - c);     // at c
+  bool obtuse = false;
+  int e0 = 0, e1 = 0;
   if (da < -kRightAngleTolerance * std::sqrt(luu * lvv)) {
-    s.obtuse = true; s.e0 = 1; s.e1 = 2;
+    obtuse = true; e0 = 1; e1 = 2;
   } else if (db < -kRightAngleTolerance * std::sqrt(luu * lww)) {
-    s.obtuse = true; s.e0 = 0; s.e1 = 2;
+    obtuse = true; e0 = 0; e1 = 2;
   } else if (dc < -kRightAngleTolerance * std::sqrt(lvv * lww)) {
-    s.obtuse = true; s.e0 = 0; s.e1 = 1;
+    obtuse = true; e0 = 0; e1 = 1;
   }
-  if (s.obtuse) {
-    const Vec3 p0 = s.corner(s.e0), p1 = s.corner(s.e1);
-    s.center_rel = (p0 - a) * 0.5 + (p1 - a) * 0.5;
-    s.r2 = squared_distance(p0, p1) * 0.25;
+  Vec3 center_rel;
+  double r2;
+  if (obtuse) {
+    const Vec3 p0 = e0 == 0 ? a : b, p1 = e1 == 1 ? b : c;  // e0 < e1
+    center_rel = (p0 - a) * 0.5 + (p1 - a) * 0.5;
+    r2 = squared_distance(p0, p1) * 0.25;
   } else {
     // Circumcentre in the plane of the triangle.
-    s.center_rel = (cross(n, u) * lvv + cross(v, n) * luu) * (0.5 / n2);
-    s.r2 = squared_norm(s.center_rel);
+    center_rel = (cross(n, u) * lvv + cross(v, n) * luu) * (0.5 / n2);
+    r2 = squared_norm(center_rel);
   }
-  return s;
+  return SmallestSphere{false, obtuse, a, b, c, center_rel, r2, n, 1.0 / n2, e0, e1};
 }
 
 /// Does q count as strictly inside the sphere? `tie` is set when the symbolic tie-break
