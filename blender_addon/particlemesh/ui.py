@@ -94,7 +94,7 @@ class VIEW3D_PT_particlemesh_object(_Panel, bpy.types.Panel):
                 layout.label(text=f"frame {record['frame']} ({record['mode'].lower()}): "
                                   f"{1000 * record['seconds']:.0f} ms"
                                   + (", cached" if record.get("cached") else "")
-                                  + (", normals at rest" if record.get("unfinished") else ""))
+                                  + (", finished at rest" if record.get("unfinished") else ""))
                 meshed, read = record.get("vertices"), record.get("particles")
                 if state.method == "TRIANGULATE" and meshed and read and meshed < read:
                     factor = record.get("thin")

@@ -426,7 +426,7 @@ def test_viewport_frames_get_their_normals_once_frames_rest(pm, clean_scene, def
     assert pm.blender_mesh.get_point_attribute(mesh, "velocity") is None
     assert pm.generate.attributes_pending(cached_data(live, obj, 4)) == ("velocity",)
     assert live.last_update[obj.name]["unfinished"]
-    assert any(kind == "label" and "normals at rest" in text
+    assert any(kind == "label" and "finished at rest" in text
                for kind, text in draw_panels(pm, bpy.context))
     assert bpy.app.timers.is_registered(live.finish_frames)
     # Not yet at rest: the timer looks again later and leaves the frame as it is.
