@@ -862,19 +862,9 @@ PolygonizeResult polygonize(const PointCloud& cloud, const PolygonizeOptions& op
   const auto t0 = Clock::now();
   detail::validate_finishing(options);
   PolygonizeResult r = detail::with_threads(options.threads, [&] {
-    FieldParams params;
-    params.kernel = options.kernel;
-    params.radius = options.radius;
-    params.threshold = options.threshold;
-    params.radii = options.radii;
-    params.strengths = options.strengths;
-    params.anisotropy = options.anisotropy;
     // The anisotropic kernels cost about as much as the sampling: give them their share.
     const double field_end = options.anisotropy.enabled ? 0.3 : 0.1;
-    tracker.stage("estimating spacing", 0.0, field_end);
-    const ParticleField field =
-        detail::FieldBuilder::build(cloud.positions.data(), cloud.positions.size(), params, tracker, 0.0, field_end,
-                                    {options.domain_min, options.domain_max_radius});
+    const ParticleField field = detail::polygonize_field_of(cloud, options, tracker, 0.0, field_end);
     // The attributes are interpolated while the vertices are placed (above).
     PolygonizeResult res =
         polygonize_field(field, options, tracker, field_end, PolygonizeStats{}, t0, &cloud.attributes);

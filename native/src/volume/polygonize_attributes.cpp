@@ -53,19 +53,9 @@ std::vector<VertexAttribute> polygonize_attributes(const PointCloud& cloud, cons
   detail::ProgressTracker tracker(options.progress);
   check_points(points, count);
   std::vector<VertexAttribute> out = detail::with_threads(options.threads, [&] {
-    // The field polygonize(cloud, options) builds (polygonize.cpp), from the same options.
-    FieldParams params;
-    params.kernel = options.kernel;
-    params.radius = options.radius;
-    params.threshold = options.threshold;
-    params.radii = options.radii;
-    params.strengths = options.strengths;
-    params.anisotropy = options.anisotropy;
+    // The field polygonize(cloud, options) builds, from the same options.
     const double field_end = options.anisotropy.enabled ? 0.6 : 0.2;
-    tracker.stage("estimating spacing", 0.0, field_end);
-    const ParticleField field =
-        detail::FieldBuilder::build(cloud.positions.data(), cloud.positions.size(), params, tracker, 0.0, field_end,
-                                    {options.domain_min, options.domain_max_radius});
+    const ParticleField field = detail::polygonize_field_of(cloud, options, tracker, 0.0, field_end);
     return interpolate(field, cloud.attributes, points, count, tracker, field_end);
   });
   tracker.finish();

@@ -109,4 +109,21 @@ class AttributeSums {
   double total_ = 0;
 };
 
+/// The field polygonize(cloud, options) samples, with the options' kernel, radius, threshold,
+/// per-particle radii and strengths, anisotropy and domain (polygonize_attributes builds the
+/// very same one, so that its values are polygonize's own).
+inline ParticleField polygonize_field_of(const PointCloud& cloud, const PolygonizeOptions& options,
+                                         ProgressTracker& tracker, double begin, double end) {
+  FieldParams params;
+  params.kernel = options.kernel;
+  params.radius = options.radius;
+  params.threshold = options.threshold;
+  params.radii = options.radii;
+  params.strengths = options.strengths;
+  params.anisotropy = options.anisotropy;
+  tracker.stage("estimating spacing", begin, end);
+  return FieldBuilder::build(cloud.positions.data(), cloud.positions.size(), params, tracker, begin, end,
+                             {options.domain_min, options.domain_max_radius});
+}
+
 }  // namespace particlemesh::detail
