@@ -708,7 +708,7 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   // The particles' attributes at the vertices (AttributeSums), each summed right after its
   // vertex is placed: a crossing's from the particles gathered for its edge.
   std::optional<detail::AttributeSums> attribute_shape;
-  if (attributes && !attributes->empty()) attribute_shape.emplace(mesh, field, *attributes);
+  if (attributes && !attributes->empty()) attribute_shape.emplace(mesh.attributes, mesh.positions.size(), field, *attributes);
   const bool with_attributes = attribute_shape && attribute_shape->any();
   // Spherical kernels: a crossing's evaluations can go through the particles gathered for its
   // edge (the same values bit for bit, a third of the particles tested each time). Gathering

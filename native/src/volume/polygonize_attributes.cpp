@@ -30,10 +30,8 @@ void check_points(const Vec3* points, size_t count) {
 std::vector<VertexAttribute> interpolate(const ParticleField& field, const std::vector<VertexAttribute>& attributes,
                                          const Vec3* points, size_t count, detail::ProgressTracker& tracker,
                                          double begin) {
-  TriMesh shape;  // AttributeSums writes into a mesh's attributes, one value per vertex
-  shape.positions.resize(count);
-  detail::AttributeSums sums(shape, field, attributes);
-  std::vector<Vec3>().swap(shape.positions);  // only its size was needed
+  std::vector<VertexAttribute> values;
+  detail::AttributeSums sums(values, count, field, attributes);
   if (!sums.any()) return {};
   tracker.stage("interpolating attributes", begin, 1.0, count);
   detail::parallel_blocks(count, 1024, [&](size_t bb, size_t be) {
@@ -43,7 +41,7 @@ std::vector<VertexAttribute> interpolate(const ParticleField& field, const std::
     tracker.tick(be - bb);
   });
   tracker.check();
-  return std::move(shape.attributes);
+  return values;
 }
 
 }  // namespace

@@ -39,10 +39,11 @@ void validate_finishing(const PolygonizeOptions& o) {
                 "min_component_volume, min_component_particles and taubin_iterations need the whole surface");
 }
 
-AttributeSums::AttributeSums(TriMesh& mesh, const ParticleField& field, const std::vector<VertexAttribute>& attributes)
-    : mesh_(mesh), field_(field), attributes_(attributes), kernel_(field.kernel()) {
-  mesh.attributes.clear();
-  const size_t nv = mesh.positions.size(), np = field.size();
+AttributeSums::AttributeSums(std::vector<VertexAttribute>& out, size_t vertices, const ParticleField& field,
+                             const std::vector<VertexAttribute>& attributes)
+    : out_(out), field_(field), attributes_(attributes), kernel_(field.kernel()) {
+  out.clear();
+  const size_t nv = vertices, np = field.size();
   for (const VertexAttribute& a : attributes) {
     if (a.components < 1 || a.values.size() != np * size_t(a.components))
       throw Error(Status::InvalidInput, "attribute '" + a.name + "' has " + std::to_string(a.values.size()) +
@@ -51,7 +52,7 @@ AttributeSums::AttributeSums(TriMesh& mesh, const ParticleField& field, const st
     channels_ += size_t(a.components);
   }
   if (channels_ == 0) return;
-  for (const VertexAttribute& a : attributes) mesh.attributes.push_back({a.name, a.components, std::vector<float>(nv * size_t(a.components))});
+  for (const VertexAttribute& a : attributes) out.push_back({a.name, a.components, std::vector<float>(nv * size_t(a.components))});
   sum_.resize(channels_);
 }
 

@@ -36,13 +36,14 @@ void finish_polygonized(PolygonizeResult& r, const PolygonizeOptions& options, c
 /// count, and the tiles of a cloud get the whole cloud's values bit for bit. A vertex no
 /// kernel reaches (none on a polygonized surface) gets 0.
 ///
-/// The constructor checks `attributes` against the field's particles and makes
-/// mesh.attributes (zeros, one value per vertex and component); each thread then works on
+/// The constructor checks `attributes` against the field's particles and makes `out` (zeros,
+/// one value per vertex and component: a mesh's attributes, or polygonize_attributes' values); each thread then works on
 /// a copy of its own and calls interpolate() for each vertex it places.
 class AttributeSums {
  public:
   /// @throws Error(InvalidInput) an attribute whose values do not match the particles.
-  AttributeSums(TriMesh& mesh, const ParticleField& field, const std::vector<VertexAttribute>& attributes);
+  AttributeSums(std::vector<VertexAttribute>& out, size_t vertices, const ParticleField& field,
+                const std::vector<VertexAttribute>& attributes);
   /// Whether there is any channel to interpolate.
   bool any() const { return channels_ > 0; }
   /// Vertex v at x: its values from the contributors at x that `from` gives, in the field's
@@ -89,18 +90,18 @@ class AttributeSums {
       total += w;
       for (int k = 0; k < C; ++k) sum[k] += w * double(values[i * C + size_t(k)]);
     });
-    float* out = mesh_.attributes[0].values.data() + v * C;
+    float* out = out_[0].values.data() + v * C;
     for (int k = 0; k < C; ++k) out[k] = total > 0 ? float(sum[k] / total) : 0.0f;
   }
-  /// Vertex v's values into mesh.attributes.
+  /// Vertex v's values into out.
   void store(size_t v) const {
     size_t c = 0;
-    for (VertexAttribute& a : mesh_.attributes)
+    for (VertexAttribute& a : out_)
       for (int k = 0; k < a.components; ++k, ++c)
         a.values[v * size_t(a.components) + size_t(k)] = total_ > 0 ? float(sum_[c] / total_) : 0.0f;
   }
 
-  TriMesh& mesh_;
+  std::vector<VertexAttribute>& out_;
   const ParticleField& field_;
   const std::vector<VertexAttribute>& attributes_;
   Kernel kernel_;
