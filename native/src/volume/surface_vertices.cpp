@@ -13,77 +13,102 @@ void EdgeNeighbours::gather(const ParticleField& field, const Vec3& a, int axis,
   axis_ = axis;
   const double R = field.params().radius;
   inv_r2_ = 1.0 / (R * R);  // as the field's own
+  if (axis == 0) gather_along<0>(field, a, h);
+  else if (axis == 1) gather_along<1>(field, a, h);
+  else gather_along<2>(field, a, h);
+}
+
+template <int A>
+void EdgeNeighbours::gather_along(const ParticleField& field, const Vec3& a, double h) {
+  constexpr int U = (A + 1) % 3, W = (A + 2) % 3;
   const double r = field.max_radius();
   const double r2 = r * r;
   const NeighborGrid& grid = field.grid();
   // The points on the edge are a + t h e_axis, 0 <= t <= 1, computed as at() in refine():
   // their query boxes [x - r, x + r] lie in the box of the two ends' (rounding is monotone).
   Vec3 b = a;
-  (axis == 0 ? b.x : axis == 1 ? b.y : b.z) += h;
+  (A == 0 ? b.x : A == 1 ? b.y : b.z) += h;
   const Vec3 rv{r, r, r};
   // A particle is kept if its distance to the segment is within r: any point of the edge
   // that has it within r (by the field's rounded test) has it within r (1 + 1e-12) exactly.
   const double keep2 = r2 * (1.0 + 1e-12);
-  const double lo_a = a[axis], hi_a = b[axis];
-  // The cells first, then their particles into room for all of them, each written and kept
-  // or not without a branch (about half are dropped, in no predictable pattern).
-  cells_.clear();
+  const double lo_a = get<A>(a), hi_a = get<A>(b);
+  const double au = get<U>(a), aw = get<W>(a);
+  // The box's cells a column at a time (a run of consecutive particles; along z each cell is
+  // a run of its own, for its coordinate on the edge's axis), in the field's cell order; then
+  // their particles into room for all of them, each written and kept or not without a branch
+  // (about half are dropped, in no predictable pattern).
+  runs_.clear();
   size_t room = 0;
-  field.for_each_cell_in(grid.coord_of(a - rv), grid.coord_of(b + rv), [&](uint32_t c) {
-    cells_.push_back(c);
-    room += grid.cell_end(c) - grid.cell_begin(c);
+  field.for_each_column_in(grid.coord_of(a - rv), grid.coord_of(b + rv), [&](uint32_t c0, uint32_t c1) {
+    if constexpr (A == 2) {
+      for (uint32_t c = c0; c < c1; ++c) runs_.push_back({grid.cell_begin(c), grid.cell_end(c), grid.cell_coord(c)[2]});
+    } else {
+      runs_.push_back({grid.cell_begin(c0), grid.cell_begin(c1), grid.cell_coord(c0)[A]});
+    }
+    room += grid.cell_begin(c1) - grid.cell_begin(c0);
   });
   if (near_.size() < room) near_.resize(room);
+  Near* const out = near_.data();
+  const Vec3* const points = grid.sorted_points().data();
   size_t n = 0;
-  const int u = (axis + 1) % 3, w = (axis + 2) % 3;
-  const double au = a[u], aw = a[w];
-  for (const uint32_t c : cells_) {
-    const int32_t cell = grid.cell_coord(c)[size_t(axis)];
-    for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) {
-      const Vec3& p = grid.sorted_point(s);
-      const double pa = p[axis];
-      const double da = pa - std::clamp(pa, lo_a, hi_a), du = p[u] - au, dw = p[w] - aw;
-      near_[n] = {s, cell};
+  for (const Run& run : runs_) {
+    const int32_t cell = run.cell;
+    for (uint32_t s = run.begin; s < run.end; ++s) {
+      const Vec3& p = points[s];
+      const double pa = get<A>(p);
+      const double da = pa - std::clamp(pa, lo_a, hi_a), du = get<U>(p) - au, dw = get<W>(p) - aw;
+      out[n] = {s, cell};
       n += da * da + du * du + dw * dw <= keep2;
     }
   }
   count_ = n;
 }
 
-template <Kernel K>
+template <Kernel K, bool General>
 double EdgeNeighbours::sum(const Vec3& x, Vec3* gradient) const {
   // ParticleField::value_and_gradient's spherical branch, over the gathered particles that
-  // its query at x would visit (the cells along the other axes are the edge's).
+  // its query at x would visit (the cells along the other axes are the edge's). Not General:
+  // one radius, unit strengths and a gradient asked for (the same arithmetic, without the
+  // tests for the others in the loop).
   const ParticleField& field = *field_;
   const double r = field.max_radius();
   const double r2 = r * r;
   const NeighborGrid& grid = field.grid();
   const int32_t lo = grid.coord_on_axis(x[axis_] - r, axis_), hi = grid.coord_on_axis(x[axis_] + r, axis_);
-  const bool uniform = field.uniform_radius();
-  const std::vector<double>& inv_r2s = field.sorted_inverse_squared_radii();
-  const std::vector<double>& ws = field.sorted_strengths();
-  const bool unit = ws.empty();
+  const bool uniform = !General || field.uniform_radius();
+  const double* inv_r2s = field.sorted_inverse_squared_radii().data();
+  const double* ws = field.sorted_strengths().data();
+  const bool unit = !General || field.sorted_strengths().empty();
+  const bool with_gradient = !General || gradient != nullptr;
+  const Vec3* points = grid.sorted_points().data();
+  const Near* near = near_.data();
+  const Vec3 xl = x;
+  const double inv_r2_uniform = inv_r2_;
   double v = 0;
   Vec3 g{};
   for (size_t k = 0; k < count_; ++k) {
-    const Near& n = near_[k];
+    const Near n = near[k];
     if (n.cell < lo || n.cell > hi) continue;
-    const Vec3& p = grid.sorted_point(n.sorted);
-    const double d2 = squared_distance(p, x);
+    const Vec3& p = points[n.sorted];
+    const double d2 = squared_distance(p, xl);
     if (!(d2 <= r2)) continue;
-    const double inv_r2 = uniform ? inv_r2_ : inv_r2s[n.sorted];
+    const double inv_r2 = uniform ? inv_r2_uniform : inv_r2s[n.sorted];
     const double q = d2 * inv_r2;
     if (!(q < 1.0)) continue;
     const double w = unit ? 1.0 : ws[n.sorted];
     v += w * kernel_value_t<K>(q);
-    if (gradient) g += (x - p) * (2.0 * w * inv_r2 * kernel_derivative_t<K>(q));
+    if (with_gradient) g += (xl - p) * (2.0 * w * inv_r2 * kernel_derivative_t<K>(q));
   }
-  if (gradient) *gradient = g;
+  if (with_gradient) *gradient = g;
   return v;
 }
 
 double EdgeNeighbours::value_and_gradient(const Vec3& x, Vec3* gradient) const {
-  return dispatch_kernel(field_->kernel(), [&]<Kernel K>() { return sum<K>(x, gradient); });
+  const bool general = !field_->uniform_radius() || !field_->sorted_strengths().empty() || gradient == nullptr;
+  return dispatch_kernel(field_->kernel(), [&]<Kernel K>() {
+    return general ? sum<K, true>(x, gradient) : sum<K, false>(x, gradient);
+  });
 }
 
 namespace {

@@ -62,15 +62,23 @@ class EdgeNeighbours {
     uint32_t sorted;  // its grid (sorted) index
     int32_t cell;     // its grid cell's coordinate along the edge's axis
   };
-  template <Kernel K>
+  template <Kernel K, bool General>
   double sum(const Vec3& x, Vec3* gradient) const;
+  template <int A>
+  void gather_along(const ParticleField& field, const Vec3& a, double h);
+  template <int A>
+  static double get(const Vec3& v) { return A == 0 ? v.x : A == 1 ? v.y : v.z; }
 
   const ParticleField* field_ = nullptr;
   int axis_ = 0;
   double inv_r2_ = 0;
   std::vector<Near> near_;  // the first count_ are the edge's
   size_t count_ = 0;
-  std::vector<uint32_t> cells_;
+  struct Run {
+    uint32_t begin, end;  // sorted indices
+    int32_t cell;         // their cell's coordinate along the edge's axis
+  };
+  std::vector<Run> runs_;  // the gather's, reused
 };
 
 /// The crossing on the edge from node position a (sample fa) to a + h e_axis (sample fb):

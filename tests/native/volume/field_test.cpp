@@ -4,10 +4,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <limits>
 #include <random>
+#include <vector>
 
 #include "particlemesh/core/error.h"
 #include "particlemesh/sample/shapes.h"
@@ -222,4 +224,48 @@ TEST(ParticleField, BadInputGivesClearErrors) {
   EXPECT_NE(std::string(e.what()).find("give a radius"), std::string::npos) << e.what();
   EXPECT_NO_THROW(build(FieldParams{Kernel::Wyvill, 1, 0.5, {}, {}, {}}, one)());
   EXPECT_NO_THROW(build(FieldParams{Kernel::Wyvill, 1, 0, {}, {}, {}}, one)());  // default T needs no spacing
+}
+
+// for_each_column_in (the runs a polygonized edge gathers its particles from): its runs,
+// expanded, are for_each_cell_in's cells in the same order, each run consecutive cells of one
+// (x, y) column; with the dense cell table (one cloud) and without it (two clouds far apart,
+// where each cell is a run of its own), for boxes inside, across and outside the cells.
+TEST(ParticleField, ColumnRunsAreTheBoxCellsInOrder) {
+  PointCloud one = test::random_cloud(3000, 5);
+  PointCloud two = one;
+  for (const Vec3& p : one.positions) two.positions.push_back(p + Vec3{5000, -3000, 4000});
+  for (int sparse = 0; sparse < 2; ++sparse) {
+    FieldParams params;
+    params.radius = 0.07;
+    params.threshold = 0.5;
+    const ParticleField f(sparse ? two : one, params);
+    const NeighborGrid& grid = f.grid();
+    std::mt19937_64 rng(29 + uint64_t(sparse));
+    std::uniform_real_distribution<double> u(-0.3, 1.3), ext(0.0, 0.25);
+    size_t longest = 0, cells_seen = 0;
+    for (int t = 0; t < 4000; ++t) {
+      Vec3 x{u(rng), u(rng), u(rng)};
+      if (sparse && t % 2) x += Vec3{5000, -3000, 4000};
+      const Vec3 lo_p = x - Vec3{ext(rng), ext(rng), ext(rng)}, hi_p = x + Vec3{ext(rng), ext(rng), ext(rng)};
+      NeighborGrid::CellCoord lo = grid.coord_of(lo_p), hi = grid.coord_of(hi_p);
+      if (t % 7 == 0) std::swap(lo[size_t(t % 3)], hi[size_t(t % 3)]);  // an empty box, sometimes
+      std::vector<uint32_t> cells, runs;
+      f.for_each_cell_in(lo, hi, [&](uint32_t c) { cells.push_back(c); });
+      f.for_each_column_in(lo, hi, [&](uint32_t c0, uint32_t c1) {
+        ASSERT_LT(c0, c1);
+        longest = std::max(longest, size_t(c1 - c0));
+        for (uint32_t c = c0; c < c1; ++c) {
+          const auto cc = grid.cell_coord(c), c0c = grid.cell_coord(c0);
+          EXPECT_EQ(cc[0], c0c[0]);
+          EXPECT_EQ(cc[1], c0c[1]);
+          runs.push_back(c);
+        }
+      });
+      ASSERT_EQ(runs, cells) << "sparse " << sparse << " box " << t;
+      cells_seen += cells.size();
+    }
+    EXPECT_GT(cells_seen, 20000u);
+    if (sparse) EXPECT_EQ(longest, 1u);  // the hashed cells: each its own run
+    else EXPECT_GT(longest, 2u);         // the dense table: whole columns
+  }
 }

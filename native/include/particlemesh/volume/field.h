@@ -264,6 +264,41 @@ class PM_EXPORT ParticleField {
       }
   }
 
+  /// The same cells as for_each_cell_in(lo, hi, f), in the same order, as runs: f(c0, c1) for
+  /// the occupied cells c0, c0 + 1, ..., c1 - 1 of one (x, y) column of the box (the cells of
+  /// a column are consecutive in cell order, and so are their particles: the sorted indices
+  /// [grid().cell_begin(c0), grid().cell_begin(c1))). A column with none is skipped; without
+  /// the dense table each cell is a run of its own.
+  template <class F>
+  void for_each_column_in(NeighborGrid::CellCoord lo, NeighborGrid::CellCoord hi, F&& f) const {
+    if (dense_cells_.empty()) {
+      grid_.for_each_cell_in(lo, hi, [&](uint32_t c) { f(c, c + 1); });
+      return;
+    }
+    for (int a = 0; a < 3; ++a) {
+      lo[size_t(a)] = std::max(lo[size_t(a)], dense_lo_[size_t(a)]);
+      hi[size_t(a)] = std::min(hi[size_t(a)], dense_lo_[size_t(a)] + dense_size_[size_t(a)] - 1);
+      if (lo[size_t(a)] > hi[size_t(a)]) return;
+    }
+    const size_t sy = size_t(dense_size_[2]), sx = size_t(dense_size_[1]) * sy;
+    const int32_t len = hi[2] - lo[2] + 1;
+    const uint32_t* plane = &dense_cells_[size_t(lo[0] - dense_lo_[0]) * sx + size_t(lo[1] - dense_lo_[1]) * sy +
+                                          size_t(lo[2] - dense_lo_[2])];
+    for (int32_t cx = lo[0]; cx <= hi[0]; ++cx, plane += sx) {
+      const uint32_t* row = plane;
+      for (int32_t cy = lo[1]; cy <= hi[1]; ++cy, row += sy) {
+        // The occupied ones among the row's cells are consecutive: the first (kNoCell is
+        // above every cell) and how many.
+        uint32_t first = NeighborGrid::kNoCell, count = 0;
+        for (int32_t k = 0; k < len; ++k) {
+          first = std::min(first, row[k]);
+          count += row[k] != NeighborGrid::kNoCell;
+        }
+        if (count != 0) f(first, first + count);
+      }
+    }
+  }
+
   /// The grid over the kernel centres (cell = max_reach()), for callers with their own
   /// traversal.
   const NeighborGrid& grid() const { return grid_; }
