@@ -40,7 +40,10 @@ void EdgeNeighbours::gather_along(const ParticleField& field, const Vec3& a, dou
   // (about half are dropped, in no predictable pattern).
   runs_.clear();
   size_t room = 0;
-  field.for_each_column_in(grid.coord_of(a - rv), grid.coord_of(b + rv), [&](uint32_t c0, uint32_t c1) {
+  const NeighborGrid::CellCoord box_lo = grid.coord_of(a - rv), box_hi = grid.coord_of(b + rv);
+  box_lo_ = box_lo[A];
+  box_hi_ = box_hi[A];
+  field.for_each_column_in(box_lo, box_hi, [&](uint32_t c0, uint32_t c1) {
     if constexpr (A == 2) {
       for (uint32_t c = c0; c < c1; ++c) runs_.push_back({grid.cell_begin(c), grid.cell_end(c), grid.cell_coord(c)[2]});
     } else {
@@ -65,17 +68,18 @@ void EdgeNeighbours::gather_along(const ParticleField& field, const Vec3& a, dou
   count_ = n;
 }
 
-template <Kernel K, bool General>
-double EdgeNeighbours::sum(const Vec3& x, Vec3* gradient) const {
+template <Kernel K, bool General, bool AllCells>
+double EdgeNeighbours::sum(const Vec3& x, Vec3* gradient, int32_t lo, int32_t hi) const {
   // ParticleField::value_and_gradient's spherical branch, over the gathered particles that
   // its query at x would visit (the cells along the other axes are the edge's). Not General:
   // one radius, unit strengths and a gradient asked for (the same arithmetic, without the
-  // tests for the others in the loop).
+  // tests for the others in the loop). AllCells: the query's cells along the edge's axis hold
+  // the whole gathered box's (most points of an edge: its box is a quarter cell longer), so
+  // every gathered particle passes the cell test.
   const ParticleField& field = *field_;
   const double r = field.max_radius();
   const double r2 = r * r;
   const NeighborGrid& grid = field.grid();
-  const int32_t lo = grid.coord_on_axis(x[axis_] - r, axis_), hi = grid.coord_on_axis(x[axis_] + r, axis_);
   const bool uniform = !General || field.uniform_radius();
   const double* inv_r2s = field.sorted_inverse_squared_radii().data();
   const double* ws = field.sorted_strengths().data();
@@ -89,7 +93,7 @@ double EdgeNeighbours::sum(const Vec3& x, Vec3* gradient) const {
   Vec3 g{};
   for (size_t k = 0; k < count_; ++k) {
     const Near n = near[k];
-    if (n.cell < lo || n.cell > hi) continue;
+    if (!AllCells && (n.cell < lo || n.cell > hi)) continue;
     const Vec3& p = points[n.sorted];
     const double d2 = squared_distance(p, xl);
     if (!(d2 <= r2)) continue;
@@ -106,8 +110,14 @@ double EdgeNeighbours::sum(const Vec3& x, Vec3* gradient) const {
 
 double EdgeNeighbours::value_and_gradient(const Vec3& x, Vec3* gradient) const {
   const bool general = !field_->uniform_radius() || !field_->sorted_strengths().empty() || gradient == nullptr;
+  const double r = field_->max_radius();
+  const NeighborGrid& grid = field_->grid();
+  // The cells along the edge's axis that the field's query at x visits.
+  const int32_t lo = grid.coord_on_axis(x[axis_] - r, axis_), hi = grid.coord_on_axis(x[axis_] + r, axis_);
+  const bool all_cells = lo <= box_lo_ && hi >= box_hi_;
   return dispatch_kernel(field_->kernel(), [&]<Kernel K>() {
-    return general ? sum<K, true>(x, gradient) : sum<K, false>(x, gradient);
+    if (general) return sum<K, true, false>(x, gradient, lo, hi);
+    return all_cells ? sum<K, false, true>(x, gradient, lo, hi) : sum<K, false, false>(x, gradient, lo, hi);
   });
 }
 

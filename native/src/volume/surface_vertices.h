@@ -62,8 +62,8 @@ class EdgeNeighbours {
     uint32_t sorted;  // its grid (sorted) index
     int32_t cell;     // its grid cell's coordinate along the edge's axis
   };
-  template <Kernel K, bool General>
-  double sum(const Vec3& x, Vec3* gradient) const;
+  template <Kernel K, bool General, bool AllCells>
+  double sum(const Vec3& x, Vec3* gradient, int32_t lo, int32_t hi) const;
   template <int A>
   void gather_along(const ParticleField& field, const Vec3& a, double h);
   template <int A>
@@ -74,6 +74,7 @@ class EdgeNeighbours {
   double inv_r2_ = 0;
   std::vector<Near> near_;  // the first count_ are the edge's
   size_t count_ = 0;
+  int32_t box_lo_ = 0, box_hi_ = 0;  // the gathered box's cells along the edge's axis
   struct Run {
     uint32_t begin, end;  // sorted indices
     int32_t cell;         // their cell's coordinate along the edge's axis
