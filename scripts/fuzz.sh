@@ -2,7 +2,7 @@
 # Fuzz one target (or all) with libFuzzer in the sanitizer build.
 #
 #   scripts/fuzz.sh TARGET [SECONDS]     e.g. scripts/fuzz.sh read_ply 600
-#   scripts/fuzz.sh all [SECONDS]        every target, two at a time (scripts/test.sh: 30 s each)
+#   scripts/fuzz.sh all [SECONDS]        every target, two at a time (scripts/test.sh: 10 s each)
 #   scripts/fuzz.sh list                 the targets
 #
 # TARGET is one of tests/fuzz/fuzz_<TARGET>.cpp. Builds build-asan/ first if needed (through

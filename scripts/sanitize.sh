@@ -8,7 +8,8 @@
 #     library code through a process boundary (an uninstrumented python would need the ASan
 #     runtime preloaded), and the CLI's own code is covered by the Release suites;
 #  2. runs them through CTest (LeakSanitizer checks every test process at exit);
-#  3. fuzzes every target for PM_FUZZ_SECONDS seconds (default 30; 0 = skip), two at a time.
+#  3. fuzzes every target for PM_FUZZ_SECONDS seconds (default 10, a smoke run: longer
+#     campaigns are scripts/fuzz.sh's; 0 = skip), two at a time.
 #
 # Usage: scripts/sanitize.sh   (env: PM_ASAN_BUILD_DIR, PM_FUZZ_SECONDS, PM_JOBS, PM_WITH_PCL=OFF)
 set -euo pipefail
@@ -45,15 +46,42 @@ export ASAN_OPTIONS="detect_leaks=1:abort_on_error=0:strict_string_checks=1:dete
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
 # Suppressions, if ever needed, go in tests/lsan.supp (none at present).
 export LSAN_OPTIONS="suppressions=$ROOT/tests/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
+# Left to the Release build, because they check results, not memory safety, and the
+# sanitizers see the same code in the other tests (each run here costs 5-10 times the
+# Release run):
+#  - the determinism suite (whole runs repeated 6 times);
+#  - the tests that compare whole outputs across thread counts;
+#  - the million-point sphere (a size);
+#  - how promptly a cancel returns (a time; the cancellation paths run here in
+#    hostile.Cancellation.* and CApiHostile.*);
+#  - the same stages repeated on more shapes, densities and jitters, or checked for
+#    accuracy (the last block).
+# Together they took a third of this suite's time (bench/RESULTS.md, "The test command's time").
+RESULTS_ONLY=(
+  'hostile\.Determinism\..*'
+  'ReconstructSurface\.GrowthBlocksGiveTheSameSurfaceForAnyThreadCount'
+  'ReconstructSurface\.NormalsDecidedByNeighbourVotesAreTheSameForAnyThreadCount'
+  'ReconstructSurface\.SameOutputForAnyThreadCount'
+  'Polygonize\.OutputDoesNotDependOnTheThreadCount'
+  'PolygonizeAttributes\.TheValuesPolygonizeGivesItsVertices'
+  'AnisotropicPolygonize\.SameMeshForAnyThreadCountAndVerticesOnTheSurface'
+  'ReconstructSurface\.MillionPointSphere'
+  'ReconstructSurface\.CancelsPromptly'
+  # The same stages again on more shapes, densities and jitters, or checking an answer's
+  # accuracy: every stage they run is run here by smaller tests of its own (and by the real
+  # scans and SPH frames, which stay).
+  'ReconstructSurface\.SpheresOfEveryDensityAreClosedOutwardGenusZero'
+  'ReconstructSurface\.TorusTrefoilAndDoubleTorusKeepTheirGenus'
+  'ReconstructSurface\.JitteredSamplingsStayManifoldAndOriented'
+  'ReconstructSurface\.JitteredResampledModelsClose'
+  'Polygonize\.GatheredAndDirectEvaluationsGiveTheSameMesh'
+  'RayCaster\.FirstCrossingsOfSmallBlobsAndThinSheetsInFrontOfABlock'
+)
 if [ -z "${PM_SKIP_SUITES:-}" ]; then
-  # The determinism suite repeats whole runs 6 times and the million-point sphere checks a
-  # size: both check results, not memory safety, and run in the Release build (2 minutes more
-  # here); the sanitizers see the same code in the other tests.
-  ctest --test-dir "$BUILD" --output-on-failure -j "$JOBS" \
-    -E '^(hostile\.Determinism\..*|ReconstructSurface\.MillionPointSphere)$'
+  ctest --test-dir "$BUILD" --output-on-failure -j "$JOBS" -E "^($(IFS='|'; echo "${RESULTS_ONLY[*]}"))\$"
 fi
 
-SECONDS_PER_TARGET="${PM_FUZZ_SECONDS:-30}"
+SECONDS_PER_TARGET="${PM_FUZZ_SECONDS:-10}"
 if [ "$SECONDS_PER_TARGET" -gt 0 ]; then
   # A fixed seed: the same commit explores the same inputs (see scripts/fuzz.sh).
   PM_FUZZ_SEED="${PM_FUZZ_SEED:-1}" PM_ASAN_BUILD_DIR="$BUILD" "$ROOT/scripts/fuzz.sh" all "$SECONDS_PER_TARGET"
