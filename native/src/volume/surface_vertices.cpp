@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstring>
+#include <span>
 
 #include "volume/field_impl.h"
 #include "volume/mc_table.h"
@@ -38,16 +41,22 @@ void EdgeNeighbours::gather_along(const ParticleField& field, const Vec3& a, dou
   // a run of its own, for its coordinate on the edge's axis), in the field's cell order; then
   // their particles into room for all of them, each written and kept or not without a branch
   // (about half are dropped, in no predictable pattern).
-  runs_.clear();
   size_t room = 0;
   const NeighborGrid::CellCoord box_lo = grid.coord_of(a - rv), box_hi = grid.coord_of(b + rv);
   box_lo_ = box_lo[A];
   box_hi_ = box_hi[A];
+  // Room for the most runs the box can have (one per cell: along z, or without the dense
+  // table), written through a pointer rather than pushed back one at a time.
+  const size_t most_runs = size_t(box_hi[0] - box_lo[0] + 1) * size_t(box_hi[1] - box_lo[1] + 1) *
+                           size_t(box_hi[2] - box_lo[2] + 1);
+  if (runs_.size() < most_runs) runs_.resize(most_runs);
+  Run* const runs = runs_.data();
+  size_t run_count = 0;
   field.for_each_column_in(box_lo, box_hi, [&](uint32_t c0, uint32_t c1) {
     if constexpr (A == 2) {
-      for (uint32_t c = c0; c < c1; ++c) runs_.push_back({grid.cell_begin(c), grid.cell_end(c), grid.cell_coord(c)[2]});
+      for (uint32_t c = c0; c < c1; ++c) runs[run_count++] = {grid.cell_begin(c), grid.cell_end(c), grid.cell_coord(c)[2]};
     } else {
-      runs_.push_back({grid.cell_begin(c0), grid.cell_begin(c1), grid.cell_coord(c0)[A]});
+      runs[run_count++] = {grid.cell_begin(c0), grid.cell_begin(c1), grid.cell_coord(c0)[A]};
     }
     room += grid.cell_begin(c1) - grid.cell_begin(c0);
   });
@@ -55,13 +64,16 @@ void EdgeNeighbours::gather_along(const ParticleField& field, const Vec3& a, dou
   Near* const out = near_.data();
   const Vec3* const points = grid.sorted_points().data();
   size_t n = 0;
-  for (const Run& run : runs_) {
-    const int32_t cell = run.cell;
-    for (uint32_t s = run.begin; s < run.end; ++s) {
-      const Vec3& p = points[s];
-      const double pa = get<A>(p);
-      const double da = pa - std::clamp(pa, lo_a, hi_a), du = get<U>(p) - au, dw = get<W>(p) - aw;
-      out[n] = {s, cell};
+  // Each entry is written as one 8-byte word, {s, cell} in Near's layout (sorted index in the
+  // low half): one store a particle instead of two, and the loop's counter is that word.
+  static_assert(sizeof(Near) == 8 && offsetof(Near, sorted) == 0 && offsetof(Near, cell) == 4);
+  for (const Run& run : std::span<const Run>(runs, run_count)) {
+    const uint64_t tag = uint64_t(uint32_t(run.cell)) << 32;
+    const Vec3* p = points + run.begin;
+    for (uint64_t word = tag | run.begin, end = tag | run.end; word != end; ++word, ++p) {
+      const double pa = get<A>(*p);
+      const double da = pa - std::clamp(pa, lo_a, hi_a), du = get<U>(*p) - au, dw = get<W>(*p) - aw;
+      std::memcpy(out + n, &word, sizeof word);
       n += da * da + du * du + dw * dw <= keep2;
     }
   }
@@ -91,6 +103,25 @@ double EdgeNeighbours::sum(const Vec3& x, Vec3* gradient, int32_t lo, int32_t hi
   const double inv_r2_uniform = inv_r2_;
   double v = 0;
   Vec3 g{};
+  if constexpr (!General) {
+    // The same sum with the difference x - p computed once: its squares are those of p - x
+    // (squared_distance's), and it is the gradient's direction as is; 2 w / R^2 (w = 1) is
+    // the same product for every particle.
+    const double two_inv_r2 = 2.0 * inv_r2_uniform;
+    for (size_t k = 0; k < count_; ++k) {
+      const Near n = near[k];
+      if (!AllCells && (n.cell < lo || n.cell > hi)) continue;
+      const Vec3 d = xl - points[n.sorted];
+      const double d2 = squared_norm(d);
+      if (!(d2 <= r2)) continue;
+      const double q = d2 * inv_r2_uniform;
+      if (!(q < 1.0)) continue;
+      v += kernel_value_t<K>(q);
+      g += d * (two_inv_r2 * kernel_derivative_t<K>(q));
+    }
+    *gradient = g;
+    return v;
+  }
   for (size_t k = 0; k < count_; ++k) {
     const Near n = near[k];
     if (!AllCells && (n.cell < lo || n.cell > hi)) continue;

@@ -79,7 +79,7 @@ class EdgeNeighbours {
     uint32_t begin, end;  // sorted indices
     int32_t cell;         // their cell's coordinate along the edge's axis
   };
-  std::vector<Run> runs_;  // the gather's, reused
+  std::vector<Run> runs_;  // room for the gather's runs, reused
 };
 
 /// The crossing on the edge from node position a (sample fa) to a + h e_axis (sample fb):
