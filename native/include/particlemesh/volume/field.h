@@ -26,6 +26,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #include "particlemesh/core/export.h"
@@ -284,18 +285,29 @@ class PM_EXPORT ParticleField {
     const int32_t len = hi[2] - lo[2] + 1;
     const uint32_t* plane = &dense_cells_[size_t(lo[0] - dense_lo_[0]) * sx + size_t(lo[1] - dense_lo_[1]) * sy +
                                           size_t(lo[2] - dense_lo_[2])];
-    for (int32_t cx = lo[0]; cx <= hi[0]; ++cx, plane += sx) {
-      const uint32_t* row = plane;
-      for (int32_t cy = lo[1]; cy <= hi[1]; ++cy, row += sy) {
-        // The occupied ones among the row's cells are consecutive: the first (kNoCell is
-        // above every cell) and how many.
-        uint32_t first = NeighborGrid::kNoCell, count = 0;
-        for (int32_t k = 0; k < len; ++k) {
-          first = std::min(first, row[k]);
-          count += row[k] != NeighborGrid::kNoCell;
+    // The rows' length as a compile-time constant for the usual boxes (a query's or an edge's
+    // span 2 to 4 cells along z), so that the scan of a row is unrolled.
+    auto rows = [&](auto row_len) {
+      const uint32_t* p = plane;
+      for (int32_t cx = lo[0]; cx <= hi[0]; ++cx, p += sx) {
+        const uint32_t* row = p;
+        for (int32_t cy = lo[1]; cy <= hi[1]; ++cy, row += sy) {
+          // The occupied ones among the row's cells are consecutive: the first (kNoCell is
+          // above every cell) and how many.
+          uint32_t first = NeighborGrid::kNoCell, count = 0;
+          for (int32_t k = 0; k < int32_t(row_len); ++k) {
+            first = std::min(first, row[k]);
+            count += row[k] != NeighborGrid::kNoCell;
+          }
+          if (count != 0) f(first, first + count);
         }
-        if (count != 0) f(first, first + count);
       }
+    };
+    switch (len) {
+      case 2: rows(std::integral_constant<int32_t, 2>{}); break;
+      case 3: rows(std::integral_constant<int32_t, 3>{}); break;
+      case 4: rows(std::integral_constant<int32_t, 4>{}); break;
+      default: rows(len);
     }
   }
 
