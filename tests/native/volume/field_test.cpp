@@ -229,7 +229,8 @@ TEST(ParticleField, BadInputGivesClearErrors) {
 // for_each_column_in (the runs a polygonized edge gathers its particles from): its runs,
 // expanded, are for_each_cell_in's cells in the same order, each run consecutive cells of one
 // (x, y) column; with the dense cell table (one cloud) and without it (two clouds far apart,
-// where each cell is a run of its own), for boxes inside, across and outside the cells.
+// where each cell is a run of its own), for boxes inside, across and outside the cells, 1 to
+// 6 cells long along z (the row scan has cases for 2, 3 and 4 cells and a general one).
 TEST(ParticleField, ColumnRunsAreTheBoxCellsInOrder) {
   PointCloud one = test::random_cloud(3000, 5);
   PointCloud two = one;
@@ -243,6 +244,7 @@ TEST(ParticleField, ColumnRunsAreTheBoxCellsInOrder) {
     std::mt19937_64 rng(29 + uint64_t(sparse));
     std::uniform_real_distribution<double> u(-0.3, 1.3), ext(0.0, 0.25);
     size_t longest = 0, cells_seen = 0;
+    uint32_t z_lengths_seen = 0;  // bit k: a box k cells long along z (the row scan's cases)
     for (int t = 0; t < 4000; ++t) {
       Vec3 x{u(rng), u(rng), u(rng)};
       if (sparse && t % 2) x += Vec3{5000, -3000, 4000};
@@ -250,6 +252,7 @@ TEST(ParticleField, ColumnRunsAreTheBoxCellsInOrder) {
       NeighborGrid::CellCoord lo = grid.coord_of(lo_p), hi = grid.coord_of(hi_p);
       if (t % 7 == 0) std::swap(lo[size_t(t % 3)], hi[size_t(t % 3)]);  // an empty box, sometimes
       std::vector<uint32_t> cells, runs;
+      if (hi[2] >= lo[2]) z_lengths_seen |= 1u << std::min(hi[2] - lo[2] + 1, 31);
       f.for_each_cell_in(lo, hi, [&](uint32_t c) { cells.push_back(c); });
       f.for_each_column_in(lo, hi, [&](uint32_t c0, uint32_t c1) {
         ASSERT_LT(c0, c1);
@@ -265,6 +268,7 @@ TEST(ParticleField, ColumnRunsAreTheBoxCellsInOrder) {
       cells_seen += cells.size();
     }
     EXPECT_GT(cells_seen, 20000u);
+    for (int k = 1; k <= 6; ++k) EXPECT_TRUE(z_lengths_seen >> k & 1u) << "no box " << k << " cells long along z";
     if (sparse) EXPECT_EQ(longest, 1u);  // the hashed cells: each its own run
     else EXPECT_GT(longest, 2u);         // the dense table: whole columns
   }
