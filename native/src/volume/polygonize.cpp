@@ -16,7 +16,9 @@
 
 #include <tbb/parallel_sort.h>
 
+#include "core/first_touch.h"
 #include "core/hashing.h"
+#include "core/huge_pages.h"
 #include "core/parallel.h"
 #include "core/progress_tracker.h"
 #include "particlemesh/core/error.h"
@@ -113,7 +115,9 @@ struct Grid {
   // the field's grid keeps them): proving and sampling in it read the particles near each
   // other one block after the next.
   std::vector<uint32_t> memory_order;
-  std::vector<float> values, more_values;  // the samples' storage
+  // The samples' storage: uninitialised, each block's kBN floats written by its sampling
+  // (which starts from zero itself), so its pages are first touched on all cores.
+  detail::FreshArray<float> values, more_values;
   std::vector<uint64_t> mesh_keys;     // sampled blocks and their lower neighbours, sorted
   std::vector<MeshBlock> mesh;
 };
@@ -163,9 +167,9 @@ std::vector<uint32_t> particle_memory_order(const std::vector<uint64_t>& keys) {
 }
 
 // Sample the blocks `todo` (indices into sampled_keys) into `storage`, on all cores.
-void sample_blocks(const ParticleField& field, Grid& g, const std::vector<uint32_t>& todo, std::vector<float>& storage,
-                   detail::ProgressTracker& tracker) {
-  storage.resize(todo.size() * kBN);
+void sample_blocks(const ParticleField& field, Grid& g, const std::vector<uint32_t>& todo,
+                   detail::FreshArray<float>& storage, detail::ProgressTracker& tracker) {
+  storage = detail::FreshArray<float>(todo.size() * kBN);
   detail::parallel_blocks(todo.size(), 4, [&](size_t bb, size_t be) {
     if (tracker.cancelled()) return;
     for (size_t k = bb; k < be; ++k) {
@@ -702,9 +706,11 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   tracker.stage("meshing", begin + 0.7 * (1 - begin), begin + 1.0 * (1 - begin), nm);
   PolygonizeResult result;
   TriMesh& mesh = result.mesh;
-  mesh.positions.resize(total_vertices);
-  mesh.normals.resize(total_vertices);
-  mesh.triangles.resize(total_triangles);
+  // Every element is written by the parallel pass below; their pages are faulted in on all
+  // cores first rather than while resize() zeroes them on this one (first_touch.h).
+  detail::resize_touched(mesh.positions, total_vertices);
+  detail::resize_touched(mesh.normals, total_vertices);
+  detail::resize_touched(mesh.triangles, total_triangles);
   // The particles' attributes at the vertices (AttributeSums), each summed right after its
   // vertex is placed: a crossing's from the particles gathered for its edge.
   std::optional<detail::AttributeSums> attribute_shape;
