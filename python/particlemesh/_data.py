@@ -1,9 +1,10 @@
 """Meshes and particles as numpy arrays, and their way in and out of the library's handles
-(pm_cloud, pm_mesh): one copy each way, no per-point Python."""
+(pm_cloud, pm_mesh): one copy in, none out for meshes (their arrays are the library's,
+lent), no per-point Python."""
 
 import ctypes
 import os
-from ctypes import POINTER, c_char_p, c_double, c_float, c_int32, c_size_t
+from ctypes import POINTER, c_char_p, c_double, c_float, c_int32, c_size_t, c_uint32, c_void_p
 
 import numpy as np
 
@@ -221,24 +222,79 @@ def _attributes(lib, handle, count, kind):
     return out
 
 
+class _MeshHandle:
+    """Owns a pm_mesh whose arrays numpy arrays are lent (pm_mesh_lend_arrays): destroyed when
+    the last of those arrays is (they hold it through _Lent, their base)."""
+
+    __slots__ = ("_destroy", "_handle", "__weakref__")
+
+    def __init__(self, lib, handle):
+        self._destroy = lib.pm_mesh_destroy
+        self._handle = handle
+
+    def __del__(self):
+        handle, self._handle = self._handle, None
+        if handle is not None and handle.value:
+            self._destroy(handle)
+
+
+class _Lent:
+    """The numpy array interface of memory a _MeshHandle owns: np.asarray() of it is an array
+    over that memory whose base keeps the handle alive."""
+
+    def __init__(self, owner, address, shape, dtype):
+        self.owner = owner
+        self.__array_interface__ = {"data": (address, False), "shape": shape,
+                                    "typestr": np.dtype(dtype).str, "version": 3}
+
+
+def _lent(owner, address, shape, dtype):
+    if not address:
+        return np.empty(shape, dtype=dtype)
+    return np.asarray(_Lent(owner, address, shape, dtype))
+
+
 def read_mesh_handle(lib, handle, stats=None):
-    """A Mesh with copies of everything the pm_mesh handle holds."""
+    """A Mesh over the pm_mesh handle's own arrays, without copying them: the handle (a
+    pm_mesh_p) is taken over - set to NULL, so that the caller's pm_mesh_destroy does nothing -
+    and destroyed once the Mesh's arrays are all gone. A big mesh is then never held twice,
+    and its pages are not written a second time (a polygonized 1.5M-triangle frame: 60 MB)."""
+    owner = _MeshHandle(lib, _abi.pm_mesh_p(handle.value))
+    handle.value = None
     nv, nt = c_size_t(0), c_size_t(0)
-    lib.check(lib.pm_mesh_get_counts(handle, ctypes.byref(nv), ctypes.byref(nt)))
+    lib.check(lib.pm_mesh_get_counts(owner._handle, ctypes.byref(nv), ctypes.byref(nt)))
     nv, nt = nv.value, nt.value
-    vertices = np.empty((nv, 3), dtype=np.float64)
-    triangles = np.empty((nt, 3), dtype=np.int32)
-    if nv:
-        lib.check(lib.pm_mesh_copy_positions(handle, ptr(vertices, c_double), nv))
-    if nt:
-        lib.check(lib.pm_mesh_copy_triangles(handle, ptr(triangles, c_int32), nt))
-    has = c_int32(0)
-    lib.check(lib.pm_mesh_has_normals(handle, ctypes.byref(has)))
-    normals = None
-    if has.value and nv:
-        normals = np.empty((nv, 3), dtype=np.float64)
-        lib.check(lib.pm_mesh_copy_normals(handle, ptr(normals, c_double), nv))
-    return Mesh(vertices, triangles, normals, _attributes(lib, handle, nv, "mesh"), stats)
+    positions, normals, triangles = POINTER(c_double)(), POINTER(c_double)(), POINTER(c_uint32)()
+    lib.check(lib.pm_mesh_lend_arrays(owner._handle, ctypes.byref(positions), ctypes.byref(normals),
+                                      ctypes.byref(triangles)))
+    vertices = _lent(owner, ctypes.cast(positions, c_void_p).value, (nv, 3), np.float64)
+    has_normals = bool(normals)
+    normals = _lent(owner, ctypes.cast(normals, c_void_p).value, (nv, 3), np.float64) if has_normals else None
+    if nv <= 2**31 - 1:  # the library's uint32 indices read as the int32 they then are
+        triangles = _lent(owner, ctypes.cast(triangles, c_void_p).value, (nt, 3), np.int32)
+    else:  # only to raise the library's error: the indices do not fit int32
+        triangles = np.empty((nt, 3), dtype=np.int32)
+        lib.check(lib.pm_mesh_copy_triangles(owner._handle, ptr(triangles, c_int32), nt))
+    return Mesh(vertices, triangles, normals, _lent_attributes(lib, owner, nv), stats)
+
+
+def _lent_attributes(lib, owner, count):
+    """Every per-vertex channel of the mesh `owner` holds: {name: (count, C) float32}, lent."""
+    handle = owner._handle
+    n = c_size_t(0)
+    lib.check(lib.pm_mesh_get_attribute_count(handle, ctypes.byref(n)))
+    out = {}
+    for i in range(n.value):
+        name = c_char_p()
+        lib.check(lib.pm_mesh_get_attribute_name(handle, i, ctypes.byref(name)))
+        key = name.value
+        components = c_int32(0)
+        lib.check(lib.pm_mesh_get_attribute_components(handle, key, ctypes.byref(components)))
+        values = POINTER(c_float)()
+        lib.check(lib.pm_mesh_lend_attribute(handle, key, ctypes.byref(values)))
+        out[key.decode(errors="replace")] = _lent(owner, ctypes.cast(values, c_void_p).value,
+                                                  (count, components.value), np.float32)
+    return out
 
 
 def read_cloud_handle(lib, handle, info=None):

@@ -73,6 +73,10 @@ TEST(CApiHostile, EveryNullPointerIsNamed) {
   double dbuf[3 * 256];
   int32_t ibuf[3 * 512];
   const char* name = nullptr;
+  double* const kUntouched = reinterpret_cast<double*>(0x7);
+  double* dptr = kUntouched;
+  uint32_t* uptr = reinterpret_cast<uint32_t*>(0x7);
+  float* fptr = reinterpret_cast<float*>(0x7);
   pm_topology_report report{};
   report.struct_size = sizeof report;
   // An attribute "a", so that the attribute calls get as far as their output pointers.
@@ -130,6 +134,10 @@ TEST(CApiHostile, EveryNullPointerIsNamed) {
       {"out", [&] { return pm_mesh_copy_normals(h.mesh, nullptr, 256); }},
       {"mesh", [&] { return pm_mesh_copy_triangles(nullptr, ibuf, 512); }},
       {"out", [&] { return pm_mesh_copy_triangles(h.mesh, nullptr, 512); }},
+      {"mesh", [&] { return pm_mesh_lend_arrays(nullptr, &dptr, &dptr, &uptr); }},
+      {"out_positions", [&] { return pm_mesh_lend_arrays(h.mesh, nullptr, &dptr, &uptr); }},
+      {"out_normals", [&] { return pm_mesh_lend_arrays(h.mesh, &dptr, nullptr, &uptr); }},
+      {"out_triangles", [&] { return pm_mesh_lend_arrays(h.mesh, &dptr, &dptr, nullptr); }},
       {"mesh", [&] { return pm_mesh_report(nullptr, &report); }},
       {"out_report", [&] { return pm_mesh_report(h.mesh, nullptr); }},
       {"mesh", [&] { return pm_mesh_set_attribute(nullptr, "a", 1, values, 3); }},
@@ -141,6 +149,9 @@ TEST(CApiHostile, EveryNullPointerIsNamed) {
       {"mesh", [&] { return pm_mesh_copy_attribute(nullptr, "a", buf, 256); }},
       {"name", [&] { return pm_mesh_copy_attribute(h.mesh, nullptr, buf, 256); }},
       {"out", [&] { return pm_mesh_copy_attribute(h.mesh, "a", nullptr, 256); }},
+      {"mesh", [&] { return pm_mesh_lend_attribute(nullptr, "a", &fptr); }},
+      {"name", [&] { return pm_mesh_lend_attribute(h.mesh, nullptr, &fptr); }},
+      {"out_values", [&] { return pm_mesh_lend_attribute(h.mesh, "a", nullptr); }},
       {"mesh", [&] { return pm_mesh_get_attribute_count(nullptr, &n); }},
       {"out_count", [&] { return pm_mesh_get_attribute_count(h.mesh, nullptr); }},
       {"mesh", [&] { return pm_mesh_get_attribute_name(nullptr, 0, &name); }},
@@ -158,6 +169,9 @@ TEST(CApiHostile, EveryNullPointerIsNamed) {
   EXPECT_EQ(i32, 7);
   EXPECT_EQ(d, 7);
   EXPECT_EQ(name, nullptr);
+  EXPECT_EQ(dptr, kUntouched);
+  EXPECT_EQ(uptr, reinterpret_cast<uint32_t*>(0x7));
+  EXPECT_EQ(fptr, reinterpret_cast<float*>(0x7));
   // Destroying NULL is a no-op.
   pm_cloud_destroy(nullptr);
   pm_mesh_destroy(nullptr);

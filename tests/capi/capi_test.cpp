@@ -202,6 +202,75 @@ TEST(CApi, FullPrecisionReadBack) {
   pm_mesh_destroy(mesh);
 }
 
+TEST(CApi, LentArraysAreTheMeshsOwnUntilItIsDestroyed) {
+  // A triangulated sphere: the lent arrays hold exactly what the copying calls give, and
+  // writing through them changes the mesh (they are its storage, not a copy).
+  const PointCloud s = fibonacci_sphere(2000);
+  pm_cloud* cloud = nullptr;
+  ASSERT_EQ(pm_cloud_create(flat(s.positions).data(), flat(s.normals).data(), s.positions.size(), &cloud), PM_OK);
+  pm_mesh* mesh = nullptr;
+  ASSERT_EQ(pm_triangulate(cloud, nullptr, &mesh, nullptr), PM_OK) << last();
+  pm_cloud_destroy(cloud);
+  size_t nv = 0, nt = 0;
+  ASSERT_EQ(pm_mesh_get_counts(mesh, &nv, &nt), PM_OK);
+  ASSERT_GT(nt, 1000u);
+  std::vector<double> positions(3 * nv), normals(3 * nv);
+  std::vector<int32_t> tris(3 * nt);
+  ASSERT_EQ(pm_mesh_copy_positions(mesh, positions.data(), nv), PM_OK);
+  ASSERT_EQ(pm_mesh_copy_normals(mesh, normals.data(), nv), PM_OK);
+  ASSERT_EQ(pm_mesh_copy_triangles(mesh, tris.data(), nt), PM_OK);
+  double *lp = nullptr, *ln = nullptr;
+  uint32_t* lt = nullptr;
+  ASSERT_EQ(pm_mesh_lend_arrays(mesh, &lp, &ln, &lt), PM_OK) << last();
+  ASSERT_TRUE(lp && ln && lt);
+  EXPECT_TRUE(std::equal(positions.begin(), positions.end(), lp));
+  EXPECT_TRUE(std::equal(normals.begin(), normals.end(), ln));
+  for (size_t i = 0; i < 3 * nt; ++i) ASSERT_EQ(int64_t(lt[i]), int64_t(tris[i])) << i;
+  lp[4] = 12.5;  // vertex 1's y
+  lt[0] = lt[1];
+  ASSERT_EQ(pm_mesh_copy_positions(mesh, positions.data(), nv), PM_OK);
+  ASSERT_EQ(pm_mesh_copy_triangles(mesh, tris.data(), nt), PM_OK);
+  EXPECT_EQ(positions[4], 12.5);
+  EXPECT_EQ(tris[0], tris[1]);
+  // Lent again: the same storage.
+  double *lp2 = nullptr, *ln2 = nullptr;
+  uint32_t* lt2 = nullptr;
+  ASSERT_EQ(pm_mesh_lend_arrays(mesh, &lp2, &ln2, &lt2), PM_OK);
+  EXPECT_EQ(lp2, lp);
+  EXPECT_EQ(ln2, ln);
+  EXPECT_EQ(lt2, lt);
+  // An attribute: lent as it is held, and its name checked.
+  const std::vector<float> speed(nv * 2, 0.25f);
+  ASSERT_EQ(pm_mesh_set_attribute(mesh, "speed", 2, speed.data(), nv), PM_OK) << last();
+  float* values = nullptr;
+  ASSERT_EQ(pm_mesh_lend_attribute(mesh, "speed", &values), PM_OK) << last();
+  ASSERT_NE(values, nullptr);
+  EXPECT_TRUE(std::equal(speed.begin(), speed.end(), values));
+  values[3] = 2.0f;
+  std::vector<float> back(nv * 2);
+  ASSERT_EQ(pm_mesh_copy_attribute(mesh, "speed", back.data(), nv), PM_OK);
+  EXPECT_EQ(back[3], 2.0f);
+  float* untouched = reinterpret_cast<float*>(0x7);
+  EXPECT_EQ(pm_mesh_lend_attribute(mesh, "colour", &untouched), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("'colour'"), std::string::npos) << last();
+  EXPECT_EQ(untouched, reinterpret_cast<float*>(0x7));
+  pm_mesh_destroy(mesh);
+
+  // Empty arrays and a mesh without normals lend NULL.
+  const double p[] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  const int32_t tri[] = {0, 1, 2};
+  ASSERT_EQ(pm_mesh_create(p, 3, tri, 1, nullptr, &mesh), PM_OK);
+  ASSERT_EQ(pm_mesh_lend_arrays(mesh, &lp, &ln, &lt), PM_OK);
+  EXPECT_TRUE(lp != nullptr && ln == nullptr && lt != nullptr);
+  EXPECT_EQ(lp[3], 1.0);
+  EXPECT_EQ(lt[2], 2u);
+  pm_mesh_destroy(mesh);
+  ASSERT_EQ(pm_mesh_create(nullptr, 0, nullptr, 0, nullptr, &mesh), PM_OK) << last();
+  ASSERT_EQ(pm_mesh_lend_arrays(mesh, &lp, &ln, &lt), PM_OK);
+  EXPECT_TRUE(lp == nullptr && ln == nullptr && lt == nullptr);
+  pm_mesh_destroy(mesh);
+}
+
 TEST(CApi, ThinKeepsAnEvenSubsetAndChecksItsArguments) {
   const PointCloud c = fibonacci_sphere(5000);
   pm_cloud* cloud = nullptr;

@@ -1,8 +1,11 @@
 """The particlemesh Python package: numpy in and out, the library's options as keywords with
 its own defaults, errors as particlemesh.Error with the library's message, progress and
 cancellation, handles freed on every path."""
+import gc
+import pickle
 import signal
 import threading
+import weakref
 
 import numpy as np
 import pytest
@@ -201,6 +204,49 @@ def test_normals_and_attributes_pass_through(pm):
     assert mesh.attributes["radius"].shape == (1500, 1)
     with pytest.raises(pm.Error, match="attribute 'velocity' has shape"):
         pm.triangulate(p, attributes={"velocity": speed[:10]})
+
+
+def test_a_meshs_arrays_are_the_librarys_own_and_outlive_the_mesh(pm):
+    """No copy out: the arrays of a returned mesh are the library's (lent), writable numpy
+    arrays of the documented types, valid for as long as any of them lives, and the library's
+    mesh is destroyed with the last one."""
+    p = fibonacci_sphere(3000)
+    speed = (p * 2).astype(np.float32)
+    mesh = pm.polygonize(p, attributes={"velocity": speed}, threads=1)
+    v, t, n, a = mesh.vertices, mesh.triangles, mesh.normals, mesh.attributes["velocity"]
+    for array, dtype, columns in ((v, np.float64, 3), (t, np.int32, 3), (n, np.float64, 3),
+                                  (a, np.float32, 3)):
+        assert array.dtype == dtype and array.shape[1] == columns
+        assert array.flags.c_contiguous and array.flags.writeable and not array.flags.owndata
+    owner = v.base.owner
+    assert t.base.owner is owner and n.base.owner is owner and a.base.owner is owner
+    gone = weakref.ref(owner)
+    copies = [x.copy() for x in (v, t, n, a)]
+    # What the library made: the same mesh again, on two threads.
+    again = pm.polygonize(p, attributes={"velocity": speed}, threads=2)
+    for x, y in zip(copies, (again.vertices, again.triangles, again.normals,
+                             again.attributes["velocity"])):
+        np.testing.assert_array_equal(x, y)
+    del y
+    assert pickle.loads(pickle.dumps(mesh)).vertices.tobytes() == copies[0].tobytes()
+    del mesh, owner, again
+    gc.collect()
+    assert gone() is not None  # the arrays still hold the library's mesh
+    assert t.max() < len(v) and t.min() >= 0
+    for i, x in enumerate((v, t, n, a)):
+        np.testing.assert_array_equal(x, copies[i])
+    del x, array  # the loops' last arrays
+    v[0] = (7.0, 8.0, 9.0)  # their own memory: writing is allowed and stays
+    assert tuple(v[0]) == (7.0, 8.0, 9.0)
+    del v, t, n
+    gc.collect()
+    assert gone() is not None  # the attribute's array alone keeps it
+    del a
+    gc.collect()
+    assert gone() is None
+    empty = pm.polygonize(p, threshold=1e9)  # no surface: nothing to lend
+    assert empty.vertices.shape == (0, 3) and empty.vertices.dtype == np.float64
+    assert empty.triangles.shape == (0, 3) and empty.triangles.dtype == np.int32
 
 
 def test_real_scan_from_shared_data(pm, data_dir):
@@ -407,6 +453,8 @@ def test_handles_are_freed_on_every_path(pm, pm_library, monkeypatch):
     with pytest.raises(KeyboardInterrupt):
         pm.polygonize(p[:500])                                   # cloud, mesh; then Ctrl-C
     monkeypatch.undo()
+    del mesh  # a returned mesh's arrays are its handle's own: it goes with the last of them
+    gc.collect()
     assert len(made) == 13 and sorted(made) == sorted(freed)  # (addresses may be reused)
 
 

@@ -201,6 +201,13 @@ PM_EXPORT pm_status pm_mesh_copy_positions_f32(const pm_mesh* mesh, float* out, 
 PM_EXPORT pm_status pm_mesh_copy_normals_f32(const pm_mesh* mesh, float* out, size_t capacity);
 PM_EXPORT pm_status pm_mesh_copy_normals(const pm_mesh* mesh, double* out, size_t capacity);
 PM_EXPORT pm_status pm_mesh_copy_triangles(const pm_mesh* mesh, int32_t* out, size_t capacity);
+/** The mesh's own arrays, lent without a copy (a binding's arrays over them need no second
+ *  copy of a big mesh): positions and normals 3 doubles per vertex, triangles 3 vertex indices
+ *  each; NULL where the array is empty (normals: where the mesh has none). They stay valid, and
+ *  writable, until the mesh is destroyed. A vector with more than a quarter of its room unused
+ *  is trimmed first (one copy), so what is lent is what the mesh holds. */
+PM_EXPORT pm_status pm_mesh_lend_arrays(pm_mesh* mesh, double** out_positions, double** out_normals,
+                                        uint32_t** out_triangles);
 PM_EXPORT void pm_mesh_destroy(pm_mesh* mesh);
 
 typedef struct pm_topology_report {
@@ -241,6 +248,10 @@ PM_EXPORT pm_status pm_mesh_get_attribute_components(const pm_mesh* mesh, const 
 /** Copy attribute `name` into `out` (capacity_vertices * components floats). */
 PM_EXPORT pm_status pm_mesh_copy_attribute(const pm_mesh* mesh, const char* name, float* out,
                                            size_t capacity_vertices);
+/** Attribute `name`'s values lent without a copy (vertex count * components floats; NULL for a
+ *  mesh without vertices), valid and writable until the attribute is replaced or the mesh is
+ *  destroyed. */
+PM_EXPORT pm_status pm_mesh_lend_attribute(pm_mesh* mesh, const char* name, float** out_values);
 /** Number of attributes on a mesh, and the name of attribute `index` (0-based; the string
  *  stays valid until the mesh is changed or destroyed). */
 PM_EXPORT pm_status pm_mesh_get_attribute_count(const pm_mesh* mesh, size_t* out_count);

@@ -3,6 +3,7 @@
 #include <climits>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "capi/conversions.h"
@@ -18,6 +19,17 @@ using particlemesh::capi::check_capacity;
 using particlemesh::capi::copy_vec3s;
 using particlemesh::capi::guarded;
 using particlemesh::capi::require;
+
+namespace {
+
+// A vector whose capacity exceeds its size by more than a quarter (one grown by doubling)
+// shrunk to its size, so that a lent array is all the memory its mesh keeps for it.
+template <class T>
+void trim_room(std::vector<T>& v) {
+  if (v.capacity() - v.size() > v.size() / 4) v.shrink_to_fit();
+}
+
+}  // namespace
 
 extern "C" {
 
@@ -135,6 +147,24 @@ pm_status pm_mesh_copy_triangles(const pm_mesh* mesh, int32_t* out, size_t capac
       throw Error(Status::LimitExceeded, "vertex indices do not fit int32");
     for (size_t f = 0; f < t.size(); ++f)
       for (int c = 0; c < 3; ++c) out[3 * f + size_t(c)] = int32_t(t[f][size_t(c)]);
+  });
+}
+
+pm_status pm_mesh_lend_arrays(pm_mesh* mesh, double** out_positions, double** out_normals, uint32_t** out_triangles) {
+  static_assert(sizeof(Vec3) == 3 * sizeof(double) && std::is_standard_layout_v<Vec3>);
+  static_assert(sizeof(Triangle) == 3 * sizeof(uint32_t));
+  return guarded([&] {
+    require(mesh, "mesh");
+    require(out_positions, "out_positions");
+    require(out_normals, "out_normals");
+    require(out_triangles, "out_triangles");
+    TriMesh& m = mesh->mesh;
+    trim_room(m.positions);
+    trim_room(m.normals);
+    trim_room(m.triangles);
+    *out_positions = m.positions.empty() ? nullptr : &m.positions.front().x;
+    *out_normals = m.normals.empty() ? nullptr : &m.normals.front().x;
+    *out_triangles = m.triangles.empty() ? nullptr : m.triangles.front().data();
   });
 }
 

@@ -129,6 +129,16 @@ pm_status pm_mesh_copy_attribute(const pm_mesh* mesh, const char* name, float* o
   });
 }
 
+pm_status pm_mesh_lend_attribute(pm_mesh* mesh, const char* name, float** out_values) {
+  return guarded([&] {
+    const VertexAttribute& a = find(mesh, name);
+    require(out_values, "out_values");
+    // find() gives const access for the copying functions; the mesh itself is not const here.
+    std::vector<float>& values = const_cast<VertexAttribute&>(a).values;
+    *out_values = values.empty() ? nullptr : values.data();
+  });
+}
+
 pm_status pm_mesh_get_attribute_count(const pm_mesh* mesh, size_t* out_count) {
   return guarded([&] {
     require(mesh, "mesh");
