@@ -200,8 +200,9 @@ def new_mesh(lib, mesh, with_attributes=True):
 
 # ---- handles out ----------------------------------------------------------------------------
 
-def _attributes(lib, handle, count, kind):
-    """Every per-point channel of a cloud or mesh handle: {name: (count, C) float32}."""
+def _attributes(lib, handle, count, kind, read=None):
+    """Every per-point channel of a cloud or mesh handle: {name: (count, C) float32}, each
+    read(name, C) (default: a copy)."""
     get_count = getattr(lib, f"pm_{kind}_get_attribute_count")
     get_name = getattr(lib, f"pm_{kind}_get_attribute_name")
     get_components = getattr(lib, f"pm_{kind}_get_attribute_components")
@@ -215,9 +216,12 @@ def _attributes(lib, handle, count, kind):
         key = name.value
         components = c_int32(0)
         lib.check(get_components(handle, key, ctypes.byref(components)))
-        values = np.empty((count, components.value), dtype=np.float32)
-        if count:
-            lib.check(copy(handle, key, ptr(values, c_float), count))
+        if read is not None:
+            values = read(key, components.value)
+        else:
+            values = np.empty((count, components.value), dtype=np.float32)
+            if count:
+                lib.check(copy(handle, key, ptr(values, c_float), count))
         out[key.decode(errors="replace")] = values
     return out
 
@@ -248,6 +252,10 @@ class _Lent:
                                     "typestr": np.dtype(dtype).str, "version": 3}
 
 
+def _address(pointer):
+    return ctypes.cast(pointer, c_void_p).value
+
+
 def _lent(owner, address, shape, dtype):
     if not address:
         return np.empty(shape, dtype=dtype)
@@ -267,34 +275,21 @@ def read_mesh_handle(lib, handle, stats=None):
     positions, normals, triangles = POINTER(c_double)(), POINTER(c_double)(), POINTER(c_uint32)()
     lib.check(lib.pm_mesh_lend_arrays(owner._handle, ctypes.byref(positions), ctypes.byref(normals),
                                       ctypes.byref(triangles)))
-    vertices = _lent(owner, ctypes.cast(positions, c_void_p).value, (nv, 3), np.float64)
-    has_normals = bool(normals)
-    normals = _lent(owner, ctypes.cast(normals, c_void_p).value, (nv, 3), np.float64) if has_normals else None
+    vertices = _lent(owner, _address(positions), (nv, 3), np.float64)
+    normals = _lent(owner, _address(normals), (nv, 3), np.float64) if normals else None
     if nv <= 2**31 - 1:  # the library's uint32 indices read as the int32 they then are
-        triangles = _lent(owner, ctypes.cast(triangles, c_void_p).value, (nt, 3), np.int32)
+        triangles = _lent(owner, _address(triangles), (nt, 3), np.int32)
     else:  # only to raise the library's error: the indices do not fit int32
         triangles = np.empty((nt, 3), dtype=np.int32)
         lib.check(lib.pm_mesh_copy_triangles(owner._handle, ptr(triangles, c_int32), nt))
-    return Mesh(vertices, triangles, normals, _lent_attributes(lib, owner, nv), stats)
 
-
-def _lent_attributes(lib, owner, count):
-    """Every per-vertex channel of the mesh `owner` holds: {name: (count, C) float32}, lent."""
-    handle = owner._handle
-    n = c_size_t(0)
-    lib.check(lib.pm_mesh_get_attribute_count(handle, ctypes.byref(n)))
-    out = {}
-    for i in range(n.value):
-        name = c_char_p()
-        lib.check(lib.pm_mesh_get_attribute_name(handle, i, ctypes.byref(name)))
-        key = name.value
-        components = c_int32(0)
-        lib.check(lib.pm_mesh_get_attribute_components(handle, key, ctypes.byref(components)))
+    def lend_attribute(key, components):
         values = POINTER(c_float)()
-        lib.check(lib.pm_mesh_lend_attribute(handle, key, ctypes.byref(values)))
-        out[key.decode(errors="replace")] = _lent(owner, ctypes.cast(values, c_void_p).value,
-                                                  (count, components.value), np.float32)
-    return out
+        lib.check(lib.pm_mesh_lend_attribute(owner._handle, key, ctypes.byref(values)))
+        return _lent(owner, _address(values), (nv, components), np.float32)
+
+    attributes = _attributes(lib, owner._handle, nv, "mesh", read=lend_attribute)
+    return Mesh(vertices, triangles, normals, attributes, stats)
 
 
 def read_cloud_handle(lib, handle, info=None):
