@@ -289,7 +289,7 @@ class PARTICLEMESH_OT_smooth(_ModalJob, bpy.types.Operator):
 
 
 class PARTICLEMESH_OT_import_cloud(bpy.types.Operator, ImportHelper):
-    """Import point clouds and simulation particles (.ply, .xyz, .pcd, .vtk, .vtu, .vtp, classic .bgeo) as vertex-only mesh objects; normals, colours, velocity and other channels become attributes"""
+    """Import point clouds and simulation particles (.ply, .xyz, .pcd, .vtk, .vtu, .vtp, .bgeo) as vertex-only mesh objects; normals, colours, velocity and other channels become attributes"""
     bl_idname = "particlemesh.import_cloud"
     bl_label = "Import Point Cloud"
     bl_options = {"REGISTER", "UNDO"}
@@ -519,7 +519,7 @@ class PARTICLEMESH_OT_update(bpy.types.Operator):
 
 
 class PARTICLEMESH_OT_import_sequence(bpy.types.Operator, ImportHelper):
-    """Import a simulation cache (one particle file per frame: .ply, .xyz, .vtk, .vtu, .vtp, classic .bgeo) as a live mesh that shows the scene frame's file, meshed"""
+    """Import a simulation cache (one particle file per frame: .ply, .xyz, .vtk, .vtu, .vtp, .bgeo) as a live mesh that shows the scene frame's file, meshed"""
     bl_idname = "particlemesh.import_sequence"
     bl_label = "Import Particle Sequence"
     bl_options = {"REGISTER", "UNDO"}

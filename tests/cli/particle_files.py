@@ -1,6 +1,7 @@
 """Writers of simulators' particle files for the tests: the same particles as PLY, VTK legacy
-(ASCII, BINARY), VTK XML .vtu (ascii, base64, raw appended, zlib) and Houdini's classic bgeo
-(plain, gzip). Values are multiples of 1/1024 so that every text form is exact in float32."""
+(ASCII, BINARY), VTK XML .vtu (ascii, base64, raw appended, zlib), Houdini's classic bgeo
+(plain, gzip) and Houdini 12+'s binary-JSON bgeo (paged, tuples and arrays layouts, either
+byte order, token strings, constant pages, gzip). Values are multiples of 1/1024 so that every text form is exact in float32."""
 
 import base64
 import gzip
@@ -128,6 +129,125 @@ def write_bgeo(path, p, attrs, compress=False):
         f.write(gzip.compress(data, mtime=0) if compress else data)
 
 
+def _length(n, e):
+    """Binary JSON's encoded length (UT_JSONDefines.h)."""
+    if n < 0xF1:
+        return bytes([n])
+    if n < 1 << 16:
+        return b"\xf2" + struct.pack(e + "H", n)
+    if n < 1 << 32:
+        return b"\xf4" + struct.pack(e + "I", n)
+    return b"\xf8" + struct.pack(e + "q", n)
+
+
+class _BinaryJson:
+    """Houdini's binary JSON, token by token."""
+
+    def __init__(self, big, tokens):
+        self.e = ">" if big else "<"
+        self.out = [b"\x7f" + (b"bJSN" if big else b"NSJb")]
+        self.tokens = {} if tokens else None
+
+    def string(self, text):
+        raw = text.encode()
+        if self.tokens is None:
+            self.out.append(b"\x27" + _length(len(raw), self.e) + raw)
+            return
+        if text not in self.tokens:  # defined on first use, then referenced
+            self.tokens[text] = len(self.tokens)
+            self.out.append(b"\x2b" + _length(self.tokens[text], self.e) + _length(len(raw), self.e) + raw)
+        self.out.append(b"\x26" + _length(self.tokens[text], self.e))
+
+    def value(self, v):
+        if isinstance(v, str):
+            self.string(v)
+        elif isinstance(v, bool):
+            self.out.append(b"\x31" if v else b"\x30")
+        elif isinstance(v, int):
+            self.out.append(b"\x13" + struct.pack(self.e + "i", v))
+        elif isinstance(v, float):
+            self.out.append(b"\x1a" + struct.pack(self.e + "d", v))
+        elif isinstance(v, dict):
+            self.out.append(b"{")
+            for k, x in v.items():
+                self.string(k)
+                self.value(x)
+            self.out.append(b"}")
+        elif isinstance(v, np.ndarray):  # a uniform array
+            if v.dtype == bool:
+                words = np.zeros((len(v) + 31) // 32, dtype=np.uint32)
+                for i, flag in enumerate(v):
+                    words[i // 32] |= np.uint32(int(flag) << (i % 32))
+                self.out.append(b"\x40\x10" + _length(len(v), self.e) + words.astype(self.e + "u4").tobytes())
+            else:
+                code = {"f4": b"\x19", "f8": b"\x1a", "i4": b"\x13"}[v.dtype.str[1:]]
+                self.out.append(b"\x40" + code + _length(len(v), self.e) + v.astype(self.e + v.dtype.str[1:]).tobytes())
+        else:  # a list
+            self.out.append(b"[")
+            for x in v:
+                self.value(x)
+            self.out.append(b"]")
+
+
+def _paged(a, page, packing):
+    """An attribute's values as "rawpagedata": page by page, sub-vector by sub-vector, a page's
+    sub-vector stored once where it is constant (what Houdini writes)."""
+    n, width = a.shape
+    pages = (n + page - 1) // page
+    flags = [np.zeros(pages, dtype=bool) for _ in packing]
+    raw = []
+    for pg in range(pages):
+        c0 = 0
+        for k, w in enumerate(packing):
+            block = a[pg * page:(pg + 1) * page, c0:c0 + w]
+            if len(block) > 1 and (block == block[0]).all():
+                flags[k][pg] = True
+                raw.append(block[0])
+            else:
+                raw.append(block.ravel())
+            c0 += w
+    data = np.concatenate(raw).astype(np.float32) if raw else np.zeros(0, np.float32)
+    values = ["size", width, "storage", "fpreal32", "packing", list(packing), "pagesize", page]
+    if any(f.any() for f in flags):
+        values += ["constantpageflags", [f if f.any() else np.zeros(0, dtype=bool) for f in flags]]
+    return values + ["rawpagedata", data]
+
+
+def write_bgeo_json(path, p, attrs, big=False, tokens=True, layout="paged", page=1024, compress=False):
+    """Houdini 12+'s binary-JSON bgeo of the particles: P and each channel as a numeric point
+    attribute in `layout` ("paged": rawpagedata, vectors packed [1, 2] when page < 1024;
+    "tuples"; "arrays" for one-value channels, tuples otherwise), plus a string attribute
+    and an info map that a reader must walk past."""
+    n = len(p)
+    channels = {"P": p.reshape(n, 3)}
+    channels.update({name: a.reshape(n, -1) for name, a in attrs.items()})
+    entries = []
+    for name, a in channels.items():
+        width = a.shape[1]
+        if layout == "paged":
+            values = _paged(a, page, [width] if page >= 1024 or width == 1 else [1, width - 1])
+        elif layout == "arrays" and width == 1:
+            values = ["size", 1, "storage", "fpreal32", "arrays", [a[:, 0].astype(np.float32)]]
+        else:
+            values = ["size", width, "storage", "fpreal32", "tuples", [row.astype(np.float32) for row in a]]
+        definition = ["scope", "public", "type", "numeric", "name", name, "options", {}]
+        entries.append([definition, ["size", width, "storage", "fpreal32",
+                                     "defaults", ["size", 1, "storage", "fpreal64", "values", [0.0]],
+                                     "values", values]])
+    entries.append([["scope", "public", "type", "string", "name", "name"],
+                    ["size", 1, "storage", "int32", "strings", ["fluid"],
+                     "indices", ["size", 1, "storage", "int32", "arrays", [np.zeros(n, dtype="i4")]]]])
+    doc = ["fileversion", "19.5.303", "hasindex", False, "pointcount", n, "vertexcount", 0,
+           "primitivecount", 0, "info", {"software": "particlemesh tests", "bounds": [0.0, 1.0]},
+           "topology", ["pointref", ["indices", np.zeros(0, dtype="i4")]],
+           "attributes", ["pointattributes", entries], "primitives", []]
+    w = _BinaryJson(big, tokens)
+    w.value(doc)
+    data = b"".join(w.out)
+    with open(path, "wb") as f:
+        f.write(gzip.compress(data, mtime=0) if compress else data)
+
+
 #: Every form the tests write: (file name suffix, writer).
 FORMATS = {
     ".ply": write_ply,
@@ -139,6 +259,11 @@ FORMATS = {
     ".zlib.vtu": lambda path, p, a: write_vtu(path, p, a, "zlib"),
     ".bgeo": write_bgeo,
     ".bgeo.gz": lambda path, p, a: write_bgeo(path, p, a, compress=True),
+    ".json.bgeo": write_bgeo_json,
+    ".json-big-endian-pages.bgeo": lambda path, p, a: write_bgeo_json(path, p, a, big=True, page=50),
+    ".json-tuples.bgeo.gz": lambda path, p, a: write_bgeo_json(path, p, a, tokens=False, layout="tuples",
+                                                                compress=True),
+    ".json-arrays.bgeo": lambda path, p, a: write_bgeo_json(path, p, a, layout="arrays"),
 }
 
 

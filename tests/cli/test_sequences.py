@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
-from particle_files import FORMATS, particles, read_ascii_ply, write_bgeo, write_vtk  # noqa: E402
+from particle_files import (FORMATS, particles, read_ascii_ply, write_bgeo, write_bgeo_json,  # noqa: E402
+                            write_ply, write_vtk)
 
 POLY = ["--radius", "0.14", "--cell", "0.03"]  # fixed R and h: frames share a lattice
 
@@ -182,11 +183,38 @@ def test_sequence_usage_errors(cli, tmp_path):
     assert r.stdout.count("frame ") == 1
 
 
-def test_binary_json_bgeo_is_a_clear_error(cli, tmp_path):
-    for name, data in [("a.bgeo", b"\x7fNSJ" + b"\0" * 64), ("b.bgeo.sc", b"\0" * 64)]:
+def test_binary_json_bgeo_pages_and_clear_errors(cli, tmp_path):
+    """Houdini 12+'s binary-JSON bgeo: constant pages (a channel constant over some pages of a
+    packed vector and of a scalar) give what the same values as PLY give; a malformed file is
+    an error naming it and what is wrong; .bgeo.sc is refused saying what is read."""
+    p, a = particles(0)  # 216 particles: pages of 50, the last one short
+    a["velocity"][:100, 1:] = [0.25, -0.5]  # pages 0 and 1 of the [1, 2] packing's second part
+    a["density"][150:] = 1000.0  # pages 3 and 4 (16 particles)
+    write_ply(tmp_path / "in.ply", p, a)
+    write_bgeo_json(tmp_path / "in.bgeo", p, a, big=True, page=50)
+    raw = (tmp_path / "in.bgeo").read_bytes()
+    assert b"constantpageflags" in raw
+    for src in ("in.ply", "in.bgeo"):
+        cli("polygonize", tmp_path / src, "-o", tmp_path / f"{src}.out.ply", *POLY, "-q")
+        cli("triangulate", tmp_path / src, "-o", tmp_path / f"{src}.tri.ply", "--raw", "-q")
+    assert (tmp_path / "in.bgeo.out.ply").read_bytes() == (tmp_path / "in.ply.out.ply").read_bytes()
+    assert (tmp_path / "in.bgeo.tri.ply").read_bytes() == (tmp_path / "in.ply.tri.ply").read_bytes()
+
+    write_bgeo_json(tmp_path / "good.bgeo", p, a)
+    good = (tmp_path / "good.bgeo").read_bytes()
+    cases = {
+        "truncated.bgeo": (good[: len(good) // 2], "truncated"),
+        "magic.bgeo": (b"\x7fNSJx" + good[5:], "magic number"),
+        "token.bgeo": (good[:5] + b"\x99" + good[6:], "unknown binary JSON token 0x99"),
+        "undefined.bgeo": (good[:5] + b"\x26\x05" + good[5:], "string token 5, which was never defined"),
+        "noP.bgeo": (good.replace(b"\x01P", b"\x01Q", 1), "no position attribute 'P'"),
+        "b.bgeo.sc": (b"\0" * 64, ".bgeo.sc"),
+    }
+    for name, (data, message) in cases.items():
         (tmp_path / name).write_bytes(data)
         r = cli("polygonize", tmp_path / name, "-o", tmp_path / "m.ply", check=False)
-        assert r.returncode == 1 and "classic bgeo" in r.stderr and name in r.stderr
+        assert r.returncode == 1 and message in r.stderr and name in r.stderr, (name, r.stderr)
+        assert not (tmp_path / "m.ply").exists()
 
 
 def test_shared_simulator_samples(cli, tmp_path):

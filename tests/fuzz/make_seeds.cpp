@@ -3,6 +3,7 @@
 // format (comments, lists, other types, endianness, quads, negative indices, OFF/STL), byte
 // strings for the C ABI targets, and the small files of the shared data folder (copied into
 // OUT, never into the repository). OUT/<target>/ gets one file per seed.
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -66,6 +67,77 @@ void append_be_float(std::string& s, float f) {
 void append_be16(std::string& s, uint16_t v) {
   s += char(v >> 8);
   s += char(v & 0xff);
+}
+
+/// Houdini 12+'s binary JSON (little-endian) of `points` points: P paged in [1, 2] sub-vectors
+/// with a constant page, a scalar as "arrays", a vector as "tuples", a string attribute, an
+/// info map, token-defined and plain strings.
+std::string bgeo_json_seed(int points) {
+  std::string s = "\x7fNSJb";
+  int next_token = 0;
+  auto str = [&](const std::string& t, bool token = true) {
+    if (token) {
+      s += char(0x2b);
+      s += char(next_token);
+      s += char(t.size());
+      s += t;
+      s += char(0x26);
+      s += char(next_token++);
+    } else {
+      s += char(0x27);
+      s += char(t.size());
+      s += t;
+    }
+  };
+  auto i32 = [&](int32_t v) {
+    s += char(0x13);
+    append(s, v);
+  };
+  auto floats = [&](const std::vector<float>& v) {
+    s += char(0x40);
+    s += char(0x19);
+    s += char(v.size());
+    for (float f : v) append(s, f);
+  };
+  const int page = 4, pages = (points + page - 1) / page;
+  s += '[';
+  str("fileversion"), str("19.5.303", false), str("pointcount"), i32(points);
+  str("info"), s += '{', str("software", false), str("seed", false), s += '}';
+  str("attributes"), s += '[', str("pointattributes"), s += '[';
+  // P: x varies; (y, z) constant on page 0.
+  s += '[', s += '[', str("name"), str("P"), str("type"), str("numeric"), s += ']';
+  s += '[', str("size"), i32(3), str("values"), s += '[', str("size"), i32(3), str("packing"), s += '[', i32(1), i32(2),
+      s += ']', str("pagesize"), i32(page), str("constantpageflags"), s += '[';
+  s += char(0x40), s += char(0x10), s += char(pages), append(s, uint32_t(0));
+  s += char(0x40), s += char(0x10), s += char(pages), append(s, uint32_t(1));
+  s += ']', str("rawpagedata");
+  std::vector<float> raw;
+  for (int pg = 0; pg < pages; ++pg) {
+    const int m = std::min(page, points - pg * page);
+    for (int e = 0; e < m; ++e) raw.push_back(float(pg * page + e) * 0.1f);
+    if (pg == 0) {
+      raw.push_back(0.5f), raw.push_back(0.25f);
+    } else {
+      for (int e = 0; e < m; ++e) raw.push_back(float(e) * 0.05f), raw.push_back(float(pg) * 0.2f);
+    }
+  }
+  floats(raw);
+  s += ']', s += ']', s += ']';
+  // density: "arrays"; N: "tuples".
+  s += '[', s += '[', str("name"), str("density"), str("type"), str("numeric"), s += ']';
+  s += '[', str("size"), i32(1), str("values"), s += '[', str("size"), i32(1), str("arrays"), s += '[';
+  std::vector<float> density;
+  for (int i = 0; i < points; ++i) density.push_back(1000.0f + float(i));
+  floats(density);
+  s += ']', s += ']', s += ']', s += ']';
+  s += '[', s += '[', str("name"), str("N"), str("type"), str("numeric"), s += ']';
+  s += '[', str("size"), i32(3), str("values"), s += '[', str("size"), i32(3), str("tuples"), s += '[';
+  for (int i = 0; i < points; ++i) floats({0.0f, 0.0f, 1.0f});
+  s += ']', s += ']', s += ']', s += ']';
+  s += '[', s += '[', str("name"), str("kind"), str("type"), str("string"), s += ']';
+  s += '[', str("size"), i32(1), str("strings"), s += '[', str("water", false), s += ']', s += ']', s += ']';
+  s += ']', s += ']', s += ']';
+  return s;
 }
 
 /// A classic bgeo ("BgeoV" 5) of `points` points with a float, an int, a vector "N" and an
@@ -160,7 +232,7 @@ void file_seeds() {
   // bgeo: our own layouts (the shared data adds gzip-compressed ones).
   put("read_bgeo", "points_attributes.bgeo", bgeo_seed(5, false));
   put("read_bgeo", "particle_system.bgeo", bgeo_seed(4, true));
-  put("read_bgeo", "binary_json.bgeo", std::string("\x7fNSJ") + std::string(16, '\0'));
+  put("read_bgeo", "binary_json.bgeo", bgeo_json_seed(10));
   // VTK: the first byte picks the format (0 .vtk, 1 .vtu, 2 .vtp); our writers' files, then
   // hand-made ASCII ones with POINT_DATA and inline XML arrays.
   put("read_vtk", "ico.vtk", std::string(1, '\0') + via_mesh_writer(ico, ".vtk"));

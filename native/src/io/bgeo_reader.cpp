@@ -1,5 +1,6 @@
 // Houdini's classic binary geometry, .bgeo ("BgeoV", version 5), plain or gzip-compressed:
-// what SPlisHSPlasH, Partio, FLIP Fluids and older Houdini write for particle caches.
+// what SPlisHSPlasH, Partio, FLIP Fluids and older Houdini write for particle caches. A file
+// that starts with binary JSON's 0x7f (Houdini 12+'s .bgeo) goes to bgeo_json.cpp.
 //
 // Written by hand: no library packaged for Debian reads bgeo (Partio, which does, is not
 // packaged, aborts on some attribute types and trusts every count). Layout (all big-endian):
@@ -18,13 +19,14 @@
 // "N" (3 floats) as the normals. After the points, primitive and detail sections are read
 // when they hold only what Partio writes (particle-system primitives, detail attributes, no
 // groups), so that a truncated file is refused; anything else after the points is left
-// unread (the points are complete). Houdini 12+'s binary-JSON .bgeo and .bgeo.sc are refused
-// with a message saying what is read.
+// unread (the points are complete). Houdini's ASCII .geo and the Blosc-compressed .bgeo.sc are
+// refused with a message saying what is read.
 #include <algorithm>
 #include <cstring>
 #include <string>
 #include <vector>
 
+#include "io/bgeo_json.h"
 #include "io/compressed.h"
 #include "io/file_reader.h"
 #include "io/formats.h"
@@ -45,8 +47,8 @@ float be_float(const unsigned char* b) {
 }
 
 const char* const kSupported =
-    "particlemesh reads classic bgeo (\"BgeoV\" version 5, plain or gzip-compressed: Houdini's .bhclassic / "
-    "'Save as classic bgeo', Partio, SPlisHSPlasH); save the cache in that format, or as .vtk or .ply";
+    "particlemesh reads Houdini 12+'s binary-JSON bgeo and classic bgeo (\"BgeoV\" version 5: .bhclassic, Partio, "
+    "SPlisHSPlasH), plain or gzip-compressed (.bgeo, .bgeo.gz); save the cache in one of those, or as .vtk or .ply";
 
 class BgeoReader {
  public:
@@ -56,8 +58,14 @@ class BgeoReader {
     unsigned char magic[5];
     if (file_.peek() < 0) fail("the file is empty");
     if (!in_.read(magic, 4)) fail("too short for a bgeo file (" + std::to_string(in_.offset()) + " bytes)");
-    if (std::memcmp(magic, "\x7fNSJ", 4) == 0 || std::memcmp(magic, "NSJb", 4) == 0)
-      unsupported("this is Houdini 12+'s binary-JSON bgeo, which particlemesh does not read");
+    if (magic[0] == 0x7f) {  // Houdini 12+'s binary JSON: 0x7f, then the magic number's bytes
+      unsigned char last;
+      if (!in_.read(&last, 1)) fail("too short for a binary-JSON bgeo file");
+      const bool little = std::memcmp(magic + 1, "NSJ", 3) == 0 && last == 'b';
+      const bool big = std::memcmp(magic + 1, "bJS", 3) == 0 && last == 'N';
+      if (!little && !big) fail("starts with 0x7f but not with binary JSON's magic number (NSJb)");
+      return read_bgeo_binary_json(in_, file_.path(), big);
+    }
     if (magic[0] == '[' || magic[0] == '{')
       unsupported("this is Houdini's JSON geometry (ASCII .geo), which particlemesh does not read");
     if (std::memcmp(magic, "PGEO", 4) == 0) unsupported("this is Houdini's classic ASCII .geo, which particlemesh does not read");
@@ -230,7 +238,7 @@ FileContents read_bgeo(const std::string& path, ReadPurpose purpose) { return Bg
 
 FileContents read_bgeo_sc(const std::string& path, ReadPurpose) {
   FileReader file(path);  // a missing file is named as such first
-  throw Error(Status::FormatError, "'" + path + "': .bgeo.sc (Houdini's Blosc-compressed binary-JSON geometry) is not read; " +
+  throw Error(Status::FormatError, "'" + path + "': .bgeo.sc (Houdini's Blosc-compressed geometry) is not read; " +
                                        std::string(kSupported));
 }
 

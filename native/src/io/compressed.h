@@ -36,8 +36,9 @@ class GzipStream {
   bool skip(uint64_t n);
   /// Whether the stream has no byte left.
   bool at_end();
-  /// Bytes of the (decompressed) stream consumed so far.
-  uint64_t offset() const { return consumed_ + pos_; }
+  /// Bytes of the (decompressed) stream consumed so far (of the file itself when it is not
+  /// compressed: those are read from it directly).
+  uint64_t offset() const { return zipped_ ? consumed_ + pos_ : file_.offset(); }
 
  private:
   bool refill();

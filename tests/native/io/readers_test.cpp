@@ -288,3 +288,90 @@ TEST(StlReader, AsciiAndBinaryShareVertices) {
   EXPECT_EQ(m.triangles, (std::vector<Triangle>{{0, 1, 2}, {1, 3, 2}}));
   EXPECT_REFUSED(read_mesh(write(dir / "more.stl", b + "xx")), Status::FormatError, "binary STL with more data");
 }
+
+namespace {
+
+/// Houdini's binary JSON, little-endian, for the bgeo cases below.
+struct BinaryJson {
+  std::string s = "\x7fNSJb";
+  BinaryJson& raw(std::initializer_list<int> bytes) {
+    for (int b : bytes) s += char(b);
+    return *this;
+  }
+  BinaryJson& str(const std::string& t) {
+    s += char(0x27);
+    s += char(t.size());
+    s += t;
+    return *this;
+  }
+  BinaryJson& i32(int32_t v) {
+    s += char(0x13);
+    append(s, v);
+    return *this;
+  }
+  /// The points' P as "tuples" of uniform arrays of `type` (0x19 real32, 0x18 real16, 0x11 int8...).
+  BinaryJson& geometry(const std::string& tuples, int points) {
+    raw({'['}).str("pointcount").i32(points).str("attributes").raw({'['}).str("pointattributes").raw({'[', '['});
+    raw({'['}).str("name").str("P").str("type").str("numeric").raw({']'});
+    raw({'['}).str("values").raw({'['}).str("size").i32(3).str("tuples").raw({'['});
+    s += tuples;
+    return raw({']', ']', ']', ']', ']', ']', ']'});
+  }
+};
+
+}  // namespace
+
+// Houdini 12+'s binary-JSON bgeo (bgeo_json.cpp): every numeric type a uniform array may hold
+// read exactly; a map where the schema has key/value lists; what it refuses, by name.
+TEST(BgeoJsonReader, TypesLimitsAndRefusals) {
+  const auto dir = test::scratch_dir("bgeo_json");
+  // Three points: real32, real16 (1.5 = 0x3e00, -2 = 0xc000, 0.25 = 0x3400), int8.
+  std::string t;
+  t += std::string("\x40\x19\x03", 3);
+  for (float f : {1.0f, 2.0f, 3.0f}) append(t, f);
+  t += std::string("\x40\x18\x03", 3);
+  for (uint16_t h : {uint16_t(0x3e00), uint16_t(0xc000), uint16_t(0x3400)}) append(t, h);
+  t += std::string("\x40\x11\x03\x05\xfb\x00", 6);
+  const PointCloud c = read_point_cloud(write(dir / "types.bgeo", BinaryJson().geometry(t, 3).s));
+  ASSERT_EQ(c.positions.size(), 3u);
+  EXPECT_EQ(c.positions[0], (Vec3{1, 2, 3}));
+  EXPECT_EQ(c.positions[1], (Vec3{1.5, -2, 0.25}));
+  EXPECT_EQ(c.positions[2], (Vec3{5, -5, 0}));
+
+  // The root as a map ({...}) rather than a key/value list.
+  std::string m = "\x7fNSJb{";
+  m += std::string("\x27\x0apointcount", 12) + "\x13";
+  append(m, int32_t(1));
+  m += std::string("\x27\x0a" "attributes", 12) + "[" + std::string("\x27\x0fpointattributes", 17) + "[[";
+  m += BinaryJson().raw({'['}).str("name").str("P").str("type").str("numeric").raw({']', '['}).str("values").s.substr(5);
+  m += BinaryJson().raw({'['}).str("size").i32(3).str("arrays").raw({'['}).s.substr(5);
+  for (float f : {7.0f, 8.0f, 9.0f}) {
+    m += std::string("\x40\x19\x01", 3);
+    append(m, f);
+  }
+  m += "]]]]]]}";
+  const PointCloud one = read_point_cloud(write(dir / "map.bgeo", m));
+  ASSERT_EQ(one.positions.size(), 1u);
+  EXPECT_EQ(one.positions[0], (Vec3{7, 8, 9}));
+
+  // Nesting past the limit, a page size past it, constant pages expanding past 64 values a
+  // byte, a tuple of the wrong size: refused, naming what.
+  EXPECT_REFUSED(read_point_cloud(write(dir / "deep.bgeo", "\x7fNSJb" + std::string(200, '['))), Status::FormatError,
+                 "nested more than 64 deep");
+  std::string paged = BinaryJson().raw({'['}).str("pointcount").i32(1 << 30).str("attributes").raw({'['}).str("pointattributes")
+                          .raw({'[', '[', '['}).str("name").str("P").str("type").str("numeric").raw({']', '['}).str("values")
+                          .raw({'['}).str("size").i32(3).str("pagesize").i32(1024).str("constantpageflags").raw({'['}).s;
+  paged += std::string("\x40\x10\xf4", 3);
+  append(paged, uint32_t(1 << 20));
+  paged += std::string((1 << 20) / 8, '\xff');
+  paged += BinaryJson().raw({']'}).str("rawpagedata").raw({0x40, 0x19, 3, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, ']', ']', ']', ']', ']', ']'}).s.substr(5);
+  EXPECT_REFUSED(read_point_cloud(write(dir / "expand.bgeo", paged)), Status::FormatError, "more than 64 per byte");
+  std::string wrong;
+  wrong += std::string("\x40\x19\x02", 3);
+  append(wrong, 1.0f);
+  append(wrong, 2.0f);
+  EXPECT_REFUSED(read_point_cloud(write(dir / "tuple.bgeo", BinaryJson().geometry(wrong, 1).s)), Status::FormatError,
+                 "tuple 0 does not hold 3 values");
+  EXPECT_REFUSED(read_point_cloud(write(dir / "short.bgeo", BinaryJson().geometry(t, 4).s)), Status::FormatError,
+                 "\"tuples\" holds 3 tuples for 4 points");
+}
