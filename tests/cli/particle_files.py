@@ -1,10 +1,11 @@
 """Writers of simulators' particle files for the tests: the same particles as PLY, VTK legacy
 (ASCII, BINARY), VTK XML .vtu (ascii, base64, raw appended, zlib), Houdini's classic bgeo
 (plain, gzip) and Houdini 12+'s binary-JSON bgeo (paged, tuples and arrays layouts, either
-byte order, token strings, constant pages, gzip). Values are multiples of 1/1024 so that every text form is exact in float32."""
+byte order, token strings, constant pages, gzip) and ASCII .geo. Values are multiples of 1/1024 so that every text form is exact in float32."""
 
 import base64
 import gzip
+import json
 import struct
 import zlib
 
@@ -213,8 +214,9 @@ def _paged(a, page, packing):
     return values + ["rawpagedata", data]
 
 
-def write_bgeo_json(path, p, attrs, big=False, tokens=True, layout="paged", page=1024, compress=False):
-    """Houdini 12+'s binary-JSON bgeo of the particles: P and each channel as a numeric point
+def write_bgeo_json(path, p, attrs, big=False, tokens=True, layout="paged", page=1024, compress=False,
+                    ascii=False):
+    """Houdini 12+'s binary-JSON bgeo (`ascii`: its text .geo) of the particles: P and each channel as a numeric point
     attribute in `layout` ("paged": rawpagedata, vectors packed [1, 2] when page < 1024;
     "tuples"; "arrays" for one-value channels, tuples otherwise), plus a string attribute
     and an info map that a reader must walk past."""
@@ -241,9 +243,20 @@ def write_bgeo_json(path, p, attrs, big=False, tokens=True, layout="paged", page
            "primitivecount", 0, "info", {"software": "particlemesh tests", "bounds": [0.0, 1.0]},
            "topology", ["pointref", ["indices", np.zeros(0, dtype="i4")]],
            "attributes", ["pointattributes", entries], "primitives", []]
-    w = _BinaryJson(big, tokens)
-    w.value(doc)
-    data = b"".join(w.out)
+    if ascii:  # Houdini's ASCII .geo: the same document as text JSON
+        def plain(v):
+            if isinstance(v, np.ndarray):
+                return [bool(x) for x in v] if v.dtype == bool else [float(x) if v.dtype.kind == "f" else int(x) for x in v]
+            if isinstance(v, list):
+                return [plain(x) for x in v]
+            if isinstance(v, dict):
+                return {k: plain(x) for k, x in v.items()}
+            return v
+        data = json.dumps(plain(doc), indent=1).encode()
+    else:
+        w = _BinaryJson(big, tokens)
+        w.value(doc)
+        data = b"".join(w.out)
     with open(path, "wb") as f:
         f.write(gzip.compress(data, mtime=0) if compress else data)
 
@@ -264,6 +277,8 @@ FORMATS = {
     ".json-tuples.bgeo.gz": lambda path, p, a: write_bgeo_json(path, p, a, tokens=False, layout="tuples",
                                                                 compress=True),
     ".json-arrays.bgeo": lambda path, p, a: write_bgeo_json(path, p, a, layout="arrays"),
+    ".geo": lambda path, p, a: write_bgeo_json(path, p, a, page=50, ascii=True),
+    ".tuples.geo.gz": lambda path, p, a: write_bgeo_json(path, p, a, layout="tuples", ascii=True, compress=True),
 }
 
 

@@ -184,7 +184,7 @@ def test_sequence_usage_errors(cli, tmp_path):
 
 
 def test_binary_json_bgeo_pages_and_clear_errors(cli, tmp_path):
-    """Houdini 12+'s binary-JSON bgeo: constant pages (a channel constant over some pages of a
+    """Houdini 12+'s binary-JSON bgeo (and ASCII .geo): constant pages (a channel constant over some pages of a
     packed vector and of a scalar) give what the same values as PLY give; a malformed file is
     an error naming it and what is wrong; .bgeo.sc is refused saying what is read."""
     p, a = particles(0)  # 216 particles: pages of 50, the last one short
@@ -209,6 +209,9 @@ def test_binary_json_bgeo_pages_and_clear_errors(cli, tmp_path):
         "undefined.bgeo": (good[:5] + b"\x26\x05" + good[5:], "string token 5, which was never defined"),
         "noP.bgeo": (good.replace(b"\x01P", b"\x01Q", 1), "no position attribute 'P'"),
         "b.bgeo.sc": (b"\0" * 64, ".bgeo.sc"),
+        "comma.geo": (b'["pointcount", 3 "attributes", []]', "',' or ']' expected in a list"),
+        "escape.geo": (b'["pointcount", 1, "\\q"]', "unknown escape"),
+        "classic.geo": (b"PGEOMETRY V5\nNPoints 1 NPrims 0\n", "classic ASCII .geo"),
     }
     for name, (data, message) in cases.items():
         (tmp_path / name).write_bytes(data)

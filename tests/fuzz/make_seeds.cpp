@@ -233,6 +233,11 @@ void file_seeds() {
   put("read_bgeo", "points_attributes.bgeo", bgeo_seed(5, false));
   put("read_bgeo", "particle_system.bgeo", bgeo_seed(4, true));
   put("read_bgeo", "binary_json.bgeo", bgeo_json_seed(10));
+  put("read_bgeo", "ascii.geo",
+      "[\"pointcount\",3,\"info\",{\"a\\u00e9\":\"x\\n\"},\"attributes\",[\"pointattributes\",[[[\"name\",\"P\","
+      "\"type\",\"numeric\"],[\"size\",3,\"values\",[\"size\",3,\"packing\",[1,2],\"pagesize\",2,"
+      "\"constantpageflags\",[[false,true],[]],\"rawpagedata\",[0.5,-1e-3,1,2,3,4,5,6,7]]]],[[\"name\",\"v\","
+      "\"type\",\"numeric\"],[\"size\",1,\"values\",[\"size\",1,\"tuples\",[[1],[2],[3]]]]]]]]");
   // VTK: the first byte picks the format (0 .vtk, 1 .vtu, 2 .vtp); our writers' files, then
   // hand-made ASCII ones with POINT_DATA and inline XML arrays.
   put("read_vtk", "ico.vtk", std::string(1, '\0') + via_mesh_writer(ico, ".vtk"));

@@ -1,5 +1,6 @@
 // Houdini 12+'s geometry in binary JSON (.bgeo, and gzip-compressed .bgeo.gz): what Houdini
-// writes for particle caches by default.
+// writes for particle caches by default; and its ASCII form (.geo): the same schema as text
+// JSON (TextParser).
 //
 // Written by hand: no Debian package reads it (Houdini's own reader, UT_JSONParser, is in
 // the proprietary HDK). The encoding is SideFX's binary JSON as documented in the HDK's
@@ -289,10 +290,200 @@ class Parser {
   uint64_t nodes_ = 0;
 };
 
+/// Houdini's ASCII geometry (.geo): the same schema as text JSON. A list of plain numbers is
+/// kept as one array of doubles (8 bytes a number, not a value each: a .geo's points are
+/// such lists); any other list as values.
+class TextParser {
+ public:
+  TextParser(GzipStream& in, const std::string& path, std::string_view read_already)
+      : in_(in), path_(path), pending_(read_already) {}
+
+  /// The file's one value; what follows it is not read.
+  Node parse_document() { return value(0); }
+  uint64_t bytes_read() const { return in_.offset(); }
+
+ private:
+  [[noreturn]] void fail(const std::string& problem) const {
+    throw Error(Status::FormatError, "'" + path_ + "': " + problem + " (ASCII geometry, near byte " +
+                                         std::to_string(in_.offset()) + ")");
+  }
+  int peek() {
+    if (next_ < 0) next_ = take();
+    return next_;
+  }
+  int get() {
+    const int c = peek();
+    next_ = -1;
+    return c;
+  }
+  int take() {
+    if (at_ < pending_.size()) return static_cast<unsigned char>(pending_[at_++]);
+    unsigned char c;
+    return in_.read(&c, 1) ? c : -1;
+  }
+  int after_space() {
+    while (peek() == ' ' || peek() == '\n' || peek() == '\r' || peek() == '\t') get();
+    return peek();
+  }
+  void expect(char c) {
+    if (after_space() != c) fail(std::string("'") + c + "' expected");
+    get();
+  }
+  void count_node() {
+    if (++nodes_ > kMaxNodes)
+      fail("more than " + std::to_string(kMaxNodes) + " values outside lists of numbers (not a plausible geometry file)");
+  }
+  static bool starts_number(int c) { return (c >= '0' && c <= '9') || c == '-' || c == '+' || c == '.'; }
+  double number() {
+    std::string t;
+    while (starts_number(peek()) || peek() == 'e' || peek() == 'E') {
+      t += char(get());
+      if (t.size() > 64) fail("a number of more than 64 characters");
+    }
+    double v = 0;
+    if (parse_number(t, v) != NumberText::Ok) fail("'" + shown(t) + "' is not a number");
+    return v;
+  }
+  std::string string() {
+    get();  // the opening quote
+    std::string out;
+    for (;;) {
+      int c = get();
+      if (c < 0) fail("the file ends inside a string");
+      if (c == '"') return out;
+      if (c == '\\') {
+        c = get();
+        switch (c) {
+          case 'b': c = '\b'; break;
+          case 'f': c = '\f'; break;
+          case 'n': c = '\n'; break;
+          case 'r': c = '\r'; break;
+          case 't': c = '\t'; break;
+          case 'u': {
+            unsigned code = 0;
+            for (int k = 0; k < 4; ++k) {
+              const int h = get();
+              const int d = h >= '0' && h <= '9' ? h - '0' : h >= 'a' && h <= 'f' ? h - 'a' + 10 : h >= 'A' && h <= 'F' ? h - 'A' + 10 : -1;
+              if (d < 0) fail("a \\u escape without four hexadecimal digits");
+              code = code * 16 + unsigned(d);
+            }
+            // UTF-8 (names are ASCII in practice; a lone surrogate is kept as its code).
+            if (code < 0x80) {
+              out += char(code);
+            } else if (code < 0x800) {
+              out += char(0xc0 | (code >> 6));
+              out += char(0x80 | (code & 0x3f));
+            } else {
+              out += char(0xe0 | (code >> 12));
+              out += char(0x80 | ((code >> 6) & 0x3f));
+              out += char(0x80 | (code & 0x3f));
+            }
+            continue;
+          }
+          case '"': case '\\': case '/': break;
+          default: fail("an unknown escape in a string");
+        }
+      }
+      out += char(c);
+      if (out.size() > kMaxString) fail("a string of more than 64 MiB");
+    }
+  }
+  Node value(int depth) {
+    if (depth > kMaxDepth) fail("values nested more than " + std::to_string(kMaxDepth) + " deep");
+    const int c = after_space();
+    count_node();
+    Node n;
+    if (c == '"') {
+      n.kind = Node::Kind::String;
+      n.text = string();
+    } else if (c == '[') {
+      get();
+      list(n, depth);
+    } else if (c == '{') {
+      get();
+      n.kind = Node::Kind::Map;
+      if (after_space() == '}') {
+        get();
+        return n;
+      }
+      for (;;) {
+        if (after_space() != '"') fail("a map key that is not a string");
+        n.keys.push_back(string());
+        expect(':');
+        n.items.push_back(value(depth + 1));
+        const int d = after_space();
+        get();
+        if (d == '}') break;
+        if (d != ',') fail("',' or '}' expected in a map");
+      }
+    } else if (starts_number(c)) {
+      n.kind = Node::Kind::Number;
+      n.number = number();
+    } else if (c == 't' || c == 'f' || c == 'n') {
+      const std::string word = c == 't' ? "true" : c == 'f' ? "false" : "null";
+      for (char w : word)
+        if (get() != w) fail("'" + word + "' expected");
+      if (c != 'n') {
+        n.kind = Node::Kind::Bool;
+        n.number = c == 't';
+      }
+    } else {
+      fail(c < 0 ? std::string("the file ends inside a value") : "an unexpected character");
+    }
+    return n;
+  }
+  void list(Node& n, int depth) {
+    // Numbers first go to one array of doubles; a list that turns out to hold something else
+    // has them as values after all.
+    n.kind = Node::Kind::Uniform;
+    n.type = kReal64;
+    if (after_space() == ']') {
+      get();
+      return;
+    }
+    for (;;) {
+      if (n.kind == Node::Kind::Uniform && starts_number(after_space())) {
+        const double v = number();
+        n.text.append(reinterpret_cast<const char*>(&v), 8);
+        ++n.count;
+      } else {
+        if (n.kind == Node::Kind::Uniform) {
+          for (uint64_t i = 0; i < n.count; ++i) {
+            count_node();
+            Node x;
+            x.kind = Node::Kind::Number;
+            std::memcpy(&x.number, n.text.data() + 8 * i, 8);
+            n.items.push_back(x);
+          }
+          n.kind = Node::Kind::List;
+          n.text.clear();
+          n.count = 0;
+        }
+        n.items.push_back(value(depth + 1));
+      }
+      const int d = after_space();
+      get();
+      if (d == ']') return;
+      if (d != ',') fail("',' or ']' expected in a list");
+    }
+  }
+
+  GzipStream& in_;
+  const std::string& path_;
+  std::string pending_;
+  size_t at_ = 0;
+  int next_ = -1;
+  uint64_t nodes_ = 0;
+};
+
 /// Reading the structure: lists of key/value pairs (the schema's usual form) or maps.
 class Schema {
  public:
-  Schema(const Parser& p, bool swap) : p_(p), swap_(swap) {}
+  Schema(const std::string& path, bool swap) : path_(path), swap_(swap) {}
+
+  [[noreturn]] void fail(const std::string& problem) const {
+    throw Error(Status::FormatError, "'" + path_ + "': " + problem);
+  }
 
   const Node* find(const Node& n, const char* key) const {
     if (n.kind == Node::Kind::Map) {
@@ -318,7 +509,7 @@ class Schema {
   double at(const Node& n, uint64_t i, const std::string& what) const {
     if (n.kind == Node::Kind::List) {
       const Node& e = n.items[size_t(i)];
-      if (e.kind != Node::Kind::Number && e.kind != Node::Kind::Bool) p_.fail(what + " holds a value that is not a number");
+      if (e.kind != Node::Kind::Number && e.kind != Node::Kind::Bool) fail(what + " holds a value that is not a number");
       return e.number;
     }
     const unsigned char* b = reinterpret_cast<const unsigned char*>(n.text.data());
@@ -343,7 +534,7 @@ class Schema {
   /// A non-negative integer value.
   uint64_t count(const Node& n, const std::string& what, uint64_t most) const {
     if (n.kind != Node::Kind::Number || !(n.number >= 0) || n.number != std::floor(n.number) || n.number > double(most))
-      p_.fail(what + " is not a count from 0 to " + std::to_string(most));
+      fail(what + " is not a count from 0 to " + std::to_string(most));
     return uint64_t(n.number);
   }
 
@@ -360,53 +551,53 @@ class Schema {
     out.assign(size_t(elements) * width, 0.0f);
     if (const Node* tuples = find(block, "tuples")) {
       if (tuples->kind != Node::Kind::List || tuples->items.size() != elements)
-        p_.fail(what + ": \"tuples\" holds " + std::to_string(this->size(*tuples)) + " tuples for " + std::to_string(elements) + " points");
+        fail(what + ": \"tuples\" holds " + std::to_string(this->size(*tuples)) + " tuples for " + std::to_string(elements) + " points");
       for (uint64_t e = 0; e < elements; ++e) {
         const Node& t = tuples->items[size_t(e)];
-        if (!is_array(t) || this->size(t) != width) p_.fail(what + ": tuple " + std::to_string(e) + " does not hold " + std::to_string(width) + " values");
+        if (!is_array(t) || this->size(t) != width) fail(what + ": tuple " + std::to_string(e) + " does not hold " + std::to_string(width) + " values");
         for (size_t c = 0; c < width; ++c) out[size_t(e) * width + c] = float(at(t, c, what));
       }
       return;
     }
     if (const Node* arrays = find(block, "arrays")) {
       if (arrays->kind != Node::Kind::List || arrays->items.size() != width)
-        p_.fail(what + ": \"arrays\" does not hold " + std::to_string(width) + " arrays");
+        fail(what + ": \"arrays\" does not hold " + std::to_string(width) + " arrays");
       for (size_t c = 0; c < width; ++c) {
         const Node& a = arrays->items[c];
         if (!is_array(a) || this->size(a) != elements)
-          p_.fail(what + ": array " + std::to_string(c) + " does not hold " + std::to_string(elements) + " values");
+          fail(what + ": array " + std::to_string(c) + " does not hold " + std::to_string(elements) + " values");
         for (uint64_t e = 0; e < elements; ++e) out[size_t(e) * width + c] = float(at(a, e, what));
       }
       return;
     }
     const Node* raw = find(block, "rawpagedata");
-    if (raw == nullptr || !is_array(*raw)) p_.fail(what + " has no \"tuples\", \"arrays\" or \"rawpagedata\" to read");
+    if (raw == nullptr || !is_array(*raw)) fail(what + " has no \"tuples\", \"arrays\" or \"rawpagedata\" to read");
     const Node* page_node = find(block, "pagesize");
-    if (page_node == nullptr) p_.fail(what + ": \"rawpagedata\" without \"pagesize\"");
+    if (page_node == nullptr) fail(what + ": \"rawpagedata\" without \"pagesize\"");
     const uint64_t page = count(*page_node, what + "'s \"pagesize\"", kMaxPageSize);
-    if (page == 0) p_.fail(what + "'s \"pagesize\" is 0");
+    if (page == 0) fail(what + "'s \"pagesize\" is 0");
     std::vector<size_t> packing;
     if (const Node* pk = find(block, "packing")) {
-      if (!is_array(*pk)) p_.fail(what + "'s \"packing\" is not an array");
+      if (!is_array(*pk)) fail(what + "'s \"packing\" is not an array");
       size_t sum = 0;
       for (uint64_t k = 0; k < this->size(*pk); ++k) {
         const double w = at(*pk, k, what + "'s \"packing\"");
-        if (!(w >= 1 && w <= double(width) && w == std::floor(w))) p_.fail(what + "'s \"packing\" holds " + std::to_string(w));
+        if (!(w >= 1 && w <= double(width) && w == std::floor(w))) fail(what + "'s \"packing\" holds " + std::to_string(w));
         packing.push_back(size_t(w));
         sum += size_t(w);
       }
-      if (sum != width) p_.fail(what + "'s \"packing\" adds up to " + std::to_string(sum) + ", not the tuple size " + std::to_string(width));
+      if (sum != width) fail(what + "'s \"packing\" adds up to " + std::to_string(sum) + ", not the tuple size " + std::to_string(width));
     } else {
       packing.push_back(width);
     }
     const uint64_t pages = (elements + page - 1) / page;
     const Node* flags = find(block, "constantpageflags");
     if (flags != nullptr && (flags->kind != Node::Kind::List || flags->items.size() != packing.size()))
-      p_.fail(what + "'s \"constantpageflags\" does not hold one array per packed sub-vector");
+      fail(what + "'s \"constantpageflags\" does not hold one array per packed sub-vector");
     for (size_t k = 0; flags != nullptr && k < packing.size(); ++k) {
       const Node& f = flags->items[k];
       if (!is_array(f) || (this->size(f) != 0 && this->size(f) != pages))
-        p_.fail(what + "'s \"constantpageflags\" for sub-vector " + std::to_string(k) + " does not hold one flag per page (" +
+        fail(what + "'s \"constantpageflags\" for sub-vector " + std::to_string(k) + " does not hold one flag per page (" +
                 std::to_string(pages) + ")");
     }
     const uint64_t stored = this->size(*raw);
@@ -419,7 +610,7 @@ class Schema {
         const Node* f = flags != nullptr ? &flags->items[k] : nullptr;
         const bool constant = f != nullptr && this->size(*f) != 0 && at(*f, pg, what) != 0;
         const uint64_t need = constant ? w : m * w;
-        if (at_raw + need > stored) p_.fail(what + ": \"rawpagedata\" holds " + std::to_string(stored) + " values, fewer than its pages need");
+        if (at_raw + need > stored) fail(what + ": \"rawpagedata\" holds " + std::to_string(stored) + " values, fewer than its pages need");
         for (uint64_t e = 0; e < m; ++e)
           for (size_t c = 0; c < w; ++c)
             out[size_t(first + e) * width + c0 + c] = float(at(*raw, at_raw + (constant ? c : e * w + c), what));
@@ -428,7 +619,7 @@ class Schema {
       }
     }
     if (at_raw != stored)
-      p_.fail(what + ": \"rawpagedata\" holds " + std::to_string(stored) + " values, its pages " + std::to_string(at_raw));
+      fail(what + ": \"rawpagedata\" holds " + std::to_string(stored) + " values, its pages " + std::to_string(at_raw));
   }
 
  private:
@@ -439,21 +630,19 @@ class Schema {
     std::memcpy(&w, v, 4);
     return w;
   }
-  const Parser& p_;
+  const std::string& path_;
   bool swap_;
 };
 
-}  // namespace
-
-FileContents read_bgeo_binary_json(GzipStream& in, const std::string& path, bool big_endian) {
-  Parser parser(in, path, big_endian);
-  const Node root = parser.parse_document();
-  const Schema s(parser, big_endian);
+/// The points of a parsed geometry document; `bytes` the stream's length, `swap` whether its
+/// uniform arrays hold big-endian values.
+FileContents geometry_of(const Node& root, const std::string& path, bool swap, uint64_t bytes) {
+  const Schema s(path, swap);
   const Node* count_node = s.find(root, "pointcount");
-  if (count_node == nullptr) parser.fail("the geometry has no \"pointcount\" (not a Houdini geometry file?)");
+  if (count_node == nullptr) s.fail("the geometry has no \"pointcount\" (not a Houdini geometry file?)");
   const uint64_t points = s.count(*count_node, "\"pointcount\"", uint64_t(UINT32_MAX) - 1);
   // Values carried, at most kValuesPerByte per byte the stream held (constant pages expand).
-  const uint64_t budget = kValuesPerByte * parser.bytes_read() + (uint64_t(1) << 20);
+  const uint64_t budget = kValuesPerByte * bytes + (uint64_t(1) << 20);
   uint64_t carried = 0;
   FileContents out;
   bool have_positions = false;
@@ -461,25 +650,25 @@ FileContents read_bgeo_binary_json(GzipStream& in, const std::string& path, bool
   const Node* point_attributes = attributes != nullptr ? s.find(*attributes, "pointattributes") : nullptr;
   if (point_attributes != nullptr && point_attributes->kind == Node::Kind::List) {
     for (const Node& entry : point_attributes->items) {
-      if (entry.kind != Node::Kind::List || entry.items.size() != 2) parser.fail("a point attribute entry is not [definition, values]");
+      if (entry.kind != Node::Kind::List || entry.items.size() != 2) s.fail("a point attribute entry is not [definition, values]");
       const Node* name_node = s.find(entry.items[0], "name");
       const Node* type_node = s.find(entry.items[0], "type");
-      if (name_node == nullptr || name_node->kind != Node::Kind::String) parser.fail("a point attribute without a name");
+      if (name_node == nullptr || name_node->kind != Node::Kind::String) s.fail("a point attribute without a name");
       const std::string name = name_node->text;
       const std::string what = "point attribute '" + shown(name) + "'";
       if (type_node == nullptr || type_node->kind != Node::Kind::String || type_node->text != "numeric") continue;  // strings, dicts
       const Node* values = s.find(entry.items[1], "values");
-      if (values == nullptr) parser.fail(what + " has no \"values\"");
+      if (values == nullptr) s.fail(what + " has no \"values\"");
       const Node* size_node = s.find(*values, "size");
       if (size_node == nullptr) size_node = s.find(entry.items[1], "size");
       const uint64_t size = size_node != nullptr ? s.count(*size_node, what + "'s tuple size", 65535) : 1;
       if (size == 0) continue;
       const bool position = name == "P" && !have_positions;
-      if (position && size < 3) parser.fail("point attribute 'P' has " + std::to_string(size) + " values per point, not 3");
+      if (position && size < 3) s.fail("point attribute 'P' has " + std::to_string(size) + " values per point, not 3");
       carried += points * size;
       if (carried > budget)
-        parser.fail("the point attributes would expand to " + std::to_string(carried) + " values from " +
-                    std::to_string(parser.bytes_read()) + " bytes (more than " + std::to_string(kValuesPerByte) +
+        s.fail("the point attributes would expand to " + std::to_string(carried) + " values from " +
+                    std::to_string(bytes) + " bytes (more than " + std::to_string(kValuesPerByte) +
                     " per byte: not a plausible geometry file)");
       std::vector<float> v;
       s.decode(*values, points, size_t(size), v, what);
@@ -497,9 +686,23 @@ FileContents read_bgeo_binary_json(GzipStream& in, const std::string& path, bool
   }
   if (!have_positions) {
     if (points == 0) return out;
-    parser.fail("the geometry's " + std::to_string(points) + " points have no position attribute 'P'");
+    s.fail("the geometry's " + std::to_string(points) + " points have no position attribute 'P'");
   }
   return out;
+}
+
+}  // namespace
+
+FileContents read_bgeo_binary_json(GzipStream& in, const std::string& path, bool big_endian) {
+  Parser parser(in, path, big_endian);
+  const Node root = parser.parse_document();
+  return geometry_of(root, path, big_endian, parser.bytes_read());
+}
+
+FileContents read_geo_text_json(GzipStream& in, const std::string& path, std::string_view read_already) {
+  TextParser parser(in, path, read_already);
+  const Node root = parser.parse_document();
+  return geometry_of(root, path, false, parser.bytes_read());
 }
 
 }  // namespace particlemesh::detail

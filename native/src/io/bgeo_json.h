@@ -1,8 +1,10 @@
-// Internal: Houdini 12+'s geometry in binary JSON (.bgeo, .bgeo.gz): the points' positions,
-// normals and numeric point attributes (bgeo_json.cpp says what is read and how).
+// Internal: Houdini 12+'s geometry in binary JSON (.bgeo, .bgeo.gz) and as text (ASCII .geo,
+// .geo.gz): the points' positions, normals and numeric point attributes (bgeo_json.cpp says
+// what is read and how).
 #pragma once
 
 #include <string>
+#include <string_view>
 
 #include "io/compressed.h"
 #include "io/formats.h"
@@ -13,5 +15,9 @@ namespace PM_NAMESPACE::detail {
 /// `in` has already read; `big_endian` from those magic bytes. `path` names the file in errors.
 /// @throws Error(FormatError) naming the file and what was wrong.
 FileContents read_bgeo_binary_json(GzipStream& in, const std::string& path, bool big_endian);
+
+/// The geometry of an ASCII (text JSON) .geo whose first bytes, `read_already`, `in` has
+/// already read.
+FileContents read_geo_text_json(GzipStream& in, const std::string& path, std::string_view read_already);
 
 }  // namespace particlemesh::detail

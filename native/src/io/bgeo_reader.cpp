@@ -1,6 +1,7 @@
 // Houdini's classic binary geometry, .bgeo ("BgeoV", version 5), plain or gzip-compressed:
 // what SPlisHSPlasH, Partio, FLIP Fluids and older Houdini write for particle caches. A file
-// that starts with binary JSON's 0x7f (Houdini 12+'s .bgeo) goes to bgeo_json.cpp.
+// that starts with binary JSON's 0x7f (Houdini 12+'s .bgeo), or with '[' or '{' (its ASCII .geo),
+// goes to bgeo_json.cpp.
 //
 // Written by hand: no library packaged for Debian reads bgeo (Partio, which does, is not
 // packaged, aborts on some attribute types and trusts every count). Layout (all big-endian):
@@ -19,8 +20,8 @@
 // "N" (3 floats) as the normals. After the points, primitive and detail sections are read
 // when they hold only what Partio writes (particle-system primitives, detail attributes, no
 // groups), so that a truncated file is refused; anything else after the points is left
-// unread (the points are complete). Houdini's ASCII .geo and the Blosc-compressed .bgeo.sc are
-// refused with a message saying what is read.
+// unread (the points are complete). Houdini's classic ASCII geometry ("PGEOMETRY") and the
+// Blosc-compressed .bgeo.sc are refused with a message saying what is read.
 #include <algorithm>
 #include <cstring>
 #include <string>
@@ -47,8 +48,9 @@ float be_float(const unsigned char* b) {
 }
 
 const char* const kSupported =
-    "particlemesh reads Houdini 12+'s binary-JSON bgeo and classic bgeo (\"BgeoV\" version 5: .bhclassic, Partio, "
-    "SPlisHSPlasH), plain or gzip-compressed (.bgeo, .bgeo.gz); save the cache in one of those, or as .vtk or .ply";
+    "particlemesh reads Houdini 12+'s bgeo (binary JSON) and .geo (ASCII JSON) and classic bgeo (\"BgeoV\" version 5: "
+    ".bhclassic, Partio, SPlisHSPlasH), plain or gzip-compressed (.bgeo, .bgeo.gz, .geo, .geo.gz); save the cache in "
+    "one of those, or as .vtk or .ply";
 
 class BgeoReader {
  public:
@@ -66,8 +68,8 @@ class BgeoReader {
       if (!little && !big) fail("starts with 0x7f but not with binary JSON's magic number (NSJb)");
       return read_bgeo_binary_json(in_, file_.path(), big);
     }
-    if (magic[0] == '[' || magic[0] == '{')
-      unsupported("this is Houdini's JSON geometry (ASCII .geo), which particlemesh does not read");
+    if (magic[0] == '[' || magic[0] == '{')  // Houdini 12+'s ASCII geometry: the same schema as text
+      return read_geo_text_json(in_, file_.path(), std::string_view(reinterpret_cast<const char*>(magic), 4));
     if (std::memcmp(magic, "PGEO", 4) == 0) unsupported("this is Houdini's classic ASCII .geo, which particlemesh does not read");
     if (std::memcmp(magic, "Bgeo", 4) != 0)
       fail(std::string("not a bgeo file (it does not start with 'Bgeo'") + (in_.compressed() ? " once decompressed" : "") +

@@ -25,6 +25,8 @@ const std::vector<FileFormat>& file_formats() {
       {".bgeo", "Houdini bgeo", &read_bgeo, true, false},
       {".bgeo.gz", "Houdini bgeo", &read_bgeo, true, false},
       {".bhclassic", "Houdini classic bgeo", &read_bgeo, true, false},
+      {".geo", "Houdini geo (ASCII JSON)", &read_bgeo, true, false},
+      {".geo.gz", "Houdini geo (ASCII JSON)", &read_bgeo, true, false},
       {".bgeo.sc", "Houdini bgeo.sc (refused with what is read)", &read_bgeo_sc, true, false},
   };
   return formats;
@@ -37,7 +39,7 @@ std::string lower_extension(const std::string& path) {
   if (ext == ".gz" || ext == ".sc") {
     std::string inner = p.stem().extension().string();
     for (char& c : inner) c = char(std::tolower(static_cast<unsigned char>(c)));
-    if (inner == ".bgeo") return inner + ext;
+    if (inner == ".bgeo" || (inner == ".geo" && ext == ".gz")) return inner + ext;
   }
   return ext;
 }

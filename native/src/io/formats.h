@@ -60,8 +60,8 @@ const FileFormat* format_for(const std::string& path);
 /// ".ply, .xyz" - the extensions read for points (points = true) or meshes.
 std::string known_extensions(bool points);
 
-/// Lower-case extension of `path`, with the dot ("" if none). The compound ".bgeo.gz" and
-/// ".bgeo.sc" count as one extension.
+/// Lower-case extension of `path`, with the dot ("" if none). The compound ".bgeo.gz",
+/// ".bgeo.sc" and ".geo.gz" count as one extension.
 std::string lower_extension(const std::string& path);
 
 /// `name`, or name_2, name_3 ... when `c` already has an attribute of that name (attribute
