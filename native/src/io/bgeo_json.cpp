@@ -12,7 +12,7 @@
 // list of key/value pairs; "pointcount" counts the points; "attributes" holds
 // "pointattributes", a list of [definition, values] pairs, the definition naming the
 // attribute ("name") and its "type", the values giving the tuple "size" and the numbers in
-// one of three layouts (decode_values below).
+// one of three layouts (Schema::decode below).
 //
 // What comes back: P as the positions, N (3 values) as the normals, and every other numeric
 // point attribute under its Houdini name, as floats. String attributes, vertex, primitive
@@ -113,7 +113,6 @@ class Parser {
   /// true) is not read.
   Node parse_document() { return value(next_token(), 0); }
 
-  bool big_endian() const { return swap_; }
   uint64_t bytes_read() const { return in_.offset(); }
 
   [[noreturn]] void fail(const std::string& problem) const {
@@ -224,7 +223,7 @@ class Parser {
         n.kind = Node::Kind::String;
         n.text = token(length());
         return n;
-      case kUniformArray: return uniform(depth);
+      case kUniformArray: return uniform();
       case kArrayBegin: {
         n.kind = Node::Kind::List;
         for (uint8_t c = next_token(); c != kArrayEnd; c = next_token()) n.items.push_back(value(c, depth + 1));
@@ -245,7 +244,7 @@ class Parser {
     return n;
   }
 
-  Node uniform(int depth) {
+  Node uniform() {
     Node n;
     n.type = byte();
     n.count = length();
@@ -271,7 +270,6 @@ class Parser {
       if (n.count > (uint64_t(1) << 40)) fail("a uniform array of " + std::to_string(n.count) + " values");
       bytes = n.count * each;
     }
-    (void)depth;
     // Read in pieces: the count alone sizes nothing (a truncated or lying file ends first).
     constexpr uint64_t kPiece = uint64_t(1) << 20;
     for (uint64_t done = 0; done < bytes;) {
