@@ -94,6 +94,31 @@ double half_to_double(uint16_t h) {
   return sign * std::ldexp(double(mantissa + 1024), exponent - 25);
 }
 
+/// The number of `type` (a numeric token, element_bytes > 0) stored at `b` in the file's byte
+/// order (`swap`: big-endian): a single value's and a uniform array's element alike.
+double number_at(uint8_t type, const unsigned char* b, bool swap) {
+  const size_t each = element_bytes(type);
+  unsigned char v[8];
+  std::memcpy(v, b, each);
+  if (swap) std::reverse(v, v + each);
+  switch (type) {
+    case kInt8: return double(int8_t(v[0]));
+    case kUint8: return double(v[0]);
+    case kInt16: { int16_t x; std::memcpy(&x, v, 2); return x; }
+    case kUint16: { uint16_t x; std::memcpy(&x, v, 2); return x; }
+    case kReal16: { uint16_t x; std::memcpy(&x, v, 2); return half_to_double(x); }
+    case kInt32: { int32_t x; std::memcpy(&x, v, 4); return x; }
+    case kReal32: { float x; std::memcpy(&x, v, 4); return x; }
+    case kInt64: { int64_t x; std::memcpy(&x, v, 8); return double(x); }
+    default: { double x; std::memcpy(&x, v, 8); return x; }
+  }
+}
+
+/// The error every part of the reader raises: the file, then what was wrong.
+[[noreturn]] void fail_in(const std::string& path, const std::string& problem) {
+  throw Error(Status::FormatError, "'" + path + "': " + problem);
+}
+
 struct Node {
   enum class Kind : uint8_t { Null, Bool, Number, String, List, Map, Uniform };
   Kind kind = Kind::Null;
@@ -115,9 +140,7 @@ class Parser {
 
   uint64_t bytes_read() const { return in_.offset(); }
 
-  [[noreturn]] void fail(const std::string& problem) const {
-    throw Error(Status::FormatError, "'" + path_ + "': " + problem);
-  }
+  [[noreturn]] void fail(const std::string& problem) const { fail_in(path_, problem); }
 
  private:
   static std::string hex(uint8_t b) {
@@ -206,15 +229,13 @@ class Parser {
         n.kind = Node::Kind::Bool;
         n.number = byte() != 0;
         return n;
-      case kInt8: n.number = scalar<int8_t>(); break;
-      case kInt16: n.number = scalar<int16_t>(); break;
-      case kInt32: n.number = scalar<int32_t>(); break;
-      case kInt64: n.number = double(scalar<int64_t>()); break;
-      case kUint8: n.number = scalar<uint8_t>(); break;
-      case kUint16: n.number = scalar<uint16_t>(); break;
-      case kReal16: n.number = half_to_double(scalar<uint16_t>()); break;
-      case kReal32: n.number = scalar<float>(); break;
-      case kReal64: n.number = scalar<double>(); break;
+      case kInt8: case kInt16: case kInt32: case kInt64: case kUint8: case kUint16: case kReal16: case kReal32:
+      case kReal64: {
+        unsigned char b[8];
+        read(b, element_bytes(t));
+        n.number = number_at(t, b, swap_);
+        break;
+      }
       case kString:
         n.kind = Node::Kind::String;
         n.text = string();
@@ -302,8 +323,7 @@ class TextParser {
 
  private:
   [[noreturn]] void fail(const std::string& problem) const {
-    throw Error(Status::FormatError, "'" + path_ + "': " + problem + " (ASCII geometry, near byte " +
-                                         std::to_string(in_.offset()) + ")");
+    fail_in(path_, problem + " (ASCII geometry, near byte " + std::to_string(in_.offset()) + ")");
   }
   int peek() {
     if (next_ < 0) next_ = take();
@@ -479,9 +499,7 @@ class Schema {
  public:
   Schema(const std::string& path, bool swap) : path_(path), swap_(swap) {}
 
-  [[noreturn]] void fail(const std::string& problem) const {
-    throw Error(Status::FormatError, "'" + path_ + "': " + problem);
-  }
+  [[noreturn]] void fail(const std::string& problem) const { fail_in(path_, problem); }
 
   const Node* find(const Node& n, const char* key) const {
     if (n.kind == Node::Kind::Map) {
@@ -512,21 +530,7 @@ class Schema {
     }
     const unsigned char* b = reinterpret_cast<const unsigned char*>(n.text.data());
     if (n.type == kBool) return double((word(b + 4 * (i / 32)) >> (i % 32)) & 1u);
-    const size_t each = element_bytes(n.type);
-    unsigned char v[8];
-    std::memcpy(v, b + i * each, each);
-    if (swap_) std::reverse(v, v + each);
-    switch (n.type) {
-      case kInt8: return double(int8_t(v[0]));
-      case kUint8: return double(v[0]);
-      case kInt16: { int16_t x; std::memcpy(&x, v, 2); return x; }
-      case kUint16: { uint16_t x; std::memcpy(&x, v, 2); return x; }
-      case kReal16: { uint16_t x; std::memcpy(&x, v, 2); return half_to_double(x); }
-      case kInt32: { int32_t x; std::memcpy(&x, v, 4); return x; }
-      case kReal32: { float x; std::memcpy(&x, v, 4); return x; }
-      case kInt64: { int64_t x; std::memcpy(&x, v, 8); return double(x); }
-      default: { double x; std::memcpy(&x, v, 8); return x; }
-    }
+    return number_at(n.type, b + i * element_bytes(n.type), swap_);
   }
 
   /// A non-negative integer value.
