@@ -211,6 +211,7 @@ def test_binary_json_bgeo_pages_and_clear_errors(cli, tmp_path):
         "b.bgeo.sc": (b"\0" * 64, ".bgeo.sc"),
         "comma.geo": (b'["pointcount", 3 "attributes", []]', "',' or ']' expected in a list"),
         "escape.geo": (b'["pointcount", 1, "\\q"]', "unknown escape"),
+        "nan.geo": (b'["pointcount", 1, "attributes", [nan]]', "'nan' is not a JSON value"),
         "classic.geo": (b"PGEOMETRY V5\nNPoints 1 NPrims 0\n", "classic ASCII .geo"),
     }
     for name, (data, message) in cases.items():

@@ -437,13 +437,14 @@ class TextParser {
     } else if (starts_number(c)) {
       n.kind = Node::Kind::Number;
       n.number = number();
-    } else if (c == 't' || c == 'f' || c == 'n') {
-      const std::string word = c == 't' ? "true" : c == 'f' ? "false" : "null";
-      for (char w : word)
-        if (get() != w) fail("'" + word + "' expected");
-      if (c != 'n') {
+    } else if ((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z')) {
+      std::string word;
+      while (word.size() < 16 && ((peek() >= 'a' && peek() <= 'z') || (peek() >= 'A' && peek() <= 'Z'))) word += char(get());
+      if (word == "true" || word == "false") {
         n.kind = Node::Kind::Bool;
-        n.number = c == 't';
+        n.number = word == "true";
+      } else if (word != "null") {
+        fail("'" + shown(word) + "' is not a JSON value (true, false, null; JSON has no NaN or infinity)");
       }
     } else {
       fail(c < 0 ? std::string("the file ends inside a value") : "an unexpected character");
