@@ -5,6 +5,10 @@ find_package(OpenMesh REQUIRED)  # targets OpenMeshCore, OpenMeshTools
 find_package(Eigen3 REQUIRED NO_MODULE)
 find_package(PNG REQUIRED)       # libpng16 (Debian's libpng-dev): the renderer's PNG output
 find_package(ZLIB REQUIRED)      # zlib1g-dev: gzip .bgeo, zlib-compressed VTK XML arrays
+find_package(LibLZMA REQUIRED)   # liblzma-dev: LZMA-compressed VTK XML arrays (.xz streams)
+# liblz4-dev: LZ4-compressed VTK XML arrays. It ships a pkg-config file, not a CMake package.
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(PM_LZ4 REQUIRED IMPORTED_TARGET liblz4)
 if(PM_BUILD_CLI)
   find_package(CLI11 REQUIRED)
   find_package(nlohmann_json REQUIRED)

@@ -53,6 +53,12 @@ foreach(dep IN LISTS resolved)
   list(APPEND bundled "${lib}/${name}")
   execute_process(COMMAND dpkg-query -S "${real}" OUTPUT_VARIABLE owner RESULT_VARIABLE rc
                   ERROR_QUIET OUTPUT_STRIP_TRAILING_WHITESPACE)
+  if(NOT rc EQUAL 0 AND real MATCHES "^/usr(/lib/.*)")
+    # Debian 12 merges /lib into /usr/lib, but some packages (liblzma5) still list their
+    # files under /lib.
+    execute_process(COMMAND dpkg-query -S "${CMAKE_MATCH_1}" OUTPUT_VARIABLE owner RESULT_VARIABLE rc
+                    ERROR_QUIET OUTPUT_STRIP_TRAILING_WHITESPACE)
+  endif()
   if(NOT rc EQUAL 0)
     message(FATAL_ERROR "stage_python_package.cmake: no Debian package owns ${real}; its "
                         "licence cannot be bundled")

@@ -13,8 +13,10 @@ PACKAGES=(
   libtbb-dev libopenmesh-dev libosd-dev libeigen3-dev
   libcli11-dev nlohmann-json3-dev
   libpng-dev
+  liblz4-dev liblzma-dev  # VTK XML arrays compressed with LZ4 or LZMA (zlib comes with libpng-dev)
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-numpy python3-pytest
+  python3-vtk9  # tests/python/test_vtk_files.py: files written by VTK's own writers
   patchelf  # RUNPATH $ORIGIN on the libraries the Python package and the add-on zip carry
   debootstrap  # scripts/test_addon_portable.sh: the add-on zip in a bare Debian 12
   python3-pip python3-setuptools python3-wheel  # `pip install build/python` (offline) and its test

@@ -15,6 +15,7 @@
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/io/png.h"
 #include "particlemesh/sample/shapes.h"
+#include "support/compressed_vtu.h"
 
 namespace fs = std::filesystem;
 using namespace particlemesh;
@@ -259,6 +260,14 @@ void file_seeds() {
           "type=\"Int64\" Name=\"connectivity\" format=\"ascii\"></DataArray><DataArray type=\"Int64\" "
           "Name=\"offsets\" format=\"ascii\"></DataArray><DataArray type=\"UInt8\" Name=\"types\" "
           "format=\"ascii\"></DataArray></Cells></Piece></UnstructuredGrid>\n</VTKFile>\n");
+  {
+    // Positions compressed by each of VTK's compressors, in blocks of 40 bytes (the last short).
+    std::vector<float> xyz;
+    for (int i = 0; i < 3 * 9; ++i) xyz.push_back(float(i) * 0.25f);
+    put("read_vtk", "zlib.vtu", std::string(1, '\1') + test::compressed_vtu(test::VtuCodec::Zlib, xyz, 40));
+    put("read_vtk", "lz4.vtu", std::string(1, '\1') + test::compressed_vtu(test::VtuCodec::Lz4, xyz, 40));
+    put("read_vtk", "lzma.vtu", std::string(1, '\1') + test::compressed_vtu(test::VtuCodec::Xz, xyz, 40));
+  }
   put("read_xyz", "bom.xyz", "\xEF\xBB\xBF" "0 0 0\n1 0 0\n0 1 0\n");
   put("read_obj", "colours.obj", "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nvn 0 0 1\nf 1//1 2//1 3//1\n");
   put("read_obj", "stl_two_solids.bin",

@@ -4,8 +4,11 @@
 #include <cstring>
 #include <limits>
 
+#include <lz4.h>
+#include <lzma.h>
 #include <zlib.h>
 
+#include "io/scalar_types.h"
 #include "particlemesh/core/error.h"
 
 namespace PM_NAMESPACE::detail {
@@ -118,11 +121,15 @@ bool GzipStream::at_end() {
   return pos_ == end_ && !refill();
 }
 
+namespace {
+/// Throws "'<path>': <what>: <problem>".
+[[noreturn]] void block_error(const std::string& path, const std::string& what, const std::string& problem) {
+  throw Error(Status::FormatError, "'" + path + "': " + what + ": " + problem);
+}
+
 void inflate_block(const unsigned char* in, size_t in_size, unsigned char* out, size_t out_size,
                    const std::string& path, const std::string& what) {
-  auto fail = [&](const std::string& problem) {
-    throw Error(Status::FormatError, "'" + path + "': " + what + ": " + problem);
-  };
+  const auto fail = [&](const std::string& problem) { block_error(path, what, problem); };
   // zlib counts in 32 bits; VTK writes blocks of 32 KiB (vtkDataCompressor's default).
   constexpr size_t kMax = std::numeric_limits<uInt>::max();
   if (in_size > kMax || out_size > kMax) fail("a compressed block of over 4 GiB (VTK writes 32 KiB blocks)");
@@ -147,6 +154,73 @@ void inflate_block(const unsigned char* in, size_t in_size, unsigned char* out, 
     fail("truncated zlib block (its data ends before its end marker)");
   }
   fail("the zlib data is corrupt (" + message + ")");
+}
+
+/// One raw LZ4 block, as vtkLZ4DataCompressor writes it (LZ4_compress_fast, no frame).
+void lz4_block(const unsigned char* in, size_t in_size, unsigned char* out, size_t out_size, const std::string& path,
+               const std::string& what) {
+  const auto fail = [&](const std::string& problem) { block_error(path, what, problem); };
+  constexpr size_t kMax = size_t(LZ4_MAX_INPUT_SIZE);
+  if (in_size > kMax || out_size > kMax) fail("an LZ4 block of over 2 GB (VTK writes 32 KiB blocks)");
+  const int made = LZ4_decompress_safe(reinterpret_cast<const char*>(in), reinterpret_cast<char*>(out), int(in_size),
+                                       int(out_size));
+  // LZ4's decoder tells a corrupt block from one that would overflow the output only by a
+  // negative count; both are named.
+  if (made < 0) fail("the LZ4 data is corrupt or holds more bytes than its header says (" + std::to_string(out_size) + ")");
+  if (size_t(made) != out_size)
+    fail("an LZ4 block holds fewer bytes than its header says (" + std::to_string(made) + " of " +
+         std::to_string(out_size) + ")");
+}
+
+/// One .xz stream, as vtkLZMADataCompressor writes it (lzma_easy_buffer_encode).
+void xz_block(const unsigned char* in, size_t in_size, unsigned char* out, size_t out_size, const std::string& path,
+              const std::string& what) {
+  // The decoder's memory is bounded: preset 9's 64 MiB dictionary needs 65 MiB; a stream
+  // claiming a larger one is refused rather than allocated.
+  uint64_t memlimit = uint64_t(128) << 20;
+  size_t in_pos = 0, out_pos = 0;
+  const lzma_ret r = lzma_stream_buffer_decode(&memlimit, 0, nullptr, in, &in_pos, in_size, out, &out_pos, out_size);
+  if (r == LZMA_OK && out_pos == out_size) return;
+  if (r == LZMA_MEM_ERROR) throw Error(Status::OutOfMemory, "'" + path + "': " + what + ": out of memory in the xz decoder");
+  std::string problem;
+  switch (r) {
+    case LZMA_OK:
+      problem = "an xz block holds fewer bytes than its header says (" + std::to_string(out_pos) + " of " +
+                std::to_string(out_size) + ")";
+      break;
+    case LZMA_BUF_ERROR:
+      problem = out_pos == out_size
+                    ? "an xz block holds more bytes than its header says (" + std::to_string(out_size) + ")"
+                    : "truncated xz block (its data ends before the end of its stream)";
+      break;
+    case LZMA_FORMAT_ERROR: problem = "the xz data is corrupt (it does not start with the .xz magic bytes)"; break;
+    case LZMA_DATA_ERROR: problem = "the xz data is corrupt (it does not decode, or fails its own check)"; break;
+    case LZMA_OPTIONS_ERROR: problem = "the xz data uses options liblzma does not support"; break;
+    case LZMA_MEMLIMIT_ERROR:
+      problem = "the xz data asks for " + std::to_string(memlimit >> 20) + " MiB to decode, more than the 128 MiB allowed";
+      break;
+    default: problem = "the xz data is corrupt (liblzma error " + std::to_string(int(r)) + ")";
+  }
+  block_error(path, what, problem);
+}
+}  // namespace
+
+uint64_t max_decompressed_size(BlockCodec codec, uint64_t in_size) {
+  switch (codec) {
+    case BlockCodec::Zlib: return saturating_mul(in_size, 1032) + 64;
+    case BlockCodec::Lz4: return saturating_mul(in_size, 256) + 64;
+    case BlockCodec::Xz: return saturating_mul(in_size, 16384) + 4096;
+  }
+  return 0;
+}
+
+void decompress_block(BlockCodec codec, const unsigned char* in, size_t in_size, unsigned char* out, size_t out_size,
+                      const std::string& path, const std::string& what) {
+  switch (codec) {
+    case BlockCodec::Zlib: return inflate_block(in, in_size, out, out_size, path, what);
+    case BlockCodec::Lz4: return lz4_block(in, in_size, out, out_size, path, what);
+    case BlockCodec::Xz: return xz_block(in, in_size, out, out_size, path, what);
+  }
 }
 
 }  // namespace particlemesh::detail

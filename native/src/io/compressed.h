@@ -1,14 +1,16 @@
-// Internal: compressed data inside particle files, through zlib (the library every reader of
-// these formats uses; it is on every system Blender runs on, and the add-on zip carries it).
+// Internal: compressed data inside particle files, through zlib, LZ4 and liblzma (the
+// libraries VTK's own compressors call; zlib is on every system Blender runs on, the add-on zip
+// carries LZ4's and liblzma's).
 //
 //  - GzipStream: a file that may be gzip-compressed (Houdini's classic .bgeo usually is),
 //    read front to back: the file's own bytes when it does not start with gzip's magic
 //    bytes (1f 8b), else the decompressed stream (several concatenated gzip members too).
-//  - inflate_block: one zlib block of a VTK XML array (vtkZLibDataCompressor) into exactly
-//    the bytes its header promises.
+//  - decompress_block: one compressed block of a VTK XML array into exactly the bytes its
+//    header promises: vtkZLibDataCompressor (a zlib stream), vtkLZ4DataCompressor (one raw
+//    LZ4 block) or vtkLZMADataCompressor (an .xz stream).
 //
 // Errors are Error(FormatError) naming the file and what was wrong ("the gzip data is
-// corrupt: invalid distance too far back"), never zlib's codes.
+// corrupt: invalid distance too far back"), never the libraries' codes.
 #pragma once
 
 #include <cstddef>
@@ -53,10 +55,19 @@ class GzipStream {
   bool finished_ = false;
 };
 
-/// Inflate the zlib stream `in[0..in_size)` into exactly `out_size` bytes at `out`.
-/// @throws Error(FormatError) "'<path>': <what>: the zlib data is corrupt (...)" or holds more
-///         or fewer bytes than `out_size`.
-void inflate_block(const unsigned char* in, size_t in_size, unsigned char* out, size_t out_size,
-                   const std::string& path, const std::string& what);
+/// The block compressions of VTK's XML files, by their `compressor` attribute.
+enum class BlockCodec { Zlib, Lz4, Xz };
+
+/// The most bytes `in_size` compressed bytes can give, with some slack: deflate gives at most
+/// 1032 to 1, LZ4 at most 255 to 1 (a byte of match length per 255), .xz at most about 7000
+/// to 1 (Python's lzma, preset 9, on zeros: 248 for 32 KiB, 6827 for 128 MiB; bound 16384).
+/// A block header claiming more is refused before anything is allocated.
+uint64_t max_decompressed_size(BlockCodec codec, uint64_t in_size);
+
+/// Decompress the block `in[0..in_size)` into exactly `out_size` bytes at `out`.
+/// @throws Error(FormatError) "'<path>': <what>: the zlib data is corrupt (...)" (LZ4, xz
+///         alike) or the block holds more or fewer bytes than `out_size`.
+void decompress_block(BlockCodec codec, const unsigned char* in, size_t in_size, unsigned char* out, size_t out_size,
+                      const std::string& path, const std::string& what);
 
 }  // namespace particlemesh::detail

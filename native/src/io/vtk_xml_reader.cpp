@@ -1,6 +1,7 @@
 // VTK's XML formats for point sets, .vtu (UnstructuredGrid) and .vtp (PolyData): data arrays
 // in ascii, binary (base64) or appended (raw or base64) form, uncompressed or compressed with
-// zlib (vtkZLibDataCompressor), headers of UInt32 or UInt64, either byte order, any number of
+// zlib, LZ4 or LZMA (vtkZLibDataCompressor, vtkLZ4DataCompressor, vtkLZMADataCompressor:
+// ParaView's three choices), headers of UInt32 or UInt64, either byte order, any number of
 // pieces. Raw appended data is what splashsurf fails on; it is read here like the rest.
 //
 // Written by hand for the reasons given at the top of vtk_legacy_reader.cpp (VTK's readers
@@ -11,8 +12,8 @@
 // What is read: the points (exactly: Float32, Float64 or integer components), every numeric
 // PointData array as an attribute of its name (the one PointData's Normals="..." names, with
 // 3 components, as the normals), and for meshes the triangle, polygon and quad cells of an
-// UnstructuredGrid or the Polys and Strips of a PolyData, fanned. LZ4 and LZMA compressed
-// files are refused with a message saying so; string arrays are skipped.
+// UnstructuredGrid or the Polys and Strips of a PolyData, fanned. String arrays are
+// skipped.
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
@@ -130,10 +131,13 @@ class VtkXmlReader {
     if (header != "UInt32" && header != "UInt64") fail("header_type '" + shown(header) + "' is not UInt32 or UInt64");
     header_size_ = header == "UInt64" ? 8 : 4;
     const std::string compressor = root.get("compressor");
-    if (!compressor.empty() && compressor != "vtkZLibDataCompressor")
-      fail("compressor '" + shown(compressor) + "' is not read (only vtkZLibDataCompressor, zlib; save the file "
-           "uncompressed or with zlib)");
     compressed_ = !compressor.empty();
+    if (compressor == "vtkZLibDataCompressor") codec_ = BlockCodec::Zlib;
+    else if (compressor == "vtkLZ4DataCompressor") codec_ = BlockCodec::Lz4;
+    else if (compressor == "vtkLZMADataCompressor") codec_ = BlockCodec::Xz;
+    else if (compressed_)
+      fail("compressor '" + shown(compressor) + "' is not read (read: vtkZLibDataCompressor, vtkLZ4DataCompressor, "
+           "vtkLZMADataCompressor)");
 
     const Node* set = root.child(type);
     if (!set) fail("<VTKFile type=\"" + type + "\"> holds no <" + type + "> element");
@@ -322,7 +326,20 @@ class VtkXmlReader {
     return v;
   }
 
-  /// The payload bytes of a binary or appended array: header + data, or header + zlib blocks.
+  /// Where the values of an uncompressed array start (after its header), checked to hold
+  /// `expected` bytes.
+  const unsigned char* uncompressed(const unsigned char* b, size_t size, uint64_t expected, const std::string& what) const {
+    const size_t hs = header_size_;
+    if (hs > size) fail("truncated: " + what + " needs " + std::to_string(hs) + " bytes for its header, the data holds " + std::to_string(size));
+    const uint64_t bytes = header_value(b);
+    if (bytes != expected) fail(what + " holds " + std::to_string(bytes) + " bytes, expected " + std::to_string(expected));
+    if (bytes > size - hs)
+      fail("truncated: " + what + " needs " + std::to_string(hs + bytes) + " bytes for its values, the data holds " +
+           std::to_string(size));
+    return b + hs;
+  }
+
+  /// The payload bytes of a binary or appended array: header + data, or header + compressed blocks.
   std::vector<unsigned char> payload(const unsigned char* b, size_t size, uint64_t expected, const std::string& what) const {
     const size_t hs = header_size_;
     auto need = [&](uint64_t bytes, const char* where) {
@@ -332,12 +349,8 @@ class VtkXmlReader {
     };
     std::vector<unsigned char> out;
     if (!compressed_) {
-      need(hs, "for its header");
-      const uint64_t bytes = header_value(b);
-      if (bytes != expected)
-        fail(what + " holds " + std::to_string(bytes) + " bytes, expected " + std::to_string(expected));
-      need(hs + bytes, "for its values");
-      out.assign(b + hs, b + hs + bytes);
+      const unsigned char* v = uncompressed(b, size, expected, what);
+      out.assign(v, v + expected);
       return out;
     }
     need(3 * hs, "for its compression header");
@@ -347,19 +360,19 @@ class VtkXmlReader {
     const uint64_t total = blocks == 0 ? 0 : saturating_mul(blocks - 1, block) + (last == 0 ? block : last);
     if (total != expected || (last > block && blocks > 0))
       fail(what + ": its compressed blocks hold " + std::to_string(total) + " bytes, expected " + std::to_string(expected));
-    // The output grows block by block, each checked against what deflate can give from its
-    // compressed bytes (at most 1032 to 1): a header claiming more allocates nothing.
+    // The output grows block by block, each checked against what its codec can give from its
+    // compressed bytes (max_decompressed_size): a header claiming more allocates nothing.
     out.reserve(size_t(std::min<uint64_t>(total, uint64_t(1) << 24)));
     uint64_t at = (3 + blocks) * hs, made = 0;
     for (uint64_t k = 0; k < blocks; ++k) {
       const uint64_t csize = header_value(b + (3 + k) * hs);
       need(at + csize, "for its compressed blocks");
       const uint64_t usize = k + 1 == blocks && last != 0 ? last : block;
-      if (usize > saturating_mul(csize, 1032) + 64)
+      if (usize > max_decompressed_size(codec_, csize))
         fail(what + ", block " + std::to_string(k) + ": " + std::to_string(csize) + " compressed bytes cannot hold the " +
              std::to_string(usize) + " its header claims");
       out.resize(size_t(made + usize));
-      inflate_block(b + at, size_t(csize), out.data() + made, size_t(usize), path_, what + ", block " + std::to_string(k));
+      decompress_block(codec_, b + at, size_t(csize), out.data() + made, size_t(usize), path_, what + ", block " + std::to_string(k));
       at += csize;
       made += usize;
     }
@@ -401,6 +414,7 @@ class VtkXmlReader {
     const int size = scalar_size(type);
     const uint64_t expected = saturating_mul(count, uint64_t(size));
     std::vector<unsigned char> bytes;
+    const unsigned char* values = nullptr;  // bytes.data(), or raw appended data in place
     if (format == "binary") {
       const std::vector<unsigned char> raw = base64(a.text, what);
       bytes = payload(raw.data(), raw.size(), expected, what);
@@ -419,6 +433,8 @@ class VtkXmlReader {
         if (stop != std::string_view::npos) chars = chars.substr(0, stop);
         const std::vector<unsigned char> raw = base64(chars, what);
         bytes = payload(raw.data(), raw.size(), expected, what);
+      } else if (!compressed_) {
+        values = uncompressed(base, length - size_t(offset), expected, what);
       } else {
         bytes = payload(base, length - size_t(offset), expected, what);
       }
@@ -426,7 +442,7 @@ class VtkXmlReader {
       fail(what + ": format '" + shown(format) + "' is not ascii, binary or appended");
     }
     out.resize(size_t(count));
-    for (uint64_t i = 0; i < count; ++i) out[size_t(i)] = decode_scalar(type, bytes.data() + i * uint64_t(size), big_endian_);
+    decode_scalars(type, values ? values : bytes.data(), size_t(count), big_endian_, out.data());
     return out;
   }
 
@@ -442,6 +458,7 @@ class VtkXmlReader {
       int comps = 0;
       const std::vector<double> p = array(*pa, n, &comps, label + " Points");
       if (comps != 3) fail(label + " Points have " + std::to_string(comps) + " components (3 expected)");
+      out_.positions.reserve(base + size_t(n));
       for (uint64_t i = 0; i < n; ++i) out_.positions.push_back({p[3 * i], p[3 * i + 1], p[3 * i + 2]});
     }
     if (const Node* pd = piece.child("PointData")) {
@@ -467,6 +484,7 @@ class VtkXmlReader {
           out_.attributes.push_back({unique_attribute_name(out_, name.empty() ? "array" : name), comps, {}});
           target = &out_.attributes.back();
         }
+        target->values.reserve(target->values.size() + v.size());
         for (double x : v) target->values.push_back(float(x));
       }
     }
@@ -544,6 +562,7 @@ class VtkXmlReader {
   bool appended_base64_ = false;
   bool big_endian_ = false;
   bool compressed_ = false;
+  BlockCodec codec_ = BlockCodec::Zlib;
   bool normals_ = false;
   size_t header_size_ = 4;
   size_t pieces_ = 0;

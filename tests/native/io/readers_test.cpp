@@ -16,6 +16,7 @@
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
 #include "particlemesh/sample/shapes.h"
+#include "support/compressed_vtu.h"
 #include "support/test_support.h"
 
 using namespace particlemesh;
@@ -374,4 +375,37 @@ TEST(BgeoJsonReader, TypesLimitsAndRefusals) {
                  "tuple 0 does not hold 3 values");
   EXPECT_REFUSED(read_point_cloud(write(dir / "short.bgeo", BinaryJson().geometry(t, 4).s)), Status::FormatError,
                  "\"tuples\" holds 3 tuples for 4 points");
+}
+
+// VTK XML arrays compressed by each of VTK's compressors (zlib, LZ4, LZMA), in several blocks
+// (the last one short): every value exact. Blocks whose header claims more than their codec
+// can give from their bytes are refused before anything is allocated; damaged blocks are
+// refused naming the codec. (Files of VTK's own writers: tests/python/test_vtk_files.py.)
+TEST(VtkXmlReader, CompressedBlocksOfEveryCodec) {
+  using test::VtuCodec;
+  const auto dir = test::scratch_dir("vtu_codecs");
+  std::vector<float> xyz;
+  for (int i = 0; i < 3 * 50; ++i) xyz.push_back(float(i % 7) * 0.5f - float(i) * 1e-3f);
+  for (VtuCodec codec : {VtuCodec::Zlib, VtuCodec::Lz4, VtuCodec::Xz}) {
+    SCOPED_TRACE(test::compressor_name(codec));
+    for (size_t block : {size_t(64), size_t(100), size_t(4096)}) {
+      const PointCloud c = read_point_cloud(write(dir / "c.vtu", test::compressed_vtu(codec, xyz, block)));
+      ASSERT_EQ(c.positions.size(), 50u);
+      for (size_t i = 0; i < 50; ++i)
+        EXPECT_EQ(c.positions[i], (Vec3{xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]})) << i;
+    }
+    // One block of 600 000 bytes from 2 compressed bytes: more than any codec gives.
+    std::vector<float> many(3 * 50000, 1.0f);
+    std::string header;
+    auto word = [&](uint32_t v) { header.append(reinterpret_cast<const char*>(&v), 4); };
+    word(1), word(600000), word(0), word(2);
+    EXPECT_REFUSED(read_point_cloud(write(dir / "claim.vtu", test::compressed_vtu(codec, many, 600000, header + "xx"))),
+                   Status::FormatError, "2 compressed bytes cannot hold the 600000 its header claims");
+    // The right header over damaged bytes.
+    std::string array = test::compressed_array(codec, std::string(reinterpret_cast<const char*>(xyz.data()), 600), 600);
+    array[16] = char(~array[16]);  // the block's first byte: zlib's header, LZ4's first token, xz's magic
+    const std::string codec_name = codec == VtuCodec::Zlib ? "zlib" : codec == VtuCodec::Lz4 ? "LZ4" : "xz";
+    EXPECT_REFUSED(read_point_cloud(write(dir / "bad.vtu", test::compressed_vtu(codec, xyz, 600, array))),
+                   Status::FormatError, "block 0: the " + codec_name + " data is corrupt");
+  }
 }

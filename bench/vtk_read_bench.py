@@ -1,0 +1,85 @@
+"""Reading VTK XML particle files: particlemesh.read_points beside VTK's own reader
+(vtkXMLUnstructuredGridReader, Debian's python3-vtk9) on the same files, written by VTK's
+writer with each of its compressors (raw appended data, 32 KiB blocks, VTK's default levels).
+
+    PM_PYTHON_PATH=build/python /usr/bin/python3 bench/vtk_read_bench.py [--points 1000000] [--reps 5]
+
+Prints per compressor the file size and the median wall time of each reader; both give the
+same positions (checked)."""
+import argparse
+import os
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import vtk
+from vtk.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+
+sys.path.insert(0, os.environ.get("PM_PYTHON_PATH", str(Path(__file__).resolve().parents[1] / "build" / "python")))
+import particlemesh as pm  # noqa: E402
+
+
+def grid(n):
+    rng = np.random.default_rng(3)
+    pts = vtk.vtkPoints()
+    pts.SetData(numpy_to_vtk(rng.random((n, 3)).astype(np.float32), deep=True))
+    g = vtk.vtkUnstructuredGrid()
+    g.SetPoints(pts)
+    for name, values in (("velocity", rng.normal(size=(n, 3)).astype(np.float32)),
+                         ("density", rng.uniform(900, 1100, n).astype(np.float32))):
+        a = numpy_to_vtk(values, deep=True)
+        a.SetName(name)
+        g.GetPointData().AddArray(a)
+    return g
+
+
+def median_time(f, reps):
+    times = []
+    for _ in range(reps):
+        t = time.perf_counter()
+        out = f()
+        times.append(time.perf_counter() - t)
+    return statistics.median(times), out
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--points", type=int, default=1_000_000)
+    ap.add_argument("--reps", type=int, default=5)
+    args = ap.parse_args()
+    g = grid(args.points)
+    print(f"{args.points} particles (positions, velocity, density; Float32), median of {args.reps}")
+    print("| compressor | file | particlemesh.read_points | vtkXMLUnstructuredGridReader |")
+    print("|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as tmp:
+        for compressor in ("None", "ZLib", "LZ4", "LZMA"):
+            path = os.path.join(tmp, f"p_{compressor}.vtu")
+            w = vtk.vtkXMLUnstructuredGridWriter()
+            w.SetInputData(g)
+            w.SetFileName(path)
+            w.SetDataModeToAppended()
+            w.EncodeAppendedDataOff()
+            getattr(w, "SetCompressorTypeTo" + compressor)()
+            w.Write()
+
+            def ours():
+                return pm.read_points(path).positions
+
+            def theirs():
+                r = vtk.vtkXMLUnstructuredGridReader()
+                r.SetFileName(path)
+                r.Update()
+                return vtk_to_numpy(r.GetOutput().GetPoints().GetData())
+
+            t_pm, p_pm = median_time(ours, args.reps)
+            t_vtk, p_vtk = median_time(theirs, args.reps)
+            assert np.array_equal(p_pm, p_vtk.astype(np.float64)), compressor
+            size = os.path.getsize(path) / 1e6
+            print(f"| {compressor} | {size:.1f} MB | {t_pm:.3f} s | {t_vtk:.3f} s |")
+
+
+if __name__ == "__main__":
+    main()

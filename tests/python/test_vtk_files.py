@@ -1,0 +1,161 @@
+"""Files written by VTK's own writers (Debian's python3-vtk9: the writers ParaView and the
+simulators call), read by read_points and read_mesh: every XML data mode and encoding, each
+of ParaView's compressors (zlib, LZ4, LZMA), both header types and byte orders, several
+compressed blocks per array, and the legacy ASCII and binary files. Every value must come
+back exactly; a damaged compressed block is refused naming the file and the codec."""
+import numpy as np
+import pytest
+import vtk
+from vtk.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+
+# 12 000 points: 144 000 bytes of Float32 positions, five of VTK's 32 KiB compressed blocks.
+N = 12000
+
+
+def cloud():
+    rng = np.random.default_rng(7)
+    p = rng.normal(size=(N, 3)) * [1.0, 2.0, 0.5] + [10.0, -3.0, 0.25]
+    density = rng.uniform(900.0, 1100.0, N)
+    velocity = rng.normal(size=(N, 3))
+    return p.astype(np.float32), density.astype(np.float64), velocity.astype(np.float32)
+
+
+def point_set(kind):
+    """The particles as a vtkUnstructuredGrid of vertex cells or a vtkPolyData of vertices,
+    with two point-data arrays (Float64 and Float32)."""
+    p, density, velocity = cloud()
+    pts = vtk.vtkPoints()
+    pts.SetData(numpy_to_vtk(p, deep=True))
+    data = vtk.vtkUnstructuredGrid() if kind == "grid" else vtk.vtkPolyData()
+    data.SetPoints(pts)
+    verts = vtk.vtkCellArray()
+    for i in range(N):
+        verts.InsertNextCell(1)
+        verts.InsertCellPoint(i)
+    if kind == "grid":
+        data.SetCells(vtk.VTK_VERTEX, verts)
+    else:
+        data.SetVerts(verts)
+    for name, values in (("density", density), ("velocity", velocity)):
+        a = numpy_to_vtk(values, deep=True)
+        a.SetName(name)
+        data.GetPointData().AddArray(a)
+    return data
+
+
+XML_WRITERS = {"grid": (vtk.vtkXMLUnstructuredGridWriter, ".vtu"), "poly": (vtk.vtkXMLPolyDataWriter, ".vtp")}
+# (data mode, appended data base64-encoded)
+MODES = [("Ascii", False), ("Binary", False), ("Appended", False), ("Appended", True)]
+COMPRESSORS = ["None", "ZLib", "LZ4", "LZMA"]
+
+
+def write_xml(path, data, kind, mode, encode, compressor, header64=False, big_endian=False):
+    cls, _ = XML_WRITERS[kind]
+    w = cls()
+    w.SetInputData(data)
+    w.SetFileName(str(path))
+    getattr(w, "SetDataModeTo" + mode)()
+    w.SetEncodeAppendedData(encode)
+    getattr(w, "SetCompressorTypeTo" + compressor)()
+    if header64:
+        w.SetHeaderTypeToUInt64()
+    if big_endian:
+        w.SetByteOrderToBigEndian()
+    assert w.Write() == 1, path
+    return path
+
+
+def check_points(pm, path, rtol=0.0):
+    """The positions exactly (or to `rtol`), the channels as the library keeps them (float32)."""
+    p, density, velocity = cloud()
+    c = pm.read_points(path)
+    assert c.positions.shape == (N, 3), path
+    np.testing.assert_allclose(c.positions, p.astype(np.float64), rtol=rtol, atol=0, err_msg=str(path))
+    assert set(c.attributes) == {"density", "velocity"}, path
+    np.testing.assert_allclose(c.attributes["density"].ravel(), density.astype(np.float32), rtol=rtol, atol=0,
+                               err_msg=str(path))
+    np.testing.assert_allclose(c.attributes["velocity"].reshape(N, 3), velocity, rtol=rtol, atol=1e-6 * (rtol > 0),
+                               err_msg=str(path))
+
+
+@pytest.mark.parametrize("kind", ["grid", "poly"])
+def test_every_xml_mode_and_compressor_reads_exactly(pm, tmp_path, kind):
+    data = point_set(kind)
+    ext = XML_WRITERS[kind][1]
+    for mode, encode in MODES:
+        for compressor in COMPRESSORS:
+            if mode == "Ascii" and compressor != "None":
+                continue  # VTK writes ASCII arrays uncompressed whatever the compressor
+            path = tmp_path / f"{mode}{'64' if encode else ''}_{compressor}{ext}"
+            check_points(pm, write_xml(path, data, kind, mode, encode, compressor))
+    # UInt64 headers and big-endian values, with each compressor.
+    for compressor in COMPRESSORS:
+        check_points(pm, write_xml(tmp_path / f"h64_{compressor}{ext}", data, kind, "Appended", False, compressor,
+                                   header64=True))
+        check_points(pm, write_xml(tmp_path / f"be_{compressor}{ext}", data, kind, "Binary", False, compressor,
+                                   big_endian=True))
+
+
+def test_legacy_ascii_and_binary(pm, tmp_path):
+    for kind, cls in (("grid", vtk.vtkUnstructuredGridWriter), ("poly", vtk.vtkPolyDataWriter)):
+        for binary in (False, True):
+            path = tmp_path / f"{kind}_{'binary' if binary else 'ascii'}.vtk"
+            w = cls()
+            w.SetInputData(point_set(kind))
+            w.SetFileName(str(path))
+            w.SetFileTypeToBinary() if binary else w.SetFileTypeToASCII()
+            assert w.Write() == 1
+            # VTK's legacy ASCII writer prints 6 significant digits.
+            check_points(pm, path, rtol=0 if binary else 5e-6)
+
+
+def test_compressed_meshes_keep_their_triangles(pm, tmp_path):
+    sphere = vtk.vtkSphereSource()
+    sphere.SetThetaResolution(80)
+    sphere.SetPhiResolution(60)
+    sphere.Update()
+    poly = sphere.GetOutput()
+    points = vtk_to_numpy(poly.GetPoints().GetData()).astype(np.float64)
+    tris = vtk_to_numpy(poly.GetPolys().GetConnectivityArray()).reshape(-1, 3)
+    for compressor in ("LZ4", "LZMA"):
+        path = write_xml(tmp_path / f"sphere_{compressor}.vtp", poly, "poly", "Appended", False, compressor)
+        m = pm.read_mesh(path)
+        np.testing.assert_array_equal(m.vertices, points)
+        np.testing.assert_array_equal(m.triangles, tris)
+        assert m.triangle_count == poly.GetNumberOfPolys() == 9280
+
+
+def damage(path, marker, offset_in_block):
+    """Flip a byte `offset_in_block` bytes into the first compressed block of the first raw
+    appended array (after its header of 4 UInt32 words for a single block)."""
+    raw = bytearray(path.read_bytes())
+    start = raw.index(b'<AppendedData encoding="raw">')
+    at = raw.index(b"_", start) + 1
+    blocks = int.from_bytes(raw[at:at + 4], "little")
+    data = at + 4 * (3 + blocks)
+    raw[data + offset_in_block] ^= marker
+    path.write_bytes(bytes(raw))
+
+
+def test_damaged_compressed_blocks_are_refused_by_name(pm, tmp_path):
+    data = point_set("grid")
+    lz4 = write_xml(tmp_path / "lz4.vtu", data, "grid", "Appended", False, "LZ4")
+    damage(lz4, 0xFF, 0)  # the first token: its literal run now overruns the block
+    with pytest.raises(pm.Error, match=r"lz4\.vtu.*block 0: the LZ4 data is corrupt") as e:
+        pm.read_points(lz4)
+    assert e.value.status_name == "format error"
+
+    xz = write_xml(tmp_path / "xz.vtu", data, "grid", "Appended", False, "LZMA")
+    damage(xz, 0x01, 0)  # the .xz magic bytes
+    with pytest.raises(pm.Error, match=r"xz\.vtu.*block 0: the xz data is corrupt \(it does not start"):
+        pm.read_points(xz)
+    xz = write_xml(tmp_path / "xz2.vtu", data, "grid", "Appended", False, "LZMA")
+    damage(xz, 0x40, 200)  # inside the compressed data: the stream's check fails
+    with pytest.raises(pm.Error, match=r"xz2\.vtu.*block 0: the xz data is corrupt"):
+        pm.read_points(xz)
+
+    other = tmp_path / "other.vtu"
+    text = write_xml(tmp_path / "z.vtu", data, "grid", "Appended", False, "ZLib").read_bytes()
+    other.write_bytes(text.replace(b"vtkZLibDataCompressor", b"vtkZstdDataCompressor"))
+    with pytest.raises(pm.Error, match=r"compressor 'vtkZstdDataCompressor' is not read \(read: vtkZLib"):
+        pm.read_points(other)
