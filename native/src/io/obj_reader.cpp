@@ -1,6 +1,7 @@
 // Wavefront OBJ meshes: v (x y z, optional w, or x y z r g b), vn, and f with v, v/vt, v//vn
 // or v/vt/vn corners (1-based, or negative: relative to the vertices so far); polygons are
-// fanned. Other statements (vt, o, g, s, usemtl, mtllib, l, p, ...) are skipped.
+// fanned; a line ending in a backslash continues on the next. Other statements (vt, o, g, s,
+// usemtl, mtllib, l, p, ...) are skipped.
 //
 // Written by hand, not with tinyobjloader (Debian's libtinyobjloader-dev, 2.0.0rc10), which
 // does not fit on three counts, each checked: its number parser is not correctly rounded
@@ -33,14 +34,33 @@ class ObjReader {
     if (in_.peek() < 0) fail_file("the file is empty");
     std::string_view line;
     std::vector<std::string_view> w;
-    while (in_.line(line, kMaxLine)) {
-      if (const size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
-      split_words(line, w);
-      if (w.empty()) continue;
+    std::string continued;  // a statement whose lines end with a backslash, joined
+    auto statement = [&](std::string_view text) {
+      split_words(text, w);
+      if (w.empty()) return;
       if (w[0] == "v") vertex(w);
       else if (w[0] == "vn") normal(w);
       else if (w[0] == "f" && purpose_ == ReadPurpose::Mesh) face(w);
+    };
+    while (in_.line(line, kMaxLine)) {
+      if (const size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
+      // A backslash ending a line continues the statement on the next one (the OBJ
+      // specification's line continuation; exporters use it to wrap long faces).
+      const size_t last = line.find_last_not_of(" \t\r");
+      if (last != std::string_view::npos && line[last] == '\\') {
+        continued.append(line.substr(0, last)).push_back(' ');
+        if (continued.size() > kMaxLine) fail("a statement continued over lines is longer than " + std::to_string(kMaxLine) + " bytes");
+        continue;
+      }
+      if (continued.empty()) {
+        statement(line);
+        continue;
+      }
+      continued.append(line);
+      statement(continued);
+      continued.clear();
     }
+    if (!continued.empty()) statement(continued);  // the file ended on a continued line
     FileContents out;
     out.positions = std::move(positions_);
     out.triangles = std::move(triangles_);

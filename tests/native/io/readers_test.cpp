@@ -219,6 +219,17 @@ TEST(ObjReader, ValuesAndCornersNamedWithTheirLine) {
   const TriMesh col = read_mesh(write(dir / "col.obj", "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nf 1 2 3\n"));
   ASSERT_EQ(col.attributes.size(), 1u);
   EXPECT_EQ(col.attributes[0].values[4], 1.0f);
+  // A backslash ending a line continues the statement (a face wrapped over three lines, a
+  // vertex over two, a comment in between), also on the file's last line.
+  const TriMesh wrapped = read_mesh(write(dir / "wrapped.obj", "v 0 0 0\nv 1 \\\n 0 0\nv 1 1 0\nv 0 1 0\n"
+                                                              "f 1 2 \\ # half\n 3 \\\r\n 4\nf 1 3 \\\n 4"));
+  ASSERT_EQ(wrapped.positions.size(), 4u);
+  EXPECT_EQ(wrapped.positions[1], (Vec3{1, 0, 0}));
+  ASSERT_EQ(wrapped.triangles.size(), 3u);  // the quad fanned, then the last triangle
+  EXPECT_EQ(wrapped.triangles[1], (Triangle{0, 2, 3}));
+  EXPECT_EQ(wrapped.triangles[2], (Triangle{0, 2, 3}));
+  EXPECT_REFUSED(read_mesh(write(dir / "wrapbad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 \\\n 9\n")),
+                 Status::FormatError, "line 5: face corner '9' names vertex 9");
 }
 
 // .xyz: a UTF-8 byte order mark is skipped (before: "not a number"); a line that never ends
