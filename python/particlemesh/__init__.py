@@ -91,7 +91,7 @@ def defaults(function):
 
 def read_points(path):
     """Particles from a file: .ply (any numeric vertex properties, normals, vertex colours as
-    the "color" attribute), .xyz, VTK .vtk/.vtu/.vtp and Houdini .bgeo/.geo (every
+    the "color" attribute), .xyz, VTK .vtk/.vtu/.vtp/.pvtu/.pvtp and Houdini .bgeo/.geo (every
     point-data array / point attribute in `attributes`) through the library; .pcd (ascii, binary, compressed)
     through the PCL bridge, which drops points with a NaN coordinate and counts them in
     `info`. Coordinates keep their full precision. Returns Points."""

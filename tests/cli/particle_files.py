@@ -1,13 +1,16 @@
 """Writers of simulators' particle files for the tests: the same particles as PLY, VTK legacy
-(ASCII, BINARY), VTK XML .vtu (ascii, base64, raw appended, zlib), Houdini's classic bgeo
+(ASCII, BINARY), VTK XML .vtu (ascii, base64, raw appended, zlib, LZMA) and parallel .pvtu
+(pieces in a folder beside it), Houdini's classic bgeo
 (plain, gzip) and Houdini 12+'s binary-JSON bgeo (paged, tuples and arrays layouts, either
 byte order, token strings, constant pages, gzip) and ASCII .geo. Values are multiples of 1/1024 so that every text form is exact in float32."""
 
 import base64
 import gzip
 import json
+import lzma
 import struct
 import zlib
+from pathlib import Path
 
 import numpy as np
 
@@ -65,7 +68,8 @@ def write_vtk(path, p, attrs, binary=False):
 
 
 def write_vtu(path, p, attrs, encoding="ascii"):
-    """encoding: ascii, base64, appended (raw), zlib (base64, compressed)."""
+    """encoding: ascii, base64, appended (raw), zlib or lzma (base64, compressed as
+    vtkZLibDataCompressor / vtkLZMADataCompressor write)."""
     n = len(p)
     arrays = [("Points", p)] + list(attrs.items())
     appended = b""
@@ -81,8 +85,8 @@ def write_vtu(path, p, attrs, encoding="ascii"):
         if encoding == "base64":
             return head + ' format="binary">' + base64.b64encode(struct.pack("<I", len(raw)) + raw).decode() + \
                 "</DataArray>\n"
-        if encoding == "zlib":
-            z = zlib.compress(raw)
+        if encoding in ("zlib", "lzma"):
+            z = zlib.compress(raw) if encoding == "zlib" else lzma.compress(raw, check=lzma.CHECK_CRC64)
             header = struct.pack("<4I", 1, len(raw), len(raw), len(z))
             return head + ' format="binary">' + base64.b64encode(header).decode() + \
                 base64.b64encode(z).decode() + "</DataArray>\n"
@@ -95,7 +99,8 @@ def write_vtu(path, p, attrs, encoding="ascii"):
     conn = " ".join(str(i) for i in range(n))
     offs = " ".join(str(i + 1) for i in range(n))
     types = " ".join("1" for _ in range(n))
-    comp = ' compressor="vtkZLibDataCompressor"' if encoding == "zlib" else ""
+    comp = {"zlib": ' compressor="vtkZLibDataCompressor"',
+            "lzma": ' compressor="vtkLZMADataCompressor"'}.get(encoding, "")
     text = (f'<?xml version="1.0"?>\n<VTKFile type="UnstructuredGrid" version="1.0" '
             f'byte_order="LittleEndian" header_type="UInt32"{comp}>\n<UnstructuredGrid>\n'
             f'<Piece NumberOfPoints="{n}" NumberOfCells="{n}">\n<PointData>\n{pdata}</PointData>\n'
@@ -110,6 +115,22 @@ def write_vtu(path, p, attrs, encoding="ascii"):
     data += b"</VTKFile>\n"
     with open(path, "wb") as f:
         f.write(data)
+
+
+def write_pvtu(path, p, attrs, pieces=3):
+    """A parallel .pvtu listing `pieces` raw appended .vtu files (the particles split in order)
+    in a folder beside it, as ParaView writes one piece per process."""
+    path = Path(path)
+    folder = path.parent / path.name.split(".")[0]
+    folder.mkdir(exist_ok=True)
+    sources = []
+    for k, rows in enumerate(np.array_split(np.arange(len(p)), pieces)):
+        piece = folder / f"{folder.name}_{k}.vtu"
+        write_vtu(piece, p[rows], {name: a.reshape(len(p), -1)[rows] for name, a in attrs.items()}, "appended")
+        sources.append(f"{folder.name}/{piece.name}")
+    path.write_text('<?xml version="1.0"?>\n<VTKFile type="PUnstructuredGrid" version="1.0" '
+                    'byte_order="LittleEndian" header_type="UInt32">\n<PUnstructuredGrid GhostLevel="0">\n' +
+                    "".join(f'<Piece Source="{s}"/>\n' for s in sources) + "</PUnstructuredGrid>\n</VTKFile>\n")
 
 
 def write_bgeo(path, p, attrs, compress=False):
@@ -270,6 +291,8 @@ FORMATS = {
     ".base64.vtu": lambda path, p, a: write_vtu(path, p, a, "base64"),
     ".appended.vtu": lambda path, p, a: write_vtu(path, p, a, "appended"),
     ".zlib.vtu": lambda path, p, a: write_vtu(path, p, a, "zlib"),
+    ".lzma.vtu": lambda path, p, a: write_vtu(path, p, a, "lzma"),
+    ".pvtu": write_pvtu,
     ".bgeo": write_bgeo,
     ".bgeo.gz": lambda path, p, a: write_bgeo(path, p, a, compress=True),
     ".json.bgeo": write_bgeo_json,

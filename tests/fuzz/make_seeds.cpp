@@ -268,6 +268,13 @@ void file_seeds() {
     put("read_vtk", "lz4.vtu", std::string(1, '\1') + test::compressed_vtu(test::VtuCodec::Lz4, xyz, 40));
     put("read_vtk", "lzma.vtu", std::string(1, '\1') + test::compressed_vtu(test::VtuCodec::Xz, xyz, 40));
   }
+  // A parallel file: its pieces do not exist beside the fuzzer's input, so the list itself is
+  // what is exercised (sources, the folder rule, the refusals).
+  put("read_vtk", "parallel.vtu",
+      std::string(1, '\1') +
+          "<?xml version=\"1.0\"?>\n<VTKFile type=\"PUnstructuredGrid\" version=\"0.1\"><PUnstructuredGrid>"
+          "<PPoints><PDataArray type=\"Float32\" NumberOfComponents=\"3\"/></PPoints><Piece Source=\"p/p_0.vtu\"/>"
+          "<Piece Source=\"../p_1.vtu\"/></PUnstructuredGrid></VTKFile>\n");
   put("read_xyz", "bom.xyz", "\xEF\xBB\xBF" "0 0 0\n1 0 0\n0 1 0\n");
   put("read_obj", "colours.obj", "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nvn 0 0 1\nf 1//1 2//1 3//1\n");
   put("read_obj", "stl_two_solids.bin",

@@ -159,3 +159,76 @@ def test_damaged_compressed_blocks_are_refused_by_name(pm, tmp_path):
     other.write_bytes(text.replace(b"vtkZLibDataCompressor", b"vtkZstdDataCompressor"))
     with pytest.raises(pm.Error, match=r"compressor 'vtkZstdDataCompressor' is not read \(read: vtkZLib"):
         pm.read_points(other)
+
+
+def vtk_read(path):
+    """Positions and density as VTK's own reader for the file's kind gives them."""
+    reader = {".pvtu": vtk.vtkXMLPUnstructuredGridReader, ".pvtp": vtk.vtkXMLPPolyDataReader}[path.suffix]()
+    reader.SetFileName(str(path))
+    reader.Update()
+    out = reader.GetOutput()
+    return (vtk_to_numpy(out.GetPoints().GetData()).astype(np.float64),
+            vtk_to_numpy(out.GetPointData().GetArray("density")).astype(np.float32))
+
+
+@pytest.mark.parametrize("kind", ["grid", "poly"])
+def test_parallel_files_read_their_pieces(pm, tmp_path, kind):
+    """A .pvtu / .pvtp from VTK's parallel writers (three pieces in a subfolder, as ParaView
+    writes them for three processes, LZ4-compressed) gives the points VTK's parallel reader
+    gives, in its order."""
+    data = point_set(kind)
+    if kind == "grid":
+        split = vtk.vtkExtractUnstructuredGridPiece()
+        writer, ext = vtk.vtkXMLPUnstructuredGridWriter(), ".pvtu"
+    else:
+        split = vtk.vtkExtractPolyDataPiece()
+        writer, ext = vtk.vtkXMLPPolyDataWriter(), ".pvtp"
+    split.SetInputData(data)
+    path = tmp_path / f"sim{ext}"
+    writer.SetInputConnection(split.GetOutputPort())
+    writer.SetFileName(str(path))
+    writer.SetNumberOfPieces(3)
+    writer.SetStartPiece(0)
+    writer.SetEndPiece(2)
+    writer.SetUseSubdirectory(True)
+    writer.SetCompressorTypeToLZ4()
+    assert writer.Write() == 1
+    assert len(list((tmp_path / "sim").iterdir())) == 3
+    positions, density = vtk_read(path)
+    assert len(positions) >= N
+    c = pm.read_points(path)
+    np.testing.assert_array_equal(c.positions, positions)
+    np.testing.assert_array_equal(c.attributes["density"].ravel(), density)
+    assert set(c.attributes) == {"density", "velocity"}
+
+
+def test_parallel_file_pieces_stay_inside_its_folder(pm, tmp_path):
+    data = point_set("grid")
+    write_xml(tmp_path / "a.vtu", data, "grid", "Appended", False, "None")
+    write_xml(tmp_path / "b.vtp", point_set("poly"), "poly", "Appended", False, "None")
+    (tmp_path / "sub").mkdir()
+    write_xml(tmp_path / "sub" / "c.vtu", data, "grid", "Appended", False, "ZLib")
+
+    def pvtu(name, *sources):
+        pieces = "".join(f'<Piece Source="{s}"/>' for s in sources)
+        path = tmp_path / name
+        path.write_text('<?xml version="1.0"?>\n<VTKFile type="PUnstructuredGrid" version="0.1">'
+                        f"<PUnstructuredGrid>{pieces}</PUnstructuredGrid></VTKFile>\n")
+        return path
+
+    two = pm.read_points(pvtu("two.pvtu", "a.vtu", "sub/c.vtu"))
+    assert two.positions.shape == (2 * N, 3)
+    np.testing.assert_array_equal(two.positions[:N], two.positions[N:])
+    for name, sources, message in [
+            ("abs.pvtu", ["/etc/passwd"], "piece 0's Source '/etc/passwd' is not a path inside"),
+            ("up.pvtu", ["a.vtu", "sub/../../x.vtu"], "piece 1's Source 'sub/../../x.vtu' is not a path inside"),
+            ("twice.pvtu", ["a.vtu", "sub/c.vtu", "a.vtu"], "piece 2 repeats the Source 'a.vtu'"),
+            ("missing.pvtu", ["a.vtu", "gone.vtu"], "piece 1's Source 'gone.vtu' does not exist"),
+            ("folder.pvtu", ["sub"], "piece 0's Source 'sub' is not a regular file"),
+            ("kind.pvtu", ["b.vtp"], "b.vtp': VTKFile type 'PolyData', but the parallel file"),
+            ("nested.pvtu", ["two.pvtu"], "two.pvtu': a piece of a parallel file is itself a parallel file"),
+            ("none.pvtu", [], "lists no <Piece Source"),
+    ]:
+        with pytest.raises(pm.Error, match=message.replace("(", r"\(").replace(".", r"\.")) as e:
+            pm.read_points(pvtu(name, *sources))
+        assert e.value.status_name == "format error", name

@@ -22,6 +22,8 @@ const std::vector<FileFormat>& file_formats() {
       {".vtk", "VTK legacy", &read_vtk_legacy, true, true},
       {".vtu", "VTK XML UnstructuredGrid", &read_vtk_xml, true, true},
       {".vtp", "VTK XML PolyData", &read_vtk_xml, true, true},
+      {".pvtu", "VTK XML parallel UnstructuredGrid", &read_vtk_xml, true, true},
+      {".pvtp", "VTK XML parallel PolyData", &read_vtk_xml, true, true},
       {".bgeo", "Houdini bgeo", &read_bgeo, true, false},
       {".bgeo.gz", "Houdini bgeo", &read_bgeo, true, false},
       {".bhclassic", "Houdini classic bgeo", &read_bgeo, true, false},

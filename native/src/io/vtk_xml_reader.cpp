@@ -1,4 +1,5 @@
-// VTK's XML formats for point sets, .vtu (UnstructuredGrid) and .vtp (PolyData): data arrays
+// VTK's XML formats for point sets, .vtu (UnstructuredGrid) and .vtp (PolyData), and their
+// parallel forms .pvtu and .pvtp (a list of piece files, read and concatenated): data arrays
 // in ascii, binary (base64) or appended (raw or base64) form, uncompressed or compressed with
 // zlib, LZ4 or LZMA (vtkZLibDataCompressor, vtkLZ4DataCompressor, vtkLZMADataCompressor:
 // ParaView's three choices), headers of UInt32 or UInt64, either byte order, any number of
@@ -18,6 +19,7 @@
 #include <cctype>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -92,7 +94,10 @@ bool xml_space(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r';
 
 class VtkXmlReader {
  public:
-  VtkXmlReader(const std::string& path, ReadPurpose purpose) : path_(path), purpose_(purpose) {}
+  /// `piece_of`: for a piece named by a parallel file, that file's serial type
+  /// ("UnstructuredGrid" or "PolyData"), which the piece must have; empty for a file read alone.
+  VtkXmlReader(const std::string& path, ReadPurpose purpose, std::string piece_of = {})
+      : path_(path), purpose_(purpose), piece_of_(std::move(piece_of)) {}
 
   FileContents read() {
     {
@@ -120,10 +125,15 @@ class VtkXmlReader {
         fail("truncated: no </AppendedData> after the appended data");
     }
     const std::string type = root.get("type");
-    if (type == "PUnstructuredGrid" || type == "PPolyData")
-      fail("this is a parallel VTK file (" + type + ") that only lists its pieces: read the pieces' .vtu / .vtp files");
+    if (type == "PUnstructuredGrid" || type == "PPolyData") {
+      if (!piece_of_.empty()) fail("a piece of a parallel file is itself a parallel file (" + type + ")");
+      return read_parallel(root, type);
+    }
     if (type != "UnstructuredGrid" && type != "PolyData")
-      fail("VTKFile type '" + shown(type) + "' is not a set of points (read: UnstructuredGrid .vtu, PolyData .vtp)");
+      fail("VTKFile type '" + shown(type) + "' is not a set of points (read: UnstructuredGrid .vtu, PolyData .vtp, " +
+           "and their parallel .pvtu, .pvtp)");
+    if (!piece_of_.empty() && type != piece_of_)
+      fail("VTKFile type '" + type + "', but the parallel file that lists it has " + piece_of_ + " pieces");
     const std::string order = root.get("byte_order", "LittleEndian");
     if (order != "LittleEndian" && order != "BigEndian") fail("byte_order '" + shown(order) + "' is not LittleEndian or BigEndian");
     big_endian_ = order == "BigEndian";
@@ -155,6 +165,73 @@ class VtkXmlReader {
  private:
   [[noreturn]] void fail(const std::string& problem) const {
     throw Error(Status::FormatError, "'" + path_ + "': " + problem);
+  }
+
+  // ---- Parallel files ----------------------------------------------------------------------
+  // A .pvtu / .pvtp (what ParaView and MPI simulations write, a piece per process) only lists
+  // its pieces, each a serial file of the same kind; their points are concatenated in the
+  // listed order, as VTK's parallel readers do. A piece is read only from the parallel file's
+  // folder or below it (no absolute path, no '..'), only if it is a regular file (never a
+  // device or a FIFO), and at most once: a hostile list cannot reach other files or make the
+  // same large file count many times.
+  FileContents read_parallel(const Node& root, const std::string& type) {
+    namespace fs = std::filesystem;
+    const std::string serial = type.substr(1);
+    const Node* set = root.child(type);
+    if (!set) fail("<VTKFile type=\"" + type + "\"> holds no <" + type + "> element");
+    const fs::path folder = fs::path(path_).parent_path();
+    std::vector<std::string> sources;
+    for (const Node& piece : set->children) {
+      if (piece.name != "Piece") continue;
+      const std::string label = "piece " + std::to_string(sources.size());
+      const std::string source = piece.get("Source");
+      if (source.empty()) fail(label + " has no Source file");
+      const fs::path relative(source);
+      bool outside = relative.is_absolute() || relative.has_root_name();
+      for (const fs::path& part : relative) outside = outside || part == "..";
+      if (outside)
+        fail(label + "'s Source '" + shown(source) + "' is not a path inside the parallel file's folder (pieces are " +
+             "read only from beside it or below it)");
+      if (std::find(sources.begin(), sources.end(), source) != sources.end())
+        fail(label + " repeats the Source '" + shown(source) + "' of an earlier piece");
+      sources.push_back(source);
+      const fs::path file = folder / relative;
+      std::error_code ec;
+      if (!fs::exists(file, ec)) fail(label + "'s Source '" + shown(source) + "' does not exist (" + file.string() + ")");
+      if (!fs::is_regular_file(file, ec))
+        fail(label + "'s Source '" + shown(source) + "' is not a regular file (" + file.string() + ")");
+      add_piece_file(VtkXmlReader(file.string(), purpose_, serial).read(), label + " ('" + shown(source) + "')");
+    }
+    if (sources.empty()) fail("<" + type + "> lists no <Piece Source=\"...\">");
+    return std::move(out_);
+  }
+
+  /// Appends a piece file's contents; every piece with points must carry the same point arrays
+  /// (names and components) and normals as the first one.
+  void add_piece_file(FileContents&& c, const std::string& label) {
+    out_.faces += c.faces;
+    if (c.positions.empty()) return;  // a process that held no particles
+    if (out_.positions.empty()) {
+      const uint64_t faces = out_.faces;
+      out_ = std::move(c);
+      out_.faces = faces;
+      return;
+    }
+    bool same = c.attributes.size() == out_.attributes.size() && c.normals.empty() == out_.normals.empty();
+    for (size_t a = 0; same && a < c.attributes.size(); ++a)
+      same = c.attributes[a].name == out_.attributes[a].name && c.attributes[a].components == out_.attributes[a].components;
+    if (!same) fail(label + " carries other point arrays than the first piece (pieces must carry the same arrays)");
+    const size_t base = out_.positions.size();
+    if (!c.triangles.empty() && base + c.positions.size() > size_t(UINT32_MAX))
+      fail(label + ": the pieces hold more than 2^32 points with cells");
+    out_.positions.insert(out_.positions.end(), c.positions.begin(), c.positions.end());
+    out_.normals.insert(out_.normals.end(), c.normals.begin(), c.normals.end());
+    for (size_t a = 0; a < c.attributes.size(); ++a)
+      out_.attributes[a].values.insert(out_.attributes[a].values.end(), c.attributes[a].values.begin(),
+                                       c.attributes[a].values.end());
+    out_.triangles.reserve(out_.triangles.size() + c.triangles.size());
+    for (const Triangle& t : c.triangles)
+      out_.triangles.push_back({uint32_t(base + t[0]), uint32_t(base + t[1]), uint32_t(base + t[2])});
   }
 
   // ---- XML --------------------------------------------------------------------------------
@@ -557,6 +634,7 @@ class VtkXmlReader {
 
   std::string path_;
   ReadPurpose purpose_;
+  std::string piece_of_;
   std::string data_;
   size_t appended_ = std::string::npos, appended_end_ = 0;
   bool appended_base64_ = false;

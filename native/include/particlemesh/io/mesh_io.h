@@ -69,7 +69,8 @@ PM_EXPORT TriMesh read_mesh(const std::string& path);
 /// "color" attribute in [0, 1], other properties as attributes; faces ignored), .xyz (one
 /// point per line: "x y z" or "x y z nx ny nz", '#' starts a comment), simulators' files:
 /// VTK legacy .vtk (ASCII or BINARY; POLYDATA or UNSTRUCTURED_GRID; POINT_DATA arrays as
-/// attributes, NORMALS as the normals), VTK XML .vtu / .vtp (ascii, base64, raw appended;
+/// attributes, NORMALS as the normals), VTK XML .vtu / .vtp and parallel .pvtu / .pvtp
+/// (pieces from the file's folder or below; ascii, base64, raw appended;
 /// uncompressed or compressed by zlib, LZ4 or LZMA; PointData arrays as attributes) and
 /// Houdini's .bgeo (binary JSON or classic, plain or gzip) and ASCII .geo (point
 /// attributes, "N" as the normals). Attributes are float channels: integer arrays (ids) are
