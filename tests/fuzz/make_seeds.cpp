@@ -276,6 +276,10 @@ void file_seeds() {
           "<PPoints><PDataArray type=\"Float32\" NumberOfComponents=\"3\"/></PPoints><Piece Source=\"p/p_0.vtu\"/>"
           "<Piece Source=\"../p_1.vtu\"/></PUnstructuredGrid></VTKFile>\n");
   put("read_xyz", "bom.xyz", "\xEF\xBB\xBF" "0 0 0\n1 0 0\n0 1 0\n");
+  // Columns named by a header line, and told from their count (colours, intensity, normals).
+  put("read_xyz", "header.xyz", "//X,Y,Z,R,G,B,Intensity,Nx,Ny,Nz\n0,0,0,255,0,0,5,0,0,1\n1,0,0,0,255,0,6,0,0,1\n");
+  put("read_xyz", "rgb_intensity.xyz", "0 0 0 255 0 0 9\n1 0 0 0 255 0 8\n0 1 0 0 0 255 7\n");
+  put("read_xyz", "colour_normal.xyz", "0 0 0 255 0 0 0 0 1\n1 0 0 0 255 0 0 1 0\n");
   put("read_obj", "colours.obj", "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nvn 0 0 1\nf 1//1 2//1 3//1\n");
   put("read_obj", "stl_two_solids.bin",
       "\xFE" "solid\nfacet normal 0 0 1\n outer loop\n vertex 0 0 0\n vertex 1 0 0\n vertex 0 1 0\n endloop\nendfacet\n"

@@ -16,6 +16,7 @@ const std::vector<FileFormat>& file_formats() {
       // extension, name, reader, points, mesh
       {".ply", "PLY", &read_ply, true, true},
       {".xyz", "XYZ text", &read_xyz, true, false},
+      {".pts", "PTS text (Leica, CloudCompare)", &read_xyz, true, false},
       {".obj", "Wavefront OBJ", &read_obj, false, true},
       {".off", "OFF", &read_off, false, true},
       {".stl", "STL", &read_stl, false, true},

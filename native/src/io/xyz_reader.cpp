@@ -1,11 +1,41 @@
-// The plain-text .xyz particle format: "x y z" or "x y z nx ny nz" per line (spaces, tabs or
-// commas between values), '#' starts a comment, blank lines are skipped, every data line has
-// the same number of values. A UTF-8 byte order mark at the start is skipped (editors on
-// Windows write one). Lines are at most 64 KiB: a file that never ends a line (/dev/zero,
-// a binary file renamed) is refused after that much, not read into memory whole.
+// Plain-text point files, one point per line: .xyz (and the .pts of Leica scanners and
+// CloudCompare). Values are separated by spaces, tabs, commas or semicolons; '#' starts a
+// comment; blank lines are skipped; every data line has the same number of values. A UTF-8
+// byte order mark at the start is skipped (editors on Windows write one). Lines are at most
+// 64 KiB: a file that never ends a line (/dev/zero, a binary file renamed) is refused after
+// that much, not read into memory whole.
+//
+// What the columns are:
+//  - A header line names them, when the first line that is not a comment starts with a word
+//    rather than a number ("x y z nx ny nz red green blue", CloudCompare's "//X,Y,Z,R,G,B",
+//    PDAL's "\"X\",\"Y\",\"Z\",\"Intensity\""): x, y, z (required); nx, ny, nz (or normal_x
+//    ... or normalx ...) the normals; r, g, b (or red, green, blue) the colour (values in
+//    [0, 1] as they are, up to 255 as 8-bit, above as 16-bit colours); any other name a
+//    channel of that name.
+//  - Without a header, by their count and values (the conventions of scanners and of
+//    CloudCompare's two column orders, "point, colour, scalars, normal" and, in .pts,
+//    "point, scalars, colour, normal"):
+//      3  x y z
+//      4  x y z intensity
+//      6  x y z nx ny nz, or x y z r g b where the last three are plainly colours (whole
+//         numbers from 0 to 255 with one above 1, or values in [0, 1] that are not unit
+//         vectors); otherwise normals, as before colours were told apart
+//      7  .xyz: x y z r g b intensity; .pts: x y z intensity r g b (either only where those
+//         three are colours)
+//      9  x y z r g b nx ny nz or x y z nx ny nz r g b (whichever three are unit vectors,
+//         the other three colours)
+//     Any other count, or a 7 or 9 whose values fit neither order, keeps x y z and reads
+//     every further column as a channel "column_4", "column_5", ... (nothing is guessed and
+//     nothing is lost; a header line names them).
+//  - .pts: a line holding one whole number (the point count Leica's files start each scan
+//    with) is skipped.
 #include <algorithm>
+#include <array>
+#include <cctype>
+#include <cmath>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "io/file_reader.h"
 #include "io/formats.h"
@@ -14,51 +44,273 @@
 
 namespace PM_NAMESPACE::detail {
 
-FileContents read_xyz(const std::string& path, ReadPurpose) {
-  constexpr size_t kMaxLine = size_t(1) << 16;
-  FileReader in(path);
-  if (in.peek() < 0) throw Error(Status::FormatError, "'" + path + "': the file is empty");
-  if (in.look_ahead(3) == "\xEF\xBB\xBF") in.skip(3);
-  FileContents out;
-  if (in.size() > 0) out.positions.reserve(size_t(std::min<int64_t>(in.size() / 24, 1 << 20)));  // ~24 bytes a point at least
-  int columns = -1;
-  std::string_view line;
-  auto fail = [&](const std::string& problem) {
-    throw Error(Status::FormatError, "'" + path + "' line " + std::to_string(in.line_number()) + ": " + problem);
-  };
-  auto separator = [](char c) { return c == ' ' || c == '\t' || c == ',' || c == '\r'; };
-  while (in.line(line, kMaxLine)) {
-    if (const size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
-    double v[6];
-    int count = 0;
-    size_t i = 0;
-    while (true) {
-      while (i < line.size() && separator(line[i])) ++i;
-      if (i >= line.size()) break;
-      size_t j = i;
-      while (j < line.size() && !separator(line[j])) ++j;
-      const std::string_view t = line.substr(i, j - i);
-      if (count == 6) fail("more than 6 values");
-      // NaN and inf are read here and refused by name with the point's index
-      // (validate_point_cloud: "positions[7].x is NaN"); overflowing text is named here.
-      switch (parse_number(t, v[count])) {
-        case NumberText::Ok: break;
-        case NumberText::NotANumber: fail("not a number: '" + shown(t) + "'"); break;
-        case NumberText::Overflow: fail("'" + shown(t) + "' is beyond the range of double (1.8e308)"); break;
-      }
-      ++count;
-      i = j;
-    }
-    if (count == 0) continue;
-    if (count != 3 && count != 6)
-      fail(std::to_string(count) + " values, expected 3 (x y z) or 6 (x y z nx ny nz)");
-    if (columns == -1) columns = count;
-    if (count != columns)
-      fail(std::to_string(count) + " values where earlier lines have " + std::to_string(columns));
-    out.positions.push_back({v[0], v[1], v[2]});
-    if (count == 6) out.normals.push_back({v[3], v[4], v[5]});
+namespace {
+
+constexpr size_t kMaxLine = size_t(1) << 16;
+constexpr int kMaxColumns = 64;
+
+bool separator(char c) { return c == ' ' || c == '\t' || c == ',' || c == ';' || c == '\r'; }
+
+/// The words of a line, split at separators.
+void split(std::string_view line, std::vector<std::string_view>& words) {
+  words.clear();
+  size_t i = 0;
+  while (true) {
+    while (i < line.size() && separator(line[i])) ++i;
+    if (i >= line.size()) return;
+    size_t j = i;
+    while (j < line.size() && !separator(line[j])) ++j;
+    words.push_back(line.substr(i, j - i));
+    i = j;
   }
+}
+
+std::string lower(std::string_view s) {
+  std::string out(s);
+  for (char& c : out) c = char(std::tolower(static_cast<unsigned char>(c)));
   return out;
 }
+
+/// What each column of the file is.
+struct Layout {
+  int normal = -1;  ///< first of three columns, or -1
+  int color = -1;   ///< first of three columns, or -1
+  std::vector<std::pair<std::string, int>> channels;  ///< name, column
+};
+
+class XyzReader {
+ public:
+  explicit XyzReader(const std::string& path) : in_(path), pts_(lower_extension(path) == ".pts") {}
+
+  FileContents read() {
+    if (in_.peek() < 0) fail_file("the file is empty");
+    if (in_.look_ahead(3) == "\xEF\xBB\xBF") in_.skip(3);
+    if (in_.size() > 0) values_.reserve(size_t(std::min<int64_t>(in_.size() / 8, 1 << 22)));
+    std::string_view line;
+    std::vector<std::string_view> words;
+    bool first = true;
+    std::vector<std::string> header;
+    while (in_.line(line, kMaxLine)) {
+      if (const size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
+      split(line, words);
+      if (words.empty()) continue;
+      if (first) {
+        first = false;
+        double v = 0;
+        std::string_view w0 = words[0];
+        if (w0.substr(0, 2) == "//") w0.remove_prefix(2);
+        if (w0.empty() || parse_number(w0, v) == NumberText::NotANumber) {
+          header = header_names(line);
+          columns_ = int(header.size());
+          continue;
+        }
+      }
+      if (pts_ && words.size() == 1 && columns_ != 1) {
+        double v = 0;
+        if (parse_number(words[0], v) == NumberText::Ok && v >= 0 && v == std::floor(v)) continue;  // a scan's count
+      }
+      if (words.size() > size_t(kMaxColumns)) fail("more than " + std::to_string(kMaxColumns) + " values");
+      const int count = int(words.size());
+      if (columns_ == -1) {
+        if (count < 3) fail(std::to_string(count) + " values, expected at least 3 (x y z)");
+        columns_ = count;
+      }
+      if (count != columns_)
+        fail(std::to_string(count) + " values where " + (header.empty() ? "earlier lines have " : "the header names ") +
+             std::to_string(columns_));
+      for (std::string_view t : words) {
+        double v = 0;
+        // NaN and inf are read here and refused by name with the point's index
+        // (validate_point_cloud: "positions[7].x is NaN"); overflowing text is named here.
+        switch (parse_number(t, v)) {
+          case NumberText::Ok: break;
+          case NumberText::NotANumber: fail("not a number: '" + shown(t) + "'");
+          case NumberText::Overflow: fail("'" + shown(t) + "' is beyond the range of double (1.8e308)");
+        }
+        values_.push_back(v);
+      }
+    }
+    if (columns_ <= 0 || values_.empty()) return {};
+    int xyz[3] = {0, 1, 2};
+    const Layout layout = header.empty() ? guess() : named(header, xyz);
+    return contents(layout, xyz);
+  }
+
+ private:
+  [[noreturn]] void fail_file(const std::string& problem) const {
+    throw Error(Status::FormatError, "'" + in_.path() + "': " + problem);
+  }
+  [[noreturn]] void fail(const std::string& problem) const {
+    throw Error(Status::FormatError, "'" + in_.path() + "' line " + std::to_string(in_.line_number()) + ": " + problem);
+  }
+
+  size_t rows() const { return values_.size() / size_t(columns_); }
+  double at(size_t row, int column) const { return values_[row * size_t(columns_) + size_t(column)]; }
+
+  /// The header's column names: "//" and quotes dropped.
+  std::vector<std::string> header_names(std::string_view line) const {
+    std::string text(line);
+    const size_t start = text.find_first_not_of(" \t");
+    if (text.compare(start, 2, "//") == 0) text.erase(start, 2);
+    std::vector<std::string_view> words;
+    split(text, words);
+    std::vector<std::string> names;
+    for (std::string_view w : words) {
+      while (!w.empty() && (w.front() == '"' || w.front() == '\'')) w.remove_prefix(1);
+      while (!w.empty() && (w.back() == '"' || w.back() == '\'')) w.remove_suffix(1);
+      if (w.empty()) fail("an empty column name in the header line");
+      names.emplace_back(w);
+    }
+    if (names.size() > size_t(kMaxColumns)) fail("the header names more than " + std::to_string(kMaxColumns) + " columns");
+    return names;
+  }
+
+  /// The layout a header line names; x, y, z are required.
+  Layout named(const std::vector<std::string>& names, int* xyz) {
+    Layout l;
+    int normal[3] = {-1, -1, -1}, color[3] = {-1, -1, -1};
+    for (int k = 0; k < 3; ++k) xyz[k] = -1;
+    static const char* const kAxis[3] = {"x", "y", "z"};
+    static const char* const kColour[3][2] = {{"r", "red"}, {"g", "green"}, {"b", "blue"}};
+    for (int c = 0; c < int(names.size()); ++c) {
+      const std::string n = lower(names[size_t(c)]);
+      bool taken = false;
+      for (int k = 0; k < 3 && !taken; ++k) {
+        const std::string a = kAxis[k];
+        int* slot = nullptr;
+        if (n == a) slot = &xyz[k];
+        else if (n == "n" + a || n == "normal_" + a || n == "normal" + a) slot = &normal[k];
+        else if (n == kColour[k][0] || n == kColour[k][1]) slot = &color[k];
+        if (slot && *slot < 0) *slot = c, taken = true;
+      }
+      if (!taken) l.channels.push_back({names[size_t(c)], c});
+    }
+    for (int k = 0; k < 3; ++k)
+      if (xyz[k] < 0) fail_file("the header line names no '" + std::string(kAxis[k]) + "' column");
+    // Normals and colours need all three of their columns; a partial set stays channels.
+    auto triple = [&](const int* t, std::array<int, 3>& order) {
+      if (t[0] >= 0 && t[1] >= 0 && t[2] >= 0) {
+        order = {t[0], t[1], t[2]};
+        return t[0];
+      }
+      for (int k = 0; k < 3; ++k)
+        if (t[k] >= 0) l.channels.push_back({names[size_t(t[k])], t[k]});
+      return -1;
+    };
+    l.normal = triple(normal, order_[0]);
+    l.color = triple(color, order_[1]);
+    std::sort(l.channels.begin(), l.channels.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+    return l;
+  }
+
+  /// Whether columns c..c+2 hold unit vectors (or zero vectors: points without a normal).
+  bool unit(int c) const {
+    for (size_t r = 0; r < rows(); ++r) {
+      const double x = at(r, c), y = at(r, c + 1), z = at(r, c + 2);
+      const double n2 = x * x + y * y + z * z;
+      if (n2 != 0 && !(n2 > 0.81 && n2 < 1.21)) return false;
+    }
+    return true;
+  }
+
+  /// Whether columns c..c+2 are plainly colours: whole numbers from 0 to 255, one of them
+  /// above 1; or values in [0, 1] that are not all unit vectors.
+  bool colour(int c) const {
+    bool whole = true, unit_range = true, above_one = false;
+    for (size_t r = 0; r < rows(); ++r)
+      for (int k = 0; k < 3; ++k) {
+        const double v = at(r, c + k);
+        if (!(v >= 0 && v <= 255)) return false;
+        whole = whole && v == std::floor(v);
+        unit_range = unit_range && v <= 1;
+        above_one = above_one || v > 1;
+      }
+    return (whole && above_one) || (unit_range && !unit(c));
+  }
+
+  Layout guess() {
+    Layout l;
+    auto rest = [&](int from) {
+      for (int c = from; c < columns_; ++c) l.channels.push_back({"column_" + std::to_string(c + 1), c});
+    };
+    switch (columns_) {
+      case 3: return l;
+      case 4: l.channels.push_back({"intensity", 3}); return l;
+      case 6:
+        if (colour(3)) l.color = 3;
+        else l.normal = 3;
+        return l;
+      case 7:
+        if (!pts_ && colour(3)) {
+          l.color = 3;
+          l.channels.push_back({"intensity", 6});
+          return l;
+        }
+        if (pts_ && colour(4)) {
+          l.channels.push_back({"intensity", 3});
+          l.color = 4;
+          return l;
+        }
+        break;
+      case 9:
+        if (colour(3) && unit(6)) {
+          l.color = 3, l.normal = 6;
+          return l;
+        }
+        if (unit(3) && colour(6)) {
+          l.normal = 3, l.color = 6;
+          return l;
+        }
+        break;
+      default: break;
+    }
+    rest(3);
+    return l;
+  }
+
+  FileContents contents(const Layout& l, const int* xyz) {
+    if (l.normal >= 0 && order_[0][0] < 0) order_[0] = {l.normal, l.normal + 1, l.normal + 2};
+    if (l.color >= 0 && order_[1][0] < 0) order_[1] = {l.color, l.color + 1, l.color + 2};
+    const size_t n = rows();
+    FileContents out;
+    out.positions.resize(n);
+    for (size_t r = 0; r < n; ++r) out.positions[r] = {at(r, xyz[0]), at(r, xyz[1]), at(r, xyz[2])};
+    if (l.normal >= 0) {
+      out.normals.resize(n);
+      for (size_t r = 0; r < n; ++r) out.normals[r] = {at(r, order_[0][0]), at(r, order_[0][1]), at(r, order_[0][2])};
+    }
+    if (l.color >= 0) {
+      // [0, 1] as is, up to 255 as 8-bit, up to 65535 as 16-bit colours (as in LAS).
+      double top = 0;
+      for (size_t r = 0; r < n; ++r)
+        for (int k = 0; k < 3; ++k) top = std::max(top, at(r, order_[1][size_t(k)]));
+      const double scale = top <= 1 ? 1.0 : top <= 255 ? 1.0 / 255.0 : 1.0 / 65535.0;
+      VertexAttribute color{"color", 3, {}};
+      color.values.resize(3 * n);
+      for (size_t r = 0; r < n; ++r)
+        for (int k = 0; k < 3; ++k)
+          color.values[3 * r + size_t(k)] = float(std::clamp(at(r, order_[1][size_t(k)]) * scale, 0.0, 1.0));
+      out.attributes.push_back(std::move(color));
+    }
+    for (const auto& [name, column] : l.channels) {
+      VertexAttribute a{unique_attribute_name(out, name), 1, {}};
+      a.values.resize(n);
+      for (size_t r = 0; r < n; ++r) a.values[r] = float(at(r, column));
+      out.attributes.push_back(std::move(a));
+    }
+    return out;
+  }
+
+  FileReader in_;
+  bool pts_;
+  int columns_ = -1;
+  std::vector<double> values_;  ///< rows x columns_
+  /// The columns of the normal's and the colour's x/r, y/g, z/b (header order), or -1.
+  std::array<std::array<int, 3>, 2> order_{{{-1, -1, -1}, {-1, -1, -1}}};
+};
+
+}  // namespace
+
+FileContents read_xyz(const std::string& path, ReadPurpose) { return XyzReader(path).read(); }
 
 }  // namespace particlemesh::detail

@@ -99,13 +99,13 @@ TEST(MeshIO, BadFilesGiveErrorsNamingFileAndProblem) {
   write_text(dir / "cols.xyz", "0 0 0\n1 0 0 0 0 1\n");
   EXPECT_EQ(status_of([&] { read_point_cloud((dir / "cols.xyz").string()); }, &msg), Status::FormatError);
   EXPECT_NE(msg.find("line 2"), std::string::npos) << msg;
-  write_text(dir / "four.xyz", "0 0 0 1\n");
-  EXPECT_EQ(status_of([&] { read_point_cloud((dir / "four.xyz").string()); }, &msg), Status::FormatError);
+  write_text(dir / "two.xyz", "0 0\n");
+  EXPECT_EQ(status_of([&] { read_point_cloud((dir / "two.xyz").string()); }, &msg), Status::FormatError);
   write_text(dir / "nan.xyz", "0 0 0\n1 1 1\nnan 0 0\n");
   EXPECT_EQ(status_of([&] { read_point_cloud((dir / "nan.xyz").string()); }, &msg), Status::InvalidInput);
   EXPECT_NE(msg.find("positions[2].x is NaN"), std::string::npos) << msg;
-  write_text(dir / "x.pts", "0 0 0\n");
-  EXPECT_EQ(status_of([&] { read_point_cloud((dir / "x.pts").string()); }, &msg), Status::FormatError);
+  write_text(dir / "x.e57", "0 0 0\n");
+  EXPECT_EQ(status_of([&] { read_point_cloud((dir / "x.e57").string()); }, &msg), Status::FormatError);
   EXPECT_NE(msg.find("unsupported"), std::string::npos);
 
   // A binary PLY cut short: the reader must fail, not return zeros.

@@ -11,6 +11,7 @@
 #include <string>
 #include <sys/stat.h>
 #include <thread>
+#include <tuple>
 
 #include "particlemesh/core/error.h"
 #include "particlemesh/io/mesh_io.h"
@@ -247,6 +248,84 @@ TEST(XyzReader, ByteOrderMarkLongLinesAndOverflow) {
   // /dev/zero behind a name: refused at once, in bounded memory.
   fs::create_symlink("/dev/zero", dir / "zero.xyz");
   EXPECT_REFUSED(read_point_cloud((dir / "zero.xyz").string()), Status::FormatError, "line 1 is longer than 65536 bytes");
+}
+
+// Text point files' columns: named by a header line (CloudCompare's "//X,Y,Z,R,G,B", PDAL's
+// quoted names, any case), or told by their count and values (scanners' and CloudCompare's
+// conventions): colours are never taken for normals, nothing is dropped.
+TEST(XyzReader, ColumnsNamedByAHeaderOrToldByTheirValues) {
+  const auto dir = test::scratch_dir("xyz_columns");
+  auto read = [&](const std::string& name, const std::string& text) { return read_point_cloud(write(dir / name, text)); };
+  auto attribute = [](const PointCloud& c, const std::string& name) -> const VertexAttribute* {
+    for (const VertexAttribute& a : c.attributes)
+      if (a.name == name) return &a;
+    return nullptr;
+  };
+  auto expect_colours = [&](const PointCloud& c) {
+    const VertexAttribute* col = attribute(c, "color");
+    ASSERT_NE(col, nullptr);
+    ASSERT_EQ(col->components, 3);
+    EXPECT_EQ(col->values, (std::vector<float>{1, 0, 0, 0, 1, 0, 0, 0, 1}));
+  };
+  const std::string xyz[3] = {"0 0 0", "1 0 0", "0 1 0"};
+  auto rows = [&](const std::string& a, const std::string& b, const std::string& c) {
+    return xyz[0] + " " + a + "\n" + xyz[1] + " " + b + "\n" + xyz[2] + " " + c + "\n";
+  };
+
+  // A header: columns in any order and case, colours 0-255, a channel; normals need all three.
+  PointCloud h = read("h.xyz", "//Intensity,Z,Y,X,R,G,B,nz\n5,0,0,0,255,0,0,1\n6,0,0,1,0,255,0,1\n7,0,1,0,0,0,255,1\n");
+  EXPECT_EQ(h.positions[1], (Vec3{1, 0, 0}));
+  EXPECT_EQ(h.positions[2], (Vec3{0, 1, 0}));
+  EXPECT_TRUE(h.normals.empty());
+  expect_colours(h);
+  ASSERT_NE(attribute(h, "Intensity"), nullptr);
+  EXPECT_EQ(attribute(h, "Intensity")->values, (std::vector<float>{5, 6, 7}));
+  ASSERT_NE(attribute(h, "nz"), nullptr);  // a lone normal component stays a channel
+  const PointCloud pdal = read("pdal.xyz", "\"X\",\"Y\",\"Z\",\"NormalX\",\"NormalY\",\"NormalZ\"\n" + rows("0,0,1", "0,0,1", "1,0,0"));
+  ASSERT_EQ(pdal.normals.size(), 3u);
+  EXPECT_EQ(pdal.normals[2], (Vec3{1, 0, 0}));
+  EXPECT_REFUSED(read("noz.xyz", "x y w\n0 0 0\n"), Status::FormatError, "noz.xyz': the header line names no 'z' column");
+  EXPECT_REFUSED(read("short.xyz", "x y z r g b\n0 0 0 1 1\n"), Status::FormatError,
+                 "short.xyz' line 2: 5 values where the header names 6");
+
+  // No header: 6 columns are normals unless plainly colours (whole numbers up to 255, or
+  // values in [0, 1] that are not unit vectors); normals of any length stay normals.
+  expect_colours(read("rgb.xyz", rows("255 0 0", "0 255 0", "0 0 255")));
+  const PointCloud rgbf = read("rgbf.xyz", rows("0.5 0.5 0.5", "0.1 0.2 0.3", "1 1 1"));
+  EXPECT_TRUE(rgbf.normals.empty());
+  ASSERT_NE(attribute(rgbf, "color"), nullptr);
+  EXPECT_EQ(attribute(rgbf, "color")->values[5], 0.3f);
+  const PointCloud n6 = read("n.xyz", rows("0 0 1", "1 0 0", "0.6 0 0.8"));
+  ASSERT_EQ(n6.normals.size(), 3u);
+  EXPECT_TRUE(n6.attributes.empty());
+  EXPECT_EQ(read("long_normals.xyz", rows("-3 2 1", "0.5 0 0", "0 0 0")).normals.size(), 3u);
+  // 4: intensity; 7: x y z r g b intensity (.xyz) or x y z intensity r g b (.pts, with its
+  // count lines); 9: colour and normals either way round.
+  EXPECT_EQ(attribute(read("i.xyz", rows("10", "20", "30")), "intensity")->values, (std::vector<float>{10, 20, 30}));
+  const PointCloud x7 = read("c7.xyz", rows("255 0 0 9", "0 255 0 8", "0 0 255 7"));
+  expect_colours(x7);
+  EXPECT_EQ(attribute(x7, "intensity")->values, (std::vector<float>{9, 8, 7}));
+  const PointCloud p7 = read("scan.pts", "2\n" + xyz[0] + " -100 255 0 0\n" + xyz[1] + " 200 0 255 0\n1\n" + xyz[2] +
+                                             " 300 0 0 255\n");
+  ASSERT_EQ(p7.size(), 3u);
+  expect_colours(p7);
+  EXPECT_EQ(attribute(p7, "intensity")->values, (std::vector<float>{-100, 200, 300}));
+  for (const auto& [name, a, b, c] : {std::tuple{"c9.xyz", "255 0 0 0 0 1", "0 255 0 0 0 1", "0 0 255 1 0 0"},
+                                      std::tuple{"n9.xyz", "0 0 1 255 0 0", "0 0 1 0 255 0", "1 0 0 0 0 255"}}) {
+    const PointCloud c9 = read(name, rows(a, b, c));
+    ASSERT_EQ(c9.normals.size(), 3u) << name;
+    EXPECT_EQ(c9.normals[2], (Vec3{1, 0, 0})) << name;
+    expect_colours(c9);
+  }
+  // Any other count, and 7 or 9 columns that fit neither order: channels column_4, ...
+  const PointCloud five = read("five.xyz", rows("1 2", "3 4", "5 6"));
+  EXPECT_TRUE(five.normals.empty());
+  ASSERT_EQ(five.attributes.size(), 2u);
+  EXPECT_EQ(five.attributes[1].name, "column_5");
+  EXPECT_EQ(five.attributes[1].values, (std::vector<float>{2, 4, 6}));
+  EXPECT_EQ(read("seven.xyz", rows("1 2 3 4", "5 6 7 8", "9 10 -11 12")).attributes.size(), 4u);
+  EXPECT_REFUSED(read("two.xyz", "0 0\n"), Status::FormatError, "two.xyz' line 1: 2 values, expected at least 3");
+  EXPECT_REFUSED(read("ragged.xyz", "0 0 0\n1 0 0 1\n"), Status::FormatError, "line 2: 4 values where earlier lines have 3");
 }
 
 // Each file is read exactly once, front to back: a FIFO (readable once) reads like a file.
