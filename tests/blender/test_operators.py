@@ -393,6 +393,33 @@ def test_import_ply_vertex_colours(pm, tmp_path):
     np.testing.assert_allclose(co, p, atol=1e-6)
 
 
+def test_import_scanner_text_and_parallel_vtk(pm, tmp_path):
+    """A Leica .pts (count line, x y z intensity r g b): colours as `Col`, intensity as a
+    channel, no normals; a .pvtu's pieces (in a folder beside it) as one object."""
+    pts = tmp_path / "scan.pts"
+    pts.write_text("3\n0 0 0 -100 255 0 0\n1 0 0 200 0 255 0\n0 1 0 300 0 0 255\n")
+    obj = import_cloud(pts)
+    co, _ = mesh_arrays(obj.data)
+    np.testing.assert_allclose(co, [[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    got = pm.blender_mesh.get_point_attribute(obj.data, "Col")
+    np.testing.assert_allclose(got[:, :3], np.eye(3), atol=1e-6)
+    np.testing.assert_allclose(pm.blender_mesh.get_point_attribute(obj.data, "intensity").ravel(), [-100, 200, 300])
+    assert pm.blender_mesh.get_point_attribute(obj.data, "point_normal") is None
+
+    (tmp_path / "sim").mkdir()
+    for k in range(2):
+        (tmp_path / "sim" / f"sim_{k}.vtu").write_text(
+            '<?xml version="1.0"?>\n<VTKFile type="UnstructuredGrid" version="1.0">\n<UnstructuredGrid>'
+            '<Piece NumberOfPoints="2" NumberOfCells="0"><Points><DataArray type="Float32" '
+            f'NumberOfComponents="3" format="ascii">{k} 0 0 {k} 1 0</DataArray></Points></Piece>'
+            "</UnstructuredGrid>\n</VTKFile>\n")
+    pvtu = tmp_path / "sim.pvtu"
+    pvtu.write_text('<?xml version="1.0"?>\n<VTKFile type="PUnstructuredGrid" version="1.0"><PUnstructuredGrid>'
+                    '<Piece Source="sim/sim_0.vtu"/><Piece Source="sim/sim_1.vtu"/></PUnstructuredGrid></VTKFile>\n')
+    co, _ = mesh_arrays(import_cloud(pvtu).data)
+    np.testing.assert_allclose(co, [[0, 0, 0], [0, 1, 0], [1, 0, 0], [1, 1, 0]])
+
+
 def test_import_malformed_pcd_cancels_naming_the_file(pm, tmp_path):
     bad = tmp_path / "broken.pcd"
     bad.write_text("VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
