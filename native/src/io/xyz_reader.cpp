@@ -101,6 +101,7 @@ class XyzReader {
         if (w0.substr(0, 2) == "//") w0.remove_prefix(2);
         if (w0.empty() || parse_number(w0, v) == NumberText::NotANumber) {
           header = header_names(line);
+          header_text_ = std::string(line.substr(0, 200));
           columns_ = int(header.size());
           continue;
         }
@@ -186,7 +187,9 @@ class XyzReader {
       if (!taken) l.channels.push_back({names[size_t(c)], c});
     }
     for (int k = 0; k < 3; ++k)
-      if (xyz[k] < 0) fail_file("the header line names no '" + std::string(kAxis[k]) + "' column");
+      if (xyz[k] < 0)
+        fail_file("its first line ('" + shown(header_text_) + "') starts with a word, so it is read as a header line " +
+                  "naming the columns, but it names no '" + kAxis[k] + "' column");
     // Normals and colours need all three of their columns; a partial set stays channels.
     auto triple = [&](const int* t, std::array<int, 3>& order) {
       if (t[0] >= 0 && t[1] >= 0 && t[2] >= 0) {
@@ -303,6 +306,7 @@ class XyzReader {
 
   FileReader in_;
   bool pts_;
+  std::string header_text_;
   int columns_ = -1;
   std::vector<double> values_;  ///< rows x columns_
   /// The columns of the normal's and the colour's x/r, y/g, z/b (header order), or -1.

@@ -284,7 +284,7 @@ TEST(XyzReader, ColumnsNamedByAHeaderOrToldByTheirValues) {
   const PointCloud pdal = read("pdal.xyz", "\"X\",\"Y\",\"Z\",\"NormalX\",\"NormalY\",\"NormalZ\"\n" + rows("0,0,1", "0,0,1", "1,0,0"));
   ASSERT_EQ(pdal.normals.size(), 3u);
   EXPECT_EQ(pdal.normals[2], (Vec3{1, 0, 0}));
-  EXPECT_REFUSED(read("noz.xyz", "x y w\n0 0 0\n"), Status::FormatError, "noz.xyz': the header line names no 'z' column");
+  EXPECT_REFUSED(read("noz.xyz", "x y w\n0 0 0\n"), Status::FormatError, "noz.xyz': its first line ('x y w') starts with a word, so it is read as a header line naming the columns, but it names no 'z' column");
   EXPECT_REFUSED(read("short.xyz", "x y z r g b\n0 0 0 1 1\n"), Status::FormatError,
                  "short.xyz' line 2: 5 values where the header names 6");
 
