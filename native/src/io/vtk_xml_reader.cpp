@@ -186,7 +186,10 @@ class VtkXmlReader {
       const std::string label = "piece " + std::to_string(sources.size());
       const std::string source = piece.get("Source");
       if (source.empty()) fail(label + " has no Source file");
-      const fs::path relative(source);
+      // A file written on Windows may separate folders with backslashes.
+      std::string portable = source;
+      std::replace(portable.begin(), portable.end(), '\\', '/');
+      const fs::path relative(portable);
       bool outside = relative.is_absolute() || relative.has_root_name();
       for (const fs::path& part : relative) outside = outside || part == "..";
       if (outside)
