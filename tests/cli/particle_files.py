@@ -1,6 +1,6 @@
 """Writers of simulators' particle files for the tests: the same particles as PLY, VTK legacy
 (ASCII, BINARY), VTK XML .vtu (ascii, base64, raw appended, zlib, LZMA) and parallel .pvtu
-(pieces in a folder beside it), Houdini's classic bgeo
+(pieces in a folder beside it), Krakatoa's .prt, Houdini's classic bgeo
 (plain, gzip) and Houdini 12+'s binary-JSON bgeo (paged, tuples and arrays layouts, either
 byte order, token strings, constant pages, gzip) and ASCII .geo. Values are multiples of 1/1024 so that every text form is exact in float32."""
 
@@ -131,6 +131,28 @@ def write_pvtu(path, p, attrs, pieces=3):
     path.write_text('<?xml version="1.0"?>\n<VTKFile type="PUnstructuredGrid" version="1.0" '
                     'byte_order="LittleEndian" header_type="UInt32">\n<PUnstructuredGrid GhostLevel="0">\n' +
                     "".join(f'<Piece Source="{s}"/>\n' for s in sources) + "</PUnstructuredGrid>\n</VTKFile>\n")
+
+
+def write_prt(path, p, attrs, half_velocity=False):
+    """Krakatoa's .prt: Position float32[3], Velocity float32[3] (or float16[3]), Density
+    float32, one zlib stream of the records (as Partio and Krakatoa write it)."""
+    n = len(p)
+    channels = [("Position", 4, 3, p.reshape(n, 3).astype("<f4"))]
+    for name, a in attrs.items():
+        a = a.reshape(n, -1)
+        half = half_velocity and name == "velocity"
+        channels.append((name.capitalize(), 3 if half else 4, a.shape[1], a.astype("<f2" if half else "<f4")))
+    defs, offset = [], 0
+    for name, code, arity, a in channels:
+        defs.append(name.encode().ljust(32, b"\0") + struct.pack("<3i", code, arity, offset))
+        offset += a.itemsize * arity
+    records = np.zeros(n, dtype=[(f"c{k}", c[3].dtype, (c[2],)) for k, c in enumerate(channels)])
+    for k, c in enumerate(channels):
+        records[f"c{k}"] = c[3]
+    header = (bytes([0xC0]) + b"PRT\r\n\x1a\n" + struct.pack("<i", 56) + b"Extensible Particle Format".ljust(32, b"\0")
+              + struct.pack("<iq", 1, n) + struct.pack("<3i", 4, len(channels), 44))
+    with open(path, "wb") as f:
+        f.write(header + b"".join(defs) + zlib.compress(records.tobytes()))
 
 
 def write_bgeo(path, p, attrs, compress=False):
@@ -293,6 +315,8 @@ FORMATS = {
     ".zlib.vtu": lambda path, p, a: write_vtu(path, p, a, "zlib"),
     ".lzma.vtu": lambda path, p, a: write_vtu(path, p, a, "lzma"),
     ".pvtu": write_pvtu,
+    ".prt": write_prt,
+    ".half.prt": lambda path, p, a: write_prt(path, p, a, half_velocity=True),
     ".bgeo": write_bgeo,
     ".bgeo.gz": lambda path, p, a: write_bgeo(path, p, a, compress=True),
     ".json.bgeo": write_bgeo_json,

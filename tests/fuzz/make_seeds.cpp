@@ -10,7 +10,10 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <tuple>
 #include <vector>
+
+#include <zlib.h>
 
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/io/png.h"
@@ -234,6 +237,32 @@ void file_seeds() {
   put("read_bgeo", "points_attributes.bgeo", bgeo_seed(5, false));
   put("read_bgeo", "particle_system.bgeo", bgeo_seed(4, true));
   put("read_bgeo", "binary_json.bgeo", bgeo_json_seed(10));
+  {
+    // Krakatoa .prt: Position float32[3], Velocity float16[3], Density float64 over 4 particles.
+    std::string prt("\xC0PRT\r\n\x1A\n", 8);
+    append(prt, int32_t(56));
+    prt += std::string("Extensible Particle Format") + std::string(6, '\0');
+    append(prt, int32_t(1));
+    append(prt, int64_t(4));
+    for (int32_t v : {4, 3, 44}) append(prt, v);
+    int32_t offset = 0;
+    for (const auto& [name, type, arity, size] : {std::tuple{"Position", 4, 3, 12}, std::tuple{"Velocity", 3, 3, 6},
+                                                  std::tuple{"Density", 5, 1, 8}}) {
+      prt += std::string(name) + std::string(32 - std::strlen(name), '\0');
+      for (int32_t v : {type, arity, offset}) append(prt, v);
+      offset += size;
+    }
+    std::string records;
+    for (int i = 0; i < 4; ++i) {
+      for (float v : {float(i), float(i % 2), 0.5f}) append(records, v);
+      for (uint16_t h : {uint16_t(0x3c00), uint16_t(0), uint16_t(0xbc00)}) append(records, h);
+      append(records, 1000.0 + i);
+    }
+    uLongf size = compressBound(uLong(records.size()));
+    std::string z(size, '\0');
+    compress(reinterpret_cast<Bytef*>(z.data()), &size, reinterpret_cast<const Bytef*>(records.data()), uLong(records.size()));
+    put("read_prt", "krakatoa.prt", prt + z.substr(0, size));
+  }
   put("read_bgeo", "ascii.geo",
       "[\"pointcount\",3,\"info\",{\"a\\u00e9\":\"x\\n\"},\"attributes\",[\"pointattributes\",[[[\"name\",\"P\","
       "\"type\",\"numeric\"],[\"size\",3,\"values\",[\"size\",3,\"packing\",[1,2],\"pagesize\",2,"

@@ -23,6 +23,7 @@
 // byte), so that a hostile file is refused before it takes memory out of proportion to its
 // size.
 #include "io/bgeo_json.h"
+#include "io/scalar_types.h"
 
 #include <algorithm>
 #include <bit>
@@ -83,15 +84,6 @@ size_t element_bytes(uint8_t type) {
     case kInt64: case kReal64: return 8;
     default: return 0;
   }
-}
-
-/// IEEE half to double.
-double half_to_double(uint16_t h) {
-  const int exponent = (h >> 10) & 0x1f, mantissa = h & 0x3ff;
-  const double sign = (h & 0x8000) ? -1.0 : 1.0;
-  if (exponent == 0) return sign * std::ldexp(double(mantissa), -24);
-  if (exponent == 31) return mantissa ? NAN : sign * INFINITY;
-  return sign * std::ldexp(double(mantissa + 1024), exponent - 25);
 }
 
 /// The number of `type` (a numeric token, element_bytes > 0) stored at `b` in the file's byte

@@ -25,6 +25,7 @@ const std::vector<FileFormat>& file_formats() {
       {".vtp", "VTK XML PolyData", &read_vtk_xml, true, true},
       {".pvtu", "VTK XML parallel UnstructuredGrid", &read_vtk_xml, true, true},
       {".pvtp", "VTK XML parallel PolyData", &read_vtk_xml, true, true},
+      {".prt", "Krakatoa PRT", &read_prt, true, false},
       {".bgeo", "Houdini bgeo", &read_bgeo, true, false},
       {".bgeo.gz", "Houdini bgeo", &read_bgeo, true, false},
       {".bhclassic", "Houdini classic bgeo", &read_bgeo, true, false},

@@ -17,6 +17,8 @@
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
 #include "particlemesh/sample/shapes.h"
+#include <zlib.h>
+
 #include "support/compressed_vtu.h"
 #include "support/test_support.h"
 
@@ -498,4 +500,73 @@ TEST(VtkXmlReader, CompressedBlocksOfEveryCodec) {
     EXPECT_REFUSED(read_point_cloud(write(dir / "bad.vtu", test::compressed_vtu(codec, xyz, 600, array))),
                    Status::FormatError, "block 0: the " + codec_name + " data is corrupt");
   }
+}
+
+namespace {
+/// A Krakatoa .prt: channels (name, type code, arity) over `count` records of `record` bytes.
+std::string prt_file(int64_t count, const std::vector<std::tuple<std::string, int32_t, int32_t>>& channels,
+                     const std::string& records, const char* magic = "\xC0PRT\r\n\x1A\n") {
+  std::string s(magic, 8);
+  append(s, int32_t(56));
+  s += std::string("Extensible Particle Format") + std::string(6, '\0');
+  append(s, int32_t(1));
+  append(s, count);
+  append(s, int32_t(4));
+  append(s, int32_t(channels.size()));
+  append(s, int32_t(44));
+  int32_t offset = 0;
+  for (const auto& [name, type, arity] : channels) {
+    s += name + std::string(32 - name.size(), '\0');
+    append(s, type);
+    append(s, arity);
+    append(s, offset);
+    offset += arity * (type == 3 ? 2 : type == 5 ? 8 : 4);
+  }
+  uLongf size = compressBound(uLong(records.size()));
+  std::string z(size, '\0');
+  compress(reinterpret_cast<Bytef*>(z.data()), &size, reinterpret_cast<const Bytef*>(records.data()), uLong(records.size()));
+  return s + z.substr(0, size);
+}
+}  // namespace
+
+// Krakatoa .prt: Position, Normal and other channels of any type exactly (float16 too); a
+// malformed header, a missing Position, a count the data cannot hold and corrupt data are
+// refused naming the file and the problem.
+TEST(PrtReader, ChannelsExactAndBadFilesNamed) {
+  const auto dir = test::scratch_dir("prt");
+  std::string records;
+  for (int i = 0; i < 2; ++i) {
+    for (float v : {float(i), 2.0f, 3.0f}) append(records, v);                    // Position float32
+    for (uint16_t h : {uint16_t(0x3e00), uint16_t(0xc000), uint16_t(0x3400)}) append(records, h);  // Velocity float16
+    append(records, double(1000.5 + i));                                          // Density float64
+    for (float v : {0.0f, 0.0f, 1.0f}) append(records, v);                        // Normal float32
+  }
+  const std::vector<std::tuple<std::string, int32_t, int32_t>> channels = {
+      {"Position", 4, 3}, {"Velocity", 3, 3}, {"Density", 5, 1}, {"Normal", 4, 3}};
+  const PointCloud c = read_point_cloud(write(dir / "ok.prt", prt_file(2, channels, records)));
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_EQ(c.positions[1], (Vec3{1, 2, 3}));
+  ASSERT_EQ(c.normals.size(), 2u);
+  EXPECT_EQ(c.normals[1], (Vec3{0, 0, 1}));
+  ASSERT_EQ(c.attributes.size(), 2u);
+  EXPECT_EQ(c.attributes[0].name, "velocity");
+  EXPECT_EQ(c.attributes[0].values, (std::vector<float>{1.5f, -2.0f, 0.25f, 1.5f, -2.0f, 0.25f}));
+  EXPECT_EQ(c.attributes[1].name, "density");
+  EXPECT_EQ(c.attributes[1].values, (std::vector<float>{1000.5f, 1001.5f}));
+
+  EXPECT_REFUSED(read_point_cloud(write(dir / "magic.prt", prt_file(2, channels, records, "\xC0PRX\r\n\x1A\n"))),
+                 Status::FormatError, "magic.prt': not a Krakatoa PRT file");
+  EXPECT_REFUSED(read_point_cloud(write(dir / "nopos.prt", prt_file(2, {{"Density", 5, 1}}, std::string(16, '\0')))),
+                 Status::FormatError, "nopos.prt': no Position channel");
+  EXPECT_REFUSED(read_point_cloud(write(dir / "type.prt", prt_file(2, {{"Position", 11, 3}}, records))),
+                 Status::FormatError, "channel 0 'Position': data type 11 is not 0..10");
+  EXPECT_REFUSED(read_point_cloud(write(dir / "many.prt", prt_file(int64_t(1) << 40, channels, records))),
+                 Status::FormatError, "particles of 38 bytes cannot come from the");
+  EXPECT_REFUSED(read_point_cloud(write(dir / "more.prt", prt_file(3, channels, records))), Status::FormatError,
+                 "the particle data: ");
+  std::string bad = prt_file(2, channels, records);
+  bad.resize(bad.size() - 6);
+  EXPECT_REFUSED(read_point_cloud(write(dir / "cut.prt", bad)), Status::FormatError, "cut.prt': the particle data: truncated");
+  EXPECT_REFUSED(read_point_cloud(write(dir / "short.prt", prt_file(2, channels, records).substr(0, 70))),
+                 Status::FormatError, "short.prt': truncated: the file ends");
 }

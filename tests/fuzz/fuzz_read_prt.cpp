@@ -1,0 +1,7 @@
+// Fuzz target: Krakatoa .prt particle files (our own reader), through the C++ API and the C ABI.
+#include "fuzz_read_files.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  particlemesh::fuzz::read_both(data, size, ".prt", true, false);
+  return 0;
+}
