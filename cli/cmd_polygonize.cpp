@@ -1,7 +1,10 @@
 // particlemesh polygonize IN -o OUT: volume particles to the mesh of their implicit surface.
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "commands.h"
 #include "particlemesh/core/error.h"
@@ -23,6 +26,8 @@ namespace {
 struct PolygonizeArgs {
   std::string input, output, report, kernel = "wyvill";
   double radius = 0, threshold = 0, cell = 0;
+  std::string radius_channel;
+  double radius_scale = 4;
   double max_grid_mib = double(kDefaultMaxGridBytes >> 20);
   int threads = 0;
   bool ascii = false, quiet = false;
@@ -65,6 +70,36 @@ nlohmann::json stats_json(const PolygonizeStats& s) {
                        {"finishing", s.seconds_finishing}}}};
 }
 
+/// R_i = scale x the cloud's one-component channel `name`. @throws Error(InvalidArgument)
+/// naming the channels the particles carry when it is not one of them or has several
+/// components, Error(InvalidInput) naming the particle whose radius is not positive.
+std::vector<double> radii_from_channel(const PointCloud& cloud, const std::string& name, double scale,
+                                       const std::string& path) {
+  std::string names;
+  for (const VertexAttribute& x : cloud.attributes) {
+    if (x.name != name) {
+      names += (names.empty() ? "" : ", ") + x.name;
+      continue;
+    }
+    if (x.components != 1)
+      throw Error(Status::InvalidArgument, "--radius-channel " + name + ": the channel has " +
+                                               std::to_string(x.components) + " components (one is needed)");
+    std::vector<double> radii(x.values.size());
+    for (size_t i = 0; i < radii.size(); ++i) {
+      radii[i] = scale * double(x.values[i]);
+      if (!(radii[i] > 0) || !std::isfinite(radii[i])) {
+        char value[32];
+        std::snprintf(value, sizeof value, "%g", double(x.values[i]));
+        throw Error(Status::InvalidInput, "'" + path + "': particle " + std::to_string(i) + "'s " + name + " is " +
+                                              value + " (a radius must be positive)");
+      }
+    }
+    return radii;
+  }
+  throw Error(Status::InvalidArgument, "--radius-channel " + name + ": '" + path + "' has no such channel (" +
+                                           (names.empty() ? std::string("it has none") : "it has " + names) + ")");
+}
+
 std::vector<OutputSpec> output_specs(const PolygonizeArgs& a) {
   return {{"-o", a.output, OutputKind::Mesh, a.ascii ? MeshFormat::PlyAscii : MeshFormat::Auto},
           {"--report", a.report, OutputKind::Text}};
@@ -77,6 +112,9 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
   const auto t0 = Clock::now();
   ProgressLine progress(a.quiet);
   ParticleInput input = read_particles(a.input, ParticleInputArgs{}, a.threads);
+  // Per-particle radii from a channel, taken before --attributes chooses what the mesh carries.
+  std::vector<double> radii;
+  if (!a.radius_channel.empty()) radii = radii_from_channel(input.cloud, a.radius_channel, a.radius_scale, a.input);
   settle_attributes(input.cloud, a.attributes, frame);
   const PointCloud& cloud = input.cloud;
   const double t_read = std::chrono::duration<double>(Clock::now() - t0).count();
@@ -84,6 +122,7 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
   PolygonizeOptions opt;
   opt.kernel = kernel_from_name(a.kernel);
   opt.radius = a.radius;
+  opt.radii = std::move(radii);
   opt.threshold = a.threshold;
   opt.cell_size = a.cell;
   opt.threads = a.threads;
@@ -140,7 +179,11 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
     if (!input.summary.empty()) std::printf("%s", input.summary.c_str());
     if (s.spacing > 0) std::printf("  spacing       %.6g (median nearest-neighbour distance)\n", s.spacing);
     std::printf("  kernel        %s (C%d at R)\n", kernel_name(s.kernel), kernel_continuity(s.kernel));
-    std::printf("  radius R      %.6g (%s)\n", s.radius, s.radius_defaulted ? "default: 2 x spacing" : "given");
+    if (!a.radius_channel.empty())
+      std::printf("  radius R      per particle: %g x '%s' (median %.6g, largest %.6g)\n", a.radius_scale,
+                  a.radius_channel.c_str(), s.radius, s.max_radius);
+    else
+      std::printf("  radius R      %.6g (%s)\n", s.radius, s.radius_defaulted ? "default: 2 x spacing" : "given");
     if (s.threshold_defaulted && s.anisotropic)
       std::printf("  threshold T   %.6g (default: a packed face half a spacing out, calibrated at R = %.3g spacings)\n",
                   s.threshold, s.calibration_ratio);
@@ -182,6 +225,16 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
       ->required();
   app->add_option("--radius", args->radius,
                   "Particle radius R (the field's support), world units (default: 2 x the median particle spacing)")
+      ->check(CLI::PositiveNumber)
+      ->check(finite_number());
+  auto* channel = app->add_option(
+      "--radius-channel", args->radius_channel,
+      "Per-particle radius: R_i = F x the input's one-component channel NAME (Houdini's pscale, a radius or size "
+      "channel), F from --radius-scale; instead of --radius");
+  channel->excludes(app->get_option("--radius"));
+  app->add_option("--radius-scale", args->radius_scale,
+                  "With --radius-channel: the factor F (default 4: a pscale of half the particle spacing gives the "
+                  "default R of two spacings)")
       ->check(CLI::PositiveNumber)
       ->check(finite_number());
   app->add_option("--threshold", args->threshold,

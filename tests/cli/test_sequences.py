@@ -82,6 +82,51 @@ def test_attributes_reach_the_mesh(cli, tmp_path):
     assert b'Name="velocity"' in text and b'NumberOfComponents="3"' in text and b'Name="density"' in text
 
 
+def test_radius_from_a_channel(cli, tmp_path):
+    """--radius-channel pscale: R_i = F x pscale_i (Houdini's per-particle size). A constant
+    pscale gives exactly the mesh of the same --radius; a larger pscale on one side reaches
+    further out there; bad channels and values are named, and nothing is written."""
+    p, a = particles(0)
+    n = len(p)
+    pscale = np.full(n, 1 / 32, np.float32)
+    src = tmp_path / "in.bgeo"
+    write_bgeo(src, p, {"pscale": pscale, "density": a["density"]})
+    cli("polygonize", src, "-o", tmp_path / "ch.ply", "--radius-channel", "pscale", "--cell", "0.03", "-q")
+    cli("polygonize", src, "-o", tmp_path / "r.ply", "--radius", "0.125", "--cell", "0.03", "-q")
+    assert (tmp_path / "ch.ply").read_bytes() == (tmp_path / "r.ply").read_bytes()
+    cli("polygonize", src, "-o", tmp_path / "f.ply", "--radius-channel", "pscale", "--radius-scale", "4.48",
+        "--cell", "0.03", "-q")
+    cli("polygonize", src, "-o", tmp_path / "r2.ply", "--radius", "0.14", "--cell", "0.03", "-q")
+    assert (tmp_path / "f.ply").read_bytes() == (tmp_path / "r2.ply").read_bytes()
+
+    # Doubled pscale where x is above the middle: the surface reaches further out on that side only.
+    big = pscale.copy()
+    big[p[:, 0] > p[:, 0].mean()] *= 2
+    write_bgeo(src, p, {"pscale": big, "density": a["density"]})
+    cli("polygonize", src, "-o", tmp_path / "v.ply", "--ascii", "--radius-channel", "pscale", "--cell", "0.03", "-q")
+    pos_v, _, faces = read_ascii_ply(tmp_path / "v.ply")
+    cli("polygonize", src, "-o", tmp_path / "c.ply", "--ascii", "--radius", "0.125", "--cell", "0.03", "-q")
+    pos_c, _, _ = read_ascii_ply(tmp_path / "c.ply")
+    assert len(faces) > 100
+    assert pos_v[:, 0].max() > pos_c[:, 0].max() + 0.05  # the big side grew
+    assert abs(pos_v[:, 0].min() - pos_c[:, 0].min()) < 0.02  # the small side barely moved
+
+    for args, code, message in [
+            (["--radius-channel", "size"], 1, "--radius-channel size: "),
+            (["--radius-channel", "pscale", "--radius", "1"], 2, "--radius excludes --radius-channel"),
+    ]:
+        r = cli("polygonize", src, "-o", tmp_path / "x.ply", *args, check=False)
+        assert r.returncode == code and message in r.stderr, r.stderr
+        assert not (tmp_path / "x.ply").exists()
+    r = cli("polygonize", src, "-o", tmp_path / "x.ply", "--radius-channel", "size", check=False)
+    assert "has no such channel (it has pscale, density)" in r.stderr
+    big[5] = 0
+    write_bgeo(src, p, {"pscale": big, "density": a["density"]})
+    r = cli("polygonize", src, "-o", tmp_path / "x.ply", "--radius-channel", "pscale", check=False)
+    assert r.returncode == 1 and "particle 5's pscale is 0 (a radius must be positive)" in r.stderr
+    assert not (tmp_path / "x.ply").exists()
+
+
 def test_sequence_meshes_each_frame_as_its_file_alone(cli, tmp_path):
     frames(tmp_path / "in", [1, 2, 3, 10])
     out = tmp_path / "out"
