@@ -99,7 +99,8 @@ class PolygonizeProps:
         description="Where each particle's field radius R comes from",
         items=[("AUTO", "Auto", "A multiple of the particle spacing (the library's default)"),
                ("PARTICLE_SIZE", "Particle Size",
-                "Each particle's size (particle systems) times the factor"),
+                "Each particle's size times the factor: a particle system's sizes, or a point "
+                "cloud's or particle file's radius (Blender) or pscale (Houdini) channel"),
                ("FIXED", "Fixed", "One radius for all particles")])
     radius: FloatProperty(
         name="Radius", default=0.1, min=1e-6, soft_max=10.0, precision=4, step=1,

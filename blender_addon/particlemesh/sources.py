@@ -68,6 +68,21 @@ def find_frames(pattern):
     return sorted(frames)
 
 
+#: One-component point channels that give each particle's size (radius) for the Particle Size
+#: radius mode: Blender's point clouds and Geometry Nodes write `radius`, Houdini `pscale`.
+SIZE_CHANNELS = ("radius", "pscale")
+
+
+def _sizes(channel_of):
+    """The first of SIZE_CHANNELS that `channel_of(name)` gives as one component, flattened to
+    float32, or None."""
+    for name in SIZE_CHANNELS:
+        values = channel_of(name)
+        if values is not None and values.ndim == 2 and values.shape[1] == 1:
+            return np.ascontiguousarray(values[:, 0], dtype=np.float32)
+    return None
+
+
 def read_file_frame(pattern, frame):
     """The particles of one frame's file: positions, normals and a 3-component `velocity`
     channel (what motion blur reads on the mesh). SourceError when the file is missing;
@@ -83,6 +98,7 @@ def read_file_frame(pattern, frame):
     return Particles(np.ascontiguousarray(cloud.positions, dtype=np.float32),
                      None if cloud.normals is None else np.asarray(cloud.normals, np.float32),
                      None if velocity is None else np.ascontiguousarray(velocity, np.float32),
+                     sizes=_sizes(lambda name: cloud.attributes.get(name)),
                      label=os.path.basename(path))
 
 
@@ -117,10 +133,10 @@ def read(obj, depsgraph, kind="AUTO", system_name="", need_sizes=False):
     kind = resolve_kind(obj, kind)
     if kind == "PARTICLES":
         return _read_particles(obj, depsgraph, system_name, need_sizes)
-    return _read_vertices(obj, depsgraph)
+    return _read_vertices(obj, depsgraph, need_sizes)
 
 
-def _read_vertices(obj, depsgraph):
+def _read_vertices(obj, depsgraph, need_sizes=False):
     evaluated = obj.evaluated_get(depsgraph)
     mesh = evaluated.to_mesh()
     try:
@@ -134,6 +150,7 @@ def _read_vertices(obj, depsgraph):
         velocities = blender_mesh.get_point_attribute(mesh, "velocity")
         if velocities is not None and velocities.shape[1] != 3:
             velocities = None
+        sizes = _sizes(lambda name: blender_mesh.get_point_attribute(mesh, name)) if need_sizes else None
     finally:
         evaluated.to_mesh_clear()
     matrix = np.array(evaluated.matrix_world, dtype=np.float64)
@@ -144,7 +161,10 @@ def _read_vertices(obj, depsgraph):
             normals = None  # the library would reject them; the positions are what matter
     if velocities is not None:
         velocities = (velocities.astype(np.float64) @ matrix[:3, :3].T).astype(np.float32)
-    return Particles(positions, normals=normals, velocities=velocities, label=obj.name)
+    if sizes is not None:
+        # World units: the object's scale (the cube root of its volume scale when not uniform).
+        sizes = (sizes * abs(np.linalg.det(matrix[:3, :3])) ** (1.0 / 3.0)).astype(np.float32)
+    return Particles(positions, normals=normals, velocities=velocities, sizes=sizes, label=obj.name)
 
 
 def _check_finite(obj, positions):

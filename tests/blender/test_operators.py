@@ -638,6 +638,31 @@ def test_polygonize_particle_system_with_sizes(pm, clean_scene):
     assert r6 > r.mean() + 0.05
 
 
+def test_polygonize_sizes_from_a_pscale_attribute(pm, tmp_path, clean_scene):
+    """Particle Size radii for a point cloud: its `pscale` (Houdini) point attribute, imported
+    with the file, scaled by the object; the same mesh as the library given those radii."""
+    p = fibonacci_sphere(3000)
+    n = len(p)
+    pscale = np.where(p[:, 0] > 0, 0.06, 0.03).astype(np.float32)
+    ply = tmp_path / "sized.ply"
+    with open(ply, "wb") as f:
+        f.write(f"ply\nformat binary_little_endian 1.0\nelement vertex {n}\nproperty float x\nproperty float y\n"
+                "property float z\nproperty float pscale\nend_header\n".encode())
+        rec = np.zeros(n, dtype=[("p", "<f4", 3), ("s", "<f4")])
+        rec["p"], rec["s"] = p, pscale
+        f.write(rec.tobytes())
+    source = import_cloud(ply)
+    source.scale = (2.0, 2.0, 2.0)
+    bpy.context.view_layer.update()
+    assert bpy.ops.particlemesh.polygonize(radius_mode="PARTICLE_SIZE", radius_factor=2.0) == {"FINISHED"}
+    co, tris = mesh_arrays(bpy.context.active_object.data)
+    world = p.astype(np.float64) * 2.0
+    direct = pm.particlemesh.polygonize(world, radii=pscale.astype(np.float64) * 2.0 * 2.0,
+                                        threshold=0.5 * pm.particlemesh.lattice_field("wyvill", 2.0, 2.0))
+    assert len(tris) == direct.triangle_count > 1000
+    np.testing.assert_allclose(co, direct.vertices, atol=1e-5)
+
+
 # ---- undo -------------------------------------------------------------------------------------
 
 def test_undo_restores_the_previous_state(pm):
