@@ -289,13 +289,13 @@ class PARTICLEMESH_OT_smooth(_ModalJob, bpy.types.Operator):
 
 
 class PARTICLEMESH_OT_import_cloud(bpy.types.Operator, ImportHelper):
-    """Import point clouds and simulation particles (.ply, .xyz, .pts, .pcd, .vtk, .vtu, .vtp, .pvtu, .pvtp, .prt, .bgeo, .geo) as vertex-only mesh objects; normals, colours, velocity and other channels become attributes"""
+    """Import point clouds and simulation particles (.ply, .xyz, .pts, .las, .pcd, .vtk, .vtu, .vtp, .pvtu, .pvtp, .prt, .bgeo, .geo) as vertex-only mesh objects; normals, colours, velocity and other channels become attributes"""
     bl_idname = "particlemesh.import_cloud"
     bl_label = "Import Point Cloud"
     bl_options = {"REGISTER", "UNDO"}
 
     filename_ext = ".ply"
-    filter_glob: StringProperty(default="*.ply;*.xyz;*.pts;*.pcd;*.vtk;*.vtu;*.vtp;*.pvtu;*.pvtp;*.prt;*.bgeo;*.bgeo.gz;*.geo;*.geo.gz",
+    filter_glob: StringProperty(default="*.ply;*.xyz;*.pts;*.pcd;*.vtk;*.vtu;*.vtp;*.pvtu;*.pvtp;*.prt;*.las;*.bgeo;*.bgeo.gz;*.geo;*.geo.gz",
                                 options={"HIDDEN"})
     files: CollectionProperty(type=bpy.types.OperatorFileListElement,
                               options={"HIDDEN", "SKIP_SAVE"})

@@ -92,7 +92,7 @@ def defaults(function):
 def read_points(path):
     """Particles from a file: .ply (any numeric vertex properties, normals, vertex colours as
     the "color" attribute), .xyz and .pts (text; columns by a header line or by their count),
-    VTK .vtk/.vtu/.vtp/.pvtu/.pvtp, Krakatoa .prt and Houdini .bgeo/.geo (every
+    VTK .vtk/.vtu/.vtp/.pvtu/.pvtp, lidar .las, Krakatoa .prt and Houdini .bgeo/.geo (every
     point-data array / point attribute in `attributes`) through the library; .pcd (ascii, binary, compressed)
     through the PCL bridge, which drops points with a NaN coordinate and counts them in
     `info`. Coordinates keep their full precision. Returns Points."""

@@ -1,6 +1,6 @@
 """Writers of simulators' particle files for the tests: the same particles as PLY, VTK legacy
 (ASCII, BINARY), VTK XML .vtu (ascii, base64, raw appended, zlib, LZMA) and parallel .pvtu
-(pieces in a folder beside it), Krakatoa's .prt, Houdini's classic bgeo
+(pieces in a folder beside it), Krakatoa's .prt, ASPRS LAS, Houdini's classic bgeo
 (plain, gzip) and Houdini 12+'s binary-JSON bgeo (paged, tuples and arrays layouts, either
 byte order, token strings, constant pages, gzip) and ASCII .geo. Values are multiples of 1/1024 so that every text form is exact in float32."""
 
@@ -153,6 +153,43 @@ def write_prt(path, p, attrs, half_velocity=False):
               + struct.pack("<iq", 1, n) + struct.pack("<3i", 4, len(channels), 44))
     with open(path, "wb") as f:
         f.write(header + b"".join(defs) + zlib.compress(records.tobytes()))
+
+
+def write_las(path, p, intensity, rgb=None, point_format=2, minor=2, extra_bytes=0, vlr=b"", laz=False,
+              scale=1 / 1024):
+    """An ASPRS LAS file (1.2 or 1.4 header), point format 0-3 or 6-8, with a VLR and extra
+    bytes per record if asked; coordinates as integers of `scale`."""
+    n = len(p)
+    layouts = {0: (20, 0), 1: (28, 0), 2: (26, 20), 3: (34, 28), 6: (30, 0), 7: (36, 30), 8: (38, 30)}
+    size, colour_at = layouts[point_format]
+    record = size + extra_bytes
+    header_size = 375 if minor >= 4 else 227
+    vlrs = b""
+    if vlr:
+        vlrs = struct.pack("<H16sHH32s", 0, b"particlemesh", 1, len(vlr), b"test record") + vlr
+    offset = header_size + len(vlrs)
+    lo, hi = p.min(axis=0), p.max(axis=0)
+    h = bytearray(header_size)
+    h[0:4] = b"LASF"
+    h[24], h[25] = 1, minor
+    struct.pack_into("<HIIBHI", h, 94, header_size, offset, 1 if vlr else 0, point_format | (0x80 if laz else 0),
+                     record, n if minor < 4 or point_format < 6 else 0)
+    struct.pack_into("<3d3d6d", h, 131, scale, scale, scale, 0.0, 0.0, 0.0, hi[0], lo[0], hi[1], lo[1], hi[2], lo[2])
+    if minor >= 4:
+        struct.pack_into("<Q", h, 247, n)
+    recs = bytearray(n * record)
+    q = np.round(np.asarray(p, np.float64) / scale).astype("<i4")
+    for i in range(n):
+        at = i * record
+        struct.pack_into("<3iH", recs, at, *q[i], int(intensity[i]))
+        if point_format >= 6:
+            recs[at + 16] = 2  # classification: ground
+        else:
+            recs[at + 15] = 2
+        if colour_at:
+            struct.pack_into("<3H", recs, at + colour_at, *(int(c) for c in rgb[i]))
+    with open(path, "wb") as f:
+        f.write(bytes(h) + vlrs + bytes(recs))
 
 
 def write_bgeo(path, p, attrs, compress=False):

@@ -10,7 +10,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 from particle_files import (FORMATS, particles, read_ascii_ply, write_bgeo, write_bgeo_json,  # noqa: E402
-                            write_ply, write_vtk)
+                            write_las, write_ply, write_vtk)
 
 POLY = ["--radius", "0.14", "--cell", "0.03"]  # fixed R and h: frames share a lattice
 
@@ -125,6 +125,51 @@ def test_radius_from_a_channel(cli, tmp_path):
     r = cli("polygonize", src, "-o", tmp_path / "x.ply", "--radius-channel", "pscale", check=False)
     assert r.returncode == 1 and "particle 5's pscale is 0 (a radius must be positive)" in r.stderr
     assert not (tmp_path / "x.ply").exists()
+
+
+def test_las_lidar_files(cli, tmp_path):
+    """ASPRS LAS 1.2 (formats 0-3) and 1.4 (formats 6-8, a VLR, extra bytes per record): the
+    positions exactly (the PLY's mesh byte for byte), intensity, classification and colours
+    (16-bit, or 8-bit values) as channels; LAZ and broken files refused by name."""
+    rng = np.random.default_rng(3)
+    v = rng.normal(size=(3000, 3))
+    p = np.round(v / np.linalg.norm(v, axis=1)[:, None] * 1024) / 1024 + [100.0, -50.0, 7.0]
+    intensity = rng.integers(0, 65536, len(p))
+    rgb16 = rng.integers(0, 65536, (len(p), 3))
+    rgb8 = rng.integers(0, 256, (len(p), 3))
+    write_ply(tmp_path / "ref.ply", p.astype(np.float32), {})
+    cli("triangulate", tmp_path / "ref.ply", "-o", tmp_path / "ref_out.ply", "--attributes", "none", "-q")
+    reference = (tmp_path / "ref_out.ply").read_bytes()
+    cases = [dict(point_format=0), dict(point_format=1), dict(point_format=2, rgb=rgb16), dict(point_format=3, rgb=rgb8),
+             dict(point_format=6, minor=4), dict(point_format=7, minor=4, rgb=rgb16, vlr=b"x" * 54, extra_bytes=6),
+             dict(point_format=8, minor=4, rgb=rgb8)]
+    for k, case in enumerate(cases):
+        src = tmp_path / f"scan{k}.las"
+        write_las(src, p, intensity, **case)
+        cli("triangulate", src, "-o", tmp_path / "out.ply", "--attributes", "none", "-q")
+        assert (tmp_path / "out.ply").read_bytes() == reference, case
+        cli("triangulate", src, "-o", tmp_path / "attr.ply", "--ascii", "-q")
+        _, cols, _ = read_ascii_ply(tmp_path / "attr.ply")
+        np.testing.assert_array_equal(cols["intensity"], intensity)
+        assert (cols["classification"] == 2).all()
+        if "rgb" in case:
+            expected = case["rgb"] if case["rgb"] is rgb8 else np.round(case["rgb"] / 65535 * 255)
+            np.testing.assert_allclose(np.column_stack([cols["red"], cols["green"], cols["blue"]]), expected, atol=1)
+        else:
+            assert "red" not in cols
+
+    write_las(tmp_path / "c.laz", p, intensity, point_format=2, rgb=rgb16, laz=True)
+    for name, message in [("c.laz", "this is LAZ (compressed LAS), which is not read: decompress it first")]:
+        r = cli("triangulate", tmp_path / name, "-o", tmp_path / "x.ply", check=False)
+        assert r.returncode == 1 and message in r.stderr, r.stderr
+    data = (tmp_path / "scan2.las").read_bytes()
+    (tmp_path / "cut.las").write_bytes(data[:-10])
+    (tmp_path / "sig.las").write_bytes(b"LASX" + data[4:])
+    for name, message in [("cut.las", "truncated: 3000 points of 26 bytes, but the file holds"),
+                          ("sig.las", "not a LAS file")]:
+        r = cli("triangulate", tmp_path / name, "-o", tmp_path / "x.ply", check=False)
+        assert r.returncode == 1 and name in r.stderr and message in r.stderr, r.stderr
+        assert not (tmp_path / "x.ply").exists()
 
 
 def test_sequence_meshes_each_frame_as_its_file_alone(cli, tmp_path):

@@ -263,6 +263,27 @@ void file_seeds() {
     compress(reinterpret_cast<Bytef*>(z.data()), &size, reinterpret_cast<const Bytef*>(records.data()), uLong(records.size()));
     put("read_prt", "krakatoa.prt", prt + z.substr(0, size));
   }
+  {
+    // ASPRS LAS 1.2, point format 2 (colour), four points, a scale of 1/1000.
+    std::string las(227, '\0');
+    las.replace(0, 4, "LASF");
+    las[24] = 1, las[25] = 2;
+    auto put_at = [&](size_t at, auto v) { std::memcpy(las.data() + at, &v, sizeof v); };
+    put_at(94, uint16_t(227));
+    put_at(96, uint32_t(227));
+    las[104] = 2;
+    put_at(105, uint16_t(26));
+    put_at(107, uint32_t(4));
+    for (size_t a = 0; a < 3; ++a) put_at(131 + 8 * a, 0.001);
+    for (int i = 0; i < 4; ++i) {
+      for (int32_t c : {1000 * i, 1000 * (i % 2), 500}) append(las, c);
+      append(las, uint16_t(100 * i));
+      for (uint8_t b : {uint8_t(0), uint8_t(2), uint8_t(0), uint8_t(0)}) las += char(b);
+      append(las, uint16_t(0));
+      for (uint16_t c : {uint16_t(65535), uint16_t(0), uint16_t(30000)}) append(las, c);
+    }
+    put("read_las", "format2.las", las);
+  }
   put("read_bgeo", "ascii.geo",
       "[\"pointcount\",3,\"info\",{\"a\\u00e9\":\"x\\n\"},\"attributes\",[\"pointattributes\",[[[\"name\",\"P\","
       "\"type\",\"numeric\"],[\"size\",3,\"values\",[\"size\",3,\"packing\",[1,2],\"pagesize\",2,"

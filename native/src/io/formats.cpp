@@ -26,6 +26,8 @@ const std::vector<FileFormat>& file_formats() {
       {".pvtu", "VTK XML parallel UnstructuredGrid", &read_vtk_xml, true, true},
       {".pvtp", "VTK XML parallel PolyData", &read_vtk_xml, true, true},
       {".prt", "Krakatoa PRT", &read_prt, true, false},
+      {".las", "ASPRS LAS lidar", &read_las, true, false},
+      {".laz", "LAZ (compressed LAS: refused with how to decompress it)", &read_las, true, false},
       {".bgeo", "Houdini bgeo", &read_bgeo, true, false},
       {".bgeo.gz", "Houdini bgeo", &read_bgeo, true, false},
       {".bhclassic", "Houdini classic bgeo", &read_bgeo, true, false},

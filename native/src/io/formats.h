@@ -81,6 +81,7 @@ FileContents read_off(const std::string& path, ReadPurpose purpose);
 FileContents read_stl(const std::string& path, ReadPurpose purpose);
 FileContents read_xyz(const std::string& path, ReadPurpose purpose);
 FileContents read_prt(const std::string& path, ReadPurpose purpose);
+FileContents read_las(const std::string& path, ReadPurpose purpose);
 FileContents read_vtk_legacy(const std::string& path, ReadPurpose purpose);
 FileContents read_vtk_xml(const std::string& path, ReadPurpose purpose);
 FileContents read_bgeo(const std::string& path, ReadPurpose purpose);

@@ -72,7 +72,7 @@ PM_EXPORT TriMesh read_mesh(const std::string& path);
 /// attributes, NORMALS as the normals), VTK XML .vtu / .vtp and parallel .pvtu / .pvtp
 /// (pieces from the file's folder or below; ascii, base64, raw appended;
 /// uncompressed or compressed by zlib, LZ4 or LZMA; PointData arrays as attributes),
-/// Krakatoa's .prt (every channel) and Houdini's .bgeo (binary JSON or classic, plain or gzip) and ASCII .geo (point
+/// lidar .las (intensity, classification, colour), Krakatoa's .prt (every channel) and Houdini's .bgeo (binary JSON or classic, plain or gzip) and ASCII .geo (point
 /// attributes, "N" as the normals). Attributes are float channels: integer arrays (ids) are
 /// exact up to 2^24. A (0, 0, 0) normal is kept as it is: the surface stage reads it as a
 /// point without a normal.
