@@ -10,6 +10,7 @@
 #include "particlemesh/core/error.h"
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
+#include "particlemesh/volume/field.h"
 #include "particlemesh/volume/polygonize.h"
 #include "attribute_selection.h"
 #include "frame_sequence.h"
@@ -124,6 +125,11 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
   opt.radius = a.radius;
   opt.radii = std::move(radii);
   opt.threshold = a.threshold;
+  // Radii from sizes: the size says the spacing (touching particles of size s lie 2 s apart),
+  // so the default threshold is half the field inside such a packing at R = F s, as the
+  // Blender add-on's Particle Size mode sets it (at F = 4 it is the library's own default).
+  const bool sized_threshold = !a.radius_channel.empty() && a.threshold == 0 && !a.anisotropy.enabled;
+  if (sized_threshold) opt.threshold = 0.5 * lattice_field(opt.kernel, a.radius_scale, 2.0);
   opt.cell_size = a.cell;
   opt.threads = a.threads;
   opt.max_grid_bytes = uint64_t(a.max_grid_mib * double(1 << 20));
@@ -187,6 +193,9 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
     if (s.threshold_defaulted && s.anisotropic)
       std::printf("  threshold T   %.6g (default: a packed face half a spacing out, calibrated at R = %.3g spacings)\n",
                   s.threshold, s.calibration_ratio);
+    else if (sized_threshold)
+      std::printf("  threshold T   %.6g (default: half the field inside touching particles at R = %g x size)\n",
+                  s.threshold, a.radius_scale);
     else
       std::printf("  threshold T   %.6g (%s)\n", s.threshold,
                   s.threshold_defaulted ? "default: half the field inside a packed volume at R = 2 spacings" : "given");
@@ -234,7 +243,8 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
   channel->excludes(app->get_option("--radius"));
   app->add_option("--radius-scale", args->radius_scale,
                   "With --radius-channel: the factor F (default 4: a pscale of half the particle spacing gives the "
-                  "default R of two spacings)")
+                  "default R of two spacings). The default threshold is then half the field inside touching "
+                  "particles of their size at R = F x size, as in the Blender add-on's Particle Size mode")
       ->check(CLI::PositiveNumber)
       ->check(finite_number());
   app->add_option("--threshold", args->threshold,

@@ -1,5 +1,6 @@
 """Simulators' files, particle attributes and frame sequences through the CLI."""
 
+import json
 import os
 import sys
 import time
@@ -94,9 +95,14 @@ def test_radius_from_a_channel(cli, tmp_path):
     cli("polygonize", src, "-o", tmp_path / "ch.ply", "--radius-channel", "pscale", "--cell", "0.03", "-q")
     cli("polygonize", src, "-o", tmp_path / "r.ply", "--radius", "0.125", "--cell", "0.03", "-q")
     assert (tmp_path / "ch.ply").read_bytes() == (tmp_path / "r.ply").read_bytes()
+    # Another factor: R = 4.48 x pscale, and the threshold of touching particles of their size at
+    # that R (above the default's: the field inside a packing grows with R / spacing).
     cli("polygonize", src, "-o", tmp_path / "f.ply", "--radius-channel", "pscale", "--radius-scale", "4.48",
+        "--cell", "0.03", "-q", "--report", tmp_path / "f.json")
+    report = json.loads((tmp_path / "f.json").read_text())["polygonize"]
+    assert report["radius"] == pytest.approx(0.14) and report["threshold"] > 3.34
+    cli("polygonize", src, "-o", tmp_path / "r2.ply", "--radius", "0.14", "--threshold", repr(report["threshold"]),
         "--cell", "0.03", "-q")
-    cli("polygonize", src, "-o", tmp_path / "r2.ply", "--radius", "0.14", "--cell", "0.03", "-q")
     assert (tmp_path / "f.ply").read_bytes() == (tmp_path / "r2.ply").read_bytes()
 
     # Doubled pscale where x is above the middle: the surface reaches further out on that side only.
