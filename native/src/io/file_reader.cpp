@@ -102,6 +102,14 @@ size_t FileReader::read_some(void* out, size_t n) {
   return k;
 }
 
+std::string FileReader::read_rest() {
+  std::string out;
+  if (size_ > 0 && uint64_t(size_) > offset()) out.reserve(size_t(uint64_t(size_) - offset()));
+  char chunk[1 << 16];
+  while (const size_t k = read_some(chunk, sizeof chunk)) out.append(chunk, k);
+  return out;
+}
+
 bool FileReader::skip(uint64_t n) {
   while (n > 0) {
     if (pos_ == end_) {

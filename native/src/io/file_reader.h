@@ -47,6 +47,8 @@ class FileReader {
   /// Up to `n` bytes into `out`: what the buffer holds, or one read's worth; 0 only at the end
   /// of the file.
   size_t read_some(void* out, size_t n);
+  /// Everything left in the file (for formats whose parts refer to each other by offset).
+  std::string read_rest();
   /// Skip `n` bytes; false when the file ends first.
   bool skip(uint64_t n);
 

@@ -27,13 +27,6 @@ namespace PM_NAMESPACE::detail {
 
 namespace {
 
-template <class T>
-T at(const unsigned char* b, size_t offset) {
-  T v;
-  std::memcpy(&v, b + offset, sizeof v);
-  return v;
-}
-
 /// The standard fields' size of each point data record format, and where its colour lies
 /// (0: none).
 struct RecordLayout {
@@ -54,10 +47,10 @@ FileContents read_las(const std::string& path, ReadPurpose) {
   if (!in.read(h, 227)) fail("truncated: the file is shorter than a LAS header (227 bytes)");
   if (std::memcmp(h, "LASF", 4) != 0) fail("not a LAS file (it does not start with 'LASF')");
   const int major = h[24], minor = h[25];
-  const uint16_t header_size = at<uint16_t>(h, 94);
-  const uint32_t data_offset = at<uint32_t>(h, 96);
+  const uint16_t header_size = load_little<uint16_t>(h + 94);
+  const uint32_t data_offset = load_little<uint32_t>(h + 96);
   const uint8_t format_byte = h[104];
-  const uint16_t record_length = at<uint16_t>(h, 105);
+  const uint16_t record_length = load_little<uint16_t>(h + 105);
   if (major != 1 || minor > 4)
     fail("LAS version " + std::to_string(major) + "." + std::to_string(minor) + " is not read (1.0 to 1.4 are)");
   if (format_byte & 0xC0)
@@ -69,14 +62,14 @@ FileContents read_las(const std::string& path, ReadPurpose) {
     fail("point data records of " + std::to_string(record_length) + " bytes are shorter than format " +
          std::to_string(format_byte) + "'s " + std::to_string(layout.size));
   if (header_size < 227 || data_offset < header_size) fail("its header size or point data offset is inconsistent");
-  uint64_t count = at<uint32_t>(h, 107);
+  uint64_t count = load_little<uint32_t>(h + 107);
   if (minor >= 4 && header_size >= 375) {
     if (!in.read(h + 227, 375 - 227)) fail("truncated: the file ends in its LAS 1.4 header");
-    const uint64_t count14 = at<uint64_t>(h, 247);
+    const uint64_t count14 = load_little<uint64_t>(h + 247);
     if (count14 != 0) count = count14;
   }
-  const double scale[3] = {at<double>(h, 131), at<double>(h, 139), at<double>(h, 147)};
-  const double offset[3] = {at<double>(h, 155), at<double>(h, 163), at<double>(h, 171)};
+  const double scale[3] = {load_little<double>(h + 131), load_little<double>(h + 139), load_little<double>(h + 147)};
+  const double offset[3] = {load_little<double>(h + 155), load_little<double>(h + 163), load_little<double>(h + 171)};
   for (double s : scale)
     if (!(s > 0 || s < 0) || !std::isfinite(s)) fail("a coordinate scale factor is zero or not finite");
   // Skip the rest of the header and the variable length records up to the points.
@@ -104,13 +97,13 @@ FileContents read_las(const std::string& path, ReadPurpose) {
     if (!in.read(buf.data(), k * record_length)) fail("truncated: the file ends in point " + std::to_string(i));
     for (size_t j = 0; j < k; ++j) {
       const unsigned char* r = buf.data() + j * record_length;
-      out.positions.push_back({double(at<int32_t>(r, 0)) * scale[0] + offset[0],
-                               double(at<int32_t>(r, 4)) * scale[1] + offset[1],
-                               double(at<int32_t>(r, 8)) * scale[2] + offset[2]});
-      intensity.values.push_back(float(at<uint16_t>(r, 12)));
+      out.positions.push_back({double(load_little<int32_t>(r + 0)) * scale[0] + offset[0],
+                               double(load_little<int32_t>(r + 4)) * scale[1] + offset[1],
+                               double(load_little<int32_t>(r + 8)) * scale[2] + offset[2]});
+      intensity.values.push_back(float(load_little<uint16_t>(r + 12)));
       classification.values.push_back(float(layout.extended ? r[16] : (r[15] & 0x1F)));
       if (layout.color)
-        for (size_t c = 0; c < 3; ++c) rgb.push_back(at<uint16_t>(r, layout.color + 2 * c));
+        for (size_t c = 0; c < 3; ++c) rgb.push_back(load_little<uint16_t>(r + layout.color + 2 * c));
     }
     i += k;
   }

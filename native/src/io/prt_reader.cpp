@@ -48,13 +48,6 @@ ScalarType prt_type(uint32_t code) {
   return code < 11 ? kTypes[code] : ScalarType::None;
 }
 
-template <class T>
-T little(const unsigned char* b) {
-  T v;
-  std::memcpy(&v, b, sizeof v);
-  return v;
-}
-
 std::string project_name(const std::string& name) {
   if (name == "Velocity") return "velocity";
   if (name == "Density") return "density";
@@ -67,40 +60,37 @@ std::string project_name(const std::string& name) {
 
 FileContents read_prt(const std::string& path, ReadPurpose) {
   auto fail = [&](const std::string& problem) { throw Error(Status::FormatError, "'" + path + "': " + problem); };
-  FileReader in(path);
-  std::vector<unsigned char> data;
-  {
-    unsigned char buf[1 << 16];
-    if (in.size() > 0) data.reserve(size_t(in.size()));
-    while (const size_t k = in.read_some(buf, sizeof buf)) data.insert(data.end(), buf, buf + k);
-  }
-  if (data.size() < kHeaderSize || std::memcmp(data.data(), kMagic, 8) != 0)
+  // Read whole: the header's lengths say where the channels and the data start.
+  std::string file = FileReader(path).read_rest();
+  const auto* data = reinterpret_cast<const unsigned char*>(file.data());
+  const size_t size = file.size();
+  if (size < kHeaderSize || std::memcmp(data, kMagic, 8) != 0)
     fail("not a Krakatoa PRT file (it does not start with the PRT magic bytes)");
-  const uint32_t header_size = little<uint32_t>(&data[8]);
-  const uint32_t version = little<uint32_t>(&data[44]);
-  const int64_t count = little<int64_t>(&data[48]);
-  if (header_size < kHeaderSize || header_size > data.size())
+  const uint32_t header_size = load_little<uint32_t>(data + 8);
+  const uint32_t version = load_little<uint32_t>(data + 44);
+  const int64_t count = load_little<int64_t>(data + 48);
+  if (header_size < kHeaderSize || header_size > size)
     fail("its header's length " + std::to_string(header_size) + " is not between 56 and the file's size");
   if (version < 1) fail("version " + std::to_string(version) + " is not a PRT version (1 and later are read)");
   if (count < 0) fail("the particle count " + std::to_string(count) + " is negative");
   size_t at = header_size;
-  if (data.size() - at < 12) fail("truncated: the file ends before its channel definitions");
-  const uint32_t channels = little<uint32_t>(&data[at + 4]), definition = little<uint32_t>(&data[at + 8]);
+  if (size - at < 12) fail("truncated: the file ends before its channel definitions");
+  const uint32_t channels = load_little<uint32_t>(data + at + 4), definition = load_little<uint32_t>(data + at + 8);
   at += 12;
   if (definition < kChannelSize) fail("a channel definition of " + std::to_string(definition) + " bytes (44 expected)");
   if (channels == 0 || channels > 4096) fail(std::to_string(channels) + " channels (1 to 4096 are read)");
-  if (uint64_t(channels) * definition > data.size() - at) fail("truncated: the file ends in its channel definitions");
+  if (uint64_t(channels) * definition > size - at) fail("truncated: the file ends in its channel definitions");
 
   std::vector<Channel> list;
   uint64_t record = 0;
   for (uint32_t c = 0; c < channels; ++c, at += definition) {
-    const unsigned char* d = &data[at];
+    const unsigned char* d = data + at;
     const size_t length = std::find(d, d + 32, 0) - d;
-    Channel ch{std::string(reinterpret_cast<const char*>(d), length), prt_type(little<uint32_t>(d + 32)),
-               little<uint32_t>(d + 36), little<uint32_t>(d + 40)};
+    Channel ch{std::string(reinterpret_cast<const char*>(d), length), prt_type(load_little<uint32_t>(d + 32)),
+               load_little<uint32_t>(d + 36), load_little<uint32_t>(d + 40)};
     const std::string label = "channel " + std::to_string(c) + " '" + shown(ch.name) + "'";
     if (ch.name.empty()) fail("channel " + std::to_string(c) + " has no name");
-    if (ch.type == ScalarType::None) fail(label + ": data type " + std::to_string(little<uint32_t>(d + 32)) + " is not 0..10");
+    if (ch.type == ScalarType::None) fail(label + ": data type " + std::to_string(load_little<uint32_t>(d + 32)) + " is not 0..10");
     if (ch.arity < 1 || ch.arity > 1024) fail(label + ": arity " + std::to_string(ch.arity) + " (1 to 1024 are read)");
     record = std::max(record, uint64_t(ch.offset) + uint64_t(ch.arity) * uint64_t(scalar_size(ch.type)));
     list.push_back(std::move(ch));
@@ -114,14 +104,14 @@ FileContents read_prt(const std::string& path, ReadPurpose) {
   // The particles: one zlib stream of count records. Deflate gives at most 1032 bytes per
   // byte, so a count the stream cannot hold is refused before anything is allocated.
   const uint64_t bytes = saturating_mul(uint64_t(count), record);
-  const size_t compressed = data.size() - at;
+  const size_t compressed = size - at;
   if (bytes > max_decompressed_size(BlockCodec::Zlib, compressed))
     fail("truncated: " + std::to_string(count) + " particles of " + std::to_string(record) + " bytes cannot come from the " +
          std::to_string(compressed) + " compressed bytes left");
   std::vector<unsigned char> particles(static_cast<size_t>(bytes));
-  decompress_block(BlockCodec::Zlib, data.data() + at, compressed, particles.data(), particles.size(), path,
+  decompress_block(BlockCodec::Zlib, data + at, compressed, particles.data(), particles.size(), path,
                    "the particle data");
-  data = {};
+  std::string().swap(file);  // the compressed bytes are not needed any more (`data` pointed into them)
 
   FileContents out;
   const size_t n = size_t(count);

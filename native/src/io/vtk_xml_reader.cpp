@@ -100,12 +100,7 @@ class VtkXmlReader {
       : path_(path), purpose_(purpose), piece_of_(std::move(piece_of)) {}
 
   FileContents read() {
-    {
-      FileReader in(path_);
-      if (in.size() > 0) data_.reserve(size_t(in.size()));
-      char buf[1 << 16];
-      while (const size_t k = in.read_some(buf, sizeof buf)) data_.append(buf, k);
-    }
+    data_ = FileReader(path_).read_rest();
     if (data_.empty()) fail("the file is empty");
     size_t p = 0;
     skip_misc(p);

@@ -71,10 +71,16 @@ std::string lower(std::string_view s) {
   return out;
 }
 
+using Columns = std::array<int, 3>;
+constexpr Columns kNoColumns = {-1, -1, -1};
+/// Three consecutive columns from `first`.
+constexpr Columns from(int first) { return {first, first + 1, first + 2}; }
+
 /// What each column of the file is.
 struct Layout {
-  int normal = -1;  ///< first of three columns, or -1
-  int color = -1;   ///< first of three columns, or -1
+  Columns xyz = from(0);
+  Columns normal = kNoColumns;  ///< nx ny nz, or none
+  Columns color = kNoColumns;   ///< r g b, or none
   std::vector<std::pair<std::string, int>> channels;  ///< name, column
 };
 
@@ -132,9 +138,7 @@ class XyzReader {
       }
     }
     if (columns_ <= 0 || values_.empty()) return {};
-    int xyz[3] = {0, 1, 2};
-    const Layout layout = header.empty() ? guess() : named(header, xyz);
-    return contents(layout, xyz);
+    return contents(header.empty() ? guess() : named(header));
   }
 
  private:
@@ -167,10 +171,9 @@ class XyzReader {
   }
 
   /// The layout a header line names; x, y, z are required.
-  Layout named(const std::vector<std::string>& names, int* xyz) {
+  Layout named(const std::vector<std::string>& names) const {
     Layout l;
-    int normal[3] = {-1, -1, -1}, color[3] = {-1, -1, -1};
-    for (int k = 0; k < 3; ++k) xyz[k] = -1;
+    Columns xyz = kNoColumns, normal = kNoColumns, color = kNoColumns;
     static const char* const kAxis[3] = {"x", "y", "z"};
     static const char* const kColour[3][2] = {{"r", "red"}, {"g", "green"}, {"b", "blue"}};
     for (int c = 0; c < int(names.size()); ++c) {
@@ -190,18 +193,16 @@ class XyzReader {
       if (xyz[k] < 0)
         fail_file("its first line ('" + shown(header_text_) + "') starts with a word, so it is read as a header line " +
                   "naming the columns, but it names no '" + kAxis[k] + "' column");
+    l.xyz = xyz;
     // Normals and colours need all three of their columns; a partial set stays channels.
-    auto triple = [&](const int* t, std::array<int, 3>& order) {
-      if (t[0] >= 0 && t[1] >= 0 && t[2] >= 0) {
-        order = {t[0], t[1], t[2]};
-        return t[0];
-      }
-      for (int k = 0; k < 3; ++k)
-        if (t[k] >= 0) l.channels.push_back({names[size_t(t[k])], t[k]});
-      return -1;
+    auto triple = [&](const Columns& t) {
+      if (t[0] >= 0 && t[1] >= 0 && t[2] >= 0) return t;
+      for (int c : t)
+        if (c >= 0) l.channels.push_back({names[size_t(c)], c});
+      return kNoColumns;
     };
-    l.normal = triple(normal, order_[0]);
-    l.color = triple(color, order_[1]);
+    l.normal = triple(normal);
+    l.color = triple(color);
     std::sort(l.channels.begin(), l.channels.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
     return l;
   }
@@ -240,28 +241,28 @@ class XyzReader {
       case 3: return l;
       case 4: l.channels.push_back({"intensity", 3}); return l;
       case 6:
-        if (colour(3)) l.color = 3;
-        else l.normal = 3;
+        if (colour(3)) l.color = from(3);
+        else l.normal = from(3);
         return l;
       case 7:
         if (!pts_ && colour(3)) {
-          l.color = 3;
+          l.color = from(3);
           l.channels.push_back({"intensity", 6});
           return l;
         }
         if (pts_ && colour(4)) {
           l.channels.push_back({"intensity", 3});
-          l.color = 4;
+          l.color = from(4);
           return l;
         }
         break;
       case 9:
         if (colour(3) && unit(6)) {
-          l.color = 3, l.normal = 6;
+          l.color = from(3), l.normal = from(6);
           return l;
         }
         if (unit(3) && colour(6)) {
-          l.normal = 3, l.color = 6;
+          l.normal = from(3), l.color = from(6);
           return l;
         }
         break;
@@ -271,28 +272,27 @@ class XyzReader {
     return l;
   }
 
-  FileContents contents(const Layout& l, const int* xyz) {
-    if (l.normal >= 0 && order_[0][0] < 0) order_[0] = {l.normal, l.normal + 1, l.normal + 2};
-    if (l.color >= 0 && order_[1][0] < 0) order_[1] = {l.color, l.color + 1, l.color + 2};
+  FileContents contents(const Layout& l) const {
     const size_t n = rows();
+    auto vec = [&](size_t r, const Columns& c) { return Vec3{at(r, c[0]), at(r, c[1]), at(r, c[2])}; };
     FileContents out;
     out.positions.resize(n);
-    for (size_t r = 0; r < n; ++r) out.positions[r] = {at(r, xyz[0]), at(r, xyz[1]), at(r, xyz[2])};
-    if (l.normal >= 0) {
+    for (size_t r = 0; r < n; ++r) out.positions[r] = vec(r, l.xyz);
+    if (l.normal != kNoColumns) {
       out.normals.resize(n);
-      for (size_t r = 0; r < n; ++r) out.normals[r] = {at(r, order_[0][0]), at(r, order_[0][1]), at(r, order_[0][2])};
+      for (size_t r = 0; r < n; ++r) out.normals[r] = vec(r, l.normal);
     }
-    if (l.color >= 0) {
+    if (l.color != kNoColumns) {
       // [0, 1] as is, up to 255 as 8-bit, up to 65535 as 16-bit colours (as in LAS).
       double top = 0;
       for (size_t r = 0; r < n; ++r)
-        for (int k = 0; k < 3; ++k) top = std::max(top, at(r, order_[1][size_t(k)]));
+        for (int c : l.color) top = std::max(top, at(r, c));
       const double scale = top <= 1 ? 1.0 : top <= 255 ? 1.0 / 255.0 : 1.0 / 65535.0;
       VertexAttribute color{"color", 3, {}};
       color.values.resize(3 * n);
       for (size_t r = 0; r < n; ++r)
         for (int k = 0; k < 3; ++k)
-          color.values[3 * r + size_t(k)] = float(std::clamp(at(r, order_[1][size_t(k)]) * scale, 0.0, 1.0));
+          color.values[3 * r + size_t(k)] = float(std::clamp(at(r, l.color[size_t(k)]) * scale, 0.0, 1.0));
       out.attributes.push_back(std::move(color));
     }
     for (const auto& [name, column] : l.channels) {
@@ -309,8 +309,6 @@ class XyzReader {
   std::string header_text_;
   int columns_ = -1;
   std::vector<double> values_;  ///< rows x columns_
-  /// The columns of the normal's and the colour's x/r, y/g, z/b (header order), or -1.
-  std::array<std::array<int, 3>, 2> order_{{{-1, -1, -1}, {-1, -1, -1}}};
 };
 
 }  // namespace
