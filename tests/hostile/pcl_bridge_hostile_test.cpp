@@ -53,6 +53,20 @@ TEST(PclBridgeFiles, BinaryDataThatReadsLikeAHeaderLineIsRefused) {
     PM_EXPECT_ERROR(particlemesh_pcl::loadParticles((dir / "blank.pcd").string()), Status::FormatError,
                     "header line 1 holds only whitespace");
   }
+  // A control byte in a header line: PCL splits "DATA\fbinary" as one word and threw out of
+  // its reader (an abort, found by fuzzing).
+  for (const std::string sep : {std::string("\f"), std::string("\v"), std::string(1, '\0')}) {
+    std::string bad = h;
+    bad.replace(bad.find("DATA binary"), 11, "DATA" + sep + "binary");
+    std::ofstream(dir / "control.pcd", std::ios::binary) << bad << std::string(24, '\0');
+    PM_EXPECT_ERROR(particlemesh_pcl::loadParticles((dir / "control.pcd").string()), Status::FormatError,
+                    "header line 11 holds the control byte 0x");
+  }
+  // Tabs and CRLF line ends are not control bytes to refuse.
+  std::string tabs = h;
+  tabs.replace(tabs.find("WIDTH 2"), 7, "WIDTH\t2\r");
+  std::ofstream(dir / "tabs.pcd", std::ios::binary) << tabs << std::string(24, '\0');
+  EXPECT_EQ(particlemesh_pcl::loadParticles((dir / "tabs.pcd").string()).size(), 2u);
   // Ordinary binary data (here: its first byte a newline) reads.
   float pts[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
   std::memcpy(pts, "\n\0\0\0", 4);
