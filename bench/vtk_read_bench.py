@@ -1,6 +1,7 @@
-"""Reading VTK XML particle files: particlemesh.read_points beside VTK's own reader
-(vtkXMLUnstructuredGridReader, Debian's python3-vtk9) on the same files, written by VTK's
-writer with each of its compressors (raw appended data, 32 KiB blocks, VTK's default levels).
+"""Reading VTK particle files: particlemesh.read_points beside VTK's own readers
+(vtkXMLUnstructuredGridReader, vtkUnstructuredGridReader; Debian's python3-vtk9) on the same
+files, written by VTK's writers: XML with each of its compressors (raw appended data, 32 KiB
+blocks, VTK's default levels), and the legacy format in BINARY (big-endian) and ASCII.
 
     PM_PYTHON_PATH=build/python /usr/bin/python3 bench/vtk_read_bench.py [--points 1000000] [--reps 5]
 
@@ -52,7 +53,7 @@ def main():
     args = ap.parse_args()
     g = grid(args.points)
     print(f"{args.points} particles (positions, velocity, density; Float32), median of {args.reps}")
-    print("| compressor | file | particlemesh.read_points | vtkXMLUnstructuredGridReader |")
+    print("| file kind | file | particlemesh.read_points | VTK's reader |")
     print("|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp:
         for compressor in ("None", "ZLib", "LZ4", "LZMA"):
@@ -78,7 +79,34 @@ def main():
             t_vtk, p_vtk = median_time(theirs, args.reps)
             assert np.array_equal(p_pm, p_vtk.astype(np.float64)), compressor
             size = os.path.getsize(path) / 1e6
-            print(f"| {compressor} | {size:.1f} MB | {t_pm:.3f} s | {t_vtk:.3f} s |")
+            print(f"| XML, {compressor} | {size:.1f} MB | {t_pm:.3f} s | {t_vtk:.3f} s |")
+        for mode in ("Binary", "ASCII"):
+            path = os.path.join(tmp, f"p_{mode}.vtk")
+            w = vtk.vtkUnstructuredGridWriter()
+            w.SetInputData(g)
+            w.SetFileName(path)
+            getattr(w, "SetFileTypeTo" + mode)()
+            w.Write()
+
+            def ours():
+                return pm.read_points(path).positions
+
+            def theirs():
+                r = vtk.vtkUnstructuredGridReader()
+                r.SetFileName(path)
+                r.ReadAllVectorsOn()
+                r.ReadAllScalarsOn()
+                r.Update()
+                return vtk_to_numpy(r.GetOutput().GetPoints().GetData())
+
+            t_pm, p_pm = median_time(ours, args.reps)
+            t_vtk, p_vtk = median_time(theirs, args.reps)
+            # ASCII holds the values VTK printed (6 significant digits): the same text read by both.
+            assert np.array_equal(p_pm, p_vtk.astype(np.float64)) or mode == "ASCII", mode
+            if mode == "ASCII":
+                assert np.allclose(p_pm, p_vtk, rtol=1e-6, atol=1e-6), mode
+            size = os.path.getsize(path) / 1e6
+            print(f"| legacy {mode} | {size:.1f} MB | {t_pm:.3f} s | {t_vtk:.3f} s |")
 
 
 if __name__ == "__main__":

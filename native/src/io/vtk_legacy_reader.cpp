@@ -180,9 +180,22 @@ class VtkLegacyReader {
     return in_.size() < 0 ? UINT64_MAX : uint64_t(in_.size()) - std::min<uint64_t>(in_.offset(), uint64_t(in_.size()));
   }
 
-  /// Read `count` values of `type`, calling sink(index, value) for each. Nothing is
+  /// Takes values first, first + 1, ... first + k - 1 of an array, decoded, at v.
+  using ValueSink = std::function<void(uint64_t first, const double* v, size_t k)>;
+
+  /// A ValueSink calling f(index, value) for each value: one call through std::function per
+  /// run of values, the per-value work inlined.
+  template <class F>
+  static ValueSink each(F f) {
+    return [f](uint64_t first, const double* v, size_t k) mutable {
+      for (size_t j = 0; j < k; ++j) f(first + j, v[j]);
+    };
+  }
+
+  /// Read `count` values of `type`, handing them to sink in order (a run of binary values
+  /// decoded at once, text values one by one); an empty sink skips them. Nothing is
   /// allocated here; the sink's vectors grow with what is really read.
-  void values(Type type, uint64_t count, const std::string& what, const std::function<void(uint64_t, double)>& sink) {
+  void values(Type type, uint64_t count, const std::string& what, const ValueSink& sink) {
     if (type == Type::Bit || type == Type::String || type == Type::None)
       fail(what + ": " + (type == Type::None ? std::string("unknown data type") : "bit and string arrays are not read"));
     if (binary_) {
@@ -191,14 +204,17 @@ class VtkLegacyReader {
       if (saturating_mul(count, uint64_t(size)) > bytes_left())
         fail("truncated: " + what + " needs " + std::to_string(count) + " values of " + std::to_string(size) +
              " bytes, the file has " + std::to_string(bytes_left()) + " bytes left");
-      unsigned char buf[4096];
+      unsigned char buf[16384];
       const uint64_t per = sizeof buf / uint64_t(size);
+      if (sink) decoded_.resize(size_t(per));
       for (uint64_t i = 0; i < count;) {
         const uint64_t k = std::min(per, count - i);
         if (!in_.read(buf, size_t(k) * size_t(size)))
           fail("truncated: the file ends in " + what + " (value " + std::to_string(i) + " of " + std::to_string(count) + ")");
-        if (sink)
-          for (uint64_t j = 0; j < k; ++j) sink(i + j, decode_scalar(type, buf + j * uint64_t(size), true));
+        if (sink) {
+          decode_scalars(type, buf, size_t(k), true, decoded_.data());
+          sink(i, decoded_.data(), size_t(k));
+        }
         i += k;
       }
       return;
@@ -214,7 +230,7 @@ class VtkLegacyReader {
       const NumberText r = parse_number(t, v);
       if (r == NumberText::NotANumber) fail(what + ", value " + std::to_string(i) + ": not a number: '" + shown(t) + "'");
       if (r == NumberText::Overflow) fail(what + ", value " + std::to_string(i) + ": '" + shown(t) + "' is beyond the range of double");
-      if (sink) sink(i, v);
+      if (sink) sink(i, &v, 1);
     }
     ended_ = false;
   }
@@ -233,10 +249,10 @@ class VtkLegacyReader {
     if (!word(t) || !parse_count(t, n)) fail("POINTS needs a count");
     const Type type = data_type("POINTS");
     out_.positions.reserve(size_t(std::min<uint64_t>(n, bytes_left() / (binary_ ? 3 * uint64_t(std::max(1, scalar_size(type))) : 6))));
-    values(type, saturating_mul(n, 3), "POINTS", [&](uint64_t i, double v) {
+    values(type, saturating_mul(n, 3), "POINTS", each([&](uint64_t i, double v) {
       if (i % 3 == 0) out_.positions.emplace_back();
       set_axis(out_.positions.back(), int(i % 3), v);
-    });
+    }));
   }
 
   /// A cell list: the classic "n size" + size ids (each cell: count, ids), or version 5.1's
@@ -259,14 +275,14 @@ class VtkLegacyReader {
     if (ahead.size() >= 7 && upper(std::string(ahead.substr(0, 7))) == "OFFSETS") {
       word(t);
       const Type ot = data_type(k + " OFFSETS");
-      values(ot, a, k + " OFFSETS", [&](uint64_t, double v) {
+      values(ot, a, k + " OFFSETS", each([&](uint64_t, double v) {
         if (wanted) cells.offsets.push_back(v);
-      });
+      }));
       if (!word(t) || upper(t) != "CONNECTIVITY") fail(k + ": CONNECTIVITY expected after OFFSETS");
       const Type ct = data_type(k + " CONNECTIVITY");
-      values(ct, b, k + " CONNECTIVITY", [&](uint64_t, double v) {
+      values(ct, b, k + " CONNECTIVITY", each([&](uint64_t, double v) {
         if (wanted) cells.ids.push_back(v);
-      });
+      }));
       if (wanted) {
         if (a == 0 ? b != 0 : (cells.offsets.front() != 0 || cells.offsets.back() != double(b)))
           fail(k + ": the offsets do not span the " + std::to_string(b) + " connectivity entries");
@@ -278,7 +294,7 @@ class VtkLegacyReader {
       // Classic: `a` cells in `b` integers, each cell its size then its ids.
       ended_ = true;
       uint64_t next = 0, cell = 0;
-      values(Type::I32, b, k, [&](uint64_t i, double v) {
+      values(Type::I32, b, k, each([&](uint64_t i, double v) {
         if (i == next) {
           if (!(v >= 0 && v <= double(b))) fail(k + ": cell " + std::to_string(cell) + " has " + format_number(v) + " points");
           next = i + 1 + uint64_t(v);
@@ -287,7 +303,7 @@ class VtkLegacyReader {
         } else if (wanted) {
           cells.ids.push_back(v);
         }
-      });
+      }));
       if (next != b || cell != a)
         fail(k + " declares " + std::to_string(a) + " cells in " + std::to_string(b) + " integers, but they hold " +
              std::to_string(cell) + " cells" + (next != b ? " and a cut-off one" : ""));
@@ -304,9 +320,9 @@ class VtkLegacyReader {
     uint64_t n = 0;
     if (!word(t) || !parse_count(t, n)) fail("CELL_TYPES needs a count");
     const bool wanted = purpose_ == ReadPurpose::Mesh;
-    values(Type::I32, n, "CELL_TYPES", [&](uint64_t, double v) {
+    values(Type::I32, n, "CELL_TYPES", each([&](uint64_t, double v) {
       if (wanted) cell_types_.push_back(int(v));
-    });
+    }));
   }
 
   void read_attribute(const std::string& k) {
@@ -357,17 +373,17 @@ class VtkLegacyReader {
     if (as_normals) {
       normals_read_ = true;
       out_.normals.reserve(size_t(std::min<uint64_t>(n, out_.positions.size())));
-      values(type, saturating_mul(n, 3), what, [&](uint64_t i, double v) {
+      values(type, saturating_mul(n, 3), what, each([&](uint64_t i, double v) {
         if (i % 3 == 0) out_.normals.emplace_back();
         set_axis(out_.normals.back(), int(i % 3), v);
-      });
+      }));
       return;
     }
     VertexAttribute a{unique_attribute_name(out_, name), components, {}};
     a.values.reserve(size_t(std::min<uint64_t>(saturating_mul(n, uint64_t(components)), saturating_mul(out_.positions.size(), uint64_t(components)))));
-    values(type, saturating_mul(n, uint64_t(components)), what, [&](uint64_t, double v) {
+    values(type, saturating_mul(n, uint64_t(components)), what, each([&](uint64_t, double v) {
       a.values.push_back(unsigned_char_colours ? float(v / 255.0) : float(v));
-    });
+    }));
     out_.attributes.push_back(std::move(a));
   }
 
@@ -408,7 +424,7 @@ class VtkLegacyReader {
       }
       VertexAttribute a{unique_attribute_name(out_, array), int(components), {}};
       a.values.reserve(size_t(saturating_mul(components, tuples)));
-      values(type, saturating_mul(components, tuples), what, [&](uint64_t, double v) { a.values.push_back(float(v)); });
+      values(type, saturating_mul(components, tuples), what, each([&](uint64_t, double v) { a.values.push_back(float(v)); }));
       out_.attributes.push_back(std::move(a));
     }
   }
@@ -478,6 +494,7 @@ class VtkLegacyReader {
   bool binary_ = false;
   bool polydata_ = false;
   bool ended_ = true;
+  std::vector<double> decoded_;  // a run of binary values, decoded (values())
   bool normals_read_ = false;
   Section section_ = Section::None;
   uint64_t count_ = 0;
