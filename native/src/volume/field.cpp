@@ -224,9 +224,10 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
       if (!std::isfinite(params.strengths[i]))
         throw Error(Status::InvalidArgument, "strengths[" + std::to_string(i) + "] is " + num(params.strengths[i]));
       else if (std::abs(params.strengths[i]) > kMaxStrength)
-        // Sums and gradients of strengths near DBL_MAX overflow to inf / NaN normals (fuzzing).
+        // Sums and gradients of strengths near DBL_MAX overflow to inf / NaN normals, and the
+        // polygonizer's single-precision samples of strengths beyond FLT_MAX (fuzzing).
         throw Error(Status::InvalidArgument, "strengths[" + std::to_string(i) + "] is " + num(params.strengths[i]) +
-                                                 " (its magnitude must be at most 1e100)");
+                                                 " (its magnitude must be at most 1e30)");
   }
   if (!(params.threshold >= 0) || !std::isfinite(params.threshold))
     throw Error(Status::InvalidArgument,

@@ -387,6 +387,29 @@ TEST(Polygonize, NegativeStrengthCarvesACavity) {
   for (const Vec3& p : r.mesh.positions) EXPECT_NEAR(F(norm(p - c.positions[0])), 0.3, 1e-6);
 }
 
+// The largest strengths accepted (kMaxStrength, with the default threshold scaled by the
+// median): the mesh of the same particles at unit strength, at the float samples' precision.
+// 1e50, accepted before, made infinite float samples and NaN vertices (found by fuzzing).
+TEST(Polygonize, TheLargestStrengthsGiveTheUnitStrengthMesh) {
+  const PointCloud c = test::random_cloud(500, 3, 1.0);
+  PolygonizeOptions unit;
+  const PolygonizeResult ref = polygonize(c, unit);
+  ASSERT_GT(ref.mesh.triangles.size(), 100u);
+  PolygonizeOptions big;
+  big.strengths.assign(c.positions.size(), kMaxStrength);
+  const PolygonizeResult r = polygonize(c, big);
+  expect_watertight(r.mesh);
+  ASSERT_EQ(r.mesh.positions.size(), ref.mesh.positions.size());
+  EXPECT_TRUE(r.mesh.triangles == ref.mesh.triangles);
+  const double cell = ref.stats.cell_size;
+  for (size_t i = 0; i < r.mesh.positions.size(); ++i) {
+    ASSERT_TRUE(is_finite(r.mesh.positions[i]) && is_finite(r.mesh.normals[i])) << i;
+    EXPECT_LT(distance(r.mesh.positions[i], ref.mesh.positions[i]), 1e-4 * cell) << i;
+  }
+  big.strengths[7] = 1e50;
+  EXPECT_EQ(status_of([&] { polygonize(c, big); }), Status::InvalidArgument);
+}
+
 TEST(Polygonize, OutputDoesNotDependOnTheThreadCount) {
   const PointCloud c = test::random_cloud(20000, 8, 2.7);
   PolygonizeResult ref;

@@ -58,8 +58,10 @@ inline constexpr double kDefaultRadiusFactor = 2.0;
 /// like splashes in SPH surface reconstruction; give a threshold below 1 to keep every
 /// particle as a blob.
 inline constexpr double kDefaultThresholdFraction = 0.5;
-/// The largest strength magnitude accepted: sums and gradients of the field stay finite.
-inline constexpr double kMaxStrength = 1e100;
+/// The largest strength magnitude accepted. The polygonizer samples the field in single
+/// precision (FLT_MAX ~3.4e38): a strength beyond it became an infinite sample and NaN
+/// vertices (found by fuzzing), so the limit leaves room for the sums of many particles.
+inline constexpr double kMaxStrength = 1e30;
 
 /// The field at a particle of an infinite simple cubic lattice of unit-strength particles
 /// with the given spacing and radius: the sum of g(|q|^2 / R^2) over the lattice points q
@@ -104,7 +106,7 @@ struct FieldParams {
   /// Empty, or one radius R_i > 0 per particle (world units).
   std::vector<double> radii;
   /// Empty (every strength 1), or one finite strength w_i per particle, |w_i| <= kMaxStrength
-  /// (1e100). Negative strengths subtract; particles of zero strength contribute nothing.
+  /// (1e30). Negative strengths subtract; particles of zero strength contribute nothing.
   std::vector<double> strengths;
   /// Anisotropic kernels (anisotropy.h; off by default): each particle's kernel becomes an
   /// ellipsoid of the volume of its sphere, centred on its smoothed centre, and F sums
