@@ -413,8 +413,8 @@ typedef struct pm_polygonize_stats {
 
 PM_EXPORT void pm_polygonize_options_init(pm_polygonize_options* options);
 /** Polygonize the particles' iso-surface. `radii` (one R_i > 0 per particle) and
- *  `strengths` (one finite w_i per particle) are NULL for one radius / strength 1. `options`
- *  may be NULL (defaults). The mesh is closed, consistently oriented (counter-clockwise seen
+ *  `strengths` (one finite w_i per particle, |w_i| <= 1e30) are NULL for one radius /
+ *  strength 1. `options` may be NULL (defaults). The mesh is closed, consistently oriented (counter-clockwise seen
  *  from outside) and carries per-vertex normals from the field gradient, and the cloud's
  *  attributes interpolated with the normalised kernel weights (sum w_i a_i / sum w_i,
  *  w_i = |strength_i| g(s_i), isotropic or anisotropic kernels); it has no vertex when
