@@ -1,13 +1,115 @@
-// particlemesh inspect MESH [--json]: what a mesh is, topologically.
+// particlemesh inspect FILE [--json]: what a mesh is, topologically; for a file of particles
+// (no triangles), what the meshing commands will read from it: the count, the bounds, the
+// spacing, the normals and every channel with its range (the names --attributes and
+// --radius-channel take).
+#include <algorithm>
+#include <cctype>
+#include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
+#include <sstream>
 
 #include "commands.h"
+#include "particle_input.h"
+#include "particlemesh/core/error.h"
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
+#include "particlemesh/spatial/spacing.h"
 #include "report_json.h"
 
 namespace particlemesh::cli {
+
+namespace {
+
+/// Whether read_mesh reads `path`'s format (the mesh extensions readable_extensions lists).
+bool mesh_format(const std::string& path) {
+  std::string lower = path;
+  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  std::stringstream list(readable_extensions(false));
+  std::string ext;
+  while (std::getline(list, ext, ',')) {
+    ext.erase(0, ext.find_first_not_of(' '));
+    if (!ext.empty() && lower.size() > ext.size() && lower.compare(lower.size() - ext.size(), ext.size(), ext) == 0)
+      return true;
+  }
+  return false;
+}
+
+std::string number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.9g", v);
+  return buf;
+}
+
+/// The particle summary, as JSON (the text form is printed from it).
+nlohmann::json particle_summary(const std::string& path, const ParticleInput& in) {
+  const PointCloud& c = in.cloud;
+  nlohmann::json j;
+  j["file"] = path;
+  j["particles"] = c.size();
+  double lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) lo[a] = hi[a] = c.positions[0][a];
+  for (const Vec3& p : c.positions)
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], p[a]);
+      hi[a] = std::max(hi[a], p[a]);
+    }
+  j["bounds"] = {{"min", {lo[0], lo[1], lo[2]}}, {"max", {hi[0], hi[1], hi[2]}}};
+  try {
+    const SpacingEstimate s = estimate_spacing(c.positions.data(), c.size());
+    j["spacing"] = s.spacing;
+    j["duplicate_points"] = s.duplicate_points;
+  } catch (const Error& e) {
+    // Too few or coinciding points: said, not fatal (the file itself read).
+    j["spacing"] = nullptr;
+    j["spacing_error"] = e.what();
+  }
+  j["normals"] = c.has_normals();
+  j["channels"] = nlohmann::json::array();
+  for (const VertexAttribute& a : c.attributes) {
+    double mn = std::numeric_limits<double>::infinity(), mx = -mn;
+    for (const float v : a.values) {
+      mn = std::min(mn, double(v));
+      mx = std::max(mx, double(v));
+    }
+    j["channels"].push_back({{"name", a.name}, {"components", a.components}, {"min", mn}, {"max", mx}});
+  }
+  if (!in.report.is_null()) j["input"] = in.report;
+  return j;
+}
+
+std::string describe_particles(const nlohmann::json& j, const std::string& read_summary) {
+  std::string out = j["file"].get<std::string>() + "\n";
+  auto line = [&](const std::string& key, const std::string& value) {
+    std::string k = "  " + key;
+    k.resize(16, ' ');
+    out += k + value + "\n";
+  };
+  auto point = [](const nlohmann::json& p) {
+    return "(" + number(p[0].get<double>()) + ", " + number(p[1].get<double>()) + ", " + number(p[2].get<double>()) + ")";
+  };
+  line("particles", std::to_string(j["particles"].get<size_t>()) +
+                        (j.contains("duplicate_points") && j["duplicate_points"].get<size_t>() > 0
+                             ? " (" + std::to_string(j["duplicate_points"].get<size_t>()) + " exact duplicates)"
+                             : ""));
+  line("bounds", point(j["bounds"]["min"]) + " to " + point(j["bounds"]["max"]));
+  line("spacing", j["spacing"].is_null() ? "cannot be estimated: " + j["spacing_error"].get<std::string>()
+                                         : number(j["spacing"].get<double>()) + " (median nearest-neighbour distance)");
+  line("normals", j["normals"].get<bool>() ? "yes" : "no");
+  if (j["channels"].empty()) line("channels", "none");
+  bool first = true;
+  for (const auto& a : j["channels"]) {
+    const int k = a["components"].get<int>();
+    line(first ? "channels" : "", a["name"].get<std::string>() + (k > 1 ? " (" + std::to_string(k) + " components)" : "") +
+                                      ": " + number(a["min"].get<double>()) + " to " + number(a["max"].get<double>()));
+    first = false;
+  }
+  if (!read_summary.empty()) out += read_summary;
+  return out;
+}
+
+}  // namespace
 
 void add_inspect(CLI::App& root, std::vector<Command>& commands) {
   struct Args {
@@ -15,17 +117,32 @@ void add_inspect(CLI::App& root, std::vector<Command>& commands) {
     bool json = false;
   };
   auto args = std::make_shared<Args>();
-  CLI::App* app = root.add_subcommand("inspect", "Print the topology report of a mesh (.ply, .obj, .off, .stl)");
-  app->add_option("mesh", args->input, "Mesh file")->required();
+  CLI::App* app = root.add_subcommand(
+      "inspect",
+      "Print the topology report of a mesh (.ply, .obj, .off, .stl, VTK), or for a file of particles (no triangles: "
+      "any input the meshing commands read) their count, bounds, spacing, normals and channels with their ranges");
+  app->add_option("file", args->input, "Mesh or particle file")->required();
   app->add_flag("--json", args->json, "Print the report as JSON");
   commands.push_back({app, [args] {
-                        const TriMesh mesh = read_mesh(args->input);
-                        const TopologyReport r = topology_report(mesh);
-                        if (args->json) {
-                          std::printf("%s\n", to_json(r).dump(2).c_str());
-                        } else {
-                          std::printf("%s\n%s", args->input.c_str(), describe(r).c_str());
+                        if (mesh_format(args->input)) {
+                          const TriMesh mesh = read_mesh(args->input);
+                          // A mesh file with vertices and no triangles is particles (a
+                          // vertex-only PLY, a VTK particle file); an empty mesh stays a mesh.
+                          if (!mesh.triangles.empty() || mesh.positions.empty()) {
+                            const TopologyReport r = topology_report(mesh);
+                            if (args->json)
+                              std::printf("%s\n", to_json(r).dump(2).c_str());
+                            else
+                              std::printf("%s\n%s", args->input.c_str(), describe(r).c_str());
+                            return 0;
+                          }
                         }
+                        const ParticleInput in = read_particles(args->input, ParticleInputArgs{}, 0);
+                        const nlohmann::json j = particle_summary(args->input, in);
+                        if (args->json)
+                          std::printf("%s\n", j.dump(2).c_str());
+                        else
+                          std::printf("%s", describe_particles(j, in.summary).c_str());
                         return 0;
                       }});
 }
