@@ -69,11 +69,19 @@ nlohmann::json particle_summary(const std::string& path, const ParticleInput& in
   j["channels"] = nlohmann::json::array();
   for (const VertexAttribute& a : c.attributes) {
     double mn = std::numeric_limits<double>::infinity(), mx = -mn;
+    size_t non_finite = 0;
     for (const float v : a.values) {
+      if (!std::isfinite(v)) {
+        ++non_finite;
+        continue;
+      }
       mn = std::min(mn, double(v));
       mx = std::max(mx, double(v));
     }
-    j["channels"].push_back({{"name", a.name}, {"components", a.components}, {"min", mn}, {"max", mx}});
+    nlohmann::json c = {{"name", a.name}, {"components", a.components}, {"min", nullptr}, {"max", nullptr}};
+    if (mn <= mx) c["min"] = mn, c["max"] = mx;
+    if (non_finite > 0) c["non_finite"] = non_finite;  // NaN or infinite values, left out of the range
+    j["channels"].push_back(c);
   }
   if (!in.report.is_null()) j["input"] = in.report;
   return j;
@@ -101,8 +109,11 @@ std::string describe_particles(const nlohmann::json& j, const std::string& read_
   bool first = true;
   for (const auto& a : j["channels"]) {
     const int k = a["components"].get<int>();
-    line(first ? "channels" : "", a["name"].get<std::string>() + (k > 1 ? " (" + std::to_string(k) + " components)" : "") +
-                                      ": " + number(a["min"].get<double>()) + " to " + number(a["max"].get<double>()));
+    std::string range = a["min"].is_null() ? "no finite value"
+                                           : number(a["min"].get<double>()) + " to " + number(a["max"].get<double>());
+    if (a.contains("non_finite")) range += " (" + std::to_string(a["non_finite"].get<size_t>()) + " NaN or infinite)";
+    line(first ? "channels" : "",
+         a["name"].get<std::string>() + (k > 1 ? " (" + std::to_string(k) + " components)" : "") + ": " + range);
     first = false;
   }
   if (!read_summary.empty()) out += read_summary;

@@ -71,6 +71,15 @@ def test_shared_simulator_file(cli, data_dir):
     assert 0 < r["spacing"] < 0.1
 
 
+def test_values_that_are_not_finite_are_counted_apart(cli, tmp_path):
+    path = tmp_path / "nan.xyz"
+    path.write_text("x y z density speed\n0 0 0 nan nan\n1 0 0 2 nan\n0 1 0 inf nan\n0 0 1 -3 nan\n")
+    c = {c["name"]: c for c in inspect_json(cli, path)["channels"]}
+    assert (c["density"]["min"], c["density"]["max"], c["density"]["non_finite"]) == (-3.0, 2.0, 2)
+    assert c["speed"]["min"] is None and c["speed"]["max"] is None and c["speed"]["non_finite"] == 4
+    assert "speed: no finite value (4 NaN or infinite)" in cli("inspect", path).stdout
+
+
 def test_what_cannot_be_read_is_an_error(cli, tmp_path):
     proc = cli("inspect", tmp_path / "missing.vtk", check=False)
     assert proc.returncode == 1 and "missing.vtk" in proc.stderr
