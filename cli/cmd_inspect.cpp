@@ -3,12 +3,10 @@
 // spacing, the normals and every channel with its range (the names --attributes and
 // --radius-channel take).
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <memory>
-#include <sstream>
 
 #include "commands.h"
 #include "particle_input.h"
@@ -21,20 +19,6 @@
 namespace particlemesh::cli {
 
 namespace {
-
-/// Whether read_mesh reads `path`'s format (the mesh extensions readable_extensions lists).
-bool mesh_format(const std::string& path) {
-  std::string lower = path;
-  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  std::stringstream list(readable_extensions(false));
-  std::string ext;
-  while (std::getline(list, ext, ',')) {
-    ext.erase(0, ext.find_first_not_of(' '));
-    if (!ext.empty() && lower.size() > ext.size() && lower.compare(lower.size() - ext.size(), ext.size(), ext) == 0)
-      return true;
-  }
-  return false;
-}
 
 std::string number(double v) {
   char buf[32];
@@ -135,7 +119,7 @@ void add_inspect(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("file", args->input, "Mesh or particle file")->required();
   app->add_flag("--json", args->json, "Print the report as JSON");
   commands.push_back({app, [args] {
-                        if (mesh_format(args->input)) {
+                        if (reads_format(args->input, false)) {
                           const TriMesh mesh = read_mesh(args->input);
                           // A mesh file with vertices and no triangles is particles (a
                           // vertex-only PLY, a VTK particle file); an empty mesh stays a mesh.

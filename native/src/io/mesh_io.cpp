@@ -41,6 +41,11 @@ Vertices take_vertices(detail::FileContents& c) {
 
 std::string readable_extensions(bool points) { return detail::known_extensions(points); }
 
+bool reads_format(const std::string& path, bool points) {
+  const detail::FileFormat* f = detail::format_for(path);
+  return f != nullptr && (points ? f->points : f->mesh);
+}
+
 TriMesh read_mesh(const std::string& path) {
   detail::FileContents c = read_file(path, detail::ReadPurpose::Mesh);
   TriMesh mesh = take_vertices<TriMesh>(c);

@@ -73,6 +73,17 @@ TEST(MeshIO, PointCloudsReadPlyAndXyz) {
   EXPECT_EQ(q.positions[3], (Vec3{1.5, 2, 3}));
 }
 
+// Which reader takes a path, by its extension alone (the table read_mesh and read_point_cloud
+// look up): what `inspect` asks before it reads.
+TEST(MeshIO, FormatsReadAsMeshesOrPoints) {
+  EXPECT_TRUE(reads_format("a/b.PLY", false) && reads_format("a/b.PLY", true));
+  EXPECT_TRUE(reads_format("m.obj", false) && !reads_format("m.obj", true));
+  EXPECT_TRUE(!reads_format("f.bgeo.gz", false) && reads_format("f.bgeo.gz", true));
+  EXPECT_TRUE(reads_format("f.vtu", false) && reads_format("f.vtu", true));
+  EXPECT_FALSE(reads_format("f.pcd", true));  // the PCL bridge's, not the core reader's
+  EXPECT_FALSE(reads_format("noextension", false) || reads_format("x.txt", true));
+}
+
 TEST(MeshIO, SharedDataLoads) {
   PM_REQUIRE_DATA(points, "points/bunny_poisson.ply");
   PM_REQUIRE_DATA(obj, "meshes/spot.obj");

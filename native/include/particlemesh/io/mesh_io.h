@@ -83,6 +83,10 @@ PM_EXPORT PointCloud read_point_cloud(const std::string& path);
 /// The extensions read_point_cloud (points) or read_mesh reads, for messages: ".ply, .xyz".
 PM_EXPORT std::string readable_extensions(bool points);
 
+/// Whether read_mesh (points = false) or read_point_cloud (points = true) reads `path`'s
+/// format, by its extension (any case); the file itself is not opened.
+PM_EXPORT bool reads_format(const std::string& path, bool points);
+
 /// Check, before any work, that particles can be written to `path` (.ply or .xyz, or a
 /// device / FIFO). @throws Error(InvalidArgument).
 PM_EXPORT void check_point_cloud_output(const std::string& path);
