@@ -35,9 +35,15 @@ def test_same_particles_same_mesh_whatever_the_file(cli, tmp_path):
         tri = tmp_path / f"tri{fmt}.ply"
         cli("triangulate", src, "-o", tri, "--raw", "-q")
         meshes["tri" + fmt] = tri.read_bytes()
+        # The vector channel by its name from every format (PLY: velocity_0, _1, _2 are it).
+        vtu = tmp_path / f"out{fmt}.vtu"
+        cli("polygonize", src, "-o", vtu, *POLY, "--attributes", "velocity,density", "-q")
+        meshes["vtu" + fmt] = vtu.read_bytes()
     for fmt in FORMATS:
         assert meshes[fmt] == meshes[".ply"], f"{fmt} gives another polygonize mesh than .ply"
         assert meshes["tri" + fmt] == meshes["tri.ply"], f"{fmt} gives another triangulate mesh than .ply"
+        assert meshes["vtu" + fmt] == meshes["vtu.ply"], f"{fmt} gives another .vtu than .ply"
+    assert b'Name="velocity" NumberOfComponents="3"' in meshes["vtu.ply"]
     assert b"property float velocity_2" in meshes[".ply"] and b"property float density" in meshes[".ply"]
 
 

@@ -13,8 +13,9 @@
 // no lower-case one is declared), nx ny nz (all three, or they are kept as plain
 // attributes), red green blue (-> the "color" attribute in [0, 1]: 8-bit values / 255,
 // 16-bit / 65535, float as stored), every other scalar vertex property as a one-component
-// attribute of its name; and the "face" element's vertex_indices (or vertex_index) lists,
-// fanned into triangles. List properties anywhere (a vertex element with a list, an "edge"
+// attribute of its name, except that properties name_0, name_1, .., name_k declared one after
+// another (as our writers write a vector channel) are one (k + 1)-component attribute "name";
+// and the "face" element's vertex_indices (or vertex_index) lists, fanned into triangles. List properties anywhere (a vertex element with a list, an "edge"
 // or "material" element) are walked and skipped. After the last element the file must end
 // (whitespace aside): data beyond what the header declares means a count is wrong.
 #include <algorithm>
@@ -98,6 +99,7 @@ class PlyReader {
       fail("more data after the " + declared() +
            " the header declares (at byte " + std::to_string(in_.offset() - 1) +
            "): a count in the header is too small, or the file is not one PLY file");
+    merge_component_runs();
     if (!colors_.empty()) {
       VertexAttribute color{"color", 3, std::move(colors_)};
       out_.attributes.insert(out_.attributes.begin(), std::move(color));
@@ -106,6 +108,54 @@ class PlyReader {
   }
 
  private:
+  // Properties name_0, name_1, .., name_k declared one after another (two or more) become one
+  // attribute "name" of k + 1 components, interleaved per vertex: write_mesh writes a vector
+  // channel (velocity) that way, so a PLY round trip gives back the channel it was. Left as
+  // they are where "name" is itself a property's or attribute's name.
+  void merge_component_runs() {
+    auto& attrs = out_.attributes;
+    std::vector<std::string> names;  // every vertex property's name, and the colour channel's
+    for (const Property& p : vertex_->properties) names.push_back(p.name);
+    if (has_colors_) names.push_back("color");
+    auto taken = [&](const std::string& name, const std::vector<VertexAttribute>& so_far) {
+      for (const VertexAttribute& a : so_far)
+        if (a.name == name) return true;
+      return std::find(names.begin(), names.end(), name) != names.end();
+    };
+    std::vector<size_t> declared_at(attrs.size());  // each attribute's place among the properties
+    for (size_t k = 0; k < vertex_->properties.size(); ++k)
+      if (vertex_->properties[k].role == kAttribute) declared_at[vertex_->properties[k].attribute] = k;
+    std::vector<VertexAttribute> merged;
+    merged.reserve(attrs.size());
+    for (size_t i = 0; i < attrs.size();) {
+      const std::string& name = attrs[i].name;
+      size_t run = 0;
+      if (name.size() > 2 && name.compare(name.size() - 2, 2, "_0") == 0) {
+        const std::string base = name.substr(0, name.size() - 2);
+        while (i + run < attrs.size() && declared_at[i + run] == declared_at[i] + run &&
+               attrs[i + run].name == base + "_" + std::to_string(run))
+          ++run;
+        if (run < 2 || taken(base, merged)) run = 0;
+        if (run > 0) {
+          const size_t n = attrs[i].values.size();
+          VertexAttribute v{base, int(run), {}};
+          v.values.resize(n * run);
+          for (size_t c = 0; c < run; ++c) {
+            const std::vector<float>& from = attrs[i + c].values;
+            for (size_t k = 0; k < n; ++k) v.values[k * run + c] = from[k];
+            std::vector<float>().swap(attrs[i + c].values);  // freed as it goes: no third copy
+          }
+          merged.push_back(std::move(v));
+          i += run;
+          continue;
+        }
+      }
+      merged.push_back(std::move(attrs[i]));
+      ++i;
+    }
+    attrs = std::move(merged);
+  }
+
   [[noreturn]] void fail(const std::string& problem) const {
     throw Error(Status::FormatError, "'" + in_.path() + "': " + problem);
   }

@@ -196,10 +196,77 @@ TEST(PlyReader, ColoursAndOtherPropertiesAreAttributes) {
   m.attributes.push_back({"v", 2, std::vector<float>(2 * m.positions.size(), -1.0f)});
   write_mesh(m, (dir / "more.ply").string());
   const TriMesh back = read_mesh((dir / "more.ply").string());
-  ASSERT_EQ(back.attributes.size(), 4u);
+  ASSERT_EQ(back.attributes.size(), 3u);
   EXPECT_EQ(back.attributes[1].name, "x_");
   EXPECT_EQ(back.attributes[1].values[7], 2.5f);
-  EXPECT_EQ(back.attributes[3].name, "v_1");
+  // The vector channel, written as v_0 v_1, comes back as the 2-component channel it was.
+  EXPECT_EQ(back.attributes[2].name, "v");
+  EXPECT_EQ(back.attributes[2].components, 2);
+  EXPECT_EQ(back.attributes[2].values, m.attributes[2].values);
+}
+
+// Properties name_0 .. name_k one after another are one vector channel "name" (our writers'
+// spelling of a vector), interleaved per vertex; properties not declared one after another,
+// runs that do not start at 0, have one member, skip an index or whose "name" is taken stay
+// apart.
+TEST(PlyReader, NumberedPropertiesAreOneVectorChannel) {
+  const auto dir = test::scratch_dir("vector_channels");
+  auto header = [](std::initializer_list<const char*> props) {
+    std::string h = "ply\nformat ascii 1.0\nelement vertex 2\n";
+    for (const char* p : props) h += std::string("property float ") + p + "\n";
+    return h + "end_header\n";
+  };
+  const PointCloud c = read_point_cloud(
+      write(dir / "v.ply", header({"w_0", "x", "w_1", "y", "z", "velocity_0", "velocity_1",
+                                   "velocity_2", "id", "stress_0", "stress_1", "stress_2", "stress_3"}) +
+                               "9 0 9 0 0 1 2 3 7 1 2 3 4\n9 1 9 0 0 4 5 6 8 5 6 7 8\n"));
+  ASSERT_EQ(c.positions.size(), 2u);
+  EXPECT_EQ(c.positions[1], (Vec3{1, 0, 0}));
+  std::vector<std::string> names;
+  for (const VertexAttribute& a : c.attributes) names.push_back(a.name);
+  // w_0 and w_1 are not declared next to each other (x stands between them): apart.
+  EXPECT_EQ(names, (std::vector<std::string>{"w_0", "w_1", "velocity", "id", "stress"}));
+  EXPECT_EQ(c.attributes[2].components, 3);
+  EXPECT_EQ(c.attributes[2].values, (std::vector<float>{1, 2, 3, 4, 5, 6}));
+  EXPECT_EQ(c.attributes[3].components, 1);
+  EXPECT_EQ(c.attributes[3].values, (std::vector<float>{7, 8}));
+  EXPECT_EQ(c.attributes[4].components, 4);
+  EXPECT_EQ(c.attributes[4].values, (std::vector<float>{1, 2, 3, 4, 5, 6, 7, 8}));
+  // Not runs: one member, a start at 1, a gap, and a name that is a property's own.
+  const PointCloud apart = read_point_cloud(
+      write(dir / "apart.ply", header({"x", "y", "z", "a_0", "b_1", "b_2", "c_0", "c_2", "d", "d_0", "d_1", "_0", "_1"}) +
+                                   "0 0 0 1 2 3 4 5 6 7 8 9 10\n1 0 0 1 2 3 4 5 6 7 8 9 10\n"));
+  names.clear();
+  for (const VertexAttribute& a : apart.attributes) {
+    names.push_back(a.name);
+    EXPECT_EQ(a.components, 1) << a.name;
+  }
+  EXPECT_EQ(names, (std::vector<std::string>{"a_0", "b_1", "b_2", "c_0", "c_2", "d", "d_0", "d_1", "_0", "_1"}));
+  // A mesh's vector channel through binary and ASCII PLY, and a colour beside a "color_0" run.
+  TriMesh m = icosphere_mesh(1);
+  m.attributes.push_back({"velocity", 3, {}});
+  m.attributes.push_back({"color", 3, {}});
+  for (size_t i = 0; i < m.positions.size(); ++i) {
+    m.attributes[0].values.insert(m.attributes[0].values.end(), {float(i), -float(i), 0.5f});
+    m.attributes[1].values.insert(m.attributes[1].values.end(), {1.0f, 0.0f, 1.0f});
+  }
+  for (const MeshFormat format : {MeshFormat::Auto, MeshFormat::PlyAscii}) {
+    const std::string name = format == MeshFormat::Auto ? "m.ply" : "a.ply";
+    WriteMeshOptions options;
+    options.format = format;
+    write_mesh(m, (dir / name).string(), options);
+    const TriMesh back = read_mesh((dir / name).string());
+    ASSERT_EQ(back.attributes.size(), 2u) << name;
+    EXPECT_EQ(back.attributes[0].name, "color") << name;
+    EXPECT_EQ(back.attributes[1].name, "velocity") << name;
+    EXPECT_EQ(back.attributes[1].components, 3) << name;
+    EXPECT_EQ(back.attributes[1].values, m.attributes[0].values) << name;
+  }
+  const PointCloud colours = read_point_cloud(
+      write(dir / "colours.ply", header({"x", "y", "z", "color_0", "color_1"}) + "0 0 0 1 2\n1 0 0 3 4\n"));
+  ASSERT_EQ(colours.attributes.size(), 1u);  // no colour properties: "color" is free
+  EXPECT_EQ(colours.attributes[0].name, "color");
+  EXPECT_EQ(colours.attributes[0].components, 2);
 }
 
 // OBJ: NaN and values beyond double named with their line (before: "a face refers to a

@@ -59,14 +59,17 @@ PM_EXPORT void write_mesh(const TriMesh& mesh, OutputFile& out, const WriteMeshO
 /// Read a mesh (.ply, .obj, .off, .stl, .vtk, .vtu, .vtp). Polygons with more than three
 /// corners are fanned.
 /// A PLY file's colours come back as the "color" attribute, its other vertex properties as
-/// attributes of their names.
+/// attributes of their names, except that properties name_0, name_1, .., name_k declared one
+/// after another are the one (k + 1)-component attribute "name" (as write_mesh writes a
+/// vector), unless "name" is itself a property's name.
 /// @throws Error(IoError | FormatError) naming the file and the problem (and the element or
 ///         line): a header that promises more or less than the data, a face corner beyond
 ///         the vertices, a NaN or infinite coordinate, a face with fewer than three corners.
 PM_EXPORT TriMesh read_mesh(const std::string& path);
 
 /// Read particles: .ply (the vertex element: x y z, optional nx ny nz, red green blue -> the
-/// "color" attribute in [0, 1], other properties as attributes; faces ignored), .xyz (one
+/// "color" attribute in [0, 1], other properties as attributes, name_0 .. name_k declared
+/// one after another as the vector "name", as read_mesh; faces ignored), .xyz (one
 /// point per line: "x y z" or "x y z nx ny nz", '#' starts a comment), simulators' files:
 /// VTK legacy .vtk (ASCII or BINARY; POLYDATA or UNSTRUCTURED_GRID; POINT_DATA arrays as
 /// attributes, NORMALS as the normals), VTK XML .vtu / .vtp and parallel .pvtu / .pvtp
