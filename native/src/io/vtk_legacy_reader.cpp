@@ -15,7 +15,10 @@
 //
 // What is read: POINTS (any numeric type, exactly), POINT_DATA's SCALARS, VECTORS, NORMALS
 // (the first one: the normals), TEXTURE_COORDINATES, TENSORS, COLOR_SCALARS and FIELD arrays
-// (any numeric type; one attribute each, named as in the file with %XX escapes decoded), and
+// (any numeric type, bit arrays as 0 / 1; one attribute each, named as in the file with %XX
+// escapes decoded; COLOR_SCALARS as VTK's reader gives them: unsigned chars 0..255, which is
+// how VTK writes any unsigned-char array set as the active scalars, a material or type id as
+// much as a colour), string arrays walked and skipped (they are no per-particle number), and
 // for meshes POLYGONS and TRIANGLE_STRIPS (POLYDATA) or triangle, polygon and quad CELLS
 // (UNSTRUCTURED_GRID), fanned. Cells in both layouts (the classic counts-and-ids list and
 // version 5.1's OFFSETS / CONNECTIVITY), CELL_DATA, lookup tables, METADATA and field data
@@ -196,8 +199,16 @@ class VtkLegacyReader {
   /// decoded at once, text values one by one); an empty sink skips them. Nothing is
   /// allocated here; the sink's vectors grow with what is really read.
   void values(Type type, uint64_t count, const std::string& what, const ValueSink& sink) {
-    if (type == Type::Bit || type == Type::String || type == Type::None)
-      fail(what + ": " + (type == Type::None ? std::string("unknown data type") : "bit and string arrays are not read"));
+    if (type == Type::None) fail(what + ": unknown data type");
+    if (type == Type::String) {
+      if (sink) fail(what + ": a string array is not a channel of numbers");
+      skip_strings(count, what);
+      return;
+    }
+    if (type == Type::Bit && binary_) {
+      bits(count, what, sink);
+      return;
+    }
     if (binary_) {
       end_line();
       const int size = scalar_size(type);
@@ -233,6 +244,54 @@ class VtkLegacyReader {
       if (sink) sink(i, &v, 1);
     }
     ended_ = false;
+  }
+
+  /// A binary bit array: count bits packed into bytes, the first in the highest bit (as
+  /// vtkDataWriter writes them), handed on as 0 / 1.
+  void bits(uint64_t count, const std::string& what, const ValueSink& sink) {
+    end_line();
+    const uint64_t bytes = count / 8 + (count % 8 != 0);
+    if (bytes > bytes_left())
+      fail("truncated: " + what + " needs " + std::to_string(bytes) + " bytes of bits, the file has " +
+           std::to_string(bytes_left()) + " bytes left");
+    unsigned char buf[2048];
+    double v[8 * sizeof buf];
+    for (uint64_t i = 0; i < bytes;) {
+      const size_t k = size_t(std::min<uint64_t>(sizeof buf, bytes - i));
+      if (!in_.read(buf, k)) fail("truncated: the file ends in " + what);
+      if (sink) {
+        const uint64_t first = 8 * i, n = std::min<uint64_t>(8 * uint64_t(k), count - first);
+        for (uint64_t j = 0; j < n; ++j) v[j] = (buf[j / 8] >> (7 - j % 8)) & 1;
+        sink(first, v, size_t(n));
+      }
+      i += k;
+    }
+  }
+
+  /// A string array, skipped: ASCII holds one value per line (%XX-escaped, so an empty value
+  /// is an empty line); BINARY a big-endian length before each value, its top two bits
+  /// saying its size (11: 1 byte, 10: 2, 01: 4, 00: 8; vtkDataWriter's layout).
+  void skip_strings(uint64_t count, const std::string& what) {
+    end_line();
+    auto truncated = [&](uint64_t i) {
+      fail("truncated: the file ends in " + what + " (string " + std::to_string(i) + " of " + std::to_string(count) + ")");
+    };
+    if (!binary_) {
+      std::string_view line;
+      for (uint64_t i = 0; i < count; ++i)
+        if (!in_.line(line, 1 << 20)) truncated(i);
+      return;
+    }
+    for (uint64_t i = 0; i < count; ++i) {
+      unsigned char b[8];
+      if (!in_.read(b, 1)) truncated(i);
+      const int size = b[0] >> 6 == 3 ? 1 : b[0] >> 6 == 2 ? 2 : b[0] >> 6 == 1 ? 4 : 8;
+      if (size > 1 && !in_.read(b + 1, size_t(size - 1))) truncated(i);
+      uint64_t length = b[0] & (size == 8 ? 0xff : 0x3f);
+      for (int j = 1; j < size; ++j) length = length << 8 | b[j];
+      if (length > bytes_left()) truncated(i);
+      if (!in_.skip(length)) truncated(i);
+    }
   }
 
   Type data_type(const std::string& what) {
@@ -332,13 +391,13 @@ class VtkLegacyReader {
     const std::string what = k + " '" + shown(name) + "'";
     int components = 1;
     Type type = Type::None;
-    bool unsigned_char_colours = false;
+    bool ascii_colours = false;  // COLOR_SCALARS as text: 0..1, stored as round(255 v)
     if (k == "COLOR_SCALARS") {
       uint64_t c = 0;
       if (!word(t) || !parse_count(t, c) || c < 1 || c > 65535) fail(what + " needs a component count");
       components = int(c);
       type = binary_ ? Type::U8 : Type::F32;
-      unsigned_char_colours = binary_;
+      ascii_colours = !binary_;
     } else if (k == "TEXTURE_COORDINATES") {
       uint64_t c = 0;
       if (!word(t) || !parse_count(t, c) || c < 1 || c > 3) fail(what + " needs a dimension 1, 2 or 3");
@@ -364,7 +423,7 @@ class VtkLegacyReader {
       }
     }
     const uint64_t n = count_;
-    const bool keep = section_ == Section::Points;
+    const bool keep = section_ == Section::Points && type != Type::String;
     if (!keep) {
       values(type, saturating_mul(n, uint64_t(components)), what, {});
       return;
@@ -382,7 +441,8 @@ class VtkLegacyReader {
     VertexAttribute a{unique_attribute_name(out_, name), components, {}};
     a.values.reserve(size_t(std::min<uint64_t>(saturating_mul(n, uint64_t(components)), saturating_mul(out_.positions.size(), uint64_t(components)))));
     values(type, saturating_mul(n, uint64_t(components)), what, each([&](uint64_t, double v) {
-      a.values.push_back(unsigned_char_colours ? float(v / 255.0) : float(v));
+      // vtkDataReader's conversion of text colours to unsigned chars.
+      a.values.push_back(ascii_colours ? float(std::floor(std::clamp(255.0 * v + 0.5, 0.0, 255.0))) : float(v));
     }));
     out_.attributes.push_back(std::move(a));
   }
@@ -414,7 +474,7 @@ class VtkLegacyReader {
       if (!word(t) || !parse_count(t, components) || !word(t) || !parse_count(t, tuples))
         fail(what + " needs: components tuples type");
       const Type type = data_type(what);
-      const bool take = keep && section_ == Section::Points;
+      const bool take = keep && section_ == Section::Points && type != Type::String;
       if (take && tuples != out_.positions.size())
         fail(what + " has " + std::to_string(tuples) + " tuples for " + std::to_string(out_.positions.size()) + " points");
       if (take && (components < 1 || components > 65535)) fail(what + " has " + std::to_string(components) + " components");

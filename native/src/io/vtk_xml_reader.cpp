@@ -12,9 +12,9 @@
 //
 // What is read: the points (exactly: Float32, Float64 or integer components), every numeric
 // PointData array as an attribute of its name (the one PointData's Normals="..." names, with
-// 3 components, as the normals), and for meshes the triangle, polygon and quad cells of an
-// UnstructuredGrid or the Polys and Strips of a PolyData, fanned. String arrays are
-// skipped.
+// 3 components, as the normals; a Bit array as 0 / 1), and for meshes the triangle, polygon
+// and quad cells of an UnstructuredGrid or the Polys and Strips of a PolyData, fanned. String
+// arrays are skipped.
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
@@ -71,6 +71,7 @@ Type type_of(const std::string& t) {
   if (t == "Float32" || t == "Float") return Type::F32;
   if (t == "Float64" || t == "Double") return Type::F64;
   if (t == "String") return Type::String;
+  if (t == "Bit") return Type::Bit;
   return Type::None;
 }
 
@@ -486,8 +487,10 @@ class VtkXmlReader {
              std::to_string(tuples) + " x " + std::to_string(comps) + ")");
       return out;
     }
+    // A Bit array packs its values eight to a byte, the first in the highest bit.
+    const bool bits = type == Type::Bit;
     const int size = scalar_size(type);
-    const uint64_t expected = saturating_mul(count, uint64_t(size));
+    const uint64_t expected = bits ? count / 8 + (count % 8 != 0) : saturating_mul(count, uint64_t(size));
     std::vector<unsigned char> bytes;
     const unsigned char* values = nullptr;  // bytes.data(), or raw appended data in place
     if (format == "binary") {
@@ -517,7 +520,12 @@ class VtkXmlReader {
       fail(what + ": format '" + shown(format) + "' is not ascii, binary or appended");
     }
     out.resize(size_t(count));
-    decode_scalars(type, values ? values : bytes.data(), size_t(count), big_endian_, out.data());
+    const unsigned char* from = values ? values : bytes.data();
+    if (bits) {
+      for (uint64_t i = 0; i < count; ++i) out[size_t(i)] = (from[i / 8] >> (7 - i % 8)) & 1;
+      return out;
+    }
+    decode_scalars(type, from, size_t(count), big_endian_, out.data());
     return out;
   }
 
