@@ -1,7 +1,10 @@
 // Plain-text point files, one point per line: .xyz (and the .pts of Leica scanners and
 // CloudCompare). Values are separated by spaces, tabs, commas or semicolons; '#' starts a
 // comment; blank lines are skipped; every data line has the same number of values. A UTF-8
-// byte order mark at the start is skipped (editors on Windows write one). Lines are at most
+// byte order mark at the start is skipped (editors on Windows write one); UTF-16 text (a
+// byte order mark FF FE or FE FF, or NUL bytes in a line) is refused by name, and so are
+// decimal commas ("0,5;1,25;2", as spreadsheets in many locales write them: the comma would
+// split each value in two). Lines are at most
 // 64 KiB: a file that never ends a line (/dev/zero, a binary file renamed) is refused after
 // that much, not read into memory whole.
 //
@@ -51,6 +54,32 @@ constexpr int kMaxColumns = 64;
 
 bool separator(char c) { return c == ' ' || c == '\t' || c == ',' || c == ';' || c == '\r'; }
 
+/// Whether a line writes decimals with a comma: between spaces, tabs or semicolons it has a
+/// word like "-0,0294" (digits, one comma, digits, no '.'), and no word that starts or ends
+/// with a comma (in "1, 2,3" commas separate the values). Returns that word, or empty.
+std::string_view decimal_comma(std::string_view line) {
+  if (line.find(',') == std::string_view::npos) return {};
+  auto strong = [](char c) { return c == ' ' || c == '\t' || c == ';' || c == '\r'; };
+  auto digit = [](char c) { return c >= '0' && c <= '9'; };
+  std::string_view found;
+  size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && strong(line[i])) ++i;
+    size_t j = i;
+    while (j < line.size() && !strong(line[j])) ++j;
+    const std::string_view w = line.substr(i, j - i);
+    i = j;
+    if (w.empty()) continue;
+    if (w.front() == ',' || w.back() == ',') return {};
+    const size_t c = w.find(',');
+    if (c == std::string_view::npos || !found.empty()) continue;
+    if (w.find(',', c + 1) == std::string_view::npos && w.find('.') == std::string_view::npos && c > 0 &&
+        digit(w[c - 1]) && c + 1 < w.size() && digit(w[c + 1]))
+      found = w;
+  }
+  return found;
+}
+
 /// The words of a line, split at separators.
 void split(std::string_view line, std::vector<std::string_view>& words) {
   words.clear();
@@ -91,6 +120,9 @@ class XyzReader {
   FileContents read() {
     if (in_.peek() < 0) fail_file("the file is empty");
     if (in_.look_ahead(3) == "\xEF\xBB\xBF") in_.skip(3);
+    if (const std::string_view bom = in_.look_ahead(2); bom == "\xFF\xFE" || bom == "\xFE\xFF")
+      fail_file("the file is UTF-16 text (it starts with the byte order mark " + std::string(bom[0] == '\xFF' ? "FF FE" : "FE FF") +
+                "): save it as UTF-8 or ASCII text");
     if (in_.size() > 0) values_.reserve(size_t(std::min<int64_t>(in_.size() / 8, 1 << 22)));
     std::string_view line;
     std::vector<std::string_view> words;
@@ -98,6 +130,10 @@ class XyzReader {
     std::vector<std::string> header;
     while (in_.line(line, kMaxLine)) {
       if (const size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
+      if (line.find('\0') != std::string_view::npos)
+        fail("NUL bytes: UTF-16 text (save it as UTF-8 or ASCII text) or not a text file");
+      if (const std::string_view w = decimal_comma(line); !w.empty())
+        fail("'" + shown(w) + "' is a number with a decimal comma; write decimals with '.' (a comma separates values)");
       split(line, words);
       if (words.empty()) continue;
       if (first) {

@@ -319,6 +319,37 @@ TEST(XyzReader, ByteOrderMarkLongLinesAndOverflow) {
   EXPECT_REFUSED(read_point_cloud((dir / "zero.xyz").string()), Status::FormatError, "line 1 is longer than 65536 bytes");
 }
 
+// Text that would be misread as numbers is refused by name: UTF-16 (PowerShell's ">" and
+// Notepad's "Unicode" write it) and decimal commas (spreadsheets in many locales write
+// "0,0114;-0,0294"; split at the commas, each line became six values, read as a point and a
+// "normal"). Commas that separate values, with or without spaces, still read.
+TEST(XyzReader, Utf16AndDecimalCommasAreRefusedByName) {
+  const auto dir = test::scratch_dir("xyz_text");
+  std::string utf16 = "\xFF\xFE";
+  for (char ch : std::string("1 2 3\n4 5 6\n")) utf16 += std::string{ch, '\0'};
+  EXPECT_REFUSED(read_point_cloud(write(dir / "le.xyz", utf16)), Status::FormatError,
+                 "le.xyz': the file is UTF-16 text (it starts with the byte order mark FF FE): save it as UTF-8");
+  EXPECT_REFUSED(read_point_cloud(write(dir / "be.xyz", "\xFE\xFF" + utf16.substr(3))), Status::FormatError,
+                 "byte order mark FE FF");
+  EXPECT_REFUSED(read_point_cloud(write(dir / "nobom.xyz", utf16.substr(2))), Status::FormatError,
+                 "nobom.xyz' line 1: NUL bytes: UTF-16 text");
+  for (const char* sep : {";", "\t", " ", "; "}) {
+    SCOPED_TRACE(sep);
+    EXPECT_REFUSED(read_point_cloud(write(dir / "comma.xyz", std::string("0,0114") + sep + "-0,0294" + sep + "0,9995\n")),
+                   Status::FormatError, "comma.xyz' line 1: '0,0114' is a number with a decimal comma");
+  }
+  EXPECT_REFUSED(read_point_cloud(write(dir / "later.xyz", "1;2;3\n4;5;6,5\n")), Status::FormatError,
+                 "later.xyz' line 2: '6,5' is a number with a decimal comma");
+  // Comma-separated values (with spaces or not, an integer pair, a header) read as before.
+  for (const char* text : {"1,2,3\n4,5,6\n", "1, 2, 3\n4, 5, 6\n", "1, 2,3\n4, 5,6\n", "1.0,2 ,3\n4.0,5 ,6\n",
+                           "//X,Y,Z\n1,2,3\n4,5,6\n"}) {
+    const PointCloud c = read_point_cloud(write(dir / "csv.xyz", text));
+    ASSERT_EQ(c.size(), 2u) << text;
+    EXPECT_EQ(c.positions[1], (Vec3{4, 5, 6})) << text;
+    EXPECT_TRUE(c.normals.empty()) << text;
+  }
+}
+
 // Text point files' columns: named by a header line (CloudCompare's "//X,Y,Z,R,G,B", PDAL's
 // quoted names, any case), or told by their count and values (scanners' and CloudCompare's
 // conventions): colours are never taken for normals, nothing is dropped.
