@@ -2,11 +2,11 @@
 // CloudCompare). Values are separated by spaces, tabs, commas or semicolons; '#' starts a
 // comment; blank lines are skipped; every data line has the same number of values. A UTF-8
 // byte order mark at the start is skipped (editors on Windows write one); UTF-16 text (a
-// byte order mark FF FE or FE FF, or NUL bytes in a line) is refused by name, and so are
-// decimal commas ("0,5;1,25;2", as spreadsheets in many locales write them: the comma would
-// split each value in two). Lines are at most
-// 64 KiB: a file that never ends a line (/dev/zero, a binary file renamed) is refused after
-// that much, not read into memory whole.
+// byte order mark FF FE or FE FF, or NUL bytes in a line), lines ended by CR alone (classic
+// Mac OS) and decimal commas ("0,5;1,25;2", as spreadsheets in many locales write them: the
+// comma would split each value in two) are refused by name. Lines are at most 64 KiB: a file
+// that never ends a line (/dev/zero, a binary file renamed) is refused after that much, not
+// read into memory whole.
 //
 // What the columns are:
 //  - A header line names them, when the first line that is not a comment starts with a word
@@ -120,6 +120,9 @@ class XyzReader {
   FileContents read() {
     if (in_.peek() < 0) fail_file("the file is empty");
     if (in_.look_ahead(3) == "\xEF\xBB\xBF") in_.skip(3);
+    if (const std::string_view start = in_.look_ahead(4096);
+        start.find('\n') == std::string_view::npos && start.find('\r') != std::string_view::npos)
+      fail_file("its lines end with CR alone (classic Mac OS text): convert the line ends to LF (or CR LF)");
     if (const std::string_view bom = in_.look_ahead(2); bom == "\xFF\xFE" || bom == "\xFE\xFF")
       fail_file("the file is UTF-16 text (it starts with the byte order mark " + std::string(bom[0] == '\xFF' ? "FF FE" : "FE FF") +
                 "): save it as UTF-8 or ASCII text");

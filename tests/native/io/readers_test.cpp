@@ -333,6 +333,14 @@ TEST(XyzReader, Utf16AndDecimalCommasAreRefusedByName) {
                  "byte order mark FE FF");
   EXPECT_REFUSED(read_point_cloud(write(dir / "nobom.xyz", utf16.substr(2))), Status::FormatError,
                  "nobom.xyz' line 1: NUL bytes: UTF-16 text");
+  // Classic Mac OS line ends: one line of every value ("more than 64 values", or longer than
+  // 64 KiB) before.
+  std::string mac;
+  for (int i = 0; i < 10000; ++i) mac += std::to_string(i) + " 0 0\r";
+  for (const size_t size : {size_t(60), mac.size()})
+    EXPECT_REFUSED(read_point_cloud(write(dir / "mac.xyz", mac.substr(0, size))), Status::FormatError,
+                   "mac.xyz': its lines end with CR alone (classic Mac OS text)");
+  EXPECT_EQ(read_point_cloud(write(dir / "crlf.xyz", "1 2 3\r\n4 5 6\r\n")).size(), 2u);
   for (const char* sep : {";", "\t", " ", "; "}) {
     SCOPED_TRACE(sep);
     EXPECT_REFUSED(read_point_cloud(write(dir / "comma.xyz", std::string("0,0114") + sep + "-0,0294" + sep + "0,9995\n")),
