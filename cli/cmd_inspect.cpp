@@ -1,12 +1,16 @@
 // particlemesh inspect FILE [--json]: what a mesh is, topologically; for a file of particles
 // (no triangles), what the meshing commands will read from it: the count, the bounds, the
 // spacing, the normals and every channel with its range (the names --attributes and
-// --radius-channel take).
+// --radius-channel take). A mesh file the mesh reader refuses (FormatError) but the particle
+// reader takes (a PLY of 1-corner faces, as meshio writes a point cloud) gets the particle
+// report, with the mesh reader's message as "not a mesh" (--json: "not_a_mesh").
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <limits>
 #include <memory>
+#include <optional>
 
 #include "commands.h"
 #include "particle_input.h"
@@ -78,6 +82,8 @@ std::string describe_particles(const nlohmann::json& j, const std::string& read_
     k.resize(16, ' ');
     out += k + value + "\n";
   };
+  if (j.contains("not_a_mesh"))
+    line("not a mesh", j["not_a_mesh"].get<std::string>() + "; read as particles");
   auto point = [](const nlohmann::json& p) {
     return "(" + number(p[0].get<double>()) + ", " + number(p[1].get<double>()) + ", " + number(p[2].get<double>()) + ")";
   };
@@ -119,12 +125,27 @@ void add_inspect(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("file", args->input, "Mesh or particle file")->required();
   app->add_flag("--json", args->json, "Print the report as JSON");
   commands.push_back({app, [args] {
+                        // Why the file is not read as a mesh when the mesh reader refused it.
+                        std::exception_ptr mesh_error;
+                        std::string not_a_mesh;
                         if (reads_format(args->input, false)) {
-                          const TriMesh mesh = read_mesh(args->input);
+                          std::optional<TriMesh> mesh;
+                          try {
+                            mesh = read_mesh(args->input);
+                          } catch (const Error& e) {
+                            // A malformed mesh may still be particles, read as the meshing
+                            // commands read them (meshio writes a point cloud's vertex cells
+                            // as 1-corner PLY faces, which those commands skip).
+                            if (e.status() != Status::FormatError) throw;
+                            mesh_error = std::current_exception();
+                            not_a_mesh = e.what();
+                            const std::string prefix = "'" + args->input + "': ";
+                            if (not_a_mesh.compare(0, prefix.size(), prefix) == 0) not_a_mesh.erase(0, prefix.size());
+                          }
                           // A mesh file with vertices and no triangles is particles (a
                           // vertex-only PLY, a VTK particle file); an empty mesh stays a mesh.
-                          if (!mesh.triangles.empty() || mesh.positions.empty()) {
-                            const TopologyReport r = topology_report(mesh);
+                          if (mesh && (!mesh->triangles.empty() || mesh->positions.empty())) {
+                            const TopologyReport r = topology_report(*mesh);
                             if (args->json)
                               std::printf("%s\n", to_json(r).dump(2).c_str());
                             else
@@ -132,8 +153,18 @@ void add_inspect(CLI::App& root, std::vector<Command>& commands) {
                             return 0;
                           }
                         }
-                        const ParticleInput in = read_particles(args->input, ParticleInputArgs{}, 0);
-                        const nlohmann::json j = particle_summary(args->input, in);
+                        auto read = [&] {
+                          if (!mesh_error) return read_particles(args->input, ParticleInputArgs{}, 0);
+                          try {
+                            return read_particles(args->input, ParticleInputArgs{}, 0);
+                          } catch (const Error& e) {
+                            if (e.status() == Status::Cancelled) throw;
+                            std::rethrow_exception(mesh_error);  // neither: the mesh reader's word
+                          }
+                        };
+                        const ParticleInput in = read();
+                        nlohmann::json j = particle_summary(args->input, in);
+                        if (mesh_error) j["not_a_mesh"] = not_a_mesh;
                         if (args->json)
                           std::printf("%s\n", j.dump(2).c_str());
                         else

@@ -1,6 +1,7 @@
 """`particlemesh inspect`: a mesh's topology report; for a file of particles (no triangles),
 the count, bounds, spacing, normals and channels the meshing commands will read."""
 import json
+import struct
 
 import numpy as np
 import pytest
@@ -86,3 +87,58 @@ def test_what_cannot_be_read_is_an_error(cli, tmp_path):
     one.write_text("0 0 0\n")
     r = inspect_json(cli, one)  # read, but one point has no spacing: said, not fatal
     assert r["particles"] == 1 and r["spacing"] is None and "two points" in r["spacing_error"]
+
+
+@pytest.mark.parametrize("fmt", ["binary_little_endian", "ascii"])
+def test_a_meshio_point_cloud_ply_gets_the_particle_report(cli, tmp_path, fmt):
+    """meshio.write("p.ply", meshio.Mesh(points, [("vertex", idx)])) writes each vertex cell as
+    a 1-corner face: the mesh reader refuses them, the meshing commands skip them. inspect
+    reads the file as they do and says why it is not a mesh."""
+    p, _ = particles(n=4)
+    p = p.astype(np.float64)
+    n = len(p)
+    head = (f"ply\nformat {fmt} 1.0\ncomment Created by meshio\nelement vertex {n}\nproperty double x\n"
+            f"property double y\nproperty double z\nelement face {n}\nproperty list uint8 int32 vertex_indices\n"
+            "end_header\n").encode()
+    if fmt == "ascii":
+        body = ("".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in p.tolist()) +
+                "".join(f"1 {i}\n" for i in range(n))).encode()
+    else:
+        body = p.astype("<f8").tobytes() + b"".join(struct.pack("<Bi", 1, i) for i in range(n))
+    path = tmp_path / "p.ply"
+    path.write_bytes(head + body)
+    why = "'face' element 0 has 1 corner (a face needs at least 3)"
+    r = inspect_json(cli, path)
+    assert r["particles"] == n and r["not_a_mesh"] == why
+    assert r["bounds"]["min"] == p.min(0).tolist() and r["bounds"]["max"] == p.max(0).tolist()
+    assert r["spacing"] == pytest.approx(median_nn(p), rel=1e-12)
+    assert "triangles" not in r and r["channels"] == []
+    text = cli("inspect", path).stdout
+    assert f"  not a mesh    {why}; read as particles\n" in text and f"  particles     {n}\n" in text
+    # Cut short inside the faces: refused both ways, with the mesh reader's error.
+    cut = tmp_path / "cut.ply"
+    cut.write_bytes(head + body[:-3])
+    proc = cli("inspect", cut, check=False)
+    assert proc.returncode == 1 and "cut.ply" in proc.stderr and "1 corner" in proc.stderr, proc.stderr
+    assert proc.stdout == ""
+
+
+def test_an_obj_point_cloud_gets_the_particle_report(cli, tmp_path):
+    """MeshLab, Blender and CloudCompare export point clouds as OBJ v lines (x y z r g b),
+    with one vn per v and no faces."""
+    p, _ = particles(n=3)
+    n = len(p)
+    rgb = np.stack([np.arange(n) % 2, np.arange(n) / (2 * n), np.full(n, 0.25)], -1)
+    path = tmp_path / "cloud.obj"
+    path.write_text("# MeshLab point cloud\n" +
+                    "".join(f"v {x!r} {y!r} {z!r} {r!r} {g!r} {b!r}\n"
+                            for (x, y, z), (r, g, b) in zip(p.astype(np.float64).tolist(), rgb.tolist())) +
+                    "vn 0 0 1\n" * n)
+    r = inspect_json(cli, path)
+    assert r["particles"] == n and r["normals"] is True and "not_a_mesh" not in r
+    assert r["bounds"]["min"] == p.min(0).astype(np.float64).tolist()
+    assert r["bounds"]["max"] == p.max(0).astype(np.float64).tolist()
+    assert r["channels"] == [{"name": "color", "components": 3, "min": 0.0, "max": 1.0}]
+    text = cli("inspect", path).stdout
+    assert f"  particles     {n}\n" in text and "  normals       yes\n" in text
+    assert "color (3 components): 0 to 1" in text and "not a mesh" not in text

@@ -17,7 +17,7 @@ const std::vector<FileFormat>& file_formats() {
       {".ply", "PLY", &read_ply, true, true},
       {".xyz", "XYZ text", &read_xyz, true, false},
       {".pts", "PTS text (Leica, CloudCompare)", &read_xyz, true, false},
-      {".obj", "Wavefront OBJ", &read_obj, false, true},
+      {".obj", "Wavefront OBJ", &read_obj, true, true},
       {".off", "OFF", &read_off, false, true},
       {".stl", "STL", &read_stl, false, true},
       {".vtk", "VTK legacy", &read_vtk_legacy, true, true},

@@ -3,6 +3,13 @@
 // fanned; a line ending in a backslash continues on the next. Other statements (vt, o, g, s,
 // usemtl, mtllib, l, p, ...) are skipped.
 //
+// Also particles (ReadPurpose::Points): the point clouds MeshLab, Blender and CloudCompare
+// export are v lines (often v x y z r g b), sometimes one vn per v in the same order, and no
+// f. Read for points, the v lines are the particles and faces are skipped (counted only); the
+// vn lines are the normals, in order, when the file has no face and exactly one vn per v (for
+// a mesh too: a face-less file is a point cloud however it is read), else they only serve the
+// faces' corners.
+//
 // Written by hand, not with tinyobjloader (Debian's libtinyobjloader-dev, 2.0.0rc10), which
 // does not fit on three counts, each checked: its number parser is not correctly rounded
 // (with TINYOBJLOADER_USE_DOUBLE, 17 161 of 30 000 random 17-digit coordinates came back
@@ -40,7 +47,10 @@ class ObjReader {
       if (w.empty()) return;
       if (w[0] == "v") vertex(w);
       else if (w[0] == "vn") normal(w);
-      else if (w[0] == "f" && purpose_ == ReadPurpose::Mesh) face(w);
+      else if (w[0] == "f") {
+        if (purpose_ == ReadPurpose::Mesh) face(w);
+        else ++faces_;  // skipped for points; counted (a file with faces has no per-v normals)
+      }
     };
     while (in_.line(line, kMaxLine)) {
       if (const size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
@@ -65,7 +75,11 @@ class ObjReader {
     out.positions = std::move(positions_);
     out.triangles = std::move(triangles_);
     out.faces = faces_;
-    if (any_vertex_normal_) {
+    if (faces_ == 0 && !normals_.empty() && normals_.size() == out.positions.size()) {
+      // A point cloud's normals: one vn per v, in order (a count that differs says nothing
+      // about which normal is whose, so they are ignored then).
+      out.normals = std::move(normals_);
+    } else if (any_vertex_normal_) {
       // One normal per vertex from the corners that name one (the last wins, as OpenMesh's
       // reader did); a vertex no corner gives a normal keeps (0, 0, 0): no normal.
       vertex_normals_.resize(out.positions.size());

@@ -73,11 +73,80 @@ TEST(MeshIO, PointCloudsReadPlyAndXyz) {
   EXPECT_EQ(q.positions[3], (Vec3{1.5, 2, 3}));
 }
 
+// The point clouds MeshLab, Blender and CloudCompare export as OBJ: v lines (often with r g b
+// in [0, 1]), sometimes one vn per v in the same order, no faces.
+TEST(MeshIO, ObjPointCloudsReadVerticesColoursAndNormals) {
+  const auto dir = test::scratch_dir("obj_points");
+  auto read = [&](const char* name, const std::string& text) {
+    write_text(dir / name, text);
+    return read_point_cloud((dir / name).string());
+  };
+  const std::vector<Vec3> p{{0.1, -2, 3}, {1.5, 0, 0.25}, {-1, 1e-3, 0.30000000000000004}};
+  const std::string v = "v 0.1 -2 3\nv 1.5 0 0.25\nv -1 1e-3 0.30000000000000004\n";
+
+  const PointCloud plain = read("plain.obj", "# CloudCompare\no cloud\n" + v);
+  EXPECT_EQ(plain.positions, p);  // exact, as every reader keeps them
+  EXPECT_FALSE(plain.has_normals());
+  EXPECT_TRUE(plain.attributes.empty());
+
+  const PointCloud rgb = read("rgb.obj", "v 0.1 -2 3 1 0 0.5\nv 1.5 0 0.25 0 1 0.25\r\nv -1 1e-3 0.30000000000000004 0.2 0.4 0.6\n");
+  EXPECT_EQ(rgb.positions, p);
+  EXPECT_FALSE(rgb.has_normals());
+  ASSERT_EQ(rgb.attributes.size(), 1u);
+  EXPECT_EQ(rgb.attributes[0].name, "color");
+  EXPECT_EQ(rgb.attributes[0].components, 3);
+  EXPECT_EQ(rgb.attributes[0].values, (std::vector<float>{1, 0, 0.5f, 0, 1, 0.25f, 0.2f, 0.4f, 0.6f}));
+
+  // One vn per v, no faces: the normals, in order (a (0, 0, 0) one kept as it is).
+  const std::vector<Vec3> n{{0, 0, 1}, {0.6, -0.8, 0}, {0, 0, 0}};
+  const PointCloud normals = read("normals.obj", v + "vn 0 0 1\nvn 0.6 -0.8 0\nvn 0 0 0\n");
+  EXPECT_EQ(normals.positions, p);
+  EXPECT_EQ(normals.normals, n);
+  const PointCloud interleaved = read("interleaved.obj", "v 0.1 -2 3\nvn 0 0 1\nv 1.5 0 0.25\nvn 0.6 -0.8 0\n"
+                                                         "v -1 1e-3 0.30000000000000004\nvn 0 0 0\n");
+  EXPECT_EQ(interleaved.positions, p);
+  EXPECT_EQ(interleaved.normals, n);
+
+  // A vn count that is not the v count says nothing about which normal is whose: none.
+  for (const char* vn : {"vn 0 0 1\nvn 0.6 -0.8 0\n", "vn 0 0 1\nvn 0.6 -0.8 0\nvn 0 0 0\nvn 1 0 0\n"}) {
+    SCOPED_TRACE(vn);
+    const PointCloud c = read("mismatch.obj", v + vn);
+    EXPECT_EQ(c.positions, p);
+    EXPECT_FALSE(c.has_normals());
+  }
+
+  // Faces are ignored for particles (as the PLY reader ignores them), the points kept; the
+  // normals then belong to the faces' corners, not to the points.
+  const PointCloud faces = read("faces.obj", v + "vn 0 0 1\nvn 0.6 -0.8 0\nvn 0 0 0\nf 1//1 2//2 3//3\n");
+  EXPECT_EQ(faces.positions, p);
+  EXPECT_FALSE(faces.has_normals());
+  const PointCloud rgb_faces = read("rgb_faces.obj", "v 0 0 0 1 1 1\nv 1 0 0 0 0 0\nv 0 1 0 0.5 0.5 0.5\nf 1 2 3\n");
+  EXPECT_EQ(rgb_faces.positions, (std::vector<Vec3>{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}));
+  ASSERT_EQ(rgb_faces.attributes.size(), 1u);
+  EXPECT_EQ(rgb_faces.attributes[0].values, (std::vector<float>{1, 1, 1, 0, 0, 0, 0.5f, 0.5f, 0.5f}));
+
+  // Still hardened: a bad value names its line; a file of no v is no cloud.
+  std::string msg;
+  write_text(dir / "bad.obj", "v 0 0 0\nv 1 0 0 0.5 0.5 x\nv 0 1 0\n");
+  EXPECT_EQ(status_of([&] { read_point_cloud((dir / "bad.obj").string()); }, &msg), Status::FormatError);
+  EXPECT_NE(msg.find("bad.obj"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("line 2: colour 'x' is not a number"), std::string::npos) << msg;
+  write_text(dir / "badvn.obj", "v 0 0 0\nvn 0 0\n");
+  EXPECT_EQ(status_of([&] { read_point_cloud((dir / "badvn.obj").string()); }, &msg), Status::FormatError);
+  EXPECT_NE(msg.find("line 2: 'vn' with 2 values"), std::string::npos) << msg;
+  write_text(dir / "nan.obj", "v 0 0 0\nv 1 nan 0\n");
+  EXPECT_EQ(status_of([&] { read_point_cloud((dir / "nan.obj").string()); }, &msg), Status::FormatError);
+  EXPECT_NE(msg.find("line 2: vertex y is NaN"), std::string::npos) << msg;
+  write_text(dir / "none.obj", "# no vertices\nvn 0 0 1\n");
+  EXPECT_EQ(status_of([&] { read_point_cloud((dir / "none.obj").string()); }, &msg), Status::InvalidInput);
+}
+
 // Which reader takes a path, by its extension alone (the table read_mesh and read_point_cloud
 // look up): what `inspect` asks before it reads.
 TEST(MeshIO, FormatsReadAsMeshesOrPoints) {
   EXPECT_TRUE(reads_format("a/b.PLY", false) && reads_format("a/b.PLY", true));
-  EXPECT_TRUE(reads_format("m.obj", false) && !reads_format("m.obj", true));
+  EXPECT_TRUE(reads_format("m.obj", false) && reads_format("m.obj", true));  // OBJ point clouds too
+  EXPECT_TRUE(reads_format("m.off", false) && !reads_format("m.off", true));
   EXPECT_TRUE(!reads_format("f.bgeo.gz", false) && reads_format("f.bgeo.gz", true));
   EXPECT_TRUE(reads_format("f.vtu", false) && reads_format("f.vtu", true));
   EXPECT_FALSE(reads_format("f.pcd", true));  // the PCL bridge's, not the core reader's

@@ -70,7 +70,10 @@ PM_EXPORT TriMesh read_mesh(const std::string& path);
 /// Read particles: .ply (the vertex element: x y z, optional nx ny nz, red green blue -> the
 /// "color" attribute in [0, 1], other properties as attributes, name_0 .. name_k declared
 /// one after another as the vector "name", as read_mesh; faces ignored), .xyz (one
-/// point per line: "x y z" or "x y z nx ny nz", '#' starts a comment), simulators' files:
+/// point per line: "x y z" or "x y z nx ny nz", '#' starts a comment), .obj point clouds
+/// (as MeshLab, Blender and CloudCompare export them: the v lines, "v x y z r g b" -> the
+/// "color" attribute; vn lines as the normals, in order, when the file has no faces and one
+/// vn per v; faces ignored), simulators' files:
 /// VTK legacy .vtk (ASCII or BINARY; POLYDATA or UNSTRUCTURED_GRID; POINT_DATA arrays as
 /// attributes, NORMALS as the normals), VTK XML .vtu / .vtp and parallel .pvtu / .pvtp
 /// (pieces from the file's folder or below; ascii, base64, raw appended;
