@@ -319,7 +319,7 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
       ->check(CLI::Range(0.1, 10.0))
       ->check(finite_number())
       ->capture_default_str();
-  app->add_flag("--no-orient", args->no_orient, "Do not turn closed components to face outward");
+  app->add_flag("--no-orient", args->no_orient, "Do not turn closed components to face outward (away from the solid each bounds: a hollow object's inner wall into its cavity)");
   app->add_option("--threads", args->threads, "Worker threads, 0 = all cores (the output does not depend on it)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();

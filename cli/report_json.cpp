@@ -21,7 +21,8 @@ nlohmann::json to_json(const TopologyReport& r) {
                      {"manifold", c.manifold},
                      {"consistently_oriented", c.consistently_oriented},
                      {"genus", c.genus},
-                     {"signed_volume", c.signed_volume}});
+                     {"signed_volume", c.signed_volume},
+                     {"nesting_depth", c.nesting_depth}});
   }
   return {{"vertices", r.vertices},
           {"triangles", r.triangles},
@@ -108,7 +109,7 @@ std::string describe(const TopologyReport& r) {
   o << "  manifold      " << (r.manifold ? "yes" : "no") << " (" << r.nonmanifold_vertices
     << " non-manifold vertices)\n";
   o << "  oriented      " << (r.consistently_oriented ? "consistently" : "no") << " ("
-    << r.orientation_conflicts << " conflicts)" << (r.closed_components ? (r.outward ? ", closed parts face outward" : ", some closed part faces inward") : "") << "\n";
+    << r.orientation_conflicts << " conflicts)" << (r.closed_components ? (r.outward ? ", closed parts face outward" : ", some closed part faces into its solid") : "") << "\n";
   if (r.degenerate_triangles || r.duplicate_triangles)
     o << "  defects       " << r.degenerate_triangles << " degenerate, " << r.duplicate_triangles << " duplicate triangles\n";
   return o.str();

@@ -12,6 +12,7 @@
 #include "core/huge_pages.h"
 #include "core/parallel.h"
 #include "mesh/corner_buckets.h"
+#include "mesh/nesting.h"
 #include "mesh/orientation.h"
 
 // The report is built vertex by vertex, in parallel. The triangles' corners are bucketed by
@@ -646,11 +647,17 @@ TopologyReport topology_report(const TriMesh& mesh) {
   r.manifold = r.nonmanifold_edges == 0 && r.nonmanifold_vertices == 0;
   r.closed = r.manifold && r.boundary_edges == 0 && F > 0;
   r.consistently_oriented = r.orientation_conflicts == 0 && r.nonmanifold_edges == 0;
+  // A closed component inside another (a cavity's wall) faces into the cavity: outward is
+  // away from the solid each bounds (mesh/nesting.h).
+  std::vector<uint8_t> closed_flags(ncomp, 0);
+  for (size_t c = 0; c < ncomp; ++c) closed_flags[c] = C[c].closed;
+  const std::vector<uint32_t> depth = detail::nesting_depths(mesh.positions, T, comp.data(), ncomp, closed_flags);
   r.outward = true;
-  for (const auto& c : C) {
-    if (c.closed) {
+  for (size_t c = 0; c < ncomp; ++c) {
+    C[c].nesting_depth = depth[c];
+    if (C[c].closed) {
       ++r.closed_components;
-      if (!detail::faces_outward(c.signed_volume)) r.outward = false;
+      if (!detail::faces_away_from_its_solid(C[c].signed_volume, depth[c])) r.outward = false;
     }
   }
   if (r.closed_components == 0) r.outward = false;

@@ -7,6 +7,7 @@
 
 #include "core/disjoint_sets.h"
 #include "core/parallel.h"
+#include "mesh/nesting.h"
 #include "mesh/orientation.h"
 
 namespace PM_NAMESPACE::detail {
@@ -51,7 +52,26 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
   std::vector<double> vol(n, 0.0);
   for (const auto& pt : part)
     for (const auto& [r, v] : pt) vol[r] += v;
-  auto turned = [&](uint32_t r) { return !open[r] && vol[r] < 0; };  // faces_outward, or 0: left as it is
+  // A closed component inside another faces into the cavity it bounds, one inside that
+  // outward again (nesting.h): its depth decides. Pieces numbered by their root, in root order.
+  std::vector<uint32_t> piece(n, UINT32_MAX);
+  size_t pieces = 0;
+  for (const Triangle& t : T)
+    if (piece[root[t[0]]] == UINT32_MAX) piece[root[t[0]]] = 0;
+  for (size_t v = 0; v < n; ++v)
+    if (piece[v] == 0) piece[v] = uint32_t(pieces++);
+  std::vector<uint8_t> closed(pieces, 0);
+  for (size_t v = 0; v < n; ++v)
+    if (piece[v] != UINT32_MAX) closed[piece[v]] = !open[v];
+  std::vector<uint32_t> piece_of(T.size());
+  parallel_blocks(T.size(), 8192, [&](size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i) piece_of[i] = piece[root[T[i][0]]];
+  });
+  const std::vector<uint32_t> depth = nesting_depths(P, T, piece_of.data(), pieces, closed);
+  // Closed, enclosing some volume, and facing into its solid: turned (0 volume: left as it is).
+  auto turned = [&](uint32_t r) {
+    return !open[r] && vol[r] != 0 && !faces_away_from_its_solid(vol[r], depth[piece[r]]);
+  };
   parallel_blocks(T.size(), 8192, [&](size_t b, size_t e) {
     for (size_t i = b; i < e; ++i)
       if (turned(root[T[i][0]])) std::swap(T[i][1], T[i][2]);

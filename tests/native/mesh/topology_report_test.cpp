@@ -53,6 +53,101 @@ TEST(TopologyReport, InwardAndInconsistentWindingsAreSeen) {
   EXPECT_EQ(r.orientation_conflicts, 3u);
 }
 
+namespace {
+// `part` appended to `m`, scaled and moved, its winding reversed if `inward`.
+void append(TriMesh& m, const TriMesh& part, double scale, Vec3 offset, bool inward) {
+  const uint32_t base = uint32_t(m.positions.size());
+  for (const Vec3& p : part.positions) m.positions.push_back(p * scale + offset);
+  for (Triangle t : part.triangles) {
+    if (inward) std::swap(t[1], t[2]);
+    m.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  }
+}
+
+// An axis-aligned box whose six faces are fans of four triangles around their centres, wound
+// outward; its first triangle's first corner is the top face's centre, (c.x, c.y, c.z + h).
+TriMesh fan_box(Vec3 c, double h) {
+  TriMesh m;
+  const int axes[6][3] = {{2, 0, 1}, {2, 1, 0}, {0, 1, 2}, {0, 2, 1}, {1, 2, 0}, {1, 0, 2}};  // normal, u, v
+  for (int f = 0; f < 6; ++f) {
+    const int n = axes[f][0], u = axes[f][1], v = axes[f][2];
+    const double side = f % 2 == 0 ? 1.0 : -1.0;
+    auto at = [&](double a, double b) {
+      double q[3];
+      q[n] = side * h, q[u] = a * h, q[v] = b * h;
+      return c + Vec3{q[0], q[1], q[2]};
+    };
+    const uint32_t centre = uint32_t(m.positions.size());
+    m.positions.push_back(at(0, 0));
+    const double corner[4][2] = {{1, 1}, {-1, 1}, {-1, -1}, {1, -1}};
+    for (const auto& k : corner) m.positions.push_back(at(k[0], k[1]));
+    for (uint32_t k = 0; k < 4; ++k) m.triangles.push_back({centre, centre + 1 + k, centre + 1 + (k + 1) % 4});
+  }
+  // Faces do not share their corner vertices here: weld them, and wind each face outward.
+  std::vector<uint32_t> id(m.positions.size());
+  TriMesh w;
+  for (size_t i = 0; i < m.positions.size(); ++i) {
+    size_t j = 0;
+    while (j < w.positions.size() && !(w.positions[j] == m.positions[i])) ++j;
+    if (j == w.positions.size()) w.positions.push_back(m.positions[i]);
+    id[i] = uint32_t(j);
+  }
+  for (const Triangle& t : m.triangles) {
+    Triangle u{id[t[0]], id[t[1]], id[t[2]]};
+    const Vec3 a = w.positions[u[0]], b = w.positions[u[1]], d = w.positions[u[2]];
+    if (dot(cross(b - a, d - a), a - c) < 0) std::swap(u[1], u[2]);
+    w.triangles.push_back(u);
+  }
+  return w;
+}
+}  // namespace
+
+// A closed piece inside another bounds a cavity and faces into it; one inside that is a solid
+// again: "outward" follows the nesting (a hollow ball with a marble in it), whatever the order
+// of the pieces, and pieces side by side are each at depth 0.
+TEST(TopologyReport, CavityWallsFaceIntoTheirCavities) {
+  const TriMesh ball = icosphere_mesh(3);
+  TriMesh m;
+  append(m, ball, 0.3, {0.1, 0, 0}, false);  // the marble
+  append(m, ball, 1.0, {}, false);           // the ball's outside
+  append(m, ball, 0.8, {}, true);            // the cavity's wall, facing into it
+  TopologyReport r = topology_report(m);
+  ASSERT_EQ(r.closed_components, 3u);
+  EXPECT_TRUE(r.outward);
+  for (const ComponentReport& c : r.per_component) {
+    const uint32_t expected = c.signed_volume > 4.0 ? 0 : c.signed_volume < 0 ? 1 : 2;
+    EXPECT_EQ(c.nesting_depth, expected) << c.signed_volume;
+  }
+  TriMesh wrong;  // the cavity's wall facing into the solid
+  append(wrong, ball, 1.0, {}, false);
+  append(wrong, ball, 0.8, {}, false);
+  EXPECT_FALSE(topology_report(wrong).outward);
+  TriMesh apart;
+  append(apart, ball, 1.0, {}, false);
+  append(apart, ball, 1.0, {2.5, 0, 0}, false);
+  append(apart, ball, 0.2, {5.0, 0.5, 0}, false);
+  r = topology_report(apart);
+  EXPECT_TRUE(r.outward);
+  for (const ComponentReport& c : r.per_component) EXPECT_EQ(c.nesting_depth, 0u);
+}
+
+// The inside test counts a crossing once where the ray goes exactly through a vertex shared
+// by four triangles or along an edge between two (a box's fans, axis-aligned): the inner box's
+// test point lies straight below the outer box's top centre, then below one of its diagonals.
+TEST(TopologyReport, NestingThroughVerticesAndEdgesOfTheOuterPiece) {
+  for (const Vec3 inner : {Vec3{0, 0, 0}, Vec3{0.25, 0.25, 0}, Vec3{-0.25, 0.25, -0.3}, Vec3{0.3, 0, 0.2}}) {
+    TriMesh m;
+    append(m, fan_box(inner, 0.2), 1.0, {}, true);  // a cavity, facing into it
+    append(m, fan_box({}, 1.0), 1.0, {}, false);
+    ASSERT_EQ(m.positions[m.triangles[0][0]], (inner + Vec3{0, 0, 0.2}));
+    const TopologyReport r = topology_report(m);
+    ASSERT_EQ(r.closed_components, 2u) << inner.x;
+    EXPECT_TRUE(r.outward) << inner.x << " " << inner.y;
+    for (const ComponentReport& c : r.per_component)
+      EXPECT_EQ(c.nesting_depth, c.signed_volume < 0 ? 1u : 0u) << inner.x << " " << inner.y;
+  }
+}
+
 TEST(TopologyReport, TorusHasGenusOneAndIcosphereGenusZero) {
   const TopologyReport t = topology_report(torus_mesh(1, 0.3, 24, 12));
   EXPECT_EQ(t.euler_characteristic, 0);

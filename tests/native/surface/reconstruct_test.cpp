@@ -315,6 +315,43 @@ TEST(ReconstructSurface, SpheresCloserThanLStayTwoClosedSurfaces) {
   }
 }
 
+// A hollow ball sampled on both walls (with a marble inside): the cavity's wall faces into
+// the cavity, the marble out of itself again, with normals that say so, without normals, and
+// with normals all pointing away from the centre (the input's facing is overruled by the
+// nesting, as an outward turn overrules it for a single closed surface).
+TEST(ReconstructSurface, HollowBallsInnerWallFacesIntoTheCavity) {
+  PointCloud c;
+  std::vector<double> radius;
+  for (const auto& [n, r, sign] : {std::tuple{6000, 1.0, 1.0}, std::tuple{3840, 0.8, -1.0}, std::tuple{540, 0.3, 1.0}}) {
+    const PointCloud s = fibonacci_sphere(size_t(n), r);
+    for (size_t i = 0; i < s.size(); ++i) {
+      c.positions.push_back(s.positions[i]);
+      c.normals.push_back(s.normals[i] * sign);
+      radius.push_back(r);
+    }
+  }
+  PointCloud bare = c, away = c;
+  bare.normals.clear();
+  for (size_t i = 0; i < away.size(); ++i) away.normals[i] = normalized(away.positions[i]);
+  for (const auto& [cloud, what] : {std::pair{&c, "normals into the cavity"}, std::pair{&bare, "no normals"},
+                                    std::pair{&away, "normals away from the centre"}}) {
+    const SurfaceResult r = reconstruct_surface(*cloud);
+    expect_closed_surfaces(*cloud, r, 3, 0, what);  // (outward: each faces away from its solid)
+    // Each wall's winding, by the volume it encloses: the 0.8 wall negative.
+    for (double wall : {1.0, 0.8, 0.3}) {
+      double volume = 0;
+      for (const Triangle& t : r.mesh.triangles)
+        if (radius[t[0]] == wall)
+          volume += dot(r.mesh.positions[t[0]], cross(r.mesh.positions[t[1]], r.mesh.positions[t[2]])) / 6;
+      const double ball = 4.0 / 3.0 * std::numbers::pi * wall * wall * wall;
+      EXPECT_NEAR(volume, wall == 0.8 ? -ball : ball, 0.02 * ball) << what << ", wall " << wall;
+    }
+    // The vertex normals agree: into the cavity on its wall.
+    for (size_t i = 0; i < cloud->size(); ++i)
+      if (radius[i] == 0.8) ASSERT_LT(dot(r.mesh.normals[i], r.mesh.positions[i]), 0) << what << " " << i;
+  }
+}
+
 TEST(ReconstructSurface, FoldedSheetIsNotJoinedAcrossTheGap) {
   // A strip of width 2 folded back on itself: arm z = 0 for x in [0, 3], a half circle of
   // radius g/2 at x = 3, arm z = g going back. The gap g is below L = 2 r0.

@@ -29,6 +29,10 @@ struct ComponentReport {
   int genus = -1;
   /// Signed volume (closed components only, else 0): > 0 when the winding faces outward.
   double signed_volume = 0;
+  /// Closed components only: how many other closed components enclose this one. At an odd
+  /// depth it is a cavity's wall (a hollow ball's inside), which faces into the cavity: its
+  /// signed volume is negative when it faces away from the solid it bounds.
+  uint32_t nesting_depth = 0;
 };
 
 /// Counts and checks over a whole mesh. Edge statistics use undirected edges.
@@ -51,7 +55,9 @@ struct TopologyReport {
   bool manifold = false;              ///< no non-manifold edges or vertices
   bool closed = false;                ///< manifold and no boundary edges (and not empty)
   bool consistently_oriented = false; ///< no orientation conflicts and no edge with > 2 faces
-  bool outward = false;               ///< every closed component has positive signed volume
+  /// Every closed component faces away from the solid it bounds: positive signed volume, or
+  /// negative for a cavity's wall (odd nesting_depth); false without closed components.
+  bool outward = false;
   std::vector<ComponentReport> per_component;  ///< largest first (then by lowest triangle)
   /// The edges of each boundary loop, smallest first (holes by size: a scan's sampling gaps
   /// are loops of a few edges, its real openings long ones).

@@ -58,7 +58,9 @@ struct SurfaceOptions : TriangulateOptions {
   /// Fill triangles' edges are at most fill_edge_factor x L: the documented criterion that
   /// tells a hole (narrower) from a real opening (wider).
   double fill_edge_factor = 1.5;
-  /// Turn each closed component to face outward (positive signed volume).
+  /// Turn each closed component to face outward: away from the solid it bounds (positive
+  /// signed volume), or into the cavity for a closed component inside another (a hollow
+  /// object's inner wall; by how many enclose it, as topology_report's outward judges).
   bool orient = true;
   /// Each particle's edge limit follows the sampling around it (real scans are sampled
   /// unevenly): L_i = max_edge_factor x h_i, h_i its local spacing (estimate_local_spacing;
