@@ -41,6 +41,9 @@ struct PolygonizeArgs {
   SequenceArgs sequence;
 };
 
+/// Below this share of the particles inside the surface, the run warns (see the warning).
+constexpr double kFewEnclosed = 0.5;
+
 nlohmann::json stats_json(const PolygonizeStats& s) {
   return {{"particles", s.particles},
           {"kernel", kernel_name(s.kernel)},
@@ -55,6 +58,8 @@ nlohmann::json stats_json(const PolygonizeStats& s) {
           {"anisotropic", s.anisotropic},
           {"anisotropic_particles", s.anisotropic_particles},
           {"calibration_ratio", s.calibration_ratio},
+          {"enclosed_fraction", s.enclosed_fraction},
+          {"density_radius", s.density_radius},
           {"min_component_volume", s.min_component_volume},
           {"components_removed", s.components_removed},
           {"smoothing_iterations", s.smoothing_iterations},
@@ -153,13 +158,27 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
                                                 [&] { outputs.write_mesh("-o", result.mesh); });
   // No surface at all: the field never reaches the threshold where it was sampled. The empty
   // mesh is still written (a frame of a sequence may well be empty), with a warning.
+  // Most particles outside the surface: it shows only their densest clumps (SPH particles in
+  // motion sit closer than their rest spacing, so 2 x their median nearest-neighbour distance
+  // is a small radius for them). Said, with the radius their packing suggests.
   std::string warning;
+  char w[600];
+  w[0] = 0;
+  const PolygonizeStats& st = result.stats;
   if (result.mesh.triangles.empty()) {
-    char w[400];
     std::snprintf(w, sizeof w,
                   "no surface: the field reaches the threshold T = %g nowhere (T above the field's largest value, or "
                   "particles too far apart for the radius R = %g): lower --threshold or raise --radius",
-                  result.stats.threshold, result.stats.radius);
+                  st.threshold, st.radius);
+  } else if (st.enclosed_fraction < kFewEnclosed) {
+    const int n = std::snprintf(w, sizeof w,
+                                "the surface encloses only %.0f%% of the particles: the radius R = %g is small for how "
+                                "sparsely they are packed, or the threshold T = %g high",
+                                100.0 * st.enclosed_fraction, st.radius, st.threshold);
+    if (st.density_radius > st.radius && n > 0 && size_t(n) < sizeof w)
+      std::snprintf(w + n, sizeof w - size_t(n), "; their packing suggests --radius %.3g", st.density_radius);
+  }
+  if (w[0] != 0) {
     warning = w;
     if (frame)
       frame->warn(w);
@@ -200,6 +219,7 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
       std::printf("  threshold T   %.6g (%s)\n", s.threshold,
                   s.threshold_defaulted ? "default: half the field inside a packed volume at R = 2 spacings" : "given");
     std::printf("  cell h        %.6g (%s)\n", s.cell_size, s.cell_size_defaulted ? "default: R / 4" : "given");
+    std::printf("  enclosed      %.0f%% of the particles (F >= T at their centres)\n", 100.0 * s.enclosed_fraction);
     if (s.anisotropic)
       std::printf("  anisotropic   %zu of %zu particles got an ellipsoid (the others: too few neighbours)\n",
                   s.anisotropic_particles, s.particles);

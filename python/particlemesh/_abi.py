@@ -199,6 +199,8 @@ class pm_polygonize_stats(Structure):
         ("components_removed", c_uint64),
         ("calibration_ratio", c_double),
         ("origin", c_double * 3),
+        ("enclosed_fraction", c_double),
+        ("density_radius", c_double),
     ]
 
 

@@ -108,6 +108,41 @@ def test_sph_frames(cli, inspect, data_dir, tmp_path, name):
     assert mesh["triangles"] > 1000
 
 
+def test_particles_left_outside_the_surface_are_said(cli, tmp_path):
+    """Irregular particles (uniform random points: their median nearest-neighbour distance is
+    about half their mean spacing, like an SPH frame in motion) at the default radius leave
+    most of them outside the surface: a warning with the share and the radius their packing
+    suggests, which takes most of them in. A jittered lattice is not warned about."""
+    rng = random.Random(3)
+    pts = tmp_path / "random.xyz"
+    pts.write_text("".join("%.9g %.9g %.9g\n" % (rng.random(), rng.random(), rng.random()) for _ in range(3000)))
+    out, report = tmp_path / "m.ply", tmp_path / "r.json"
+    proc = cli("polygonize", pts, "-o", out, "--report", report)
+    assert "warning: the surface encloses only" in proc.stderr
+    r = json.loads(report.read_text())
+    p = r["polygonize"]
+    assert p["enclosed_fraction"] < 0.2 and p["density_radius"] > 1.25 * p["radius"]
+    assert r["warning"].startswith("the surface encloses only") and "--radius %.3g" % p["density_radius"] in r["warning"]
+    assert "enclosed      %.0f%% of the particles" % (100 * p["enclosed_fraction"]) in proc.stdout
+    proc = cli("polygonize", pts, "-o", out, "--report", report, "--radius", "%.3g" % p["density_radius"])
+    assert "warning" not in proc.stderr and json.loads(report.read_text())["polygonize"]["enclosed_fraction"] > 0.5
+    block = tmp_path / "block.xyz"
+    write_block(block)
+    proc = cli("polygonize", block, "-o", out, "--report", report)
+    assert "warning" not in proc.stderr
+    p = json.loads(report.read_text())["polygonize"]
+    assert p["enclosed_fraction"] > 0.9 and math.isclose(p["density_radius"], p["radius"], rel_tol=0.1)
+
+
+def test_an_sph_frame_in_motion_is_said_to_need_a_larger_radius(cli, tmp_path, data_dir):
+    """Mostly blobs at the default radius (2 x a median nearest-neighbour distance of 0.036,
+    where the fluid's rest spacing is 0.05): said, with about splashsurf's 4 x 0.025."""
+    out = tmp_path / "m.ply"
+    frame = data_dir / "particles" / "dam_break_frame_9_6859_particles.bgeo"
+    proc = cli("polygonize", frame, "-o", out, "-q")
+    assert "warning: the surface encloses only" in proc.stderr and "their packing suggests --radius 0.09" in proc.stderr
+
+
 def test_sigint_cancels_without_partial_output(cli, tmp_path):
     import os
     from test_triangulate import interrupt_while_computing

@@ -603,6 +603,12 @@ def test_polygonize_radii_strengths_and_defaults(pm):
     assert auto.stats["radius"] == pytest.approx(2 * auto.stats["spacing"])
     assert auto.stats["cell_size"] == pytest.approx(auto.stats["radius"] / 4)
     assert pm.topology(auto)["closed"]
+    # How the particles sit in their field: uniform random points are mostly outside the
+    # surface at the default radius; the radius their packing suggests takes most in.
+    scattered = np.random.default_rng(5).uniform(0, 1, (4000, 3))
+    s = pm.polygonize(scattered).stats
+    assert s["enclosed_fraction"] < 0.2 and s["density_radius"] > 1.25 * s["radius"]
+    assert pm.polygonize(scattered, radius=s["density_radius"]).stats["enclosed_fraction"] > 0.5
 
 
 def test_polygonize_anisotropic_and_finishing(pm):

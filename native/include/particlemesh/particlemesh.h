@@ -409,6 +409,13 @@ typedef struct pm_polygonize_stats {
                                        calibrated for (else 0) */
   /* -- appended -- */
   double origin[3];         /**< the lattice's node (0, 0, 0) */
+  /* -- appended -- */
+  double enclosed_fraction; /**< share of the particles inside the surface (F >= T at their
+                                 centres, up to 4096 sampled): low when R is too small for how
+                                 sparsely they are packed */
+  double density_radius;    /**< spherical kernels of one radius: the R their packing suggests
+                                 (2 spacings of a lattice as dense; R itself for packed
+                                 particles at the default radius), else 0 */
 } pm_polygonize_stats;
 
 PM_EXPORT void pm_polygonize_options_init(pm_polygonize_options* options);

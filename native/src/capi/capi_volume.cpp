@@ -108,6 +108,8 @@ pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii, const dou
       s.components_removed = r.stats.components_removed;
       s.calibration_ratio = r.stats.calibration_ratio;
       for (int a = 0; a < 3; ++a) s.origin[a] = r.stats.origin[a];
+      s.enclosed_fraction = r.stats.enclosed_fraction;
+      s.density_radius = r.stats.density_radius;
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();

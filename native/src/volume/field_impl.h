@@ -28,6 +28,11 @@ struct FieldBuilder {
                                               ProgressTracker& tracker);
 };
 
+/// The radius / spacing ratio x at which a particle deep inside a simple cubic lattice sees
+/// the field `level` (lattice_field(kernel, x, 1) = level), within [1, kMaxCalibrationRatio]:
+/// what a field level at the particles says about how densely they are packed.
+double lattice_ratio_of(Kernel kernel, double level);
+
 /// g(s) and dg/ds for a kernel known at compile time (s >= 0; 0 outside the support).
 template <Kernel K>
 inline double kernel_value_t(double s) {

@@ -380,6 +380,9 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   st.anisotropic = field.anisotropic();
   st.anisotropic_particles = field.anisotropic_count();
   st.calibration_ratio = field.calibration_ratio();
+  const FieldAtParticles at = field_at_particles(field);
+  st.enclosed_fraction = at.enclosed_fraction;
+  st.density_radius = at.density_radius;
   if (!(options.cell_size >= 0) || !std::isfinite(options.cell_size))
     throw Error(Status::InvalidArgument,
                 "cell_size is " + num(options.cell_size) + " (must be a finite length > 0, or 0 for the default)");

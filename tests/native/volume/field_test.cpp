@@ -171,6 +171,38 @@ TEST(ParticleField, DefaultsComeFromTheSpacing) {
   for (size_t i = 0; i < c.size(); ++i) ASSERT_EQ(h.position(i), c.positions[i]);
 }
 
+// The field at the particles' own centres: packed particles at the default radius are inside
+// their surface and say their radius is right; irregular ones (uniform random points, whose
+// median nearest-neighbour distance is about half their mean spacing) are mostly outside it,
+// and the radius their packing suggests takes most of them in.
+TEST(ParticleField, FieldAtTheParticlesSaysHowTheyArePacked) {
+  PointCloud block;
+  for (int i = 0; i < 12; ++i)
+    for (int j = 0; j < 12; ++j)
+      for (int k = 0; k < 12; ++k) block.positions.push_back({0.5 * i, 0.5 * j, 0.5 * k});
+  for (Kernel kernel : {Kernel::Wyvill, Kernel::Poly4, Kernel::Poly6}) {
+    const FieldAtParticles at = field_at_particles(ParticleField(block, FieldParams{kernel, 0, 0, {}, {}, {}}));
+    EXPECT_GT(at.enclosed_fraction, 0.99);  // all but a few corners
+    EXPECT_NEAR(at.density_radius, 1.0, 1e-5);
+  }
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  PointCloud random;
+  for (int i = 0; i < 4000; ++i) random.positions.push_back({u(rng), u(rng), u(rng)});
+  const ParticleField f(random, FieldParams{});
+  const FieldAtParticles at = field_at_particles(f);
+  EXPECT_LT(at.enclosed_fraction, 0.2);
+  EXPECT_GT(at.density_radius, 1.25 * f.params().radius);
+  const FieldAtParticles again = field_at_particles(ParticleField(random, FieldParams{Kernel::Wyvill, at.density_radius, 0, {}, {}, {}}));
+  EXPECT_GT(again.enclosed_fraction, 0.5);
+  // Per-particle radii and anisotropic kernels suggest no radius; the share is still measured.
+  FieldParams radii;
+  radii.radii.assign(random.size(), f.params().radius);
+  const FieldAtParticles per = field_at_particles(ParticleField(random, radii));
+  EXPECT_EQ(per.density_radius, 0.0);
+  EXPECT_EQ(per.enclosed_fraction, at.enclosed_fraction);
+}
+
 TEST(ParticleField, BadInputGivesClearErrors) {
   const PointCloud c = test::random_cloud(10, 1);
   auto build = [&](FieldParams p, PointCloud cloud) { return [p, cloud] { ParticleField f(cloud, p); }; };

@@ -87,6 +87,24 @@ inline constexpr double kMaxCalibrationRatio = 8.0;
 ///         options or kernel.
 PM_EXPORT double lattice_face_field(Kernel kernel, double radius, const AnisotropyOptions& anisotropy = {});
 
+class ParticleField;
+
+/// How the particles sit in their own field, from F at (up to 4096 of) their centres.
+struct FieldAtParticles {
+  /// The share of the particles at which F >= T: inside the surface. Deep inside packed
+  /// particles F is about twice the default T; a low share means most particles end up
+  /// outside the surface (a radius too small for how sparsely they are packed, or a
+  /// threshold too high), and the surface shows only the densest of them.
+  double enclosed_fraction = 0;
+  /// Spherical kernels of one radius: the radius that is kDefaultRadiusFactor spacings of a
+  /// simple cubic lattice as densely packed as these particles, the packing read from the
+  /// field's upper quartile at their centres (lattice_field of the ratio R / spacing). Equal to
+  /// R for a lattice at the default radius; larger for irregular particles (an SPH frame's
+  /// median nearest-neighbour distance is well below its rest spacing). 0 otherwise.
+  double density_radius = 0;
+};
+PM_EXPORT FieldAtParticles field_at_particles(const ParticleField& field);
+
 /// The field's parameters. Zero radius / threshold ask for the defaults above; the default
 /// radius needs the particle spacing and therefore at least two distinct particles.
 struct FieldParams {

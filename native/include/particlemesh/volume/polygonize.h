@@ -173,6 +173,12 @@ struct PolygonizeStats {
   /// With anisotropic kernels and the default threshold: the radius / spacing ratio it was
   /// calibrated for (FieldParams::threshold), else 0.
   double calibration_ratio = 0;
+  /// The share of the particles inside the surface (F >= T at their centres;
+  /// field_at_particles): low when the radius is too small for how sparsely they are packed.
+  double enclosed_fraction = 0;
+  /// The radius their packing suggests (field_at_particles; spherical kernels of one radius,
+  /// else 0): R for evenly packed particles at the default radius.
+  double density_radius = 0;
   double min_component_volume = 0;   ///< the volume limit applied to pieces (0: none)
   size_t components_removed = 0;     ///< pieces dropped by it
   int32_t smoothing_iterations = 0;  ///< Taubin iterations applied to the mesh
