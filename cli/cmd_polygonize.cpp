@@ -41,9 +41,6 @@ struct PolygonizeArgs {
   SequenceArgs sequence;
 };
 
-/// Below this share of the particles inside the surface, the run warns (see the warning).
-constexpr double kFewEnclosed = 0.5;
-
 nlohmann::json stats_json(const PolygonizeStats& s) {
   return {{"particles", s.particles},
           {"kernel", kernel_name(s.kernel)},
@@ -158,32 +155,23 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
                                                 [&] { outputs.write_mesh("-o", result.mesh); });
   // No surface at all: the field never reaches the threshold where it was sampled. The empty
   // mesh is still written (a frame of a sequence may well be empty), with a warning.
-  // Most particles outside the surface: it shows only their densest clumps (SPH particles in
-  // motion sit closer than their rest spacing, so 2 x their median nearest-neighbour distance
-  // is a small radius for them). Said, with the radius their packing suggests.
-  std::string warning;
-  char w[600];
-  w[0] = 0;
+  // Most particles outside the surface: said, with the radius their packing suggests.
   const PolygonizeStats& st = result.stats;
+  std::string warning =
+      enclosure_warning(st.enclosed_fraction, st.density_radius, st.radius, st.threshold);
   if (result.mesh.triangles.empty()) {
+    char w[400];
     std::snprintf(w, sizeof w,
                   "no surface: the field reaches the threshold T = %g nowhere (T above the field's largest value, or "
                   "particles too far apart for the radius R = %g): lower --threshold or raise --radius",
                   st.threshold, st.radius);
-  } else if (st.enclosed_fraction < kFewEnclosed) {
-    const int n = std::snprintf(w, sizeof w,
-                                "the surface encloses only %.0f%% of the particles: the radius R = %g is small for how "
-                                "sparsely they are packed, or the threshold T = %g high",
-                                100.0 * st.enclosed_fraction, st.radius, st.threshold);
-    if (st.density_radius > st.radius && n > 0 && size_t(n) < sizeof w)
-      std::snprintf(w + n, sizeof w - size_t(n), "; their packing suggests --radius %.3g", st.density_radius);
-  }
-  if (w[0] != 0) {
     warning = w;
+  }
+  if (!warning.empty()) {
     if (frame)
-      frame->warn(w);
+      frame->warn(warning);
     else
-      std::fprintf(stderr, "particlemesh polygonize: warning: %s\n", w);
+      std::fprintf(stderr, "particlemesh polygonize: warning: %s\n", warning.c_str());
   }
 
   if (!a.report.empty()) {

@@ -67,11 +67,18 @@ int run_render(const RenderArgs& a) {
   outputs.commit_all();
   // No pixel on the surface: the image is written (a frame of a sequence may be empty), with
   // a word on why it is blank.
-  if (r.hits == 0)
+  if (r.hits == 0) {
     std::fprintf(stderr,
                  "particlemesh render: warning: the surface appears in no pixel: the field may reach the threshold "
                  "T = %g nowhere (lower --threshold or raise --radius), or the camera looks away from it\n",
                  caster.field().threshold());
+  } else {
+    // Most particles outside the surface (an SPH frame at a radius too small for it): said.
+    const FieldAtParticles at = field_at_particles(caster.field());
+    const std::string w = enclosure_warning(at.enclosed_fraction, at.density_radius, caster.field().params().radius,
+                                            caster.field().threshold());
+    if (!w.empty()) std::fprintf(stderr, "particlemesh render: warning: %s\n", w.c_str());
+  }
   if (!a.quiet) {
     const auto& f = caster.field();
     const Camera& c = r.camera;

@@ -1,10 +1,14 @@
 // The options polygonize and render share: anisotropic kernels (Yu and Turk 2013).
 #pragma once
 
+#include <cstdio>
+#include <string>
+
 #include <CLI/CLI.hpp>
 
 #include "commands.h"
 #include "particlemesh/volume/anisotropy.h"
+#include "particlemesh/volume/field.h"
 
 namespace particlemesh::cli {
 
@@ -35,6 +39,25 @@ inline void add_anisotropy_options(CLI::App& app, AnisotropyOptions& a) {
                  "spacing)")
       ->check(CLI::Range(0.0, 1.0))
       ->check(finite_number());
+}
+
+/// Below this share of the particles inside the surface, polygonize and render warn.
+constexpr double kFewEnclosed = 0.5;
+
+/// The warning when most particles end up outside the surface (field_at_particles): it shows
+/// only their densest clumps (SPH particles in motion sit closer than their rest spacing, so
+/// 2 x their median nearest-neighbour distance is a small radius for them), with the radius
+/// their packing suggests. Empty when most are inside.
+inline std::string enclosure_warning(double enclosed_fraction, double density_radius, double radius, double threshold) {
+  if (!(enclosed_fraction < kFewEnclosed)) return {};
+  char w[400];
+  int n = std::snprintf(w, sizeof w,
+                        "the surface encloses only %.0f%% of the particles: the radius R = %g is small for how sparsely "
+                        "they are packed, or the threshold T = %g high",
+                        100.0 * enclosed_fraction, radius, threshold);
+  if (density_radius > radius && n > 0 && size_t(n) < sizeof w)
+    std::snprintf(w + n, sizeof w - size_t(n), "; their packing suggests --radius %.3g", density_radius);
+  return w;
 }
 
 }  // namespace particlemesh::cli

@@ -120,3 +120,19 @@ def test_anisotropic_render(cli, data_dir, tmp_path):
     assert "anisotropic" in proc.stdout and "got an ellipsoid" in proc.stdout
     proc = cli("render", frame, "-o", a, "--anisotropic", "--aniso-max-stretch", "200", *common, check=False)
     assert proc.returncode == 2
+
+
+def test_particles_left_outside_the_surface_are_said(cli, tmp_path):
+    """As polygonize: irregular particles (uniform random points) at the default radius leave
+    most of them outside the surface, which the render shows as scattered blobs: said, with
+    the radius their packing suggests; at that radius, not."""
+    import random
+    rng = random.Random(3)
+    pts = tmp_path / "random.xyz"
+    pts.write_text("".join("%.9g %.9g %.9g\n" % (rng.random(), rng.random(), rng.random()) for _ in range(3000)))
+    out = tmp_path / "r.png"
+    proc = cli("render", pts, "-o", out, "--width", "64", "--height", "48", "-q")
+    assert "render: warning: the surface encloses only" in proc.stderr
+    radius = proc.stderr.split("--radius ")[1].split()[0]
+    proc = cli("render", pts, "-o", out, "--width", "64", "--height", "48", "-q", "--radius", radius)
+    assert "warning" not in proc.stderr
