@@ -146,7 +146,20 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
   const auto t1 = Clock::now();
   set_phase(Phase::Computing);
   throw_if_interrupted();
-  PolygonizeResult result = polygonize(cloud, opt);
+  PolygonizeResult result = [&] {
+    try {
+      return polygonize(cloud, opt);
+    } catch (const Error& e) {
+      // The library names its own option (max_grid_bytes); say the command line's.
+      std::string m = e.what();
+      const std::string lib = "(max_grid_bytes; use a larger cell size or raise the budget)";
+      if (const size_t at = m.find(lib); at != std::string::npos) {
+        m.replace(at, lib.size(), "(use a larger --cell or raise --max-grid-mib)");
+        throw Error(e.status(), m);
+      }
+      throw;
+    }
+  }();
   const double t_poly = std::chrono::duration<double>(Clock::now() - t1).count();
   progress.clear();
   throw_if_interrupted();

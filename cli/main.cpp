@@ -54,7 +54,10 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "particlemesh %s: usage error: %s\nRun with --help for more information.\n", name, e.what());
       return 2;
     } catch (const Error& e) {
-      std::fprintf(stderr, "particlemesh %s: error: %s\n", c.app->get_name().c_str(), e.what());
+      // Cancelled by a signal: the library's own words would name its progress callback.
+      const bool by_signal = e.status() == Status::Cancelled && cli::interrupted();
+      std::fprintf(stderr, "particlemesh %s: error: %s\n", c.app->get_name().c_str(),
+                   by_signal ? "cancelled (interrupted)" : e.what());
       return e.status() == Status::Cancelled ? 130 : 1;
     } catch (const std::bad_alloc&) {
       std::fprintf(stderr, "particlemesh %s: error: out of memory\n", c.app->get_name().c_str());
