@@ -104,10 +104,34 @@ std::string volume_particles_hint(const SurfaceResult& r) {
   return s;
 }
 
+/// When a --spacing was given and over 5 % of the particles are in no triangle: is it well
+/// below their median nearest-neighbour distance (edges too short to reach their neighbours)?
+/// Then that is the cause to name. Empty otherwise.
+std::string given_spacing_hint(const SurfaceResult& r, const PointCloud& cloud, double given, int threads) {
+  const size_t points = r.triangulation.points, unused = r.surface.unused_points;
+  if (!(given > 0) || points == 0 || unused * 20 <= points || cloud.size() < 2) return {};
+  double measured = 0;
+  try {
+    measured = estimate_spacing_sampled(cloud.positions.data(), cloud.size(), 200000, threads).spacing;
+  } catch (const Error&) {
+    return {};
+  }
+  if (!(given < 0.75 * measured)) return {};
+  char s[320];
+  std::snprintf(s, sizeof s,
+                "the given --spacing %g is %.0f%% of the particles' median nearest-neighbour distance %.4g: edges of "
+                "%g x it do not reach their neighbours; leave --spacing out (estimated) or raise it",
+                given, 100.0 * given / measured, measured, r.triangulation.max_edge / given);
+  return s;
+}
+
 /// Every hint that applies, most important first.
-std::vector<std::string> surface_hints(const SurfaceResult& r, double thin, bool global_spacing) {
+std::vector<std::string> surface_hints(const SurfaceResult& r, const TriangulateArgs& a, const PointCloud& cloud) {
   std::vector<std::string> out;
-  for (std::string h : {volume_particles_hint(r), uneven_spacing_hint(r, thin, global_spacing)})
+  std::string given = given_spacing_hint(r, cloud, a.thin > 1 ? 0.0 : a.spacing, a.threads);  // (thinning: its own)
+  const bool spacing_named = !given.empty();
+  for (std::string h : {volume_particles_hint(r), std::move(given),
+                        spacing_named ? std::string() : uneven_spacing_hint(r, a.thin, a.global_spacing)})
     if (!h.empty()) out.push_back(std::move(h));
   return out;
 }
@@ -174,12 +198,14 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
   set_phase(Phase::Computing);
   throw_if_interrupted();
   SurfaceResult result;
+  std::vector<std::string> hints;  // what the summary and the report say might help
   if (a.raw) {
     TriangulateResult r = triangulate_raw(cloud, opt);
     result.mesh = std::move(r.mesh);
     result.triangulation = r.stats;
   } else {
     result = reconstruct_surface(cloud, opt);
+    hints = surface_hints(result, a, cloud);
   }
   const double t_tri = std::chrono::duration<double>(Clock::now() - t1).count();
   progress.clear();
@@ -207,7 +233,7 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
     if (!a.raw) {
       j["surface"]["holes_left_by_size"] = holes_by_size(result.surface.holes_left_edges);
       std::string joined;  // one string, as the report has always had
-      for (const std::string& h : surface_hints(result, a.thin, a.global_spacing))
+      for (const std::string& h : hints)
         joined += (joined.empty() ? "" : " / ") + h;
       if (!joined.empty()) j["hint"] = joined;
     }
@@ -253,7 +279,7 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
                     f.viewpoint_used ? (std::to_string(f.rejected_shadow) + " triangles across depth jumps dropped").c_str()
                                      : "not taken (the particles do not look scanned from there)");
       if (f.unused_points) std::printf("  unused        %zu particles in no triangle\n", f.unused_points);
-      for (const std::string& h : surface_hints(result, a.thin, a.global_spacing))
+      for (const std::string& h : hints)
         std::printf("  hint          %s\n", h.c_str());
     }
     print_mesh_and_times(written.report, "triangulate", t_read, t_tri, written.seconds);

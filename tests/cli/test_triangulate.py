@@ -172,6 +172,22 @@ def test_unevenly_spaced_particles_get_a_hint(cli, tmp_path):
     assert "hint" not in proc.stdout and "hint" not in json.loads(rep.read_text())
 
 
+def test_a_spacing_given_too_small_is_named(cli, tmp_path):
+    """--spacing well below the particles' median nearest-neighbour distance leaves them all
+    out (edges of 2 x it reach no neighbour): the hint names the given spacing and the
+    measured one, not the particles' evenness; a fitting --spacing gets no hint."""
+    pts, rep = tmp_path / "s.xyz", tmp_path / "r.json"
+    cli("sample", "fibonacci", "--points", "4000", "-o", pts)
+    measured = json.loads(cli("inspect", pts, "--json").stdout)["spacing"]
+    proc = cli("triangulate", pts, "-o", tmp_path / "m.ply", "--report", rep, "--spacing", "%.6g" % (0.45 * measured))
+    r = json.loads(rep.read_text())
+    assert r["topology"]["triangles"] == 0
+    assert r["hint"].startswith("the given --spacing") and "45%" in r["hint"] and "--thin" not in r["hint"]
+    assert "the given --spacing" in proc.stdout
+    proc = cli("triangulate", pts, "-o", tmp_path / "m.ply", "--report", rep, "--spacing", "%.6g" % measured)
+    assert "hint" not in json.loads(rep.read_text()) and "hint" not in proc.stdout
+
+
 def test_volume_particles_get_a_hint_to_polygonize(cli, tmp_path):
     """Particles filling a block (a jittered lattice: what a fluid simulation gives) are no
     surface sample: most seed triangles join particles facing opposite ways, the surface does
