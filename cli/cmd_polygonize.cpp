@@ -244,9 +244,9 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
   CLI::App* app = root.add_subcommand(
       "polygonize", "Volume particles to the mesh of their implicit surface (summed kernels, marching cubes)");
   app->add_option("input", args->input,
-                  "Particles: .ply (x y z ...), .xyz (x y z per line), .obj (v x y z [r g b] lines), VTK .vtk/.vtu/.vtp, "
-                  "Houdini .bgeo or, with the PCL bridge, .pcd; a path with a frame field ({} or {:04d}, e.g. "
-                  "sim/fluid_{:04d}.vtk) is a sequence: every frame is meshed")
+                  "Particles: " + kParticleFormats +
+                      "; a path with a frame field ({} or {:04d}, e.g. sim/fluid_{:04d}.vtk) is a sequence: every "
+                      "frame is meshed")
       ->required();
   app->add_option("-o,--output", args->output,
                   "Output mesh with normals: .ply (binary; --ascii for text), .obj, .vtk, .vtu or .vtp; - (or a "

@@ -114,8 +114,7 @@ void add_render(CLI::App& root, std::vector<Command>& commands) {
   CLI::App* app = root.add_subcommand(
       "render", "Ray cast the exact iso-surface of volume particles into a PNG");
   app->add_option("input", args->input,
-                  "Particles: .ply (x y z ...), .xyz (x y z per line), .obj (v x y z [r g b] lines) or, with the PCL "
-                  "bridge, .pcd")
+                  "Particles: " + kParticleFormats)
       ->required();
   app->add_option("-o,--output", args->output, "Output image (.png; - for standard output)")->required();
   app->add_option("--radius", args->radius,

@@ -162,7 +162,7 @@ void add_smooth(CLI::App& root, std::vector<Command>& commands) {
   CLI::App* app = root.add_subcommand(
       "smooth", "Subdivide a triangle mesh into a smooth one: Loop (OpenSubdiv) or modified butterfly (OpenMesh)");
   app->add_option("mesh", args->input, "Input mesh: .ply, .obj, .off or .stl (a 2-manifold)")->required();
-  app->add_option("-o,--output", args->output, "Output mesh: .ply (binary; --ascii for text) or .obj; - (or a device, a FIFO) for PLY on standard output")->required();
+  app->add_option("-o,--output", args->output, "Output mesh: .ply (binary; --ascii for text), .obj, .vtk, .vtu or .vtp; - (or a device, a FIFO) for PLY on standard output")->required();
   app->add_option("--scheme", args->scheme,
                   "loop: approximating, exact limit surface; butterfly: interpolating, keeps every vertex")
       ->check(CLI::IsMember({"loop", "butterfly"}))

@@ -293,9 +293,9 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
   auto args = std::make_shared<TriangulateArgs>();
   CLI::App* app = root.add_subcommand("triangulate", "Surface particles to a triangle mesh (Tonnesen's smallest-sphere test, made into a finished surface)");
   app->add_option("input", args->input,
-                  "Particles: .ply (x y z [nx ny nz] ...), .xyz (x y z [nx ny nz] per line), .obj (v x y z [r g b] "
-                  "lines, vn normals), VTK .vtk/.vtu/.vtp, Houdini .bgeo or .pcd (PCL: ascii, binary, binary_compressed); "
-                  "a path with a frame field ({} or {:04d}, e.g. scan_{:04d}.ply) is a sequence: every frame is meshed")
+                  "Particles: " + kParticleFormats +
+                      "; a path with a frame field ({} or {:04d}, e.g. scan_{:04d}.ply) is a sequence: every frame is "
+                      "meshed")
       ->required();
   app->add_option("-o,--output", args->output,
                   "Output mesh: .ply (binary; --ascii for text), .obj, .vtk, .vtu or .vtp; - (or a device, a FIFO) "

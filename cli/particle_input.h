@@ -16,6 +16,12 @@
 
 namespace particlemesh::cli {
 
+/// The particle files every command reads, for their help: the one list.
+inline const std::string kParticleFormats =
+    ".ply (x y z [nx ny nz], other properties as channels), .xyz/.pts (x y z [nx ny nz] per line), .obj (v x y z "
+    "[r g b] lines, vn normals), VTK .vtk/.vtu/.vtp/.pvtu/.pvtp, Houdini .bgeo/.geo, lidar .las, Krakatoa .prt or, "
+    "with the PCL bridge, .pcd (ascii, binary, binary_compressed)";
+
 struct ParticleInputArgs {
   double uniform_sampling = 0;  ///< leaf size, 0 = off
   double voxel_grid = 0;        ///< leaf size, 0 = off
