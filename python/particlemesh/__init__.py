@@ -478,7 +478,8 @@ def topology(mesh):
     edges, boundary_edges, manifold_edges, nonmanifold_edges, nonmanifold_vertices,
     degenerate_triangles, duplicate_triangles, orientation_conflicts, boundary_loops,
     components, closed_components, euler_characteristic, and the booleans manifold, closed,
-    consistently_oriented, outward (closed parts enclose positive volume)."""
+    consistently_oriented, outward (every closed part faces away from the solid it bounds:
+    positive volume, or negative for a closed part inside another, a cavity's wall)."""
     lib = _library.load()
     handle = new_mesh(lib, mesh, with_attributes=False)
     try:

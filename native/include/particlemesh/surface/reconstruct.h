@@ -21,7 +21,9 @@
 //     fill_edge_factor x L that keep every fan a disk, winding with the normals: holes left by
 //     sampling and extraction are that narrow; a real opening (no particles within that
 //     distance across it) is wider and stays open, and is reported.
-//  6. Orientation: every closed component is turned to enclose positive volume (outward).
+//  6. Orientation: every closed component is turned to face outward: to enclose positive
+//     volume, or negative for one inside another (a hollow object's inner wall faces into
+//     its cavity; mesh/nesting.h).
 #pragma once
 
 #include "particlemesh/core/config.h"
