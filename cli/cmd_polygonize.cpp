@@ -171,7 +171,7 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
   // Most particles outside the surface: said, with the radius their packing suggests.
   const PolygonizeStats& st = result.stats;
   std::string warning =
-      enclosure_warning(st.enclosed_fraction, st.density_radius, st.radius, st.threshold);
+      enclosure_warning(st.enclosed_fraction, st.density_radius, st.radius, st.threshold, true);
   if (result.mesh.triangles.empty()) {
     char w[400];
     std::snprintf(w, sizeof w,

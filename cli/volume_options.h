@@ -47,16 +47,21 @@ constexpr double kFewEnclosed = 0.5;
 /// The warning when most particles end up outside the surface (field_at_particles): it shows
 /// only their densest clumps (SPH particles in motion sit closer than their rest spacing, so
 /// 2 x their median nearest-neighbour distance is a small radius for them), with the radius
-/// their packing suggests. Empty when most are inside.
-inline std::string enclosure_warning(double enclosed_fraction, double density_radius, double radius, double threshold) {
+/// their packing suggests, and (`surface_method`) the command for particles that sample a
+/// surface rather than fill a volume. Empty when most are inside.
+inline std::string enclosure_warning(double enclosed_fraction, double density_radius, double radius, double threshold,
+                                     bool surface_method = false) {
   if (!(enclosed_fraction < kFewEnclosed)) return {};
-  char w[400];
+  char w[500];
   int n = std::snprintf(w, sizeof w,
                         "the surface encloses only %.0f%% of the particles: the radius R = %g is small for how sparsely "
                         "they are packed, or the threshold T = %g high",
                         100.0 * enclosed_fraction, radius, threshold);
   if (density_radius > radius && n > 0 && size_t(n) < sizeof w)
-    std::snprintf(w + n, sizeof w - size_t(n), "; their packing suggests --radius %.3g", density_radius);
+    n += std::snprintf(w + n, sizeof w - size_t(n), "; their packing suggests --radius %.3g", density_radius);
+  if (surface_method && n > 0 && size_t(n) < sizeof w)
+    std::snprintf(w + n, sizeof w - size_t(n), " (particles that sample a surface rather than fill a volume: "
+                                               "`particlemesh triangulate`)");
   return w;
 }
 

@@ -121,6 +121,7 @@ def test_particles_left_outside_the_surface_are_said(cli, tmp_path):
     out, report = tmp_path / "m.ply", tmp_path / "r.json"
     proc = cli("polygonize", pts, "-o", out, "--report", report)
     assert "warning: the surface encloses only" in proc.stderr
+    assert "sample a surface rather than fill a volume: `particlemesh triangulate`" in proc.stderr
     r = json.loads(report.read_text())
     p = r["polygonize"]
     assert p["enclosed_fraction"] < 0.2 and p["density_radius"] > 1.25 * p["radius"]
