@@ -250,6 +250,22 @@ def volume_particles_warning(stats):
             "ways: if the particles fill a volume (a fluid simulation's), use Polygonize")
 
 
+def enclosure_warning(stats):
+    """A warning when most particles end up outside the polygonized surface (the library's
+    enclosed_fraction: F below the threshold at their centres), which then shows only their
+    densest clumps: the radius is small for how sparsely they are packed (an SPH frame in
+    motion sits closer than its rest spacing, so the automatic radius from the median
+    neighbour distance is small), with the radius their packing suggests. None otherwise."""
+    share = stats.get("enclosed_fraction")
+    if share is None or share >= 0.5:
+        return None
+    suggested = stats.get("density_radius", 0.0)
+    advice = (f"; their packing suggests a Fixed radius of {suggested:.3g}"
+              if suggested > stats.get("radius", 0.0) else "; raise the radius or lower the threshold")
+    return (f"the surface encloses only {100 * share:.0f}% of the particles: the radius "
+            f"{stats.get('radius', 0.0):.4g} is small for how sparsely they are packed{advice}")
+
+
 def polygonize_radii(particles, settings):
     """(radius, radii): one radius for all (0 = the library's default from the spacing), or
     per-particle radii from the particles' sizes."""

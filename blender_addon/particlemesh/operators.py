@@ -180,11 +180,11 @@ class _Generate(SourceProps, CommonProps, SmoothProps, _ModalJob):
             detail = ""
         self.report({"INFO"}, f"{obj.name}: {data.vertex_count} vertices, "
                               f"{data.triangle_count} triangles{detail}")
-        if self.method == "TRIANGULATE":
-            for warning in (generate.volume_particles_warning(stats),
-                            generate.uneven_spacing_warning(stats)):
-                if warning:
-                    self.report({"WARNING"}, f"{obj.name}: {warning}")
+        warnings = ((generate.volume_particles_warning(stats), generate.uneven_spacing_warning(stats))
+                    if self.method == "TRIANGULATE" else (generate.enclosure_warning(stats),))
+        for warning in warnings:
+            if warning:
+                self.report({"WARNING"}, f"{obj.name}: {warning}")
 
     def draw(self, context):
         layout = self.layout
