@@ -97,7 +97,7 @@ class ParityTest {
  private:
   size_t cell(double v, int a) const {
     const double c = (v - lo_[a]) * scale_[a];
-    return c <= 0 ? 0 : std::min(side_ - 1, size_t(c));
+    return c > 0 ? size_t(std::min(c, double(side_ - 1))) : 0;  // (NaN: 0)
   }
   /// Which side of the line a -> b (a the lower-numbered end) q lies on in xy, never 0: on
   /// the line, q moved by (eps, eps^2) decides.
