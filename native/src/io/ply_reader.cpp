@@ -15,8 +15,9 @@
 // 16-bit / 65535, float as stored), every other scalar vertex property as a one-component
 // attribute of its name, except that properties name_0, name_1, .., name_k declared one after
 // another (as our writers write a vector channel) are one (k + 1)-component attribute "name";
-// and the "face" element's vertex_indices (or vertex_index) lists, fanned into triangles. List properties anywhere (a vertex element with a list, an "edge"
-// or "material" element) are walked and skipped. After the last element the file must end
+// and the "face" element's vertex_indices (or vertex_index) lists, fanned into triangles. List
+// properties anywhere (a vertex element with a list, an "edge" or "material" element) are
+// walked and skipped. After the last element the file must end
 // (whitespace aside): data beyond what the header declares means a count is wrong.
 #include <algorithm>
 #include <cmath>

@@ -111,6 +111,15 @@ inline void decode_scalars(ScalarType t, const unsigned char* raw, size_t count,
     for (size_t i = 0; i < count; ++i) out[i] = 0;
 }
 
+/// Bytes holding `count` values of a Bit array (eight to a byte).
+inline uint64_t bit_bytes(uint64_t count) { return count / 8 + (count % 8 != 0); }
+
+/// `count` values of a Bit array from `raw` into `out` as 0 / 1: VTK packs them eight to a
+/// byte, the first in the highest bit (vtkBitArray, in legacy and XML files alike).
+inline void decode_bits(const unsigned char* raw, size_t count, double* out) {
+  for (size_t i = 0; i < count; ++i) out[i] = (raw[i / 8] >> (7 - i % 8)) & 1;
+}
+
 /// a * b, or UINT64_MAX where that overflows: sizes from a file's header compared with what
 /// the file holds.
 inline uint64_t saturating_mul(uint64_t a, uint64_t b) { return b != 0 && a > UINT64_MAX / b ? UINT64_MAX : a * b; }

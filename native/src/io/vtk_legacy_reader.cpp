@@ -246,23 +246,22 @@ class VtkLegacyReader {
     ended_ = false;
   }
 
-  /// A binary bit array: count bits packed into bytes, the first in the highest bit (as
-  /// vtkDataWriter writes them), handed on as 0 / 1.
+  /// A binary bit array (decode_bits), a run of bytes at a time, handed on as 0 / 1.
   void bits(uint64_t count, const std::string& what, const ValueSink& sink) {
     end_line();
-    const uint64_t bytes = count / 8 + (count % 8 != 0);
+    const uint64_t bytes = bit_bytes(count);
     if (bytes > bytes_left())
       fail("truncated: " + what + " needs " + std::to_string(bytes) + " bytes of bits, the file has " +
            std::to_string(bytes_left()) + " bytes left");
     unsigned char buf[2048];
-    double v[8 * sizeof buf];
+    if (sink) decoded_.resize(8 * sizeof buf);
     for (uint64_t i = 0; i < bytes;) {
       const size_t k = size_t(std::min<uint64_t>(sizeof buf, bytes - i));
       if (!in_.read(buf, k)) fail("truncated: the file ends in " + what);
       if (sink) {
         const uint64_t first = 8 * i, n = std::min<uint64_t>(8 * uint64_t(k), count - first);
-        for (uint64_t j = 0; j < n; ++j) v[j] = (buf[j / 8] >> (7 - j % 8)) & 1;
-        sink(first, v, size_t(n));
+        decode_bits(buf, size_t(n), decoded_.data());
+        sink(first, decoded_.data(), size_t(n));
       }
       i += k;
     }

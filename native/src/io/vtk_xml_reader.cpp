@@ -487,10 +487,9 @@ class VtkXmlReader {
              std::to_string(tuples) + " x " + std::to_string(comps) + ")");
       return out;
     }
-    // A Bit array packs its values eight to a byte, the first in the highest bit.
     const bool bits = type == Type::Bit;
     const int size = scalar_size(type);
-    const uint64_t expected = bits ? count / 8 + (count % 8 != 0) : saturating_mul(count, uint64_t(size));
+    const uint64_t expected = bits ? bit_bytes(count) : saturating_mul(count, uint64_t(size));
     std::vector<unsigned char> bytes;
     const unsigned char* values = nullptr;  // bytes.data(), or raw appended data in place
     if (format == "binary") {
@@ -521,11 +520,8 @@ class VtkXmlReader {
     }
     out.resize(size_t(count));
     const unsigned char* from = values ? values : bytes.data();
-    if (bits) {
-      for (uint64_t i = 0; i < count; ++i) out[size_t(i)] = (from[i / 8] >> (7 - i % 8)) & 1;
-      return out;
-    }
-    decode_scalars(type, from, size_t(count), big_endian_, out.data());
+    if (bits) decode_bits(from, size_t(count), out.data());
+    else decode_scalars(type, from, size_t(count), big_endian_, out.data());
     return out;
   }
 

@@ -53,16 +53,18 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
   for (const auto& pt : part)
     for (const auto& [r, v] : pt) vol[r] += v;
   // A closed component inside another faces into the cavity it bounds, one inside that
-  // outward again (nesting.h): its depth decides. Pieces numbered by their root, in root order.
+  // outward again (nesting.h): its depth decides. Pieces (the roots of triangles) numbered in
+  // root order.
+  std::vector<uint8_t> has_triangle(n, 0);
+  for (const Triangle& t : T) has_triangle[root[t[0]]] = 1;
   std::vector<uint32_t> piece(n, UINT32_MAX);
-  size_t pieces = 0;
-  for (const Triangle& t : T)
-    if (piece[root[t[0]]] == UINT32_MAX) piece[root[t[0]]] = 0;
+  std::vector<uint8_t> closed;
   for (size_t v = 0; v < n; ++v)
-    if (piece[v] == 0) piece[v] = uint32_t(pieces++);
-  std::vector<uint8_t> closed(pieces, 0);
-  for (size_t v = 0; v < n; ++v)
-    if (piece[v] != UINT32_MAX) closed[piece[v]] = !open[v];
+    if (has_triangle[v]) {
+      piece[v] = uint32_t(closed.size());
+      closed.push_back(!open[v]);
+    }
+  const size_t pieces = closed.size();
   std::vector<uint32_t> piece_of(T.size());
   parallel_blocks(T.size(), 8192, [&](size_t b, size_t e) {
     for (size_t i = b; i < e; ++i) piece_of[i] = piece[root[T[i][0]]];
