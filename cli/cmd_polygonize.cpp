@@ -209,7 +209,8 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
       std::printf("  radius R      per particle: %g x '%s' (median %.6g, largest %.6g)\n", a.radius_scale,
                   a.radius_channel.c_str(), s.radius, s.max_radius);
     else
-      std::printf("  radius R      %.6g (%s)\n", s.radius, s.radius_defaulted ? "default: 2 x spacing" : "given");
+      std::printf("  radius R      %.6g (%s)\n", s.radius,
+                  s.radius_defaulted ? default_radius_note(s.radius, s.spacing).c_str() : "given");
     if (s.threshold_defaulted && s.anisotropic)
       std::printf("  threshold T   %.6g (default: a packed face half a spacing out, calibrated at R = %.3g spacings)\n",
                   s.threshold, s.calibration_ratio);
@@ -253,8 +254,7 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
                   "device, a FIFO) for PLY on standard output. With a frame pattern input, a pattern too "
                   "(out/fluid_{:04d}.ply)")
       ->required();
-  app->add_option("--radius", args->radius,
-                  "Particle radius R (the field's support), world units (default: 2 x the median particle spacing)")
+  app->add_option("--radius", args->radius, kRadiusHelp)
       ->check(CLI::PositiveNumber)
       ->check(finite_number());
   auto* channel = app->add_option(

@@ -89,7 +89,8 @@ int run_render(const RenderArgs& a) {
     if (f.anisotropic())
       std::printf("  anisotropic   %zu of %zu particles got an ellipsoid (the others: too few neighbours)\n",
                   f.anisotropic_count(), f.size());
-    std::printf("  radius R      %.6g (%s)\n", f.params().radius, f.radius_defaulted() ? "default: 2 x spacing" : "given");
+    std::printf("  radius R      %.6g (%s)\n", f.params().radius,
+                f.radius_defaulted() ? default_radius_note(f.params().radius, f.spacing()).c_str() : "given");
     if (f.threshold_defaulted() && f.anisotropic())
       std::printf("  threshold T   %.6g (default: a packed face half a spacing out, calibrated at R = %.3g spacings)\n",
                   f.threshold(), f.calibration_ratio());
@@ -117,8 +118,7 @@ void add_render(CLI::App& root, std::vector<Command>& commands) {
                   "Particles: " + kParticleFormats)
       ->required();
   app->add_option("-o,--output", args->output, "Output image (.png; - for standard output)")->required();
-  app->add_option("--radius", args->radius,
-                  "Particle radius R (the field's support), world units (default: 2 x the median particle spacing)")
+  app->add_option("--radius", args->radius, kRadiusHelp)
       ->check(CLI::PositiveNumber)
       ->check(finite_number());
   app->add_option("--threshold", args->threshold,

@@ -1,6 +1,7 @@
 // The options polygonize and render share: anisotropic kernels (Yu and Turk 2013).
 #pragma once
 
+#include <cmath>
 #include <cstdio>
 #include <string>
 
@@ -40,6 +41,22 @@ inline void add_anisotropy_options(CLI::App& app, AnisotropyOptions& a) {
       ->check(CLI::Range(0.0, 1.0))
       ->check(finite_number());
 }
+
+/// What the summary says of a default radius R for particles of median spacing s: 2 x s, or the
+/// larger radius their packing asked for (FieldParams::radius).
+inline std::string default_radius_note(double radius, double spacing) {
+  const double x = spacing > 0 ? radius / spacing : 0;
+  if (!(std::abs(x - kDefaultRadiusFactor) > 1e-9 * kDefaultRadiusFactor)) return "default: 2 x spacing";
+  char w[160];
+  std::snprintf(w, sizeof w, "default: %.3g x spacing, from how densely the particles are packed", x);
+  return w;
+}
+
+/// The help text of --radius for polygonize and render.
+inline constexpr const char* kRadiusHelp =
+    "Particle radius R (the field's support), world units (default: 2 x the median particle spacing; when that "
+    "leaves over a tenth of the particles outside the surface, as in an SPH frame in motion, up to twice as much: "
+    "the radius at which the field at the particles reaches a packed lattice's)";
 
 /// Below this share of the particles inside the surface, polygonize and render warn.
 constexpr double kFewEnclosed = 0.5;

@@ -253,9 +253,9 @@ def volume_particles_warning(stats):
 def enclosure_warning(stats):
     """A warning when most particles end up outside the polygonized surface (the library's
     enclosed_fraction: F below the threshold at their centres), which then shows only their
-    densest clumps: the radius is small for how sparsely they are packed (an SPH frame in
-    motion sits closer than its rest spacing, so the automatic radius from the median
-    neighbour distance is small), with the radius their packing suggests. None otherwise."""
+    densest clumps: the radius is small for how sparsely they are packed (a Fixed radius or one
+    from the particle sizes; the automatic radius follows the packing), with the radius their
+    packing suggests. None otherwise."""
     share = stats.get("enclosed_fraction")
     if share is None or share >= 0.5:
         return None
@@ -267,7 +267,7 @@ def enclosure_warning(stats):
 
 
 def polygonize_radii(particles, settings):
-    """(radius, radii): one radius for all (0 = the library's default from the spacing), or
+    """(radius, radii): one radius for all (0 = the library's default from the packing), or
     per-particle radii from the particles' sizes."""
     mode = settings.get("radius_mode", "AUTO")
     if mode == "FIXED":

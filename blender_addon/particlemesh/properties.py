@@ -97,7 +97,8 @@ class PolygonizeProps:
     radius_mode: EnumProperty(
         name="Radius", default="AUTO", update=_settings_changed,
         description="Where each particle's field radius R comes from",
-        items=[("AUTO", "Auto", "A multiple of the particle spacing (the library's default)"),
+        items=[("AUTO", "Auto", "The library's default: twice the particle spacing, or more for particles "
+                "packed less densely than that (a fluid simulation's frame in motion)"),
                ("PARTICLE_SIZE", "Particle Size",
                 "Each particle's size times the factor: a particle system's sizes, or a point "
                 "cloud's or particle file's radius (Blender) or pscale (Houdini) channel"),

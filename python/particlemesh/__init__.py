@@ -37,7 +37,7 @@ __all__ = [
     "read_points", "read_mesh", "write_mesh", "triangulate", "polygonize", "polygonize_attributes",
     "smooth", "Smoother",
     "topology",
-    "estimate_spacing", "thin", "triangle_edges", "lattice_field", "defaults", "version",
+    "estimate_spacing", "thin", "triangle_edges", "default_radius", "lattice_field", "defaults", "version",
     "library_path", "pcl_bridge_path", "Mesh", "Points", "Progress", "Error", "CancelledError",
     "LibraryNotFoundError", "PclBridgeNotFoundError",
 ]
@@ -256,7 +256,8 @@ def polygonize(positions, radius=None, threshold=None, kernel=None, cell=None, *
     R_i^2), by marching cubes on a sparse grid: a closed, outward mesh with normals from the
     field's gradient (no vertex when the field stays below the threshold).
 
-    positions: (N, 3) or Points; radius R (None = 2 x the median spacing) or radii, one per
+    positions: (N, 3) or Points; radius R (None = default_radius: 2 x the median spacing, or
+    more for particles that leaves outside the surface) or radii, one per
     particle; strengths w_i (None = 1; |w_i| <= 1e30); threshold T (None = half the field
     inside evenly packed particles); kernel "wyvill", "poly4", "poly6" or "blinn"; cell the grid cell (the C
     field cell_size; None = R / 4); attributes {name: (N, C)} interpolated onto the vertices
@@ -548,6 +549,26 @@ def triangle_edges(triangles, vertex_count, threads=0):
                                     ptr(edges, c_uint32), len(edges), ptr(corners, c_uint32),
                                     ctypes.byref(count)))
     return edges[:count.value], corners
+
+
+def default_radius(positions, strengths=None, kernel=None, threads=0):
+    """The radius polygonize takes for radius=None (spherical kernels of one radius): 2 x the
+    median particle spacing, or, when that leaves over a tenth of the particles outside the
+    surface, the larger radius their packing asks for (up to twice as much: SPH particles in
+    motion sit closer than their rest spacing). For callers that mesh a cloud in pieces and
+    must give every piece the whole cloud's radius."""
+    lib = _library.load()
+    k = _options.POLYGONIZE.convert("kernel", "kernel", kernel or "wyvill")
+    cloud = new_cloud(lib, positions)
+    try:
+        count = c_size_t(0)
+        lib.check(lib.pm_cloud_get_count(cloud, ctypes.byref(count)))
+        s = per_point(strengths, "strengths", count.value)
+        out = c_double(0)
+        lib.check(lib.pm_default_radius(cloud, ptr(s, c_double), k, int(threads), ctypes.byref(out)))
+        return out.value
+    finally:
+        lib.pm_cloud_destroy(cloud)
 
 
 def lattice_field(kernel, radius, spacing):

@@ -313,6 +313,7 @@ FUNCTIONS = {
                                              POINTER(pm_polygonize_options), _f64p, c_size_t,
                                              _f32p, c_size_t]),
     "pm_lattice_field": (pm_status, [c_int32, c_double, c_double, _f64p]),
+    "pm_default_radius": (pm_status, [pm_cloud_p, _f64p, c_int32, c_int32, _f64p]),
     # volume particles: ray casting
     "pm_field_options_init": (None, [POINTER(pm_field_options)]),
     "pm_field_create": (pm_status, [pm_cloud_p, _f64p, _f64p, POINTER(pm_field_options),

@@ -802,19 +802,26 @@ def run_modal(driver, context, first=None):
 
 def test_particles_left_outside_a_polygonized_surface_warn(pm, clean_scene):
     """Irregular particles (uniform random points: their median neighbour distance is about
-    half their mean spacing, as in an SPH frame in motion) at the automatic radius leave most
-    of them outside the surface: a warning with the radius their packing suggests, which takes
-    most of them in; packed particles do not warn."""
+    half their mean spacing, as in an SPH frame in motion): the automatic radius follows their
+    packing and takes most of them in. A Fixed radius of twice that neighbour distance leaves
+    most of them outside the surface: a warning with the radius their packing suggests, the
+    automatic one; packed particles do not warn."""
     scattered = np.random.default_rng(5).uniform(0, 1, (4000, 3))
-    data = pm.generate.run("POLYGONIZE", pm.generate.Particles(scattered), {"radius_mode": "AUTO"})
+    auto = pm.generate.run("POLYGONIZE", pm.generate.Particles(scattered), {"radius_mode": "AUTO"})
+    assert auto.stats["enclosed_fraction"] > 0.5 and pm.generate.enclosure_warning(auto.stats) is None
+    two = 2 * pm.particlemesh.estimate_spacing(scattered)
+    assert auto.stats["radius"] > 1.25 * two
+    data = pm.generate.run("POLYGONIZE", pm.generate.Particles(scattered), {"radius_mode": "FIXED", "radius": two})
     warning = pm.generate.enclosure_warning(data.stats)
     assert warning and "encloses only" in warning and "Fixed radius of" in warning
     suggested = float(warning.rsplit(" ", 1)[1])
+    assert suggested == pytest.approx(auto.stats["radius"], rel=5e-3)  # as the warning rounds it
     fixed = pm.generate.run("POLYGONIZE", pm.generate.Particles(scattered), {"radius_mode": "FIXED", "radius": suggested})
     assert fixed.stats["enclosed_fraction"] > 0.5 and pm.generate.enclosure_warning(fixed.stats) is None
     g = np.stack(np.meshgrid(*[np.arange(10.0)] * 3, indexing="ij"), -1).reshape(-1, 3) * 0.1
     packed = pm.generate.run("POLYGONIZE", pm.generate.Particles(g), {"radius_mode": "AUTO"})
     assert pm.generate.enclosure_warning(packed.stats) is None
+    assert packed.stats["radius"] == pytest.approx(0.2)
 
 
 def test_unevenly_spaced_particles_warn(pm, clean_scene):

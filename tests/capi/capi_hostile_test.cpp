@@ -200,6 +200,8 @@ TEST(CApiHostile, EveryNullPointerIsNamedVolumeRaysAndAttributes) {
       {"cloud", [&] { return pm_polygonize(nullptr, nullptr, nullptr, nullptr, &m); }},
       {"out_mesh", [&] { return pm_polygonize(h.cloud, nullptr, nullptr, nullptr, nullptr); }},
       {"out_value", [&] { return pm_lattice_field(PM_KERNEL_WYVILL, 1.0, 0.5, nullptr); }},
+      {"cloud", [&] { return pm_default_radius(nullptr, nullptr, PM_KERNEL_WYVILL, 0, &d); }},
+      {"out_radius", [&] { return pm_default_radius(h.cloud, nullptr, PM_KERNEL_WYVILL, 0, nullptr); }},
       {"cloud", [&] { return pm_field_create(nullptr, nullptr, nullptr, nullptr, &f); }},
       {"out_field", [&] { return pm_field_create(h.cloud, nullptr, nullptr, nullptr, nullptr); }},
       {"field", [&] { return pm_field_get_params(nullptr, &d, &d); }},

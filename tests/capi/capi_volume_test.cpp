@@ -311,6 +311,42 @@ TEST(CApiPolygonize, LatticeField) {
   EXPECT_EQ(pm_lattice_field(PM_KERNEL_POLY6, 0.1, 0.05, nullptr), PM_STATUS_INVALID_ARGUMENT);
 }
 
+// The radius pm_polygonize takes for radius 0: what a caller cutting a cloud into tiles passes
+// to every tile. Irregular particles get more than 2 x their median spacing; a lattice 2 x.
+TEST(CApiPolygonize, DefaultRadiusIsPolygonizes) {
+  const PointCloud random = test::random_cloud(3000, 8, 1.0);
+  std::vector<double> strengths(random.size(), 1.5);
+  strengths[0] = 40;
+  for (const double* w : {static_cast<const double*>(nullptr), static_cast<const double*>(strengths.data())}) {
+    Cloud cloud(random);
+    double r = 0;
+    ASSERT_EQ(pm_default_radius(cloud.handle, w, PM_KERNEL_POLY4, 1, &r), PM_OK) << last();
+    pm_polygonize_options opt;
+    pm_polygonize_options_init(&opt);
+    opt.kernel = PM_KERNEL_POLY4;
+    pm_mesh* mesh = nullptr;
+    pm_polygonize_stats stats{};
+    stats.struct_size = sizeof(stats);
+    ASSERT_EQ(pm_polygonize_ex(cloud.handle, nullptr, w, &opt, &mesh, &stats), PM_OK) << last();
+    pm_mesh_destroy(mesh);
+    EXPECT_EQ(r, stats.radius);
+    EXPECT_GT(r, 1.25 * 2 * stats.spacing);
+  }
+  PointCloud block;
+  for (int i = 0; i < 8; ++i)
+    for (int j = 0; j < 8; ++j)
+      for (int k = 0; k < 8; ++k) block.positions.push_back({0.5 * i, 0.5 * j, 0.5 * k});
+  Cloud lattice(block);
+  double r = 0;
+  ASSERT_EQ(pm_default_radius(lattice.handle, nullptr, PM_KERNEL_WYVILL, 0, &r), PM_OK) << last();
+  EXPECT_DOUBLE_EQ(r, 1.0);
+  EXPECT_EQ(pm_default_radius(lattice.handle, nullptr, 9, 0, &r), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("kernel"), std::string::npos) << last();
+  Cloud one(PointCloud{{{1.0, 2.0, 3.0}}, {}, {}});
+  EXPECT_EQ(pm_default_radius(one.handle, nullptr, PM_KERNEL_WYVILL, 0, &r), PM_STATUS_INVALID_INPUT);
+  EXPECT_NE(last().find("give a radius"), std::string::npos) << last();
+}
+
 // pm_polygonize_attributes at the vertices of a mesh made without attributes: the values
 // pm_polygonize gives its vertices, bit for bit, laid out attribute after attribute; the usual
 // statuses and messages for misuse, and the output untouched on failure.

@@ -25,12 +25,14 @@ def test_block_gives_one_closed_surface_with_defaults(cli, inspect, tmp_path):
     out = tmp_path / "block.ply"
     report = tmp_path / "report.json"
     proc = cli("polygonize", pts, "-o", out, "--report", report)
-    assert "threshold T" in proc.stdout and "default: 2 x spacing" in proc.stdout
+    assert "threshold T" in proc.stdout
     r = json.loads(report.read_text())
     p = r["polygonize"]
     assert p["particles"] == n
     assert p["radius_defaulted"] and p["threshold_defaulted"] and p["cell_size_defaulted"]
-    assert math.isclose(p["radius"], 2 * p["spacing"])
+    # A lattice jittered by up to a tenth of its spacing holds its particles at 2 x spacing.
+    assert math.isclose(p["radius"], 2 * p["spacing"]) and p["enclosed_fraction"] > 0.9
+    assert "radius R      %.6g (default: 2 x spacing)" % p["radius"] in proc.stdout
     assert math.isclose(p["cell_size"], p["radius"] / 4)
     assert p["kernel"] == "wyvill"
     assert p["sampled_nodes"] == 512 * p["sampled_blocks"]
@@ -112,23 +114,28 @@ def test_sph_frames(cli, inspect, data_dir, tmp_path, name):
 
 def test_particles_left_outside_the_surface_are_said(cli, tmp_path):
     """Irregular particles (uniform random points: their median nearest-neighbour distance is
-    about half their mean spacing, like an SPH frame in motion) at the default radius leave
-    most of them outside the surface: a warning with the share and the radius their packing
-    suggests, which takes most of them in. A jittered lattice is not warned about."""
+    about half their mean spacing, like an SPH frame in motion): the default radius follows
+    their packing and takes most of them in. At 2 x that distance most are left outside the
+    surface: a warning with the share and the radius their packing suggests, the default's.
+    A jittered lattice is not warned about."""
     rng = random.Random(3)
     pts = tmp_path / "random.xyz"
     pts.write_text("".join("%.9g %.9g %.9g\n" % (rng.random(), rng.random(), rng.random()) for _ in range(3000)))
     out, report = tmp_path / "m.ply", tmp_path / "r.json"
     proc = cli("polygonize", pts, "-o", out, "--report", report)
+    assert "warning" not in proc.stderr
+    default = json.loads(report.read_text())["polygonize"]
+    assert default["radius_defaulted"] and default["enclosed_fraction"] > 0.6
+    assert 1.25 * 2 * default["spacing"] < default["radius"] < 2 * 2 * default["spacing"]
+    assert "from how densely the particles are packed" in proc.stdout
+    proc = cli("polygonize", pts, "-o", out, "--report", report, "--radius", repr(2 * default["spacing"]))
     assert "warning: the surface encloses only" in proc.stderr
     assert "sample a surface rather than fill a volume: `particlemesh triangulate`" in proc.stderr
     r = json.loads(report.read_text())
     p = r["polygonize"]
-    assert p["enclosed_fraction"] < 0.2 and p["density_radius"] > 1.25 * p["radius"]
+    assert p["enclosed_fraction"] < 0.2 and math.isclose(p["density_radius"], default["radius"], rel_tol=1e-9)
     assert r["warning"].startswith("the surface encloses only") and "--radius %.3g" % p["density_radius"] in r["warning"]
     assert "enclosed      %.0f%% of the particles" % (100 * p["enclosed_fraction"]) in proc.stdout
-    proc = cli("polygonize", pts, "-o", out, "--report", report, "--radius", "%.3g" % p["density_radius"])
-    assert "warning" not in proc.stderr and json.loads(report.read_text())["polygonize"]["enclosed_fraction"] > 0.5
     block = tmp_path / "block.xyz"
     write_block(block)
     proc = cli("polygonize", block, "-o", out, "--report", report)
@@ -137,13 +144,21 @@ def test_particles_left_outside_the_surface_are_said(cli, tmp_path):
     assert p["enclosed_fraction"] > 0.9 and math.isclose(p["density_radius"], p["radius"], rel_tol=0.1)
 
 
-def test_an_sph_frame_in_motion_is_said_to_need_a_larger_radius(cli, tmp_path, data_dir):
-    """Mostly blobs at the default radius (2 x a median nearest-neighbour distance of 0.036,
-    where the fluid's rest spacing is 0.05): said, with about splashsurf's 4 x 0.025."""
-    out = tmp_path / "m.ply"
+def test_an_sph_frame_in_motion_is_one_body_by_default(cli, inspect, tmp_path, data_dir):
+    """SPH particles in motion sit closer than their rest spacing (a median nearest-neighbour
+    distance of 0.036 where it is 0.05): at 2 x 0.036 the surface is mostly blobs, said, with
+    about splashsurf's 4 x 0.025; the default radius is that and gives one body."""
+    out, report = tmp_path / "m.ply", tmp_path / "r.json"
     frame = data_dir / "particles" / "dam_break_frame_9_6859_particles.bgeo"
-    proc = cli("polygonize", frame, "-o", out, "-q")
+    proc = cli("polygonize", frame, "-o", out, "-q", "--radius", "0.072")
     assert "warning: the surface encloses only" in proc.stderr and "their packing suggests --radius 0.09" in proc.stderr
+    assert inspect(out)["components"] > 20
+    proc = cli("polygonize", frame, "-o", out, "--report", report)
+    assert "warning" not in proc.stderr
+    p = json.loads(report.read_text())["polygonize"]
+    assert p["enclosed_fraction"] > 0.9 and 0.09 < p["radius"] < 0.1
+    mesh = inspect(out)
+    assert mesh["components"] == 1 and mesh["closed"] and mesh["outward"]
 
 
 def test_sigint_cancels_without_partial_output(cli, tmp_path):

@@ -80,7 +80,7 @@ def test_options_are_used_and_threads_do_not_matter(cli, tmp_path):
 def test_default_size_and_sph_frame(cli, data_dir, tmp_path):
     out = tmp_path / "cube.png"
     proc = cli("render", data_dir / "particles" / "cube_2366_particles.ply", "-o", out)
-    assert "default: 2 x spacing" in proc.stdout
+    assert "default: 2 x spacing)" in proc.stdout  # a lattice: 2 x its spacing
     w, h, rows = read_png(out)
     assert (w, h) == (640, 480)
     background = rows[0][:3]
@@ -123,15 +123,22 @@ def test_anisotropic_render(cli, data_dir, tmp_path):
 
 
 def test_particles_left_outside_the_surface_are_said(cli, tmp_path):
-    """As polygonize: irregular particles (uniform random points) at the default radius leave
-    most of them outside the surface, which the render shows as scattered blobs: said, with
-    the radius their packing suggests; at that radius, not."""
+    """As polygonize: irregular particles (uniform random points) get a default radius from
+    their packing; at 2 x their median nearest-neighbour distance most of them are left outside
+    the surface, which the render shows as scattered blobs: said, with the radius their packing
+    suggests; at that radius, not."""
     import random
     rng = random.Random(3)
     pts = tmp_path / "random.xyz"
     pts.write_text("".join("%.9g %.9g %.9g\n" % (rng.random(), rng.random(), rng.random()) for _ in range(3000)))
     out = tmp_path / "r.png"
-    proc = cli("render", pts, "-o", out, "--width", "64", "--height", "48", "-q")
+    proc = cli("render", pts, "-o", out, "--width", "64", "--height", "48")
+    assert "warning" not in proc.stderr and "from how densely the particles are packed" in proc.stdout
+    default, ratio = proc.stdout.split("radius R")[1].split()[0:3:2]  # "R (default: X x spacing, ..."
+    assert 2.5 < float(ratio) < 4
+    # At 2 x spacing: warned.
+    two_spacings = 2 * float(default) / float(ratio)
+    proc = cli("render", pts, "-o", out, "--width", "64", "--height", "48", "-q", "--radius", repr(two_spacings))
     assert "render: warning: the surface encloses only" in proc.stderr and "triangulate" not in proc.stderr
     radius = proc.stderr.split("--radius ")[1].split()[0]
     proc = cli("render", pts, "-o", out, "--width", "64", "--height", "48", "-q", "--radius", radius)

@@ -393,7 +393,7 @@ def test_polygonize_threshold_from_particle_sizes(pkg):
 
 def test_polygonize_anisotropic_setting(pkg):
     """The add-on's Anisotropic Kernels setting reaches the library: a one-particle sheet stays
-    one surface with it, while the default spherical kernels leave little of it."""
+    one surface with it, while spherical kernels of the same radius leave little of it."""
     rng = np.random.default_rng(2)
     x, z = np.meshgrid(np.arange(40.0), np.arange(40.0))
     sheet = np.stack([x.ravel(), np.zeros(x.size), z.ravel()], 1) + rng.uniform(-0.15, 0.15, (x.size, 3))
@@ -402,7 +402,7 @@ def test_polygonize_anisotropic_setting(pkg):
     rep = pkg.pm.topology(an)
     assert rep["closed"] and rep["components"] == 1
     assert an.stats["anisotropic"] == 1
-    iso = pkg.generate.run("POLYGONIZE", particles, {})
+    iso = pkg.generate.run("POLYGONIZE", particles, {"radius_mode": "FIXED", "radius": an.stats["radius"]})
     assert iso.triangle_count < 0.5 * an.triangle_count
 
 

@@ -598,17 +598,30 @@ def test_polygonize_radii_strengths_and_defaults(pm):
     assert r_right == pytest.approx(2 * r_left, rel=0.02)  # the field scales with R
     with pytest.raises(pm.Error, match="radii has 1 values for 2 points"):
         pm.polygonize(p, radii=[1.0])
-    cloud = fibonacci_sphere(3000)
-    auto = pm.polygonize(cloud)
-    assert auto.stats["radius"] == pytest.approx(2 * auto.stats["spacing"])
+    g = np.stack(np.meshgrid(np.arange(10), np.arange(10), np.arange(10), indexing="ij"), -1).reshape(-1, 3)
+    block = 0.1 * g.astype(np.float64)
+    auto = pm.polygonize(block)
+    assert auto.stats["radius"] == pytest.approx(2 * auto.stats["spacing"]) == pytest.approx(0.2)
+    assert pm.default_radius(block) == auto.stats["radius"]
     assert auto.stats["cell_size"] == pytest.approx(auto.stats["radius"] / 4)
     assert pm.topology(auto)["closed"]
     # How the particles sit in their field: uniform random points are mostly outside the
-    # surface at the default radius; the radius their packing suggests takes most in.
+    # surface at 2 x their median nearest-neighbour distance; the radius their packing
+    # suggests takes most in, and is the default.
     scattered = np.random.default_rng(5).uniform(0, 1, (4000, 3))
-    s = pm.polygonize(scattered).stats
+    two = 2 * pm.estimate_spacing(scattered)
+    s = pm.polygonize(scattered, radius=two).stats
     assert s["enclosed_fraction"] < 0.2 and s["density_radius"] > 1.25 * s["radius"]
-    assert pm.polygonize(scattered, radius=s["density_radius"]).stats["enclosed_fraction"] > 0.5
+    d = pm.polygonize(scattered).stats
+    assert d["radius"] == s["density_radius"] == pm.default_radius(scattered)
+    assert d["enclosed_fraction"] > 0.5
+    # The packing is read in units of the median strength; other kernels read it their way.
+    assert pm.default_radius(scattered, strengths=np.full(len(scattered), 2.0)) == d["radius"]
+    assert pm.default_radius(scattered, kernel="poly6") != d["radius"]
+    with pytest.raises(pm.Error, match="strengths"):
+        pm.default_radius(scattered, strengths=[1.0])
+    with pytest.raises(pm.Error, match="spacing"):
+        pm.default_radius(np.zeros((3, 3)))
 
 
 def test_polygonize_anisotropic_and_finishing(pm):

@@ -340,7 +340,8 @@ PM_EXPORT void pm_smoother_destroy(pm_smoother* smoother);
 typedef struct pm_polygonize_options {
   uint32_t struct_size;     /**< sizeof(pm_polygonize_options), set by _init */
   int32_t kernel;           /**< PM_KERNEL_* (default PM_KERNEL_WYVILL) */
-  double radius;            /**< R in world units; 0 = 2 x the median particle spacing */
+  double radius;            /**< R in world units; 0 = the default (pm_default_radius): 2 x the
+                                 median particle spacing, or the larger R the packing asks for */
   double threshold;         /**< T > 0; 0 = half the field inside an evenly packed volume at
                                  R = 2 spacings (3.33 Wyvill, 3.94 poly4, 2.58 poly6, 1.23 Blinn) */
   double cell_size;         /**< grid cell h in world units; 0 = R / 4 */
@@ -454,6 +455,14 @@ PM_EXPORT pm_status pm_polygonize_attributes(const pm_cloud* cloud, const double
  *  is half of it; an SPH iso level given as a fraction of the rest density maps to
  *  T = fraction x pm_lattice_field(kernel, R, rest spacing). */
 PM_EXPORT pm_status pm_lattice_field(int32_t kernel, double radius, double spacing, double* out_value);
+/** The radius pm_polygonize and pm_field_create take for radius 0 (spherical kernels of one
+ *  radius): 2 x the median particle spacing, or, when that leaves over a tenth of the particles
+ *  outside the surface, the larger radius their packing asks for (density_radius). For callers that cut a cloud into pieces and must give every piece
+ *  the whole cloud's radius. `strengths`: NULL or one per particle (their median scales the
+ *  field the packing is read from). PM_STATUS_INVALID_INPUT when the spacing cannot be
+ *  estimated (fewer than two distinct particles). */
+PM_EXPORT pm_status pm_default_radius(const pm_cloud* cloud, const double* strengths, int32_t kernel,
+                                      int32_t threads, double* out_radius);
 
 /* ---- volume particles: exact ray casting of the iso-surface --------------------------- */
 
@@ -469,7 +478,8 @@ typedef struct pm_ray_hits pm_ray_hits; /**< all hits of a batch of rays */
 typedef struct pm_field_options {
   uint32_t struct_size;     /**< sizeof(pm_field_options), set by _init */
   int32_t kernel;           /**< PM_KERNEL_* (default PM_KERNEL_WYVILL) */
-  double radius;            /**< R in world units; 0 = 2 x the median particle spacing */
+  double radius;            /**< R in world units; 0 = the default (pm_default_radius): 2 x the
+                                 median particle spacing, or the larger R the packing asks for */
   double threshold;         /**< T > 0; 0 = half the field inside an evenly packed volume */
   int32_t threads;          /**< 0 = all cores (for the spacing estimate) */
   pm_progress_fn progress;  /**< may be NULL */

@@ -155,4 +155,17 @@ pm_status pm_lattice_field(int32_t kernel, double radius, double spacing, double
   });
 }
 
+pm_status pm_default_radius(const pm_cloud* cloud, const double* strengths, int32_t kernel, int32_t threads,
+                            double* out_radius) {
+  return guarded([&] {
+    require(cloud, "cloud");
+    require(out_radius, "out_radius");
+    FieldParams p;
+    p.kernel = to_kernel(kernel);
+    if (strengths) p.strengths.assign(strengths, strengths + cloud->cloud.size());
+    const double r = ParticleField(cloud->cloud, p, threads).params().radius;
+    *out_radius = r;
+  });
+}
+
 }  // extern "C"

@@ -19,6 +19,20 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 // See calibrate_anisotropic_threshold.
 constexpr double kMinFaceFraction = 0.1;
+// A particle whose neighbours' kernel-weighted mean lies within this many radii of it is in
+// the bulk (field_at_particles): 0 inside a lattice, 0.2-0.3 for the particles of its outer
+// two layers at the default radius; under 0.1 for about half of a jittered lattice's or an SPH
+// fluid's particles.
+constexpr double kBulkOffset = 0.1;
+// Fewer sampled bulk particles than this (a sheet, a spray, a handful): the packing is read
+// from the upper quartile of every sampled particle instead. 8: the core of a 4 x 4 x 4 block.
+constexpr size_t kMinBulkSamples = 8;
+// The default radius follows the particles' packing when 2 x spacing leaves more than a tenth
+// of them outside the surface (on a packed block every particle is inside: its face lies half
+// a spacing out) and the packing asks for a radius larger by more than kPackingTolerance.
+// Particles that the field at 2 x spacing already holds keep that radius, and their mesh.
+constexpr double kMinEnclosedAtTwoSpacings = 0.9;
+constexpr double kPackingTolerance = 0.02;
 
 std::string num(double v) {
   if (std::isnan(v)) return "NaN";
@@ -146,23 +160,50 @@ FieldAtParticles field_at_particles(const ParticleField& f) {
   FieldAtParticles r;
   const size_t n = f.size();
   if (n == 0) return r;
-  // At most ~4096 particles, evenly by input index: the shares and the quartile are as good,
+  const FieldParams& p = f.params();
+  const bool spheres = !f.anisotropic() && p.radii.empty();
+  // At most ~4096 particles, evenly by input index: the shares and the median are as good,
   // the cost bounded (microseconds to milliseconds).
   const size_t stride = (n + 4095) / 4096;
-  std::vector<double> level((n + stride - 1) / stride);
+  std::vector<double> level((n + stride - 1) / stride), offset(level.size(), kInf);
   detail::parallel_blocks(level.size(), 64, [&](size_t b, size_t e) {
-    for (size_t k = b; k < e; ++k) level[k] = f.value(f.position(k * stride));
+    for (size_t k = b; k < e; ++k) {
+      const Vec3 x = f.position(k * stride);
+      level[k] = f.value(x);
+      if (!spheres) continue;
+      // How far the kernel-weighted mean of the neighbours lies from the particle, in radii:
+      // 0 deep inside an even packing, about 0.3 on its face.
+      double W = 0;
+      Vec3 S{};
+      f.for_each_contributor(x, [&](size_t j, double s) {
+        const double g = kernel_value(p.kernel, s);
+        W += g;
+        S += (f.position(j) - x) * g;
+      });
+      if (W > 0) offset[k] = std::sqrt(squared_norm(S)) / W / p.radius;
+    }
   });
   size_t inside = 0;
   for (double v : level) inside += v >= f.threshold();
   r.enclosed_fraction = double(inside) / double(level.size());
-  const FieldParams& p = f.params();
-  if (!f.anisotropic() && p.radii.empty()) {
+  if (spheres) {
     const double w = p.strengths.empty() ? 1.0 : median(p.strengths);
     if (w > 0) {
-      const size_t q = (3 * level.size()) / 4;
-      std::nth_element(level.begin(), level.begin() + std::ptrdiff_t(q), level.end());
-      const double x = detail::lattice_ratio_of(p.kernel, level[q] / w);
+      // The packing is read where the particles have neighbours all around (the bulk: the
+      // field there is a lattice's interior level, whatever the particles' shape); too few of
+      // them: the upper quartile of every particle's level.
+      std::vector<double> bulk;
+      for (size_t k = 0; k < level.size(); ++k)
+        if (offset[k] < kBulkOffset) bulk.push_back(level[k]);
+      double packed;
+      if (bulk.size() >= kMinBulkSamples) {
+        packed = median(std::move(bulk));
+      } else {
+        const size_t q = (3 * level.size()) / 4;
+        std::nth_element(level.begin(), level.begin() + std::ptrdiff_t(q), level.end());
+        packed = level[q];
+      }
+      const double x = detail::lattice_ratio_of(p.kernel, packed / w);
       r.density_radius = kDefaultRadiusFactor * p.radius / x;
     }
   }
@@ -444,6 +485,21 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
   if (!params.strengths.empty()) {
     f.sorted_strength_.resize(n);
     for (uint32_t s = 0; s < n; ++s) f.sorted_strength_[s] = params.strengths[f.grid_.original_index(s)];
+  }
+  if (need_radius && !aniso) {
+    // The default radius from the packing (FieldParams::radius): built again at the radius
+    // the field at the particles asks for, when too many of them are outside the surface.
+    tracker.check();
+    const FieldAtParticles at = field_at_particles(f);
+    const double packed = at.density_radius;
+    if (at.enclosed_fraction < kMinEnclosedAtTwoSpacings && packed > f.params_.radius * (1.0 + kPackingTolerance)) {
+      FieldParams resolved = params;
+      resolved.radius = packed;
+      ParticleField g = build(positions, n, resolved, tracker, end, end, domain);
+      g.spacing_ = f.spacing_;
+      g.radius_defaulted_ = true;
+      return g;
+    }
   }
   return f;
 }

@@ -14,7 +14,7 @@ import uuid
 import numpy as np
 
 from .. import _abi, _library, _options
-from .. import estimate_spacing, lattice_field, polygonize
+from .. import default_radius, lattice_field, polygonize
 from .._errors import Error
 from ._dask import check_client, distributed, gather_in_order
 from ._merge import merge_by_position
@@ -114,7 +114,7 @@ def polygonize_tiled(client, particles, tiles=(2, 2, 1), *, bounds=None, radius=
             R = _median(r)
             R_max = max(float(r.max()), float(domain_max_radius))
         else:
-            R = float(radius) if radius else 2.0 * estimate_spacing(p["positions"])
+            R = float(radius) if radius else default_radius(p["positions"], p["strengths"], kernel)
             R_max = max(R, float(domain_max_radius))
             tile_options["radius"] = R
         if not threshold and p["strengths"] is not None:

@@ -135,7 +135,10 @@ TEST(ParticleField, LatticeFieldCountsTheLatticeSupport) {
 }
 
 TEST(ParticleField, DefaultsComeFromTheSpacing) {
-  const PointCloud c = square_lattice(20, 20, 0.1);
+  PointCloud c;
+  for (int i = 0; i < 10; ++i)
+    for (int j = 0; j < 10; ++j)
+      for (int k = 0; k < 10; ++k) c.positions.push_back({0.1 * i, 0.1 * j, 0.1 * k});
   const double spacing = estimate_spacing(c.positions.data(), c.size()).spacing;
   const ParticleField f(c, FieldParams{Kernel::Poly6, 0, 0, {}, {}, {}});
   EXPECT_TRUE(f.radius_defaulted());
@@ -143,6 +146,28 @@ TEST(ParticleField, DefaultsComeFromTheSpacing) {
   EXPECT_DOUBLE_EQ(f.spacing(), spacing);
   EXPECT_DOUBLE_EQ(f.params().radius, kDefaultRadiusFactor * spacing);
   EXPECT_DOUBLE_EQ(f.threshold(), kDefaultThresholdFraction * lattice_field(Kernel::Poly6, 2 * spacing, spacing));
+  // A sheet one particle thick is packed more sparsely than a block of its spacing, and at
+  // 2 x spacing a fifth of it falls outside the surface: the default radius grows so that its
+  // own field reaches a block's (measured at the grown radius, the packing asks for about as
+  // much again: the map is a lattice's, the sheet is not one).
+  const PointCloud sheet = square_lattice(20, 20, 0.1);
+  const ParticleField s(sheet, FieldParams{Kernel::Poly6, 0, 0, {}, {}, {}});
+  EXPECT_TRUE(s.radius_defaulted());
+  EXPECT_DOUBLE_EQ(s.spacing(), estimate_spacing(sheet.positions.data(), sheet.size()).spacing);
+  EXPECT_GT(s.params().radius, 1.1 * kDefaultRadiusFactor * s.spacing());
+  EXPECT_NEAR(s.params().radius, field_at_particles(s).density_radius, 0.1 * s.params().radius);
+  EXPECT_GT(field_at_particles(s).enclosed_fraction, 0.9);
+  EXPECT_LT(field_at_particles(ParticleField(sheet, FieldParams{Kernel::Poly6, 2 * s.spacing(), 0, {}, {}, {}}))
+                .enclosed_fraction,
+            0.85);
+  // A thin shell sampled evenly reads as sparse too, but its field at 2 x spacing already
+  // holds every particle: it keeps that radius (and its mesh).
+  const PointCloud shell = fibonacci_sphere(20000);
+  const ParticleField sf(shell, FieldParams{});
+  const FieldAtParticles sat = field_at_particles(sf);
+  EXPECT_DOUBLE_EQ(sf.params().radius, kDefaultRadiusFactor * sf.spacing());
+  EXPECT_GT(sat.enclosed_fraction, 0.99);
+  EXPECT_GT(sat.density_radius, 1.1 * sf.params().radius);
   // Given values are kept and no spacing is estimated.
   const ParticleField g(c, FieldParams{Kernel::Poly6, 0.3, 0.7, {}, {}, {}});
   EXPECT_FALSE(g.radius_defaulted());
@@ -189,12 +214,20 @@ TEST(ParticleField, FieldAtTheParticlesSaysHowTheyArePacked) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   PointCloud random;
   for (int i = 0; i < 4000; ++i) random.positions.push_back({u(rng), u(rng), u(rng)});
-  const ParticleField f(random, FieldParams{});
+  const double spacing = estimate_spacing(random.positions.data(), random.size()).spacing;
+  const ParticleField f(random, FieldParams{Kernel::Wyvill, kDefaultRadiusFactor * spacing, 0, {}, {}, {}});
   const FieldAtParticles at = field_at_particles(f);
   EXPECT_LT(at.enclosed_fraction, 0.2);
   EXPECT_GT(at.density_radius, 1.25 * f.params().radius);
+  EXPECT_LT(at.density_radius, 2.0 * f.params().radius);  // at most 2x: the particle alone
   const FieldAtParticles again = field_at_particles(ParticleField(random, FieldParams{Kernel::Wyvill, at.density_radius, 0, {}, {}, {}}));
   EXPECT_GT(again.enclosed_fraction, 0.5);
+  // The default radius is that suggestion, so the default field takes most of them in.
+  const ParticleField d(random, FieldParams{});
+  EXPECT_TRUE(d.radius_defaulted());
+  EXPECT_EQ(d.spacing(), spacing);
+  EXPECT_EQ(d.params().radius, at.density_radius);
+  EXPECT_EQ(field_at_particles(d).enclosed_fraction, again.enclosed_fraction);
   // Per-particle radii and anisotropic kernels suggest no radius; the share is still measured.
   FieldParams radii;
   radii.radii.assign(random.size(), f.params().radius);

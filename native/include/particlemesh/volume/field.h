@@ -43,9 +43,13 @@ namespace detail {
 struct FieldBuilder;
 }
 
-/// Default radius: R = kDefaultRadiusFactor x the median particle spacing (the median
-/// nearest-neighbour distance, estimate_spacing): every point of an evenly packed volume
-/// then lies in the support of about 30 particles, so the summed field is smooth.
+/// Default radius: R = kDefaultRadiusFactor spacings of a simple cubic lattice as densely
+/// packed as the particles: every point of an evenly packed volume then lies in the support of
+/// about 30 particles, so the summed field is smooth. The spacing is the median
+/// nearest-neighbour distance (estimate_spacing) for a lattice; particles in motion (an SPH
+/// frame) sit closer to their nearest neighbour than their packing says (a median of 0.036
+/// against a rest spacing of 0.05), and R = 2 x that leaves most of them outside the surface:
+/// R is then taken larger, from the field at the particles (FieldParams::radius).
 inline constexpr double kDefaultRadiusFactor = 2.0;
 
 /// Default threshold: T = kDefaultThresholdFraction x the field deep inside an evenly packed
@@ -97,10 +101,13 @@ struct FieldAtParticles {
   /// threshold too high), and the surface shows only the densest of them.
   double enclosed_fraction = 0;
   /// Spherical kernels of one radius: the radius that is kDefaultRadiusFactor spacings of a
-  /// simple cubic lattice as densely packed as these particles, the packing read from the
-  /// field's upper quartile at their centres (lattice_field of the ratio R / spacing). Equal to
-  /// R for a lattice at the default radius; larger for irregular particles (an SPH frame's
-  /// median nearest-neighbour distance is well below its rest spacing). 0 otherwise.
+  /// simple cubic lattice as densely packed as these particles. The packing is read from the
+  /// field at the centres of the bulk particles (those whose neighbours' kernel-weighted mean
+  /// lies within 0.1 R of them), or from the upper quartile of all when fewer than 8 of the
+  /// sampled particles are in the bulk: that level is lattice_field of a ratio x = R /
+  /// spacing, and the result is R x 2 / x. Equal to R for a lattice at 2 spacings; larger for
+  /// irregular particles (an SPH frame's median nearest-neighbour distance is well below its
+  /// rest spacing). 0 otherwise.
   double density_radius = 0;
 };
 PM_EXPORT FieldAtParticles field_at_particles(const ParticleField& field);
@@ -109,8 +116,12 @@ PM_EXPORT FieldAtParticles field_at_particles(const ParticleField& field);
 /// radius needs the particle spacing and therefore at least two distinct particles.
 struct FieldParams {
   Kernel kernel = Kernel::Wyvill;
-  /// R for every particle, world units (not relative). 0 = kDefaultRadiusFactor x the median
-  /// spacing. Ignored when `radii` is given.
+  /// R for every particle, world units (not relative). 0 = the default: kDefaultRadiusFactor
+  /// x the median spacing; with spherical kernels, when that leaves more than a tenth of the
+  /// particles outside the surface (field_at_particles), FieldAtParticles::density_radius of
+  /// that field instead, if larger by over 2 % (the field is then built again at it): up to 2x
+  /// larger for irregularly packed particles (SPH frames in motion), unchanged for packed
+  /// ones. Ignored when `radii` is given.
   double radius = 0;
   /// T > 0, in the units of F (sums of kernel values times strengths). 0 = the default:
   /// spherical kernels: kDefaultThresholdFraction x median strength x lattice_field(kernel,

@@ -102,8 +102,10 @@ inline Vec3 space_anchored_origin(const Vec3& origin, double h) {
 
 struct PolygonizeOptions {
   Kernel kernel = Kernel::Wyvill;
-  /// R for every particle, world units. 0 = kDefaultRadiusFactor (2) x the median particle
-  /// spacing (estimate_spacing). Ignored when `radii` is given.
+  /// R for every particle, world units. 0 = the default: kDefaultRadiusFactor (2) x the
+  /// median particle spacing (estimate_spacing), or with spherical kernels, when that leaves
+  /// over a tenth of the particles outside the surface, the larger radius their packing asks
+  /// for (FieldParams::radius). Ignored when `radii` is given.
   double radius = 0;
   /// T > 0. 0 = kDefaultThresholdFraction (0.5) x the field deep inside an evenly packed
   /// volume at the default radius (lattice_field(kernel, 2, 1): 3.33 for Wyvill), which puts
@@ -177,7 +179,8 @@ struct PolygonizeStats {
   /// field_at_particles): low when the radius is too small for how sparsely they are packed.
   double enclosed_fraction = 0;
   /// The radius their packing suggests (field_at_particles; spherical kernels of one radius,
-  /// else 0): R for evenly packed particles at the default radius.
+  /// else 0): R itself for evenly packed particles at 2 spacings. The default radius takes it
+  /// when 2 spacings leave too many particles outside (FieldParams::radius).
   double density_radius = 0;
   double min_component_volume = 0;   ///< the volume limit applied to pieces (0: none)
   size_t components_removed = 0;     ///< pieces dropped by it
