@@ -188,6 +188,49 @@ def test_a_spacing_given_too_small_is_named(cli, tmp_path):
     assert "hint" not in json.loads(rep.read_text()) and "hint" not in proc.stdout
 
 
+def test_loops_the_settings_left_open_get_a_hint(cli, tmp_path):
+    """Loops left open for a fill limit set too low are named with the setting that reaches
+    them, and that setting closes them (no hint then); an edge limit given below the default
+    is named as the cause of the open loops it leaves; the defaults close the sphere."""
+    pts, rep, out = tmp_path / "s.ply", tmp_path / "r.json", tmp_path / "m.ply"
+    cli("sample", "sphere", "--spacing", "0.05", "-o", pts, "-q")
+    proc = cli("triangulate", pts, "-o", out, "--report", rep)
+    r = json.loads(rep.read_text())
+    assert "hint" not in r and "hint" not in proc.stdout and r["topology"]["closed"]
+    proc = cli("triangulate", pts, "-o", out, "--report", rep, "--fill-edge-factor", "1")
+    r = json.loads(rep.read_text())
+    loops = r["topology"]["boundary_loops"]
+    assert loops > 5
+    assert r["hint"].startswith("all %d loops left open are narrow" % loops), r["hint"]
+    factor = r["hint"].split("try --fill-edge-factor ")[1].split()[0]
+    widest = max(l["width_over_L"] for l in r["surface"]["open_loops"])
+    assert 1 < widest <= float(factor) < widest + 0.1 + 1e-9
+    proc = cli("triangulate", pts, "-o", out, "--report", rep, "--fill-edge-factor", factor)
+    r = json.loads(rep.read_text())
+    assert r["topology"]["closed"] and "hint" not in r and "hint" not in proc.stdout
+    proc = cli("triangulate", pts, "-o", out, "--report", rep, "--max-edge-factor", "1.5")
+    r = json.loads(rep.read_text())
+    assert r["topology"]["boundary_loops"] > 20
+    assert r["hint"].startswith("--max-edge-factor 1.5 is below the default 2: edges of 1.5 x r0 leave %d loops open"
+                                % r["topology"]["boundary_loops"]), r["hint"]
+    assert "--fill-edge-factor" not in r["hint"]
+
+
+def test_a_models_vertices_get_the_fill_that_closes_them(cli, tmp_path, data_dir):
+    """The vertices of a coarse closed model (long thin triangles: an uneven sampling) leave one
+    loop 1.6 L across at the default fill limit of 1.5 L: named, and the fill it names closes
+    the surface."""
+    out, rep = tmp_path / "m.ply", tmp_path / "r.json"
+    pts = data_dir / "points" / "bunny_coarse_vertices.ply"
+    proc = cli("triangulate", pts, "-o", out, "--report", rep)
+    hint = json.loads(rep.read_text())["hint"]
+    assert hint.startswith("the loop left open is narrow") and hint in proc.stdout
+    factor = hint.split("try --fill-edge-factor ")[1].split()[0]
+    cli("triangulate", pts, "-o", out, "--report", rep, "--fill-edge-factor", factor)
+    r = json.loads(rep.read_text())
+    assert r["topology"]["closed"] and r["topology"]["components"] == 1 and "hint" not in r
+
+
 def test_volume_particles_get_a_hint_to_polygonize(cli, tmp_path):
     """Particles filling a block (a jittered lattice: what a fluid simulation gives) are no
     surface sample: most seed triangles join particles facing opposite ways, the surface does
