@@ -168,10 +168,11 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
                                                 [&] { outputs.write_mesh("-o", result.mesh); });
   // No surface at all: the field never reaches the threshold where it was sampled. The empty
   // mesh is still written (a frame of a sequence may well be empty), with a warning.
-  // Most particles outside the surface: said, with the radius their packing suggests.
+  // Most particles outside the surface, or a radius far larger than their packing asks for:
+  // said, with the radius their packing suggests.
   const PolygonizeStats& st = result.stats;
   std::string warning =
-      enclosure_warning(st.enclosed_fraction, st.density_radius, st.radius, st.threshold, true);
+      radius_warning(st.enclosed_fraction, st.density_radius, st.radius, st.threshold, true);
   if (result.mesh.triangles.empty()) {
     char w[400];
     std::snprintf(w, sizeof w,

@@ -73,9 +73,10 @@ int run_render(const RenderArgs& a) {
                  "T = %g nowhere (lower --threshold or raise --radius), or the camera looks away from it\n",
                  caster.field().threshold());
   } else {
-    // Most particles outside the surface (an SPH frame at a radius too small for it): said.
+    // Most particles outside the surface (an SPH frame at a radius too small for it), or a
+    // radius far larger than the particles' packing asks for: said.
     const FieldAtParticles at = field_at_particles(caster.field());
-    const std::string w = enclosure_warning(at.enclosed_fraction, at.density_radius, caster.field().params().radius,
+    const std::string w = radius_warning(at.enclosed_fraction, at.density_radius, caster.field().params().radius,
                                             caster.field().threshold());
     if (!w.empty()) std::fprintf(stderr, "particlemesh render: warning: %s\n", w.c_str());
   }

@@ -60,16 +60,28 @@ inline constexpr const char* kRadiusHelp =
 
 /// Below this share of the particles inside the surface, polygonize and render warn.
 constexpr double kFewEnclosed = 0.5;
+/// A radius more than this many times what the particles' packing asks for (over 6 spacings
+/// of a lattice as dense: each particle's support holds about 900 of them) is said too.
+constexpr double kLargeRadius = 3.0;
 
-/// The warning when most particles end up outside the surface (field_at_particles): it shows
-/// only their densest clumps (SPH particles in motion sit closer than their rest spacing, so
-/// 2 x their median nearest-neighbour distance is a small radius for them), with the radius
-/// their packing suggests, and (`surface_method`) the command for particles that sample a
-/// surface rather than fill a volume. Empty when most are inside.
-inline std::string enclosure_warning(double enclosed_fraction, double density_radius, double radius, double threshold,
+/// The warning when the radius does not fit how the particles are packed (field_at_particles):
+/// most of them end up outside the surface, which shows only their densest clumps (a radius
+/// given small, or a threshold high), said with the radius their packing suggests and
+/// (`surface_method`) the command for particles that sample a surface rather than fill a
+/// volume; or the radius is over kLargeRadius x what the packing asks for. Empty otherwise.
+inline std::string radius_warning(double enclosed_fraction, double density_radius, double radius, double threshold,
                                      bool surface_method = false) {
-  if (!(enclosed_fraction < kFewEnclosed)) return {};
   char w[500];
+  if (!(enclosed_fraction < kFewEnclosed)) {
+    // The other way round: a radius so large that every detail of the particles smaller than
+    // it melts into one smooth blob (density_radius reads at most 8 spacings: at R / 4).
+    if (!(density_radius > 0 && density_radius * kLargeRadius < radius)) return {};
+    std::snprintf(w, sizeof w,
+                  "the radius R = %g is large for how densely the particles are packed (their packing suggests "
+                  "--radius %.3g%s): every detail smaller than about R melts into one smooth blob",
+                  radius, density_radius, density_radius * 4.0 <= radius * (1.0 + 1e-6) ? " or less" : "");
+    return w;
+  }
   int n = std::snprintf(w, sizeof w,
                         "the surface encloses only %.0f%% of the particles: the radius R = %g is small for how sparsely "
                         "they are packed, or the threshold T = %g high",

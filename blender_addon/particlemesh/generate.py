@@ -255,11 +255,18 @@ def enclosure_warning(stats):
     enclosed_fraction: F below the threshold at their centres), which then shows only their
     densest clumps: the radius is small for how sparsely they are packed (a Fixed radius or one
     from the particle sizes; the automatic radius follows the packing), with the radius their
-    packing suggests. None otherwise."""
+    packing suggests; or when the radius is over 3 x what their packing asks for. None
+    otherwise."""
     share = stats.get("enclosed_fraction")
+    suggested = stats.get("density_radius", 0.0)
+    radius = stats.get("radius", 0.0)
+    if share is not None and share >= 0.5 and 0 < suggested and 3 * suggested < radius:
+        # The other way round: over 6 spacings of a lattice as dense (the library reads at
+        # most 8: then it suggests R / 4).
+        return (f"the radius {radius:.4g} is large for how densely the particles are packed (their packing "
+                f"suggests a Fixed radius of {suggested:.3g}): every detail smaller than it melts into one blob")
     if share is None or share >= 0.5:
         return None
-    suggested = stats.get("density_radius", 0.0)
     advice = (f"; their packing suggests a Fixed radius of {suggested:.3g}"
               if suggested > stats.get("radius", 0.0) else "; raise the radius or lower the threshold")
     return (f"the surface encloses only {100 * share:.0f}% of the particles: the radius "

@@ -822,6 +822,10 @@ def test_particles_left_outside_a_polygonized_surface_warn(pm, clean_scene):
     packed = pm.generate.run("POLYGONIZE", pm.generate.Particles(g), {"radius_mode": "AUTO"})
     assert pm.generate.enclosure_warning(packed.stats) is None
     assert packed.stats["radius"] == pytest.approx(0.2)
+    # A radius of 10 spacings: said the other way round.
+    huge = pm.generate.run("POLYGONIZE", pm.generate.Particles(g), {"radius_mode": "FIXED", "radius": 1.0})
+    warning = pm.generate.enclosure_warning(huge.stats)
+    assert warning and warning.startswith("the radius 1 is large") and "Fixed radius of 0.2" in warning
 
 
 def test_unevenly_spaced_particles_warn(pm, clean_scene):

@@ -144,6 +144,22 @@ def test_particles_left_outside_the_surface_are_said(cli, tmp_path):
     assert p["enclosed_fraction"] > 0.9 and math.isclose(p["density_radius"], p["radius"], rel_tol=0.1)
 
 
+def test_a_radius_far_larger_than_the_packing_is_said(cli, inspect, tmp_path):
+    """A radius of 10 spacings melts a block into one blob: said, with what the packing asks
+    for; 2.5 spacings is not."""
+    pts, out, report = tmp_path / "block.xyz", tmp_path / "m.ply", tmp_path / "r.json"
+    write_block(pts, 8, 8, 8, jitter=0)
+    proc = cli("polygonize", pts, "-o", out, "--report", report, "--radius", "1")
+    assert "warning: the radius R = 1 is large for how densely the particles are packed" in proc.stderr
+    # (8 spacings is as far as the packing is read; this block is smaller than its support)
+    assert 0.25 <= float(proc.stderr.split("suggests --radius ")[1].split()[0].rstrip("):")) < 0.3
+    r = json.loads(report.read_text())
+    assert r["warning"].startswith("the radius R = 1 is large") and r["polygonize"]["enclosed_fraction"] == 1
+    assert inspect(out)["components"] == 1
+    proc = cli("polygonize", pts, "-o", out, "--report", report, "--radius", "0.25")
+    assert "warning" not in proc.stderr and "warning" not in json.loads(report.read_text())
+
+
 def test_an_sph_frame_in_motion_is_one_body_by_default(cli, inspect, tmp_path, data_dir):
     """SPH particles in motion sit closer than their rest spacing (a median nearest-neighbour
     distance of 0.036 where it is 0.05): at 2 x 0.036 the surface is mostly blobs, said, with

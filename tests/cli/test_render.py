@@ -143,3 +143,7 @@ def test_particles_left_outside_the_surface_are_said(cli, tmp_path):
     radius = proc.stderr.split("--radius ")[1].split()[0]
     proc = cli("render", pts, "-o", out, "--width", "64", "--height", "48", "-q", "--radius", radius)
     assert "warning" not in proc.stderr
+    # Far larger than the packing asks for: said too.
+    proc = cli("render", pts, "-o", out, "--width", "64", "--height", "48", "-q", "--radius", "%g" % (4 * float(radius)))
+    assert "render: warning: the radius R = %g is large for how densely the particles are packed" % (
+        4 * float(radius)) in proc.stderr
