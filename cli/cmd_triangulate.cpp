@@ -125,41 +125,26 @@ std::string given_spacing_hint(const SurfaceResult& r, const PointCloud& cloud, 
   return s;
 }
 
-/// Loops left open at most this many L across (a patch over one needs no longer edges) are
-/// gaps in the sampling rather than the surface's openings: a scan's outline or a model's real
-/// hole is many times wider (the measured ones: 3.7 L and more).
-constexpr double kNarrowLoop = 3.0;
-
-/// When loops are left open that a patch of edges at most kNarrowLoop x L spans and the fill
-/// did not try for being wider than --fill-edge-factor or longer than --fill-holes, say which
-/// settings reach them. Long thin source triangles (a CAD model's vertices) leave such gaps.
-/// (Loops within both limits stay open for the fill's other checks: a fold, a small piece.)
+/// When loops are left open that the fill did not try and a patch of edges at most
+/// kNarrowLoopWidth x L spans (SurfaceStats::narrow_loops), say which settings reach them.
 /// Empty otherwise.
 std::string narrow_loops_hint(const SurfaceResult& r, const TriangulateArgs& a) {
-  if (a.no_repair || a.fill_holes == 0) return {};
-  size_t narrow = 0, edges = 0;
-  double width = 0;
-  for (const auto& l : r.surface.open_loops)
-    if (std::isfinite(l.width) && l.width <= kNarrowLoop && (l.width > a.fill_edge_factor || l.edges > a.fill_holes)) {
-      ++narrow;
-      width = std::max(width, l.width);
-      edges = std::max(edges, l.edges);
-    }
-  if (narrow == 0) return {};
-  const double factor = std::max(a.fill_edge_factor, std::ceil(width * 10.0 + 1e-9) / 10.0);
+  const SurfaceStats::NarrowLoops& n = r.surface.narrow_loops;
+  if (n.count == 0) return {};
+  const double factor = std::max(a.fill_edge_factor, std::ceil(n.width * 10.0 + 1e-9) / 10.0);
   char which[80];
   if (r.surface.holes_left == 1)
     std::snprintf(which, sizeof which, "the loop left open is narrow (a patch across it");
-  else if (narrow == r.surface.holes_left)
-    std::snprintf(which, sizeof which, "all %zu loops left open are narrow (a patch across each", narrow);
+  else if (n.count == r.surface.holes_left)
+    std::snprintf(which, sizeof which, "all %zu loops left open are narrow (a patch across each", n.count);
   else
-    std::snprintf(which, sizeof which, "%zu of the %zu loops left open are narrow (a patch across each", narrow,
+    std::snprintf(which, sizeof which, "%zu of the %zu loops left open are narrow (a patch across each", n.count,
                   r.surface.holes_left);
   char s[400];
   std::snprintf(s, sizeof s,
                 "%s needs edges of at most %.2f x L): gaps in the sampling rather than openings; try "
                 "--fill-edge-factor %g%s (wider loops stay open)",
-                which, width, factor, edges > a.fill_holes ? (" --fill-holes " + std::to_string(edges)).c_str() : "");
+                which, n.width, factor, n.edges > a.fill_holes ? (" --fill-holes " + std::to_string(n.edges)).c_str() : "");
   return s;
 }
 

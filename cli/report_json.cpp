@@ -76,6 +76,8 @@ nlohmann::json to_json(const SurfaceStats& s) {
           {"hole_triangles", s.hole_triangles},
           {"holes_left", s.holes_left},
           {"largest_hole_left", s.largest_hole_left},
+          {"narrow_loops", {{"count", s.narrow_loops.count}, {"width_over_L", s.narrow_loops.width},
+                            {"edges", s.narrow_loops.edges}}},
           {"components_flipped", s.components_flipped},
           {"unused_points", s.unused_points},
           {"local_spacing", {{"unit", "r0"}, {"min", s.local_spacing.min}, {"p10", s.local_spacing.p10},

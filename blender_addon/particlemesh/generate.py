@@ -239,6 +239,22 @@ def uneven_spacing_warning(stats):
             f"for the longest edge; {advice}try Thin Out 2 or a larger Edge Factor")
 
 
+def narrow_holes_warning(stats, settings):
+    """A warning when holes were left open that the fill did not try for the Fill Edge Factor
+    or Fill Holes set, though a patch of short edges spans them (the library's narrow_loops:
+    at most 3 longest edges across): gaps in the sampling (a model's vertices leave such),
+    with the settings that reach them. None otherwise."""
+    count = stats.get("narrow_loops", 0)
+    if stats.get("raw") or not count:
+        return None
+    factor = max(float(settings.get("fill_edge_factor", 1.5)),
+                 math.ceil(stats.get("narrow_loop_width", 0.0) * 10.0 - 1e-9) / 10.0)
+    edges = int(stats.get("narrow_loop_edges", 0))
+    more = (f" and Fill Holes to {edges}" if edges > int(settings.get("fill_holes", 100)) else "")
+    return (f"{count} of the {stats.get('holes_left', count)} holes left open are narrow gaps in the "
+            f"sampling: set Fill Edge Factor to {factor:g}{more} to fill them")
+
+
 def volume_particles_warning(stats):
     """A warning when the library says the particles look like a volume's (the triangulation
     statistic looks_like_volume: co-normality dropped most raw triangles and loops were left

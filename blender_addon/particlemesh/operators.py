@@ -180,7 +180,8 @@ class _Generate(SourceProps, CommonProps, SmoothProps, _ModalJob):
             detail = ""
         self.report({"INFO"}, f"{obj.name}: {data.vertex_count} vertices, "
                               f"{data.triangle_count} triangles{detail}")
-        warnings = ((generate.volume_particles_warning(stats), generate.uneven_spacing_warning(stats))
+        warnings = ((generate.volume_particles_warning(stats), generate.uneven_spacing_warning(stats),
+                     generate.narrow_holes_warning(stats, settings))
                     if self.method == "TRIANGULATE" else (generate.enclosure_warning(stats),))
         for warning in warnings:
             if warning:

@@ -92,6 +92,9 @@ class pm_triangulate_stats(Structure):
         ("viewpoint_used", c_int32),
         ("rejected_shadow", c_uint64),
         ("looks_like_volume", c_int32),
+        ("narrow_loops", c_uint64),
+        ("narrow_loop_width", c_double),
+        ("narrow_loop_edges", c_uint64),
     ]
 
 

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "particlemesh/sample/shapes.h"
+#include "particlemesh/surface/reconstruct.h"
 #include "particlemesh/surface/triangulate.h"
 #include "support/test_support.h"
 
@@ -65,6 +66,31 @@ TEST(CApi, TriangulateMatchesTheCppApi) {
   ASSERT_EQ(pm_mesh_report(mesh, &rep), PM_OK);
   EXPECT_EQ(rep.triangles, nt);
   EXPECT_EQ(rep.vertices_used, nv);
+  pm_mesh_destroy(mesh);
+  pm_cloud_destroy(cloud);
+}
+
+// The appended narrow-loop statistics are the library's: loops a fill of 1 x L did not try.
+TEST(CApi, NarrowLoopsLeftOpenAreTheLibrarys) {
+  const PointCloud c = poisson_disk_sample(icosphere_mesh(5), 0.05, 1);
+  const auto pos = flat(c.positions);
+  pm_cloud* cloud = nullptr;
+  ASSERT_EQ(pm_cloud_create(pos.data(), nullptr, c.size(), &cloud), PM_OK);
+  pm_triangulate_options opt;
+  pm_triangulate_options_init(&opt);
+  opt.fill_edge_factor = 1.0;
+  pm_triangulate_stats stats{};
+  stats.struct_size = sizeof(stats);
+  pm_mesh* mesh = nullptr;
+  ASSERT_EQ(pm_triangulate(cloud, &opt, &mesh, &stats), PM_OK) << last();
+  SurfaceOptions o;
+  o.fill_edge_factor = 1.0;
+  const SurfaceResult ref = reconstruct_surface(c, o);
+  EXPECT_GT(stats.narrow_loops, 0u);
+  EXPECT_EQ(stats.narrow_loops, ref.surface.narrow_loops.count);
+  EXPECT_EQ(stats.narrow_loop_width, ref.surface.narrow_loops.width);
+  EXPECT_EQ(stats.narrow_loop_edges, ref.surface.narrow_loops.edges);
+  EXPECT_EQ(stats.holes_left, ref.surface.holes_left);
   pm_mesh_destroy(mesh);
   pm_cloud_destroy(cloud);
 }

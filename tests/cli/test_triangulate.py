@@ -204,10 +204,13 @@ def test_loops_the_settings_left_open_get_a_hint(cli, tmp_path):
     assert r["hint"].startswith("all %d loops left open are narrow" % loops), r["hint"]
     factor = r["hint"].split("try --fill-edge-factor ")[1].split()[0]
     widest = max(l["width_over_L"] for l in r["surface"]["open_loops"])
+    assert r["surface"]["narrow_loops"] == {"count": loops, "width_over_L": widest,
+                                            "edges": max(l["edges"] for l in r["surface"]["open_loops"])}
     assert 1 < widest <= float(factor) < widest + 0.1 + 1e-9
     proc = cli("triangulate", pts, "-o", out, "--report", rep, "--fill-edge-factor", factor)
     r = json.loads(rep.read_text())
     assert r["topology"]["closed"] and "hint" not in r and "hint" not in proc.stdout
+    assert r["surface"]["narrow_loops"]["count"] == 0
     proc = cli("triangulate", pts, "-o", out, "--report", rep, "--max-edge-factor", "1.5")
     r = json.loads(rep.read_text())
     assert r["topology"]["boundary_loops"] > 20

@@ -324,6 +324,31 @@ def test_volume_particles_warn_to_polygonize(pkg):
     assert surface.stats["looks_like_volume"] == 0
 
 
+def test_narrow_holes_warn_with_the_fill_that_reaches_them(pkg):
+    """Holes the fill did not try for the Fill Edge Factor set, though narrow: the library
+    counts them (narrow_loops, their widest and longest), the warning names the settings, and
+    those settings close the sphere; at the defaults, no warning."""
+    x = np.random.default_rng(3).normal(size=(40000, 3))
+    x /= np.linalg.norm(x, axis=1)[:, None]
+    p = x[pkg.pm.thin(x, 0.05)].astype(np.float32)  # a Poisson-disk sampling: not on a grid
+    assert pkg.generate.narrow_holes_warning(pkg.generate.run("TRIANGULATE", pkg.generate.Particles(p), {}).stats,
+                                             {}) is None
+    data = pkg.generate.run("TRIANGULATE", pkg.generate.Particles(p), {"fill_edge_factor": 1.0})
+    s = data.stats
+    assert s["holes_left"] > 3 and s["narrow_loops"] == s["holes_left"]
+    assert 1.0 < s["narrow_loop_width"] <= 3.0 and s["narrow_loop_edges"] >= 3
+    warning = pkg.generate.narrow_holes_warning(s, {"fill_edge_factor": 1.0, "fill_holes": 100})
+    assert warning and warning.startswith(f"{s['narrow_loops']} of the {s['holes_left']} holes left open")
+    factor = float(warning.split("Fill Edge Factor to ")[1].split()[0])
+    assert s["narrow_loop_width"] <= factor < s["narrow_loop_width"] + 0.1 + 1e-9
+    assert "Fill Holes" not in warning
+    assert "Fill Holes to 2" in pkg.generate.narrow_holes_warning({**s, "narrow_loop_edges": 2}, {"fill_holes": 1})
+    filled = pkg.generate.run("TRIANGULATE", pkg.generate.Particles(p), {"fill_edge_factor": factor})
+    assert filled.stats["holes_left"] == 0 and filled.stats["narrow_loops"] == 0
+    assert pkg.generate.narrow_holes_warning(filled.stats, {"fill_edge_factor": factor}) is None
+    assert pkg.pm.topology(filled)["closed"]
+
+
 def test_generate_raw_is_wound_by_the_normals(pkg):
     p = sphere(2000)
     out = pkg.generate.run("TRIANGULATE", pkg.generate.Particles(p, normals=p), {"raw": True})

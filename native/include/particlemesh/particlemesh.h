@@ -170,6 +170,12 @@ typedef struct pm_triangulate_stats {
   int32_t looks_like_volume; /**< 1: co-normality dropped over 35 % of the raw triangles and
                                   loops were left open: the particles probably fill a volume
                                   (pm_polygonize meshes those) rather than sample a surface */
+  /* -- appended -- */
+  uint64_t narrow_loops;    /**< loops left open at most 3 L across that the fill did not try
+                                 (wider than fill_edge_factor or longer than fill_holes): gaps
+                                 in the sampling, not openings */
+  double narrow_loop_width; /**< the widest of them, in L: fill_edge_factor >= it reaches them all */
+  uint64_t narrow_loop_edges; /**< the longest of them: fill_holes >= it reaches them all */
 } pm_triangulate_stats;
 
 PM_EXPORT void pm_triangulate_options_init(pm_triangulate_options* options);

@@ -101,6 +101,9 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
       s.viewpoint_used = r.surface.viewpoint_used;
       s.rejected_shadow = r.surface.rejected_shadow;
       s.looks_like_volume = r.surface.looks_like_volume;
+      s.narrow_loops = r.surface.narrow_loops.count;
+      s.narrow_loop_width = r.surface.narrow_loops.width;
+      s.narrow_loop_edges = r.surface.narrow_loops.edges;
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();

@@ -179,7 +179,15 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     st.largest_hole_left = bs.largest_hole_left;
     st.components_flipped = bs.components_flipped;
     st.unused_points = bs.unused_points;
-    for (const auto& [edges, width] : bs.open_loops) st.open_loops.push_back({edges, width});
+    for (const auto& [edges, width] : bs.open_loops) {
+      st.open_loops.push_back({edges, width});
+      if (options.repair && options.fill_holes > 0 && std::isfinite(width) && width <= kNarrowLoopWidth &&
+          (width > options.fill_edge_factor || edges > options.fill_holes)) {
+        ++st.narrow_loops.count;
+        st.narrow_loops.width = std::max(st.narrow_loops.width, width);
+        st.narrow_loops.edges = std::max(st.narrow_loops.edges, edges);
+      }
+    }
     st.holes_left_edges = std::move(bs.holes_left_edges);
     tracker.check();
     t0 = Clock::now();

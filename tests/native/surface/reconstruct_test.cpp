@@ -422,6 +422,49 @@ TEST(ReconstructSurface, OpenDiskKeepsItsOneBoundary) {
   }
 }
 
+// Loops the fill did not try for the limits set (too wide for fill_edge_factor, too long for
+// fill_holes) and a patch of short edges spans are counted as narrow, with the limits that
+// reach them; those limits close the sphere. The disk's rim, an opening, is never narrow.
+TEST(ReconstructSurface, NarrowLoopsLeftOpenSayWhichFillReachesThem) {
+  const PointCloud sphere = poisson_disk_sample(icosphere_mesh(5), 0.05, 1);
+  SurfaceOptions o;
+  o.fill_edge_factor = 1.0;
+  const SurfaceResult tight = reconstruct_surface(sphere, o);
+  const SurfaceStats::NarrowLoops& n = tight.surface.narrow_loops;
+  ASSERT_GT(tight.surface.holes_left, 5u);
+  EXPECT_EQ(n.count, tight.surface.holes_left);
+  double widest = 0;
+  size_t longest = 0;
+  for (const auto& l : tight.surface.open_loops) {
+    widest = std::max(widest, l.width);
+    longest = std::max(longest, l.edges);
+  }
+  EXPECT_EQ(n.width, widest);
+  EXPECT_EQ(n.edges, longest);
+  EXPECT_GT(n.width, 1.0);
+  EXPECT_LE(n.width, kNarrowLoopWidth);
+  o.fill_edge_factor = std::ceil(n.width * 10) / 10;  // (as the command line's hint rounds it)
+  const SurfaceResult reached = reconstruct_surface(sphere, o);
+  EXPECT_EQ(reached.surface.holes_left, 0u);
+  EXPECT_EQ(reached.surface.narrow_loops.count, 0u);
+  EXPECT_TRUE(topology_report(reached.mesh).closed);
+  // Loops longer than fill_holes count whatever their width; without repair nothing does.
+  SurfaceOptions few;
+  few.fill_holes = 3;
+  const SurfaceResult small = reconstruct_surface(sphere, few);
+  EXPECT_GT(small.surface.narrow_loops.count, 0u);
+  EXPECT_GT(small.surface.narrow_loops.edges, 3u);
+  few.repair = false;
+  EXPECT_EQ(reconstruct_surface(sphere, few).surface.narrow_loops.count, 0u);
+  TriMesh disk;
+  disk.positions.push_back({0, 0, 0});
+  for (int i = 0; i < 256; ++i) disk.positions.push_back({std::cos(i * 2 * std::numbers::pi / 256), std::sin(i * 2 * std::numbers::pi / 256), 0});
+  for (uint32_t i = 0; i < 256; ++i) disk.triangles.push_back({0, 1 + i, 1 + (i + 1) % 256});
+  const SurfaceResult open = reconstruct_surface(poisson_disk_sample(disk, 0.04, 2), SurfaceOptions{});
+  EXPECT_EQ(open.surface.holes_left, 1u);
+  EXPECT_EQ(open.surface.narrow_loops.count, 0u);
+}
+
 TEST(ReconstructSurface, SmallIsolatedPatchesAreNotCappedIntoPillows) {
   // A flat disk (it sets the spacing, r0 ~ 0.04) and, far from it, patches of a few points
   // each: two triangles on a square (the flat rows of a depth scan), a pentagon around a

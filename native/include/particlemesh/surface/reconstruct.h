@@ -82,6 +82,11 @@ struct SurfaceOptions : TriangulateOptions {
   Vec3 viewpoint;
 };
 
+/// Loops left open at most this many L across (a patch over one needs no longer edges) are
+/// gaps in the sampling rather than the surface's openings: a scan's outline or a model's real
+/// holes are many times wider (3.7 L and more on the shared scans and models).
+inline constexpr double kNarrowLoopWidth = 3.0;
+
 struct SurfaceStats {
   bool normals_estimated = false;
   size_t candidates = 0;          ///< raw triangles that passed co-normality
@@ -102,6 +107,17 @@ struct SurfaceStats {
     double width = 0;
   };
   std::vector<OpenLoop> open_loops;
+  /// Of those, the loops at most kNarrowLoopWidth x L across that the fill did not try for being
+  /// wider than fill_edge_factor or longer than fill_holes: gaps in the sampling (a model's
+  /// vertices, with long thin triangles between them, leave such), not the surface's openings.
+  /// `width` and `edges` are their largest: fill_edge_factor >= width and fill_holes >= edges
+  /// let the fill try every one of them. All 0 without repair or with fill_holes 0.
+  struct NarrowLoops {
+    size_t count = 0;
+    double width = 0;
+    size_t edges = 0;
+  };
+  NarrowLoops narrow_loops;
   /// The edges of every loop left open, ascending: the holes left by size (a scan's sampling
   /// gaps are loops of a few edges, its real openings and outlines long ones).
   std::vector<size_t> holes_left_edges;
