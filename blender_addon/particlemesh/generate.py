@@ -251,8 +251,12 @@ def narrow_holes_warning(stats, settings):
                  math.ceil(stats.get("narrow_loop_width", 0.0) * 10.0 - 1e-9) / 10.0)
     edges = int(stats.get("narrow_loop_edges", 0))
     more = (f" and Fill Holes to {edges}" if edges > int(settings.get("fill_holes", 100)) else "")
-    return (f"{count} of the {stats.get('holes_left', count)} holes left open are narrow gaps in the "
-            f"sampling: set Fill Edge Factor to {factor:g}{more} to fill them")
+    left = stats.get("holes_left", count)
+    which = ("the hole left open is a narrow gap" if left == 1 else
+             f"all {count} holes left open are narrow gaps" if count == left else
+             f"{count} of the {left} holes left open are narrow gaps")
+    return (f"{which} in the sampling: set Fill Edge Factor to {factor:g}{more} to fill "
+            f"{'it' if left == 1 else 'them'}")
 
 
 def volume_particles_warning(stats):

@@ -338,7 +338,11 @@ def test_narrow_holes_warn_with_the_fill_that_reaches_them(pkg):
     assert s["holes_left"] > 3 and s["narrow_loops"] == s["holes_left"]
     assert 1.0 < s["narrow_loop_width"] <= 3.0 and s["narrow_loop_edges"] >= 3
     warning = pkg.generate.narrow_holes_warning(s, {"fill_edge_factor": 1.0, "fill_holes": 100})
-    assert warning and warning.startswith(f"{s['narrow_loops']} of the {s['holes_left']} holes left open")
+    assert warning and warning.startswith(f"all {s['holes_left']} holes left open are narrow gaps in the sampling")
+    assert pkg.generate.narrow_holes_warning({**s, "holes_left": s["narrow_loops"] + 2}, {}).startswith(
+        f"{s['narrow_loops']} of the {s['narrow_loops'] + 2} holes")
+    assert pkg.generate.narrow_holes_warning({**s, "holes_left": 1, "narrow_loops": 1}, {}).startswith(
+        "the hole left open is a narrow gap")
     factor = float(warning.split("Fill Edge Factor to ")[1].split()[0])
     assert s["narrow_loop_width"] <= factor < s["narrow_loop_width"] + 0.1 + 1e-9
     assert "Fill Holes" not in warning
