@@ -1,4 +1,5 @@
-// Fuzz target: pm_polygonize_ex (issue 7) fed arbitrary arrays and parameter structs:
+// Fuzz target: pm_polygonize_ex and pm_default_radius fed arbitrary arrays and
+// parameter structs:
 // particles (NaN/Inf, duplicates, far apart), per-particle radii and strengths (<= 0, NaN,
 // huge), every option field (kernel, radius, threshold, cell size, threads, the grid budget,
 // struct_size, anisotropic kernels, dropping pieces, Taubin smoothing; a tile's flags,
@@ -122,6 +123,17 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   const bool ranged = (opt.flags & PM_POLYGONIZE_CELL_RANGE) && opt.struct_size >= sizeof(opt) && !(size_mode & 32);
 
+  // The default radius alone (pm_default_radius): on success what pm_polygonize_ex resolves
+  // for the same cloud, strengths and kernel (checked below); on failure nothing written.
+  double default_radius = -7;
+  const pm_status ds = pm_default_radius(cloud, strengths.empty() ? nullptr : strengths.data(), opt.kernel,
+                                         opt.threads, &default_radius);
+  check_status(ds);
+  PM_FUZZ_CHECK(ds == PM_OK ? default_radius > 0 && std::isfinite(default_radius) : default_radius == -7);
+  const bool same_default = ds == PM_OK && radii.empty() && opt.radius == 0 && !opt.anisotropic && opt.flags == 0 &&
+                            opt.struct_size == sizeof(opt) && !(size_mode & 32) && !(size_mode & 64) &&
+                            stats.struct_size == sizeof(stats);
+
   pm_mesh* mesh = reinterpret_cast<pm_mesh*>(0x2);
   s = pm_polygonize_ex(cloud, radii.empty() ? nullptr : radii.data(), strengths.empty() ? nullptr : strengths.data(),
                        (size_mode & 32) ? nullptr : &opt, &mesh, (size_mode & 64) ? nullptr : &stats);
@@ -148,6 +160,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (!(size_mode & 64) && stats.struct_size == sizeof(stats) && !(size_mode & 32) &&
         opt.struct_size == sizeof(opt))
       PM_FUZZ_CHECK(stats.grid_bytes <= opt.max_grid_bytes && stats.triangles == nt);
+    if (same_default) PM_FUZZ_CHECK(stats.radius == default_radius);
     pm_mesh_destroy(mesh);
   } else {
     PM_FUZZ_CHECK(mesh == reinterpret_cast<pm_mesh*>(0x2));

@@ -156,7 +156,11 @@ double lattice_face_field(Kernel kernel, double radius, const AnisotropyOptions&
   return sum / (kSamples * kSamples);
 }
 
-FieldAtParticles field_at_particles(const ParticleField& f) {
+FieldAtParticles field_at_particles(const ParticleField& f) { return detail::field_at_particles(f, f.threshold()); }
+
+namespace detail {
+
+FieldAtParticles field_at_particles(const ParticleField& f, double threshold) {
   FieldAtParticles r;
   const size_t n = f.size();
   if (n == 0) return r;
@@ -184,7 +188,7 @@ FieldAtParticles field_at_particles(const ParticleField& f) {
     }
   });
   size_t inside = 0;
-  for (double v : level) inside += v >= f.threshold();
+  for (double v : level) inside += v >= threshold;
   r.enclosed_fraction = double(inside) / double(level.size());
   if (spheres) {
     const double w = p.strengths.empty() ? 1.0 : median(p.strengths);
@@ -209,8 +213,6 @@ FieldAtParticles field_at_particles(const ParticleField& f) {
   }
   return r;
 }
-
-namespace detail {
 
 double lattice_ratio_of(Kernel kernel, double level) {
   // lattice_field(kernel, x, 1) grows with x (from 1: the particle alone, below one spacing).
@@ -488,9 +490,12 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
   }
   if (need_radius && !aniso) {
     // The default radius from the packing (FieldParams::radius): built again at the radius
-    // the field at the particles asks for, when too many of them are outside the surface.
+    // the field at the particles asks for, when too many of them are outside the surface of
+    // the default threshold (whatever threshold is given: the radius is the same for all).
     tracker.check();
-    const FieldAtParticles at = field_at_particles(f);
+    const double w = params.strengths.empty() ? 1.0 : median(params.strengths);
+    const FieldAtParticles at =
+        field_at_particles(f, kDefaultThresholdFraction * w * lattice_field(params.kernel, kDefaultRadiusFactor, 1.0));
     const double packed = at.density_radius;
     if (at.enclosed_fraction < kMinEnclosedAtTwoSpacings && packed > f.params_.radius * (1.0 + kPackingTolerance)) {
       FieldParams resolved = params;

@@ -28,6 +28,10 @@ struct FieldBuilder {
                                               ProgressTracker& tracker);
 };
 
+/// field_at_particles with the enclosed share measured against `threshold` instead of the
+/// field's own (the default radius is decided at the default threshold, whatever T is given).
+FieldAtParticles field_at_particles(const ParticleField& f, double threshold);
+
 /// The radius / spacing ratio x at which a particle deep inside a simple cubic lattice sees
 /// the field `level` (lattice_field(kernel, x, 1) = level), within [1, kMaxCalibrationRatio]:
 /// what a field level at the particles says about how densely they are packed.

@@ -228,6 +228,9 @@ TEST(ParticleField, FieldAtTheParticlesSaysHowTheyArePacked) {
   EXPECT_EQ(d.spacing(), spacing);
   EXPECT_EQ(d.params().radius, at.density_radius);
   EXPECT_EQ(field_at_particles(d).enclosed_fraction, again.enclosed_fraction);
+  // The default radius does not depend on a given threshold (it is decided at the default).
+  for (double t : {0.5, 3.0, 9.0})
+    EXPECT_EQ(ParticleField(random, FieldParams{Kernel::Wyvill, 0, t, {}, {}, {}}).params().radius, d.params().radius);
   // Per-particle radii and anisotropic kernels suggest no radius; the share is still measured.
   FieldParams radii;
   radii.radii.assign(random.size(), f.params().radius);

@@ -118,10 +118,11 @@ struct FieldParams {
   Kernel kernel = Kernel::Wyvill;
   /// R for every particle, world units (not relative). 0 = the default: kDefaultRadiusFactor
   /// x the median spacing; with spherical kernels, when that leaves more than a tenth of the
-  /// particles outside the surface (field_at_particles), FieldAtParticles::density_radius of
-  /// that field instead, if larger by over 2 % (the field is then built again at it): up to 2x
-  /// larger for irregularly packed particles (SPH frames in motion), unchanged for packed
-  /// ones. Ignored when `radii` is given.
+  /// particles outside the surface of the default threshold (field_at_particles; whatever
+  /// threshold is given, so that the radius does not depend on it),
+  /// FieldAtParticles::density_radius of that field instead, if larger by over 2 % (the field
+  /// is then built again at it): up to 2x larger for irregularly packed particles (SPH frames
+  /// in motion), unchanged for packed ones. Ignored when `radii` is given.
   double radius = 0;
   /// T > 0, in the units of F (sums of kernel values times strengths). 0 = the default:
   /// spherical kernels: kDefaultThresholdFraction x median strength x lattice_field(kernel,
