@@ -74,12 +74,14 @@ inline std::string radius_warning(double enclosed_fraction, double density_radiu
   char w[500];
   if (!(enclosed_fraction < kFewEnclosed)) {
     // The other way round: a radius so large that every detail of the particles smaller than
-    // it melts into one smooth blob (density_radius reads at most 8 spacings: at R / 4).
+    // it melts into one smooth blob (density_radius reads at most kMaxCalibrationRatio
+    // spacings: then it is R x 2 / 8, and the radius to try may be smaller still).
     if (!(density_radius > 0 && density_radius * kLargeRadius < radius)) return {};
+    const bool at_most = density_radius * (kMaxCalibrationRatio / kDefaultRadiusFactor) <= radius * (1.0 + 1e-6);
     std::snprintf(w, sizeof w,
                   "the radius R = %g is large for how densely the particles are packed (their packing suggests "
                   "--radius %.3g%s): every detail smaller than about R melts into one smooth blob",
-                  radius, density_radius, density_radius * 4.0 <= radius * (1.0 + 1e-6) ? " or less" : "");
+                  radius, density_radius, at_most ? " or less" : "");
     return w;
   }
   int n = std::snprintf(w, sizeof w,

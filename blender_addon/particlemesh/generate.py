@@ -248,7 +248,7 @@ def narrow_holes_warning(stats, settings):
     if stats.get("raw") or not count:
         return None
     factor = max(float(settings.get("fill_edge_factor", 1.5)),
-                 math.ceil(stats.get("narrow_loop_width", 0.0) * 10.0 - 1e-9) / 10.0)
+                 math.ceil(stats.get("narrow_loop_width", 0.0) * 10.0 + 1e-9) / 10.0)  # as the CLI's hint
     edges = int(stats.get("narrow_loop_edges", 0))
     more = (f" and Fill Holes to {edges}" if edges > int(settings.get("fill_holes", 100)) else "")
     left = stats.get("holes_left", count)
@@ -288,9 +288,9 @@ def enclosure_warning(stats):
     if share is None or share >= 0.5:
         return None
     advice = (f"; their packing suggests a Fixed radius of {suggested:.3g}"
-              if suggested > stats.get("radius", 0.0) else "; raise the radius or lower the threshold")
+              if suggested > radius else "; raise the radius or lower the threshold")
     return (f"the surface encloses only {100 * share:.0f}% of the particles: the radius "
-            f"{stats.get('radius', 0.0):.4g} is small for how sparsely they are packed{advice}")
+            f"{radius:.4g} is small for how sparsely they are packed{advice}")
 
 
 def polygonize_radii(particles, settings):

@@ -257,7 +257,7 @@ def polygonize(positions, radius=None, threshold=None, kernel=None, cell=None, *
     field's gradient (no vertex when the field stays below the threshold).
 
     positions: (N, 3) or Points; radius R (None = default_radius: 2 x the median spacing, or
-    more for particles that leaves outside the surface) or radii, one per
+    more when that leaves over a tenth of the particles outside the surface) or radii, one per
     particle; strengths w_i (None = 1; |w_i| <= 1e30); threshold T (None = half the field
     inside evenly packed particles); kernel "wyvill", "poly4", "poly6" or "blinn"; cell the grid cell (the C
     field cell_size; None = R / 4); attributes {name: (N, C)} interpolated onto the vertices

@@ -170,7 +170,7 @@ FieldAtParticles field_at_particles(const ParticleField& f, double threshold) {
   // the cost bounded (microseconds to milliseconds).
   const size_t stride = (n + 4095) / 4096;
   std::vector<double> level((n + stride - 1) / stride), offset(level.size(), kInf);
-  detail::parallel_blocks(level.size(), 64, [&](size_t b, size_t e) {
+  parallel_blocks(level.size(), 64, [&](size_t b, size_t e) {
     for (size_t k = b; k < e; ++k) {
       const Vec3 x = f.position(k * stride);
       level[k] = f.value(x);
@@ -207,7 +207,7 @@ FieldAtParticles field_at_particles(const ParticleField& f, double threshold) {
         std::nth_element(level.begin(), level.begin() + std::ptrdiff_t(q), level.end());
         packed = level[q];
       }
-      const double x = detail::lattice_ratio_of(p.kernel, packed / w);
+      const double x = lattice_ratio_of(p.kernel, packed / w);
       r.density_radius = kDefaultRadiusFactor * p.radius / x;
     }
   }
