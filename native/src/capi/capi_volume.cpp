@@ -162,6 +162,9 @@ pm_status pm_default_radius(const pm_cloud* cloud, const double* strengths, int3
     require(out_radius, "out_radius");
     FieldParams p;
     p.kernel = to_kernel(kernel);
+    // The default radius does not depend on the threshold (FieldParams::radius): any given one
+    // spares the default's need of a positive median strength, as pm_polygonize with a threshold.
+    p.threshold = 1;
     if (strengths) p.strengths.assign(strengths, strengths + cloud->cloud.size());
     const double r = ParticleField(cloud->cloud, p, threads).params().radius;
     *out_radius = r;
