@@ -23,7 +23,7 @@ lib/ folder, at $PARTICLEMESH_LIBRARY, or on the system's library path. It never
 the Blender add-on carries this same package."""
 
 import ctypes
-from ctypes import c_double, c_float, c_size_t, c_uint32
+from ctypes import c_double, c_float, c_size_t, c_uint32, c_uint64
 
 import numpy as np
 
@@ -37,7 +37,7 @@ __all__ = [
     "read_points", "read_mesh", "write_mesh", "triangulate", "polygonize", "polygonize_attributes",
     "smooth", "Smoother",
     "topology",
-    "estimate_spacing", "thin", "triangle_edges", "default_radius", "lattice_field", "defaults", "version",
+    "estimate_spacing", "thin", "triangle_edges", "ray_crossings", "default_radius", "lattice_field", "defaults", "version",
     "library_path", "pcl_bridge_path", "Mesh", "Points", "Progress", "Error", "CancelledError",
     "LibraryNotFoundError", "PclBridgeNotFoundError",
 ]
@@ -549,6 +549,24 @@ def triangle_edges(triangles, vertex_count, threads=0):
                                     ptr(edges, c_uint32), len(edges), ptr(corners, c_uint32),
                                     ctypes.byref(count)))
     return edges[:count.value], corners
+
+
+def ray_crossings(mesh, points, threads=0):
+    """Per point, how many of the mesh's triangles the ray from it straight up (+z) crosses:
+    (N,) uint64. A point is inside a closed surface when its count is odd, whatever the
+    winding. Watertight (a ray through an edge or vertex counts once, each edge's test
+    evaluated from its lower-numbered end), so meshes cut from one surface, their vertices
+    numbered in the same relative order, give counts that add up to the whole one's."""
+    lib = _library.load()
+    q = vec3(points, "points")
+    handle = new_mesh(lib, mesh, with_attributes=False)
+    try:
+        out = np.zeros(len(q), dtype=np.uint64)
+        lib.check(lib.pm_mesh_ray_crossings(handle, ptr(q, c_double), len(q), int(threads),
+                                            ptr(out, c_uint64)))
+    finally:
+        lib.pm_mesh_destroy(handle)
+    return out
 
 
 def default_radius(positions, strengths=None, kernel=None, threads=0):

@@ -290,6 +290,7 @@ FUNCTIONS = {
     "pm_mesh_report": (pm_status, [pm_mesh_p, POINTER(pm_topology_report)]),
     "pm_triangle_edges": (pm_status, [_u32p, c_size_t, c_size_t, c_int32, _u32p, c_size_t, _u32p,
                                       _sizep]),
+    "pm_mesh_ray_crossings": (pm_status, [pm_mesh_p, _f64p, c_size_t, c_int32, POINTER(c_uint64)]),
     # per-vertex attributes
     "pm_mesh_set_attribute": (pm_status, [pm_mesh_p, c_char_p, c_int32, _f32p, c_size_t]),
     "pm_mesh_get_attribute_components": (pm_status, [pm_mesh_p, c_char_p, _i32p]),

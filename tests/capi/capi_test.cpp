@@ -358,6 +358,25 @@ TEST(CApi, TriangleEdgesNumberEachEdgeOnceAndEveryCorner) {
   EXPECT_EQ(count, 0u);
 }
 
+// A point inside a closed tetrahedron crosses it once, whatever its winding; one below it
+// twice (also through its apex's vertex); beside it never. Counts, not a yes or no, so that
+// pieces of one surface in different processes add up.
+TEST(CApi, RayCrossingsCountEveryTriangleTheRayCrosses) {
+  const double p[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+  const int32_t tri[] = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
+  pm_mesh* mesh = nullptr;
+  ASSERT_EQ(pm_mesh_create(p, 4, tri, 4, nullptr, &mesh), PM_OK) << last();
+  const double q[] = {0.2, 0.2, 0.2, 0.2, 0.2, -1, 0, 0, -1, 2, 2, 0, 0.2, 0.2, 5};
+  uint64_t count[5] = {9, 9, 9, 9, 9};
+  ASSERT_EQ(pm_mesh_ray_crossings(mesh, q, 5, 0, count), PM_OK) << last();
+  EXPECT_EQ(std::vector<uint64_t>(count, count + 5), (std::vector<uint64_t>{1, 2, 2, 0, 0}));
+  const double nan_point[] = {0, 0, 0, 0, NAN, 0};
+  EXPECT_EQ(pm_mesh_ray_crossings(mesh, nan_point, 2, 0, count), PM_STATUS_INVALID_INPUT);
+  EXPECT_NE(last().find("point 1 is not finite"), std::string::npos) << last();
+  EXPECT_EQ(pm_mesh_ray_crossings(mesh, nullptr, 0, 0, nullptr), PM_OK) << last();
+  pm_mesh_destroy(mesh);
+}
+
 TEST(CApi, MisuseGivesStatusAndMessageAndLeavesOutputsAlone) {
   const double pts[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
   pm_cloud* sentinel = reinterpret_cast<pm_cloud*>(0x1);

@@ -312,6 +312,47 @@ def test_triangulate_tiled_from_a_loader(pm, pmd, client, torus):
     assert sorted(map(tuple, tiled.vertices)) == sorted(map(tuple, pts.positions))
 
 
+def test_triangulate_tiled_turns_a_cavitys_wall_into_it_as_one_machine(pm, pmd, client):
+    # A hollow ball with a marble in its cavity, every surface cut by the tiles: the cavity's
+    # wall must face into the cavity (negative volume) and the marble out, as one machine
+    # orients them. The tiles hold the enclosing surfaces' triangles, so which part lies
+    # inside which is counted on them (the rays' crossings added up with the seams').
+    pts = np.concatenate([fibonacci_sphere(12000), fibonacci_sphere(5880, 0.7),
+                          fibonacci_sphere(1080, 0.3) + [0.1, 0, 0]])
+    parts = [(0, 12000), (12000, 17880), (17880, len(pts))]
+    one = pm.triangulate(pts)
+    ref = pm.topology(one)
+    assert ref["closed_components"] == 3 and ref["outward"]
+
+    def faces_as_one_machine(tiled):
+        top = pm.topology(tiled)
+        for key in ("closed", "manifold", "consistently_oriented", "outward", "closed_components"):
+            assert top[key] == ref[key], (key, top, tiled.stats)
+        dots = np.einsum("ij,ij->i", tiled.normals, one.normals)
+        for a, b in parts:  # the cavity's wall too
+            assert np.median(dots[a:b]) > 0.99, (a, b)
+        assert tiled.stats["nested_components"] == 2  # the wall (depth 1), the marble (2)
+        assert tiled.stats["nesting_tests"] == 3
+
+    faces_as_one_machine(pmd.triangulate_tiled(client, pts, tiles=(2, 2, 1)))
+    # From a loader whose ids are not in the cloud's order: the tiles number the triangles
+    # they count by final id, as the stitched surface does.
+    perm = np.random.default_rng(5).permutation(len(pts))
+    inverse = np.argsort(perm)  # particle perm[j] is vertex j: particle i is vertex inverse[i]
+
+    def loader(lo, hi):
+        inside = np.flatnonzero(((pts >= lo) & (pts <= hi)).all(axis=1))
+        return {"positions": pts[inside], "ids": inverse[inside]}
+
+    tiled = pmd.triangulate_tiled(client, loader, tiles=(1, 2, 2), bounds=(pts.min(axis=0), pts.max(axis=0)),
+                                  spacing=one.stats["spacing"])
+    assert np.array_equal(tiled.vertices, pts[perm])
+    # Back in the cloud's order, so that the normals compare with one machine's.
+    back = pm.Mesh(pts, perm[tiled.triangles], tiled.normals[inverse])
+    back.stats = tiled.stats
+    faces_as_one_machine(back)
+
+
 def test_a_cluster_started_as_the_docs_say(pm, pmd, tmp_path):
     """`dask scheduler` and `dask worker` (docs/distributed.md), the package on the worker's
     PYTHONPATH: a frame and a tiled call run there."""

@@ -545,6 +545,33 @@ def test_triangle_edges_number_every_corner(pm):
         pm.triangle_edges(np.array([[0, 1, 2000]]), 2000)
 
 
+def test_ray_crossings_are_odd_inside_a_closed_surface_whatever_its_winding(pm):
+    mesh = pm.triangulate(fibonacci_sphere(2000))
+    rng = np.random.default_rng(3)
+    q = rng.uniform(-1.5, 1.5, (500, 3))
+    r = np.linalg.norm(q, axis=1)
+    count = pm.ray_crossings(mesh, q)
+    assert count.dtype == np.uint64 and count.shape == (500,)
+    assert np.all(count[r < 0.95] == 1)  # inside: the ray leaves once
+    assert np.all(count[r > 1.05] % 2 == 0) and np.any(count[r > 1.05] == 2)
+    turned = pm.Mesh(mesh.vertices, mesh.triangles[:, ::-1])
+    np.testing.assert_array_equal(pm.ray_crossings(turned, q, threads=1), count)
+    # Two halves, each over its own vertices in the whole one's order, add up to it.
+    upper = mesh.vertices[mesh.triangles].mean(axis=1)[:, 2] > 0.1
+    halves = []
+    for keep in (upper, ~upper):
+        t = mesh.triangles[keep]
+        v = np.unique(t)
+        halves.append(pm.ray_crossings(pm.Mesh(mesh.vertices[v], np.searchsorted(v, t)), q))
+    np.testing.assert_array_equal(halves[0] + halves[1], count)
+    with pytest.raises(pm.Error, match="point 1 is not finite") as e:
+        pm.ray_crossings(mesh, [[0, 0, 0], [0, np.nan, 0]])
+    assert e.value.status == pm.STATUS_INVALID_INPUT
+    with pytest.raises(pm.Error, match="refers to vertex 2000 of 2000"):
+        pm.ray_crossings(pm.Mesh(mesh.vertices, np.array([[0, 1, 2000]])), q)
+    assert len(pm.ray_crossings(mesh, np.zeros((0, 3)))) == 0
+
+
 def test_index_arrays_name_the_index_as_passed(pm):
     # The C ABI takes unsigned (or 32-bit) indices: -1 and 2^32 must be named as passed, not
     # as their 32-bit wraps (4294967295, 0), with the triangle and the corner that hold them.

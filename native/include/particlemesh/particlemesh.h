@@ -238,6 +238,15 @@ PM_EXPORT pm_status pm_triangle_edges(const uint32_t* triangles, size_t triangle
                                       int32_t threads, uint32_t* out_edges, size_t edge_capacity,
                                       uint32_t* out_corner_edges, size_t* out_edge_count);
 
+/** Per point (3 doubles each), how many of the mesh's triangles the ray from it straight up
+ *  (+z) crosses, into out_crossings (point_count values): a point lies inside a closed surface
+ *  when its count is odd, whatever the winding. Watertight: a ray through an edge or a vertex
+ *  is counted once, each edge's test evaluated from its lower-numbered end, so each triangle's
+ *  share depends on it alone; meshes cut from one surface, their vertices numbered in the same
+ *  relative order, give counts that add up to the whole one's. `threads`: 0 = all. */
+PM_EXPORT pm_status pm_mesh_ray_crossings(const pm_mesh* mesh, const double* points, size_t point_count,
+                                          int32_t threads, uint64_t* out_crossings);
+
 /* ---- per-vertex attributes ---------------------------------------------------------- */
 
 /* Named float channels per vertex (colour, velocity, radius, ...): `components` floats per

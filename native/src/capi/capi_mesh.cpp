@@ -12,6 +12,7 @@
 #include "mesh/edges_impl.h"
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/edges.h"
+#include "particlemesh/mesh/ray_crossings.h"
 #include "particlemesh/mesh/topology_report.h"
 
 using namespace particlemesh;
@@ -189,6 +190,21 @@ pm_status pm_triangle_edges(const uint32_t* triangles, size_t triangle_count, si
                                                                " is less than the " + std::to_string(count) + " edges");
                                              return out_edges;
                                            });
+  });
+}
+
+pm_status pm_mesh_ray_crossings(const pm_mesh* mesh, const double* points, size_t point_count, int32_t threads,
+                                uint64_t* out_crossings) {
+  return guarded([&] {
+    require(mesh, "mesh");
+    if (point_count > 0) {
+      require(points, "points");
+      require(out_crossings, "out_crossings");
+    }
+    std::vector<Vec3> q(point_count);
+    for (size_t i = 0; i < point_count; ++i) q[i] = {points[3 * i], points[3 * i + 1], points[3 * i + 2]};
+    const std::vector<uint64_t> counts = ray_crossings(mesh->mesh, q, threads);
+    std::copy(counts.begin(), counts.end(), out_crossings);
   });
 }
 

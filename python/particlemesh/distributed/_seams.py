@@ -13,6 +13,8 @@ from collections import defaultdict
 
 import numpy as np
 
+from .. import Mesh, ray_crossings
+
 
 class UnionFind:
     """Disjoint sets over 0..n-1 with a parity per element relative to its root (for
@@ -336,36 +338,94 @@ class Stitch:
         self.loops, self.left = loops, left
         return left
 
-    def outward(self, volume, is_open, top_z, top_nz):
-        """Turn each component outward: per piece (tile components, joined by the seam and fill
-        triangles) the final sign (+1 or -1 against the tile's own winding). A closed
-        component encloses positive volume; an open one faces up (+z) at its highest particle.
-        volume, is_open, top_z, top_nz: per piece, as the tiles wound them."""
-        sign = np.where(self.flip, -1.0, 1.0)
-        volume = volume * sign
-        top_nz = top_nz * sign
+    def join(self, is_open):
+        """The components: pieces joined by the seam and fill triangles (self.root, per piece
+        its component's first piece) and whether each is open (self.comp_open, per root): a
+        tile saw a real opening in one of its pieces, or a loop here stayed open. is_open: per
+        piece."""
         is_open = is_open.copy()
-        extra = np.concatenate([self.stitched, self.fills])
-        if len(extra):
-            p = self.pos[extra]
-            det = np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])) / 6.0
-            volume += np.bincount(self.piece[extra[:, 0]], weights=det, minlength=self.n_pieces)
+        self.extra = np.concatenate([self.stitched, self.fills])
         for loop in self.left:
             is_open[self.piece[loop]] = True
         joined = UnionFind(self.n_pieces)
-        for tri in extra.tolist():
+        for tri in self.extra.tolist():
             ps = self.piece[tri]
             joined.union(int(ps[0]), int(ps[1]))
             joined.union(int(ps[0]), int(ps[2]))
-        root = np.array([joined.find(i) for i in range(self.n_pieces)], dtype=np.int64)
+        self.root = np.array([joined.find(i) for i in range(self.n_pieces)], dtype=np.int64)
+        self.comp_open = np.bincount(self.root, weights=is_open, minlength=self.n_pieces) > 0
+        return self.root
+
+    def nesting_pairs(self, box_lo, box_hi, query):
+        """Which closed components may lie inside which, as the library's nesting test pairs
+        them (the enclosing one's box holds the other's), with each inner one's point (its
+        first piece's, see _piece_boxes; else a corner of its seam triangles): {outer root:
+        (inner roots, their points)}. box_lo, box_hi, query: per piece."""
+        n = self.n_pieces
+        lo = np.full((n, 3), np.inf)
+        hi = np.full((n, 3), -np.inf)
+        np.minimum.at(lo, self.root, box_lo)
+        np.maximum.at(hi, self.root, box_hi)
+        point = np.full((n, 3), np.nan)
+        if len(self.extra):  # a component of seam triangles only: a corner of its first one
+            corner = self.extra[:, 0]
+            roots, first = np.unique(self.root[self.piece[corner]], return_index=True)
+            point[roots] = self.pos[corner[first]]
+        has = np.flatnonzero(np.isfinite(query[:, 0]))
+        roots, first = np.unique(self.root[has], return_index=True)  # its first piece's point
+        point[roots] = query[has[first]]
+        closed = np.flatnonzero((self.root == np.arange(n)) & ~self.comp_open & (lo[:, 0] <= hi[:, 0]))
+        inner = closed[np.isfinite(point[closed, 0])]
+        pairs = {}
+        for d in closed.tolist():
+            holds = ((lo[inner] >= lo[d]) & (hi[inner] <= hi[d])).all(axis=1) & (inner != d)
+            if holds.any():
+                pairs[d] = (inner[holds], point[inner[holds]])
+        return pairs
+
+    def crossings(self, d, points):
+        """How many of the seam and fill triangles of component d the ray straight up from each
+        point crosses (rows of the table are in final-id order, as the tiles number theirs)."""
+        sel = self.extra[self.root[self.piece[self.extra[:, 0]]] == d] if len(self.extra) else self.extra
+        if len(sel) == 0:
+            return np.zeros(len(points), dtype=np.uint64)
+        verts = np.unique(sel)
+        local = np.searchsorted(verts, sel)
+        return ray_crossings(Mesh(self.pos[verts], local), points, threads=1)
+
+    def nesting_depths(self, pairs, crossings):
+        """Per component (root): how many closed components enclose it, from the total
+        crossings of each pair's ray (odd: inside)."""
+        depth = np.zeros(self.n_pieces, dtype=np.int64)
+        for d, (inner, _) in pairs.items():
+            np.add.at(depth, inner, (crossings[d] % 2).astype(np.int64))
+        return depth
+
+    def outward(self, volume, top_z, top_nz, depth):
+        """Turn each component outward: per piece (tile components, joined by the seam and fill
+        triangles) the final sign (+1 or -1 against the tile's own winding). A closed
+        component faces away from the solid it bounds, as on one machine: it encloses positive
+        volume, or negative at an odd nesting depth (a cavity's wall); an open one faces up
+        (+z) at its highest particle. volume, top_z, top_nz: per piece, as the tiles wound
+        them; depth: per component (nesting_depths)."""
+        sign = np.where(self.flip, -1.0, 1.0)
+        volume = volume * sign
+        top_nz = top_nz * sign
+        if len(self.extra):
+            p = self.pos[self.extra]
+            det = np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])) / 6.0
+            volume += np.bincount(self.piece[self.extra[:, 0]], weights=det, minlength=self.n_pieces)
+        root = self.root
         comp_volume = np.bincount(root, weights=volume, minlength=self.n_pieces)
-        comp_open = np.bincount(root, weights=is_open, minlength=self.n_pieces) > 0
         highest = {}
         for i in np.argsort(top_z, kind="stable"):
             highest[root[i]] = i  # the last (highest) wins
         outward = np.zeros(self.n_pieces, dtype=bool)
         for r, i in highest.items():
-            outward[r] = (top_nz[i] < 0) if comp_open[r] else (comp_volume[r] < 0)
+            if self.comp_open[r]:
+                outward[r] = top_nz[i] < 0
+            else:  # turned unless it faces away from its solid (mesh/nesting.h)
+                outward[r] = (comp_volume[r] < 0) if depth[r] % 2 == 0 else (comp_volume[r] > 0)
         self.turn_component = outward[root]
         self.sign = sign * np.where(self.turn_component, -1.0, 1.0)
         return self.sign

@@ -10,7 +10,9 @@ two tiles' extractions chose differently near a seam (about 1 % of the triangles
 small patches), this leaves small holes, which are closed as the library closes its own small
 holes (the triangulation of the loop with the smallest largest angle, edges within
 fill_edge_factor x L). Tiles orient their pieces independently: pieces that share seam
-triangles are turned to agree, and each closed component is then turned outward.
+triangles are turned to agree, and each closed component is then turned to face away from
+the solid it bounds (into its cavity when it lies inside another: the rays' crossings that
+decide it are counted on the tiles that hold the triangles, and added up).
 
 Only the seams cross to the driver first; the tiles' bulk triangles stay on the workers until
 the orientation is known, then come back once. Why not the raw test alone in the tiles and the
@@ -24,7 +26,7 @@ import uuid
 import numpy as np
 
 from .. import _abi, _library, _options
-from .. import Mesh, estimate_spacing, triangulate
+from .. import Mesh, estimate_spacing, ray_crossings, triangulate
 from .. import defaults as library_defaults
 from .._errors import Error
 from ._dask import check_client, distributed, gather_in_order
@@ -121,6 +123,62 @@ def triangulate_tile(payload, tile, cuts, options, near):
     }
 
 
+def _piece_boxes(result):
+    """Per piece: the box of its own particles that its triangles use, and a point on it (the
+    first corner of its first triangle with every corner its own: a vertex of the stitched
+    surface), NaN where it has none. For the driver's test of which closed parts lie inside
+    which."""
+    pieces, pos, core, tri = result["pieces"], result["positions"], result["core"], result["tri"]
+    box_lo = np.full((pieces, 3), np.inf)
+    box_hi = np.full((pieces, 3), -np.inf)
+    query = np.full((pieces, 3), np.nan)
+    if len(tri) == 0:
+        return box_lo, box_hi, query
+    used = np.zeros(result["n"], dtype=bool)
+    used[tri[result["touching"]].ravel()] = True
+    v = np.flatnonzero(core & used)
+    if len(v):
+        order = np.argsort(result["label"][v], kind="stable")
+        lab = result["label"][v][order]
+        starts = np.flatnonzero(np.r_[True, lab[1:] != lab[:-1]])
+        p = pos[v[order]]
+        box_lo[lab[starts]] = np.minimum.reduceat(p, starts, axis=0)
+        box_hi[lab[starts]] = np.maximum.reduceat(p, starts, axis=0)
+    inner = np.flatnonzero(result["interior"])
+    pieces_with, first = np.unique(result["tri_label"][inner], return_index=True)
+    query[pieces_with] = pos[tri[inner[first], 0]]
+    return box_lo, box_hi, query
+
+
+def _crossings(positions, triangles, final_ids, points):
+    """particlemesh.ray_crossings of the triangles (rows of vertex indices) over their own
+    vertices renumbered in the order of their final ids, as the stitched surface numbers them
+    (the counts of the tiles and the driver then add up to the stitched surface's)."""
+    verts = np.unique(triangles)
+    verts = verts[np.argsort(final_ids[verts], kind="stable")]
+    local = np.zeros(int(verts.max()) + 1, dtype=np.int64)
+    local[verts] = np.arange(len(verts))
+    return ray_crossings(Mesh(positions[verts], local[triangles]), points, threads=1)
+
+
+def tile_crossings(result, first_id, piece_root, queries):
+    """On a worker: for each closed component d in `queries` ({d: points}), how many of the
+    tile's own triangles of d (its pieces whose piece_root is d) the ray straight up from each
+    point crosses."""
+    core = result["core"]
+    ids = result["ids"]
+    final = np.full(result["n"], -1, dtype=np.int64)
+    final[core] = ids[core] if ids is not None else first_id + np.arange(int(core.sum()))
+    own = result["tri"][result["interior"]]
+    root = piece_root[result["tri_label"][result["interior"]]]
+    out = {}
+    for d, points in queries.items():
+        sel = own[root == d]
+        out[d] = (_crossings(result["positions"], sel, final, points) if len(sel)
+                  else np.zeros(len(points), dtype=np.uint64))
+    return out
+
+
 def seam_part(result):
     """On a worker: what the driver needs of a tile to stitch it: the triangles that reach
     another tile (seam) and those around the tile's particles near its faces (band), over a
@@ -150,6 +208,7 @@ def seam_part(result):
         top = own[order[last]]
         top_z[result["label"][top]] = pos[top, 2]
         top_nz[result["label"][top]] = result["normals"][top, 2]
+    box_lo, box_hi, query = _piece_boxes(result)
     return {
         "tri": inverse.reshape(-1, 3), "seam_count": int(seam.sum()),
         "tri_piece": result["tri_label"][parts],
@@ -157,7 +216,8 @@ def seam_part(result):
         "v_near": result["near"][verts],
         "v_piece": label[verts], "v_normal": result["normals"][verts],
         "pieces": result["pieces"], "volume": result["volume"], "open": result["open_piece"],
-        "top_z": top_z, "top_nz": top_nz, "core_count": int(core.sum()),
+        "top_z": top_z, "top_nz": top_nz, "box_lo": box_lo, "box_hi": box_hi, "query": query,
+        "core_count": int(core.sum()),
         "has_ids": ids is not None,
         "unused_core": result["unused_core"], "particles": result["particles"],
         "seconds": result["seconds"],
@@ -211,8 +271,10 @@ def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attri
     canonical, normals angle-weighted from the surface. It is a consistently oriented
     2-manifold wherever the one-machine result is, closed components facing outward, every
     particle used that the tiles use; near the seams some triangles differ from the
-    one-machine choice. mesh.stats: spacing, max_edge, tiles, halo, seam triangles, holes
-    filled and left, pieces turned, unused particles, bytes moved, seconds."""
+    one-machine choice. A closed component inside another (a cavity's wall) faces into its
+    cavity, as on one machine. mesh.stats: spacing, max_edge, tiles, halo, seam triangles,
+    holes filled and left, pieces turned, nested components, unused particles, bytes moved,
+    seconds."""
     distributed()
     check_client(client)
     lib = _library.load()
@@ -282,11 +344,33 @@ def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attri
     seams.orient_pieces()
     seams.choose()
     seams.close_holes(fill_factor * L, fill_holes)
-    volume = np.concatenate([p["volume"] for p in parts])
-    is_open = np.concatenate([p["open"] for p in parts])
-    top_z = np.concatenate([p["top_z"] for p in parts])
-    top_nz = np.concatenate([p["top_nz"] for p in parts])
-    sign = seams.outward(volume, is_open, top_z, top_nz)
+    joined = lambda key: np.concatenate([p[key] for p in parts])
+    seams.join(joined("open"))
+    # Closed components inside others (a hollow object's inner wall, and what lies in its
+    # cavity) face into their cavity, as on one machine: whether a component's point lies
+    # inside another is the parity of the triangles the ray from it crosses, counted on the
+    # tiles that hold the enclosing one's triangles and at the seams, and added up.
+    pairs = seams.nesting_pairs(joined("box_lo"), joined("box_hi"), joined("query"))
+    crossings = {d: seams.crossings(d, points) for d, (_, points) in pairs.items()}
+    if pairs:
+        base = seams.piece_base
+        jobs = []
+        for t in range(n):
+            roots = seams.root[base[t]:base[t] + parts[t]["pieces"]]
+            asked = {d: points for d, (_, points) in pairs.items() if (roots == d).any()}
+            jobs.append((t, roots, asked))
+        jobs = [j for j in jobs if j[2]]
+        counted = client.map(tile_crossings, [results[t] for t, _, _ in jobs],
+                             [int(first_id[t]) for t, _, _ in jobs], [r for _, r, _ in jobs],
+                             [a for _, _, a in jobs], pure=False,
+                             key=[f"particlemesh-nesting-{t}-{token}" for t, _, _ in jobs])
+        counted = client.gather(counted)
+        received += nbytes(counted)
+        for part in counted:
+            for d, c in part.items():
+                crossings[d] = crossings[d] + c
+    depth = seams.nesting_depths(pairs, crossings)
+    sign = seams.outward(joined("volume"), joined("top_z"), joined("top_nz"), depth)
     t_seams = time.perf_counter() - t0 - t_setup - t_tiles
 
     # ---- the tiles' own triangles, now turned, come back once --------------------------------
@@ -333,6 +417,7 @@ def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attri
         "seam_triangles": len(seams.copies), "seam_rejected": seams.rejected,
         "pieces": seams.n_pieces, "pieces_aligned": int(seams.flip.sum()),
         "pieces_turned": int((sign < 0).sum()),
+        "nested_components": int((depth > 0).sum()), "nesting_tests": sum(len(c) for c, _ in pairs.values()),
         "holes_filled": len(seams.loops) - len(seams.left), "fill_triangles": len(seams.fills),
         "holes_left": len(seams.left), "unused_points": int((~used).sum()),
         "bytes_sent": sent, "bytes_received": received, "seconds_tiles": t_tiles,
