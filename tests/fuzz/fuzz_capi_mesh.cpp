@@ -1,6 +1,7 @@
 // Fuzz target: the C ABI's mesh entry points fed arbitrary arrays and parameter structs:
 // pm_mesh_create (indices out of range, NaN positions or normals, degenerate, repeated and
-// non-manifold triangles), pm_mesh_report, the copy functions with any capacity, attributes
+// non-manifold triangles), pm_mesh_report, pm_mesh_ray_crossings (points anywhere, also on
+// the vertices; the counts of two halves of the triangles add up), the copy functions with any capacity, attributes
 // (pm_mesh_set_attribute / _get_attribute_* / _copy_attribute) and pm_smooth with every option
 // field fuzzed (scheme, levels, boundary, creases with any indices and sharpness, struct_size,
 // a progress callback that may cancel). Checks: statuses and messages, outputs untouched on
@@ -80,6 +81,36 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   size_t got_nv = 0, got_nt = 0;
   check_mesh(mesh, &got_nv, &got_nt);
   PM_FUZZ_CHECK(got_nv == nv && got_nt == nt);
+
+  // Ray crossings: at most one per triangle, and the counts of the triangles cut into two
+  // lists over the same vertices add up to the whole list's (every triangle's share its own).
+  if (mode & 64) {
+    const size_t nq = size_t(in.range(0, 6));
+    std::vector<double> q(3 * nq);
+    for (double& v : q) v = in.flag() ? pos.empty() ? 0.0 : pos[size_t(in.range(0, pos.size() - 1))] : in.number(0.25);
+    std::vector<uint64_t> whole(nq + 1, 77), first(nq + 1, 77), second(nq + 1, 77);
+    const pm_status w = pm_mesh_ray_crossings(mesh, nq ? q.data() : nullptr, nq, 0, whole.data());
+    check_status(w);
+    bool finite = true;
+    for (double v : q) finite = finite && std::isfinite(v);
+    PM_FUZZ_CHECK((w == PM_OK) == finite);
+    if (w == PM_OK) {
+      const size_t cut = size_t(in.range(0, nt));
+      pm_mesh* part[2] = {nullptr, nullptr};
+      check_status(pm_mesh_create(nv ? pos.data() : nullptr, nv, cut ? tris.data() : nullptr, cut, nullptr, &part[0]));
+      check_status(pm_mesh_create(nv ? pos.data() : nullptr, nv, nt - cut ? tris.data() + 3 * cut : nullptr, nt - cut,
+                                  nullptr, &part[1]));
+      PM_FUZZ_CHECK(part[0] && part[1]);
+      check_status(pm_mesh_ray_crossings(part[0], nq ? q.data() : nullptr, nq, 1, first.data()));
+      check_status(pm_mesh_ray_crossings(part[1], nq ? q.data() : nullptr, nq, 2, second.data()));
+      for (size_t i = 0; i < nq; ++i) PM_FUZZ_CHECK(whole[i] <= nt && first[i] + second[i] == whole[i]);
+      PM_FUZZ_CHECK(whole[nq] == 77);
+      pm_mesh_destroy(part[0]);
+      pm_mesh_destroy(part[1]);
+    } else {
+      PM_FUZZ_CHECK(whole[0] == 77);  // untouched on failure
+    }
+  }
 
   // Copies with a capacity that may be too small (the buffer holds `capacity` items).
   {

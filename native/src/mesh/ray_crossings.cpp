@@ -72,6 +72,7 @@ size_t RayCrossings::count(const Vec3& q) const {
   size_t crossings = 0;
   for (size_t i = start_[c]; i < start_[c + 1]; ++i) {
     const Triangle& t = T_[cells_[i]];
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;  // a segment or a point: no area
     double e[3];
     int sign = 0;
     bool covered = true;

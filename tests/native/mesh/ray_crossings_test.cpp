@@ -135,6 +135,17 @@ TEST(RayCrossings, InsideASphereIsOdd) {
   }
 }
 
+// A triangle that repeats a vertex has no area: no ray crosses it, also one straight through
+// its point (its three edges from one vertex would all read as the same side: a crossing).
+TEST(RayCrossings, TrianglesWithoutAreaAreNeverCrossed) {
+  TriMesh m;
+  m.positions = {{0, 0, 1}, {1, 0, 1}, {0, 1, 1}};
+  m.triangles = {{0, 0, 0}, {0, 0, 1}, {1, 2, 2}};
+  EXPECT_EQ(ray_crossings(m, {{0, 0, 0}, {0.5, 0, 0}, {0.2, 0.2, 0}}), (std::vector<uint64_t>{0, 0, 0}));
+  m.triangles = {{0, 1, 2}};
+  EXPECT_EQ(ray_crossings(m, {{0, 0, 0}, {0.5, 0, 0}, {0.2, 0.2, 0}}), (std::vector<uint64_t>{1, 1, 1}));
+}
+
 TEST(RayCrossings, BadInputIsNamed) {
   TriMesh m = icosphere_mesh(1);
   EXPECT_TRUE(ray_crossings(m, {}).empty());
