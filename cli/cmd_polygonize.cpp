@@ -248,11 +248,11 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("input", args->input,
                   "Particles: " + kParticleFormats +
                       "; a path with a frame field ({} or {:04d}, e.g. sim/fluid_{:04d}.vtk) is a sequence: every "
-                      "frame is meshed")
+                      "frame is meshed; so is a ParaView collection (.pvd, .series), frame n its n-th file by time")
       ->required();
   app->add_option("-o,--output", args->output,
                   "Output mesh with normals: .ply (binary; --ascii for text), .obj, .vtk, .vtu or .vtp; - (or a "
-                  "device, a FIFO) for PLY on standard output. With a frame pattern input, a pattern too "
+                  "device, a FIFO) for PLY on standard output. With a sequence input, a pattern too "
                   "(out/fluid_{:04d}.ply)")
       ->required();
   app->add_option("--radius", args->radius, kRadiusHelp)
@@ -326,7 +326,7 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
       ->check(CLI::IsMember({"space", "particles"}))
       ->capture_default_str();
   add_attributes_option(*app, args->attributes);
-  app->add_option("--report", args->report, "Also write statistics and the topology report as JSON (with a frame pattern input: a pattern too)");
+  app->add_option("--report", args->report, "Also write statistics and the topology report as JSON (with a sequence input: a pattern too)");
   app->add_flag("--ascii", args->ascii, "Write ASCII PLY instead of binary");
   app->add_flag("-q,--quiet", args->quiet, "No summary and no progress line");
   add_sequence_options(*app, args->sequence);

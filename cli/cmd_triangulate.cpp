@@ -334,11 +334,11 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("input", args->input,
                   "Particles: " + kParticleFormats +
                       "; a path with a frame field ({} or {:04d}, e.g. scan_{:04d}.ply) is a sequence: every frame is "
-                      "meshed")
+                      "meshed; so is a ParaView collection (.pvd, .series), frame n its n-th file by time")
       ->required();
   app->add_option("-o,--output", args->output,
                   "Output mesh: .ply (binary; --ascii for text), .obj, .vtk, .vtu or .vtp; - (or a device, a FIFO) "
-                  "for PLY on standard output. With a frame pattern input, a pattern too (out/mesh_{:04d}.ply)")
+                  "for PLY on standard output. With a sequence input, a pattern too (out/mesh_{:04d}.ply)")
       ->required();
   app->add_option("--spacing", args->spacing,
                   "Particle spacing r0 in world units (default: estimated as the median nearest-neighbour distance); "

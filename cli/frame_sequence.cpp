@@ -92,6 +92,10 @@ std::string frame_list(const std::vector<int64_t>& frames, size_t total) {
 
 bool has_frame_field(const std::string& path) { return path.find_first_of("{}") != std::string::npos; }
 
+bool is_sequence_collection(const std::string& path) { return !has_frame_field(path) && is_frame_collection(path); }
+
+bool is_sequence_input(const std::string& path) { return has_frame_field(path) || is_frame_collection(path); }
+
 FramePattern parse_frame_pattern(const std::string& path, const std::string& option) {
   auto bad = [&](const std::string& why) {
     throw UsageError(option + " '" + path + "': " + why +
@@ -155,18 +159,18 @@ std::vector<int64_t> find_frames(const FramePattern& p) {
 
 void add_sequence_options(CLI::App& app, SequenceArgs& args) {
   app.add_option("--frames", args.frames,
-                 "With a frame pattern: only frames FIRST:LAST (inclusive, e.g. 10:250; or one number N); a frame "
+                 "With a sequence (a frame pattern, or a .pvd or .series collection): only frames FIRST:LAST (inclusive, e.g. 10:250; or one number N); a frame "
                  "in the range without its file is reported and skipped (default: every file the pattern finds)");
   app.add_flag("--force", args.force,
-               "With a frame pattern: mesh every frame again, even those whose outputs are newer than their input "
+               "With a sequence (a frame pattern, or a .pvd or .series collection): mesh every frame again, even those whose outputs are newer than their input "
                "and were made with the same options (default: leave those alone)");
   app.add_option("--jobs", args.jobs,
-                 "With a frame pattern: mesh N frames at once (the --threads are shared among them; each output is "
+                 "With a sequence (a frame pattern, or a .pvd or .series collection): mesh N frames at once (the --threads are shared among them; each output is "
                  "the same whatever N)")
       ->check(CLI::Range(1, 1024))
       ->capture_default_str();
   app.add_flag("--dry-run", args.dry_run,
-               "With a frame pattern: list each frame, its input and outputs and whether it would be meshed or left "
+               "With a sequence (a frame pattern, or a .pvd or .series collection): list each frame, its input and outputs and whether it would be meshed or left "
                "alone (up to date), without reading any");
 }
 
@@ -174,11 +178,11 @@ void check_single_file(const CLI::App& app, const std::vector<OutputSpec>& outpu
   for (const char* option : {"--frames", "--force", "--jobs", "--dry-run"})
     if (app.count(option) > 0)
       throw UsageError(std::string(option) + " is for a sequence: the input must be a frame pattern ({} or {:04d}, "
-                       "e.g. sim/fluid_{:04d}.vtk)");
+                       "e.g. sim/fluid_{:04d}.vtk) or a collection (.pvd, .series)");
   for (const OutputSpec& o : outputs)
     if (has_frame_field(o.path))
-      throw UsageError(o.option + " '" + o.path + "' holds a frame field but the input is not a frame pattern "
-                       "(e.g. sim/fluid_{:04d}.vtk)");
+      throw UsageError(o.option + " '" + o.path + "' holds a frame field but the input is not a sequence (a frame pattern, "
+                       "e.g. sim/fluid_{:04d}.vtk, or a .pvd or .series collection)");
 }
 
 std::string sidecar_path(const std::string& output) {
@@ -222,7 +226,14 @@ int run_sequence(const SequenceSpec& spec) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   const std::string& cmd = spec.command;
-  const FramePattern input = parse_frame_pattern(spec.input, "input");
+  // The frames' files: a pattern's, or those a collection (.pvd, .series) lists, frame n its
+  // n-th by time.
+  const bool collection = is_sequence_collection(spec.input);
+  FramePattern input;
+  std::vector<CollectionFrame> listed;
+  if (collection) listed = read_frame_collection(spec.input);
+  else input = parse_frame_pattern(spec.input, "input");
+  auto input_of = [&](int64_t f) { return collection ? listed[size_t(f)].path : frame_path(input, f); };
   std::vector<FramePattern> outputs;
   for (const OutputSpec& o : spec.outputs) {
     if (o.path.empty()) {
@@ -231,21 +242,38 @@ int run_sequence(const SequenceSpec& spec) {
     }
     if (!has_frame_field(o.path))
       throw UsageError(o.option + " '" + o.path + "' has no frame field, while the input '" + spec.input +
-                       "' is a frame pattern: every frame would overwrite it (e.g. out/fluid_{:04d}.ply)");
+                       "' is a sequence: every frame would overwrite it (e.g. out/fluid_{:04d}.ply)");
     outputs.push_back(parse_frame_pattern(o.path, o.option));
     if (o.path == spec.input) throw UsageError(o.option + " '" + o.path + "' is the input pattern: it would overwrite the input");
+    if (collection)
+      for (const CollectionFrame& c : listed) {
+        std::error_code ec;
+        if (std::filesystem::equivalent(c.path, frame_path(outputs.back(), int64_t(&c - listed.data())), ec))
+          throw UsageError(o.option + " '" + o.path + "' names the collection's frame '" + c.path +
+                           "': it would overwrite the input");
+      }
   }
   std::optional<std::pair<int64_t, int64_t>> range;
   if (!spec.sequence.frames.empty()) range = parse_frames(spec.sequence.frames);
 
   // The frames: the files found (in --frames' range); the gaps among them, or in the range,
   // are missing frames.
-  std::vector<int64_t> found = find_frames(input);
+  std::vector<int64_t> found;
+  if (collection) {
+    for (size_t i = 0; i < listed.size(); ++i)
+      if (regular_file(listed[i].path)) found.push_back(int64_t(i));
+  } else {
+    found = find_frames(input);
+  }
   if (range) std::erase_if(found, [&](int64_t f) { return f < range->first || f > range->second; });
   std::vector<int64_t> missing_listed;
   size_t missing = 0;
   {
-    int64_t expect = range ? range->first : found.empty() ? 0 : found.front();
+    // A collection's frames are 0..N-1 whatever --frames says: the files it lists that do not
+    // exist are missing, also after the last one found.
+    std::optional<std::pair<int64_t, int64_t>> bounds = range;
+    if (collection) bounds = {range ? range->first : 0, range ? range->second : int64_t(listed.size()) - 1};
+    int64_t expect = bounds ? bounds->first : found.empty() ? 0 : found.front();
     auto gap = [&](int64_t from, int64_t to) {  // [from, to)
       if (to <= from) return;
       missing += size_t(to - from);
@@ -255,10 +283,11 @@ int run_sequence(const SequenceSpec& spec) {
       gap(expect, f);
       expect = f + 1;
     }
-    if (range) gap(expect, range->second + 1);
+    if (bounds) gap(expect, bounds->second + 1);
   }
   if (found.empty()) {
-    std::fprintf(stderr, "particlemesh %s: error: no frame: no file matches '%s'%s\n", cmd.c_str(), spec.input.c_str(),
+    std::fprintf(stderr, "particlemesh %s: error: no frame: %s '%s'%s\n", cmd.c_str(),
+                 collection ? "none of the files exists that is listed in" : "no file matches", spec.input.c_str(),
                  range ? (" in frames " + spec.sequence.frames).c_str() : "");
     return 1;
   }
@@ -272,7 +301,7 @@ int run_sequence(const SequenceSpec& spec) {
   // collisions), before any frame is read: a bad -o is a usage error, not N failed frames.
   {
     const std::vector<OutputSpec> first = paths_of(found.front());
-    RunOutputs check(first, {frame_path(input, found.front())});
+    RunOutputs check(first, {input_of(found.front())});
   }
   const std::string label_text = "particlemesh " PARTICLEMESH_VERSION_STRING "\ncommand=" + cmd + "\n";
   auto sidecar_text = [&](const std::string& in) { return label_text + "input=" + in + "\n" + spec.options_text; };
@@ -287,7 +316,7 @@ int run_sequence(const SequenceSpec& spec) {
   std::vector<Frame> todo;
   std::vector<int64_t> up_to_date;
   for (int64_t f : found) {
-    Frame fr{f, frame_path(input, f), paths_of(f), {}};
+    Frame fr{f, input_of(f), paths_of(f), {}};
     fr.sidecar = sidecar_path(fr.outputs.front().path);
     bool current = !spec.sequence.force;
     int64_t in_ns = 0;
@@ -310,9 +339,13 @@ int run_sequence(const SequenceSpec& spec) {
 
   const bool quiet = spec.quiet;
   auto missing_line = [&]() {
-    if (missing)
-      std::fprintf(stderr, "particlemesh %s: %zu missing frame%s skipped (no file): %s\n", cmd.c_str(), missing,
-                   missing == 1 ? "" : "s", frame_list(missing_listed, missing).c_str());
+    if (!missing) return;
+    std::fprintf(stderr, "particlemesh %s: %zu missing frame%s skipped (no file): %s\n", cmd.c_str(), missing,
+                 missing == 1 ? "" : "s", frame_list(missing_listed, missing).c_str());
+    if (collection)  // the files the collection names
+      for (int64_t f : missing_listed)
+        if (f >= 0 && size_t(f) < listed.size())
+          std::fprintf(stderr, "  frame %lld: '%s' is not a file\n", (long long)f, listed[size_t(f)].path.c_str());
   };
   if (spec.sequence.dry_run) {
     for (int64_t f : found) {
@@ -320,7 +353,7 @@ int run_sequence(const SequenceSpec& spec) {
       std::string outs;
       for (const OutputSpec& o : paths_of(f))
         if (!o.path.empty()) outs += (outs.empty() ? "" : ", ") + o.path;
-      std::printf("frame %lld: %s -> %s (%s)\n", (long long)f, frame_path(input, f).c_str(), outs.c_str(),
+      std::printf("frame %lld: %s -> %s (%s)\n", (long long)f, input_of(f).c_str(), outs.c_str(),
                   current ? "up to date: left alone" : "to mesh");
     }
     missing_line();

@@ -1,5 +1,6 @@
 // Sequences of frames: an input path with a frame field ({} or {:04d}) names one file per
-// frame, and every output path (-o, --report) must hold a field too. What a frame pattern is,
+// frame, or a collection (.pvd, .series) lists them, and every output path (-o, --report) must
+// hold a field too. What a frame pattern is,
 // how frames are found, picked (--frames), skipped when up to date (--force), run several at
 // once (--jobs) and reported (one progress line, a summary, exit 1 when a frame failed) lives
 // here; each command only meshes one file (its run function, given a FrameContext).
@@ -29,6 +30,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "particlemesh/io/frame_collection.h"
 #include "particlemesh/mesh/point_cloud.h"
 #include "run_outputs.h"
 
@@ -42,6 +44,13 @@ struct FramePattern {
 
 /// Whether `path` holds a '{' or '}' (and so must be a frame pattern).
 bool has_frame_field(const std::string& path);
+
+/// Whether `path` is a frame collection (.pvd, .series) and no pattern: frame n is the file it
+/// lists n-th by time.
+bool is_sequence_collection(const std::string& path);
+
+/// Whether `path` names a sequence: a frame pattern or a collection.
+bool is_sequence_input(const std::string& path);
 
 /// The pattern in `path`. @throws UsageError naming `option` when it has no field, more than
 /// one, an unsupported one, or a stray brace.
@@ -135,7 +144,7 @@ std::string sidecar_path(const std::string& output);
 template <class Args, class Outputs, class ForFrame, class Run>
 int run_file_or_sequence(const std::string& command, const CLI::App& app, const Args& args, Outputs outputs,
                          ForFrame for_frame, Run run) {
-  if (!has_frame_field(args.input)) {
+  if (!is_sequence_input(args.input)) {
     check_single_file(app, outputs(args));
     return run(args, nullptr);
   }

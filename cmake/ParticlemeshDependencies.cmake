@@ -9,9 +9,10 @@ find_package(LibLZMA REQUIRED)   # liblzma-dev: LZMA-compressed VTK XML arrays (
 # liblz4-dev: LZ4-compressed VTK XML arrays. It ships a pkg-config file, not a CMake package.
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(PM_LZ4 REQUIRED IMPORTED_TARGET liblz4)
+# nlohmann-json3-dev (header-only): the CLI's JSON reports, the library's .series collections.
+find_package(nlohmann_json REQUIRED)
 if(PM_BUILD_CLI)
   find_package(CLI11 REQUIRED)
-  find_package(nlohmann_json REQUIRED)
 endif()
 if(PM_BUILD_TESTS)
   find_package(GTest REQUIRED)

@@ -23,6 +23,7 @@ lib/ folder, at $PARTICLEMESH_LIBRARY, or on the system's library path. It never
 the Blender add-on carries this same package."""
 
 import ctypes
+import os
 from ctypes import c_double, c_float, c_size_t, c_uint32, c_uint64
 
 import numpy as np
@@ -34,7 +35,8 @@ from ._errors import CancelledError, Error, LibraryNotFoundError, PclBridgeNotFo
 from ._progress import Hook, Progress
 
 __all__ = [
-    "read_points", "read_mesh", "write_mesh", "triangulate", "polygonize", "polygonize_attributes",
+    "read_points", "read_mesh", "read_frame_collection", "write_mesh", "triangulate", "polygonize",
+    "polygonize_attributes",
     "smooth", "Smoother",
     "topology",
     "estimate_spacing", "thin", "triangle_edges", "ray_crossings", "default_radius", "lattice_field", "defaults", "version",
@@ -118,6 +120,30 @@ def read_points(path):
         return read_cloud_handle(lib, handle, details)
     finally:
         lib.pm_cloud_destroy(handle)
+
+
+def read_frame_collection(path):
+    """The frames a ParaView collection lists (.pvd: VTK XML, <DataSet timestep= file=>;
+    .series: JSON, {"files": [{"name", "time"}]}) by ascending time: a list of (time, path),
+    each path joined to the collection's folder (files are taken only from that folder or
+    below it). Whether the files exist is not checked. Raises Error (STATUS_FORMAT_ERROR)
+    naming what is wrong: an entry outside the folder, two at one time, one without a file or
+    a finite time, none."""
+    lib = _library.load()
+    handle = _abi.pm_frame_collection_p()
+    lib.check(lib.pm_frame_collection_read(path_bytes(path), ctypes.byref(handle)))
+    try:
+        count = c_size_t(0)
+        lib.check(lib.pm_frame_collection_get_count(handle, ctypes.byref(count)))
+        frames = []
+        for i in range(count.value):
+            time, name = c_double(0), ctypes.c_char_p()
+            lib.check(lib.pm_frame_collection_get_frame(handle, i, ctypes.byref(time),
+                                                        ctypes.byref(name)))
+            frames.append((time.value, os.fsdecode(name.value)))
+        return frames
+    finally:
+        lib.pm_frame_collection_destroy(handle)
 
 
 def read_mesh(path):

@@ -34,6 +34,7 @@ pm_mesh_p = c_void_p
 pm_field_p = c_void_p
 pm_ray_hits_p = c_void_p
 pm_smoother_p = c_void_p
+pm_frame_collection_p = c_void_p
 
 pm_progress_fn = CFUNCTYPE(c_int, c_void_p, c_char_p, c_double)
 
@@ -270,6 +271,12 @@ FUNCTIONS = {
     "pm_estimate_spacing": (pm_status, [pm_cloud_p, c_int32, _f64p]),
     "pm_estimate_spacing_sampled": (pm_status, [pm_cloud_p, c_size_t, c_int32, _f64p]),
     "pm_cloud_thin": (pm_status, [pm_cloud_p, c_double, _u32p, c_size_t, _sizep]),
+    # frame collections
+    "pm_frame_collection_read": (pm_status, [c_char_p, POINTER(pm_frame_collection_p)]),
+    "pm_frame_collection_get_count": (pm_status, [pm_frame_collection_p, _sizep]),
+    "pm_frame_collection_get_frame": (pm_status, [pm_frame_collection_p, c_size_t, _f64p,
+                                                  POINTER(c_char_p)]),
+    "pm_frame_collection_destroy": (None, [pm_frame_collection_p]),
     # triangulation
     "pm_triangulate_options_init": (None, [POINTER(pm_triangulate_options)]),
     "pm_triangulate": (pm_status, [pm_cloud_p, POINTER(pm_triangulate_options), _meshpp,

@@ -7,6 +7,7 @@
 #include <algorithm>
 
 #include <cmath>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -375,6 +376,40 @@ TEST(CApi, RayCrossingsCountEveryTriangleTheRayCrosses) {
   EXPECT_NE(last().find("point 1 is not finite"), std::string::npos) << last();
   EXPECT_EQ(pm_mesh_ray_crossings(mesh, nullptr, 0, 0, nullptr), PM_OK) << last();
   pm_mesh_destroy(mesh);
+}
+
+// A collection's frames by time, through the handle; misuse is named, outputs left alone.
+TEST(CApi, FrameCollectionsListTheirFilesByTime) {
+  const auto dir = particlemesh::test::scratch_dir("collection");
+  std::ofstream((dir / "run.series").string())
+      << R"({"file-series-version": "1.0", "files": [{"name": "b.vtu", "time": 3}, {"name": "a.vtu", "time": 1}]})";
+  pm_frame_collection* c = nullptr;
+  ASSERT_EQ(pm_frame_collection_read((dir / "run.series").c_str(), &c), PM_OK) << last();
+  size_t count = 0;
+  ASSERT_EQ(pm_frame_collection_get_count(c, &count), PM_OK);
+  ASSERT_EQ(count, 2u);
+  double time = -1;
+  const char* path = nullptr;
+  ASSERT_EQ(pm_frame_collection_get_frame(c, 0, &time, &path), PM_OK);
+  EXPECT_EQ(time, 1.0);
+  EXPECT_EQ(std::string(path), (dir / "a.vtu").string());
+  ASSERT_EQ(pm_frame_collection_get_frame(c, 1, &time, &path), PM_OK);
+  EXPECT_EQ(time, 3.0);
+  time = -1;
+  EXPECT_EQ(pm_frame_collection_get_frame(c, 2, &time, &path), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("frame 2 of a collection of 2"), std::string::npos) << last();
+  EXPECT_EQ(time, -1);
+  EXPECT_EQ(pm_frame_collection_get_count(c, nullptr), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(pm_frame_collection_get_frame(c, 0, nullptr, &path), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(pm_frame_collection_get_frame(c, 0, &time, nullptr), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("out_path"), std::string::npos) << last();
+  pm_frame_collection_destroy(c);
+  pm_frame_collection_destroy(nullptr);
+  pm_frame_collection* untouched = reinterpret_cast<pm_frame_collection*>(0x1);
+  std::ofstream((dir / "bad.pvd").string()) << "<VTKFile type=\"Collection\"><Collection/></VTKFile>";
+  EXPECT_EQ(pm_frame_collection_read((dir / "bad.pvd").c_str(), &untouched), PM_STATUS_FORMAT_ERROR);
+  EXPECT_NE(last().find("lists no frame"), std::string::npos) << last();
+  EXPECT_EQ(untouched, reinterpret_cast<pm_frame_collection*>(0x1));
 }
 
 TEST(CApi, MisuseGivesStatusAndMessageAndLeavesOutputsAlone) {

@@ -265,7 +265,7 @@ def test_sequence_usage_errors(cli, tmp_path):
     pat_in = tmp_path / "in/f_{}.vtk"
     cases = [
         ([pat_in, "-o", tmp_path / "m.ply"], "has no frame field"),
-        ([tmp_path / "in/f_1.vtk", "-o", tmp_path / "m_{}.ply"], "is not a frame pattern"),
+        ([tmp_path / "in/f_1.vtk", "-o", tmp_path / "m_{}.ply"], "the input is not a sequence"),
         ([tmp_path / "in/f_1.vtk", "-o", tmp_path / "m.ply", "--frames", "1:2"], "--frames is for a sequence"),
         ([pat_in, "-o", tmp_path / "m_{}.ply", "--frames", "5:2"], "the first frame is after the last"),
         ([pat_in, "-o", tmp_path / "m_{}.ply", "--frames", "a:b"], "expected FIRST:LAST"),
@@ -283,6 +283,70 @@ def test_sequence_usage_errors(cli, tmp_path):
     (tmp_path / "in/f_07.vtk").write_bytes((tmp_path / "in/f_1.vtk").read_bytes())
     r = cli("polygonize", pat_in, "-o", tmp_path / "m_{}.ply", *POLY, "--dry-run")
     assert r.stdout.count("frame ") == 1
+
+
+def pvd(path, entries):
+    """A ParaView collection: (timestep, file) per DataSet, in the order given."""
+    rows = "".join(f'    <DataSet timestep="{t}" group="" part="0" file="{f}"/>\n' for t, f in entries)
+    path.write_text(f'<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
+                    f'  <Collection>\n{rows}  </Collection>\n</VTKFile>\n')
+
+
+def test_a_paraview_collection_is_a_sequence(cli, tmp_path):
+    # A .pvd and a .series list frame files with their times, in any order: frame n is the n-th by
+    # time, meshed as its file alone; a listed file that does not exist is a missing frame, named.
+    frames(tmp_path / "sim/data", [5, 6, 7])
+    listed = [(0.25, "data/f_7.vtk"), (0.0, "data/f_5.vtk"), (0.125, "data\\f_6.vtk"), (0.5, "data/f_9.vtk")]
+    pvd(tmp_path / "sim/run.pvd", listed)
+    (tmp_path / "sim/run.vtk.series").write_text(json.dumps(
+        {"file-series-version": "1.0", "files": [{"name": f, "time": t} for t, f in listed]}))
+    by_time = [5, 6, 7]
+    for collection, out in (("run.pvd", "a"), ("run.vtk.series", "b")):
+        (tmp_path / out).mkdir()
+        r = cli("polygonize", tmp_path / "sim" / collection, "-o", tmp_path / out / "m_{:02d}.ply", *POLY)
+        assert "meshed        3" in r.stdout and "missing       1: 3" in r.stdout, r.stdout
+        assert "frame 3: '" in r.stderr and "f_9.vtk' is not a file" in r.stderr, r.stderr
+        for n, f in enumerate(by_time):
+            single = tmp_path / f"single_{f}.ply"
+            if not single.exists():
+                cli("polygonize", tmp_path / f"sim/data/f_{f}.vtk", "-o", single, *POLY, "-q")
+            assert (tmp_path / out / f"m_{n:02d}.ply").read_bytes() == single.read_bytes(), (collection, n)
+        # up to date on a re-run; --frames picks by position
+        r = cli("polygonize", tmp_path / "sim" / collection, "-o", tmp_path / out / "m_{:02d}.ply", *POLY)
+        assert "meshed        0" in r.stdout and "up to date    3" in r.stdout
+        r = cli("triangulate", tmp_path / "sim" / collection, "-o", tmp_path / out / "t_{}.ply", "--frames", "1:1",
+                "-q")
+        assert sorted(x.name for x in (tmp_path / out).glob("t_*.ply")) == ["t_1.ply"]
+
+    def refused(name, text, message, code=1, output="x_{}.ply"):
+        (tmp_path / "sim" / name).write_text(text) if text is not None else None
+        r = cli("polygonize", tmp_path / "sim" / name, "-o", tmp_path / output, *POLY, check=False)
+        assert r.returncode == code and message in r.stderr, (name, r.stderr)
+        assert not list(tmp_path.glob("x_*.ply"))
+
+    pvd(tmp_path / "sim/twice.pvd", [(0, "data/f_5.vtk"), (0, "data/f_6.vtk")])
+    refused("twice.pvd", None, "'data/f_5.vtk' and 'data/f_6.vtk' share the time 0 (one file per frame")
+    for outside in ("../sim/data/f_5.vtk", "/etc/passwd", "data/../../f.vtk"):
+        pvd(tmp_path / "sim/outside.pvd", [(0, outside)])
+        refused("outside.pvd", None, "is not a path inside the collection's folder")
+    refused("grid.pvd", '<VTKFile type="UnstructuredGrid"></VTKFile>', "is not a Collection")
+    refused("empty.pvd", '<VTKFile type="Collection"><Collection></Collection></VTKFile>', "lists no frame")
+    refused("notime.pvd", '<VTKFile type="Collection"><Collection><DataSet file="data/f_5.vtk"/></Collection></VTKFile>',
+            "DataSet 0 ('data/f_5.vtk') has no timestep")
+    refused("nan.pvd", '<VTKFile type="Collection"><Collection><DataSet timestep="x" file="a.vtk"/></Collection>'
+            '</VTKFile>', "the timestep 'x' of 'a.vtk' is not a number")
+    refused("bad.series", '{"files": [', "not a JSON file series")
+    refused("nofiles.series", '{"file-series-version": "1.0"}', 'no "files" list')
+    refused("noname.series", '{"files": [{"time": 0}]}', 'files[0] has no "name"')
+    frames(tmp_path / "sim/data", [1])
+    pvd(tmp_path / "sim/self.pvd", [(0, "data/f_5.vtk"), (1, "./data/f_1.vtk")])
+    refused("self.pvd", None, "names the collection's frame", 2, output="sim/data/f_{}.vtk")
+    refused("run.pvd", None, "has no frame field", 2, output="x.ply")
+    # Read alone, a collection says how it is meshed.
+    r = cli("triangulate", tmp_path / "sim/data/f_5.vtk", "-o", tmp_path / "one.ply", "-q")
+    (tmp_path / "sim/as.vtu").write_text('<VTKFile type="Collection"><Collection></Collection></VTKFile>')
+    r = cli("triangulate", tmp_path / "sim/as.vtu", "-o", tmp_path / "one.ply", check=False)
+    assert r.returncode == 1 and "a collection of frames (.pvd)" in r.stderr, r.stderr
 
 
 def test_binary_json_bgeo_pages_and_clear_errors(cli, tmp_path):

@@ -325,6 +325,16 @@ void file_seeds() {
           "<?xml version=\"1.0\"?>\n<VTKFile type=\"PUnstructuredGrid\" version=\"0.1\"><PUnstructuredGrid>"
           "<PPoints><PDataArray type=\"Float32\" NumberOfComponents=\"3\"/></PPoints><Piece Source=\"p/p_0.vtu\"/>"
           "<Piece Source=\"../p_1.vtu\"/></PUnstructuredGrid></VTKFile>\n");
+  // Collections (the first byte 250 on: .pvd even, .series odd).
+  put("read_vtk", "collection.pvd",
+      std::string(1, char(250)) +
+          "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\"><Collection>"
+          "<DataSet timestep=\"0.5\" part=\"0\" file=\"f_1.vtu\"/><DataSet timestep=\"0\" file=\"d\\f_0.vtu\"/>"
+          "</Collection></VTKFile>\n");
+  put("read_vtk", "collection.series",
+      std::string(1, char(251)) +
+          "{\"file-series-version\": \"1.0\", \"files\": [{\"name\": \"f_0.vtu\", \"time\": 0},"
+          " {\"name\": \"d/f_1.vtu\", \"time\": 1.5e-3}]}");
   put("read_xyz", "bom.xyz", "\xEF\xBB\xBF" "0 0 0\n1 0 0\n0 1 0\n");
   // Columns named by a header line, and told from their count (colours, intensity, normals).
   put("read_xyz", "header.xyz", "//X,Y,Z,R,G,B,Intensity,Nx,Ny,Nz\n0,0,0,255,0,0,5,0,0,1\n1,0,0,0,255,0,6,0,0,1\n");

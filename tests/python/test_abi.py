@@ -16,7 +16,7 @@ import c_header
 SCALARS = {"uint32_t": c_uint32, "int32_t": c_int32, "uint64_t": c_uint64, "int64_t": c_int64,
            "size_t": c_size_t, "double": c_double, "float": c_float, "int": c_int,
            "pm_status": c_int}
-OPAQUE = {"pm_cloud", "pm_mesh", "pm_field", "pm_ray_hits", "pm_smoother"}
+OPAQUE = {"pm_cloud", "pm_mesh", "pm_field", "pm_ray_hits", "pm_smoother", "pm_frame_collection"}
 
 
 def expected_ctype(abi, structs, text, array=None):

@@ -2,6 +2,7 @@
 over loopback. Frames against the command-line tool byte for byte, polygonize_tiled against
 polygonize bit for bit, triangulate_tiled's stitched surface against the one-machine one's
 topology. Sized for CI (about 30 s with the cluster's start)."""
+import json
 import os
 import subprocess
 import sys
@@ -109,6 +110,22 @@ def test_map_frames_writes_what_the_cli_writes(pm, pmd, client, cli, tmp_path):
             "--fill-holes", 50, "-q")
         assert (tmp_path / "out" / f"shell_{f:04d}.obj").read_bytes() == (tmp_path / "cli.obj").read_bytes()
     assert pmd.find_frames(tmp_path / "fluid_{:04d}.xyz") == frames
+    # A ParaView collection: frame n is its n-th file by time, whatever order it lists them in;
+    # the outputs are the command-line tool's for the same collection, byte for byte.
+    series = tmp_path / "fluid.xyz.series"
+    series.write_text(json.dumps({"file-series-version": "1.0", "files": [
+        {"name": "fluid_0005.xyz", "time": 0.2}, {"name": "fluid_0003.xyz", "time": 0.0},
+        {"name": "fluid_0004.xyz", "time": 0.1}, {"name": "gone.xyz", "time": 0.3}]}))
+    c = pmd.map_frames(client, "polygonize", series, tmp_path / "col" / "f_{}.ply", radius=0.25,
+                       threshold=2.5)
+    assert c.ok and [(d["frame"], Path(d["input"]).name) for d in c.done] == [
+        (0, "fluid_0003.xyz"), (1, "fluid_0004.xyz"), (2, "fluid_0005.xyz")], str(c)
+    (tmp_path / "cli").mkdir()
+    cli("polygonize", series, "-o", tmp_path / "cli" / "f_{}.ply", "--radius", 0.25, "--threshold", 2.5, "-q")
+    for n in range(3):
+        assert (tmp_path / "col" / f"f_{n}.ply").read_bytes() == (tmp_path / "cli" / f"f_{n}.ply").read_bytes()
+    with pytest.raises(ValueError, match="frame 4 is not one of the 4 frames"):
+        pmd.map_frames(client, "polygonize", series, tmp_path / "col" / "g_{}.ply", frames=[4])
 
 
 def flaky_once(source, output):

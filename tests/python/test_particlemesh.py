@@ -572,6 +572,21 @@ def test_ray_crossings_are_odd_inside_a_closed_surface_whatever_its_winding(pm):
     assert len(pm.ray_crossings(mesh, np.zeros((0, 3)))) == 0
 
 
+def test_a_frame_collection_lists_its_files_by_time(pm, tmp_path):
+    (tmp_path / "sim.pvd").write_text(
+        '<?xml version="1.0"?><VTKFile type="Collection"><Collection>'
+        '<DataSet timestep="2" file="b.vtu"/><DataSet timestep="1" file="sub\\a.vtu"/>'
+        '</Collection></VTKFile>')
+    assert pm.read_frame_collection(tmp_path / "sim.pvd") == [
+        (1.0, str(tmp_path / "sub" / "a.vtu")), (2.0, str(tmp_path / "b.vtu"))]
+    (tmp_path / "up.series").write_text('{"files": [{"name": "../a.vtu", "time": 0}]}')
+    with pytest.raises(pm.Error, match="'../a.vtu' is not a path inside the collection's folder") as e:
+        pm.read_frame_collection(tmp_path / "up.series")
+    assert e.value.status == pm.STATUS_FORMAT_ERROR
+    with pytest.raises(pm.Error, match="none.pvd"):
+        pm.read_frame_collection(tmp_path / "none.pvd")
+
+
 def test_index_arrays_name_the_index_as_passed(pm):
     # The C ABI takes unsigned (or 32-bit) indices: -1 and 2^32 must be named as passed, not
     # as their 32-bit wraps (4294967295, 0), with the triangle and the corner that hold them.

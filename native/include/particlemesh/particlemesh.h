@@ -97,6 +97,22 @@ PM_EXPORT pm_status pm_estimate_spacing_sampled(const pm_cloud* cloud, size_t ma
 PM_EXPORT pm_status pm_cloud_thin(const pm_cloud* cloud, double min_distance, uint32_t* out_indices,
                                   size_t capacity, size_t* out_count);
 
+/* ---- frame collections: ParaView's .pvd and .series ---------------------------------- */
+
+/* A collection lists a simulation's frame files with their times (particlemesh/io/
+ * frame_collection.h): frames come back by ascending time, each file joined to the
+ * collection's folder; files outside that folder, two entries at one time, entries without a
+ * file or a finite time are PM_STATUS_FORMAT_ERROR naming them. */
+typedef struct pm_frame_collection pm_frame_collection;
+
+PM_EXPORT pm_status pm_frame_collection_read(const char* path, pm_frame_collection** out_collection);
+PM_EXPORT pm_status pm_frame_collection_get_count(const pm_frame_collection* collection, size_t* out_count);
+/** Frame `index` (< count): its time and its file's path (valid until the collection is
+ *  destroyed). */
+PM_EXPORT pm_status pm_frame_collection_get_frame(const pm_frame_collection* collection, size_t index,
+                                                  double* out_time, const char** out_path);
+PM_EXPORT void pm_frame_collection_destroy(pm_frame_collection* collection);
+
 /* ---- triangulation of surface particles --------------------------------------------- */
 
 /** Return the exact triangle set of Tonnesen's smallest-sphere test (not a surface) instead of

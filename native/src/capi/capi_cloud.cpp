@@ -73,6 +73,40 @@ pm_status pm_cloud_read(const char* path, pm_cloud** out_cloud) {
   });
 }
 
+pm_status pm_frame_collection_read(const char* path, pm_frame_collection** out_collection) {
+  return guarded([&] {
+    require(path, "path");
+    require(out_collection, "out_collection");
+    auto handle = std::make_unique<pm_frame_collection>();
+    handle->frames = read_frame_collection(path);
+    *out_collection = handle.release();
+  });
+}
+
+pm_status pm_frame_collection_get_count(const pm_frame_collection* collection, size_t* out_count) {
+  return guarded([&] {
+    require(collection, "collection");
+    require(out_count, "out_count");
+    *out_count = collection->frames.size();
+  });
+}
+
+pm_status pm_frame_collection_get_frame(const pm_frame_collection* collection, size_t index, double* out_time,
+                                        const char** out_path) {
+  return guarded([&] {
+    require(collection, "collection");
+    require(out_time, "out_time");
+    require(out_path, "out_path");
+    if (index >= collection->frames.size())
+      throw Error(Status::InvalidArgument, "frame " + std::to_string(index) + " of a collection of " +
+                                               std::to_string(collection->frames.size()));
+    *out_time = collection->frames[index].time;
+    *out_path = collection->frames[index].path.c_str();
+  });
+}
+
+void pm_frame_collection_destroy(pm_frame_collection* collection) { delete collection; }
+
 pm_status pm_cloud_get_count(const pm_cloud* cloud, size_t* out_count) {
   return guarded([&] {
     require(cloud, "cloud");

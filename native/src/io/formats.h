@@ -14,6 +14,7 @@
 #include "particlemesh/core/config.h"
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "particlemesh/mesh/point_cloud.h"
@@ -73,6 +74,15 @@ std::string unique_attribute_name(const FileContents& c, const std::string& name
 /// validate_point_cloud words it), normals and attributes sized to the positions, triangle
 /// indices below the vertex count, and a file that declares faces yielding triangles.
 void check_contents(const std::string& path, const FileContents& c, ReadPurpose purpose);
+
+/// Whether a file named in another (a .pvtu's piece, a collection's frame) stays in the naming
+/// file's folder or below it: relative, no '..'. `portable` receives it with Windows'
+/// backslashes read as '/'.
+bool path_inside_folder(const std::string& listed, std::string& portable);
+
+/// A .pvd's (timestep, file) entries, in the listed order (vtk_xml_reader.cpp).
+/// @throws Error(FormatError) when it is not a VTK collection or an entry lacks either.
+std::vector<std::pair<std::string, std::string>> read_pvd_entries(const std::string& path);
 
 // The readers (one file each).
 FileContents read_ply(const std::string& path, ReadPurpose purpose);

@@ -101,14 +101,7 @@ class VtkXmlReader {
       : path_(path), purpose_(purpose), piece_of_(std::move(piece_of)) {}
 
   FileContents read() {
-    data_ = FileReader(path_).read_rest();
-    if (data_.empty()) fail("the file is empty");
-    size_t p = 0;
-    skip_misc(p);
-    if (p >= data_.size() || data_[p] != '<') fail("not an XML file (VTK XML files start with '<?xml' or '<VTKFile')");
-    Node root;
-    parse_element(p, root, 0);
-    if (root.name != "VTKFile") fail("not a VTK XML file (the root element is <" + shown(root.name) + ">, not <VTKFile>)");
+    const Node root = parse_root();
     if (appended_ != std::string::npos) {
       // The appended bytes run to </AppendedData></VTKFile> at the end of the file.
       size_t end = data_.size();
@@ -121,6 +114,9 @@ class VtkXmlReader {
         fail("truncated: no </AppendedData> after the appended data");
     }
     const std::string type = root.get("type");
+    if (type == "Collection")
+      fail("a collection of frames (.pvd): mesh its frames as a sequence, the collection as the input of "
+           "triangulate or polygonize with a frame field in the output (e.g. -o out/frame_{:04d}.ply)");
     if (type == "PUnstructuredGrid" || type == "PPolyData") {
       if (!piece_of_.empty()) fail("a piece of a parallel file is itself a parallel file (" + type + ")");
       return read_parallel(root, type);
@@ -158,9 +154,43 @@ class VtkXmlReader {
     return std::move(out_);
   }
 
+  /// A .pvd's frames: (timestep, file) of each <DataSet>, in the listed order.
+  std::vector<std::pair<std::string, std::string>> collection() {
+    const Node root = parse_root();
+    const std::string type = root.get("type");
+    if (type != "Collection")
+      fail("VTKFile type '" + shown(type) + "' is not a Collection (a .pvd lists frames in <VTKFile type=\"Collection\">)");
+    const Node* set = root.child("Collection");
+    if (!set) fail("<VTKFile type=\"Collection\"> holds no <Collection> element");
+    std::vector<std::pair<std::string, std::string>> out;
+    for (const Node& d : set->children) {
+      if (d.name != "DataSet") continue;
+      const std::string label = "DataSet " + std::to_string(out.size());
+      const std::string* time = d.attribute("timestep");
+      const std::string* file = d.attribute("file");
+      if (!file || file->empty()) fail(label + " has no file");
+      if (!time) fail(label + " ('" + shown(*file) + "') has no timestep");
+      out.emplace_back(*time, *file);
+    }
+    return out;
+  }
+
  private:
   [[noreturn]] void fail(const std::string& problem) const {
     throw Error(Status::FormatError, "'" + path_ + "': " + problem);
+  }
+
+  /// The file's root element, <VTKFile>.
+  Node parse_root() {
+    data_ = FileReader(path_).read_rest();
+    if (data_.empty()) fail("the file is empty");
+    size_t p = 0;
+    skip_misc(p);
+    if (p >= data_.size() || data_[p] != '<') fail("not an XML file (VTK XML files start with '<?xml' or '<VTKFile')");
+    Node root;
+    parse_element(p, root, 0);
+    if (root.name != "VTKFile") fail("not a VTK XML file (the root element is <" + shown(root.name) + ">, not <VTKFile>)");
+    return root;
   }
 
   // ---- Parallel files ----------------------------------------------------------------------
@@ -182,19 +212,14 @@ class VtkXmlReader {
       const std::string label = "piece " + std::to_string(sources.size());
       const std::string source = piece.get("Source");
       if (source.empty()) fail(label + " has no Source file");
-      // A file written on Windows may separate folders with backslashes.
-      std::string portable = source;
-      std::replace(portable.begin(), portable.end(), '\\', '/');
-      const fs::path relative(portable);
-      bool outside = relative.is_absolute() || relative.has_root_name();
-      for (const fs::path& part : relative) outside = outside || part == "..";
-      if (outside)
+      std::string portable;
+      if (!path_inside_folder(source, portable))
         fail(label + "'s Source '" + shown(source) + "' is not a path inside the parallel file's folder (pieces are " +
              "read only from beside it or below it)");
       if (std::find(sources.begin(), sources.end(), source) != sources.end())
         fail(label + " repeats the Source '" + shown(source) + "' of an earlier piece");
       sources.push_back(source);
-      const fs::path file = folder / relative;
+      const fs::path file = folder / fs::path(portable);
       std::error_code ec;
       if (!fs::exists(file, ec)) fail(label + "'s Source '" + shown(source) + "' does not exist (" + file.string() + ")");
       if (!fs::is_regular_file(file, ec))
@@ -653,5 +678,9 @@ class VtkXmlReader {
 }  // namespace
 
 FileContents read_vtk_xml(const std::string& path, ReadPurpose purpose) { return VtkXmlReader(path, purpose).read(); }
+
+std::vector<std::pair<std::string, std::string>> read_pvd_entries(const std::string& path) {
+  return VtkXmlReader(path, ReadPurpose::Points).collection();
+}
 
 }  // namespace particlemesh::detail

@@ -9,7 +9,7 @@ import uuid
 from dataclasses import dataclass, field
 
 from .. import _library, _options
-from .. import polygonize, read_points, triangulate, write_mesh
+from .. import polygonize, read_frame_collection, read_points, triangulate, write_mesh
 from ._dask import check_client, distributed
 
 #: What a frame can be meshed with, and the particlemesh function each runs.
@@ -107,14 +107,23 @@ def mesh_file(command, input_path, output_path, options):
             "seconds": time.perf_counter() - t0}
 
 
+def _is_collection(path):
+    """Whether path is a ParaView collection (.pvd, .series) and not a frame pattern: frame n
+    is its n-th file by time, as in the command-line tool."""
+    text = str(path)
+    return "{" not in text and "}" not in text and text.lower().endswith((".pvd", ".series"))
+
+
 def map_frames(client, command, input_pattern, output_pattern, frames=None, *, retries=1,
                skip_existing=False, progress=None, **options):
     """Mesh a sequence of particle files, one Dask task per frame.
 
     command: "triangulate" or "polygonize" (or a function f(input_path, output_path) run per
     frame); input_pattern / output_pattern: paths with one frame field, '{}' or a format such
-    as '{:04d}' ("sim/fluid_{:04d}.xyz", "out/fluid_{:04d}.ply"); frames: the frame numbers
-    (default: every file matching input_pattern). Options are those of particlemesh.triangulate
+    as '{:04d}' ("sim/fluid_{:04d}.xyz", "out/fluid_{:04d}.ply"); input_pattern may also be a
+    ParaView collection (.pvd, .series), frame n its n-th file by time (read_frame_collection);
+    frames: the frame numbers (default: every file matching input_pattern, or every file the
+    collection lists that exists). Options are those of particlemesh.triangulate
     / polygonize (spacing=, radius=, threshold=, raw=, threads= ...; polygonize's lattice_anchor
     defaults to "space" here, as in the command-line tool). Each output is exactly the
     file `particlemesh triangulate|polygonize IN -o OUT` writes with the same options, written
@@ -138,13 +147,28 @@ def map_frames(client, command, input_pattern, output_pattern, frames=None, *, r
         raise TypeError("options are for 'triangulate' and 'polygonize'; a function takes its "
                         "own arguments (use functools.partial)")
     _pattern_field(output_pattern, "output_pattern")
-    if frames is None:
+    if _is_collection(input_pattern):
+        listed = [p for _, p in read_frame_collection(input_pattern)]
+        source_of = listed.__getitem__
+        if frames is None:
+            frames = [n for n, p in enumerate(listed) if os.path.isfile(p)]
+            if not frames:
+                raise FileNotFoundError(f"none of the files {str(input_pattern)!r} lists exists")
+        else:
+            frames = list(frames)
+            for f in frames:
+                if not 0 <= f < len(listed):
+                    raise ValueError(f"frame {f} is not one of the {len(listed)} frames "
+                                     f"{str(input_pattern)!r} lists (0..{len(listed) - 1})")
+    elif frames is None:
         frames = find_frames(input_pattern)
         if not frames:
             raise FileNotFoundError(f"no file matches input_pattern {str(input_pattern)!r}")
+        source_of = lambda f: frame_path(input_pattern, f)  # noqa: E731
     else:
         _pattern_field(input_pattern, "input_pattern")
         frames = list(frames)
+        source_of = lambda f: frame_path(input_pattern, f)  # noqa: E731
     outputs = [frame_path(output_pattern, f) for f in frames]
     if len(set(outputs)) != len(outputs):
         raise ValueError(f"output_pattern {str(output_pattern)!r} names the same file for two "
@@ -155,7 +179,7 @@ def map_frames(client, command, input_pattern, output_pattern, frames=None, *, r
     jobs = {}
     token = uuid.uuid4().hex[:12]  # this run's task names
     for frame, output in zip(frames, outputs):
-        source = frame_path(input_pattern, frame)
+        source = source_of(frame)
         if skip_existing and os.path.exists(output):
             summary.skipped.append(frame)
             continue

@@ -14,6 +14,7 @@
 #include <tuple>
 
 #include "particlemesh/core/error.h"
+#include "particlemesh/io/frame_collection.h"
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
 #include "particlemesh/sample/shapes.h"
@@ -675,4 +676,47 @@ TEST(PrtReader, ChannelsExactAndBadFilesNamed) {
   EXPECT_REFUSED(read_point_cloud(write(dir / "cut.prt", bad)), Status::FormatError, "cut.prt': the particle data: truncated");
   EXPECT_REFUSED(read_point_cloud(write(dir / "short.prt", prt_file(2, channels, records).substr(0, 70))),
                  Status::FormatError, "short.prt': truncated: the file ends");
+}
+
+// A ParaView collection lists frames in any order: they come back by time, joined to its
+// folder (Windows' backslashes read as '/'); a .series the same. Entries that would reach
+// outside its folder, share a time, or lack a file or a time are refused by name.
+TEST(FrameCollection, FramesByTimeInsideTheCollectionsFolder) {
+  const fs::path dir = test::scratch_dir("collection");
+  EXPECT_TRUE(is_frame_collection("a/b.PVD") && is_frame_collection("f.vtu.series") && !is_frame_collection("f.vtu"));
+  const std::string pvd = write(dir / "run.pvd",
+                                "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n"
+                                "<Collection>\n<DataSet timestep=\"0.5\" part=\"0\" file=\"b.vtu\"/>\n"
+                                "<!-- a comment -->\n<DataSet timestep=\" 1e-3 \" file=\"sub\\a.vtu\"/>\n"
+                                "</Collection>\n</VTKFile>\n");
+  const std::string series = write(
+      dir / "run.vtu.series",
+      R"({"file-series-version": "1.0", "files": [{"name": "b.vtu", "time": 0.5}, {"name": "sub/a.vtu", "time": 0.001}]})");
+  for (const std::string& path : {pvd, series}) {
+    const std::vector<CollectionFrame> f = read_frame_collection(path);
+    ASSERT_EQ(f.size(), 2u) << path;
+    EXPECT_EQ(f[0].time, 0.001);
+    EXPECT_EQ(f[0].path, (dir / "sub/a.vtu").string());
+    EXPECT_EQ(f[1].time, 0.5);
+    EXPECT_EQ(f[1].path, (dir / "b.vtu").string());
+    EXPECT_EQ(f[1].listed, "b.vtu");
+  }
+  auto one = [&](const std::string& time, const std::string& file) {
+    return write(dir / "one.pvd", "<VTKFile type=\"Collection\"><Collection><DataSet timestep=\"" + time +
+                                      "\" file=\"" + file + "\"/></Collection></VTKFile>");
+  };
+  EXPECT_REFUSED(read_frame_collection(one("0", "../a.vtu")), Status::FormatError, "not a path inside the collection");
+  EXPECT_REFUSED(read_frame_collection(one("0", "/tmp/a.vtu")), Status::FormatError, "not a path inside");
+  EXPECT_REFUSED(read_frame_collection(one("0", "a/..\\..\\b.vtu")), Status::FormatError, "not a path inside");
+  EXPECT_REFUSED(read_frame_collection(one("inf", "a.vtu")), Status::FormatError, "the time of 'a.vtu' is not finite");
+  EXPECT_REFUSED(read_frame_collection(one("t", "a.vtu")), Status::FormatError, "the timestep 't' of 'a.vtu' is not a number");
+  EXPECT_REFUSED(read_frame_collection(write(dir / "e.pvd", "<VTKFile type=\"Collection\"><Collection/></VTKFile>")),
+                 Status::FormatError, "lists no frame");
+  EXPECT_REFUSED(read_frame_collection(write(dir / "g.pvd", "<VTKFile type=\"PolyData\"></VTKFile>")),
+                 Status::FormatError, "is not a Collection");
+  EXPECT_REFUSED(read_frame_collection(write(dir / "t.series", R"({"files": [{"name": "a", "time": 1}, {"name": "b", "time": 1}]})")),
+                 Status::FormatError, "'a' and 'b' share the time 1");
+  EXPECT_REFUSED(read_frame_collection(write(dir / "n.series", R"({"files": [{"name": "a", "time": "1"}]})")),
+                 Status::FormatError, "files[0] ('a') has no numeric \"time\"");
+  EXPECT_REFUSED(read_frame_collection((dir / "none.pvd").string()), Status::IoError, "none.pvd");
 }
