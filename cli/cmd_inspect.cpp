@@ -3,7 +3,8 @@
 // spacing, the normals and every channel with its range (the names --attributes and
 // --radius-channel take). A mesh file the mesh reader refuses (FormatError) but the particle
 // reader takes (a PLY of 1-corner faces, as meshio writes a point cloud) gets the particle
-// report, with the mesh reader's message as "not a mesh" (--json: "not_a_mesh").
+// report, with the mesh reader's message as "not a mesh" (--json: "not_a_mesh"). A frame
+// collection (.pvd, .series) lists its frames by time, as the sequences number them.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -11,10 +12,12 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <sys/stat.h>
 
 #include "commands.h"
 #include "particle_input.h"
 #include "particlemesh/core/error.h"
+#include "particlemesh/io/frame_collection.h"
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
 #include "particlemesh/spatial/spacing.h"
@@ -110,6 +113,43 @@ std::string describe_particles(const nlohmann::json& j, const std::string& read_
   return out;
 }
 
+/// A collection's frames (by time) and whether each file exists; JSON, printed from it.
+nlohmann::json collection_summary(const std::string& path) {
+  nlohmann::json j;
+  j["file"] = path;
+  j["frames"] = nlohmann::json::array();
+  size_t n = 0;
+  for (const CollectionFrame& f : read_frame_collection(path)) {
+    struct stat st {};
+    const bool exists = ::stat(f.path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+    j["frames"].push_back({{"frame", n++}, {"time", f.time}, {"path", f.path}, {"exists", exists}});
+  }
+  return j;
+}
+
+std::string describe_collection(const nlohmann::json& j) {
+  const auto& frames = j["frames"];
+  size_t missing = 0;
+  for (const auto& f : frames) missing += !f["exists"].get<bool>();
+  std::string out = j["file"].get<std::string>() + ": a collection of " + std::to_string(frames.size()) +
+                    " frame" + (frames.size() == 1 ? "" : "s") + ", times " +
+                    number(frames.front()["time"].get<double>()) + " to " + number(frames.back()["time"].get<double>()) +
+                    (missing ? ", " + std::to_string(missing) + " missing" : "") + "\n";
+  // The first and last frames when there are many.
+  const size_t shown = 20;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    if (frames.size() > shown && i == shown / 2) {
+      out += "  ... " + std::to_string(frames.size() - shown) + " more\n";
+      i = frames.size() - shown / 2;
+    }
+    const auto& f = frames[i];
+    char head[64];
+    std::snprintf(head, sizeof head, "  frame %-5zu t = %-12s ", i, number(f["time"].get<double>()).c_str());
+    out += head + f["path"].get<std::string>() + (f["exists"].get<bool>() ? "" : "  (missing: not a file)") + "\n";
+  }
+  return out;
+}
+
 }  // namespace
 
 void add_inspect(CLI::App& root, std::vector<Command>& commands) {
@@ -121,10 +161,16 @@ void add_inspect(CLI::App& root, std::vector<Command>& commands) {
   CLI::App* app = root.add_subcommand(
       "inspect",
       "Print the topology report of a mesh (.ply, .obj, .off, .stl, VTK), or for a file of particles (no triangles: "
-      "any input the meshing commands read) their count, bounds, spacing, normals and channels with their ranges");
-  app->add_option("file", args->input, "Mesh or particle file")->required();
+      "any input the meshing commands read) their count, bounds, spacing, normals and channels with their ranges, "
+      "or for a collection (.pvd, .series) its frames by time and which files are missing");
+  app->add_option("file", args->input, "Mesh, particle file or frame collection")->required();
   app->add_flag("--json", args->json, "Print the report as JSON");
   commands.push_back({app, [args] {
+                        if (is_frame_collection(args->input)) {
+                          const nlohmann::json j = collection_summary(args->input);
+                          std::printf("%s", args->json ? (j.dump(2) + "\n").c_str() : describe_collection(j).c_str());
+                          return 0;
+                        }
                         // Why the file is not read as a mesh when the mesh reader refused it.
                         std::exception_ptr mesh_error;
                         std::string not_a_mesh;

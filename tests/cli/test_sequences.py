@@ -318,6 +318,14 @@ def test_a_paraview_collection_is_a_sequence(cli, tmp_path):
                 "-q")
         assert sorted(x.name for x in (tmp_path / out).glob("t_*.ply")) == ["t_1.ply"]
 
+    # inspect lists the frames as the sequence numbers them, and the missing one.
+    r = cli("inspect", tmp_path / "sim/run.pvd")
+    assert "a collection of 4 frames, times 0 to 0.5, 1 missing" in r.stdout, r.stdout
+    assert "frame 1     t = 0.125" in r.stdout and "f_9.vtk  (missing: not a file)" in r.stdout
+    j = json.loads(cli("inspect", tmp_path / "sim/run.vtk.series", "--json").stdout)
+    assert [(f["frame"], Path(f["path"]).name, f["exists"]) for f in j["frames"]] == [
+        (0, "f_5.vtk", True), (1, "f_6.vtk", True), (2, "f_7.vtk", True), (3, "f_9.vtk", False)]
+
     def refused(name, text, message, code=1, output="x_{}.ply"):
         (tmp_path / "sim" / name).write_text(text) if text is not None else None
         r = cli("polygonize", tmp_path / "sim" / name, "-o", tmp_path / output, *POLY, check=False)

@@ -585,6 +585,8 @@ def test_a_frame_collection_lists_its_files_by_time(pm, tmp_path):
     assert e.value.status == pm.STATUS_FORMAT_ERROR
     with pytest.raises(pm.Error, match="none.pvd"):
         pm.read_frame_collection(tmp_path / "none.pvd")
+    with pytest.raises(pm.Error, match="a collection of frames .* read_frame_collection lists its files"):
+        pm.read_points(tmp_path / "sim.pvd")
 
 
 def test_index_arrays_name_the_index_as_passed(pm):

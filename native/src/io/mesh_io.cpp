@@ -6,6 +6,7 @@
 #include "io/formats.h"
 #include "io/writers.h"
 #include "particlemesh/core/error.h"
+#include "particlemesh/io/frame_collection.h"
 
 namespace PM_NAMESPACE {
 
@@ -16,6 +17,10 @@ detail::FileContents read_file(const std::string& path, detail::ReadPurpose purp
   const detail::FileFormat* f = detail::format_for(path);
   if (!f || !(points ? f->points : f->mesh)) {
     const std::string ext = detail::lower_extension(path);
+    if (is_frame_collection(path))
+      throw Error(Status::FormatError, "'" + path + "': a collection of frames (" + ext +
+                                           "), not one file of particles: read_frame_collection lists its files (the "
+                                           "command line meshes every frame of it as a sequence)");
     throw Error(Status::FormatError, "'" + path + "': " +
                                          (ext.empty() ? std::string("no file extension to tell the format by")
                                                       : "unsupported file type '" + ext + "'") +
