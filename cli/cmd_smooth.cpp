@@ -78,6 +78,8 @@ nlohmann::json smooth_stats_json(const SmoothStats& s) {
           {"control_edges", s.control_edges},
           {"boundary_edges", s.boundary_edges},
           {"reoriented_triangles", s.reoriented_triangles},
+          {"nonmanifold_edges", s.nonmanifold_edges},
+          {"nonmanifold_vertices", s.nonmanifold_vertices},
           {"creases", s.creases},
           {"vertices", s.vertices},
           {"triangles", s.triangles},
@@ -149,6 +151,9 @@ int run_smooth(const SmoothArgs& a) {
                 s.control_triangles, s.control_edges, s.boundary_edges);
     if (s.dropped_vertices) std::printf("  dropped       %zu unreferenced vertices\n", s.dropped_vertices);
     if (s.reoriented_triangles) std::printf("  reoriented    %zu triangles\n", s.reoriented_triangles);
+    if (s.nonmanifold_edges || s.nonmanifold_vertices)
+      std::printf("  non-manifold  %zu edges in more than two triangles, %zu vertices joining several fans: kept "
+                  "sharp\n", s.nonmanifold_edges, s.nonmanifold_vertices);
     if (s.creases) std::printf("  creases       %zu edges\n", s.creases);
     print_mesh_and_times(written.report, "smooth", t_read, t_smooth, written.seconds);
   }

@@ -394,7 +394,8 @@ def smooth(mesh, scheme=None, levels=None, *, crease_edges=None, crease_sharpnes
     crease_edges: (K, 2) vertex pairs that stay sharp (Loop), crease_sharpness: K values
     (None = infinitely sharp). Other options (pm_smooth_options): limit, boundary
     ("edge-and-corner", "edge-only"), crease_method ("uniform", "chaikin"), threads,
-    max_triangles. The mesh must be a 2-manifold. Returns Mesh. For many meshes with the
+    max_triangles. Loop takes non-manifold meshes (an edge in more than two triangles stays
+    an infinitely sharp crease, as in OpenSubdiv); butterfly needs a 2-manifold. Returns Mesh. For many meshes with the
     same triangles (frames of an animation), a Smoother refines them once."""
     lib = _library.load()
     opt, _keep = _smooth_options(lib, mesh, scheme, levels, crease_edges, crease_sharpness, options)

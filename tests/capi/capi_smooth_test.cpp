@@ -218,14 +218,25 @@ TEST(CApiSmooth, SmoothMisuseGivesStatusAndMessageAndLeavesTheOutputAlone) {
   EXPECT_NE(last().find("is not an edge"), std::string::npos);
   EXPECT_EQ(out, kSentinel);
 
-  // Non-manifold input: a third triangle on an edge.
+  // Non-manifold input: a third triangle on an edge. Butterfly refuses it; Loop (the default)
+  // keeps it as a sharp crease.
   TriMesh fin = icosphere_mesh(0);
   fin.positions.push_back({3, 3, 3});
   fin.triangles.push_back({fin.triangles[0][0], fin.triangles[0][1], 12});
   MeshGuard bad_mesh{make_mesh(fin)};
-  EXPECT_EQ(pm_smooth(bad_mesh.m, nullptr, &out), PM_STATUS_INVALID_INPUT);
+  pm_smooth_options bf;
+  pm_smooth_options_init(&bf);
+  bf.scheme = PM_SMOOTH_BUTTERFLY;
+  EXPECT_EQ(pm_smooth(bad_mesh.m, &bf, &out), PM_STATUS_INVALID_INPUT);
   EXPECT_NE(last().find("non-manifold"), std::string::npos);
   EXPECT_EQ(out, kSentinel);
+  pm_mesh* fin_smooth = nullptr;
+  ASSERT_EQ(pm_smooth(bad_mesh.m, nullptr, &fin_smooth), PM_OK) << last();
+  pm_topology_report r{};
+  r.struct_size = sizeof(r);
+  ASSERT_EQ(pm_mesh_report(fin_smooth, &r), PM_OK);
+  EXPECT_EQ(r.nonmanifold_edges, 2u);  // the fin's edge, halved
+  pm_mesh_destroy(fin_smooth);
 }
 
 TEST(CApiSmooth, CreasesThroughTheAbi) {

@@ -150,7 +150,7 @@ def test_bad_input_gives_one_line_errors(cli, tmp_path):
     _fails(cli, tmp_path, ["smooth", tmp_path / "missing.obj"], "missing.obj")
     fin = tmp_path / "fin.obj"  # three triangles on edge (1, 2)
     fin.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 1 1 1\nf 1 2 3\nf 2 4 3\nf 2 3 5\n")
-    _fails(cli, tmp_path, ["smooth", fin], "edge (1, 2) is shared by 3 triangles")
+    _fails(cli, tmp_path, ["smooth", fin, "--scheme", "butterfly"], "edge (1, 2) is shared by 3 triangles")
     src = tmp_path / "oct.obj"
     _octahedron(src)
     _fails(cli, tmp_path, ["smooth", src, "--crease", "0,1"], "creases[0] = (0, 1) is not an edge")
@@ -188,8 +188,8 @@ def test_triangulate_then_smooth_in_one_step(cli, inspect, tmp_path):
 
 def test_triangulate_smooth_on_a_sampled_torus(cli, inspect, tmp_path):
     # Particles -> finished surface -> Loop at the limit, in one step: still a closed, outward
-    # genus-1 manifold with 16x the triangles; the raw triangle set is refused with a line
-    # naming the smoothing step (it is not a manifold) and leaves no file.
+    # genus-1 manifold with 16x the triangles; the raw triangle set is refused by butterfly
+    # with a line naming the smoothing step (it is not a manifold) and leaves no file.
     pts = tmp_path / "torus.xyz"
     cli("sample", "torus", "--spacing", "0.08", "-o", pts)
     plain = tmp_path / "plain.ply"
@@ -204,11 +204,19 @@ def test_triangulate_smooth_on_a_sampled_torus(cli, inspect, tmp_path):
         assert r["closed"] and r["manifold"] and r["consistently_oriented"] and r["outward"]
         assert r["euler_characteristic"] == 0 and r["per_component"][0]["genus"] == 1
     out = tmp_path / "raw.ply"
-    proc = cli("triangulate", pts, "-o", out, "--raw", "--smooth", "loop", check=False)
+    proc = cli("triangulate", pts, "-o", out, "--raw", "--smooth", "butterfly", check=False)
     assert proc.returncode == 1, proc.stderr
-    assert "--smooth loop: " in proc.stderr and "non-manifold" in proc.stderr
+    assert "--smooth butterfly: " in proc.stderr and "non-manifold" in proc.stderr
+    assert "the Loop scheme smooths such meshes" in proc.stderr
     assert len([l for l in proc.stderr.splitlines() if l.strip()]) == 1
     assert not out.exists()
+    # Loop smooths the raw triangle set too, its edges in three or more triangles kept sharp.
+    raw = tmp_path / "raw_plain.ply"
+    cli("triangulate", pts, "-o", raw, "--raw", "-q")
+    proc = cli("smooth", raw, "-o", out, "--levels", "1")
+    assert "non-manifold  " in proc.stdout and "kept sharp" in proc.stdout, proc.stdout
+    r, before = inspect(out), inspect(raw)
+    assert before["nonmanifold_edges"] > 0 and r["nonmanifold_edges"] == 2 * before["nonmanifold_edges"]
 
 
 def test_help(cli):

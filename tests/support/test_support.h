@@ -56,6 +56,47 @@ inline std::filesystem::path scratch_dir(const std::string& name) {
   return p;
 }
 
+/// Non-manifold meshes: a "book" of flat pages (a grid of nr x nz quads each, in the directions
+/// `angles` around the z axis) sharing their spine, the segment x = y = 0, 0 <= z <= 1 (nz
+/// edges in as many triangles as pages); and two closed tetrahedra sharing the edge (0, 1), in
+/// four triangles, with no boundary.
+inline TriMesh book_mesh(const std::vector<double>& angles, int nz = 4, int nr = 3) {
+  TriMesh m;
+  std::vector<uint32_t> spine(size_t(nz) + 1);
+  for (int j = 0; j <= nz; ++j) spine[size_t(j)] = uint32_t(j), m.positions.push_back({0, 0, double(j) / nz});
+  for (double a : angles) {
+    auto at = [&](int i, int j) -> uint32_t {
+      if (i == 0) return spine[size_t(j)];
+      return uint32_t(m.positions.size() - size_t(nr * (nz + 1)) + size_t((i - 1) * (nz + 1) + j));
+    };
+    for (int i = 1; i <= nr; ++i)
+      for (int j = 0; j <= nz; ++j) {
+        const double r = double(i) / nr;
+        m.positions.push_back({r * std::cos(a), r * std::sin(a), double(j) / nz});
+      }
+    for (int i = 0; i < nr; ++i)
+      for (int j = 0; j < nz; ++j) {
+        const uint32_t p = at(i, j), q = at(i + 1, j), r = at(i + 1, j + 1), s = at(i, j + 1);
+        m.triangles.push_back({p, q, r});
+        m.triangles.push_back({p, r, s});
+      }
+  }
+  return m;
+}
+
+inline TriMesh tetrahedra_sharing_an_edge() {
+  TriMesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0.3, 1, 0}, {0.4, 0.3, 1}, {0.5, -1, 0.2}, {0.4, -0.3, -1}};
+  const Triangle tet[4] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  for (const Triangle& t : tet) m.triangles.push_back(t);
+  for (Triangle t : tet) {  // the second: 2 -> 4, 3 -> 5, wound to face out of its own solid
+    for (auto& v : t) v = v == 2 ? 4 : v == 3 ? 5 : v;
+    std::swap(t[1], t[2]);
+    m.triangles.push_back(t);
+  }
+  return m;
+}
+
 /// Triangles as sorted vertex triples in a sorted vector (orientation ignored).
 inline std::vector<Triangle> canonical(std::vector<Triangle> t) {
   for (auto& x : t) std::sort(x.begin(), x.end());

@@ -122,7 +122,7 @@ void compact_vertex_values(const std::vector<Vec3>& positions, const std::vector
   }
 }
 
-ControlMesh prepare_control_mesh(const TriMesh& mesh) {
+ControlMesh prepare_control_mesh(const TriMesh& mesh, bool allow_nonmanifold) {
   check_sizes(mesh);
   check_triangles(mesh);
   const auto& tris = mesh.triangles;
@@ -178,9 +178,13 @@ ControlMesh prepare_control_mesh(const TriMesh& mesh) {
     if (n == 1) {
       ++cm.boundary_edges;
     } else if (n > 2) {
-      throw Error(Status::InvalidInput, edge_name(lo, hi) + " is shared by " + std::to_string(n) +
-                                            " triangles (non-manifold); smoothing needs every edge in one or "
-                                            "two triangles");
+      if (!allow_nonmanifold)
+        throw Error(Status::InvalidInput, edge_name(lo, hi) + " is shared by " + std::to_string(n) +
+                                              " triangles (non-manifold); the butterfly scheme needs every edge in "
+                                              "one or two triangles (the Loop scheme smooths such meshes)");
+      // No twins: the orientation's flood fill does not cross it (each sheet is oriented on
+      // its own), and OpenSubdiv makes it an infinitely sharp crease.
+      ++cm.nonmanifold_edges;
     } else {
       const uint32_t h0 = half[i], h1 = half[i + 1];
       if (opposite(h0) == opposite(h1))
@@ -201,14 +205,20 @@ ControlMesh prepare_control_mesh(const TriMesh& mesh) {
   // 3. Every vertex must be a single fan: all its corners connected through shared edges.
   {
     std::vector<uint32_t> fan(nv, kNone);
+    constexpr uint32_t kSeveral = kNone - 1;
     for (uint32_t corner = 0; corner < 3 * nf; ++corner) {
       const uint32_t v = tris[corner / 3][corner % 3];
       const uint32_t root = corners.find(corner);
       if (fan[v] == kNone) {
         fan[v] = root;
-      } else if (fan[v] != root) {
-        throw Error(Status::InvalidInput, "vertex " + std::to_string(v) +
-                                              " joins separate fans of triangles (non-manifold vertex)");
+      } else if (fan[v] != root && fan[v] != kSeveral) {
+        if (!allow_nonmanifold)
+          throw Error(Status::InvalidInput, "vertex " + std::to_string(v) +
+                                                " joins separate fans of triangles (non-manifold vertex); the "
+                                                "butterfly scheme needs a single fan (the Loop scheme smooths such "
+                                                "meshes)");
+        fan[v] = kSeveral;
+        ++cm.nonmanifold_vertices;
       }
     }
   }

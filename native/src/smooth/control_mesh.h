@@ -27,6 +27,8 @@ struct ControlMesh {
   /// Undirected edges as (min, max) input-index pairs, sorted: the crease lookup.
   std::vector<std::pair<uint32_t, uint32_t>> edges;
   size_t boundary_edges = 0;
+  size_t nonmanifold_edges = 0;     ///< edges in more than two triangles (allowed for Loop only)
+  size_t nonmanifold_vertices = 0;  ///< vertices joining several fans (allowed for Loop only)
   size_t reoriented_triangles = 0;
   size_t dropped_vertices = 0;
   /// Closed components whose orientation was repaired: which way they face came from their
@@ -43,9 +45,11 @@ struct ControlMesh {
 };
 
 /// Check `mesh` (see smooth/subdivide.h for the rules), drop unreferenced vertices and
-/// repair the orientation. Parallel parts run in the caller's thread arena.
+/// repair the orientation. Parallel parts run in the caller's thread arena. With
+/// `allow_nonmanifold` (Loop: OpenSubdiv subdivides them) edges in more than two triangles and
+/// vertices joining several fans pass; else they are errors (OpenMesh's butterfly).
 /// @throws Error(InvalidInput | LimitExceeded) naming the triangle, edge or vertex.
-ControlMesh prepare_control_mesh(const TriMesh& mesh);
+ControlMesh prepare_control_mesh(const TriMesh& mesh, bool allow_nonmanifold);
 
 /// The positions and attribute values of the referenced vertices (`original_vertex`, in
 /// control order), checked as prepare_control_mesh checks them: attribute sizes, finite and

@@ -32,7 +32,8 @@ void copy_triangles(const OpenSubdiv::Far::TopologyLevel& level, std::vector<Tri
 /// Whether the limit is taken by loop_limit.h (a closed surface without creases) rather than
 /// by OpenSubdiv's PrimvarRefiner::Limit.
 inline bool own_loop_limit(const ControlMesh& control, const SmoothOptions& options, size_t creases) {
-  return options.limit && control.boundary_edges == 0 && creases == 0;
+  return options.limit && control.boundary_edges == 0 && creases == 0 && control.nonmanifold_edges == 0 &&
+         control.nonmanifold_vertices == 0;
 }
 
 /// Every attribute's values as doubles, vertex-major: vertex i's channels are

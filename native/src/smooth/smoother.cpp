@@ -94,7 +94,7 @@ Smoother::Smoother(const TriMesh& mesh, const SmoothOptions& options) : impl_(st
   detail::with_threads(options.threads, [&] {
     const auto t0 = Clock::now();
     tracker.stage("checking the mesh", 0.0, 0.1);
-    m.control = detail::prepare_control_mesh(mesh);
+    m.control = detail::prepare_control_mesh(mesh, options.scheme == SmoothScheme::Loop);
     SmoothStats& st = m.stats;
     st.input_vertices = mesh.positions.size();
     st.dropped_vertices = m.control.dropped_vertices;
@@ -102,6 +102,8 @@ Smoother::Smoother(const TriMesh& mesh, const SmoothOptions& options) : impl_(st
     st.control_triangles = m.control.triangles.size();
     st.control_edges = m.control.edges.size();
     st.boundary_edges = m.control.boundary_edges;
+    st.nonmanifold_edges = m.control.nonmanifold_edges;
+    st.nonmanifold_vertices = m.control.nonmanifold_vertices;
     st.reoriented_triangles = m.control.reoriented_triangles;
     st.levels = options.levels;
     std::vector<std::pair<uint32_t, uint32_t>> crease_pairs;

@@ -106,13 +106,15 @@ SmoothResult smooth_mesh(const TriMesh& mesh, const SmoothOptions& options) {
   detail::with_threads(options.threads, [&] {
     auto t0 = Clock::now();
     tracker.stage("checking the mesh", 0.0, 0.05);
-    detail::ControlMesh cm = detail::prepare_control_mesh(mesh);
+    detail::ControlMesh cm = detail::prepare_control_mesh(mesh, options.scheme == SmoothScheme::Loop);
     st.input_vertices = mesh.positions.size();
     st.dropped_vertices = cm.dropped_vertices;
     st.control_vertices = cm.positions.size();
     st.control_triangles = cm.triangles.size();
     st.control_edges = cm.edges.size();
     st.boundary_edges = cm.boundary_edges;
+    st.nonmanifold_edges = cm.nonmanifold_edges;
+    st.nonmanifold_vertices = cm.nonmanifold_vertices;
     st.reoriented_triangles = cm.reoriented_triangles;
     st.levels = options.levels;
 

@@ -156,6 +156,10 @@ TEST(Smoother, EvaluateIsSmoothMeshBitForBit) {
   bf.scheme = SmoothScheme::Butterfly;
   bf.levels = 2;
   cases.push_back({"butterfly", sphere, bf});
+  // Non-manifold meshes (Loop keeps their edges sharp): a book's spine, closed parts sharing an
+  // edge (no boundary, so the limit is OpenSubdiv's after an attempt at the rings).
+  cases.push_back({"a book of three pages", test::book_mesh({0.0, 1.5707963, 3.4906585}), levels(2)});
+  cases.push_back({"tetrahedra sharing an edge", test::tetrahedra_sharing_an_edge(), levels(2)});
   TriMesh unused = sphere;  // unreferenced vertices are dropped (and may hold anything)
   unused.positions.push_back({std::numeric_limits<double>::quiet_NaN(), 0, 0});
   cases.push_back({"closed sphere with an unused vertex", unused, levels(2)});
@@ -233,6 +237,9 @@ TEST(Smoother, RefusesWhatSmoothMeshRefuses) {
   TriMesh fin = sphere;
   fin.positions.push_back({5, 5, 5});
   fin.triangles.push_back({sphere.triangles[0][0], sphere.triangles[0][1], uint32_t(sphere.positions.size())});
-  EXPECT_EQ(status_of([&] { Smoother s(fin); }), Status::InvalidInput);
+  SmoothOptions bf;
+  bf.scheme = SmoothScheme::Butterfly;
+  EXPECT_EQ(status_of([&] { Smoother s(fin, bf); }), Status::InvalidInput);
+  EXPECT_EQ(status_of([&] { Smoother s(fin); }), Status::Ok);  // Loop keeps the fin sharp
   EXPECT_EQ(status_of([&] { Smoother s(sphere, levels(11)); }), Status::InvalidArgument);
 }

@@ -812,12 +812,18 @@ TEST(SmoothInput, BadMeshesGiveClearErrors) {
     const TriMesh big = smooth_mesh(m, o).mesh;
     for (const Vec3& p : big.positions) EXPECT_TRUE(is_finite(p));
     for (const Vec3& n : big.normals) EXPECT_TRUE(is_finite(n));  // (0 where the sliver's tangents vanish in rounding)
-    // A fin: a third triangle on edge (0, 1).
+    // A fin: a third triangle on edge (0, 1). Butterfly refuses it; Loop keeps it sharp
+    // (SmoothInput.LoopKeepsNonManifoldEdgesSharp).
+    const bool is_loop = o.scheme == SmoothScheme::Loop;
     m = tet;
     m.positions.push_back({0.5, -1, 0});
     m.triangles.push_back({0, 1, 4});
-    EXPECT_EQ(status_of([&] { smooth_mesh(m, o); }), Status::InvalidInput);
-    EXPECT_NE(message_of([&] { smooth_mesh(m, o); }).find("edge (0, 1) is shared by 3 triangles"), std::string::npos);
+    EXPECT_EQ(status_of([&] { smooth_mesh(m, o); }), is_loop ? Status::Ok : Status::InvalidInput);
+    if (!is_loop) {
+      EXPECT_NE(message_of([&] { smooth_mesh(m, o); }).find("edge (0, 1) is shared by 3 triangles (non-manifold); the "
+                                                             "butterfly scheme needs"),
+                std::string::npos);
+    }
     // Two tetrahedra sharing vertex 0 only: vertex 0 joins two fans.
     m = tet;
     for (int i = 1; i < 4; ++i) m.positions.push_back(m.positions[size_t(i)] * -1.0);
@@ -826,7 +832,10 @@ TEST(SmoothInput, BadMeshesGiveClearErrors) {
         if (v != 0) v += 3;
       m.triangles.push_back(t);
     }
-    EXPECT_NE(message_of([&] { smooth_mesh(m, o); }).find("vertex 0 joins separate fans"), std::string::npos);
+    EXPECT_EQ(status_of([&] { smooth_mesh(m, o); }), is_loop ? Status::Ok : Status::InvalidInput);
+    if (!is_loop) {
+      EXPECT_NE(message_of([&] { smooth_mesh(m, o); }).find("vertex 0 joins separate fans"), std::string::npos);
+    }
     // The same triangle twice, facing both ways (a two-sided "pillow").
     m = TriMesh{};
     m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
@@ -861,6 +870,61 @@ TEST(SmoothInput, BadMeshesGiveClearErrors) {
     m.positions[3] = {0.5, 0.5, 0};
     EXPECT_EQ(status_of([&] { smooth_mesh(m, o); }), Status::Ok);
   }
+}
+
+// Loop smooths non-manifold meshes as OpenSubdiv (and Blender's Subdivision Surface) does: an
+// edge in more than two triangles is an infinitely sharp crease. A book of three pages at
+// uneven angles keeps its spine on the z axis (a smooth rule would pull it towards the pages),
+// the refined spine is still every page's edge, and the result does not depend on the thread
+// count; a pinched vertex and closed parts sharing an edge are smoothed too.
+TEST(SmoothInput, LoopKeepsNonManifoldEdgesSharp) {
+  const std::vector<double> angles = {0.0, 1.5707963, 3.4906585};
+  const TriMesh book = test::book_mesh(angles);
+  for (bool limit : {true, false}) {
+    const SmoothResult r = smooth_mesh(book, loop(2, limit));
+    EXPECT_EQ(r.stats.nonmanifold_edges, 4u);
+    EXPECT_EQ(r.stats.nonmanifold_vertices, 5u);
+    const TopologyReport t = topology_report(r.mesh);
+    EXPECT_EQ(t.nonmanifold_edges, 16u);  // the spine's 4 edges, halved twice
+    EXPECT_EQ(t.triangles, 16 * book.triangles.size());
+    std::map<std::pair<uint32_t, uint32_t>, int> count = test::edge_counts(r.mesh.triangles);
+    size_t spine = 0;
+    for (const auto& [e, n] : count)
+      if (n > 2) {
+        ++spine;
+        for (uint32_t v : {e.first, e.second}) {
+          EXPECT_NEAR(r.mesh.positions[v].x, 0.0, 1e-12) << v;
+          EXPECT_NEAR(r.mesh.positions[v].y, 0.0, 1e-12) << v;
+          EXPECT_EQ(n, 3);
+        }
+      }
+    EXPECT_EQ(spine, 16u);
+    // The pages stay flat: every vertex on one page's half-plane (a smooth rule at the spine
+    // would bend each page towards the others).
+    for (const Vec3& p : r.mesh.positions) {
+      double off = 1e9;
+      for (double a : angles)
+        if (p.x * std::cos(a) + p.y * std::sin(a) >= -1e-12)
+          off = std::min(off, std::abs(-p.x * std::sin(a) + p.y * std::cos(a)));
+      EXPECT_LT(off, 1e-12) << p.x << " " << p.y << " " << p.z;
+    }
+    SmoothOptions one = loop(2, limit);
+    one.threads = 1;
+    const SmoothResult serial = smooth_mesh(book, one);
+    ASSERT_EQ(serial.mesh.positions.size(), r.mesh.positions.size());
+    for (size_t i = 0; i < r.mesh.positions.size(); ++i) ASSERT_EQ(serial.mesh.positions[i], r.mesh.positions[i]);
+    EXPECT_EQ(serial.mesh.triangles, r.mesh.triangles);
+  }
+  // Closed tetrahedra sharing an edge (no boundary: the limit is OpenSubdiv's), and a pinched
+  // vertex: smoothed, the sharing kept.
+  const SmoothResult two = smooth_mesh(test::tetrahedra_sharing_an_edge(), loop(1, true));
+  EXPECT_EQ(two.stats.nonmanifold_edges, 1u);
+  EXPECT_EQ(topology_report(two.mesh).nonmanifold_edges, 2u);
+  for (const Vec3& p : two.mesh.positions) EXPECT_TRUE(is_finite(p));
+  for (const Vec3& n : two.mesh.normals) EXPECT_NEAR(norm(n), 1.0, 1e-9);
+  // Butterfly refuses them, pointing to Loop.
+  SmoothOptions bf = butterfly(1);
+  EXPECT_NE(message_of([&] { smooth_mesh(book, bf); }).find("(the Loop scheme smooths such meshes)"), std::string::npos);
 }
 
 TEST(SmoothInput, BadOptionsGiveClearErrors) {

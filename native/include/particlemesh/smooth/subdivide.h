@@ -16,12 +16,16 @@
 // (V' = V + E), so the Euler characteristic does not change. Output vertex i < V is the
 // image of control vertex i (see SmoothResult::original_vertex), for both schemes.
 //
-// Input (a TriMesh) must be a 2-manifold: every edge in one or two triangles, every vertex a
-// single fan of triangles. What happens to other input:
-//  - edge in more than two triangles, vertex joining several fans, a triangle repeating a
-//    vertex, two triangles on the same three vertices, a non-finite position or attribute
-//    value, an index out of range, no triangles: Error(InvalidInput) naming the edge,
-//    vertex or triangle;
+// Butterfly's input (a TriMesh) must be a 2-manifold: every edge in one or two triangles,
+// every vertex a single fan of triangles. Loop also takes non-manifold meshes, as OpenSubdiv
+// does: an edge in more than two triangles is an infinitely sharp crease (each sheet meets it
+// as at a boundary), a vertex joining several fans a sharp corner; the result keeps them
+// (stats.nonmanifold_edges, stats.nonmanifold_vertices), and its limit comes from OpenSubdiv.
+// What happens to other input:
+//  - for butterfly, an edge in more than two triangles or a vertex joining several fans; for
+//    both, a triangle repeating a vertex, two triangles on the same three vertices, a
+//    non-finite position or attribute value, an index out of range, no triangles:
+//    Error(InvalidInput) naming the edge, vertex or triangle;
 //  - unreferenced vertices (e.g. particles the triangulation left out) are dropped; the
 //    result says which input vertex each kept one came from (original_vertex);
 //  - inconsistent orientation (an edge walked the same way by both its triangles) is
@@ -131,6 +135,8 @@ struct SmoothStats {
   size_t control_edges = 0;
   size_t boundary_edges = 0;      ///< control edges in a single triangle
   size_t reoriented_triangles = 0;///< triangles flipped by the orientation repair
+  size_t nonmanifold_edges = 0;   ///< control edges in more than two triangles (Loop: sharp creases)
+  size_t nonmanifold_vertices = 0;///< control vertices joining several fans (Loop: sharp corners)
   size_t creases = 0;             ///< crease edges passed to OpenSubdiv
   size_t vertices = 0;            ///< of the result
   size_t triangles = 0;           ///< of the result (control_triangles * 4^levels)
