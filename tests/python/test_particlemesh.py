@@ -861,6 +861,29 @@ def test_smoother_evaluates_what_smooth_gives(pm):
                 assert got.attributes["velocity"].tobytes() == want.attributes["velocity"].tobytes()
 
 
+def test_loop_keeps_a_non_manifold_edge_sharp_and_butterfly_refuses_it(pm):
+    # A fin: three squares on one edge, the x axis from 0 to 1, at uneven angles.
+    v, t = [[0, 0, 0], [1, 0, 0]], []
+    for a in (0.0, 1.9, 4.0):
+        d = [0, np.cos(a), np.sin(a)]
+        v += [[1, d[1], d[2]], [0, d[1], d[2]]]
+        b = len(v) - 2
+        t += [[0, 1, b], [0, b, b + 1]]
+    fin = pm.Mesh(np.array(v, float), np.array(t))
+    assert pm.topology(fin)["nonmanifold_edges"] == 1
+    out = pm.smooth(fin, levels=2)
+    top = pm.topology(out)
+    assert top["nonmanifold_edges"] == 4 and top["triangles"] == 16 * len(t)
+    e = np.sort(out.triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    edges, count = np.unique(e, axis=0, return_counts=True)
+    spine = np.unique(edges[count == 3])
+    assert np.abs(out.vertices[spine][:, 1:]).max() < 1e-12  # still on the x axis
+    smoother = pm.Smoother(fin, levels=2)
+    np.testing.assert_array_equal(smoother.evaluate(fin).vertices, out.vertices)
+    with pytest.raises(pm.Error, match=r"shared by 3 triangles .*the Loop scheme smooths such meshes"):
+        pm.smooth(fin, scheme="butterfly")
+
+
 def test_smoother_refuses_other_meshes_and_closed_use(pm):
     base = pm.triangulate(fibonacci_sphere(1000))
     smoother = pm.Smoother(base, levels=1)
