@@ -131,9 +131,9 @@ std::string describe_collection(const nlohmann::json& j) {
   const auto& frames = j["frames"];
   size_t missing = 0;
   for (const auto& f : frames) missing += !f["exists"].get<bool>();
+  const double first = frames.front()["time"].get<double>(), last = frames.back()["time"].get<double>();
   std::string out = j["file"].get<std::string>() + ": a collection of " + std::to_string(frames.size()) +
-                    " frame" + (frames.size() == 1 ? "" : "s") + ", times " +
-                    number(frames.front()["time"].get<double>()) + " to " + number(frames.back()["time"].get<double>()) +
+                    " frame" + (frames.size() == 1 ? "" : "s") + ", times " + number(first) + " to " + number(last) +
                     (missing ? ", " + std::to_string(missing) + " missing" : "") + "\n";
   // The first and last frames when there are many.
   const size_t shown = 20;

@@ -159,19 +159,21 @@ std::vector<int64_t> find_frames(const FramePattern& p) {
 
 void add_sequence_options(CLI::App& app, SequenceArgs& args) {
   app.add_option("--frames", args.frames,
-                 "With a sequence (a frame pattern, or a .pvd or .series collection): only frames FIRST:LAST (inclusive, e.g. 10:250; or one number N); a frame "
-                 "in the range without its file is reported and skipped (default: every file the pattern finds)");
+                 "With a sequence (a frame pattern, or a .pvd or .series collection): only frames FIRST:LAST "
+                 "(inclusive, e.g. 10:250; or one number N); a frame in the range without its file is reported and "
+                 "skipped (default: every file the pattern finds, or the collection lists)");
   app.add_flag("--force", args.force,
-               "With a sequence (a frame pattern, or a .pvd or .series collection): mesh every frame again, even those whose outputs are newer than their input "
-               "and were made with the same options (default: leave those alone)");
+               "With a sequence (a frame pattern, or a .pvd or .series collection): mesh every frame again, even "
+               "those whose outputs are newer than their input and were made with the same options (default: leave "
+               "those alone)");
   app.add_option("--jobs", args.jobs,
-                 "With a sequence (a frame pattern, or a .pvd or .series collection): mesh N frames at once (the --threads are shared among them; each output is "
-                 "the same whatever N)")
+                 "With a sequence (a frame pattern, or a .pvd or .series collection): mesh N frames at once (the "
+                 "--threads are shared among them; each output is the same whatever N)")
       ->check(CLI::Range(1, 1024))
       ->capture_default_str();
   app.add_flag("--dry-run", args.dry_run,
-               "With a sequence (a frame pattern, or a .pvd or .series collection): list each frame, its input and outputs and whether it would be meshed or left "
-               "alone (up to date), without reading any");
+               "With a sequence (a frame pattern, or a .pvd or .series collection): list each frame, its input and "
+               "outputs and whether it would be meshed or left alone (up to date), without reading any");
 }
 
 void check_single_file(const CLI::App& app, const std::vector<OutputSpec>& outputs) {
@@ -181,8 +183,9 @@ void check_single_file(const CLI::App& app, const std::vector<OutputSpec>& outpu
                        "e.g. sim/fluid_{:04d}.vtk) or a collection (.pvd, .series)");
   for (const OutputSpec& o : outputs)
     if (has_frame_field(o.path))
-      throw UsageError(o.option + " '" + o.path + "' holds a frame field but the input is not a sequence (a frame pattern, "
-                       "e.g. sim/fluid_{:04d}.vtk, or a .pvd or .series collection)");
+      throw UsageError(o.option + " '" + o.path +
+                       "' holds a frame field but the input is not a sequence (a frame pattern, e.g. "
+                       "sim/fluid_{:04d}.vtk, or a .pvd or .series collection)");
 }
 
 std::string sidecar_path(const std::string& output) {

@@ -88,7 +88,8 @@ std::vector<CollectionFrame> read_frame_collection(const std::string& path) {
       while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
       while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
       if (detail::parse_number(text, t) != detail::NumberText::Ok)
-        detail::fail(path, "the timestep '" + detail::shown(time) + "' of '" + detail::shown(file) + "' is not a number");
+        detail::fail(path, "the timestep '" + detail::shown(time) + "' of '" + detail::shown(file) +
+                               "' is not a number");
       entries.emplace_back(t, file);
     }
   }
@@ -99,8 +100,9 @@ std::vector<CollectionFrame> read_frame_collection(const std::string& path) {
     if (!std::isfinite(time)) detail::fail(path, "the time of '" + detail::shown(file) + "' is not finite");
     std::string portable;
     if (!detail::path_inside_folder(file, portable))
-      detail::fail(path, "the frame '" + detail::shown(file) + "' is not a path inside the collection's folder (frames are read "
-                         "only from beside it or below it)");
+      detail::fail(path, "the frame '" + detail::shown(file) +
+                             "' is not a path inside the collection's folder (frames are read only from beside it or "
+                             "below it)");
     frames.push_back({time, file, (folder / portable).string()});
   }
   std::stable_sort(frames.begin(), frames.end(), [](const auto& a, const auto& b) { return a.time < b.time; });
@@ -108,7 +110,8 @@ std::vector<CollectionFrame> read_frame_collection(const std::string& path) {
     if (frames[i].time == frames[i - 1].time)
       detail::fail(path, "'" + detail::shown(frames[i - 1].listed) + "' and '" + detail::shown(frames[i].listed) +
                              "' share the time " + detail::time_text(frames[i].time) +
-                             " (one file per frame: a frame in several parts is read from a .pvtu or .pvtp listing them)");
+                             " (one file per frame: a frame in several parts is read from a .pvtu or .pvtp listing "
+                             "them)");
   return frames;
 }
 
