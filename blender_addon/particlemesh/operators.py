@@ -520,13 +520,14 @@ class PARTICLEMESH_OT_update(bpy.types.Operator):
 
 
 class PARTICLEMESH_OT_import_sequence(bpy.types.Operator, ImportHelper):
-    """Import a simulation cache (one particle file per frame: .ply, .xyz, .pts, .vtk, .vtu, .vtp, .pvtu, .pvtp, .prt, .bgeo, .geo) as a live mesh that shows the scene frame's file, meshed"""
+    """Import a simulation cache (one particle file per frame: .ply, .xyz, .pts, .vtk, .vtu, .vtp, .pvtu, .pvtp, .prt, .bgeo, .geo; or a ParaView collection listing them, .pvd or .series) as a live mesh that shows the scene frame's file, meshed"""
     bl_idname = "particlemesh.import_sequence"
     bl_label = "Import Particle Sequence"
     bl_options = {"REGISTER", "UNDO"}
 
     filename_ext = ".vtk"
-    filter_glob: StringProperty(default="*.ply;*.xyz;*.pts;*.vtk;*.vtu;*.vtp;*.pvtu;*.pvtp;*.prt;*.bgeo;*.bgeo.gz;*.geo;*.geo.gz",
+    filter_glob: StringProperty(default="*.ply;*.xyz;*.pts;*.vtk;*.vtu;*.vtp;*.pvtu;*.pvtp;*.prt;*.bgeo;*.bgeo.gz;*.geo;*.geo.gz;"
+                                        "*.pvd;*.series",
                                 options={"HIDDEN"})
     method: EnumProperty(
         name="Method", default="POLYGONIZE",
@@ -540,13 +541,20 @@ class PARTICLEMESH_OT_import_sequence(bpy.types.Operator, ImportHelper):
     def execute(self, context):
         try:
             pm.version()
-            pattern, _ = sources.pattern_from_file(self.filepath)
-            frames = sources.find_frames(pattern)
-            if not frames:
-                raise sources.SourceError(f"no file matches '{pattern}'")
+            if sources.is_collection(self.filepath):  # frame n: its n-th file by time
+                pattern = self.filepath
+                frames = sources.find_frames(pattern)
+                if not frames:
+                    raise sources.SourceError(f"none of the files '{pattern}' lists exists")
+                name = os.path.basename(pattern).split(".")[0] or "particles"
+            else:
+                pattern, _ = sources.pattern_from_file(self.filepath)
+                frames = sources.find_frames(pattern)
+                if not frames:
+                    raise sources.SourceError(f"no file matches '{pattern}'")
+                name = re.sub(r"[_.\- ]*\{[^}]*\}.*$", "", os.path.basename(pattern)) or "particles"
             scene = context.scene
             offset = frames[0] - scene.frame_start if self.start_at_scene_start else 0
-            name = re.sub(r"[_.\- ]*\{[^}]*\}.*$", "", os.path.basename(pattern)) or "particles"
             mesh = bpy.data.meshes.new(name)
             obj = bpy.data.objects.new(name, mesh)
             context.collection.objects.link(obj)

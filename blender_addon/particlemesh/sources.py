@@ -1,6 +1,7 @@
 """Particles from Blender: an object's evaluated vertices (a point cloud mesh) or one of its
 evaluated particle systems (living particles only), as numpy arrays in world space; or a
-simulation cache's file for a frame (a frame pattern, as the command-line tool takes)."""
+simulation cache's file for a frame (a frame pattern, or a ParaView collection, as the
+command-line tool takes)."""
 
 import glob
 import os
@@ -46,8 +47,40 @@ def pattern_from_file(path):
     return os.path.join(folder, pattern), int(digits)
 
 
+def is_collection(path):
+    """Whether `path` is a ParaView collection (.pvd, .series, no frame field): frame n is the
+    n-th file it lists by time, as in the command-line tool."""
+    text = str(path)
+    return "{" not in text and "}" not in text and text.lower().endswith((".pvd", ".series"))
+
+
+_collections = {}  # absolute path -> (modification time, its files by time)
+
+
+def collection_files(path):
+    """The files a collection lists, by time (read again when the collection changes)."""
+    from . import particlemesh as pm
+    path = bpy.path.abspath(path)
+    try:
+        stamp = os.stat(path).st_mtime_ns
+    except OSError as e:
+        raise SourceError(f"the collection '{path}' cannot be read ({e.strerror})") from None
+    cached = _collections.get(path)
+    if cached is None or cached[0] != stamp:
+        cached = (stamp, [file for _, file in pm.read_frame_collection(path)])
+        _collections[path] = cached
+    return cached[1]
+
+
 def frame_file(pattern, frame):
-    """The file of `frame` under a pattern ("//" paths relative to the .blend file)."""
+    """The file of `frame` under a pattern ("//" paths relative to the .blend file), or the
+    frame-th file of a collection."""
+    if is_collection(pattern):
+        files = collection_files(pattern)
+        if not 0 <= frame < len(files):
+            raise SourceError(f"no particle file for frame {frame}: '{os.path.basename(pattern)}' lists "
+                              f"frames 0..{len(files) - 1}")
+        return files[frame]
     try:
         return bpy.path.abspath(pattern.format(frame))
     except (IndexError, KeyError, ValueError) as e:
@@ -56,7 +89,10 @@ def frame_file(pattern, frame):
 
 
 def find_frames(pattern):
-    """The frame numbers of the files the pattern names, ascending."""
+    """The frame numbers of the files the pattern names (or a collection lists and exist),
+    ascending."""
+    if is_collection(pattern):
+        return [n for n, file in enumerate(collection_files(pattern)) if os.path.isfile(file)]
     path = bpy.path.abspath(pattern)
     head, sep, rest = path.partition("{")
     _, _, tail = rest.partition("}")

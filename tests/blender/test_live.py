@@ -976,3 +976,18 @@ def test_import_particle_sequence_follows_the_scene_frame(pm, clean_scene, tmp_p
     assert "no particle file for frame 11" in record["error"]
     scene.frame_set(10)
     assert "error" not in pm.live.last_update[obj.name_full]
+    # A ParaView collection listing the same files out of order: frame n is its n-th by time.
+    series = tmp_path / "fluid.vtk.series"
+    series.write_text('{"file-series-version": "1.0", "files": [{"name": "fluid_0003.vtk", "time": 0.2}, '
+                      '{"name": "fluid_0001.vtk", "time": 0.0}, {"name": "fluid_0002.vtk", "time": 0.1}]}')
+    assert bpy.ops.particlemesh.import_sequence(filepath=str(series)) == {"FINISHED"}
+    col = bpy.context.active_object
+    assert col.particlemesh.file_pattern == str(series) and col.particlemesh.frame_offset == 0 - 10
+    for frame, file_frame in ((10, 1), (12, 3)):
+        scene.frame_set(frame)
+        assert "error" not in pm.live.last_update[col.name_full]
+        co = np.empty(3 * len(shown_mesh(col).vertices), dtype=np.float32)
+        shown_mesh(col).vertices.foreach_get("co", co)
+        assert abs(co.reshape(-1, 3).mean(axis=0)[0] - centres[file_frame][0]) < 1e-6
+    scene.frame_set(13)  # the collection lists 3 frames
+    assert "lists frames 0..2" in pm.live.last_update[col.name_full]["error"]
