@@ -326,10 +326,12 @@ typedef struct pm_smooth_options {
 
 PM_EXPORT void pm_smooth_options_init(pm_smooth_options* options);
 /** Subdivide `mesh` into a new smooth mesh (with normals and every attribute carried
- *  through). `options` may be NULL (one Loop level at the limit). The input must be a
- *  2-manifold; unreferenced vertices are dropped and inconsistent orientation is repaired
- *  (see smooth/subdivide.h); anything else unusable gives PM_STATUS_INVALID_INPUT naming the
- *  edge, vertex or triangle, and a result over max_triangles PM_STATUS_LIMIT_EXCEEDED. */
+ *  through). `options` may be NULL (one Loop level at the limit). Butterfly's input must be a
+ *  2-manifold; Loop keeps an edge in more than two triangles as an infinitely sharp crease
+ *  (OpenSubdiv's rule); unreferenced vertices are dropped and inconsistent orientation is
+ *  repaired (see smooth/subdivide.h); anything else unusable gives PM_STATUS_INVALID_INPUT
+ *  naming the edge, vertex or triangle, and a result over max_triangles
+ *  PM_STATUS_LIMIT_EXCEEDED. */
 PM_EXPORT pm_status pm_smooth(const pm_mesh* mesh, const pm_smooth_options* options, pm_mesh** out_mesh);
 
 /* Refine once, evaluate many (particlemesh/smooth/smoother.h): for a mesh whose vertices move
