@@ -79,7 +79,9 @@ std::vector<uint32_t> nesting_depths(const std::vector<Vec3>& P, const std::vect
     for (size_t g = b; g < e; ++g) {
       const uint32_t d = pairs[group[g]].second;
       const RayCrossings test(P, T, of.data() + start[d], start[d + 1] - start[d]);
-      for (size_t i = group[g]; i < group[g + 1]; ++i) inside[i] = test.count(P[T[of[start[pairs[i].first]]][0]]) % 2;
+      parallel_blocks(group[g + 1] - group[g], 64, [&](size_t b, size_t e) {
+        for (size_t i = group[g] + b; i < group[g] + e; ++i) inside[i] = test.count(P[T[of[start[pairs[i].first]]][0]]) % 2;
+      });
     }
   });
   for (size_t i = 0; i < pairs.size(); ++i) depth[pairs[i].first] += inside[i];

@@ -1,9 +1,14 @@
 #include "particlemesh/mesh/ray_crossings.h"
 
 #include <algorithm>
+#include <array>
+#include <atomic>
+#include <limits>
 #include <cmath>
 #include <numeric>
 #include <string>
+
+#include <tbb/combinable.h>
 
 #include "core/parallel.h"
 #include "mesh/ray_crossings_impl.h"
@@ -30,39 +35,57 @@ double side(const Vec3& a, const Vec3& b, const Vec3& q) {
 RayCrossings::RayCrossings(const std::vector<Vec3>& P, const std::vector<Triangle>& T, const uint32_t* tris,
                            size_t count)
     : P_(P), T_(T) {
-  for (size_t i = 0; i < count; ++i)
-    for (int k = 0; k < 3; ++k) {
-      const Vec3& p = P[T[tris[i]][k]];
-      lo_[0] = std::min(lo_[0], p.x), lo_[1] = std::min(lo_[1], p.y);
-      hi_[0] = std::max(hi_[0], p.x), hi_[1] = std::max(hi_[1], p.y);
-    }
+  // In parallel (the caller's arena): the box's min and max, and the bucketing's counts and
+  // slots, do not depend on the order the triangles are seen in; a cell's triangles may come
+  // in any order, and a query only sums over them.
+  constexpr size_t kGrain = 8192;
+  tbb::combinable<std::array<double, 4>> box([] {
+    const double inf = std::numeric_limits<double>::infinity();
+    return std::array<double, 4>{inf, inf, -inf, -inf};
+  });
+  parallel_blocks(count, kGrain, [&](size_t b, size_t e) {
+    std::array<double, 4>& m = box.local();
+    for (size_t i = b; i < e; ++i)
+      for (int k = 0; k < 3; ++k) {
+        const Vec3& p = P[T[tris[i]][k]];
+        m[0] = std::min(m[0], p.x), m[1] = std::min(m[1], p.y);
+        m[2] = std::max(m[2], p.x), m[3] = std::max(m[3], p.y);
+      }
+  });
+  box.combine_each([&](const std::array<double, 4>& m) {
+    lo_[0] = std::min(lo_[0], m[0]), lo_[1] = std::min(lo_[1], m[1]);
+    hi_[0] = std::max(hi_[0], m[2]), hi_[1] = std::max(hi_[1], m[3]);
+  });
   // A grid over the xy box, about 64 triangles' boxes per cell: its counts stay in the
   // cache while the triangles are bucketed (4 per cell took twice as long for 1000 queries:
   // bench/nesting_bench.py), and a query's 64 side tests are a microsecond.
   side_ = std::clamp<size_t>(size_t(std::sqrt(double(count) / 64.0)), 1, 1024);
   for (int a = 0; a < 2; ++a) scale_[a] = hi_[a] > lo_[a] ? double(side_) / (hi_[a] - lo_[a]) : 0.0;
   start_.assign(side_ * side_ + 1, 0);
+  std::vector<size_t> at;
   for (int pass = 0; pass < 2; ++pass) {
-    std::vector<size_t> at;
     if (pass == 1) {
       for (size_t c = 0; c < side_ * side_; ++c) start_[c + 1] += start_[c];
       at.assign(start_.begin(), start_.end() - 1);
       cells_.resize(start_.back());
     }
-    for (size_t i = 0; i < count; ++i) {
-      const Triangle& t = T[tris[i]];
-      size_t c0[2], c1[2];
-      for (int a = 0; a < 2; ++a) {
-        const double u = std::min({P[t[0]][a], P[t[1]][a], P[t[2]][a]});
-        const double v = std::max({P[t[0]][a], P[t[1]][a], P[t[2]][a]});
-        c0[a] = cell(u, a), c1[a] = cell(v, a);
-      }
-      for (size_t y = c0[1]; y <= c1[1]; ++y)
-        for (size_t x = c0[0]; x <= c1[0]; ++x) {
-          if (pass == 0) ++start_[y * side_ + x + 1];
-          else cells_[at[y * side_ + x]++] = tris[i];
+    parallel_blocks(count, kGrain, [&](size_t b, size_t e) {
+      for (size_t i = b; i < e; ++i) {
+        const Triangle& t = T[tris[i]];
+        size_t c0[2], c1[2];
+        for (int a = 0; a < 2; ++a) {
+          const double u = std::min({P[t[0]][a], P[t[1]][a], P[t[2]][a]});
+          const double v = std::max({P[t[0]][a], P[t[1]][a], P[t[2]][a]});
+          c0[a] = cell(u, a), c1[a] = cell(v, a);
         }
-    }
+        for (size_t y = c0[1]; y <= c1[1]; ++y)
+          for (size_t x = c0[0]; x <= c1[0]; ++x) {
+            const size_t c = y * side_ + x;
+            if (pass == 0) std::atomic_ref<size_t>(start_[c + 1]).fetch_add(1, std::memory_order_relaxed);
+            else cells_[std::atomic_ref<size_t>(at[c]).fetch_add(1, std::memory_order_relaxed)] = tris[i];
+          }
+      }
+    });
   }
 }
 

@@ -21,7 +21,8 @@ namespace PM_NAMESPACE::detail {
 /// an edge's line is moved off it symbolically (by (eps, eps^2): Edelsbrunner and Muecke's
 /// simulation of simplicity), so it lies in exactly one of the two. Every crossing is counted
 /// once, also through edges and vertices, and each triangle's share depends on it alone.
-/// The triangles are bucketed once in a grid over their xy box; queries are read-only.
+/// The triangles are bucketed once, in parallel, in a grid over their xy box; queries are
+/// read-only (any number of threads may ask at once).
 class RayCrossings {
  public:
   /// The triangles T[tris[0 .. count)] over positions P (both kept by reference).

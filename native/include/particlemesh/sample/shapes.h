@@ -52,7 +52,9 @@ PM_EXPORT PointCloud poisson_disk_sample(const TriMesh& mesh, double r0, uint64_
 /// Maximal Poisson-disk sample of the implicit surface f = 0 inside the box [lo, hi]:
 /// random points in the box are pulled onto the surface by Newton steps along grad f, then
 /// kept in random order iff no kept point is within r0. Normals are grad f normalised (f < 0
-/// inside, so they face outward).
+/// inside, so they face outward). The darts are pulled in parallel (the caller's TBB arena),
+/// so f and grad are called from several threads at once: they must be pure functions of the
+/// point, as a surface's are. The sample is the same for any thread count.
 PM_EXPORT PointCloud sample_implicit_surface(const std::function<double(const Vec3&)>& f,
                                              const std::function<Vec3(const Vec3&)>& grad, Vec3 lo, Vec3 hi,
                                              double r0, uint64_t seed = 1, size_t candidates = 0);
