@@ -49,9 +49,9 @@ def pattern_from_file(path):
 
 def is_collection(path):
     """Whether `path` is a ParaView collection (.pvd, .series, no frame field): frame n is the
-    n-th file it lists by time, as in the command-line tool."""
-    text = str(path)
-    return "{" not in text and "}" not in text and text.lower().endswith((".pvd", ".series"))
+    n-th file it lists by time, as in the command-line tool (the package's rule)."""
+    from . import particlemesh as pm
+    return pm.is_frame_collection(path)
 
 
 _collections = {}  # absolute path -> (modification time, its files by time)

@@ -35,7 +35,8 @@ from ._errors import CancelledError, Error, LibraryNotFoundError, PclBridgeNotFo
 from ._progress import Hook, Progress
 
 __all__ = [
-    "read_points", "read_mesh", "read_frame_collection", "write_mesh", "triangulate", "polygonize",
+    "read_points", "read_mesh", "read_frame_collection", "is_frame_collection", "write_mesh",
+    "triangulate", "polygonize",
     "polygonize_attributes",
     "smooth", "Smoother",
     "topology",
@@ -120,6 +121,15 @@ def read_points(path):
         return read_cloud_handle(lib, handle, details)
     finally:
         lib.pm_cloud_destroy(handle)
+
+
+def is_frame_collection(path):
+    """Whether a sequence input names a ParaView collection (.pvd, .series, any case) rather
+    than a frame pattern (it holds no '{' or '}'): frame n is then the n-th file it lists by
+    time, in the command-line tool, particlemesh.distributed.map_frames and the Blender
+    add-on alike."""
+    text = os.fspath(path) if not isinstance(path, str) else path
+    return "{" not in text and "}" not in text and text.lower().endswith((".pvd", ".series"))
 
 
 def read_frame_collection(path):

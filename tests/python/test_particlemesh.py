@@ -577,6 +577,8 @@ def test_a_frame_collection_lists_its_files_by_time(pm, tmp_path):
         '<?xml version="1.0"?><VTKFile type="Collection"><Collection>'
         '<DataSet timestep="2" file="b.vtu"/><DataSet timestep="1" file="sub\\a.vtu"/>'
         '</Collection></VTKFile>')
+    assert pm.is_frame_collection(tmp_path / "sim.pvd") and pm.is_frame_collection("a/F.VTU.SERIES")
+    assert not pm.is_frame_collection("f_{}.pvd") and not pm.is_frame_collection("f.vtu")
     assert pm.read_frame_collection(tmp_path / "sim.pvd") == [
         (1.0, str(tmp_path / "sub" / "a.vtu")), (2.0, str(tmp_path / "b.vtu"))]
     (tmp_path / "up.series").write_text('{"files": [{"name": "../a.vtu", "time": 0}]}')

@@ -9,7 +9,8 @@ import uuid
 from dataclasses import dataclass, field
 
 from .. import _library, _options
-from .. import polygonize, read_frame_collection, read_points, triangulate, write_mesh
+from .. import (is_frame_collection, polygonize, read_frame_collection, read_points, triangulate,
+                write_mesh)
 from ._dask import check_client, distributed
 
 #: What a frame can be meshed with, and the particlemesh function each runs.
@@ -107,13 +108,6 @@ def mesh_file(command, input_path, output_path, options):
             "seconds": time.perf_counter() - t0}
 
 
-def _is_collection(path):
-    """Whether path is a ParaView collection (.pvd, .series) and not a frame pattern: frame n
-    is its n-th file by time, as in the command-line tool."""
-    text = str(path)
-    return "{" not in text and "}" not in text and text.lower().endswith((".pvd", ".series"))
-
-
 def map_frames(client, command, input_pattern, output_pattern, frames=None, *, retries=1,
                skip_existing=False, progress=None, **options):
     """Mesh a sequence of particle files, one Dask task per frame.
@@ -147,7 +141,7 @@ def map_frames(client, command, input_pattern, output_pattern, frames=None, *, r
         raise TypeError("options are for 'triangulate' and 'polygonize'; a function takes its "
                         "own arguments (use functools.partial)")
     _pattern_field(output_pattern, "output_pattern")
-    if _is_collection(input_pattern):
+    if is_frame_collection(input_pattern):
         listed = [p for _, p in read_frame_collection(input_pattern)]
         source_of = listed.__getitem__
         if frames is None:
