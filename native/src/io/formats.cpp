@@ -50,6 +50,16 @@ std::string lower_extension(const std::string& path) {
   return ext;
 }
 
+bool path_inside_folder(const std::string& listed, std::string& portable) {
+  namespace fs = std::filesystem;
+  portable = listed;
+  std::replace(portable.begin(), portable.end(), '\\', '/');  // written on Windows
+  const fs::path relative(portable);
+  bool outside = portable.empty() || relative.is_absolute() || relative.has_root_name();
+  for (const fs::path& part : relative) outside = outside || part == "..";
+  return !outside;
+}
+
 std::string unique_attribute_name(const FileContents& c, const std::string& name) {
   auto taken = [&](const std::string& n) {
     for (const VertexAttribute& a : c.attributes)

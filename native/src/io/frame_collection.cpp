@@ -20,16 +20,6 @@ namespace PM_NAMESPACE {
 
 namespace detail {
 
-bool path_inside_folder(const std::string& listed, std::string& portable) {
-  namespace fs = std::filesystem;
-  portable = listed;
-  std::replace(portable.begin(), portable.end(), '\\', '/');  // written on Windows
-  const fs::path relative(portable);
-  bool outside = portable.empty() || relative.is_absolute() || relative.has_root_name();
-  for (const fs::path& part : relative) outside = outside || part == "..";
-  return !outside;
-}
-
 namespace {
 
 [[noreturn]] void fail(const std::string& path, const std::string& problem) {

@@ -150,6 +150,15 @@ def _piece_boxes(result):
     return box_lo, box_hi, query
 
 
+def _final_ids(result, first_id):
+    """Per particle of a tile (with its halo): its vertex id in the stitched surface, the
+    loader's id or first_id + its rank among the tile's own; -1 for the halo's."""
+    core, ids = result["core"], result["ids"]
+    out = np.full(result["n"], -1, dtype=np.int64)
+    out[core] = ids[core] if ids is not None else first_id + np.arange(int(core.sum()))
+    return out
+
+
 def _crossings(positions, triangles, final_ids, points):
     """particlemesh.ray_crossings of the triangles (rows of vertex indices) over their own
     vertices renumbered in the order of their final ids, as the stitched surface numbers them
@@ -165,10 +174,7 @@ def tile_crossings(result, first_id, piece_root, queries):
     """On a worker: for each closed component d in `queries` ({d: points}), how many of the
     tile's own triangles of d (its pieces whose piece_root is d) the ray straight up from each
     point crosses."""
-    core = result["core"]
-    ids = result["ids"]
-    final = np.full(result["n"], -1, dtype=np.int64)
-    final[core] = ids[core] if ids is not None else first_id + np.arange(int(core.sum()))
+    final = _final_ids(result, first_id)
     own = result["tri"][result["interior"]]
     root = piece_root[result["tri_label"][result["interior"]]]
     out = {}
@@ -229,10 +235,8 @@ def finish_tile(result, flip, first_id, with_points):
     piece turned as the driver decided (flip: +1/-1 per piece), and its particles' normals
     likewise; with_points: also their positions and attributes (a loader's tile)."""
     core, tri, label = result["core"], result["tri"], result["label"]
-    ids = result["ids"]
-    final = (ids[core] if ids is not None else first_id + np.arange(int(core.sum()))).astype(np.int64)
-    to_final = np.full(result["n"], -1, dtype=np.int64)
-    to_final[core] = final
+    to_final = _final_ids(result, first_id)
+    final = to_final[core]
     own = tri[result["interior"]]
     turn = flip[result["tri_label"][result["interior"]]] < 0
     own = np.where(turn[:, None], own[:, [0, 2, 1]], own)
