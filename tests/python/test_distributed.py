@@ -120,6 +120,7 @@ def test_map_frames_writes_what_the_cli_writes(pm, pmd, client, cli, tmp_path):
                        threshold=2.5)
     assert c.ok and [(d["frame"], Path(d["input"]).name) for d in c.done] == [
         (0, "fluid_0003.xyz"), (1, "fluid_0004.xyz"), (2, "fluid_0005.xyz")], str(c)
+    assert c.missing == [3] and "1 missing (no file): 3" in str(c)  # gone.xyz
     (tmp_path / "cli").mkdir()
     cli("polygonize", series, "-o", tmp_path / "cli" / "f_{}.ply", "--radius", 0.25, "--threshold", 2.5, "-q")
     for n in range(3):
@@ -159,6 +160,31 @@ def test_a_failed_frame_is_retried_once_then_reported_and_the_others_go_on(pmd, 
     assert again.skipped == [0, 1, 3] and [f["frame"] for f in again.failed] == [2]
 
 
+def test_frames_without_a_file_are_missing_as_the_cli_says(pmd, client, cli, tmp_path):
+    """A gap among the files found, or a frame asked for without its file, is not run: it is
+    listed as missing (the command-line tool's frames), not failed; the others are meshed."""
+    for f in (1, 2, 4, 7):
+        np.savetxt(tmp_path / f"in_{f}.xyz", fibonacci_sphere(600 + 50 * f))
+    s = pmd.map_frames(client, "triangulate", tmp_path / "in_{}.xyz", tmp_path / "out_{}.ply")
+    assert s.ok and [d["frame"] for d in s.done] == [1, 2, 4, 7] and not s.failed, str(s)
+    assert s.missing == [3, 5, 6] and "3 missing (no file): 3, 5, 6" in str(s)
+    proc = cli("triangulate", tmp_path / "in_{}.xyz", "-o", tmp_path / "cli_{}.ply")
+    assert "3 missing frames skipped (no file): 3, 5, 6" in proc.stderr, proc.stderr
+    for f in (1, 2, 4, 7):
+        assert (tmp_path / f"out_{f}.ply").read_bytes() == (tmp_path / f"cli_{f}.ply").read_bytes()
+    t = pmd.map_frames(client, "triangulate", tmp_path / "in_{}.xyz", tmp_path / "again_{}.ply",
+                       frames=[9, 2, 3])
+    assert t.ok and [d["frame"] for d in t.done] == [2] and t.missing == [9, 3], str(t)
+    assert not (tmp_path / "again_9.ply").exists() and not (tmp_path / "again_3.ply").exists()
+    # A function's frames too; none with a file is an error before anything runs.
+    u = pmd.map_frames(client, flaky_once, tmp_path / "in_{}.xyz", str(tmp_path / "copy_{}.xyz"),
+                       frames=[3, 4])
+    assert [d["frame"] for d in u.done] == [4] and u.missing == [3], str(u)
+    with pytest.raises(FileNotFoundError, match="no input file exists"):
+        pmd.map_frames(client, "triangulate", tmp_path / "in_{}.xyz", tmp_path / "o_{}.ply",
+                       frames=[3, 5])
+
+
 def test_map_frames_refuses_bad_patterns_and_options_before_running(pmd, client, tmp_path):
     with pytest.raises(ValueError, match="frame field"):
         pmd.map_frames(client, "triangulate", tmp_path / "in.xyz", tmp_path / "out_{}.ply")
@@ -176,6 +202,43 @@ def test_map_frames_refuses_bad_patterns_and_options_before_running(pmd, client,
 
 
 # ---- polygonize in tiles -------------------------------------------------------------------
+
+def test_nesting_pairs_are_every_pair_of_nested_boxes(pmd):
+    """The driver pairs closed components whose boxes nest (an enclosing part and each part
+    inside its box), by a sort on the boxes' low x: the same pairs as testing every pair, on
+    random boxes with shared faces, open components, pieces of one component and parts
+    without a point."""
+    from particlemesh.distributed._seams import Stitch
+    rng = np.random.default_rng(5)
+    n = 400
+    st = Stitch.__new__(Stitch)
+    st.n_pieces = n
+    st.root = np.arange(n)
+    st.root[300:] = rng.integers(0, 300, 100)  # pieces joined to another component
+    st.comp_open = rng.random(n) < 0.1
+    st.extra = np.zeros((0, 3), dtype=np.int64)
+    lo = np.round(rng.uniform(0, 10, (n, 3)), 1)  # a coarse grid: equal faces are common
+    hi = lo + np.round(rng.uniform(0.1, 6, (n, 3)), 1)
+    query = np.where(rng.random((n, 1)) < 0.9, lo + 0.01, np.nan)
+    pairs = st.nesting_pairs(lo, hi, query)
+    # Brute force: each component's box is the union of its pieces'.
+    clo, chi = np.full((n, 3), np.inf), np.full((n, 3), -np.inf)
+    np.minimum.at(clo, st.root, lo)
+    np.maximum.at(chi, st.root, hi)
+    roots = [c for c in range(n) if st.root[c] == c and not st.comp_open[c]]
+    has_point = {c for c in roots if np.isfinite(query[st.root == c][:, 0]).any()}
+    expect = {}
+    for d in roots:
+        inner = [c for c in roots if c != d and c in has_point and
+                 (clo[c] >= clo[d]).all() and (chi[c] <= chi[d]).all()]
+        if inner:
+            expect[d] = inner
+    assert sum(len(v) for v in expect.values()) > 50  # the case is not trivial
+    assert {d: list(c) for d, (c, _) in pairs.items()} == expect
+    for d, (c, pts) in pairs.items():  # each inner part's point is its first piece's
+        for ci, q in zip(c, pts):
+            assert np.array_equal(q, query[np.flatnonzero((st.root == ci) & np.isfinite(query[:, 0]))[0]])
+
 
 def assert_identical(tiled, one):
     assert tiled.vertex_count == one.vertex_count > 0

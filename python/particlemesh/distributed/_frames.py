@@ -27,12 +27,15 @@ class FrameSummary:
     """What map_frames did. `done`: one dict per frame written (frame, input, output,
     seconds, vertices, triangles), in frame order; `failed`: one dict per frame
     that failed twice (frame, input, output, error: the message of its last attempt);
-    `skipped`: frames whose output existed (skip_existing=True); `seconds`: wall time of the
-    whole run."""
+    `skipped`: frames whose output existed (skip_existing=True); `missing`: frames without an
+    input file, as the command-line tool reports them (a gap among the files a pattern
+    matches, a frame asked for whose file does not exist, a file a collection lists that
+    does not exist), not run and not a failure; `seconds`: wall time of the whole run."""
 
     done: list = field(default_factory=list)
     failed: list = field(default_factory=list)
     skipped: list = field(default_factory=list)
+    missing: list = field(default_factory=list)
     seconds: float = 0.0
 
     @property
@@ -43,6 +46,10 @@ class FrameSummary:
     def __str__(self):
         text = (f"{len(self.done)} frames meshed, {len(self.failed)} failed, "
                 f"{len(self.skipped)} skipped, in {self.seconds:.1f} s")
+        if self.missing:
+            shown = ", ".join(map(str, self.missing[:10]))
+            more = f" and {len(self.missing) - 10} more" if len(self.missing) > 10 else ""
+            text += f"\n  {len(self.missing)} missing (no file): {shown}{more}"
         for f in self.failed:
             text += f"\n  frame {f['frame']}: {f['error']}"
         return text
@@ -116,8 +123,10 @@ def map_frames(client, command, input_pattern, output_pattern, frames=None, *, r
     frame); input_pattern / output_pattern: paths with one frame field, '{}' or a format such
     as '{:04d}' ("sim/fluid_{:04d}.xyz", "out/fluid_{:04d}.ply"); input_pattern may also be a
     ParaView collection (.pvd, .series), frame n its n-th file by time (read_frame_collection);
-    frames: the frame numbers (default: every file matching input_pattern, or every file the
-    collection lists that exists). Options are those of particlemesh.triangulate
+    frames: the frame numbers (default: from the first file matching input_pattern to the
+    last, or every file the collection lists); a frame whose input file does not exist is
+    not run and is listed in the summary's `missing`, as the command-line tool skips and
+    names it. Options are those of particlemesh.triangulate
     / polygonize (spacing=, radius=, threshold=, raw=, threads= ...; polygonize's lattice_anchor
     defaults to "space" here, as in the command-line tool). Each output is exactly the
     file `particlemesh triangulate|polygonize IN -o OUT` writes with the same options, written
@@ -141,13 +150,12 @@ def map_frames(client, command, input_pattern, output_pattern, frames=None, *, r
         raise TypeError("options are for 'triangulate' and 'polygonize'; a function takes its "
                         "own arguments (use functools.partial)")
     _pattern_field(output_pattern, "output_pattern")
+    present = os.path.isfile if task is None else os.path.exists  # a function may take folders
     if is_frame_collection(input_pattern):
         listed = [p for _, p in read_frame_collection(input_pattern)]
         source_of = listed.__getitem__
         if frames is None:
-            frames = [n for n, p in enumerate(listed) if os.path.isfile(p)]
-            if not frames:
-                raise FileNotFoundError(f"none of the files {str(input_pattern)!r} lists exists")
+            frames = range(len(listed))
         else:
             frames = list(frames)
             for f in frames:
@@ -155,21 +163,31 @@ def map_frames(client, command, input_pattern, output_pattern, frames=None, *, r
                     raise ValueError(f"frame {f} is not one of the {len(listed)} frames "
                                      f"{str(input_pattern)!r} lists (0..{len(listed) - 1})")
     elif frames is None:
-        frames = find_frames(input_pattern)
-        if not frames:
+        found = find_frames(input_pattern)
+        if not found:
             raise FileNotFoundError(f"no file matches input_pattern {str(input_pattern)!r}")
+        frames = range(found[0], found[-1] + 1)  # the gaps among them are missing frames
         source_of = lambda f: frame_path(input_pattern, f)  # noqa: E731
     else:
         _pattern_field(input_pattern, "input_pattern")
         frames = list(frames)
         source_of = lambda f: frame_path(input_pattern, f)  # noqa: E731
+    # A frame without its input file is missing, as the command-line tool says: reported, not
+    # sent to a worker to fail there.
+    missing = [f for f in frames if not present(source_of(f))]
+    if len(missing) == len(frames):
+        what = ("none of the files {!r} lists exists" if is_frame_collection(input_pattern)
+                else "no input file exists for the frames asked of {!r}")
+        raise FileNotFoundError(what.format(str(input_pattern)))
+    absent = set(missing)
+    frames = [f for f in frames if f not in absent]
     outputs = [frame_path(output_pattern, f) for f in frames]
     if len(set(outputs)) != len(outputs):
         raise ValueError(f"output_pattern {str(output_pattern)!r} names the same file for two "
                          "frames")
 
     t0 = time.perf_counter()
-    summary = FrameSummary()
+    summary = FrameSummary(missing=missing)
     jobs = {}
     token = uuid.uuid4().hex[:12]  # this run's task names
     for frame, output in zip(frames, outputs):

@@ -376,11 +376,22 @@ class Stitch:
         point[roots] = query[has[first]]
         closed = np.flatnonzero((self.root == np.arange(n)) & ~self.comp_open & (lo[:, 0] <= hi[:, 0]))
         inner = closed[np.isfinite(point[closed, 0])]
+        # The inner candidates by their box's low x (ties by root), and for each d only those
+        # whose low x lies within d's box, as the library pairs them: near linear for parts
+        # side by side (a frame of bubbles), not one test per pair of parts.
+        inner = inner[np.lexsort((inner, lo[inner, 0]))]
+        inner_lo, inner_hi, inner_x = lo[inner], hi[inner], lo[inner, 0]
+        first = np.searchsorted(inner_x, lo[closed, 0], side="left")
+        last = np.searchsorted(inner_x, hi[closed, 0], side="right")
         pairs = {}
-        for d in closed.tolist():
-            holds = ((lo[inner] >= lo[d]) & (hi[inner] <= hi[d])).all(axis=1) & (inner != d)
+        for d, a, b in zip(closed.tolist(), first.tolist(), last.tolist()):
+            if b <= a:
+                continue
+            c = inner[a:b]
+            holds = ((inner_lo[a:b] >= lo[d]) & (inner_hi[a:b] <= hi[d])).all(axis=1) & (c != d)
             if holds.any():
-                pairs[d] = (inner[holds], point[inner[holds]])
+                c = np.sort(c[holds])  # root order, as before
+                pairs[d] = (c, point[c])
         return pairs
 
     def crossings(self, d, points):
