@@ -34,6 +34,7 @@ struct PolygonizeArgs {
   bool ascii = false, quiet = false;
   AnisotropyOptions anisotropy;
   double min_component_volume = 0, min_component_particles = 0;
+  double collapse_edges = 0;
   int taubin = 0;
   double taubin_lambda = TaubinOptions{}.lambda, taubin_mu = TaubinOptions{}.mu;
   std::string attributes = "all";
@@ -59,6 +60,7 @@ nlohmann::json stats_json(const PolygonizeStats& s) {
           {"density_radius", s.density_radius},
           {"min_component_volume", s.min_component_volume},
           {"components_removed", s.components_removed},
+          {"edges_collapsed", s.edges_collapsed},
           {"smoothing_iterations", s.smoothing_iterations},
           {"candidate_blocks", s.candidate_blocks},
           {"sampled_blocks", s.sampled_blocks},
@@ -138,6 +140,7 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
   opt.anisotropy = a.anisotropy;
   opt.min_component_volume = a.min_component_volume;
   opt.min_component_particles = a.min_component_particles;
+  opt.collapse_edges = a.collapse_edges;
   opt.surface_smoothing.iterations = a.taubin;
   opt.surface_smoothing.lambda = a.taubin_lambda;
   opt.surface_smoothing.mu = a.taubin_mu;
@@ -229,6 +232,8 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
     if (s.min_component_volume > 0)
       std::printf("  small pieces  %zu dropped (enclosing less than %.6g)\n", s.components_removed,
                   s.min_component_volume);
+    if (a.collapse_edges > 0)
+      std::printf("  slivers       %zu edges shorter than %.3g h collapsed\n", s.edges_collapsed, a.collapse_edges);
     if (s.smoothing_iterations > 0)
       std::printf("  smoothing     %d Taubin iterations (lambda %.3g, mu %.3g)\n", s.smoothing_iterations,
                   a.taubin_lambda, a.taubin_mu);
@@ -306,6 +311,14 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
                   "Drop the pieces that enclose less than N particles' worth of volume, N x spacing^3 "
                   "(default 0: keep all)")
       ->check(CLI::NonNegativeNumber)
+      ->check(finite_number());
+  app->add_option("--collapse-edges", args->collapse_edges,
+                  "Collapse every edge shorter than F x the cell h into one vertex on the surface, where the surface "
+                  "stays closed and manifold and no triangle turns by more than 60 degrees: marching cubes' slivers "
+                  "(thin triangles where the surface passes near a lattice node) become ordinary triangles "
+                  "(0 <= F <= 0.5; 0.3 takes out nine in ten of the triangles with an angle under 10 degrees; "
+                  "default 0: off)")
+      ->check(CLI::Range(0.0, 0.5))
       ->check(finite_number());
   app->add_option("--taubin", args->taubin,
                   "Smooth the mesh with N iterations of Taubin's volume-keeping lambda|mu filter (default 0: off; "

@@ -231,6 +231,7 @@ def draw_method_settings(layout, props, method):
         sub = col.column()
         sub.active = not props.auto_cell
         sub.prop(props, "cell_size")
+        col.prop(props, "clean_slivers")
     col.prop(props, "smooth")
     sub = col.column()
     sub.active = props.smooth != "NONE"

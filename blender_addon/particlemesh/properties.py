@@ -121,6 +121,12 @@ class PolygonizeProps:
         name="Cell Size", default=0.05, min=1e-6, soft_max=1.0, precision=4, step=1,
         subtype="DISTANCE", unit="LENGTH", update=_settings_changed,
         description="Marching cubes cell edge in world units; smaller is finer and slower")
+    clean_slivers: BoolProperty(
+        name="Clean Slivers", default=False, update=_settings_changed,
+        description="Collapse marching cubes' thin sliver triangles (edges under 0.3 of a cell) "
+                    "into ordinary ones, the surface kept closed and on the field: a tenth to a "
+                    "fifth fewer triangles, cleaner shading and subdivision. Takes about as long "
+                    "again as the polygonize on large meshes")
 
 
 class SmoothProps:

@@ -178,6 +178,7 @@ class pm_polygonize_options(Structure):
         ("domain_max_radius", c_double),
         ("cell_min", c_int64 * 3),
         ("cell_max", c_int64 * 3),
+        ("collapse_edges", c_double),
     ]
 
 
@@ -205,6 +206,7 @@ class pm_polygonize_stats(Structure):
         ("origin", c_double * 3),
         ("enclosed_fraction", c_double),
         ("density_radius", c_double),
+        ("edges_collapsed", c_uint64),
     ]
 
 

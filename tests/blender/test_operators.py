@@ -610,6 +610,24 @@ def test_polygonize_volume_particles(pm, clean_scene):
     np.testing.assert_allclose(co3, direct.vertices, atol=1e-6)
     rep = pm.particlemesh.topology(pm.particlemesh.Mesh(co3, tris3))
     assert rep["closed"] and rep["manifold"] and rep["components"] == 1
+    # Clean Slivers (on jittered particles: a lattice's crossings lie alike, without slivers):
+    # the library's collapse_edges, fewer triangles, the same closed surface, stored on the
+    # object for live mode.
+    q = (p + np.random.default_rng(2).uniform(-0.02, 0.02, p.shape)).astype(np.float32)
+    jittered = point_cloud_object("jittered", q)
+    bpy.context.view_layer.objects.active = jittered
+    assert bpy.ops.particlemesh.polygonize(clean_slivers=True) == {"FINISHED"}
+    result = bpy.context.active_object
+    assert result.particlemesh.viewport.clean_slivers and result.particlemesh.render.clean_slivers
+    co4, tris4 = mesh_arrays(result.data)
+    direct = pm.particlemesh.polygonize(q, collapse_edges=0.3)
+    assert direct.stats["edges_collapsed"] > 0
+    assert len(tris4) == direct.triangle_count
+    assert direct.triangle_count == pm.particlemesh.polygonize(q).triangle_count - 2 * direct.stats["edges_collapsed"]
+    np.testing.assert_allclose(co4, direct.vertices, atol=1e-6)
+    rep = pm.particlemesh.topology(pm.particlemesh.Mesh(co4, tris4))
+    assert rep["closed"] and rep["manifold"] and rep["components"] == 1 and rep["euler_characteristic"] == 2
+    assert not result.data.validate(verbose=False)
     # Nothing reaches the threshold: an error, no object.
     bpy.context.view_layer.objects.active = source
     expect_error("no surface|threshold", op=bpy.ops.particlemesh.polygonize, threshold=1000.0)

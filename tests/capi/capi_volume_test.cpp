@@ -194,6 +194,51 @@ TEST(CApiPolygonize, AnisotropicKernelsPiecesAndSmoothing) {
   }
 }
 
+// collapse_edges, appended last: off by default and for a caller whose struct ends before it;
+// the C++ result when set; the count in the stats (left alone in a stats struct without it);
+// out of range named.
+TEST(CApiPolygonize, CollapsesShortEdges) {
+  const PointCloud c = test::random_cloud(3000, 7, 1.4);
+  Cloud cloud(c);
+  pm_polygonize_options opt;
+  pm_polygonize_options_init(&opt);
+  EXPECT_EQ(opt.collapse_edges, 0.0);
+  opt.radius = 0.15;
+  opt.collapse_edges = 0.3;
+  pm_mesh* mesh = nullptr;
+  pm_polygonize_stats stats{};
+  stats.struct_size = sizeof(stats);
+  ASSERT_EQ(pm_polygonize_ex(cloud.handle, nullptr, nullptr, &opt, &mesh, &stats), PM_OK) << last();
+  PolygonizeOptions o;
+  o.radius = 0.15;
+  o.collapse_edges = 0.3;
+  const PolygonizeResult ref = polygonize(c, o);
+  EXPECT_GT(ref.stats.edges_collapsed, 0u);
+  EXPECT_EQ(stats.edges_collapsed, ref.stats.edges_collapsed);
+  EXPECT_EQ(stats.triangles, ref.stats.triangles);
+  EXPECT_TRUE(read_back(mesh).positions == ref.mesh.positions);
+  EXPECT_TRUE(read_back(mesh).triangles == ref.mesh.triangles);
+  pm_mesh_destroy(mesh);
+  // A struct that ends before the field: off.
+  opt.struct_size = uint32_t(offsetof(pm_polygonize_options, collapse_edges));
+  pm_polygonize_stats old{};
+  old.struct_size = uint32_t(offsetof(pm_polygonize_stats, edges_collapsed));
+  old.edges_collapsed = 77;
+  ASSERT_EQ(pm_polygonize_ex(cloud.handle, nullptr, nullptr, &opt, &mesh, &old), PM_OK) << last();
+  o.collapse_edges = 0;
+  EXPECT_TRUE(read_back(mesh).triangles == polygonize(c, o).mesh.triangles);
+  EXPECT_EQ(old.edges_collapsed, 77u);
+  pm_mesh_destroy(mesh);
+  opt.struct_size = sizeof(opt);
+  for (double bad : {-0.1, 0.51, double(NAN)}) {
+    opt.collapse_edges = bad;
+    pm_mesh* untouched = reinterpret_cast<pm_mesh*>(0x1);
+    EXPECT_EQ(pm_polygonize(cloud.handle, nullptr, nullptr, &opt, &untouched), PM_STATUS_INVALID_ARGUMENT) << bad;
+    EXPECT_NE(last().find("collapse_edges"), std::string::npos) << last();
+    EXPECT_EQ(untouched, reinterpret_cast<pm_mesh*>(0x1));
+  }
+}
+
 TEST(CApiPolygonize, DefaultsRadiiAndStrengths) {
   const PointCloud c = test::random_cloud(2000, 3, 1.26);
   Cloud cloud(c);

@@ -308,7 +308,26 @@ def test_anisotropic_options_pieces_and_smoothing(cli, inspect, tmp_path):
     assert "small pieces  1 dropped" in proc.stdout
 
 
+def test_collapse_edges_takes_out_slivers_and_keeps_the_surface(cli, inspect, tmp_path):
+    pts = tmp_path / "block.xyz"
+    write_block(pts, 10, 8, 6, jitter=0.2)
+    raw, a, b = tmp_path / "raw.ply", tmp_path / "a.ply", tmp_path / "b.ply"
+    report = tmp_path / "r.json"
+    cli("polygonize", pts, "-o", raw, "-q")
+    proc = cli("polygonize", pts, "-o", a, "--collapse-edges", "0.3", "--threads", "1", "--report", report)
+    n = json.loads(report.read_text())["polygonize"]["edges_collapsed"]
+    assert n > 0 and f"slivers       {n} edges shorter than 0.3 h collapsed" in proc.stdout
+    cli("polygonize", pts, "-o", b, "--collapse-edges", "0.3", "--threads", "2", "-q")
+    assert a.read_bytes() == b.read_bytes()
+    m0, m1 = inspect(raw), inspect(a)
+    assert m1["closed"] and m1["manifold"] and m1["outward"]
+    assert m1["triangles"] == m0["triangles"] - 2 * n
+    assert (m1["components"], m1["euler_characteristic"]) == (m0["components"], m0["euler_characteristic"])
+
+
 @pytest.mark.parametrize("args, needle", [
+    (["--collapse-edges", "0.6"], "collapse-edges"),
+    (["--collapse-edges", "-0.1"], "collapse-edges"),
     (["--anisotropic", "--aniso-max-stretch", "0.5"], "aniso-max-stretch"),
     (["--anisotropic", "--aniso-smoothing", "2"], "aniso-smoothing"),
     (["--anisotropic", "--aniso-radius", "nan"], "aniso-radius"),

@@ -121,6 +121,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       opt.cell_max[a] = int64_t(uint64_t(opt.cell_min[a]) + in.range(0, 64) - 2);  // wraps, never overflows
     }
   }
+  // Short edges collapsed, read after the tile's options: in range (up to 0.64 cells, over the
+  // limit too) or any number; the mesh must stay as manifold as without.
+  const uint8_t collapse = in.take<uint8_t>();
+  if (collapse & 1) opt.collapse_edges = (collapse & 2) ? in.number(0.25) : double(in.take<uint8_t>()) / 400.0;
   const bool ranged = (opt.flags & PM_POLYGONIZE_CELL_RANGE) && opt.struct_size >= sizeof(opt) && !(size_mode & 32);
 
   // The default radius alone (pm_default_radius): on success what pm_polygonize_ex resolves

@@ -480,9 +480,9 @@ def test_tiled_calls_refuse_bad_arguments(pm, pmd, client):
         pmd.triangulate_tiled(client, p, bogus=1)
     with pytest.raises(TypeError, match="bogus"):
         pmd.polygonize_tiled(client, p, bogus=1)
-    for key in ("anisotropic", "min_component_particles", "taubin_iterations"):
+    for key in ("anisotropic", "min_component_particles", "collapse_edges", "taubin_iterations"):
         with pytest.raises(pm.Error, match=f"does not support {key}"):
-            pmd.polygonize_tiled(client, p, radius=0.1, **{key: 1})
+            pmd.polygonize_tiled(client, p, radius=0.1, **{key: 0.3 if key == "collapse_edges" else 1})
     with pytest.raises(pm.Error, match=r"positions\[3\].y"):
         q = p.copy()
         q[3, 1] = np.nan

@@ -700,6 +700,29 @@ def test_polygonize_anisotropic_and_finishing(pm):
     assert dropped.stats["components_removed"] == 1
 
 
+def test_polygonize_collapses_short_edges(pm):
+    """collapse_edges: marching cubes' slivers collapsed, the surface still closed and of the
+    same topology, fewer triangles; the count in stats; out of range an Error naming it."""
+    rng = np.random.default_rng(4)
+    p = rng.uniform(-1, 1, (20000, 3))
+    p = p[np.linalg.norm(p, axis=1) < 1] * [1.0, 0.6, 0.8]
+    velocity = p * 2
+    raw = pm.polygonize(p, attributes={"velocity": velocity})
+    clean = pm.polygonize(p, attributes={"velocity": velocity}, collapse_edges=0.3)
+    assert raw.stats["edges_collapsed"] == 0
+    n = clean.stats["edges_collapsed"]
+    assert n > 0.03 * raw.triangle_count
+    assert clean.vertex_count == raw.vertex_count - n
+    assert clean.triangle_count == raw.triangle_count - 2 * n
+    r0, r1 = pm.topology(raw), pm.topology(clean)
+    assert r1["closed"] and r1["manifold"] and r1["outward"]
+    assert (r1["components"], r1["euler_characteristic"]) == (r0["components"], r0["euler_characteristic"])
+    assert clean.attributes["velocity"].shape == (clean.vertex_count, 3)
+    for bad in (-1, 0.7, float("nan")):
+        with pytest.raises(pm.Error, match="collapse_edges"):
+            pm.polygonize(p, collapse_edges=bad)
+
+
 def test_polygonize_attributes_are_polygonizes_own(pm):
     """Meshed without attributes, then interpolated at the float64 vertices: the values
     polygonize gives them itself, bit for bit, with the same keywords (float32 particles as

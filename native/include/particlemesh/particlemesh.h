@@ -411,6 +411,10 @@ typedef struct pm_polygonize_options {
   int64_t cell_min[3];      /**< with PM_POLYGONIZE_CELL_RANGE: only the cells with
                                  cell_min <= (i, j, k) < cell_max are meshed */
   int64_t cell_max[3];
+  /* -- appended -- */
+  double collapse_edges;    /**< collapse every edge shorter than this x h into one vertex on
+                                 the surface where the surface stays a closed 2-manifold
+                                 (marching cubes' slivers), in [0, 0.5]; 0 = off (default) */
 } pm_polygonize_options;
 
 /** pm_polygonize_options.flags: anchor the lattice and the particle grid at domain_min. */
@@ -450,6 +454,8 @@ typedef struct pm_polygonize_stats {
   double density_radius;    /**< spherical kernels of one radius: the R their packing suggests
                                  (2 spacings of a lattice as dense; R itself for packed
                                  particles at the default radius), else 0 */
+  /* -- appended -- */
+  uint64_t edges_collapsed; /**< short edges collapsed by collapse_edges (vertices removed) */
 } pm_polygonize_stats;
 
 PM_EXPORT void pm_polygonize_options_init(pm_polygonize_options* options);

@@ -38,6 +38,7 @@ void pm_polygonize_options_init(pm_polygonize_options* options) {
   options->taubin_mu = d.surface_smoothing.mu;
   options->flags = 0;
   options->domain_max_radius = d.domain_max_radius;
+  options->collapse_edges = d.collapse_edges;
 }
 
 }  // extern "C"
@@ -59,6 +60,7 @@ PolygonizeOptions polygonize_options_from_c(const pm_polygonize_options& o, cons
   opt.surface_smoothing.iterations = o.taubin_iterations;
   opt.surface_smoothing.lambda = o.taubin_lambda;
   opt.surface_smoothing.mu = o.taubin_mu;
+  opt.collapse_edges = o.collapse_edges;
   if (o.flags & ~uint32_t(PM_POLYGONIZE_DOMAIN_MIN | PM_POLYGONIZE_CELL_RANGE | PM_POLYGONIZE_ANCHOR_IN_SPACE))
     throw Error(Status::InvalidArgument, "options->flags has unknown bits: " + std::to_string(o.flags));
   if (o.flags & PM_POLYGONIZE_ANCHOR_IN_SPACE) opt.lattice_anchor = LatticeAnchor::Space;
@@ -110,6 +112,7 @@ pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii, const dou
       for (int a = 0; a < 3; ++a) s.origin[a] = r.stats.origin[a];
       s.enclosed_fraction = r.stats.enclosed_fraction;
       s.density_radius = r.stats.density_radius;
+      s.edges_collapsed = r.stats.edges_collapsed;
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();

@@ -85,9 +85,10 @@ def polygonize_tiled(client, particles, tiles=(2, 2, 1), *, bounds=None, radius=
         if key in options:
             raise TypeError(f"polygonize_tiled() sets {key} itself")
     # Anisotropic kernels need each particle's neighbours (and calibrate their default
-    # threshold on the whole cloud); dropping pieces and smoothing need the whole surface.
+    # threshold on the whole cloud); dropping pieces, collapsing edges and smoothing need the
+    # whole surface.
     for key in ("anisotropic", "min_component_volume", "min_component_particles",
-                "taubin_iterations"):
+                "collapse_edges", "taubin_iterations"):
         if options.get(key):
             raise Error(f"polygonize_tiled() does not support {key} yet: it needs the whole "
                         "cloud or surface (use particlemesh.polygonize)")

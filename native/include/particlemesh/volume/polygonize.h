@@ -128,6 +128,14 @@ struct PolygonizeOptions {
   /// the median particle spacing (estimated when the default radius did not already need it).
   /// 0 = keep every piece. With min_component_volume, the larger of the two limits applies.
   double min_component_particles = 0;
+  /// Collapse every edge shorter than this fraction of the cell size h into one vertex on the
+  /// surface (F = T, its normal the field's), where that keeps the surface a closed, oriented
+  /// 2-manifold and turns no other triangle by more than 60 degrees: marching cubes' slivers,
+  /// the thin triangles where the surface passes close to a lattice node, become ordinary
+  /// ones (0.3 takes out nine in ten of the triangles with an angle under 10 degrees, and about
+  /// a tenth of the triangles). After dropping pieces, before smoothing; shortest edges
+  /// first, sequential and deterministic. 0 = off (default); at most 0.5.
+  double collapse_edges = 0;
   /// Volume-keeping smoothing of the mesh, after dropping pieces (smooth/taubin.h): Taubin's
   /// lambda|mu filter; off (0 iterations) by default. Its threads follow `threads`.
   TaubinOptions surface_smoothing{.iterations = 0};
@@ -184,6 +192,7 @@ struct PolygonizeStats {
   double density_radius = 0;
   double min_component_volume = 0;   ///< the volume limit applied to pieces (0: none)
   size_t components_removed = 0;     ///< pieces dropped by it
+  size_t edges_collapsed = 0;        ///< short edges collapsed (collapse_edges): vertices removed
   int32_t smoothing_iterations = 0;  ///< Taubin iterations applied to the mesh
   size_t candidate_blocks = 0;  ///< blocks near some particle, before the exact support test
   size_t reached_blocks = 0;    ///< blocks of 8^3 nodes that some support reaches
