@@ -36,8 +36,8 @@ struct ShortEdgeCollapse {
 /// run it opposite ways, its ends share no neighbour but those two triangles' third corners
 /// (the link condition), every vertex keeps at least three neighbours, and no other triangle
 /// at its ends turns by more than acos(min_cos) or loses its area. Edges on a boundary or in
-/// more than two triangles, and the edges of vertices on them, are left alone. Is its length
-/// at its turn no longer below max_length (an end moved), it is left too. The merged vertex
+/// more than two triangles, and the edges of vertices on them, are left alone, as is an edge
+/// no longer shorter than max_length when its turn comes (an end moved). The merged vertex
 /// gets the normalised sum of both normals and the mean of both attribute values (the caller
 /// may set better ones: `moved`). Vertices and triangles keep their order, less the removed
 /// ones; a vertex no triangle used stays. `place` is called from several threads (it must be

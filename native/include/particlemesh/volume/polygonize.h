@@ -132,8 +132,8 @@ struct PolygonizeOptions {
   /// surface (F = T, its normal the field's), where that keeps the surface a closed, oriented
   /// 2-manifold and turns no other triangle by more than 60 degrees: marching cubes' slivers,
   /// the thin triangles where the surface passes close to a lattice node, become ordinary
-  /// ones (0.3 takes out nine in ten of the triangles with an angle under 10 degrees, and about
-  /// a tenth of the triangles). After dropping pieces, before smoothing; shortest edges
+  /// ones (0.3 takes out nine in ten of the triangles with an angle under 10 degrees, and a
+  /// tenth to a fifth of all triangles). After dropping pieces, before smoothing; shortest edges
   /// first, sequential and deterministic. 0 = off (default); at most 0.5.
   double collapse_edges = 0;
   /// Volume-keeping smoothing of the mesh, after dropping pieces (smooth/taubin.h): Taubin's
