@@ -65,3 +65,26 @@ TEST(Shapes, FibonacciSphereHasUnitNormalsOutward) {
     EXPECT_NEAR(dot(c.normals[i], normalized(c.positions[i] - Vec3{1, 1, 1})), 1.0, 1e-12);
   }
 }
+
+// No two kept points closer than r0, checked pair by pair: the sampler's grid skips the
+// neighbouring cells no point of which can come within r0 of a dart, and must skip no other,
+// also far from the origin (the cells' coordinates then large, their rounding coarser).
+TEST(Shapes, PoissonDiskSampleKeepsNoTwoPointsWithinR0) {
+  for (const Vec3 shift : {Vec3{0, 0, 0}, Vec3{1e4, -3e3, 7e2}}) {
+    TriMesh m = icosphere_mesh(4);
+    for (Vec3& p : m.positions) p += shift;
+    const double r0 = 0.07;
+    const PointCloud c = poisson_disk_sample(m, r0, 3);
+    ASSERT_GT(c.size(), 1000u);
+    size_t close = 0;
+    for (size_t i = 0; i < c.size(); ++i)
+      for (size_t j = i + 1; j < c.size(); ++j) close += squared_distance(c.positions[i], c.positions[j]) < r0 * r0;
+    EXPECT_EQ(close, 0u) << "shift " << shift.x;
+    // And it is a maximal sample: no point of the sphere is farther than about 2 r0 from one.
+    for (const Vec3& v : m.positions) {
+      double nearest = 1e300;
+      for (const Vec3& p : c.positions) nearest = std::min(nearest, squared_distance(v, p));
+      ASSERT_LT(std::sqrt(nearest), 2 * r0);
+    }
+  }
+}
