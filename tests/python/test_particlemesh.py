@@ -718,6 +718,9 @@ def test_polygonize_collapses_short_edges(pm):
     assert r1["closed"] and r1["manifold"] and r1["outward"]
     assert (r1["components"], r1["euler_characteristic"]) == (r0["components"], r0["euler_characteristic"])
     assert clean.attributes["velocity"].shape == (clean.vertex_count, 3)
+    # The merged vertices' values are the particles' at their place, as for every vertex.
+    asked = pm.polygonize_attributes(p, clean.vertices, attributes={"velocity": velocity})
+    np.testing.assert_array_equal(asked["velocity"], clean.attributes["velocity"])
     for bad in (-1, 0.7, float("nan")):
         with pytest.raises(pm.Error, match="collapse_edges"):
             pm.polygonize(p, collapse_edges=bad)

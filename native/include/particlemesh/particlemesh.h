@@ -475,7 +475,8 @@ PM_EXPORT pm_status pm_polygonize_ex(const pm_cloud* cloud, const double* radii,
 /** The cloud's attributes at `count` points (count x 3 doubles), interpolated exactly as
  *  pm_polygonize interpolates them at its vertices (sum w_i a_i / sum w_i in the field's
  *  particle order; 0 where no kernel reaches): given the vertices pm_polygonize placed (before
- *  taubin_iterations move them), the values are bit for bit its own. For a caller that meshes
+ *  taubin_iterations move them; with collapse_edges, where the merged ones end up), the
+ *  values are bit for bit its own. For a caller that meshes
  *  without attributes first (a cloud without them) and asks for them later. `cloud`, `radii`,
  *  `strengths` and `options` as given to pm_polygonize: the field is built from its field
  *  options (kernel, radius, threshold, the anisotropic ones, PM_POLYGONIZE_DOMAIN_MIN with

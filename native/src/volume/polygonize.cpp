@@ -877,7 +877,8 @@ PolygonizeResult polygonize(const PointCloud& cloud, const PolygonizeOptions& op
     // The attributes are interpolated while the vertices are placed (above).
     PolygonizeResult res =
         polygonize_field(field, options, tracker, field_end, PolygonizeStats{}, t0, &cloud.attributes);
-    detail::finish_polygonized(res, options, field, cloud.positions.data(), cloud.positions.size(), tracker);
+    detail::finish_polygonized(res, options, field, cloud.positions.data(), cloud.positions.size(), tracker,
+                               &cloud.attributes);
     return res;
   });
   tracker.finish();

@@ -71,7 +71,8 @@ AttributeSums::AttributeSums(std::vector<VertexAttribute>& out, size_t vertices,
 }
 
 void finish_polygonized(PolygonizeResult& r, const PolygonizeOptions& o, const ParticleField& field,
-                        const Vec3* positions, size_t n, ProgressTracker& tracker) {
+                        const Vec3* positions, size_t n, ProgressTracker& tracker,
+                        const std::vector<VertexAttribute>* attributes) {
   const auto t0 = std::chrono::steady_clock::now();
   double limit = o.min_component_volume;
   if (o.min_component_particles > 0) {
@@ -133,6 +134,30 @@ void finish_polygonized(PolygonizeResult& r, const PolygonizeOptions& o, const P
           if (gn > 0 && std::isfinite(gn)) r.mesh.normals[v] = g * (-1.0 / gn);
         }
       });
+    // Their attributes: the particles' at the new place (the mean the collapse gave them is
+    // replaced), as every other vertex's, so polygonize_attributes at the mesh's vertices
+    // gives them bit for bit.
+    if (attributes != nullptr && !r.mesh.attributes.empty() && !c.moved.empty()) {
+      std::vector<VertexAttribute> values;
+      AttributeSums sums(values, c.moved.size(), field, *attributes);
+      const bool same = values.size() == r.mesh.attributes.size() &&
+                        std::equal(values.begin(), values.end(), r.mesh.attributes.begin(),
+                                   [](const VertexAttribute& x, const VertexAttribute& y) {
+                                     return x.name == y.name && x.components == y.components;
+                                   });
+      if (sums.any() && same) {
+        parallel_blocks(c.moved.size(), 1024, [&](size_t begin, size_t end) {
+          AttributeSums local(sums);  // its own running sums
+          for (size_t i = begin; i < end; ++i) local.interpolate(i, field, r.mesh.positions[c.moved[i]]);
+        });
+        for (size_t k = 0; k < values.size(); ++k) {
+          const size_t m = size_t(values[k].components);
+          for (size_t i = 0; i < c.moved.size(); ++i)
+            std::copy_n(values[k].values.begin() + ptrdiff_t(i * m), m,
+                        r.mesh.attributes[k].values.begin() + ptrdiff_t(size_t(c.moved[i]) * m));
+        }
+      }
+    }
     r.stats.edges_collapsed = c.collapsed;
   }
   tracker.check();

@@ -22,9 +22,12 @@ void validate_finishing(const PolygonizeOptions& options);
 /// min_component_particles is the field's when it estimated one, else it is estimated from
 /// `positions` (the input particles; the field's centres when null). The mesh's attributes,
 /// interpolated while its vertices were placed (AttributeSums), go with their vertices:
-/// dropped pieces take theirs with them.
+/// dropped pieces take theirs with them; a vertex that collapsed edges merge gets them from
+/// `attributes` (the particles', those the mesh's were interpolated from; may be null: then
+/// the mean of the merged vertices' values) at its new place, as polygonize_attributes would.
 void finish_polygonized(PolygonizeResult& r, const PolygonizeOptions& options, const ParticleField& field,
-                        const Vec3* positions, size_t n, ProgressTracker& tracker);
+                        const Vec3* positions, size_t n, ProgressTracker& tracker,
+                        const std::vector<VertexAttribute>* attributes = nullptr);
 
 /// The particles' attributes interpolated at the vertices of `mesh`: each vertex x gets, for
 /// each attribute, the particles' values weighted by their normalised kernel weights at x:

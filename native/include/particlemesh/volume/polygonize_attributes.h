@@ -23,8 +23,8 @@ namespace PM_NAMESPACE {
 /// radius, threshold, radii, strengths, anisotropy, domain_min, domain_max_radius) as
 /// polygonize(cloud, options) builds it, and the sums are polygonize's own: given the
 /// vertices polygonize placed, the values are bit for bit those it gave them. (Its vertices
-/// before surface_smoothing: the attributes are taken where a vertex is placed; dropping
-/// small pieces moves no vertex.) The other options but `threads` and `progress` are not
+/// before surface_smoothing: the attributes are taken where a vertex is placed, a vertex
+/// collapse_edges merged where it ends up; dropping small pieces moves no vertex.) The other options but `threads` and `progress` are not
 /// used. The result does not depend on the thread count. Cost: building the field (a
 /// spacing estimate when the radius is the default) and one neighbour query per point.
 /// @throws Error(InvalidInput) a non-finite point coordinate (naming the point), an
