@@ -129,6 +129,25 @@ TEST(Cancellation, PolygonizeMillionParticles) {
   });
 }
 
+// The short edges' collapses are a stage of their own, and a request to stop made in it ends
+// the call with Cancelled (the collapses ask the callback as they go).
+TEST(Cancellation, PolygonizeCollapsingEdges) {
+  PointCloud c = ball(kSanitized ? 4000 : 30000);
+  for (size_t i = 0; i < c.size(); ++i)
+    c.positions[i] += Vec3{std::sin(i * 1.3) * 0.3, std::cos(i * 0.7) * 0.3, std::sin(i * 2.9) * 0.3};
+  PolygonizeOptions o;
+  o.collapse_edges = 0.3;
+  bool seen = false;
+  o.progress = [&](std::string_view stage, double) {
+    seen = seen || stage == "collapsing short edges";
+    return !seen;
+  };
+  PM_EXPECT_ERROR(polygonize(c, o), Status::Cancelled, "cancelled");
+  EXPECT_TRUE(seen);
+  o.progress = {};
+  EXPECT_GT(polygonize(c, o).stats.edges_collapsed, 0u);
+}
+
 TEST(Determinism, Polygonize) {
   PointCloud c = ball(30000);
   // Jitter, per-particle radii and strengths: sums in a different order would show.

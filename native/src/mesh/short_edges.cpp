@@ -21,7 +21,8 @@ struct Candidate {
 }  // namespace
 
 ShortEdgeCollapse collapse_short_edges(TriMesh& mesh, double max_length, double min_cos,
-                                       const std::function<Vec3(const Vec3&, const Vec3&)>& place) {
+                                       const std::function<Vec3(const Vec3&, const Vec3&)>& place,
+                                       const std::function<void()>& check) {
   ShortEdgeCollapse out;
   std::vector<Vec3>& P = mesh.positions;
   std::vector<Triangle>& T = mesh.triangles;
@@ -50,10 +51,12 @@ ShortEdgeCollapse collapse_short_edges(TriMesh& mesh, double max_length, double 
   // caller's placement can be costly: polygonize's evaluates the field). The collapses below
   // use it while neither end has moved, and place the vertex again otherwise: the same
   // result, whatever the thread count.
+  if (check) check();
   std::vector<Vec3> planned(cand.size());
   parallel_blocks(cand.size(), 1024, [&](size_t begin, size_t end) {
     for (size_t k = begin; k < end; ++k) planned[k] = place(P[cand[k].a], P[cand[k].b]);
   });
+  if (check) check();
 
   // Each vertex's triangles (ascending), fixed; a vertex that took in others reaches theirs
   // through its chain (`next`), and a removed triangle is skipped.
@@ -97,6 +100,7 @@ ShortEdgeCollapse collapse_short_edges(TriMesh& mesh, double max_length, double 
 
   const bool has_normals = mesh.normals.size() == nv;
   for (size_t k = 0; k < cand.size(); ++k) {
+    if (check && (k & 4095) == 4095) check();
     const uint32_t a = cand[k].a, b = cand[k].b;
     if (removed_v[a] || removed_v[b]) continue;
     if (!(squared_norm(P[a] - P[b]) < limit2)) continue;

@@ -42,7 +42,10 @@ struct ShortEdgeCollapse {
 /// may set better ones: `moved`). Vertices and triangles keep their order, less the removed
 /// ones; a vertex no triangle used stays. `place` is called from several threads (it must be
 /// safe to); the result does not depend on their number.
+/// `check` (when given) is called on the calling thread every few thousand edges, so that a
+/// long run can be cancelled by its throwing; the mesh is then left half done.
 ShortEdgeCollapse collapse_short_edges(TriMesh& mesh, double max_length, double min_cos,
-                                       const std::function<Vec3(const Vec3&, const Vec3&)>& place);
+                                       const std::function<Vec3(const Vec3&, const Vec3&)>& place,
+                                       const std::function<void()>& check = {});
 
 }  // namespace particlemesh::detail

@@ -124,7 +124,8 @@ void finish_polygonized(PolygonizeResult& r, const PolygonizeOptions& o, const P
       }
       return is_finite(x) && squared_norm(x - m) <= 0.25 * max_length * max_length ? x : m;
     };
-    const ShortEdgeCollapse c = collapse_short_edges(r.mesh, max_length, kCollapseMinCos, place);
+    const ShortEdgeCollapse c =
+        collapse_short_edges(r.mesh, max_length, kCollapseMinCos, place, [&] { tracker.check(); });
     if (r.mesh.normals.size() == r.mesh.positions.size())
       parallel_blocks(c.moved.size(), 1024, [&](size_t begin, size_t end) {
         for (size_t i = begin; i < end; ++i) {
