@@ -8,6 +8,7 @@
 #include "core/disjoint_sets.h"
 #include "mesh/orientation.h"
 #include "particlemesh/core/error.h"
+#include "mesh/compact_vertices.h"
 
 namespace PM_NAMESPACE {
 
@@ -87,22 +88,7 @@ size_t remove_small_components(TriMesh& mesh, double min_volume) {
     if (id != kUnused && drop[id]) continue;
     remap[v] = next++;
   }
-  auto compact_vec3 = [&](std::vector<Vec3>& a) {
-    if (a.size() != nv) return;
-    for (size_t v = 0; v < nv; ++v)
-      if (remap[v] != kUnused) a[remap[v]] = a[v];
-    a.resize(next);
-  };
-  compact_vec3(mesh.positions);
-  compact_vec3(mesh.normals);
-  for (VertexAttribute& at : mesh.attributes) {
-    const size_t k = size_t(std::max(at.components, 1));
-    if (at.values.size() != nv * k) continue;
-    for (size_t v = 0; v < nv; ++v)
-      if (remap[v] != kUnused)
-        for (size_t j = 0; j < k; ++j) at.values[size_t(remap[v]) * k + j] = at.values[v * k + j];
-    at.values.resize(size_t(next) * k);
-  }
+  detail::compact_vertices(mesh, remap, next, kUnused);
   size_t w = 0;
   for (const Triangle& t : mesh.triangles) {
     if (drop[c.vertex_component[t[0]]]) continue;

@@ -1,6 +1,7 @@
 #include "mesh/short_edges.h"
 
 #include "core/parallel.h"
+#include "mesh/compact_vertices.h"
 
 #include <algorithm>
 #include <cmath>
@@ -109,14 +110,14 @@ ShortEdgeCollapse collapse_short_edges(TriMesh& mesh, double max_length, double 
     int count = 0, forward = 0;
     for_triangles(a, [&](uint32_t i) {
       const Triangle& t = T[i];
-      for (int k = 0; k < 3; ++k)
-        if (t[k] == b) {
+      for (int j = 0; j < 3; ++j)
+        if (t[j] == b) {
           if (count < 2) {
             shared[count] = i;
             third[count] = t[0] ^ t[1] ^ t[2] ^ a ^ b;
           }
           ++count;
-          forward += t[(k + 2) % 3] == a;  // a, then b
+          forward += t[(j + 2) % 3] == a;  // a, then b
         }
     });
     if (count != 2 || forward != 1 || third[0] == third[1]) continue;
@@ -129,22 +130,23 @@ ShortEdgeCollapse collapse_short_edges(TriMesh& mesh, double max_length, double 
     if (na.size() + nb.size() < 7 || triangle_count(c) < 4 || triangle_count(d) < 4) continue;
     const Vec3 p = moved[a] || moved[b] ? place(P[a], P[b]) : planned[k];
     if (!is_finite(p)) continue;
+    // No other triangle at a or b turns too far or loses its area with them at p.
     bool ok = true;
-    auto check = [&](uint32_t v) {
+    auto keeps_facing = [&](uint32_t v) {
       for_triangles(v, [&](uint32_t i) {
         if (!ok || i == shared[0] || i == shared[1]) return;
         Vec3 q[3], r[3];
-        for (int k = 0; k < 3; ++k) {
-          q[k] = P[T[i][k]];
-          r[k] = T[i][k] == a || T[i][k] == b ? p : q[k];
+        for (int j = 0; j < 3; ++j) {
+          q[j] = P[T[i][j]];
+          r[j] = T[i][j] == a || T[i][j] == b ? p : q[j];
         }
         const Vec3 n0 = cross(q[1] - q[0], q[2] - q[0]), n1 = cross(r[1] - r[0], r[2] - r[0]);
         const double l0 = norm(n0), l1 = norm(n1);
         if (!(l1 > 0) || !(dot(n0, n1) > min_cos * l0 * l1)) ok = false;
       });
     };
-    check(a);
-    if (ok) check(b);
+    keeps_facing(a);
+    if (ok) keeps_facing(b);
     if (!ok) continue;
 
     // Collapse: b into a.
@@ -155,10 +157,10 @@ ShortEdgeCollapse collapse_short_edges(TriMesh& mesh, double max_length, double 
       mesh.normals[a] = l > 0 ? s / l : mesh.normals[a];
     }
     for (VertexAttribute& at : mesh.attributes) {
-      const size_t k = size_t(std::max(at.components, 1));
-      if (at.values.size() != nv * k) continue;
-      for (size_t j = 0; j < k; ++j)
-        at.values[a * k + j] = float(0.5 * (double(at.values[a * k + j]) + double(at.values[b * k + j])));
+      const size_t m = size_t(std::max(at.components, 1));
+      if (at.values.size() != nv * m) continue;
+      for (size_t j = 0; j < m; ++j)
+        at.values[a * m + j] = float(0.5 * (double(at.values[a * m + j]) + double(at.values[b * m + j])));
     }
     removed_t[shared[0]] = removed_t[shared[1]] = 1;
     for_triangles(b, [&](uint32_t i) {
@@ -182,16 +184,7 @@ ShortEdgeCollapse collapse_short_edges(TriMesh& mesh, double max_length, double 
       if (moved[v]) out.moved.push_back(kept);
       ++kept;
     }
-  auto compact = [&](auto& values, size_t k) {
-    if (values.size() != nv * k) return;
-    for (size_t v = 0; v < nv; ++v)
-      if (remap[v] != kNone)
-        for (size_t j = 0; j < k; ++j) values[size_t(remap[v]) * k + j] = values[v * k + j];
-    values.resize(size_t(kept) * k);
-  };
-  compact(P, 1);
-  compact(mesh.normals, 1);
-  for (VertexAttribute& at : mesh.attributes) compact(at.values, size_t(std::max(at.components, 1)));
+  compact_vertices(mesh, remap, kept, kNone);
   size_t w = 0;
   for (size_t i = 0; i < nt; ++i)
     if (!removed_t[i]) T[w++] = {remap[T[i][0]], remap[T[i][1]], remap[T[i][2]]};
