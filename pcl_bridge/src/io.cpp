@@ -317,7 +317,6 @@ namespace particlemesh_pcl
       fail (path, "header count mismatch: COUNT has " + std::to_string (h.counts.size ()) + " entries, FIELDS has " +
                   std::to_string (nf));
     h.point_size = 0;
-    std::size_t values_per_point = 0;
     for (std::size_t f = 0; f < nf; ++f)
     {
       const int s = h.sizes[f];
@@ -325,7 +324,6 @@ namespace particlemesh_pcl
       if (!ok)
         fail (path, "bad header: field '" + h.fields[f] + "' has TYPE " + h.types[f] + " with SIZE " + std::to_string (s));
       h.point_size += std::size_t (s) * std::size_t (h.counts[f]);
-      values_per_point += std::size_t (h.counts[f]);
     }
     for (const char *axis : {"x", "y", "z"})
     {

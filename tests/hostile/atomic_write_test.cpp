@@ -87,7 +87,7 @@ TEST(AtomicWrite, MeshWritersNeverLeaveATruncatedFile) {
   TriMesh with_normals = m;
   with_normals.normals = m.positions;
   expect_atomic_failure(dir, "m.ply", [&](const std::string& p) { write_mesh(with_normals, p); });
-  expect_atomic_failure(dir, "a.ply", [&](const std::string& p) { write_mesh(with_normals, p, {MeshFormat::PlyAscii, true}); });
+  expect_atomic_failure(dir, "a.ply", [&](const std::string& p) { write_mesh(with_normals, p, {MeshFormat::PlyAscii, true, {}}); });
   expect_atomic_failure(dir, "m.obj", [&](const std::string& p) { write_mesh(with_normals, p); });
 }
 

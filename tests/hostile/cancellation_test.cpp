@@ -52,7 +52,7 @@ TEST(Cancellation, SpacingAndNormals) {
 }
 
 TEST(Cancellation, SmoothLoopAndButterfly) {
-  const TriMesh m = icosphere_mesh(kSanitized ? 5 : 6);  // 20480 / 81920 triangles
+  const TriMesh m = icosphere_mesh(kSanitized ? 4 : 6);  // 5120 / 81920 triangles
   for (SmoothScheme scheme : {SmoothScheme::Loop, SmoothScheme::Butterfly}) {
     expect_prompt_cancellation(scheme == SmoothScheme::Loop ? "smooth loop x2" : "smooth butterfly x2",
                                [&](const ProgressCallback& p) {

@@ -174,7 +174,7 @@ TEST(FileLimits, OffPromisingMore) {
             1u);
   // Found by fuzzing: the whole file on the keyword's line (OpenMesh then read its counts from
   // a failed stream: uninitialized, an allocation of GBs).
-  expect_refused(write(dir / "line.off", "COFF \xff\xff 05 0OF 5"), "bad OFF header: '??' is not a vertex/face/edge count", false);
+  expect_refused(write(dir / "line.off", "COFF \xff\xff 05 0OF 5"), "bad OFF header: '?\?' is not a vertex/face/edge count", false);
   // A face's corner count is walked too: 4e9 corners in a 40-byte file was 4e9 handles pushed.
   const std::string tri = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n";
   expect_refused(write(dir / "k.off", tri + "4000000000 0 1 2\n"), "the file ends in face 0 (4000000000 corners)", false);

@@ -24,18 +24,6 @@
 
 namespace particlemesh::test {
 
-#if defined(__SANITIZE_ADDRESS__)
-inline constexpr bool kSanitized = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-inline constexpr bool kSanitized = true;
-#else
-inline constexpr bool kSanitized = false;
-#endif
-#else
-inline constexpr bool kSanitized = false;
-#endif
-
 /// Status of a call (Ok if it returns); the message into *message.
 
 #define PM_EXPECT_ERROR(call, status, text)                                                   \
@@ -80,6 +68,7 @@ inline constexpr double kWallSlack = 10.0;
 /// What a full run's progress callbacks looked like.
 struct ProgressTrace {
   double seconds = 0;         ///< the whole call (wall)
+  double cpu = 0;             ///< the whole call (CPU, all threads)
   double longest_gap = 0;     ///< longest CPU time without a callback (incl. before the first / after the last)
   double longest_wall_gap = 0;
   std::string gap_stage;      ///< the stage in which it happened
@@ -91,7 +80,8 @@ inline ProgressTrace trace_progress(const std::function<void(const ProgressCallb
   ProgressTrace t;
   const auto start = Clock::now();
   auto last = start;
-  double last_cpu = cpu_seconds();
+  const double start_cpu = cpu_seconds();
+  double last_cpu = start_cpu;
   std::string current = "(before the first callback)";
   auto gap = [&](const std::string& stage) {
     const auto now = Clock::now();
@@ -112,6 +102,7 @@ inline ProgressTrace trace_progress(const std::function<void(const ProgressCallb
   });
   gap(current + " (after the last callback)");
   t.seconds = seconds(last - start);
+  t.cpu = last_cpu - start_cpu;
   return t;
 }
 
@@ -163,8 +154,9 @@ inline constexpr double kLatency = kSanitized ? 9.0 : 3.0;
 // (about 1 s for the 80k-triangle level 2 below on an idle machine).
 inline constexpr double kThirdPartyLatency = kSanitized ? 12.0 : 4.0;
 
-inline void expect_prompt_cancellation(const char* what, const std::function<void(const ProgressCallback&)>& call,
-                                double bound = kLatency) {
+inline ProgressTrace expect_prompt_cancellation(const char* what,
+                                               const std::function<void(const ProgressCallback&)>& call,
+                                               double bound = kLatency) {
   const ProgressTrace full = trace_progress(call);
   std::printf("%s: %.2f s, %zu stages, longest gap between callbacks %.3f s of CPU (%s), %.3f s of wall time\n",
               what, full.seconds, full.stages.size(), full.longest_gap, full.gap_stage.c_str(), full.longest_wall_gap);
@@ -181,6 +173,7 @@ inline void expect_prompt_cancellation(const char* what, const std::function<voi
     EXPECT_EQ(status, Status::Cancelled) << what << " at " << at;
     EXPECT_LT(latency, bound) << what << " cancelled at " << at * 100 << " % in stage " << stage;
   }
+  return full;
 }
 
 }  // namespace particlemesh::test

@@ -55,7 +55,7 @@ TEST(PclBridgeFiles, BinaryDataThatReadsLikeAHeaderLineIsRefused) {
   }
   // A control byte in a header line: PCL splits "DATA\fbinary" as one word and threw out of
   // its reader (an abort, found by fuzzing).
-  for (const std::string sep : {std::string("\f"), std::string("\v"), std::string(1, '\0')}) {
+  for (const std::string& sep : {std::string("\f"), std::string("\v"), std::string(1, '\0')}) {
     std::string bad = h;
     bad.replace(bad.find("DATA binary"), 11, "DATA" + sep + "binary");
     std::ofstream(dir / "control.pcd", std::ios::binary) << bad << std::string(24, '\0');

@@ -21,6 +21,20 @@
 
 namespace particlemesh::test {
 
+/// Built with AddressSanitizer (scripts/sanitize.sh): the long tests run on smaller inputs
+/// there (the same code paths; every call costs 3-10 times as much).
+#if defined(__SANITIZE_ADDRESS__)
+inline constexpr bool kSanitized = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+inline constexpr bool kSanitized = true;
+#else
+inline constexpr bool kSanitized = false;
+#endif
+#else
+inline constexpr bool kSanitized = false;
+#endif
+
 /// The status a call ends with: Ok, or the Error it throws (its message into *message).
 inline Status status_of(const std::function<void()>& f, std::string* message = nullptr) {
   try {

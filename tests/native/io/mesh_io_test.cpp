@@ -44,7 +44,7 @@ TEST(MeshIO, NonManifoldRawTrianglesRoundTripInEveryFormat) {
     EXPECT_EQ(back.normals.size(), raw.mesh.normals.size()) << name;
   }
   const auto ascii = (dir / "a.ply").string();
-  write_mesh(raw.mesh, ascii, {MeshFormat::PlyAscii, true});
+  write_mesh(raw.mesh, ascii, {MeshFormat::PlyAscii, true, {}});
   std::ifstream in(ascii);
   std::string line;
   std::getline(in, line);
@@ -325,7 +325,7 @@ TEST(MeshIO, CoordinatesKeepTheirPrecision) {
     EXPECT_EQ(back.positions, r.mesh.positions) << name;
     EXPECT_EQ(back.triangles, r.mesh.triangles) << name;
   }
-  write_mesh(r.mesh, (dir / "far_ascii.ply").string(), {MeshFormat::PlyAscii, true});
+  write_mesh(r.mesh, (dir / "far_ascii.ply").string(), {MeshFormat::PlyAscii, true, {}});
   EXPECT_EQ(read_mesh((dir / "far_ascii.ply").string()).positions, r.mesh.positions);
   auto header_says = [&](const std::string& path, const std::string& line) {
     std::ifstream in(path);

@@ -185,7 +185,7 @@ TEST(PlyReader, ColoursAndOtherPropertiesAreAttributes) {
   for (size_t i = 0; i < m.positions.size(); ++i)
     m.attributes[0].values.insert(m.attributes[0].values.end(), {float(i % 2), 0.5f, 1.0f});
   for (const char* name : {"m.ply", "a.ply"}) {
-    write_mesh(m, (dir / name).string(), {std::string(name) == "a.ply" ? MeshFormat::PlyAscii : MeshFormat::Auto, true});
+    write_mesh(m, (dir / name).string(), {std::string(name) == "a.ply" ? MeshFormat::PlyAscii : MeshFormat::Auto, true, {}});
     const TriMesh back = read_mesh((dir / name).string());
     ASSERT_EQ(back.attributes.size(), 1u) << name;
     ASSERT_EQ(back.attributes[0].values.size(), m.attributes[0].values.size());

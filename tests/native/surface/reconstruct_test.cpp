@@ -348,7 +348,9 @@ TEST(ReconstructSurface, HollowBallsInnerWallFacesIntoTheCavity) {
     }
     // The vertex normals agree: into the cavity on its wall.
     for (size_t i = 0; i < cloud->size(); ++i)
-      if (radius[i] == 0.8) ASSERT_LT(dot(r.mesh.normals[i], r.mesh.positions[i]), 0) << what << " " << i;
+      if (radius[i] == 0.8) {
+        ASSERT_LT(dot(r.mesh.normals[i], r.mesh.positions[i]), 0) << what << " " << i;
+      }
   }
 }
 

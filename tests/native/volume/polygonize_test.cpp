@@ -297,9 +297,15 @@ TEST_P(RandomCloud, WatertightManifoldOutwardOnTheSurface) {
   EXPECT_GT(nmin, 0.99);
 }
 
-INSTANTIATE_TEST_SUITE_P(Seeds, RandomCloud,
-                         ::testing::Values(std::pair<size_t, uint64_t>{1000, 1}, std::pair<size_t, uint64_t>{1000, 2},
-                                           std::pair<size_t, uint64_t>{10000, 3}, std::pair<size_t, uint64_t>{30000, 4}));
+// The 30 000-point cloud runs the 10 000-point one's code on more particles: not under ASan,
+// where it took 22 s of the sanitizer run.
+std::vector<std::pair<size_t, uint64_t>> random_cloud_cases() {
+  std::vector<std::pair<size_t, uint64_t>> cases{{1000, 1}, {1000, 2}, {10000, 3}};
+  if (!test::kSanitized) cases.push_back({30000, 4});
+  return cases;
+}
+
+INSTANTIATE_TEST_SUITE_P(Seeds, RandomCloud, ::testing::ValuesIn(random_cloud_cases()));
 
 TEST(Polygonize, ConvergesAsTheCellShrinks) {
   const PointCloud c = test::random_cloud(1000, 21, 1.0);
