@@ -94,7 +94,8 @@ def defaults(function):
 
 def read_points(path):
     """Particles from a file: .ply (any numeric vertex properties, normals, vertex colours as
-    the "color" attribute), .xyz and .pts (text; columns by a header line or by their count),
+    the "color" attribute), .xyz, .pts, .txt and .csv (text; columns by a header line, as
+    ParaView's CSV export names them, or by their count),
     VTK .vtk/.vtu/.vtp/.pvtu/.pvtp, lidar .las, Krakatoa .prt and Houdini .bgeo/.geo (every
     point-data array / point attribute in `attributes`) through the library; .pcd (ascii, binary, compressed)
     through the PCL bridge, which drops points with a NaN coordinate and counts them in

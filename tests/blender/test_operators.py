@@ -247,6 +247,18 @@ def test_import_every_ply_and_xyz(pm, data_dir, tmp_path):
     np.testing.assert_allclose(co, [[0, 0, 0], [1, 0, 0], [0, 1, 0]])
     np.testing.assert_allclose(pm.blender_mesh.get_point_attribute(obj.data, "point_normal"),
                                [[0, 0, 1]] * 3)
+    # ParaView's CSV export: the positions last, a vector's components as Name:k; the velocity
+    # becomes the FLOAT_VECTOR attribute motion blur reads, a name with a space an attribute.
+    csv = tmp_path / "paraview.csv"
+    csv.write_text('"Velocity:0","Velocity:1","Velocity:2","Point ID","Points:0","Points:1","Points:2"\n'
+                   "1,2,3,0,0,0,0\n4,5,6,1,1,0,0\n7,8,9,2,0,1,0\n")
+    obj = import_cloud(csv)
+    co, _ = mesh_arrays(obj.data)
+    np.testing.assert_allclose(co, [[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    assert obj.data.attributes["velocity"].data_type == "FLOAT_VECTOR"
+    np.testing.assert_allclose(pm.blender_mesh.get_point_attribute(obj.data, "velocity"),
+                               [[1, 2, 3], [4, 5, 6], [7, 8, 9]])
+    assert "Point ID" in obj.data.attributes
 
 
 def test_import_simulation_frames_velocity_reaches_motion_blur(pm, data_dir, clean_scene):

@@ -2,7 +2,8 @@
 (ASCII, BINARY), VTK XML .vtu (ascii, base64, raw appended, zlib, LZMA) and parallel .pvtu
 (pieces in a folder beside it), Krakatoa's .prt, ASPRS LAS, Houdini's classic bgeo
 (plain, gzip) and Houdini 12+'s binary-JSON bgeo (paged, tuples and arrays layouts, either
-byte order, token strings, constant pages, gzip) and ASCII .geo. Values are multiples of 1/1024 so that every text form is exact in float32."""
+byte order, token strings, constant pages, gzip), ASCII .geo, and text columns (ParaView's CSV
+export, a .txt with a header line). Values are multiples of 1/1024 so that every text form is exact in float32."""
 
 import base64
 import gzip
@@ -341,6 +342,33 @@ def write_bgeo_json(path, p, attrs, big=False, tokens=True, layout="paged", page
         f.write(gzip.compress(data, mtime=0) if compress else data)
 
 
+def write_csv(path, p, attrs, style="paraview"):
+    """Text columns as ParaView's CSV export writes them (quoted names, a vector's components
+    as "name:k", the points last) or as a whitespace .txt names them ("x y z vx vy vz ...")."""
+    cols, names = [], []
+    if style == "paraview":
+        for name, a in attrs.items():
+            a = a.reshape(len(p), -1)
+            cols.append(a)
+            names += [f'"{name}:{k}"' for k in range(a.shape[1])] if a.shape[1] > 1 else [f'"{name}"']
+        cols.append(p.reshape(-1, 3))
+        names += ['"Points:0"', '"Points:1"', '"Points:2"']
+        sep = ","
+    else:
+        cols.append(p.reshape(-1, 3))
+        names += ["x", "y", "z"]
+        for name, a in attrs.items():
+            a = a.reshape(len(p), -1)
+            cols.append(a)
+            names += ["vx", "vy", "vz"] if name == "velocity" else [name]
+        sep = " "
+    table = np.hstack([c.astype(np.float64) for c in cols])
+    with open(path, "w") as f:
+        f.write(sep.join(names) + "\n")
+        for row in table:
+            f.write(sep.join(repr(float(v)) for v in row) + "\n")
+
+
 #: Every form the tests write: (file name suffix, writer).
 FORMATS = {
     ".ply": write_ply,
@@ -363,6 +391,8 @@ FORMATS = {
     ".json-arrays.bgeo": lambda path, p, a: write_bgeo_json(path, p, a, layout="arrays"),
     ".geo": lambda path, p, a: write_bgeo_json(path, p, a, page=50, ascii=True),
     ".tuples.geo.gz": lambda path, p, a: write_bgeo_json(path, p, a, layout="tuples", ascii=True, compress=True),
+    ".csv": write_csv,
+    ".txt": lambda path, p, a: write_csv(path, p, a, style="columns"),
 }
 
 

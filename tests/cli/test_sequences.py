@@ -395,6 +395,24 @@ def test_binary_json_bgeo_pages_and_clear_errors(cli, tmp_path):
         assert not (tmp_path / "m.ply").exists()
 
 
+def test_houdini_velocity_v_is_the_velocity_channel(cli, tmp_path):
+    """Houdini names the velocity `v`: every bgeo form gives it as the channel `velocity` (what
+    --attributes velocity, the PLY's velocity_0.. and Blender's motion blur use)."""
+    p, a = particles(0)
+    houdini = {"v": a["velocity"], "density": a["density"]}
+    forms = {"classic.bgeo": write_bgeo, "json.bgeo": write_bgeo_json,
+             "text.geo": lambda path, p, a: write_bgeo_json(path, p, a, ascii=True)}
+    for name, write in forms.items():
+        src = tmp_path / name
+        write(src, p, houdini)
+        out = tmp_path / (name + ".ply")
+        cli("triangulate", src, "-o", out, "--raw", "--attributes", "velocity", "--ascii", "-q")
+        _, cols, _ = read_ascii_ply(out)
+        assert "density" not in cols, name
+        got = np.column_stack([cols[f"velocity_{k}"] for k in range(3)]).astype(np.float32)
+        np.testing.assert_array_equal(got, a["velocity"], err_msg=name)
+
+
 def test_shared_simulator_samples(cli, tmp_path):
     d = os.environ.get("PM_TEST_DATA")
     folder = Path(d) / "particles" if d else None

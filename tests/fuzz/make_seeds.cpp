@@ -338,6 +338,10 @@ void file_seeds() {
   put("read_xyz", "bom.xyz", "\xEF\xBB\xBF" "0 0 0\n1 0 0\n0 1 0\n");
   // Columns named by a header line, and told from their count (colours, intensity, normals).
   put("read_xyz", "header.xyz", "//X,Y,Z,R,G,B,Intensity,Nx,Ny,Nz\n0,0,0,255,0,0,5,0,0,1\n1,0,0,0,255,0,6,0,0,1\n");
+  put("read_xyz", "paraview_csv.xyz",
+      "\"Velocity:0\",\"Velocity:1\",\"Velocity:2\",\"Point ID\",\"Points:0\",\"Points:1\",\"Points:2\"\n"
+      "1,2,3,0,0,0,0\n4,5,6,1,1,0,0\n7,8,9,2,0,1,0\n");
+  put("read_xyz", "pandas_csv.xyz", ",x,y,z,vx,vy,vz,Pos.x,Pos.y,Pos.z,n_0,n_1,n_2\n0,0,0,0,1,1,1,0,0,0,0,0,1\n");
   put("read_xyz", "rgb_intensity.xyz", "0 0 0 255 0 0 9\n1 0 0 0 255 0 8\n0 1 0 0 0 255 7\n");
   put("read_xyz", "colour_normal.xyz", "0 0 0 255 0 0 0 0 1\n1 0 0 0 255 0 0 1 0\n");
   put("read_obj", "colours.obj", "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nvn 0 0 1\nf 1//1 2//1 3//1\n");

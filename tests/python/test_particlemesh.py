@@ -499,6 +499,30 @@ def test_points_keep_their_full_precision(pm, tmp_path):
     assert len(points) == 3 and points.attributes == {} and points.info == {}
 
 
+def test_csv_as_numpy_and_paraview_write_it(pm, tmp_path):
+    """np.savetxt with a header, and ParaView's CSV export (vectors as Name:k, the points
+    last): the positions in full precision, the velocity one (N, 3) channel."""
+    p = fibonacci_sphere(50) * 1000.0 + 0.123456789
+    v = np.random.default_rng(5).normal(size=(50, 3))
+    path = tmp_path / "numpy.csv"
+    np.savetxt(path, np.hstack([p, v]), delimiter=",", header="x,y,z,vx,vy,vz", comments="", fmt="%.17g")
+    cloud = pm.read_points(path)
+    np.testing.assert_array_equal(cloud.positions, p)
+    assert list(cloud.attributes) == ["velocity"]
+    np.testing.assert_allclose(cloud.attributes["velocity"], v, rtol=1e-6)
+    path = tmp_path / "paraview.csv"
+    np.savetxt(path, np.hstack([v, np.arange(50)[:, None], p]), delimiter=",", fmt="%.17g", comments="",
+               header='"Velocity:0","Velocity:1","Velocity:2","Point ID","Points:0","Points:1","Points:2"')
+    cloud = pm.read_points(path)
+    np.testing.assert_array_equal(cloud.positions, p)
+    assert list(cloud.attributes) == ["velocity", "Point ID"]
+    np.testing.assert_array_equal(cloud.attributes["Point ID"].ravel(), np.arange(50))
+    path.write_text('"Velocity:0","Velocity:1","Velocity:2"\n1,2,3\n')
+    with pytest.raises(pm.Error, match="nor the positions as a vector") as e:
+        pm.read_points(path)
+    assert e.value.status == pm.STATUS_FORMAT_ERROR
+
+
 def test_ply_vertex_colours_are_read_back(pm, tmp_path):
     p = fibonacci_sphere(20, dtype=np.float32)
     rgb = np.random.default_rng(3).integers(0, 256, size=(20, 3), dtype=np.uint8)

@@ -17,6 +17,8 @@ const std::vector<FileFormat>& file_formats() {
       {".ply", "PLY", &read_ply, true, true},
       {".xyz", "XYZ text", &read_xyz, true, false},
       {".pts", "PTS text (Leica, CloudCompare)", &read_xyz, true, false},
+      {".csv", "CSV text (ParaView's CSV export, spreadsheets, pandas)", &read_xyz, true, false},
+      {".txt", "text points (as .xyz)", &read_xyz, true, false},
       {".obj", "Wavefront OBJ", &read_obj, true, true},
       {".off", "OFF", &read_off, false, true},
       {".stl", "STL", &read_stl, false, true},

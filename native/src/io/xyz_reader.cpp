@@ -1,5 +1,5 @@
-// Plain-text point files, one point per line: .xyz (and the .pts of Leica scanners and
-// CloudCompare). Values are separated by spaces, tabs, commas or semicolons; '#' starts a
+// Plain-text point files, one point per line: .xyz, .txt, .csv (and the .pts of Leica scanners
+// and CloudCompare). Values are separated by spaces, tabs, commas or semicolons; '#' starts a
 // comment; blank lines are skipped; every data line has the same number of values. A UTF-8
 // byte order mark at the start is skipped (editors on Windows write one); UTF-16 text (a
 // byte order mark FF FE or FE FF, or NUL bytes in a line), lines ended by CR alone (classic
@@ -11,10 +11,20 @@
 // What the columns are:
 //  - A header line names them, when the first line that is not a comment starts with a word
 //    rather than a number ("x y z nx ny nz red green blue", CloudCompare's "//X,Y,Z,R,G,B",
-//    PDAL's "\"X\",\"Y\",\"Z\",\"Intensity\""): x, y, z (required); nx, ny, nz (or normal_x
-//    ... or normalx ...) the normals; r, g, b (or red, green, blue) the colour (values in
-//    [0, 1] as they are, up to 255 as 8-bit, above as 16-bit colours); any other name a
-//    channel of that name.
+//    PDAL's "\"X\",\"Y\",\"Z\",\"Intensity\"", ParaView's CSV export
+//    "\"Velocity:0\",\"Velocity:1\",\"Velocity:2\",\"Points:0\",\"Points:1\",\"Points:2\"").
+//    Its names are split at its first comma or semicolon outside quotes (so a name may
+//    hold spaces: "Point ID"), or else at spaces and tabs; quotes, and a unit in brackets
+//    after a name ("Pos.x [m]"), are dropped. Single columns: x, y, z;
+//    nx, ny, nz (or normal_x ... or normalx ...) the normals; r, g, b (or red, green, blue)
+//    the colour (values in [0, 1] as they are, up to 255 as 8-bit, above as 16-bit colours).
+//    Vectors: columns name:0, name:1, .. or name_0, name_1, .. (ParaView's CSV, our own PLY
+//    naming), or name_x name_y name_z (also name.x ..: DualSPHysics' "Pos.x"), one after
+//    another, are one vector `name`: Points / Position / Pos / P / Coordinates of 3 the
+//    positions (where no x, y, z columns are named), Normals / Normal / N the normals,
+//    Color / Colour / RGB the colour, V / Vel / Velocity (and vx vy vz) the channel
+//    "velocity" (what Blender's motion blur reads); any other a channel of its name and that
+//    many components. Every other column is a channel of its name.
 //  - Without a header, by their count and values (the conventions of scanners and of
 //    CloudCompare's two column orders, "point, colour, scalars, normal" and, in .pts,
 //    "point, scalars, colour, normal"):
@@ -36,6 +46,7 @@
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <initializer_list>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -105,13 +116,54 @@ constexpr Columns kNoColumns = {-1, -1, -1};
 /// Three consecutive columns from `first`.
 constexpr Columns from(int first) { return {first, first + 1, first + 2}; }
 
+/// A channel: `components` columns from `column` on.
+struct Channel {
+  std::string name;
+  int column = 0;
+  int components = 1;
+};
+
 /// What each column of the file is.
 struct Layout {
   Columns xyz = from(0);
   Columns normal = kNoColumns;  ///< nx ny nz, or none
   Columns color = kNoColumns;   ///< r g b, or none
-  std::vector<std::pair<std::string, int>> channels;  ///< name, column
+  std::vector<Channel> channels;
 };
+
+/// Which component of a vector a header's column name is: "name:k" or "name_k" (k from 0;
+/// ParaView's CSV export, our PLY naming), "name_x" or "name.x" (y, z: 1, 2; any case), or
+/// one of "vx", "vy", "vz" (the velocity, base "v"). Sets `base` and returns the index, or -1.
+int vector_component(std::string_view name, std::string& base) {
+  const size_t cut = name.find_last_of(":_.");
+  if (cut != std::string_view::npos && cut > 0 && cut + 1 < name.size()) {
+    const std::string_view tail = name.substr(cut + 1);
+    int index = -1;
+    if (tail.size() == 1) {
+      const char c = char(std::tolower(static_cast<unsigned char>(tail[0])));
+      if (c >= 'x' && c <= 'z') index = c - 'x';
+    }
+    if (index < 0 && name[cut] != '.' && tail.size() <= 2 &&
+        std::all_of(tail.begin(), tail.end(), [](char c) { return c >= '0' && c <= '9'; }))
+      index = tail.size() == 2 && tail[0] == '0' ? -1 : std::stoi(std::string(tail));
+    if (index >= 0) {
+      base = std::string(name.substr(0, cut));
+      return index;
+    }
+  }
+  if (name.size() == 2 && (name[0] == 'v' || name[0] == 'V')) {
+    const char c = char(std::tolower(static_cast<unsigned char>(name[1])));
+    if (c >= 'x' && c <= 'z') {
+      base = "v";
+      return c - 'x';
+    }
+  }
+  return -1;
+}
+
+bool one_of(const std::string& lowered, std::initializer_list<const char*> names) {
+  return std::any_of(names.begin(), names.end(), [&](const char* n) { return lowered == n; });
+}
 
 class XyzReader {
  public:
@@ -191,31 +243,86 @@ class XyzReader {
   size_t rows() const { return values_.size() / size_t(columns_); }
   double at(size_t row, int column) const { return values_[row * size_t(columns_) + size_t(column)]; }
 
-  /// The header's column names: "//" and quotes dropped.
+  /// The header's column names: split at the line's first comma or semicolon outside double
+  /// quotes (a CSV's names may hold spaces), or else at runs of spaces and tabs; "//" and the
+  /// quotes around each name dropped. A CSV's empty name is column_K (K from 1; pandas writes
+  /// its index column unnamed, ",x,y,z"), except at the end of the line (a trailing delimiter).
+  /// A unit in brackets after a name, "Pos.x [m]", is dropped.
   std::vector<std::string> header_names(std::string_view line) const {
-    std::string text(line);
-    const size_t start = text.find_first_not_of(" \t");
-    if (text.compare(start, 2, "//") == 0) text.erase(start, 2);
-    std::vector<std::string_view> words;
-    split(text, words);
-    std::vector<std::string> names;
-    for (std::string_view w : words) {
-      while (!w.empty() && (w.front() == '"' || w.front() == '\'')) w.remove_prefix(1);
-      while (!w.empty() && (w.back() == '"' || w.back() == '\'')) w.remove_suffix(1);
-      if (w.empty()) fail("an empty column name in the header line");
-      names.emplace_back(w);
+    std::string_view text = line;
+    while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
+    if (text.substr(0, 2) == "//") text.remove_prefix(2);
+    char delimiter = 0;
+    bool quoted = false;
+    for (char c : text) {
+      if (c == '"') quoted = !quoted;
+      else if (!quoted && (c == ',' || c == ';')) {
+        delimiter = c;
+        break;
+      }
     }
+    std::vector<std::string> fields(1);
+    quoted = false;
+    for (char c : text) {
+      if (c == '"') quoted = !quoted;
+      else if (!quoted && (delimiter ? c == delimiter : (c == ' ' || c == '\t' || c == '\r')))
+        fields.emplace_back();
+      else
+        fields.back().push_back(c);
+    }
+    auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\''; };
+    std::vector<std::string> names;
+    for (std::string_view w : fields) {
+      while (!w.empty() && blank(w.front())) w.remove_prefix(1);
+      while (!w.empty() && blank(w.back())) w.remove_suffix(1);
+      // A unit after the name ("Pos.x [m]", "Vel.x (m/s)") is not part of it.
+      if (!w.empty() && (w.back() == ']' || w.back() == ')')) {
+        const size_t open = w.find_last_of(w.back() == ']' ? '[' : '(');
+        if (open != std::string_view::npos && open > 0 && blank(w[open - 1])) {
+          std::string_view name = w.substr(0, open);
+          while (!name.empty() && blank(name.back())) name.remove_suffix(1);
+          if (!name.empty()) w = name;
+        }
+      }
+      if (!w.empty()) names.emplace_back(w);
+      else if (delimiter != 0) names.emplace_back();  // named below, or dropped at the end
+    }
+    while (!names.empty() && names.back().empty()) names.pop_back();
+    for (size_t c = 0; c < names.size(); ++c)
+      if (names[c].empty()) names[c] = "column_" + std::to_string(c + 1);
     if (names.size() > size_t(kMaxColumns)) fail("the header names more than " + std::to_string(kMaxColumns) + " columns");
     return names;
   }
 
-  /// The layout a header line names; x, y, z are required.
+  /// The layout a header line names; the positions (x, y, z, or a vector of 3 named as
+  /// positions) are required.
   Layout named(const std::vector<std::string>& names) const {
     Layout l;
     Columns xyz = kNoColumns, normal = kNoColumns, color = kNoColumns;
     static const char* const kAxis[3] = {"x", "y", "z"};
     static const char* const kColour[3][2] = {{"r", "red"}, {"g", "green"}, {"b", "blue"}};
-    for (int c = 0; c < int(names.size()); ++c) {
+    const int count = int(names.size());
+    // Vectors first: runs of two or more columns base + component 0, 1, ...
+    std::vector<Channel> vectors;
+    std::vector<bool> in_vector(size_t(count), false);
+    for (int c = 0; c < count;) {
+      std::string base, next;
+      int run = 0;
+      if (vector_component(names[size_t(c)], base) == 0) {
+        run = 1;
+        while (c + run < count && vector_component(names[size_t(c + run)], next) == run && next == base) ++run;
+      }
+      if (run < 2) {
+        ++c;
+        continue;
+      }
+      vectors.push_back({base, c, run});
+      for (int k = 0; k < run; ++k) in_vector[size_t(c + k)] = true;
+      c += run;
+    }
+    // Single columns.
+    for (int c = 0; c < count; ++c) {
+      if (in_vector[size_t(c)]) continue;
       const std::string n = lower(names[size_t(c)]);
       bool taken = false;
       for (int k = 0; k < 3 && !taken; ++k) {
@@ -226,23 +333,46 @@ class XyzReader {
         else if (n == kColour[k][0] || n == kColour[k][1]) slot = &color[k];
         if (slot && *slot < 0) *slot = c, taken = true;
       }
-      if (!taken) l.channels.push_back({names[size_t(c)], c});
+      if (!taken) l.channels.push_back({names[size_t(c)], c, 1});
+    }
+    // Normals and colours need all three of their columns; a partial set stays channels.
+    auto complete = [](const Columns& t) { return t[0] >= 0 && t[1] >= 0 && t[2] >= 0; };
+    auto partial_to_channels = [&](Columns& t) {
+      if (complete(t)) return;
+      for (int c : t)
+        if (c >= 0) l.channels.push_back({names[size_t(c)], c, 1});
+      t = kNoColumns;
+    };
+    partial_to_channels(normal);
+    partial_to_channels(color);
+    Columns positions = kNoColumns;  // a vector named as the positions
+    for (Channel& v : vectors) {
+      const std::string b = lower(v.name);
+      Columns* role = nullptr;
+      if (v.components == 3) {
+        if (one_of(b, {"points", "point", "position", "positions", "pos", "p", "coordinates", "coords"}))
+          role = &positions;
+        else if (one_of(b, {"normals", "normal", "n"})) role = &normal;
+        else if (one_of(b, {"color", "colour", "colors", "colours", "rgb"})) role = &color;
+        else if (one_of(b, {"v", "vel", "velocity"})) v.name = "velocity";
+      }
+      if (role == &positions && complete(xyz)) role = nullptr;  // x y z columns are named
+      if (role && !complete(*role)) *role = from(v.column);
+      else l.channels.push_back(std::move(v));
+    }
+    if (!complete(xyz) && complete(positions)) {
+      partial_to_channels(xyz);
+      xyz = positions;
     }
     for (int k = 0; k < 3; ++k)
       if (xyz[k] < 0)
         fail_file("its first line ('" + shown(header_text_) + "') starts with a word, so it is read as a header line " +
-                  "naming the columns, but it names no '" + kAxis[k] + "' column");
+                  "naming the columns, but it names no '" + kAxis[k] + "' column (nor the positions as a vector, " +
+                  "Points:0 Points:1 Points:2)");
     l.xyz = xyz;
-    // Normals and colours need all three of their columns; a partial set stays channels.
-    auto triple = [&](const Columns& t) {
-      if (t[0] >= 0 && t[1] >= 0 && t[2] >= 0) return t;
-      for (int c : t)
-        if (c >= 0) l.channels.push_back({names[size_t(c)], c});
-      return kNoColumns;
-    };
-    l.normal = triple(normal);
-    l.color = triple(color);
-    std::sort(l.channels.begin(), l.channels.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+    l.normal = normal;
+    l.color = color;
+    std::sort(l.channels.begin(), l.channels.end(), [](const Channel& a, const Channel& b) { return a.column < b.column; });
     return l;
   }
 
@@ -274,11 +404,11 @@ class XyzReader {
   Layout guess() {
     Layout l;
     auto rest = [&](int from) {
-      for (int c = from; c < columns_; ++c) l.channels.push_back({"column_" + std::to_string(c + 1), c});
+      for (int c = from; c < columns_; ++c) l.channels.push_back({"column_" + std::to_string(c + 1), c, 1});
     };
     switch (columns_) {
       case 3: return l;
-      case 4: l.channels.push_back({"intensity", 3}); return l;
+      case 4: l.channels.push_back({"intensity", 3, 1}); return l;
       case 6:
         if (colour(3)) l.color = from(3);
         else l.normal = from(3);
@@ -286,11 +416,11 @@ class XyzReader {
       case 7:
         if (!pts_ && colour(3)) {
           l.color = from(3);
-          l.channels.push_back({"intensity", 6});
+          l.channels.push_back({"intensity", 6, 1});
           return l;
         }
         if (pts_ && colour(4)) {
-          l.channels.push_back({"intensity", 3});
+          l.channels.push_back({"intensity", 3, 1});
           l.color = from(4);
           return l;
         }
@@ -334,10 +464,12 @@ class XyzReader {
           color.values[3 * r + size_t(k)] = float(std::clamp(at(r, l.color[size_t(k)]) * scale, 0.0, 1.0));
       out.attributes.push_back(std::move(color));
     }
-    for (const auto& [name, column] : l.channels) {
-      VertexAttribute a{unique_attribute_name(out, name), 1, {}};
-      a.values.resize(n);
-      for (size_t r = 0; r < n; ++r) a.values[r] = float(at(r, column));
+    for (const Channel& ch : l.channels) {
+      VertexAttribute a{unique_attribute_name(out, ch.name), ch.components, {}};
+      const auto k = size_t(ch.components);
+      a.values.resize(k * n);
+      for (size_t r = 0; r < n; ++r)
+        for (size_t j = 0; j < k; ++j) a.values[k * r + j] = float(at(r, ch.column + int(j)));
       out.attributes.push_back(std::move(a));
     }
     return out;

@@ -150,7 +150,8 @@ TEST(MeshIO, FormatsReadAsMeshesOrPoints) {
   EXPECT_TRUE(!reads_format("f.bgeo.gz", false) && reads_format("f.bgeo.gz", true));
   EXPECT_TRUE(reads_format("f.vtu", false) && reads_format("f.vtu", true));
   EXPECT_FALSE(reads_format("f.pcd", true));  // the PCL bridge's, not the core reader's
-  EXPECT_FALSE(reads_format("noextension", false) || reads_format("x.txt", true));
+  EXPECT_TRUE(reads_format("x.csv", true) && reads_format("x.TXT", true) && !reads_format("x.csv", false));
+  EXPECT_FALSE(reads_format("noextension", false) || reads_format("x.doc", true));
 }
 
 TEST(MeshIO, SharedDataLoads) {

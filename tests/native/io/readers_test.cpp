@@ -393,7 +393,7 @@ TEST(XyzReader, ColumnsNamedByAHeaderOrToldByTheirValues) {
   const PointCloud pdal = read("pdal.xyz", "\"X\",\"Y\",\"Z\",\"NormalX\",\"NormalY\",\"NormalZ\"\n" + rows("0,0,1", "0,0,1", "1,0,0"));
   ASSERT_EQ(pdal.normals.size(), 3u);
   EXPECT_EQ(pdal.normals[2], (Vec3{1, 0, 0}));
-  EXPECT_REFUSED(read("noz.xyz", "x y w\n0 0 0\n"), Status::FormatError, "noz.xyz': its first line ('x y w') starts with a word, so it is read as a header line naming the columns, but it names no 'z' column");
+  EXPECT_REFUSED(read("noz.xyz", "x y w\n0 0 0\n"), Status::FormatError, "noz.xyz': its first line ('x y w') starts with a word, so it is read as a header line naming the columns, but it names no 'z' column (nor the positions as a vector");
   EXPECT_REFUSED(read("short.xyz", "x y z r g b\n0 0 0 1 1\n"), Status::FormatError,
                  "short.xyz' line 2: 5 values where the header names 6");
 
@@ -435,6 +435,76 @@ TEST(XyzReader, ColumnsNamedByAHeaderOrToldByTheirValues) {
   EXPECT_EQ(read("seven.xyz", rows("1 2 3 4", "5 6 7 8", "9 10 -11 12")).attributes.size(), 4u);
   EXPECT_REFUSED(read("two.xyz", "0 0\n"), Status::FormatError, "two.xyz' line 1: 2 values, expected at least 3");
   EXPECT_REFUSED(read("ragged.xyz", "0 0 0\n1 0 0 1\n"), Status::FormatError, "line 2: 4 values where earlier lines have 3");
+}
+
+// CSV and .txt text files, and header lines naming vectors: ParaView's CSV export (quoted
+// names, "Name:k" components, the positions last, a name with a space), pandas' to_csv (an
+// unnamed index column), DualSPHysics' "Pos.x;Pos.y;Pos.z", our PLY naming "name_k". A vector
+// of 3 is the positions, the normals, the colour or the velocity by its name; any other keeps
+// its name and components; runs that are not 0, 1, 2, ... stay single channels.
+TEST(XyzReader, CsvHeadersNameVectorsAsParaViewAndPandasWriteThem) {
+  const auto dir = test::scratch_dir("xyz_csv");
+  auto read = [&](const std::string& name, const std::string& text) { return read_point_cloud(write(dir / name, text)); };
+  auto attribute = [](const PointCloud& c, const std::string& name) -> const VertexAttribute* {
+    for (const VertexAttribute& a : c.attributes)
+      if (a.name == name) return &a;
+    return nullptr;
+  };
+  const std::vector<Vec3> expected = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+
+  const PointCloud pv = read("paraview.csv",
+                             "\"Density\",\"Velocity:0\",\"Velocity:1\",\"Velocity:2\",\"Point ID\",\"Points:0\",\"Points:1\","
+                             "\"Points:2\"\r\n1000,1,2,3,0,0,0,0\r\n1001,4,5,6,1,1,0,0\r\n1002,7,8,9,2,0,1,0\r\n");
+  EXPECT_EQ(pv.positions, expected);
+  ASSERT_EQ(pv.attributes.size(), 3u);
+  EXPECT_EQ(pv.attributes[0].name, "Density");
+  EXPECT_EQ(pv.attributes[1].name, "velocity");
+  EXPECT_EQ(pv.attributes[1].components, 3);
+  EXPECT_EQ(pv.attributes[1].values, (std::vector<float>{1, 2, 3, 4, 5, 6, 7, 8, 9}));
+  ASSERT_NE(attribute(pv, "Point ID"), nullptr);
+  EXPECT_EQ(attribute(pv, "Point ID")->values, (std::vector<float>{0, 1, 2}));
+
+  // pandas: ",x,y,z,vx,vy,vz" with the index first; newer ParaView: "Points_0".
+  const PointCloud pd = read("pandas.csv", ",x,y,z,vx,vy,vz\n0,0,0,0,1,1,1\n1,1,0,0,2,2,2\n2,0,1,0,3,3,3\n");
+  EXPECT_EQ(pd.positions, expected);
+  ASSERT_NE(attribute(pd, "column_1"), nullptr);
+  EXPECT_EQ(attribute(pd, "column_1")->values, (std::vector<float>{0, 1, 2}));
+  ASSERT_NE(attribute(pd, "velocity"), nullptr);
+  EXPECT_EQ(attribute(pd, "velocity")->values, (std::vector<float>{1, 1, 1, 2, 2, 2, 3, 3, 3}));
+  const PointCloud underscore = read("pv510.txt", "Points_0\tPoints_1\tPoints_2\tNormals_0\tNormals_1\tNormals_2\tforce_0\tforce_1\n"
+                                                  "0\t0\t0\t0\t0\t1\t5\t6\n1\t0\t0\t0\t0\t1\t5\t6\n0\t1\t0\t1\t0\t0\t5\t6\n");
+  EXPECT_EQ(underscore.positions, expected);
+  ASSERT_EQ(underscore.normals.size(), 3u);
+  EXPECT_EQ(underscore.normals[2], (Vec3{1, 0, 0}));
+  ASSERT_NE(attribute(underscore, "force"), nullptr);
+  EXPECT_EQ(attribute(underscore, "force")->components, 2);
+
+  // DualSPHysics: semicolons, "Pos.x" and "Vel.x", units after the names; a colour vector
+  // scaled as r g b columns.
+  const PointCloud ds = read("dsph.csv", "Pos.x [m];Pos.y [m];Pos.z [m];Idp;Vel.x [m/s];Vel.y (m/s);Vel.z;Color_x;Color_y;Color_z;\n"
+                                         "0;0;0;7;0;0;-1;255;0;0\n1;0;0;8;0;0;-2;0;255;0\n0;1;0;9;0;0;-3;0;0;255\n");
+  EXPECT_EQ(ds.positions, expected);
+  EXPECT_EQ(attribute(ds, "Idp")->values, (std::vector<float>{7, 8, 9}));
+  EXPECT_EQ(attribute(ds, "velocity")->values, (std::vector<float>{0, 0, -1, 0, 0, -2, 0, 0, -3}));
+  EXPECT_EQ(attribute(ds, "color")->values, (std::vector<float>{1, 0, 0, 0, 1, 0, 0, 0, 1}));
+
+  // x y z columns win over a vector named as positions; components out of order, or one
+  // alone, stay single channels; a trailing delimiter adds no column.
+  const PointCloud both = read("both.csv", "x,y,z,P_0,P_1,P_2,a:1,a:0,b_0,\n0,0,0,9,9,9,1,2,3,\n1,0,0,9,9,9,1,2,3,\n0,1,0,9,9,9,1,2,3,\n");
+  EXPECT_EQ(both.positions, expected);
+  ASSERT_NE(attribute(both, "P"), nullptr);
+  EXPECT_EQ(attribute(both, "P")->components, 3);
+  for (const char* single : {"a:1", "a:0", "b_0"}) EXPECT_NE(attribute(both, single), nullptr) << single;
+  // Tab-aligned columns: a run of tabs is one separator, in the header as in the data.
+  EXPECT_EQ(read("aligned.txt", "x\t\ty\t\tz\n0\t\t0\t\t0\n1\t\t0\t\t0\n0\t\t1\t\t0\n").positions, expected);
+  // Headerless .txt and .csv read as .xyz does.
+  EXPECT_EQ(read("plain.txt", "0 0 0\n1 0 0\n0 1 0\n").positions, expected);
+  EXPECT_EQ(read("plain.csv", "0,0,0\n1,0,0\n0,1,0\n").positions, expected);
+  // No positions: the error says what was looked for.
+  EXPECT_REFUSED(read("nopos.csv", "\"Velocity:0\",\"Velocity:1\",\"Velocity:2\"\n1,2,3\n"), Status::FormatError,
+                 "names no 'x' column (nor the positions as a vector, Points:0 Points:1 Points:2)");
+  EXPECT_REFUSED(read("short.csv", "\"Point ID\",x,y,z\n1,2,3\n"), Status::FormatError,
+                 "short.csv' line 2: 3 values where the header names 4");
 }
 
 // Each file is read exactly once, front to back: a FIFO (readable once) reads like a file.
