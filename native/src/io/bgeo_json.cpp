@@ -14,9 +14,9 @@
 // attribute ("name") and its "type", the values giving the tuple "size" and the numbers in
 // one of three layouts (Schema::decode below).
 //
-// What comes back: P as the positions, N (3 values) as the normals, v (3 values) as the
-// channel "velocity", and every other numeric point attribute under its Houdini name, as
-// floats. String attributes, vertex, primitive
+// What comes back: P as the positions, N (3 values) as the normals, and every other numeric
+// point attribute under its Houdini name, as floats ("v" becomes the channel "velocity":
+// name_the_velocity). String attributes, vertex, primitive
 // and detail attributes, groups and primitives are walked (a truncated or malformed file is
 // refused) but not carried, nor anything after the geometry's value (the seek index of a
 // file written with "hasindex"). Bounded: nesting depth, string lengths, the structure's node
@@ -676,7 +676,7 @@ FileContents geometry_of(const Node& root, const std::string& path, bool swap, u
         out.normals.resize(size_t(points));
         for (size_t i = 0; i < points; ++i) out.normals[i] = {double(v[i * 3]), double(v[i * 3 + 1]), double(v[i * 3 + 2])};
       } else {
-        out.attributes.push_back({unique_attribute_name(out, houdini_channel_name(name, size)), int(size), std::move(v)});
+        out.attributes.push_back({unique_attribute_name(out, name), int(size), std::move(v)});
       }
     }
   }

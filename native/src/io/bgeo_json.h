@@ -3,7 +3,6 @@
 // what is read and how).
 #pragma once
 
-#include <cstdint>
 #include <string>
 #include <string_view>
 
@@ -20,12 +19,5 @@ FileContents read_bgeo_binary_json(GzipStream& in, const std::string& path, bool
 /// The geometry of an ASCII (text JSON) .geo whose first bytes, `read_already`, `in` has
 /// already read.
 FileContents read_geo_text_json(GzipStream& in, const std::string& path, std::string_view read_already);
-
-/// The channel a Houdini point attribute becomes, in every bgeo form: its own name, but
-/// Houdini's velocity `v` (3 values) is `velocity`, as the other readers name it and as
-/// Blender's motion blur and `--attributes velocity` look for it.
-inline std::string houdini_channel_name(const std::string& name, uint64_t size) {
-  return name == "v" && size == 3 ? "velocity" : name;
-}
 
 }  // namespace particlemesh::detail

@@ -17,7 +17,7 @@
 //
 // What comes back: the points' x y z (exact float32 values), every float / int / vector
 // attribute under its Houdini name (P's w and index (string) attributes are not carried),
-// "N" (3 floats) as the normals, "v" (3 floats) as the channel "velocity". After the points, primitive and detail sections are read
+// "N" (3 floats) as the normals ("v" becomes the channel "velocity": name_the_velocity). After the points, primitive and detail sections are read
 // when they hold only what Partio writes (particle-system primitives, detail attributes, no
 // groups), so that a truncated file is refused; anything else after the points is left
 // unread (the points are complete). Houdini's classic ASCII geometry ("PGEOMETRY") and the
@@ -203,7 +203,7 @@ class BgeoReader {
         continue;
       }
       a.target = int(out_.attributes.size());
-      out_.attributes.push_back({unique_attribute_name(out_, houdini_channel_name(a.name, a.size)), int(a.size), {}});
+      out_.attributes.push_back({unique_attribute_name(out_, a.name), int(a.size), {}});
       out_.attributes.back().values.reserve(plausible * a.size);
     }
     out_.positions.reserve(plausible);

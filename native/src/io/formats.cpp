@@ -73,6 +73,19 @@ std::string unique_attribute_name(const FileContents& c, const std::string& name
     if (!taken(name + "_" + std::to_string(k))) return name + "_" + std::to_string(k);
 }
 
+void name_the_velocity(FileContents& c) {
+  for (const VertexAttribute& a : c.attributes)
+    if (a.name == "velocity") return;
+  for (VertexAttribute& a : c.attributes) {
+    std::string n = a.name;
+    for (char& ch : n) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+    if (a.components == 3 && (n == "v" || n == "vel" || n == "velocity")) {
+      a.name = "velocity";
+      return;
+    }
+  }
+}
+
 const FileFormat* format_for(const std::string& path) {
   const std::string ext = lower_extension(path);
   for (const FileFormat& f : file_formats())

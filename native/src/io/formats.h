@@ -69,6 +69,12 @@ std::string lower_extension(const std::string& path);
 /// names are how the C ABI and the writers address them, so they are unique).
 std::string unique_attribute_name(const FileContents& c, const std::string& name);
 
+/// Whatever the format, the particles' velocity is the channel "velocity" (the name Blender's
+/// motion blur reads and --attributes velocity takes): the first 3-component channel named
+/// v, vel or velocity in any case (Houdini's "v", DualSPHysics' "Vel", ParaView's "Velocity",
+/// a text file's vx vy vz) is renamed so, unless a channel is already called "velocity".
+void name_the_velocity(FileContents& c);
+
 /// The shared checks on what a reader returned: positions finite (a NaN or infinite
 /// coordinate names the vertex; for meshes FormatError, for points InvalidInput as
 /// validate_point_cloud words it), normals and attributes sized to the positions, triangle

@@ -29,6 +29,7 @@ detail::FileContents read_file(const std::string& path, detail::ReadPurpose purp
   }
   detail::FileContents c = f->read(path, purpose);
   detail::check_contents(path, c, purpose);
+  detail::name_the_velocity(c);
   return c;
 }
 

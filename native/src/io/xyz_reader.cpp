@@ -22,9 +22,9 @@
 //    naming), or name_x name_y name_z (also name.x ..: DualSPHysics' "Pos.x"), one after
 //    another, are one vector `name`: Points / Position / Pos / P / Coordinates of 3 the
 //    positions (where no x, y, z columns are named), Normals / Normal / N the normals,
-//    Color / Colour / RGB the colour, V / Vel / Velocity (and vx vy vz) the channel
-//    "velocity" (what Blender's motion blur reads); any other a channel of its name and that
-//    many components. Every other column is a channel of its name.
+//    Color / Colour / RGB the colour; any other (vx vy vz as "v") a channel of its name and
+//    that many components (V, Vel or Velocity of 3 then becomes the channel "velocity", as
+//    in every format: name_the_velocity). Every other column is a channel of its name.
 //  - Without a header, by their count and values (the conventions of scanners and of
 //    CloudCompare's two column orders, "point, colour, scalars, normal" and, in .pts,
 //    "point, scalars, colour, normal"):
@@ -354,7 +354,6 @@ class XyzReader {
           role = &positions;
         else if (one_of(b, {"normals", "normal", "n"})) role = &normal;
         else if (one_of(b, {"color", "colour", "colors", "colours", "rgb"})) role = &color;
-        else if (one_of(b, {"v", "vel", "velocity"})) v.name = "velocity";
       }
       if (role == &positions && complete(xyz)) role = nullptr;  // x y z columns are named
       if (role && !complete(*role)) *role = from(v.column);

@@ -507,6 +507,38 @@ TEST(XyzReader, CsvHeadersNameVectorsAsParaViewAndPandasWriteThem) {
                  "short.csv' line 2: 3 values where the header names 4");
 }
 
+// Whatever the format, a 3-component channel named v, vel or velocity (any case) is the
+// channel "velocity" (Blender's motion blur, --attributes velocity), unless one is so named.
+TEST(FileReaders, TheVelocityIsNamedAsBlenderReadsItInEveryFormat) {
+  const auto dir = test::scratch_dir("velocity_names");
+  TriMesh c;  // the writers of .vtk and .vtu write meshes; a triangle's corners are the points
+  c.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  c.triangles = {{0, 1, 2}};
+  const std::vector<float> v = {1, 2, 3, 4, 5, 6, 7, 8, 9};
+  for (const char* ext : {".vtk", ".vtu", ".ply"})
+    for (const char* name : {"Vel", "V", "VELOCITY"}) {
+      c.attributes = {{"density", 1, {1, 2, 3}}, {name, 3, v}};
+      const std::string path = (dir / (std::string(name) + ext)).string();
+      write_mesh(c, path);
+      const PointCloud back = read_point_cloud(path);
+      ASSERT_EQ(back.attributes.size(), 2u) << path;
+      EXPECT_EQ(back.attributes[1].name, "velocity") << path;
+      EXPECT_EQ(back.attributes[1].values, v) << path;
+    }
+  // Two candidates: the first; one already called velocity: the others keep their names; a
+  // "v" of 2 components is no velocity.
+  c.attributes = {{"vel", 3, v}, {"V", 3, v}, {"v2", 2, {0, 0, 0, 0, 0, 0}}};
+  write_mesh(c, (dir / "two.vtk").string());
+  PointCloud back = read_point_cloud((dir / "two.vtk").string());
+  EXPECT_EQ(back.attributes[0].name, "velocity");
+  EXPECT_EQ(back.attributes[1].name, "V");
+  c.attributes = {{"V", 3, v}, {"velocity", 1, {1, 2, 3}}, {"v", 2, {0, 0, 0, 0, 0, 0}}};
+  write_mesh(c, (dir / "named.vtu").string());
+  back = read_point_cloud((dir / "named.vtu").string());
+  EXPECT_EQ(back.attributes[0].name, "V");
+  EXPECT_EQ(back.attributes[2].name, "v");
+}
+
 // Each file is read exactly once, front to back: a FIFO (readable once) reads like a file.
 // Before, a header pass read the file and then OpenMesh read it again (and found nothing).
 TEST(FileReaders, EachFileIsReadOnceFrontToBack) {
