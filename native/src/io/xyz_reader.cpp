@@ -42,10 +42,14 @@
 //     nothing is lost; a header line names them).
 //  - .pts: a line holding one whole number (the point count Leica's files start each scan
 //    with) is skipped.
+// A .xyz whose first 4 KiB are binary rather than text (control characters, not UTF-16) is
+// splashsurf's binary .xyz: each particle's x y z as little-endian float32, nothing else.
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <initializer_list>
 #include <string>
 #include <string_view>
@@ -167,17 +171,19 @@ bool one_of(const std::string& lowered, std::initializer_list<const char*> names
 
 class XyzReader {
  public:
-  explicit XyzReader(const std::string& path) : in_(path), pts_(lower_extension(path) == ".pts") {}
+  explicit XyzReader(const std::string& path)
+      : in_(path), pts_(lower_extension(path) == ".pts"), xyz_(lower_extension(path) == ".xyz") {}
 
   FileContents read() {
     if (in_.peek() < 0) fail_file("the file is empty");
     if (in_.look_ahead(3) == "\xEF\xBB\xBF") in_.skip(3);
-    if (const std::string_view start = in_.look_ahead(4096);
-        start.find('\n') == std::string_view::npos && start.find('\r') != std::string_view::npos)
-      fail_file("its lines end with CR alone (classic Mac OS text): convert the line ends to LF (or CR LF)");
     if (const std::string_view bom = in_.look_ahead(2); bom == "\xFF\xFE" || bom == "\xFE\xFF")
       fail_file("the file is UTF-16 text (it starts with the byte order mark " + std::string(bom[0] == '\xFF' ? "FF FE" : "FE FF") +
                 "): save it as UTF-8 or ASCII text");
+    if (xyz_ && binary(in_.look_ahead(4096))) return read_binary_positions();
+    if (const std::string_view start = in_.look_ahead(4096);
+        start.find('\n') == std::string_view::npos && start.find('\r') != std::string_view::npos)
+      fail_file("its lines end with CR alone (classic Mac OS text): convert the line ends to LF (or CR LF)");
     if (in_.size() > 0) values_.reserve(size_t(std::min<int64_t>(in_.size() / 8, 1 << 22)));
     std::string_view line;
     std::vector<std::string_view> words;
@@ -238,6 +244,42 @@ class XyzReader {
   }
   [[noreturn]] void fail(const std::string& problem) const {
     throw Error(Status::FormatError, "'" + in_.path() + "' line " + std::to_string(in_.line_number()) + ": " + problem);
+  }
+
+  /// Whether a file's first bytes are binary rather than text: a control character other than
+  /// the white space ones and DOS's end-of-file mark, and not UTF-16 text without a byte order
+  /// mark (a zero in every other byte; refused by name as text below).
+  static bool binary(std::string_view start) {
+    const bool control = std::any_of(start.begin(), start.end(), [](char ch) {
+      const auto c = static_cast<unsigned char>(ch);
+      return c < 0x20 && c != '\t' && c != '\n' && c != '\v' && c != '\f' && c != '\r' && c != 0x1a;
+    });
+    if (!control) return false;
+    bool even_zero = start.size() >= 2, odd_zero = start.size() >= 2;
+    for (size_t i = 0; i < start.size(); ++i) (i % 2 ? odd_zero : even_zero) &= start[i] == '\0';
+    return !even_zero && !odd_zero;
+  }
+
+  /// splashsurf's binary .xyz (what it reads and writes under that name): nothing but each
+  /// particle's x y z as little-endian float32, 12 bytes a particle.
+  FileContents read_binary_positions() {
+    FileContents out;
+    if (in_.size() > 0) out.positions.reserve(size_t(std::min<int64_t>(in_.size() / 12, 1 << 22)));
+    unsigned char p[12];
+    while (in_.peek() >= 0) {
+      if (!in_.read(p, sizeof p))
+        fail_file("binary (not text), " + std::to_string(in_.offset()) + " bytes: read as splashsurf's binary " +
+                  ".xyz (x y z as little-endian float32, 12 bytes a particle), but that is not a whole number " +
+                  "of particles; a text .xyz has one point per line");
+      Vec3 v;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t u = uint32_t(p[4 * k]) | uint32_t(p[4 * k + 1]) << 8 | uint32_t(p[4 * k + 2]) << 16 |
+                           uint32_t(p[4 * k + 3]) << 24;
+        (k == 0 ? v.x : k == 1 ? v.y : v.z) = double(std::bit_cast<float>(u));
+      }
+      out.positions.push_back(v);
+    }
+    return out;
   }
 
   size_t rows() const { return values_.size() / size_t(columns_); }
@@ -476,6 +518,7 @@ class XyzReader {
 
   FileReader in_;
   bool pts_;
+  bool xyz_;  ///< may be splashsurf's binary .xyz
   std::string header_text_;
   int columns_ = -1;
   std::vector<double> values_;  ///< rows x columns_

@@ -495,6 +495,21 @@ TEST(XyzReader, CsvHeadersNameVectorsAsParaViewAndPandasWriteThem) {
   ASSERT_NE(attribute(both, "P"), nullptr);
   EXPECT_EQ(attribute(both, "P")->components, 3);
   for (const char* single : {"a:1", "a:0", "b_0"}) EXPECT_NE(attribute(both, single), nullptr) << single;
+  // splashsurf's binary .xyz: x y z as little-endian float32 (this machine's order), told
+  // from text by its bytes; not a whole number of particles: refused by name. Only .xyz.
+  std::string bin;
+  for (const Vec3& q : expected)
+    for (double x : {q.x, q.y, q.z}) {
+      const float f = float(x) + 0.5f;
+      bin.append(reinterpret_cast<const char*>(&f), 4);
+    }
+  const PointCloud b = read("splashsurf.xyz", bin);
+  ASSERT_EQ(b.size(), 3u);
+  EXPECT_EQ(b.positions[2], (Vec3{0.5, 1.5, 0.5}));
+  EXPECT_TRUE(b.attributes.empty() && b.normals.empty());
+  EXPECT_REFUSED(read("cut.xyz", bin.substr(0, 31)), Status::FormatError,
+                 "cut.xyz': binary (not text), 31 bytes: read as splashsurf's binary .xyz");
+  EXPECT_REFUSED(read("binary.csv", bin), Status::FormatError, "binary.csv' line 1: ");
   // Tab-aligned columns: a run of tabs is one separator, in the header as in the data.
   EXPECT_EQ(read("aligned.txt", "x\t\ty\t\tz\n0\t\t0\t\t0\n1\t\t0\t\t0\n0\t\t1\t\t0\n").positions, expected);
   // Headerless .txt and .csv read as .xyz does.
