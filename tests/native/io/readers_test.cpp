@@ -34,6 +34,13 @@ std::string write(const fs::path& p, const std::string& bytes) {
   return p.string();
 }
 
+/// The attribute of that name, or nullptr.
+const VertexAttribute* attribute(const PointCloud& c, const std::string& name) {
+  for (const VertexAttribute& a : c.attributes)
+    if (a.name == name) return &a;
+  return nullptr;
+}
+
 template <class T>
 void append(std::string& s, T v) {
   s.append(reinterpret_cast<const char*>(&v), sizeof v);
@@ -365,11 +372,6 @@ TEST(XyzReader, Utf16AndDecimalCommasAreRefusedByName) {
 TEST(XyzReader, ColumnsNamedByAHeaderOrToldByTheirValues) {
   const auto dir = test::scratch_dir("xyz_columns");
   auto read = [&](const std::string& name, const std::string& text) { return read_point_cloud(write(dir / name, text)); };
-  auto attribute = [](const PointCloud& c, const std::string& name) -> const VertexAttribute* {
-    for (const VertexAttribute& a : c.attributes)
-      if (a.name == name) return &a;
-    return nullptr;
-  };
   auto expect_colours = [&](const PointCloud& c) {
     const VertexAttribute* col = attribute(c, "color");
     ASSERT_NE(col, nullptr);
@@ -445,11 +447,6 @@ TEST(XyzReader, ColumnsNamedByAHeaderOrToldByTheirValues) {
 TEST(XyzReader, CsvHeadersNameVectorsAsParaViewAndPandasWriteThem) {
   const auto dir = test::scratch_dir("xyz_csv");
   auto read = [&](const std::string& name, const std::string& text) { return read_point_cloud(write(dir / name, text)); };
-  auto attribute = [](const PointCloud& c, const std::string& name) -> const VertexAttribute* {
-    for (const VertexAttribute& a : c.attributes)
-      if (a.name == name) return &a;
-    return nullptr;
-  };
   const std::vector<Vec3> expected = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
 
   const PointCloud pv = read("paraview.csv",
