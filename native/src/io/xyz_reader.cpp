@@ -19,12 +19,13 @@
 //    nx, ny, nz (or normal_x ... or normalx ...) the normals; r, g, b (or red, green, blue)
 //    the colour (values in [0, 1] as they are, up to 255 as 8-bit, above as 16-bit colours).
 //    Vectors: columns name:0, name:1, .. or name_0, name_1, .. (ParaView's CSV, our own PLY
-//    naming), or name_x name_y name_z (also name.x ..: DualSPHysics' "Pos.x"), one after
-//    another, are one vector `name`: Points / Position / Pos / P / Coordinates of 3 the
-//    positions (where no x, y, z columns are named), Normals / Normal / N the normals,
-//    Color / Colour / RGB the colour; any other (vx vy vz as "v") a channel of its name and
-//    that many components (V, Vel or Velocity of 3 then becomes the channel "velocity", as
-//    in every format: name_the_velocity). Every other column is a channel of its name.
+//    naming), or name_x name_y name_z (also name.x ..: DualSPHysics' "Pos.x"; name[x] ..
+//    and Cd[r] ..: Houdini's table export), one after another, are one vector `name`:
+//    Points / Position / Pos / P / Coordinates of 3 the positions (where no x, y, z columns
+//    are named), Normals / Normal / N the normals, Color / Colour / RGB / Cd the colour; any
+//    other (vx vy vz as "v") a channel of its name and that many components (V, Vel or
+//    Velocity of 3 then becomes the channel "velocity", as in every format:
+//    name_the_velocity). Every other column is a channel of its name.
 //  - Without a header, by their count and values (the conventions of scanners and of
 //    CloudCompare's two column orders, "point, colour, scalars, normal" and, in .pts,
 //    "point, scalars, colour, normal"):
@@ -136,16 +137,21 @@ struct Layout {
 };
 
 /// Which component of a vector a header's column name is: "name:k" or "name_k" (k from 0;
-/// ParaView's CSV export, our PLY naming), "name_x" or "name.x" (y, z: 1, 2; any case), or
-/// one of "vx", "vy", "vz" (the velocity, base "v"). Sets `base` and returns the index, or -1.
+/// ParaView's CSV export, our PLY naming), "name_x" or "name.x" (y, z: 1, 2; any case),
+/// "name[x]", "name[k]" or "name[r]" (Houdini's table export: "P[x]", "Cd[r]"), or one of "vx",
+/// "vy", "vz" (the velocity, base "v"). Sets `base` and returns the index, or -1.
 int vector_component(std::string_view name, std::string& base) {
-  const size_t cut = name.find_last_of(":_.");
+  const bool bracket = name.size() > 3 && name.back() == ']';
+  if (bracket) name.remove_suffix(1);
+  const size_t cut = bracket ? name.rfind('[') : name.find_last_of(":_.");
+  if (bracket && cut == std::string_view::npos) return -1;
   if (cut != std::string_view::npos && cut > 0 && cut + 1 < name.size()) {
     const std::string_view tail = name.substr(cut + 1);
     int index = -1;
     if (tail.size() == 1) {
       const char c = char(std::tolower(static_cast<unsigned char>(tail[0])));
       if (c >= 'x' && c <= 'z') index = c - 'x';
+      if (bracket && (c == 'r' || c == 'g' || c == 'b')) index = c == 'r' ? 0 : c == 'g' ? 1 : 2;  // Cd[r]
     }
     if (index < 0 && name[cut] != '.' && tail.size() <= 2 &&
         std::all_of(tail.begin(), tail.end(), [](char c) { return c >= '0' && c <= '9'; }))
@@ -395,7 +401,7 @@ class XyzReader {
         if (one_of(b, {"points", "point", "position", "positions", "pos", "p", "coordinates", "coords"}))
           role = &positions;
         else if (one_of(b, {"normals", "normal", "n"})) role = &normal;
-        else if (one_of(b, {"color", "colour", "colors", "colours", "rgb"})) role = &color;
+        else if (one_of(b, {"color", "colour", "colors", "colours", "rgb", "cd"})) role = &color;
       }
       if (role == &positions && complete(xyz)) role = nullptr;  // x y z columns are named
       if (role && !complete(*role)) *role = from(v.column);

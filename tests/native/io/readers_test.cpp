@@ -485,6 +485,15 @@ TEST(XyzReader, CsvHeadersNameVectorsAsParaViewAndPandasWriteThem) {
   EXPECT_EQ(attribute(ds, "velocity")->values, (std::vector<float>{0, 0, -1, 0, 0, -2, 0, 0, -3}));
   EXPECT_EQ(attribute(ds, "color")->values, (std::vector<float>{1, 0, 0, 0, 1, 0, 0, 0, 1}));
 
+  // Houdini's table export: "P[x]", "v[0]"; the bracketed component is no unit.
+  const PointCloud hou = read("houdini.csv", "P[x],P[y],P[z],v[0],v[1],v[2],Cd[r],Cd[g],Cd[b],w[r]\n"
+                                             "0,0,0,1,2,3,1,0,0,5\n1,0,0,1,2,3,0,1,0,5\n0,1,0,1,2,3,0,0,1,5\n");
+  EXPECT_EQ(hou.positions, expected);
+  ASSERT_NE(attribute(hou, "velocity"), nullptr);
+  EXPECT_EQ(attribute(hou, "velocity")->values, (std::vector<float>{1, 2, 3, 1, 2, 3, 1, 2, 3}));
+  ASSERT_NE(attribute(hou, "color"), nullptr);
+  EXPECT_EQ(attribute(hou, "color")->values, (std::vector<float>{1, 0, 0, 0, 1, 0, 0, 0, 1}));
+  EXPECT_NE(attribute(hou, "w[r]"), nullptr);  // one component alone stays a channel
   // x y z columns win over a vector named as positions; components out of order, or one
   // alone, stay single channels; a trailing delimiter adds no column.
   const PointCloud both = read("both.csv", "x,y,z,P_0,P_1,P_2,a:1,a:0,b_0,\n0,0,0,9,9,9,1,2,3,\n1,0,0,9,9,9,1,2,3,\n0,1,0,9,9,9,1,2,3,\n");
