@@ -16,13 +16,12 @@
 //
 // What comes back: P as the positions, N (3 values) as the normals, and every other numeric
 // point attribute under its Houdini name, as floats ("v" becomes the channel "velocity":
-// name_the_velocity). String attributes, vertex, primitive
-// and detail attributes, groups and primitives are walked (a truncated or malformed file is
-// refused) but not carried, nor anything after the geometry's value (the seek index of a
-// file written with "hasindex"). Bounded: nesting depth, string lengths, the structure's node
-// count, and the values a file may expand to through constant pages (at most 64 per stored
-// byte), so that a hostile file is refused before it takes memory out of proportion to its
-// size.
+// name_the_velocity). String attributes, vertex, primitive and detail attributes, groups and
+// primitives are walked (a truncated or malformed file is refused) but not carried, nor
+// anything after the geometry's value (the seek index of a file written with "hasindex").
+// Bounded: nesting depth, string lengths, the structure's node count, and the values a file
+// may expand to through constant pages (at most 64 per stored byte), so that a hostile file
+// is refused before it takes memory out of proportion to its size.
 #include "io/bgeo_json.h"
 #include "io/scalar_types.h"
 

@@ -17,10 +17,10 @@
 //
 // What comes back: the points' x y z (exact float32 values), every float / int / vector
 // attribute under its Houdini name (P's w and index (string) attributes are not carried),
-// "N" (3 floats) as the normals ("v" becomes the channel "velocity": name_the_velocity). After the points, primitive and detail sections are read
-// when they hold only what Partio writes (particle-system primitives, detail attributes, no
-// groups), so that a truncated file is refused; anything else after the points is left
-// unread (the points are complete). Houdini's classic ASCII geometry ("PGEOMETRY") and the
+// "N" (3 floats) as the normals ("v" becomes the channel "velocity": name_the_velocity).
+// After the points, primitive and detail sections are read when they hold only what Partio
+// writes (particle-system primitives, detail attributes, no groups), so that a truncated file
+// is refused; anything else after the points is left unread (the points are complete). Houdini's classic ASCII geometry ("PGEOMETRY") and the
 // Blosc-compressed .bgeo.sc are refused with a message saying what is read.
 #include <algorithm>
 #include <cstring>
