@@ -47,7 +47,6 @@
 // splashsurf's binary .xyz: each particle's x y z as little-endian float32, nothing else.
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -58,6 +57,7 @@
 
 #include "io/file_reader.h"
 #include "io/formats.h"
+#include "io/scalar_types.h"
 #include "io/text_numbers.h"
 #include "particlemesh/core/error.h"
 
@@ -271,19 +271,15 @@ class XyzReader {
   FileContents read_binary_positions() {
     FileContents out;
     if (in_.size() > 0) out.positions.reserve(size_t(std::min<int64_t>(in_.size() / 12, 1 << 22)));
-    unsigned char p[12];
+    unsigned char raw[12];
+    double xyz[3];
     while (in_.peek() >= 0) {
-      if (!in_.read(p, sizeof p))
+      if (!in_.read(raw, sizeof raw))
         fail_file("binary (not text), " + std::to_string(in_.offset()) + " bytes: read as splashsurf's binary " +
                   ".xyz (x y z as little-endian float32, 12 bytes a particle), but that is not a whole number " +
                   "of particles; a text .xyz has one point per line");
-      Vec3 v;
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t u = uint32_t(p[4 * k]) | uint32_t(p[4 * k + 1]) << 8 | uint32_t(p[4 * k + 2]) << 16 |
-                           uint32_t(p[4 * k + 3]) << 24;
-        (k == 0 ? v.x : k == 1 ? v.y : v.z) = double(std::bit_cast<float>(u));
-      }
-      out.positions.push_back(v);
+      decode_scalars(ScalarType::F32, raw, 3, false, xyz);
+      out.positions.push_back({xyz[0], xyz[1], xyz[2]});
     }
     return out;
   }
