@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Set-up shared by the README's two commands: install the Debian packages that are missing,
-# then configure and build everything into build/. Safe to run again: it only does what is
+# then configure and build everything but the benchmarks into build/. Safe to run again: it only does what is
 # not done yet. Needs root (or sudo) only when a package is missing.
 set -euo pipefail
 
@@ -14,7 +14,7 @@ PACKAGES=(
   libcli11-dev nlohmann-json3-dev
   libpng-dev
   liblz4-dev liblzma-dev  # VTK XML arrays compressed with LZ4 or LZMA (zlib comes with libpng-dev)
-  libgtest-dev libgmock-dev libbenchmark-dev
+  libgtest-dev libgmock-dev
   python3 python3-numpy python3-pytest
   python3-vtk9  # tests/python/test_vtk_files.py: files written by VTK's own writers
   patchelf  # RUNPATH $ORIGIN on the libraries the Python package and the add-on zip carry
@@ -23,11 +23,23 @@ PACKAGES=(
   blender
   libpcl-dev
   clang llvm libclang-rt-14-dev  # the sanitizer build and libFuzzer (scripts/sanitize.sh, fuzz.sh)
-  libopenvdb-dev  # the polygonize benchmark's peer (bench/ only)
   python3-distributed python3-scipy  # particlemesh.distributed (Dask; SciPy: connected components) and its tests
-  libcgal-dev     # the scan benchmark's advancing-front peer (bench/ only)
-  libembree-dev  # the ray-casting benchmark's peer, with OpenVDB's mesh (bench/ only)
 )
+# The benchmarks (bench/) are built only when asked: PM_BUILD_BENCH=ON ./scripts/setup.sh.
+# Once asked, the build folder remembers it; PM_BUILD_BENCH=OFF turns them off again.
+BENCH_OPTION=()
+if [ -n "${PM_BUILD_BENCH:-}" ]; then
+  BENCH_OPTION=(-DPM_BUILD_BENCH="$PM_BUILD_BENCH")
+fi
+case "${PM_BUILD_BENCH:-}" in
+  ON|on|1|TRUE|true|YES|yes)
+    PACKAGES+=(
+      libbenchmark-dev  # Google Benchmark: the benchmarks' timing loops
+      libopenvdb-dev  # the polygonize benchmark's peer
+      libcgal-dev     # the scan benchmark's advancing-front peer
+      libembree-dev   # the ray-casting benchmark's peer, with OpenVDB's mesh
+    ) ;;
+esac
 
 missing=()
 for p in "${PACKAGES[@]}"; do
@@ -43,6 +55,6 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
-cmake -S "$ROOT" -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+cmake -S "$ROOT" -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release "${BENCH_OPTION[@]}" \
   -DPM_SHARED_DATA_DIR="${PM_SHARED_DATA_DIR:-$ROOT/../shared/data}" >/dev/null
 cmake --build "$BUILD" -j "$(nproc)"
