@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Set-up shared by the README's two commands: install the Debian packages that are missing,
-# then configure and build everything but the benchmarks into build/. Safe to run again: it only does what is
-# not done yet. Needs root (or sudo) only when a package is missing.
+# then configure and build everything but the benchmarks into build/. Safe to run again: it
+# only does what is not done yet. Needs root (or sudo) only when a package is missing.
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
