@@ -18,7 +18,7 @@ namespace particlemesh::cli {
 
 /// The particle files every command reads, for their help: the one list.
 inline const std::string kParticleFormats =
-    ".ply (x y z [nx ny nz], other properties as channels), .xyz/.pts/.txt/.csv (x y z [nx ny nz] per line, "
+    ".ply (x y z [nx ny nz or normal_x ..], other properties as channels), .xyz/.pts/.txt/.csv (x y z [nx ny nz] per line, "
     "or columns named by a header line), .obj (v x y z "
     "[r g b] lines, vn normals), VTK .vtk/.vtu/.vtp/.pvtu/.pvtp, Houdini .bgeo/.geo, lidar .las, Krakatoa .prt or, "
     "with the PCL bridge, .pcd (ascii, binary, binary_compressed)";

@@ -203,6 +203,11 @@ void file_seeds() {
   put("read_ply", "normals_ascii.ply",
       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
       "property float nx\nproperty float ny\nproperty float nz\nend_header\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n");
+  put("read_ply", "pcl_normals_vectors_ascii.ply",
+      "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+      "property float normal_x\nproperty float normal_y\nproperty float normal_z\nproperty float curvature\n"
+      "property float vx\nproperty float vy\nproperty float vz\nproperty float a.x\nproperty float a.y\n"
+      "end_header\n0 0 0 0 0 1 0.5 1 2 3 4 5\n1 0 0 0 1 0 0.25 -1 -2 -3 -4 -5\n");
   {
     std::string be = "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
                      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";

@@ -242,3 +242,34 @@ TEST(PlyIO, MeshesLoadInPclWithTheSameTriangles) {
   EXPECT_THROW(particlemesh_pcl::savePLYFile((dir / "no" / "m.ply").string(), pm), particlemesh::Error);
   EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 2);
 }
+
+// A pcl::PointCloud<pcl::PointNormal> saved by PCL's own PLY writer (ASCII and binary: nx ny nz,
+// the curvature, and a "camera" element after the vertices) reads with its normals and its
+// curvature as a channel.
+TEST(PlyIO, PclPointNormalFilesReadWithTheirNormals) {
+  const auto dir = test::scratch_dir("pcl_point_normal_ply");
+  const PointCloud s = fibonacci_sphere(200);
+  pcl::PointCloud<pcl::PointNormal> cloud;
+  for (size_t i = 0; i < s.size(); ++i) {
+    pcl::PointNormal p;
+    p.x = float(s.positions[i].x), p.y = float(s.positions[i].y), p.z = float(s.positions[i].z);
+    p.normal_x = p.x, p.normal_y = p.y, p.normal_z = p.z;
+    p.curvature = 0.5f;
+    cloud.push_back(p);
+  }
+  for (const bool binary : {false, true}) {
+    SCOPED_TRACE(binary ? "binary" : "ascii");
+    const std::string path = (dir / (binary ? "b.ply" : "a.ply")).string();
+    ASSERT_EQ(pcl::io::savePLYFile(path, cloud, binary), 0);
+    const PointCloud back = read_point_cloud(path);
+    ASSERT_EQ(back.size(), s.size());
+    ASSERT_EQ(back.normals.size(), s.size());
+    for (size_t i = 0; i < s.size(); ++i) {
+      ASSERT_LT(distance(back.positions[i], s.positions[i]), 1e-6);
+      ASSERT_LT(distance(back.normals[i], s.positions[i]), 1e-6);
+    }
+    ASSERT_EQ(back.attributes.size(), 1u);
+    EXPECT_EQ(back.attributes[0].name, "curvature");
+    EXPECT_EQ(back.attributes[0].values[0], 0.5f);
+  }
+}

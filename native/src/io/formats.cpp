@@ -1,9 +1,11 @@
 #include "io/formats.h"
 
 #include <algorithm>
-#include <string>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <string>
+#include <string_view>
 
 #include "particlemesh/core/error.h"
 
@@ -71,6 +73,37 @@ std::string unique_attribute_name(const FileContents& c, const std::string& name
   if (!taken(name)) return name;
   for (int k = 2;; ++k)
     if (!taken(name + "_" + std::to_string(k))) return name + "_" + std::to_string(k);
+}
+
+int vector_component(std::string_view name, std::string& base) {
+  const bool bracket = name.size() > 3 && name.back() == ']';
+  if (bracket) name.remove_suffix(1);
+  const size_t cut = bracket ? name.rfind('[') : name.find_last_of(":_.");
+  if (bracket && cut == std::string_view::npos) return -1;
+  if (cut != std::string_view::npos && cut > 0 && cut + 1 < name.size()) {
+    const std::string_view tail = name.substr(cut + 1);
+    int index = -1;
+    if (tail.size() == 1) {
+      const char c = char(std::tolower(static_cast<unsigned char>(tail[0])));
+      if (c >= 'x' && c <= 'z') index = c - 'x';
+      if (bracket && (c == 'r' || c == 'g' || c == 'b')) index = c == 'r' ? 0 : c == 'g' ? 1 : 2;  // Cd[r]
+    }
+    if (index < 0 && name[cut] != '.' && tail.size() <= 2 &&
+        std::all_of(tail.begin(), tail.end(), [](char c) { return c >= '0' && c <= '9'; }))
+      index = tail.size() == 2 && tail[0] == '0' ? -1 : std::stoi(std::string(tail));
+    if (index >= 0) {
+      base = std::string(name.substr(0, cut));
+      return index;
+    }
+  }
+  if (name.size() == 2 && (name[0] == 'v' || name[0] == 'V')) {
+    const char c = char(std::tolower(static_cast<unsigned char>(name[1])));
+    if (c >= 'x' && c <= 'z') {
+      base = "v";
+      return c - 'x';
+    }
+  }
+  return -1;
 }
 
 void name_the_velocity(FileContents& c) {

@@ -14,6 +14,7 @@
 #include "particlemesh/core/config.h"
 
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -74,6 +75,13 @@ std::string unique_attribute_name(const FileContents& c, const std::string& name
 /// v, vel or velocity in any case (Houdini's "v", DualSPHysics' "Vel", ParaView's "Velocity",
 /// a text file's vx vy vz) is renamed so, unless a channel is already called "velocity".
 void name_the_velocity(FileContents& c);
+
+/// Which component of a vector a column or property name is: "name:k" or "name_k" (k from
+/// 0; ParaView's CSV export, our PLY naming), "name_x" or "name.x" (y, z: 1, 2; any case),
+/// "name[x]", "name[k]" or "name[r]" (Houdini's table export: "P[x]", "Cd[r]"), or one of "vx",
+/// "vy", "vz" (the velocity, base "v"). Sets `base` and returns the index, or -1. The text
+/// and PLY readers make a run of names 0, 1, .. of one base, declared in a row, one vector.
+int vector_component(std::string_view name, std::string& base);
 
 /// The shared checks on what a reader returned: positions finite (a NaN or infinite
 /// coordinate names the vertex; for meshes FormatError, for points InvalidInput as

@@ -10,11 +10,12 @@
 // the element, the property and the value named.
 //
 // What it reads: the "vertex" element's x y z (any numeric type; upper-case X Y Z too, when
-// no lower-case one is declared), nx ny nz (all three, or they are kept as plain
-// attributes), red green blue (-> the "color" attribute in [0, 1]: 8-bit values / 255,
-// 16-bit / 65535, float as stored), every other scalar vertex property as a one-component
-// attribute of its name, except that properties name_0, name_1, .., name_k declared one after
-// another (as our writers write a vector channel) are one (k + 1)-component attribute "name";
+// no lower-case one is declared), nx ny nz or normal_x normal_y normal_z (all three, or
+// they are kept as plain attributes), red green blue (-> the "color" attribute in [0, 1]:
+// 8-bit values / 255, 16-bit / 65535, float as stored), every other scalar vertex property as
+// a one-component attribute of its name, except that properties name_0, name_1, .., name_k
+// declared one after another (as our writers write a vector channel; or vx vy vz, name_x
+// name_y name_z, as vector_component reads them) are one (k + 1)-component attribute "name";
 // and the "face" element's vertex_indices (or vertex_index) lists, fanned into triangles. List
 // properties anywhere (a vertex element with a list, an "edge" or "material" element) are
 // walked and skipped. After the last element the file must end
@@ -111,8 +112,10 @@ class PlyReader {
  private:
   // Properties name_0, name_1, .., name_k declared one after another (two or more) become one
   // attribute "name" of k + 1 components, interleaved per vertex: write_mesh writes a vector
-  // channel (velocity) that way, so a PLY round trip gives back the channel it was. Left as
-  // they are where "name" is itself a property's or attribute's name.
+  // channel (velocity) that way, so a PLY round trip gives back the channel it was. So do the
+  // other namings of a vector's components the text reader knows (vector_component: vx vy vz,
+  // name_x name_y name_z, ..). Left as they are where "name" is itself a property's or
+  // attribute's name.
   void merge_component_runs() {
     auto& attrs = out_.attributes;
     std::vector<std::string> names;  // every vertex property's name, and the colour channel's
@@ -129,12 +132,12 @@ class PlyReader {
     std::vector<VertexAttribute> merged;
     merged.reserve(attrs.size());
     for (size_t i = 0; i < attrs.size();) {
-      const std::string& name = attrs[i].name;
       size_t run = 0;
-      if (name.size() > 2 && name.compare(name.size() - 2, 2, "_0") == 0) {
-        const std::string base = name.substr(0, name.size() - 2);
+      std::string base, next;
+      if (vector_component(attrs[i].name, base) == 0) {
+        run = 1;
         while (i + run < attrs.size() && declared_at[i + run] == declared_at[i] + run &&
-               attrs[i + run].name == base + "_" + std::to_string(run))
+               vector_component(attrs[i + run].name, next) == int(run) && next == base)
           ++run;
         if (run < 2 || taken(base, merged)) run = 0;
         if (run > 0) {
@@ -263,6 +266,17 @@ class PlyReader {
     Property* found[9] = {};
     for (int k = 0; k < 9; ++k)
       if ((found[k] = find(kNames[k]))) found[k]->role = k;
+    // Else normal_x normal_y normal_z (PCL's names of the fields, which the text reader reads too).
+    if (!(found[kNX] && found[kNX + 1] && found[kNX + 2])) {
+      static const char* const kPclNormals[3] = {"normal_x", "normal_y", "normal_z"};
+      Property* pcl[3] = {find(kPclNormals[0]), find(kPclNormals[1]), find(kPclNormals[2])};
+      if (pcl[0] && pcl[1] && pcl[2])
+        for (int k = 0; k < 3; ++k) {
+          if (found[kNX + k]) found[kNX + k]->role = kSkip;
+          found[kNX + k] = pcl[k];
+          pcl[k]->role = kNX + k;
+        }
+    }
     for (int k = 0; k < 3; ++k)
       if (!found[k]) {
         std::string has;

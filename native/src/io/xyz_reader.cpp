@@ -136,41 +136,6 @@ struct Layout {
   std::vector<Channel> channels;
 };
 
-/// Which component of a vector a header's column name is: "name:k" or "name_k" (k from 0;
-/// ParaView's CSV export, our PLY naming), "name_x" or "name.x" (y, z: 1, 2; any case),
-/// "name[x]", "name[k]" or "name[r]" (Houdini's table export: "P[x]", "Cd[r]"), or one of "vx",
-/// "vy", "vz" (the velocity, base "v"). Sets `base` and returns the index, or -1.
-int vector_component(std::string_view name, std::string& base) {
-  const bool bracket = name.size() > 3 && name.back() == ']';
-  if (bracket) name.remove_suffix(1);
-  const size_t cut = bracket ? name.rfind('[') : name.find_last_of(":_.");
-  if (bracket && cut == std::string_view::npos) return -1;
-  if (cut != std::string_view::npos && cut > 0 && cut + 1 < name.size()) {
-    const std::string_view tail = name.substr(cut + 1);
-    int index = -1;
-    if (tail.size() == 1) {
-      const char c = char(std::tolower(static_cast<unsigned char>(tail[0])));
-      if (c >= 'x' && c <= 'z') index = c - 'x';
-      if (bracket && (c == 'r' || c == 'g' || c == 'b')) index = c == 'r' ? 0 : c == 'g' ? 1 : 2;  // Cd[r]
-    }
-    if (index < 0 && name[cut] != '.' && tail.size() <= 2 &&
-        std::all_of(tail.begin(), tail.end(), [](char c) { return c >= '0' && c <= '9'; }))
-      index = tail.size() == 2 && tail[0] == '0' ? -1 : std::stoi(std::string(tail));
-    if (index >= 0) {
-      base = std::string(name.substr(0, cut));
-      return index;
-    }
-  }
-  if (name.size() == 2 && (name[0] == 'v' || name[0] == 'V')) {
-    const char c = char(std::tolower(static_cast<unsigned char>(name[1])));
-    if (c >= 'x' && c <= 'z') {
-      base = "v";
-      return c - 'x';
-    }
-  }
-  return -1;
-}
-
 bool one_of(const std::string& lowered, std::initializer_list<const char*> names) {
   return std::any_of(names.begin(), names.end(), [&](const char* n) { return lowered == n; });
 }

@@ -277,6 +277,49 @@ TEST(PlyReader, NumberedPropertiesAreOneVectorChannel) {
   EXPECT_EQ(colours.attributes[0].components, 2);
 }
 
+// The other spellings of a vector the text reader knows (vx vy vz, name_x name_y name_z,
+// name.x, name[x]) are one channel in a PLY too, and normal_x normal_y normal_z (PCL's field
+// names, which the text reader reads too) are the normals when no nx ny nz are declared.
+TEST(PlyReader, VectorSpellingsAndNormalFieldNames) {
+  const auto dir = test::scratch_dir("ply_vector_spellings");
+  auto header = [](std::initializer_list<const char*> props) {
+    std::string h = "ply\nformat ascii 1.0\nelement vertex 2\n";
+    for (const char* p : props) h += std::string("property float ") + p + "\n";
+    return h + "end_header\n";
+  };
+  const PointCloud pcl = read_point_cloud(
+      write(dir / "pcl.ply", header({"x", "y", "z", "normal_x", "normal_y", "normal_z", "curvature"}) +
+                                 "0 0 0 0 0 1 0.5\n1 0 0 0 1 0 0.25\n"));
+  ASSERT_EQ(pcl.normals.size(), 2u);
+  EXPECT_EQ(pcl.normals[1], (Vec3{0, 1, 0}));
+  ASSERT_EQ(pcl.attributes.size(), 1u);
+  EXPECT_EQ(pcl.attributes[0].name, "curvature");
+  // nx ny nz win over normal_x ..; two of three stay attributes.
+  const PointCloud both = read_point_cloud(
+      write(dir / "both.ply", header({"x", "y", "z", "normal_x", "normal_y", "normal_z", "nx", "ny", "nz"}) +
+                                  "0 0 0 1 0 0 0 0 1\n1 0 0 1 0 0 0 0 1\n"));
+  ASSERT_EQ(both.normals.size(), 2u);
+  EXPECT_EQ(both.normals[0], (Vec3{0, 0, 1}));
+  EXPECT_EQ(both.attributes.size(), 1u);  // normal_x .. normal_z: one vector "normal"
+  const PointCloud two = read_point_cloud(
+      write(dir / "two.ply", header({"x", "y", "z", "normal_x", "normal_z"}) + "0 0 0 1 0\n1 0 0 1 0\n"));
+  EXPECT_TRUE(two.normals.empty());
+  EXPECT_EQ(two.attributes.size(), 2u);
+  // vx vy vz is the velocity (as in a text file); a_x a_y a_z, b.x b.y b.z and c[x] c[y] c[z]
+  // are vectors a, b and c; out of order or with a gap they stay apart.
+  const PointCloud v = read_point_cloud(write(
+      dir / "v.ply", header({"x", "y", "z", "vx", "vy", "vz", "a_x", "a_y", "a_z", "b.x", "b.y", "b.z", "c[x]",
+                             "c[y]", "c[z]", "d_y", "d_x", "e_x", "e_z"}) +
+                         "0 0 0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16\n"
+                         "1 0 0 -1 -2 -3 -4 -5 -6 -7 -8 -9 -10 -11 -12 -13 -14 -15 -16\n"));
+  std::vector<std::string> names;
+  for (const VertexAttribute& a : v.attributes) names.push_back(a.name);
+  EXPECT_EQ(names, (std::vector<std::string>{"velocity", "a", "b", "c", "d_y", "d_x", "e_x", "e_z"}));
+  EXPECT_EQ(v.attributes[0].values, (std::vector<float>{1, 2, 3, -1, -2, -3}));
+  EXPECT_EQ(v.attributes[3].components, 3);
+  EXPECT_EQ(v.attributes[3].values, (std::vector<float>{10, 11, 12, -10, -11, -12}));
+}
+
 // OBJ: NaN and values beyond double named with their line (before: "a face refers to a
 // vertex that does not exist"); 1e39 is a double like any other; a corner before its vertex
 // is named.
