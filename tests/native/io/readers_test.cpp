@@ -41,6 +41,13 @@ const VertexAttribute* attribute(const PointCloud& c, const std::string& name) {
   return nullptr;
 }
 
+/// An ASCII PLY header: two vertices with these float properties.
+std::string two_vertex_ply_header(std::initializer_list<const char*> props) {
+  std::string h = "ply\nformat ascii 1.0\nelement vertex 2\n";
+  for (const char* p : props) h += std::string("property float ") + p + "\n";
+  return h + "end_header\n";
+}
+
 template <class T>
 void append(std::string& s, T v) {
   s.append(reinterpret_cast<const char*>(&v), sizeof v);
@@ -219,11 +226,7 @@ TEST(PlyReader, ColoursAndOtherPropertiesAreAttributes) {
 // apart.
 TEST(PlyReader, NumberedPropertiesAreOneVectorChannel) {
   const auto dir = test::scratch_dir("vector_channels");
-  auto header = [](std::initializer_list<const char*> props) {
-    std::string h = "ply\nformat ascii 1.0\nelement vertex 2\n";
-    for (const char* p : props) h += std::string("property float ") + p + "\n";
-    return h + "end_header\n";
-  };
+  const auto header = two_vertex_ply_header;
   const PointCloud c = read_point_cloud(
       write(dir / "v.ply", header({"w_0", "x", "w_1", "y", "z", "velocity_0", "velocity_1",
                                    "velocity_2", "id", "stress_0", "stress_1", "stress_2", "stress_3"}) +
@@ -282,11 +285,7 @@ TEST(PlyReader, NumberedPropertiesAreOneVectorChannel) {
 // names, which the text reader reads too) are the normals when no nx ny nz are declared.
 TEST(PlyReader, VectorSpellingsAndNormalFieldNames) {
   const auto dir = test::scratch_dir("ply_vector_spellings");
-  auto header = [](std::initializer_list<const char*> props) {
-    std::string h = "ply\nformat ascii 1.0\nelement vertex 2\n";
-    for (const char* p : props) h += std::string("property float ") + p + "\n";
-    return h + "end_header\n";
-  };
+  const auto header = two_vertex_ply_header;
   const PointCloud pcl = read_point_cloud(
       write(dir / "pcl.ply", header({"x", "y", "z", "normal_x", "normal_y", "normal_z", "curvature"}) +
                                  "0 0 0 0 0 1 0.5\n1 0 0 0 1 0 0.25\n"));
