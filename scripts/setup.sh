@@ -26,12 +26,16 @@ PACKAGES=(
   python3-distributed python3-scipy  # particlemesh.distributed (Dask; SciPy: connected components) and its tests
 )
 # The benchmarks (bench/) are built only when asked: PM_BUILD_BENCH=ON ./scripts/setup.sh.
-# Once asked, the build folder remembers it; PM_BUILD_BENCH=OFF turns them off again.
+# Once asked, the build folder remembers it (and its peers' packages stay in the list);
+# PM_BUILD_BENCH=OFF turns them off again.
 BENCH_OPTION=()
-if [ -n "${PM_BUILD_BENCH:-}" ]; then
-  BENCH_OPTION=(-DPM_BUILD_BENCH="$PM_BUILD_BENCH")
+bench="${PM_BUILD_BENCH:-}"
+if [ -n "$bench" ]; then
+  BENCH_OPTION=(-DPM_BUILD_BENCH="$bench")
+elif grep -qs '^PM_BUILD_BENCH:BOOL=ON$' "$BUILD/CMakeCache.txt"; then
+  bench=ON
 fi
-case "${PM_BUILD_BENCH:-}" in
+case "$bench" in
   ON|on|1|TRUE|true|YES|yes)
     PACKAGES+=(
       libbenchmark-dev  # Google Benchmark: the benchmarks' timing loops
