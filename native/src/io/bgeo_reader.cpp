@@ -20,8 +20,9 @@
 // "N" (3 floats) as the normals ("v" becomes the channel "velocity": name_the_velocity).
 // After the points, primitive and detail sections are read when they hold only what Partio
 // writes (particle-system primitives, detail attributes, no groups), so that a truncated file
-// is refused; anything else after the points is left unread (the points are complete). Houdini's classic ASCII geometry ("PGEOMETRY") and the
-// Blosc-compressed .bgeo.sc are refused with a message saying what is read.
+// is refused; anything else after the points is left unread (the points are complete).
+// Houdini's classic ASCII geometry ("PGEOMETRY") and the Blosc-compressed .bgeo.sc are
+// refused with a message saying what is read.
 #include <algorithm>
 #include <cstring>
 #include <string>
