@@ -294,6 +294,10 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
       const auto& h = result.surface.local_spacing;
       std::printf("  local spacing %.2g-%.2g r0 (10%%-90%%: %.2g-%.2g, median %.2g): each particle's L = %g x its own\n",
                   h.min, h.max, h.p10, h.p90, h.median, a.max_edge_factor);
+      if (s.reach_factor > 1)
+        std::printf("  sampling      irregular (nearest-neighbour distances vary by %.0f %%, as where particles lie at "
+                    "random): the local spacings above are %.2g x the sampling's, so that triangles reach across its gaps\n",
+                    100 * s.sampling_irregularity, s.reach_factor);
     }
     std::printf("  raw test      %zu candidate triplets, %zu kept%s\n", s.candidates, s.kept,
                 s.ties ? (", " + std::to_string(s.ties) + " ties broken").c_str() : "");

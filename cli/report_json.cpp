@@ -58,6 +58,8 @@ nlohmann::json to_json(const TriangulateStats& s) {
           {"degenerate_triplets", s.degenerate},
           {"ties", s.ties},
           {"kept", s.kept},
+          {"sampling_irregularity", s.sampling_irregularity},
+          {"reach_factor", s.reach_factor},
           {"seconds", {{"spacing", s.seconds_spacing}, {"neighbors", s.seconds_neighbors}, {"test", s.seconds_test}}}};
 }
 

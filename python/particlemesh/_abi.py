@@ -96,6 +96,8 @@ class pm_triangulate_stats(Structure):
         ("narrow_loops", c_uint64),
         ("narrow_loop_width", c_double),
         ("narrow_loop_edges", c_uint64),
+        ("sampling_irregularity", c_double),
+        ("reach_factor", c_double),
     ]
 
 

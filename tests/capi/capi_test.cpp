@@ -96,6 +96,22 @@ TEST(CApi, NarrowLoopsLeftOpenAreTheLibrarys) {
   pm_cloud_destroy(cloud);
 }
 
+TEST(CApi, ParticlesAtRandomReportTheirLongerReach) {
+  const PointCloud c = particlemesh::test::random_sphere(3000, 9);
+  const auto pos = flat(c.positions);
+  pm_cloud* cloud = nullptr;
+  ASSERT_EQ(pm_cloud_create(pos.data(), nullptr, c.size(), &cloud), PM_OK);
+  pm_triangulate_stats stats{};
+  stats.struct_size = sizeof(stats);
+  pm_mesh* mesh = nullptr;
+  ASSERT_EQ(pm_triangulate(cloud, nullptr, &mesh, &stats), PM_OK) << last();
+  EXPECT_GT(stats.sampling_irregularity, 0.45);
+  EXPECT_EQ(stats.reach_factor, 1.75);
+  EXPECT_EQ(stats.holes_left, 0u);
+  pm_mesh_destroy(mesh);
+  pm_cloud_destroy(cloud);
+}
+
 TEST(CApi, DefaultIsTheFinishedSurface) {
   const PointCloud c = fibonacci_sphere(5000);
   const auto pos = flat(c.positions);
@@ -115,6 +131,8 @@ TEST(CApi, DefaultIsTheFinishedSurface) {
   EXPECT_EQ(stats.unused_points, 0u);
   EXPECT_EQ(stats.holes_left, 0u);
   EXPECT_EQ(stats.normals_estimated, 1);  // the cloud came without normals
+  EXPECT_EQ(stats.reach_factor, 1.0);      // an even sampling: the limits as they are
+  EXPECT_LT(stats.sampling_irregularity, 0.25);
   int32_t has = 0;
   ASSERT_EQ(pm_mesh_has_normals(mesh, &has), PM_OK);
   EXPECT_EQ(has, 1);

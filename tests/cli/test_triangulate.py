@@ -2,6 +2,7 @@
 import json
 import math
 import os
+import random
 import signal
 import struct
 import subprocess
@@ -170,6 +171,35 @@ def test_unevenly_spaced_particles_get_a_hint(cli, tmp_path):
     assert "hint" not in r and r["topology"]["closed"] and r["topology"]["components"] == 1
     proc = cli("triangulate", pts, "-o", tmp_path / "e.ply", "--report", rep)
     assert "hint" not in proc.stdout and "hint" not in json.loads(rep.read_text())
+
+
+def test_particles_at_random_close_with_a_longer_reach(cli, tmp_path):
+    """Particles dropped uniformly at random on a sphere (as Blender's Random emission): the
+    summary's sampling line says their edge limits were lengthened, the report gives the
+    irregularity and the factor, and the sphere closes through (nearly) every particle. An even
+    sphere keeps the factor 1 and gets no such line."""
+    rng = random.Random(7)
+    rows = []
+    for _ in range(4000):
+        z, phi = 2 * rng.random() - 1, 2 * math.pi * rng.random()
+        r = math.sqrt(1 - z * z)
+        rows.append(f"{r * math.cos(phi):.9g} {r * math.sin(phi):.9g} {z:.9g}")
+    (tmp_path / "random.xyz").write_text("\n".join(rows) + "\n")
+    rep = tmp_path / "r.json"
+    proc = cli("triangulate", tmp_path / "random.xyz", "-o", tmp_path / "r.ply", "--report", rep)
+    r = json.loads(rep.read_text())
+    assert "sampling      irregular" in proc.stdout and "1.8 x the sampling's" in proc.stdout
+    assert 0.44 < r["triangulation"]["sampling_irregularity"] < 0.56
+    assert r["triangulation"]["reach_factor"] == 1.75
+    assert r["topology"]["closed"] and r["topology"]["components"] == 1
+    # At random some particles lie almost on top of another: one such may be passed by.
+    assert r["topology"]["euler_characteristic"] == 2 and r["surface"]["unused_points"] <= 4
+    even = tmp_path / "even.xyz"
+    cli("sample", "fibonacci", "--points", "4000", "-o", even)
+    proc = cli("triangulate", even, "-o", tmp_path / "e.ply", "--report", rep)
+    r = json.loads(rep.read_text())
+    assert "sampling" not in proc.stdout and r["triangulation"]["reach_factor"] == 1
+    assert r["triangulation"]["sampling_irregularity"] < 0.25
 
 
 def test_a_spacing_given_too_small_is_named(cli, tmp_path):

@@ -96,6 +96,20 @@ def test_triangulate_a_sphere_into_a_closed_outward_surface(pm):
     assert (np.einsum("ij,ij->i", mesh.normals, p) > 0.99).all()
 
 
+def test_particles_at_random_report_their_longer_reach(pm):
+    """Points dropped uniformly at random on a sphere: the stats say how irregular the
+    sampling is and by how much the edge limits grew; the sphere closes. The even sphere
+    above keeps the factor 1."""
+    rng = np.random.default_rng(5)
+    z, phi = 2 * rng.random(3000) - 1, 2 * np.pi * rng.random(3000)
+    p = np.c_[np.sqrt(1 - z * z) * np.cos(phi), np.sqrt(1 - z * z) * np.sin(phi), z]
+    s = pm.triangulate(p).stats
+    assert 0.45 < s["sampling_irregularity"] < 0.56 and s["reach_factor"] == 1.75
+    assert s["holes_left"] == 0
+    even = pm.triangulate(fibonacci_sphere(3000)).stats
+    assert even["reach_factor"] == 1.0 and even["sampling_irregularity"] < 0.25
+
+
 def test_raw_is_the_seeds_triangle_set(pm):
     p = fibonacci_sphere(3000)
     raw = pm.triangulate(p, raw=True)

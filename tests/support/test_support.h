@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <numeric>
 #include <random>
 #include <set>
 #include <string>
@@ -142,6 +143,44 @@ inline PointCloud two_density_sphere(size_t dense, size_t sparse) {
     if (p.z < 0) out.positions.push_back(p);
   for (const Vec3& p : fibonacci_sphere(sparse).positions)
     if (p.z >= 0) out.positions.push_back(p);
+  return out;
+}
+
+/// n points dropped uniformly at random on a triangle mesh (each in a triangle chosen by area,
+/// uniformly inside it), fixed seed: what Blender's "Random" emission, or sampling a mesh
+/// uniformly by area, gives - a Poisson process, not an even sampling.
+inline PointCloud random_surface_sample(const TriMesh& mesh, size_t n, uint64_t seed) {
+  std::vector<double> area(mesh.triangles.size());
+  for (size_t f = 0; f < area.size(); ++f) {
+    const Triangle& t = mesh.triangles[f];
+    const Vec3 a = mesh.positions[t[0]], b = mesh.positions[t[1]], c = mesh.positions[t[2]];
+    area[f] = norm(cross(b - a, c - a));
+  }
+  std::partial_sum(area.begin(), area.end(), area.begin());
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  PointCloud out;
+  for (size_t i = 0; i < n; ++i) {
+    const size_t f = size_t(std::upper_bound(area.begin(), area.end(), u(rng) * area.back()) - area.begin());
+    const Triangle& t = mesh.triangles[std::min(f, area.size() - 1)];
+    double x = u(rng), y = u(rng);
+    if (x + y > 1) x = 1 - x, y = 1 - y;
+    const Vec3 a = mesh.positions[t[0]];
+    out.positions.push_back(a + (mesh.positions[t[1]] - a) * x + (mesh.positions[t[2]] - a) * y);
+  }
+  return out;
+}
+
+/// n points uniformly at random on the unit sphere (z and the angle around it uniform:
+/// Archimedes' equal areas), fixed seed.
+inline PointCloud random_sphere(size_t n, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  PointCloud out;
+  for (size_t i = 0; i < n; ++i) {
+    const double z = 2 * u(rng) - 1, phi = 2 * 3.141592653589793 * u(rng), r = std::sqrt(1 - z * z);
+    out.positions.push_back({r * std::cos(phi), r * std::sin(phi), z});
+  }
   return out;
 }
 

@@ -192,6 +192,12 @@ typedef struct pm_triangulate_stats {
                                  in the sampling, not openings */
   double narrow_loop_width; /**< the widest of them, in L: fill_edge_factor >= it reaches them all */
   uint64_t narrow_loop_edges; /**< the longest of them: fill_holes >= it reaches them all */
+  /* -- appended -- */
+  double sampling_irregularity; /**< with local spacing: the coefficient of variation of the
+                                     nearest-neighbour distances around a point, median over the
+                                     points (even samplings 0 to 0.3, particles at random ~0.5) */
+  double reach_factor;      /**< every edge limit was lengthened by this for an irregular sampling
+                                 (1 on an even one; at most 1.75); local_spacing includes it */
 } pm_triangulate_stats;
 
 PM_EXPORT void pm_triangulate_options_init(pm_triangulate_options* options);

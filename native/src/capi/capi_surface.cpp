@@ -104,6 +104,8 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
       s.narrow_loops = r.surface.narrow_loops.count;
       s.narrow_loop_width = r.surface.narrow_loops.width;
       s.narrow_loop_edges = r.surface.narrow_loops.edges;
+      s.sampling_irregularity = r.triangulation.sampling_irregularity;
+      s.reach_factor = r.triangulation.reach_factor;
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();

@@ -140,7 +140,7 @@ double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, i
 }  // namespace
 
 std::vector<double> local_spacing_impl(const Vec3* points, size_t n, double r0, ProgressTracker& tracker,
-                                       double begin, double end) {
+                                       double begin, double end, double* irregularity) {
   tracker.stage("local spacing", begin, end, n);
   const NeighborGrid grid(points, n, 2 * r0);
   const std::vector<uint32_t> knn = nearest_neighbors(grid, kK, tracker);
@@ -169,8 +169,9 @@ std::vector<double> local_spacing_impl(const Vec3* points, size_t n, double r0, 
   });
   tracker.check();
   // Per point: the median nearest-neighbour distance around it, and the sector reach (in units
-  // of an even sampling's spacing; 0 where it is not taken).
-  std::vector<double> reach(n);
+  // of an even sampling's spacing; 0 where it is not taken); and how much those distances
+  // vary (their coefficient of variation, NaN with fewer than five).
+  std::vector<double> reach(n), variation(n);
   parallel_blocks(n, 4096, [&](size_t b, size_t e) {
     std::array<double, kK + 1> v;
     std::vector<Vec3> work;
@@ -179,6 +180,11 @@ std::vector<double> local_spacing_impl(const Vec3* points, size_t n, double r0, 
       int count = 0;
       v[size_t(count++)] = nn[s];
       for (int k = 0; k < m; ++k) v[size_t(count++)] = nn[knn[s * kK + size_t(k)]];
+      double sum = 0, sum2 = 0;
+      for (int k = 0; k < count; ++k) sum += v[size_t(k)];
+      const double mean = sum / count;
+      for (int k = 0; k < count; ++k) sum2 += (v[size_t(k)] - mean) * (v[size_t(k)] - mean);
+      variation[s] = count >= 5 && mean > 0 ? std::sqrt(sum2 / count) / mean : NAN;
       raw[s] = median_of(v.data(), count);
       reach[s] = sector_reach(grid, uint32_t(s), knn.data() + s * kK, m, m == kK, work) / kSectorReach;
     }
@@ -205,6 +211,19 @@ std::vector<double> local_spacing_impl(const Vec3* points, size_t n, double r0, 
     }
   });
   tracker.check();
+  if (irregularity) {
+    // The median over the points that have one (NaN where a neighbour is at infinity).
+    std::vector<double> known;
+    known.reserve(n);
+    for (double x : variation)
+      if (std::isfinite(x)) known.push_back(x);
+    if (known.empty()) {
+      *irregularity = 0;
+    } else {
+      std::nth_element(known.begin(), known.begin() + ptrdiff_t(known.size() / 2), known.end());
+      *irregularity = known[known.size() / 2];
+    }
+  }
   std::vector<double> out(n);
   for (uint32_t s = 0; s < n; ++s) {
     // A point with no neighbour at all within reach (a far outlier) keeps the cloud's spacing.
@@ -225,7 +244,7 @@ LocalSpacing estimate_local_spacing(const Vec3* points, size_t n, int threads, c
   return detail::with_threads(threads, [&] {
     LocalSpacing r;
     r.median_nn = detail::estimate_spacing_impl(points, n, tracker, 0.0, 0.3).spacing;
-    r.spacing = detail::local_spacing_impl(points, n, r.median_nn, tracker, 0.3, 1.0);
+    r.spacing = detail::local_spacing_impl(points, n, r.median_nn, tracker, 0.3, 1.0, &r.irregularity);
     tracker.finish();
     return r;
   });

@@ -29,6 +29,33 @@ constexpr double kSpacingBand = 0.15;
 /// neighbour distance): sparser than that, samples are too far apart to be one surface at the
 /// cloud's scale.
 constexpr double kMaxLocalSpacing = 3.0;
+/// How irregular a sampling is: the median over the points of the coefficient of variation
+/// (standard deviation over mean) of the nearest-neighbour distances of the point and its
+/// neighbourhood. Evenly spaced samplings (Poisson-disk samples, lattices, a model's
+/// vertices, scans after a voxel grid) measure 0 to about 0.3; points dropped uniformly at
+/// random on a surface (a Poisson process: Blender's "Random" emission, a mesh sampled
+/// uniformly by area) about 0.5, the Rayleigh distribution's sqrt(4 / pi - 1) = 0.52 less the
+/// bias of a 17-point estimate. There the triangles that cover the surface reach much farther
+/// than the nearest neighbours: on a uniformly random sample of a sphere the longest edge of
+/// 29 % of its Delaunay triangles exceeds twice the local spacing (16 % of the edges; 0.35 %
+/// exceed 3.3 times it), so the edge limits are lengthened by irregular_reach().
+/// Up to kRegularSampling the limits are as they are ...
+constexpr double kRegularSampling = 0.35;
+/// ... from kRandomSampling on they are kRandomReach times as long, in between in proportion.
+/// 1.75 (edges up to 3.5 local spacings at the default factor 2) as measured on 20k points at
+/// random on a sphere, a torus and three models (bench/RESULTS.md, "Particles at random"):
+/// 1.5 left loops open on the sphere and the models; 2 closed one of the bunny's five real
+/// openings (1.75 keeps four or all five of them, by sample).
+constexpr double kRandomSampling = 0.45;
+constexpr double kRandomReach = 1.75;
+
+/// The factor the edge limits are lengthened by on a sampling of this irregularity (1 for
+/// every evenly spaced sampling).
+inline double irregular_reach(double irregularity) {
+  const double f = (irregularity - kRegularSampling) / (kRandomSampling - kRegularSampling);
+  return 1.0 + (kRandomReach - 1.0) * (f > 1.0 ? 1.0 : f > 0.0 ? f : 0.0);
+}
+
 /// Neighbours spread along a line when the second variance of their plane fit is below this
 /// fraction of the first (a half disk, at an edge of the surface: about 0.28).
 constexpr double kElongated = 0.05;
@@ -39,7 +66,9 @@ constexpr double kFlatAngle = 150.0;
 
 /// Per input point (see estimate_local_spacing); r0 = the cloud's median nearest-neighbour
 /// distance (sets the grid). Assumes finite coordinates; runs in the caller's TBB arena.
+/// `irregularity`, when given, receives the sampling's (see kRegularSampling; 0 when no point
+/// has five neighbours).
 std::vector<double> local_spacing_impl(const Vec3* points, size_t n, double r0, ProgressTracker& tracker,
-                                       double begin, double end);
+                                       double begin, double end, double* irregularity = nullptr);
 
 }  // namespace particlemesh::detail

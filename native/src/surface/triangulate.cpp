@@ -96,12 +96,16 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
     const double measured = st.spacing_estimated
                                 ? st.spacing
                                 : estimate_spacing_impl(cloud.positions.data(), n, tracker, at(0.0), at(0.15)).spacing;
-    local_spacing = local_spacing_impl(cloud.positions.data(), n, measured, tracker, at(0.15), at(0.3));
+    local_spacing = local_spacing_impl(cloud.positions.data(), n, measured, tracker, at(0.15), at(0.3),
+                                       &st.sampling_irregularity);
     // At most kMaxLocalSpacing r0: sparser than that, samples are too far apart to be one
-    // surface at the cloud's scale (stray clusters, a scan's far fringe).
+    // surface at the cloud's scale (stray clusters, a scan's far fringe). On an irregular
+    // (random) sampling the covering triangles reach farther than the spacing: every limit,
+    // the cap too, lengthened by the same factor (1 on every even sampling).
+    st.reach_factor = irregular_reach(st.sampling_irregularity);
     const double scale = st.spacing / measured, cap = kMaxLocalSpacing * st.spacing;
-    for (double& h : local_spacing) h = std::min(r0_with_band(h * scale, st.spacing, kSpacingBand), cap);
-    raw.edge_cap = options.max_edge_factor * cap;
+    for (double& h : local_spacing) h = std::min(r0_with_band(h * scale, st.spacing, kSpacingBand), cap) * st.reach_factor;
+    raw.edge_cap = options.max_edge_factor * cap * st.reach_factor;
   }
   st.seconds_spacing = seconds_since(t0);
 

@@ -51,6 +51,48 @@ TEST(UnevenSampling, TwoDensitiesCloseWithLocalSpacingOnly) {
   EXPECT_EQ(one.surface.local_spacing.max, 1.0);
 }
 
+TEST(UnevenSampling, ParticlesAtRandomCloseWithALongerReach) {
+  // Points dropped uniformly at random (Blender's "Random" emission, a mesh sampled by area):
+  // the triangles covering the surface reach much farther than the nearest neighbours (29 %
+  // of a random sphere's Delaunay triangles have an edge over twice the local spacing). With
+  // the limits of an even sampling the surface fell apart (a 3000-point sphere: 7 pieces,
+  // 22 open loops); lengthened for the sampling's irregularity, it closes.
+  const size_t n = particlemesh::test::kSanitized ? 3000 : 8000;
+  const PointCloud sphere = particlemesh::test::random_sphere(n, 3);
+  const PointCloud torus = particlemesh::test::random_surface_sample(torus_mesh(1.0, 0.4, 96, 48), n + n / 2, 4);
+  for (const PointCloud* c : {&sphere, &torus}) {
+    const SurfaceResult r = reconstruct_surface(*c);
+    const TopologyReport t = topology_report(r.mesh);
+    // About 0.48, past the 0.45 from which the reach is 1.75 x.
+    EXPECT_GT(r.triangulation.sampling_irregularity, 0.45);
+    EXPECT_EQ(r.triangulation.reach_factor, 1.75);
+    EXPECT_TRUE(t.closed && t.manifold && t.consistently_oriented && t.outward);
+    EXPECT_EQ(t.components, 1u);
+    ASSERT_EQ(t.per_component.size(), 1u);
+    EXPECT_EQ(t.per_component[0].genus, c == &torus ? 1 : 0);
+    // At random some particles lie almost on top of another: at most 0.1 % passed by.
+    EXPECT_GE(t.vertices_used * 1000, c->size() * 999);
+    // Every triangle within the lengthened cap: 1.75 x 3 r0 x 2.
+    EXPECT_LE(longest_edge(r.mesh), 1.75 * 6 * r.triangulation.spacing * (1 + 1e-12));
+  }
+  // One edge limit for the whole cloud stays the seed's L = 2 r0, however random the cloud.
+  const SurfaceResult one = reconstruct_surface(sphere, global());
+  EXPECT_EQ(one.triangulation.reach_factor, 1.0);
+  EXPECT_EQ(one.triangulation.sampling_irregularity, 0.0);
+}
+
+TEST(UnevenSampling, EvenSamplingsKeepTheirLimits) {
+  // The reach is lengthened only for particles at random: every even sampling measures far
+  // below where it starts, and keeps the factor 1 exactly.
+  for (const PointCloud& c : {fibonacci_sphere(10000), two_density_sphere(8000, 1500),
+                              poisson_disk_sample(torus_mesh(1.0, 0.4, 96, 48), 0.05, 3),
+                              row_sheet(60, 24, 1.0, 3.0, 5, true)}) {
+    const SurfaceResult r = reconstruct_surface(c);
+    EXPECT_EQ(r.triangulation.reach_factor, 1.0);
+    EXPECT_LT(r.triangulation.sampling_irregularity, 0.25);
+  }
+}
+
 TEST(UnevenSampling, RowsJoinAcross) {
   // A depth camera's rows on a surface seen at a grazing angle: 3 times farther apart across
   // than along. One L from the nearest-neighbour distance cannot reach across the rows.

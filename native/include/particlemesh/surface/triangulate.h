@@ -74,6 +74,11 @@ struct TriangulateStats {
   size_t degenerate = 0;         ///< triplets with edges <= L skipped as collinear
   size_t ties = 0;               ///< sphere tests decided by the symbolic tie-break
   size_t kept = 0;               ///< triangles kept
+  /// With a local spacing: how irregular the sampling is (LocalSpacing::irregularity), and the
+  /// factor every edge limit was lengthened by for it (1 on an even sampling; up to 1.75 where
+  /// the particles lie at random). 0 and 1 otherwise.
+  double sampling_irregularity = 0;
+  double reach_factor = 1;
   double seconds_spacing = 0;
   double seconds_neighbors = 0;
   double seconds_test = 0;
