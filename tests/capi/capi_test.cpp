@@ -25,6 +25,19 @@ std::vector<double> flat(const std::vector<Vec3>& v) {
   return out;
 }
 std::string last() { return pm_last_error_message(); }
+// c's finished surface through the C ABI with the default options, *stats filled (its
+// struct_size set here); nullptr on failure.
+pm_mesh* triangulate_with_stats(const PointCloud& c, pm_triangulate_stats* stats) {
+  const auto pos = flat(c.positions);
+  pm_cloud* cloud = nullptr;
+  if (pm_cloud_create(pos.data(), nullptr, c.size(), &cloud) != PM_OK) return nullptr;
+  *stats = {};
+  stats->struct_size = sizeof(*stats);
+  pm_mesh* mesh = nullptr;
+  if (pm_triangulate(cloud, nullptr, &mesh, stats) != PM_OK) mesh = nullptr;
+  pm_cloud_destroy(cloud);
+  return mesh;
+}
 }  // namespace
 
 TEST(CApi, VersionAndStatusStrings) {
@@ -97,19 +110,13 @@ TEST(CApi, NarrowLoopsLeftOpenAreTheLibrarys) {
 }
 
 TEST(CApi, ParticlesAtRandomReportTheirLongerReach) {
-  const PointCloud c = particlemesh::test::random_sphere(3000, 9);
-  const auto pos = flat(c.positions);
-  pm_cloud* cloud = nullptr;
-  ASSERT_EQ(pm_cloud_create(pos.data(), nullptr, c.size(), &cloud), PM_OK);
-  pm_triangulate_stats stats{};
-  stats.struct_size = sizeof(stats);
-  pm_mesh* mesh = nullptr;
-  ASSERT_EQ(pm_triangulate(cloud, nullptr, &mesh, &stats), PM_OK) << last();
+  pm_triangulate_stats stats;
+  pm_mesh* mesh = triangulate_with_stats(particlemesh::test::random_sphere(3000, 9), &stats);
+  ASSERT_NE(mesh, nullptr) << last();
   EXPECT_GT(stats.sampling_irregularity, 0.45);
   EXPECT_EQ(stats.reach_factor, 1.75);
   EXPECT_EQ(stats.holes_left, 0u);
   pm_mesh_destroy(mesh);
-  pm_cloud_destroy(cloud);
 }
 
 TEST(CApi, DefaultIsTheFinishedSurface) {
