@@ -200,6 +200,28 @@ def test_triangulate_particle_system_with_velocity(pm, clean_scene):
     assert not result.data.validate(verbose=False)
 
 
+def test_particles_emitted_at_random_from_faces_close(pm, clean_scene):
+    """Emission from faces with Distribution Random drops the particles at random (not evenly
+    spaced): their edge limits are lengthened for it, and the sphere they lie on comes out as
+    one closed outward surface (before, it fell apart into pieces)."""
+    em = emitter(speed=0.0)
+    settings = em.particle_systems[0].settings
+    settings.count = 3000
+    settings.emit_from = "FACE"
+    settings.distribution = "RAND"
+    clean_scene.frame_set(2)
+    positions, _ = living_particles(em)
+    assert len(positions) == 3000
+    assert bpy.ops.particlemesh.triangulate(source="PARTICLES") == {"FINISHED"}
+    co, tris = mesh_arrays(bpy.context.active_object.data)
+    np.testing.assert_allclose(co, positions, atol=1e-6)
+    mesh = pm.particlemesh.Mesh(co, tris)
+    rep = pm.particlemesh.topology(mesh)
+    assert rep["components"] == 1 and rep["closed"] and rep["outward"]
+    assert rep["euler_characteristic"] == 2 and rep["vertices_used"] >= 2995
+    assert pm.particlemesh.triangulate(positions).stats["reach_factor"] > 1.5  # (irregularity ~0.43 on the flat facets)
+
+
 def test_only_living_particles(pm, clean_scene):
     em = emitter(frame_start=1, frame_end=20)  # births spread over 20 frames
     clean_scene.frame_set(6)
