@@ -349,7 +349,9 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
                   "the local spacings are scaled to it, unless --global-spacing")
       ->check(CLI::PositiveNumber)
       ->check(finite_number());
-  app->add_option("--max-edge-factor", args->max_edge_factor, "Longest triangle edge L = factor x r0")
+  app->add_option("--max-edge-factor", args->max_edge_factor,
+                  "Longest triangle edge L = factor x r0 (x each particle's local spacing unless --global-spacing; "
+                  "where the particles lie at random, up to 1.75 x longer)")
       ->check(CLI::Range(1e-6, 100.0))
       ->check(finite_number())
       ->capture_default_str();
@@ -365,7 +367,8 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
                 "whole cloud");
   app->add_flag("--global-spacing", args->global_spacing,
                 "One longest edge L = factor x r0 for the whole cloud, instead of each particle's own from the "
-                "sampling around it (local spacing: within 15% of r0 it is r0, at most 3 r0)");
+                "sampling around it (local spacing: within 15% of r0 it is r0, at most 3 r0; up to 1.75 x that where "
+                "the particles lie at random)");
   app->add_flag("--no-viewpoint", args->no_viewpoint,
                 "Ignore a .pcd's VIEWPOINT (and --viewpoint): without it, triangles along the sensor's rays (across "
                 "depth jumps) are not told apart");

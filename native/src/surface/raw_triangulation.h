@@ -25,7 +25,8 @@ struct RawTriangulation {
   /// local spacing was given). An edge (s, t) may be up to pair_limit(L_s, L_t) long.
   std::vector<double> max_edge;
   /// The longest edge any point's limit allows (with a local spacing: max_edge_factor x
-  /// kMaxLocalSpacing x r0); the repair holds its triangles to it too. Infinite otherwise.
+  /// kMaxLocalSpacing x r0 x stats.reach_factor); the repair holds its triangles to it too.
+  /// Infinite otherwise.
   double edge_cap = INFINITY;
   /// (a < b < c), sorted; original indices, or sorted ones when asked for (see below).
   std::vector<Triangle> triangles;
@@ -43,8 +44,9 @@ enum class TriangleIndices { Original, Sorted };
 /// Validates options and cloud, then runs the test. Call inside detail::with_threads.
 /// Progress goes to [begin, end) of the tracker's overall fraction. With `local_spacing` each
 /// point's edge limit is max_edge_factor x its own spacing (estimate_local_spacing, scaled by
-/// r0 / the measured median nearest-neighbour distance when options.spacing gives r0) instead
-/// of max_edge_factor x r0; the test itself is unchanged.
+/// r0 / the measured median nearest-neighbour distance when options.spacing gives r0, and by
+/// the sampling's reach factor, irregular_reach) instead of max_edge_factor x r0; the test
+/// itself is unchanged.
 RawTriangulation run_raw_triangulation(const PointCloud& cloud, const TriangulateOptions& options,
                                        ProgressTracker& tracker, double begin, double end,
                                        TriangleIndices indices = TriangleIndices::Original,

@@ -68,7 +68,10 @@ struct SurfaceOptions : TriangulateOptions {
   /// unevenly): L_i = max_edge_factor x h_i, h_i its local spacing (estimate_local_spacing;
   /// within 15 % of r0 it is r0, so an even sampling meshes as with one spacing; at most 3 r0),
   /// scaled so that the cloud's median nearest-neighbour distance is `spacing` when that is
-  /// given. An edge may be as long as the mean of its ends' limits. Everything measured in L
+  /// given; where the particles lie at random (LocalSpacing::irregularity over 0.35) every
+  /// h_i and the cap grow by up to 1.75 x (TriangulateStats::reach_factor), as the triangles
+  /// that cover such a sampling reach farther. An edge may be as long as the mean of its ends'
+  /// limits. Everything measured in L
   /// uses the local value: the neighbour search, the plane fits, the fill limit, the widths of
   /// open loops. false: one limit L = max_edge_factor x spacing for the whole cloud, as the raw
   /// test (triangulate_raw) has.
