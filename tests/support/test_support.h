@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <numbers>
 #include <numeric>
 #include <random>
 #include <set>
@@ -178,7 +179,7 @@ inline PointCloud random_sphere(size_t n, uint64_t seed) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   PointCloud out;
   for (size_t i = 0; i < n; ++i) {
-    const double z = 2 * u(rng) - 1, phi = 2 * 3.141592653589793 * u(rng), r = std::sqrt(1 - z * z);
+    const double z = 2 * u(rng) - 1, phi = 2 * std::numbers::pi * u(rng), r = std::sqrt(1 - z * z);
     out.positions.push_back({r * std::cos(phi), r * std::sin(phi), z});
   }
   return out;

@@ -212,17 +212,11 @@ std::vector<double> local_spacing_impl(const Vec3* points, size_t n, double r0, 
   });
   tracker.check();
   if (irregularity) {
-    // The median over the points that have one (NaN where a neighbour is at infinity).
-    std::vector<double> known;
-    known.reserve(n);
-    for (double x : variation)
-      if (std::isfinite(x)) known.push_back(x);
-    if (known.empty()) {
-      *irregularity = 0;
-    } else {
-      std::nth_element(known.begin(), known.begin() + ptrdiff_t(known.size() / 2), known.end());
-      *irregularity = known[known.size() / 2];
-    }
+    // The median over the points that have one (NaN where a neighbour is at infinity), in place.
+    const auto known = std::remove_if(variation.begin(), variation.end(), [](double x) { return !std::isfinite(x); });
+    const auto mid = variation.begin() + (known - variation.begin()) / 2;
+    std::nth_element(variation.begin(), mid, known);
+    *irregularity = known == variation.begin() ? 0.0 : *mid;
   }
   std::vector<double> out(n);
   for (uint32_t s = 0; s < n; ++s) {
