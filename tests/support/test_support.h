@@ -185,6 +185,15 @@ inline PointCloud random_sphere(size_t n, uint64_t seed) {
   return out;
 }
 
+/// Every point of `c` written `copies` times in a row (point i at copies x i ... copies x i +
+/// copies - 1): a file written twice, a scan merged with itself, Blender's jittered emission
+/// repeating its pattern.
+inline PointCloud with_copies(const PointCloud& c, size_t copies) {
+  PointCloud out;
+  for (const Vec3& p : c.positions) out.positions.insert(out.positions.end(), copies, p);
+  return out;
+}
+
 /// A sheet near z = 0 sampled in rows: `along` apart within a row, rows `across` apart,
 /// alternate rows shifted by half a step (a depth camera's rows on a surface seen at a grazing
 /// angle), jittered by up to 5 % of the steps in x and y, and by up to 5 % of `along` in z when

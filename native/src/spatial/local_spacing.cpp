@@ -12,6 +12,7 @@
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/spatial/neighbor_grid.h"
+#include "spatial/grid_search.h"
 #include "spatial/local_spacing_impl.h"
 #include "spatial/nearest_neighbors.h"
 #include "spatial/spacing_impl.h"
@@ -136,13 +137,10 @@ double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, i
   return found[2];
 }
 
-
-}  // namespace
-
-std::vector<double> local_spacing_impl(const Vec3* points, size_t n, double r0, ProgressTracker& tracker,
-                                       double begin, double end, double* irregularity) {
-  tracker.stage("local spacing", begin, end, n);
-  const NeighborGrid grid(points, n, 2 * r0);
+/// local_spacing_impl over the points of `grid`, none of which coincide.
+std::vector<double> local_spacing_of_distinct(const NeighborGrid& grid, double r0, ProgressTracker& tracker,
+                                              double* irregularity) {
+  const size_t n = grid.point_count();
   const std::vector<uint32_t> knn = nearest_neighbors(grid, kK, tracker);
   auto dist = [&](uint32_t s, int k) {
     const uint32_t t = knn[size_t(s) * kK + size_t(k)];
@@ -224,6 +222,39 @@ std::vector<double> local_spacing_impl(const Vec3* points, size_t n, double r0, 
     const double v = out_sorted[s];
     out[grid.original_index(s)] = std::isfinite(v) && v > 0 ? v : r0;
   }
+  return out;
+}
+
+}  // namespace
+
+std::vector<double> local_spacing_impl(const Vec3* points, size_t n, double r0, ProgressTracker& tracker,
+                                       double begin, double end, double* irregularity) {
+  const NeighborGrid grid(points, n, 2 * r0);
+  size_t duplicates = 0;
+  const std::vector<uint32_t> rep = find_duplicates(grid, &duplicates);
+  tracker.stage("local spacing", begin, end, n - duplicates);
+  if (duplicates == 0) return local_spacing_of_distinct(grid, r0, tracker, irregularity);
+  // Exact copies of a point (a scan merged with itself, Blender's jittered emission repeating
+  // its pattern on faces, a file written twice) would fill each other's neighbourhoods: the 16
+  // nearest would then hold a few distinct places, the spacing shrink and an even sampling look
+  // irregular (or a random one regular). The estimate is taken over one copy of each place
+  // (the first in input order), and every copy gets its place's spacing.
+  std::vector<uint32_t> distinct;  // sorted indices of the representatives, in input order
+  distinct.reserve(n - duplicates);
+  for (uint32_t s = 0; s < n; ++s)
+    if (rep[s] == s) distinct.push_back(s);
+  std::sort(distinct.begin(), distinct.end(),
+            [&](uint32_t a, uint32_t b) { return grid.original_index(a) < grid.original_index(b); });
+  std::vector<Vec3> places(distinct.size());
+  std::vector<uint32_t> place_of(n);  // per sorted representative: its index in `places`
+  for (size_t i = 0; i < distinct.size(); ++i) {
+    places[i] = grid.sorted_point(distinct[i]);
+    place_of[distinct[i]] = uint32_t(i);
+  }
+  const std::vector<double> spacing =
+      local_spacing_of_distinct(NeighborGrid(places.data(), places.size(), 2 * r0), r0, tracker, irregularity);
+  std::vector<double> out(n);
+  for (uint32_t s = 0; s < n; ++s) out[grid.original_index(s)] = spacing[place_of[rep[s]]];
   return out;
 }
 

@@ -81,6 +81,28 @@ TEST(UnevenSampling, ParticlesAtRandomCloseWithALongerReach) {
   EXPECT_EQ(one.triangulation.sampling_irregularity, 0.0);
 }
 
+TEST(UnevenSampling, ExactCopiesOfParticlesAtRandomMeshAsWithout) {
+  // Every particle written three times: the copies are set aside, and the surface is the one
+  // of the cloud without them (before, they filled the neighbourhoods the irregularity and the
+  // local spacing are measured over: 53 pieces where the cloud alone closes).
+  const PointCloud c = particlemesh::test::random_sphere(3000, 5);
+  const SurfaceResult one = reconstruct_surface(c);
+  const SurfaceResult three = reconstruct_surface(particlemesh::test::with_copies(c, 3));
+  EXPECT_EQ(three.triangulation.duplicate_points, 2 * c.size());
+  EXPECT_EQ(three.triangulation.sampling_irregularity, one.triangulation.sampling_irregularity);
+  EXPECT_EQ(three.triangulation.reach_factor, 1.75);
+  const TopologyReport t = topology_report(three.mesh);
+  EXPECT_TRUE(t.closed && t.manifold && t.consistently_oriented && t.outward);
+  EXPECT_EQ(t.components, 1u);
+  // The same triangles, on the first copy of each particle.
+  std::vector<Triangle> expected = one.mesh.triangles, got = three.mesh.triangles;
+  for (Triangle& tri : expected)
+    for (auto& v : tri) v *= 3;
+  std::sort(expected.begin(), expected.end());
+  std::sort(got.begin(), got.end());
+  EXPECT_EQ(got, expected);
+}
+
 TEST(UnevenSampling, EvenSamplingsKeepTheirLimits) {
   // The reach is lengthened only for particles at random: every even sampling measures far
   // below where it starts, and keeps the factor 1 exactly.

@@ -17,7 +17,7 @@ namespace PM_NAMESPACE {
 
 struct LocalSpacing {
   /// Per input point: the spacing of the sampling around it (see estimate_local_spacing).
-  /// Exact duplicates get their first copy's.
+  /// Exact duplicates are one point: every copy gets its place's spacing.
   std::vector<double> spacing;
   /// The median nearest-neighbour distance of the distinct points (what estimate_spacing
   /// returns): the cloud's typical spacing r0.
@@ -49,6 +49,10 @@ struct LocalSpacing {
 ///    two of its neighbours with no angle over 150 degrees (on an even sampling about the
 ///    sector reach too): the reach that lets a surface take the point in at all. A point whose
 ///    neighbours all lie in one line gets none.
+/// The neighbourhoods are taken over the distinct points: exact copies of a point (a file
+/// written twice, a scan merged with itself, Blender's jittered emission repeating its pattern)
+/// are not each other's neighbours, and the spacings and the irregularity are those of the
+/// cloud without them.
 /// An even sampling gets its median nearest-neighbour distance everywhere (within ~15 %).
 /// Deterministic (the same for any thread count and input order) and linear in the points for
 /// surface samplings (a uniform grid); O(N) memory.
