@@ -31,7 +31,7 @@ std::string lower_extension(const std::string& path) {
 
 bool wants_pcl(const std::string& path, const ParticleInputArgs& a) {
   return lower_extension(path) == ".pcd" || a.uniform_sampling > 0 || a.voxel_grid > 0 || a.remove_outliers ||
-         a.estimate_normals;
+         a.mls_radius > 0 || a.estimate_normals;
 }
 
 #ifdef PM_CLI_PCL_MODULE
@@ -140,6 +140,17 @@ void add_particle_input_options(CLI::App& app, ParticleInputArgs& a) {
   app.add_option("--outlier-std", a.outlier_std, "Outlier threshold: mean + this x stddev")
       ->check(CLI::Range(0.0, 1e6))
       ->check(finite_number())
+      ->capture_default_str()
+      ->group(group);
+  app.add_option("--mls", a.mls_radius,
+                 "Smooth with pcl::MovingLeastSquares, after downsampling: each point moved onto the polynomial "
+                 "surface fitted to its neighbours within this radius (world units; a few times the spacing), which "
+                 "takes out a scanner's noise. The mesh's vertices are then the moved points")
+      ->check(CLI::PositiveNumber)
+      ->check(finite_number())
+      ->group(group);
+  app.add_option("--mls-order", a.mls_order, "Order of the polynomial --mls fits (0 or 1: a plane)")
+      ->check(CLI::Range(0, 5))
       ->capture_default_str()
       ->group(group);
   app.add_flag("--estimate-normals", a.estimate_normals,

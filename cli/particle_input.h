@@ -29,6 +29,8 @@ struct ParticleInputArgs {
   bool remove_outliers = false;
   int outlier_k = 50;
   double outlier_std = 1.0;
+  double mls_radius = 0;        ///< pcl::MovingLeastSquares' radius, 0 = off
+  int mls_order = 2;
   bool estimate_normals = false;
   int normal_k = 20;
   std::vector<double> viewpoint;  ///< empty = the PCD's sensor origin (none for other formats)

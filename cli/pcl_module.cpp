@@ -59,6 +59,8 @@ ParticleInput read_with_pcl(const std::string& path, const ParticleInputArgs& a,
     o.downsampling = particlemesh_pcl::Downsampling::VoxelGrid;
     o.leaf_size = a.voxel_grid;
   }
+  o.mls_radius = a.mls_radius;
+  o.mls_order = a.mls_order;
   o.estimate_normals = a.estimate_normals;
   o.normal_k = a.normal_k;
   for (int k = 0; k < 3; ++k) o.viewpoint[k] = a.viewpoint.size() == 3 ? float(a.viewpoint[k]) : load.origin[k];
@@ -75,6 +77,12 @@ ParticleInput read_with_pcl(const std::string& path, const ParticleInputArgs& a,
                                                                           : "none"},
                                   {"leaf_size", o.leaf_size},
                                   {"downsampled_away", p.downsampled_away},
+                                  {"mls_radius", o.mls_radius},
+                                  {"mls_order", o.mls_order},
+                                  {"smoothed", p.smoothed},
+                                  {"smoothing_skipped", p.smoothing_skipped},
+                                  {"smoothing_mean_shift", p.smoothing_mean_shift},
+                                  {"smoothing_max_shift", p.smoothing_max_shift},
                                   {"output_points", p.output_points},
                                   {"normals_estimated", p.normals_estimated},
                                   {"normals_failed", p.normals_failed},
@@ -85,6 +93,14 @@ ParticleInput read_with_pcl(const std::string& path, const ParticleInputArgs& a,
       std::snprintf(line, sizeof line, " %s %.6g: %zu points dropped;",
                     a.uniform_sampling > 0 ? "uniform sampling" : "voxel grid", o.leaf_size, p.downsampled_away);
       s += line;
+    }
+    if (o.mls_radius > 0) {
+      std::snprintf(line, sizeof line, " moving least squares (radius %.6g, order %d): %zu points moved, %.3g on average, at most %.3g",
+                    o.mls_radius, o.mls_order, p.smoothed, p.smoothing_mean_shift, p.smoothing_max_shift);
+      s += line;
+      if (p.smoothing_skipped > 0)
+        s += ", " + std::to_string(p.smoothing_skipped) + " left in place (fewer than 3 neighbours within the radius)";
+      s += ";";
     }
     if (a.estimate_normals) {
       std::snprintf(line, sizeof line, " normals %s (k %d, toward %g %g %g);",

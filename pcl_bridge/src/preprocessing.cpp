@@ -19,6 +19,7 @@
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 #include <pcl/search/kdtree.h>
+#include <pcl/surface/mls.h>
 
 #include <particlemesh/core/error.h>
 
@@ -136,7 +137,7 @@ namespace particlemesh_pcl
   bool
   anyPreprocessing (const PreprocessOptions &o)
   {
-    return o.remove_outliers || o.downsampling != Downsampling::None || o.estimate_normals;
+    return o.remove_outliers || o.downsampling != Downsampling::None || o.mls_radius > 0 || o.estimate_normals;
   }
 
   PreprocessReport
@@ -154,6 +155,10 @@ namespace particlemesh_pcl
       throw Error (Status::InvalidArgument, "outlier removal needs mean_k >= 1 and a finite stddev multiplier");
     if (o.downsampling != Downsampling::None && !(o.leaf_size > 0 && std::isfinite (o.leaf_size)))
       throw Error (Status::InvalidArgument, "downsampling needs a leaf size > 0 (got " + std::to_string (o.leaf_size) + ")");
+    if (!(o.mls_radius >= 0 && std::isfinite (o.mls_radius)))
+      throw Error (Status::InvalidArgument, "smoothing needs a finite radius >= 0 (got " + std::to_string (o.mls_radius) + ")");
+    if (o.mls_order < 0 || o.mls_order > 5)
+      throw Error (Status::InvalidArgument, "the smoothing polynomial's order must be 0 to 5 (got " + std::to_string (o.mls_order) + ")");
     if (o.estimate_normals && o.normal_k < 3)
       throw Error (Status::InvalidArgument, "normal estimation needs k >= 3 (got " + std::to_string (o.normal_k) + ")");
     if (o.threads < 0)
@@ -186,12 +191,47 @@ namespace particlemesh_pcl
         report.downsampled_away = cloud.size () - keep.size ();
         subset (cloud, keep, kept);
       }
+      const unsigned threads = o.threads > 0 ? unsigned (o.threads)
+                                             : std::max (1u, std::thread::hardware_concurrency ());
+      if (o.mls_radius > 0 && !cloud.positions.empty ())
+      {
+        auto xyz = toXYZ (cloud);
+        pcl::MovingLeastSquares<pcl::PointXYZ, pcl::PointNormal> mls;
+        mls.setInputCloud (xyz);
+        mls.setSearchMethod (pcl::search::KdTree<pcl::PointXYZ>::Ptr (new pcl::search::KdTree<pcl::PointXYZ> (false)));
+        mls.setSearchRadius (o.mls_radius);
+        mls.setPolynomialOrder (o.mls_order);
+        mls.setComputeNormals (false);
+        mls.setNumberOfThreads (threads);
+        pcl::PointCloud<pcl::PointNormal> projected;
+        mls.process (projected);
+        // With several threads PCL joins the threads' outputs in the order they ran: each
+        // projection goes back to its own point, so the result does not depend on it. A point
+        // with fewer than 3 neighbours within the radius gets none and stays where it was.
+        const pcl::PointIndicesPtr from = mls.getCorrespondingIndices ();
+        if (!from || from->indices.size () != projected.size ())
+          throw Error (Status::Internal, "pcl::MovingLeastSquares did not say which point each projection is of");
+        double shift_sum = 0;
+        for (std::size_t k = 0; k < projected.size (); ++k)
+        {
+          const pcl::index_t i = from->indices[k];
+          const auto &q = projected[k];
+          const particlemesh::Vec3 v{q.x, q.y, q.z};
+          if (i < 0 || std::size_t (i) >= cloud.size () || !particlemesh::is_finite (v))
+            continue;
+          const double shift = particlemesh::distance (v, cloud.positions[std::size_t (i)]);
+          cloud.positions[std::size_t (i)] = v;
+          ++report.smoothed;
+          shift_sum += shift;
+          report.smoothing_max_shift = std::max (report.smoothing_max_shift, shift);
+        }
+        report.smoothing_skipped = cloud.size () - report.smoothed;
+        report.smoothing_mean_shift = report.smoothed > 0 ? shift_sum / double (report.smoothed) : 0.0;
+      }
       if (o.estimate_normals && !cloud.positions.empty ())
       {
         auto xyz = toXYZ (cloud);
         pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> ne;
-        const unsigned threads = o.threads > 0 ? unsigned (o.threads)
-                                               : std::max (1u, std::thread::hardware_concurrency ());
         ne.setNumberOfThreads (threads);
         ne.setInputCloud (xyz);
         ne.setSearchMethod (pcl::search::KdTree<pcl::PointXYZ>::Ptr (new pcl::search::KdTree<pcl::PointXYZ> (false)));

@@ -163,6 +163,48 @@ def test_estimated_normals_face_the_viewpoint(pcl_cli, tmp_path):
         assert all(n * sign > 0.99 for n in nz), nz[:5]
 
 
+def test_moving_least_squares_closes_a_noisy_scan(pcl_cli, tmp_path):
+    # A sphere of 20 000 points, each moved along its radius by noise of half the spacing:
+    # as it is, the surface falls apart; smoothed with --mls over 2.4 spacings, one closed sphere
+    # whose vertices lie closer to it.
+    import numpy as np
+
+    n = 20000
+    i = np.arange(n) + 0.5
+    z = 1 - 2 * i / n
+    phi = i * math.pi * (3 - math.sqrt(5))
+    ring = np.sqrt(1 - z * z)
+    p = np.c_[ring * np.cos(phi), ring * np.sin(phi), z]
+    spacing = math.sqrt(4 * math.pi / n)
+    p *= (1 + np.random.default_rng(0).normal(0, 0.5 * spacing, n))[:, None]
+    src = tmp_path / "noisy.ply"
+    src.write_bytes(f"ply\nformat binary_little_endian 1.0\nelement vertex {n}\nproperty float x\n"
+                    f"property float y\nproperty float z\nend_header\n".encode() + p.astype("<f4").tobytes())
+    _, raw = _report(pcl_cli, tmp_path, src)
+    assert raw["topology"]["components"] > 5
+    radius = 2.4 * spacing
+    proc, r = _report(pcl_cli, tmp_path, src, "--mls", radius)
+    pre = r["input_cloud"]["preprocessing"]
+    assert pre["mls_radius"] == radius and pre["mls_order"] == 2
+    # A point or two flung far by the noise have fewer than 3 neighbours within the radius.
+    assert pre["smoothed"] + pre["smoothing_skipped"] == n and pre["smoothing_skipped"] <= 5
+    assert (f"moving least squares (radius {radius:.6g}, order 2): {pre['smoothed']} points moved"
+            in proc.stdout)
+    assert 0 < pre["smoothing_mean_shift"] < pre["smoothing_max_shift"] < radius
+    t = r["topology"]
+    assert t["components"] == 1 and t["closed"] and t["manifold"]
+    with open(tmp_path / "mesh.ply", "rb") as f:
+        data = f.read()
+    body = data[data.index(b"end_header\n") + 11:]
+    v = np.frombuffer(body[: 12 * n], dtype="<f4").reshape(-1, 3).astype(float)
+    before = np.abs(np.linalg.norm(p, axis=1) - 1).mean()
+    after = np.abs(np.linalg.norm(v, axis=1) - 1).mean()
+    assert after < before / 3, (before, after)
+    # A radius that is not a positive number is refused by the option.
+    assert pcl_cli("triangulate", src, "-o", tmp_path / "x.ply", "--mls", -1, check=False).returncode != 0
+    assert not (tmp_path / "x.ply").exists()
+
+
 def _plane_pcd(path, n=20):
     pts = "".join(f"{0.1 * i} {0.1 * j} 0\n" for i in range(n) for j in range(n))
     path.write_text(f"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH {n * n}\nHEIGHT 1\n"

@@ -315,6 +315,16 @@ TEST(ParticleTriangulation, FailsThePclWay) {
   EXPECT_NE(testing::internal::GetCapturedStderr().find("leaf size"), std::string::npos);
   EXPECT_TRUE(polygons.empty());
   pt.setDownsampling(particlemesh_pcl::Downsampling::None);
+  // Smoothing would move the points the polygons index: refused, saying what to do instead.
+  particlemesh_pcl::PreprocessOptions smooth = pt.getPreprocessOptions();
+  smooth.mls_radius = 0.2;
+  pt.setPreprocessOptions(smooth);
+  testing::internal::CaptureStderr();
+  pt.reconstruct(polygons);
+  EXPECT_NE(testing::internal::GetCapturedStderr().find("run pcl::MovingLeastSquares on the cloud"), std::string::npos);
+  EXPECT_TRUE(polygons.empty());
+  smooth.mls_radius = 0;
+  pt.setPreprocessOptions(smooth);
   pt.reconstruct(polygons);
   EXPECT_TRUE(pt.getReport().ok);
   EXPECT_GT(polygons.size(), 500u);

@@ -25,6 +25,11 @@ namespace particlemesh_pcl
     report_ = ReconstructionReport ();
     try
     {
+      // The polygons index the input cloud, whose points stay where they are.
+      if (preprocess_.mls_radius != 0)
+        throw particlemesh::Error (particlemesh::Status::InvalidArgument,
+                                   "smoothing (PreprocessOptions::mls_radius) would move the points the polygons "
+                                   "index: run pcl::MovingLeastSquares on the cloud before setInputCloud");
       particlemesh::PointCloud particles;
       pcl::Indices index_map;
       report_.input = toParticles (*input_, *indices_, particles, index_map);
