@@ -104,6 +104,40 @@ std::string volume_particles_hint(const SurfaceResult& r) {
   return s;
 }
 
+/// A sampling thicker than this (TriangulateStats::sampling_thickness) scatters across its
+/// surface: clean surfaces measured under 0.2 (a coarse model's vertices, from its curvature, up
+/// to 0.19), depth-camera scans 0.24-0.30, points moved off a sphere by noise of half their
+/// spacing 0.37 (bench/RESULTS.md, "Exact copies of particles, and noise across the surface").
+constexpr double kNoisyThickness = 0.22;
+/// ... up to this: thicker, the particles fill a volume (a block of SPH particles measured
+/// 0.86; the noisiest sphere, moved off by noise of a whole spacing, 0.59).
+constexpr double kVolumeThickness = 0.75;
+
+/// When loops are left open and the particles scatter across their surface (a scan's noise),
+/// say that smoothing them first may hold the surface together (--mls, with the PCL
+/// preprocessing). Empty otherwise.
+std::string noisy_surface_hint(const SurfaceResult& r, const TriangulateArgs& a) {
+  const double t = r.triangulation.sampling_thickness;
+  if (!has_pcl_preprocessing() || r.surface.holes_left == 0 || !(t > kNoisyThickness && t < kVolumeThickness))
+    return {};
+  // Smoothing over about 3 local spacings held the noisy spheres and scans measured together.
+  const double radius = 3.0 * r.surface.local_spacing.median * r.triangulation.spacing;
+  const double given = a.input_options.mls_radius;
+  char advice[160];
+  if (given > 0)
+    std::snprintf(advice, sizeof advice, "a larger --mls radius than %.3g may hold it together", given);
+  else
+    std::snprintf(advice, sizeof advice, "smoothing them first, --mls %.3g (3 x their spacing), may hold it together",
+                  radius);
+  char s[480];
+  std::snprintf(s, sizeof s,
+                "the particles scatter across their surface (thickness %.2f: their neighbours spread off the plane "
+                "fitted to them by %.0f%% of their spread along it; clean surfaces measure under 0.2): if they sample "
+                "a noisy surface (a scan), %s",
+                t, 100 * t, advice);
+  return s;
+}
+
 /// When a --spacing was given and over 5 % of the particles are in no triangle: is it well
 /// below their median nearest-neighbour distance (edges too short to reach their neighbours)?
 /// Then that is the cause to name. Empty otherwise.
@@ -168,7 +202,7 @@ std::vector<std::string> surface_hints(const SurfaceResult& r, const Triangulate
   std::string given = given_spacing_hint(r, cloud, a.thin > 1 ? 0.0 : a.spacing, a.threads);  // (thinning: its own)
   const bool spacing_named = !given.empty();
   const std::string short_edges = short_edges_hint(r, a);
-  for (std::string h : {volume_particles_hint(r), std::move(given),
+  for (std::string h : {volume_particles_hint(r), noisy_surface_hint(r, a), std::move(given),
                         spacing_named ? std::string() : uneven_spacing_hint(r, a.thin, a.global_spacing), short_edges,
                         short_edges.empty() ? narrow_loops_hint(r, a) : std::string()})
     if (!h.empty()) out.push_back(std::move(h));

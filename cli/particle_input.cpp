@@ -172,6 +172,14 @@ void add_particle_input_options(CLI::App& app, ParticleInputArgs& a) {
 void add_particle_input_options(CLI::App&, ParticleInputArgs&) {}
 #endif
 
+bool has_pcl_preprocessing() {
+#ifdef PM_CLI_PCL_MODULE
+  return true;
+#else
+  return false;
+#endif
+}
+
 ParticleInput read_particles(const std::string& path, const ParticleInputArgs& a, int threads) {
   if (!wants_pcl(path, a)) return read_natively(path, a);
   const std::string what = lower_extension(path) == ".pcd" ? "'" + path + "': .pcd input" : "PCL preprocessing";

@@ -47,6 +47,9 @@ struct ParticleInput {
   Vec3 viewpoint;
 };
 
+/// Whether this build has the PCL preprocessing switches (--mls, --voxel-grid, ...).
+bool has_pcl_preprocessing();
+
 /// Add the input options (preprocessing switches, --pcl-mesh) to a subcommand.
 void add_particle_input_options(CLI::App& app, ParticleInputArgs& args);
 

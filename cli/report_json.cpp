@@ -60,6 +60,7 @@ nlohmann::json to_json(const TriangulateStats& s) {
           {"kept", s.kept},
           {"sampling_irregularity", s.sampling_irregularity},
           {"reach_factor", s.reach_factor},
+          {"sampling_thickness", s.sampling_thickness},
           {"seconds", {{"spacing", s.seconds_spacing}, {"neighbors", s.seconds_neighbors}, {"test", s.seconds_test}}}};
 }
 

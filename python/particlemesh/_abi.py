@@ -98,6 +98,7 @@ class pm_triangulate_stats(Structure):
         ("narrow_loop_edges", c_uint64),
         ("sampling_irregularity", c_double),
         ("reach_factor", c_double),
+        ("sampling_thickness", c_double),
     ]
 
 

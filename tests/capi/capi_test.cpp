@@ -105,6 +105,9 @@ TEST(CApi, NarrowLoopsLeftOpenAreTheLibrarys) {
   EXPECT_EQ(stats.narrow_loop_width, ref.surface.narrow_loops.width);
   EXPECT_EQ(stats.narrow_loop_edges, ref.surface.narrow_loops.edges);
   EXPECT_EQ(stats.holes_left, ref.surface.holes_left);
+  EXPECT_EQ(stats.sampling_thickness, ref.triangulation.sampling_thickness);
+  EXPECT_GT(stats.sampling_thickness, 0.0);
+  EXPECT_LT(stats.sampling_thickness, 0.1);  // a clean sphere
   pm_mesh_destroy(mesh);
   pm_cloud_destroy(cloud);
 }

@@ -180,8 +180,15 @@ def test_moving_least_squares_closes_a_noisy_scan(pcl_cli, tmp_path):
     src = tmp_path / "noisy.ply"
     src.write_bytes(f"ply\nformat binary_little_endian 1.0\nelement vertex {n}\nproperty float x\n"
                     f"property float y\nproperty float z\nend_header\n".encode() + p.astype("<f4").tobytes())
-    _, raw = _report(pcl_cli, tmp_path, src)
+    proc, raw = _report(pcl_cli, tmp_path, src)
     assert raw["topology"]["components"] > 5
+    # The summary says the particles scatter across their surface, and what smoothing to try.
+    assert 0.3 < raw["triangulation"]["sampling_thickness"] < 0.45
+    hint = next(line for line in proc.stdout.splitlines() if "scatter across their surface" in line)
+    suggested = float(hint.split("--mls ")[1].split()[0])
+    assert 2.5 * spacing < suggested < 3.5 * spacing, hint
+    _, tried = _report(pcl_cli, tmp_path, src, "--mls", suggested)
+    assert tried["topology"]["components"] == 1 and tried["topology"]["closed"]
     radius = 2.4 * spacing
     proc, r = _report(pcl_cli, tmp_path, src, "--mls", radius)
     pre = r["input_cloud"]["preprocessing"]
@@ -193,6 +200,7 @@ def test_moving_least_squares_closes_a_noisy_scan(pcl_cli, tmp_path):
     assert 0 < pre["smoothing_mean_shift"] < pre["smoothing_max_shift"] < radius
     t = r["topology"]
     assert t["components"] == 1 and t["closed"] and t["manifold"]
+    assert "scatter across" not in proc.stdout  # closed: no hint
     with open(tmp_path / "mesh.ply", "rb") as f:
         data = f.read()
     body = data[data.index(b"end_header\n") + 11:]

@@ -110,6 +110,17 @@ def test_particles_at_random_report_their_longer_reach(pm):
     assert even["reach_factor"] == 1.0 and even["sampling_irregularity"] < 0.25
 
 
+def test_particles_off_their_surface_report_its_thickness(pm):
+    """The stats say how far the particles scatter across their surface: a clean sphere
+    measures far below 0.2, one whose points are moved along the radius by noise of half
+    their spacing about 0.37."""
+    p = fibonacci_sphere(8000)
+    spacing = np.sqrt(4 * np.pi / len(p))
+    noisy = p * (1 + np.random.default_rng(3).normal(0, 0.5 * spacing, len(p)))[:, None]
+    assert pm.triangulate(p).stats["sampling_thickness"] < 0.05
+    assert 0.3 < pm.triangulate(noisy).stats["sampling_thickness"] < 0.45
+
+
 def test_raw_is_the_seeds_triangle_set(pm):
     p = fibonacci_sphere(3000)
     raw = pm.triangulate(p, raw=True)

@@ -106,6 +106,7 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
       s.narrow_loop_edges = r.surface.narrow_loops.edges;
       s.sampling_irregularity = r.triangulation.sampling_irregularity;
       s.reach_factor = r.triangulation.reach_factor;
+      s.sampling_thickness = r.triangulation.sampling_thickness;
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();

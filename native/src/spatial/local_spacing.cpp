@@ -78,7 +78,8 @@ double triangle_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids,
 /// surface. Where it never does (or with fewer than six neighbours, or fewer than four sectors
 /// with one), the triangle reach.
 double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, int m, bool may_widen,
-                    std::vector<Vec3>& d) {
+                    std::vector<Vec3>& d, double& thickness) {
+  thickness = NAN;
   if (m < 6) return triangle_reach(grid, s, ids, m);
   const Vec3 p = grid.sorted_point(s);
   d.clear();
@@ -105,6 +106,8 @@ double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, i
     eig.computeDirect(cov);
     u = eig.eigenvectors().col(2);
     w = eig.eigenvectors().col(1);
+    if (round == 0 && eig.eigenvalues()(1) > 0)
+      thickness = std::sqrt(std::max(0.0, eig.eigenvalues()(0)) / eig.eigenvalues()(1));
     if (eig.eigenvalues()(1) >= kElongated * eig.eigenvalues()(2)) break;
     if (round == 2 || !may_widen) return triangle_reach(grid, s, ids, m);
     const double reach = farthest * double(2 << round);
@@ -137,9 +140,17 @@ double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, i
   return found[2];
 }
 
+/// The median of the finite values of v (reordered in place), 0 if none.
+double median_of_finite(std::vector<double>& v) {
+  const auto known = std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); });
+  const auto mid = v.begin() + (known - v.begin()) / 2;
+  std::nth_element(v.begin(), mid, known);
+  return known == v.begin() ? 0.0 : *mid;
+}
+
 /// local_spacing_impl over the points of `grid`, none of which coincide.
 std::vector<double> local_spacing_of_distinct(const NeighborGrid& grid, double r0, ProgressTracker& tracker,
-                                              double* irregularity) {
+                                              SamplingShape* shape) {
   const size_t n = grid.point_count();
   const std::vector<uint32_t> knn = nearest_neighbors(grid, kK, tracker);
   auto dist = [&](uint32_t s, int k) {
@@ -169,7 +180,7 @@ std::vector<double> local_spacing_of_distinct(const NeighborGrid& grid, double r
   // Per point: the median nearest-neighbour distance around it, and the sector reach (in units
   // of an even sampling's spacing; 0 where it is not taken); and how much those distances
   // vary (their coefficient of variation, NaN with fewer than five).
-  std::vector<double> reach(n), variation(n);
+  std::vector<double> reach(n), variation(n), thickness(n);
   parallel_blocks(n, 4096, [&](size_t b, size_t e) {
     std::array<double, kK + 1> v;
     std::vector<Vec3> work;
@@ -184,7 +195,7 @@ std::vector<double> local_spacing_of_distinct(const NeighborGrid& grid, double r
       for (int k = 0; k < count; ++k) sum2 += (v[size_t(k)] - mean) * (v[size_t(k)] - mean);
       variation[s] = count >= 5 && mean > 0 ? std::sqrt(sum2 / count) / mean : NAN;
       raw[s] = median_of(v.data(), count);
-      reach[s] = sector_reach(grid, uint32_t(s), knn.data() + s * kK, m, m == kK, work) / kSectorReach;
+      reach[s] = sector_reach(grid, uint32_t(s), knn.data() + s * kK, m, m == kK, work, thickness[s]) / kSectorReach;
     }
   });
   tracker.check();
@@ -209,12 +220,11 @@ std::vector<double> local_spacing_of_distinct(const NeighborGrid& grid, double r
     }
   });
   tracker.check();
-  if (irregularity) {
-    // The median over the points that have one (NaN where a neighbour is at infinity), in place.
-    const auto known = std::remove_if(variation.begin(), variation.end(), [](double x) { return !std::isfinite(x); });
-    const auto mid = variation.begin() + (known - variation.begin()) / 2;
-    std::nth_element(variation.begin(), mid, known);
-    *irregularity = known == variation.begin() ? 0.0 : *mid;
+  if (shape) {
+    // Medians over the points that have one (NaN where a neighbour is at infinity, or with no
+    // plane fitted).
+    shape->irregularity = median_of_finite(variation);
+    shape->thickness = median_of_finite(thickness);
   }
   std::vector<double> out(n);
   for (uint32_t s = 0; s < n; ++s) {
@@ -228,12 +238,12 @@ std::vector<double> local_spacing_of_distinct(const NeighborGrid& grid, double r
 }  // namespace
 
 std::vector<double> local_spacing_impl(const Vec3* points, size_t n, double r0, ProgressTracker& tracker,
-                                       double begin, double end, double* irregularity) {
+                                       double begin, double end, SamplingShape* shape) {
   const NeighborGrid grid(points, n, 2 * r0);
   size_t duplicates = 0;
   const std::vector<uint32_t> rep = find_duplicates(grid, &duplicates);
   tracker.stage("local spacing", begin, end, n - duplicates);
-  if (duplicates == 0) return local_spacing_of_distinct(grid, r0, tracker, irregularity);
+  if (duplicates == 0) return local_spacing_of_distinct(grid, r0, tracker, shape);
   // Exact copies of a point (a scan merged with itself, Blender's jittered emission repeating
   // its pattern on faces, a file written twice) would fill each other's neighbourhoods: the 16
   // nearest would then hold a few distinct places, the spacing shrink and an even sampling look
@@ -252,7 +262,7 @@ std::vector<double> local_spacing_impl(const Vec3* points, size_t n, double r0, 
     place_of[distinct[i]] = uint32_t(i);
   }
   const std::vector<double> spacing =
-      local_spacing_of_distinct(NeighborGrid(places.data(), places.size(), 2 * r0), r0, tracker, irregularity);
+      local_spacing_of_distinct(NeighborGrid(places.data(), places.size(), 2 * r0), r0, tracker, shape);
   std::vector<double> out(n);
   for (uint32_t s = 0; s < n; ++s) out[grid.original_index(s)] = spacing[place_of[rep[s]]];
   return out;
@@ -269,7 +279,10 @@ LocalSpacing estimate_local_spacing(const Vec3* points, size_t n, int threads, c
   return detail::with_threads(threads, [&] {
     LocalSpacing r;
     r.median_nn = detail::estimate_spacing_impl(points, n, tracker, 0.0, 0.3).spacing;
-    r.spacing = detail::local_spacing_impl(points, n, r.median_nn, tracker, 0.3, 1.0, &r.irregularity);
+    detail::SamplingShape shape;
+    r.spacing = detail::local_spacing_impl(points, n, r.median_nn, tracker, 0.3, 1.0, &shape);
+    r.irregularity = shape.irregularity;
+    r.thickness = shape.thickness;
     tracker.finish();
     return r;
   });

@@ -64,11 +64,18 @@ constexpr double kElongated = 0.05;
 /// surface's growth takes such triangles last; see surface/candidates.h).
 constexpr double kFlatAngle = 150.0;
 
+/// What the local spacing measures of the sampling as a whole (LocalSpacing::irregularity and
+/// ::thickness; 0 when no point has the neighbours for it).
+struct SamplingShape {
+  double irregularity = 0;
+  double thickness = 0;
+};
+
 /// Per input point (see estimate_local_spacing); r0 = the cloud's median nearest-neighbour
 /// distance (sets the grid). Assumes finite coordinates; runs in the caller's TBB arena.
-/// `irregularity`, when given, receives the sampling's (see kRegularSampling; 0 when no point
-/// has five neighbours).
+/// `shape`, when given, receives the sampling's irregularity (see kRegularSampling) and
+/// thickness.
 std::vector<double> local_spacing_impl(const Vec3* points, size_t n, double r0, ProgressTracker& tracker,
-                                       double begin, double end, double* irregularity = nullptr);
+                                       double begin, double end, SamplingShape* shape = nullptr);
 
 }  // namespace particlemesh::detail

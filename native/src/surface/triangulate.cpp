@@ -96,8 +96,10 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
     const double measured = st.spacing_estimated
                                 ? st.spacing
                                 : estimate_spacing_impl(cloud.positions.data(), n, tracker, at(0.0), at(0.15)).spacing;
-    local_spacing = local_spacing_impl(cloud.positions.data(), n, measured, tracker, at(0.15), at(0.3),
-                                       &st.sampling_irregularity);
+    SamplingShape shape;
+    local_spacing = local_spacing_impl(cloud.positions.data(), n, measured, tracker, at(0.15), at(0.3), &shape);
+    st.sampling_irregularity = shape.irregularity;
+    st.sampling_thickness = shape.thickness;
     // At most kMaxLocalSpacing r0: sparser than that, samples are too far apart to be one
     // surface at the cloud's scale (stray clusters, a scan's far fringe). On an irregular
     // (random) sampling the covering triangles reach farther than the spacing: every limit,

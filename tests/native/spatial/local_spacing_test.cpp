@@ -76,6 +76,35 @@ TEST(LocalSpacing, IrregularityTellsParticlesAtRandomFromEvenSamplings) {
   EXPECT_EQ(estimate_local_spacing(three.data(), three.size()).irregularity, 0.0);
 }
 
+TEST(LocalSpacing, ThicknessTellsNoiseAndVolumesFromCleanSurfaces) {
+  auto thickness = [](const PointCloud& c) { return estimate_local_spacing(c.positions.data(), c.size()).thickness; };
+  // Clean surfaces: far below 0.2.
+  EXPECT_LT(thickness(fibonacci_sphere(20000)), 0.05);
+  EXPECT_LT(thickness(poisson_disk_sample(torus_mesh(1.0, 0.4, 96, 48), 0.03, 3)), 0.1);
+  EXPECT_LT(thickness(square_lattice(60, 60)), 1e-6);  // flat
+  // A sphere whose points are moved along the radius by noise of half, then a whole spacing.
+  const PointCloud sphere = fibonacci_sphere(20000);
+  const double spacing = std::sqrt(4 * std::numbers::pi / 20000);
+  double previous = 0;
+  for (double sigma : {0.5, 1.0}) {
+    PointCloud noisy = sphere;
+    std::mt19937_64 rng(11);
+    std::normal_distribution<double> noise(0.0, sigma * spacing);
+    for (Vec3& p : noisy.positions) p = p * (1.0 + noise(rng));
+    const double t = thickness(noisy);
+    EXPECT_GT(t, sigma == 0.5 ? 0.3 : 0.5) << sigma;
+    EXPECT_LT(t, sigma == 0.5 ? 0.45 : 0.7) << sigma;
+    EXPECT_GT(t, previous);
+    previous = t;
+  }
+  // Particles filling a block: a volume, ~0.85.
+  PointCloud block;
+  for (int i = 0; i < 14; ++i)
+    for (int j = 0; j < 14; ++j)
+      for (int k = 0; k < 14; ++k) block.positions.push_back({double(i), double(j), double(k)});
+  EXPECT_GT(thickness(block), 0.75);
+}
+
 TEST(LocalSpacing, ExactCopiesTakeTheirPlacesSpacing) {
   // Each point three times: the copies do not count as neighbours, so every copy gets exactly
   // the spacing of its place in the cloud without copies, and the irregularity is unchanged
@@ -87,6 +116,7 @@ TEST(LocalSpacing, ExactCopiesTakeTheirPlacesSpacing) {
     const LocalSpacing three = estimate_local_spacing(copied.positions.data(), copied.size());
     EXPECT_EQ(three.median_nn, one.median_nn);
     EXPECT_EQ(three.irregularity, one.irregularity);
+    EXPECT_EQ(three.thickness, one.thickness);
     ASSERT_EQ(three.spacing.size(), 3 * c.size());
     for (size_t i = 0; i < copied.size(); ++i) ASSERT_EQ(three.spacing[i], one.spacing[i / 3]) << i;
   }

@@ -79,6 +79,9 @@ struct TriangulateStats {
   /// the particles lie at random). 0 and 1 otherwise.
   double sampling_irregularity = 0;
   double reach_factor = 1;
+  /// With a local spacing: how far the particles scatter across the surface
+  /// (LocalSpacing::thickness; noisy scans ~0.3 and more, a volume ~0.85), 0 otherwise.
+  double sampling_thickness = 0;
   double seconds_spacing = 0;
   double seconds_neighbors = 0;
   double seconds_test = 0;
