@@ -259,6 +259,23 @@ def narrow_holes_warning(stats, settings):
             f"{'it' if left == 1 else 'them'}")
 
 
+def jittered_emission_warning(stats, settings, emission):
+    """A warning when holes were left open and the particles come from a system emitting from
+    faces with Distribution Jittered (Blender's default): each face gets a jitter pattern with
+    gaps wider than the particles' spacing, repeated on faces that get many particles (8-40 %
+    exact copies), which an Edge Factor of 3 spans (measured on 1000-20 000 particles from a
+    cube, UV spheres, a torus, a cylinder and an icosphere: every one closed; at 2, up to 6
+    pieces and 99 holes), as does Distribution Random (the library lengthens the reach for
+    particles at random). `emission`: the source system's (emit_from, distribution), or None
+    for vertices. None otherwise."""
+    if stats.get("raw") or not stats.get("holes_left") or emission != ("FACE", "JIT"):
+        return None
+    if float(settings.get("max_edge_factor", 2.0)) >= 3.0:
+        return None
+    return ("the particle system emits from faces with Distribution Jittered, which leaves gaps wider than "
+            "the particles' spacing: set Edge Factor to 3, or the system's Distribution to Random")
+
+
 def volume_particles_warning(stats):
     """A warning when the library says the particles look like a volume's (the triangulation
     statistic looks_like_volume: co-normality dropped most raw triangles and loops were left

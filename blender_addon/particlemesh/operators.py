@@ -180,9 +180,16 @@ class _Generate(SourceProps, CommonProps, SmoothProps, _ModalJob):
             detail = ""
         self.report({"INFO"}, f"{obj.name}: {data.vertex_count} vertices, "
                               f"{data.triangle_count} triangles{detail}")
-        warnings = ((generate.volume_particles_warning(stats), generate.uneven_spacing_warning(stats),
-                     generate.narrow_holes_warning(stats, settings))
-                    if self.method == "TRIANGULATE" else (generate.enclosure_warning(stats),))
+        if self.method == "TRIANGULATE":
+            system_of = source.particle_systems.get(system) if kind == "PARTICLES" else None
+            emission = ((system_of.settings.emit_from, system_of.settings.distribution)
+                        if system_of is not None else None)
+            jittered = generate.jittered_emission_warning(stats, settings, emission)
+            # (A fill does not close the gaps of a jittered emission: its advice would mislead.)
+            warnings = (generate.volume_particles_warning(stats), generate.uneven_spacing_warning(stats),
+                        jittered or generate.narrow_holes_warning(stats, settings))
+        else:
+            warnings = (generate.enclosure_warning(stats),)
         for warning in warnings:
             if warning:
                 self.report({"WARNING"}, f"{obj.name}: {warning}")

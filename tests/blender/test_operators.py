@@ -222,6 +222,38 @@ def test_particles_emitted_at_random_from_faces_close(pm, clean_scene):
     assert pm.particlemesh.triangulate(positions).stats["reach_factor"] > 1.5  # (irregularity ~0.43 on the flat facets)
 
 
+def test_jittered_emission_from_faces_gets_its_edge_factor(pm, clean_scene):
+    """Emission from faces with Distribution Jittered (Blender's default) leaves gaps wider than
+    the particles' spacing: with Edge Factor 2 the sphere comes out with holes and the warning
+    names Edge Factor 3, with which it closes; Random emission gets no such warning."""
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=1.0)
+    em = bpy.context.active_object
+    em.modifiers.new("particles", "PARTICLE_SYSTEM")
+    settings = em.particle_systems[0].settings
+    settings.count = 5000
+    settings.frame_start = settings.frame_end = 1
+    settings.lifetime = 1000
+    settings.emit_from = "FACE"
+    settings.distribution = "JIT"
+    settings.normal_factor = 0.0
+    settings.effector_weights.gravity = 0.0
+    clean_scene.frame_set(2)
+    positions, _ = living_particles(em)
+    assert len(positions) == 5000
+    assert bpy.ops.particlemesh.triangulate(source="PARTICLES") == {"FINISHED"}
+    stats = pm.generate.triangulate(pm.generate.Particles(positions), {"auto_spacing": True}).stats
+    assert stats["holes_left"] > 0
+    warning = pm.generate.jittered_emission_warning(stats, {"max_edge_factor": 2.0}, ("FACE", "JIT"))
+    assert warning and "Edge Factor to 3" in warning
+    assert pm.generate.jittered_emission_warning(stats, {"max_edge_factor": 2.0}, ("FACE", "RAND")) is None
+    assert pm.generate.jittered_emission_warning(stats, {"max_edge_factor": 2.0}, None) is None
+    make_active(em)
+    assert bpy.ops.particlemesh.triangulate(source="PARTICLES", max_edge_factor=3.0) == {"FINISHED"}
+    co, tris = mesh_arrays(bpy.context.active_object.data)
+    rep = pm.particlemesh.topology(pm.particlemesh.Mesh(co, tris))
+    assert rep["components"] == 1 and rep["closed"] and rep["outward"] and rep["euler_characteristic"] == 2
+
+
 def test_only_living_particles(pm, clean_scene):
     em = emitter(frame_start=1, frame_end=20)  # births spread over 20 frames
     clean_scene.frame_set(6)
