@@ -30,14 +30,19 @@ namespace particlemesh_pcl
     using particlemesh::Error;
     using particlemesh::Status;
 
+    /* PCL computes in float: the points less `origin` (a float keeps 7 digits, so
+     * georeferenced coordinates, 5e5 m and more, would lose centimetres where they are taken as
+     * they are; the steps that move points or fit planes take them about the cloud's centre). */
     pcl::PointCloud<pcl::PointXYZ>::Ptr
-    toXYZ (const particlemesh::PointCloud &cloud)
+    toXYZ (const particlemesh::PointCloud &cloud, const particlemesh::Vec3 &origin = {})
     {
       pcl::PointCloud<pcl::PointXYZ>::Ptr out (new pcl::PointCloud<pcl::PointXYZ>);
       out->resize (cloud.size ());
       for (std::size_t i = 0; i < cloud.size (); ++i)
-        (*out)[i] = pcl::PointXYZ (float (cloud.positions[i].x), float (cloud.positions[i].y),
-                                   float (cloud.positions[i].z));
+      {
+        const particlemesh::Vec3 p = cloud.positions[i] - origin;
+        (*out)[i] = pcl::PointXYZ (float (p.x), float (p.y), float (p.z));
+      }
       out->width = static_cast<std::uint32_t> (cloud.size ());
       out->height = 1;
       out->is_dense = true;
@@ -72,6 +77,19 @@ namespace particlemesh_pcl
       }
       cloud = std::move (out);
       kept = std::move (composed);
+    }
+
+    // The centre of the cloud's bounding box.
+    particlemesh::Vec3
+    centre (const particlemesh::PointCloud &cloud)
+    {
+      particlemesh::Vec3 lo = cloud.positions.front (), hi = lo;
+      for (const auto &p : cloud.positions)
+      {
+        lo = {std::min (lo.x, p.x), std::min (lo.y, p.y), std::min (lo.z, p.z)};
+        hi = {std::max (hi.x, p.x), std::max (hi.y, p.y), std::max (hi.z, p.z)};
+      }
+      return (lo + hi) * 0.5;
     }
 
     // PCL indexes voxels with 32-bit ints (VoxelGrid checks, UniformSampling silently
@@ -195,7 +213,8 @@ namespace particlemesh_pcl
                                              : std::max (1u, std::thread::hardware_concurrency ());
       if (o.mls_radius > 0 && !cloud.positions.empty ())
       {
-        auto xyz = toXYZ (cloud);
+        const particlemesh::Vec3 origin = centre (cloud);
+        auto xyz = toXYZ (cloud, origin);
         pcl::MovingLeastSquares<pcl::PointXYZ, pcl::PointNormal> mls;
         mls.setInputCloud (xyz);
         mls.setSearchMethod (pcl::search::KdTree<pcl::PointXYZ>::Ptr (new pcl::search::KdTree<pcl::PointXYZ> (false)));
@@ -216,7 +235,7 @@ namespace particlemesh_pcl
         {
           const pcl::index_t i = from->indices[k];
           const auto &q = projected[k];
-          const particlemesh::Vec3 v{q.x, q.y, q.z};
+          const particlemesh::Vec3 v = particlemesh::Vec3{q.x, q.y, q.z} + origin;
           if (i < 0 || std::size_t (i) >= cloud.size () || !particlemesh::is_finite (v))
             continue;
           const double shift = particlemesh::distance (v, cloud.positions[std::size_t (i)]);
@@ -230,13 +249,15 @@ namespace particlemesh_pcl
       }
       if (o.estimate_normals && !cloud.positions.empty ())
       {
-        auto xyz = toXYZ (cloud);
+        const particlemesh::Vec3 origin = centre (cloud);
+        auto xyz = toXYZ (cloud, origin);
         pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> ne;
         ne.setNumberOfThreads (threads);
         ne.setInputCloud (xyz);
         ne.setSearchMethod (pcl::search::KdTree<pcl::PointXYZ>::Ptr (new pcl::search::KdTree<pcl::PointXYZ> (false)));
         ne.setKSearch (std::min<int> (o.normal_k, int (cloud.size ())));
-        ne.setViewPoint (o.viewpoint[0], o.viewpoint[1], o.viewpoint[2]);
+        ne.setViewPoint (float (o.viewpoint[0] - origin.x), float (o.viewpoint[1] - origin.y),
+                         float (o.viewpoint[2] - origin.z));
         pcl::PointCloud<pcl::Normal> normals;
         ne.compute (normals);
         cloud.normals.resize (cloud.size ());

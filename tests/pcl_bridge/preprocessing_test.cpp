@@ -153,6 +153,15 @@ TEST(Preprocessing, NormalsFaceTheViewpoint) {
   particlemesh_pcl::preprocess(above3, o);
   EXPECT_EQ(above.normals, above3.normals);
   for (size_t i = 0; i < c.size(); ++i) ASSERT_GT(dot(above.normals[i], Vec3(0, 0, 100) - c.positions[i]), 0) << i;
+  // Georeferenced coordinates (PCL computes in float): the same normals.
+  const Vec3 offset(512345.0, 4123456.0, 250.0);
+  PointCloud far = c;
+  for (Vec3& p : far.positions) p = p + offset;
+  PreprocessOptions fo = o;
+  fo.viewpoint[0] = float(offset.x), fo.viewpoint[1] = float(offset.y), fo.viewpoint[2] = float(offset.z + 100.0);
+  particlemesh_pcl::preprocess(far, fo);
+  ASSERT_EQ(far.normals.size(), c.size());
+  for (size_t i = 0; i < c.size(); ++i) ASSERT_GT(dot(far.normals[i], above.normals[i]), 0.9999) << i;
   // Estimated normals replace the cloud's own.
   PointCloud with = fibonacci_sphere(3000);
   o.viewpoint[2] = 0;
@@ -203,6 +212,12 @@ TEST(Preprocessing, MovingLeastSquaresTakesOutNoise) {
   PointCloud three = c;
   particlemesh_pcl::preprocess(three, o);
   EXPECT_EQ(three.positions, one.positions);
+  // Georeferenced coordinates (PCL computes in float): the same smoothing, moved along.
+  const Vec3 offset(512345.0, 4123456.0, 250.0);
+  PointCloud far = c;
+  for (Vec3& p : far.positions) p = p + offset;
+  particlemesh_pcl::preprocess(far, o);
+  for (size_t i = 0; i < c.size(); ++i) ASSERT_LT(distance(far.positions[i] - offset, one.positions[i]), 1e-5) << i;
 }
 
 TEST(Preprocessing, BadParametersAreErrors) {

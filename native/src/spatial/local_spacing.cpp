@@ -76,7 +76,8 @@ double triangle_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids,
 /// neighbours all lie along one line, the neighbourhood is widened (a ball of twice, then four
 /// times the farthest's distance; only when it is not cut off by a gap) until it spans the
 /// surface. Where it never does (or with fewer than six neighbours, or fewer than four sectors
-/// with one), the triangle reach.
+/// with one), the triangle reach. `thickness` receives sqrt(lambda_0 / lambda_1) of the
+/// neighbours' first plane fit (LocalSpacing::thickness), NaN with fewer than six.
 double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, int m, bool may_widen,
                     std::vector<Vec3>& d, double& thickness) {
   thickness = NAN;
