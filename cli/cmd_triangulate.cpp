@@ -209,6 +209,20 @@ std::vector<std::string> surface_hints(const SurfaceResult& r, const Triangulate
   return out;
 }
 
+/// Runs `work`; a grid too large for the points' extent (far outliers, which the library's
+/// message names) gets the switch that drops them, where this build has it.
+template <class Work>
+auto with_outlier_advice(Work&& work) {
+  try {
+    return work();
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    if (e.status() != Status::LimitExceeded || what.find("far outliers") == std::string::npos || !has_pcl_preprocessing())
+      throw;
+    throw Error(e.status(), what + " (--remove-outliers drops them)");
+  }
+}
+
 std::vector<OutputSpec> output_specs(const TriangulateArgs& a) {
   return {{"-o", a.output, OutputKind::Mesh, a.ascii ? MeshFormat::PlyAscii : MeshFormat::Auto},
           {"--report", a.report, OutputKind::Text},
@@ -238,13 +252,13 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
     const double given = a.spacing > 0 ? a.spacing : input.spacing_hint;
     if (a.global_spacing) {
       thin_distance = a.thin * (given > 0 ? given : estimate_spacing(pts, n, a.threads).spacing);
-      thinned = thin_cloud(input.cloud, thin_distance);
+      thinned = with_outlier_advice([&] { return thin_cloud(input.cloud, thin_distance); });
     } else {
-      LocalSpacing ls = estimate_local_spacing(pts, n, a.threads);
+      LocalSpacing ls = with_outlier_advice([&] { return estimate_local_spacing(pts, n, a.threads); });
       const double scale = a.thin * (given > 0 ? given / ls.median_nn : 1.0);
       for (double& h : ls.spacing) h *= scale;
       thin_distance = a.thin * (given > 0 ? given : ls.median_nn);
-      thinned = thin_cloud(input.cloud, ls.spacing);
+      thinned = with_outlier_advice([&] { return thin_cloud(input.cloud, ls.spacing); });
     }
   }
   const PointCloud& cloud = a.thin > 1 ? thinned : input.cloud;
@@ -273,11 +287,11 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
   SurfaceResult result;
   std::vector<std::string> hints;  // what the summary and the report say might help
   if (a.raw) {
-    TriangulateResult r = triangulate_raw(cloud, opt);
+    TriangulateResult r = with_outlier_advice([&] { return triangulate_raw(cloud, opt); });
     result.mesh = std::move(r.mesh);
     result.triangulation = r.stats;
   } else {
-    result = reconstruct_surface(cloud, opt);
+    result = with_outlier_advice([&] { return reconstruct_surface(cloud, opt); });
     hints = surface_hints(result, a, cloud);
   }
   const double t_tri = std::chrono::duration<double>(Clock::now() - t1).count();

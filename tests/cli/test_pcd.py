@@ -213,6 +213,29 @@ def test_moving_least_squares_closes_a_noisy_scan(pcl_cli, tmp_path):
     assert not (tmp_path / "x.ply").exists()
 
 
+def test_a_far_stray_point_is_named_and_removable(pcl_cli, tmp_path):
+    # A sphere of 5000 points and one stray a million away (a particle a simulation flung off,
+    # an invalid return): no grid spans both; the error names the point and the switch that
+    # drops it, which then gives the closed sphere.
+    import numpy as np
+
+    n = 5000
+    i = np.arange(n) + 0.5
+    z = 1 - 2 * i / n
+    phi = i * math.pi * (3 - math.sqrt(5))
+    p = np.r_[np.c_[np.sqrt(1 - z * z) * np.cos(phi), np.sqrt(1 - z * z) * np.sin(phi), z], [[1e6, 0, 0]]]
+    src = tmp_path / "stray.ply"
+    src.write_bytes(f"ply\nformat binary_little_endian 1.0\nelement vertex {n + 1}\nproperty double x\n"
+                    f"property double y\nproperty double z\nend_header\n".encode() + p.astype("<f8").tobytes())
+    proc = pcl_cli("triangulate", src, "-o", tmp_path / "x.ply", check=False)
+    assert proc.returncode != 0 and not (tmp_path / "x.ply").exists()
+    assert f"point {n} (x = 1e+06) lies 1e+06 from the points' median x" in proc.stderr, proc.stderr
+    assert "--remove-outliers drops them" in proc.stderr
+    proc, r = _report(pcl_cli, tmp_path, src, "--remove-outliers")
+    assert r["input_cloud"]["preprocessing"]["outliers_removed"] == 1
+    assert r["topology"]["components"] == 1 and r["topology"]["closed"]
+
+
 def _plane_pcd(path, n=20):
     pts = "".join(f"{0.1 * i} {0.1 * j} 0\n" for i in range(n) for j in range(n))
     path.write_text(f"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH {n * n}\nHEIGHT 1\n"

@@ -110,6 +110,8 @@ TEST(Limits, FarOutlierGivesAGridLimitNotAHugeAllocation) {
   TriangulateOptions o;
   o.spacing = 0.1;
   PM_EXPECT_ERROR(triangulate_raw(c, o), Status::LimitExceeded, "far outliers");
+  // The message names the stray point: the one farthest from the others' median.
+  PM_EXPECT_ERROR(triangulate_raw(c, o), Status::LimitExceeded, "point 1000 (x = 1e+12) lies 1e+12 from");
   c.positions.back() = {1e300, -1e300, 0};
   PM_EXPECT_ERROR(triangulate_raw(c, o), Status::LimitExceeded, "cells");
   PM_EXPECT_ERROR(NeighborGrid(c.positions.data(), c.size(), 1e-300), Status::LimitExceeded, "cells");

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "core/counting_sort.h"
 #include "core/format_number.h"
@@ -104,11 +105,26 @@ void NeighborGrid::build(const Vec3* points, size_t n, double cell_size, const V
   origin_ = lo - Vec3{cell_size, cell_size, cell_size};
   for (int a = 0; a < 3; ++a) {
     const double cells = (hi[a] - lo[a]) * inv_cell_;
-    if (!(cells < double(kMaxCellsPerAxis - 4)))
+    if (!(cells < double(kMaxCellsPerAxis - 4))) {
+      // Name the point farthest from the others' median along the axis: usually a stray one (a
+      // particle a simulation flung away, a scanner's invalid return at the origin of
+      // georeferenced coordinates). Only on this error's path: O(n).
+      std::vector<double> along(n);
+      for (size_t i = 0; i < n; ++i) along[i] = points[i][a];
+      std::nth_element(along.begin(), along.begin() + ptrdiff_t(n / 2), along.end());
+      const double median = along[n / 2];
+      size_t far = 0;
+      for (size_t i = 1; i < n; ++i)
+        if (std::abs(points[i][a] - median) > std::abs(points[far][a] - median)) far = i;
+      const std::string axis(1, "xyz"[a]);
       throw Error(Status::LimitExceeded,
                   "the points span " + detail::format_number(cells) + " cells of size " +
-                      detail::format_number(cell_size) + " along " + std::string(1, "xyz"[a]) +
-                      " (at most 2097148): remove far outliers, or use larger cells");
+                      detail::format_number(cell_size) + " along " + axis + " (at most 2097148): point " +
+                      std::to_string(far) + " (" + axis + " = " + detail::format_number(points[far][a]) +
+                      ") lies " + detail::format_number(std::abs(points[far][a] - median)) +
+                      " from the points' median " + axis + " = " + detail::format_number(median) +
+                      "; remove far outliers, or use larger cells");
+    }
   }
 
   std::vector<Entry> entries(n);
