@@ -3,7 +3,10 @@
 // spacing, the normals and every channel with its range (the names --attributes and
 // --radius-channel take). A mesh file the mesh reader refuses (FormatError) but the particle
 // reader takes (a PLY of 1-corner faces, as meshio writes a point cloud) gets the particle
-// report, with the mesh reader's message as "not a mesh" (--json: "not_a_mesh"). A frame
+// report, with the mesh reader's message as "not a mesh" (--json: "not_a_mesh"). Particles
+// also get what their local spacing measures of the sampling: the spread of the local
+// spacings, the irregularity (and the longer reach triangulate gives it) and the thickness
+// (a clean surface, a noisy one, a volume). A frame
 // collection (.pvd, .series) lists its frames by time, as the sequences number them.
 #include <algorithm>
 #include <cmath>
@@ -13,13 +16,16 @@
 #include <memory>
 #include <optional>
 #include <sys/stat.h>
+#include <vector>
 
 #include "commands.h"
 #include "particle_input.h"
+#include "sampling_shape.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/io/frame_collection.h"
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
+#include "particlemesh/spatial/local_spacing.h"
 #include "particlemesh/spatial/spacing.h"
 #include "report_json.h"
 
@@ -55,6 +61,25 @@ nlohmann::json particle_summary(const std::string& path, const ParticleInput& in
     // Too few or coinciding points: said, not fatal (the file itself read).
     j["spacing"] = nullptr;
     j["spacing_error"] = e.what();
+  }
+  if (!j["spacing"].is_null()) {
+    try {
+      LocalSpacing ls = estimate_local_spacing(c.positions.data(), c.size());
+      // The spread of the local spacings, in units of the median nearest-neighbour distance.
+      std::vector<double>& h = ls.spacing;
+      auto at = [&](double f) {
+        const auto k = h.begin() + ptrdiff_t(f * double(h.size() - 1));
+        std::nth_element(h.begin(), k, h.end());
+        return *k / ls.median_nn;
+      };
+      j["sampling"] = {{"local_spacing", {{"p10", at(0.1)}, {"median", at(0.5)}, {"p90", at(0.9)}}},
+                       {"irregularity", ls.irregularity},
+                       {"reach_factor", ls.reach_factor},
+                       {"thickness", ls.thickness}};
+    } catch (const Error& e) {
+      j["sampling"] = nullptr;
+      j["sampling_error"] = e.what();
+    }
   }
   j["normals"] = c.has_normals();
   j["channels"] = nlohmann::json::array();
@@ -97,6 +122,28 @@ std::string describe_particles(const nlohmann::json& j, const std::string& read_
   line("bounds", point(j["bounds"]["min"]) + " to " + point(j["bounds"]["max"]));
   line("spacing", j["spacing"].is_null() ? "cannot be estimated: " + j["spacing_error"].get<std::string>()
                                          : number(j["spacing"].get<double>()) + " (median nearest-neighbour distance)");
+  if (j.contains("sampling") && !j["sampling"].is_null()) {
+    const auto& sm = j["sampling"];
+    char text[400];
+    const double irregularity = sm["irregularity"].get<double>(), reach = sm["reach_factor"].get<double>();
+    std::snprintf(text, sizeof text, "local spacing %.2g-%.2g x the spacing (10%%-90%%, median %.2g); nearest-neighbour "
+                  "distances vary by %.0f%%: %s", sm["local_spacing"]["p10"].get<double>(),
+                  sm["local_spacing"]["p90"].get<double>(), sm["local_spacing"]["median"].get<double>(),
+                  100 * irregularity,
+                  reach == 1 ? "an even sampling"
+                             : "irregular, as particles dropped at random, for which triangulate lengthens its edge limits");
+    std::string first = text;
+    if (reach > 1) {
+      std::snprintf(text, sizeof text, " %.3g x", reach);
+      first += text;
+    }
+    line("sampling", first);
+    const double thickness = sm["thickness"].get<double>();
+    std::snprintf(text, sizeof text, "thickness %.2f: %s", thickness, thickness_meaning(thickness, has_pcl_preprocessing()));
+    line("", text);
+  } else if (j.contains("sampling_error")) {
+    line("sampling", "cannot be measured: " + j["sampling_error"].get<std::string>());
+  }
   line("normals", j["normals"].get<bool>() ? "yes" : "no");
   if (j["channels"].empty()) line("channels", "none");
   bool first = true;

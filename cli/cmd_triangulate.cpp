@@ -14,6 +14,7 @@
 #include "attribute_selection.h"
 #include "frame_sequence.h"
 #include "particle_input.h"
+#include "sampling_shape.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
@@ -104,16 +105,8 @@ std::string volume_particles_hint(const SurfaceResult& r) {
   return s;
 }
 
-/// A sampling thicker than this (TriangulateStats::sampling_thickness) scatters across its
-/// surface: clean surfaces measured under 0.2 (a coarse model's vertices, from its curvature, up
-/// to 0.19), depth-camera scans 0.24-0.30, points moved off a sphere by noise of half their
-/// spacing 0.37 (bench/RESULTS.md, "Exact copies of particles, and noise across the surface").
-constexpr double kNoisyThickness = 0.22;
-/// ... up to this: thicker, the particles fill a volume (a block of SPH particles measured
-/// 0.86; the noisiest sphere, moved off by noise of a whole spacing, 0.59).
-constexpr double kVolumeThickness = 0.75;
-
-/// When loops are left open and the particles scatter across their surface (a scan's noise),
+/// When loops are left open and the particles scatter across their surface (a scan's noise,
+/// TriangulateStats::sampling_thickness between kNoisyThickness and kVolumeThickness),
 /// say that smoothing them first may hold the surface together (--mls, with the PCL
 /// preprocessing). Empty otherwise.
 std::string noisy_surface_hint(const SurfaceResult& r, const TriangulateArgs& a) {

@@ -142,3 +142,34 @@ def test_an_obj_point_cloud_gets_the_particle_report(cli, tmp_path):
     text = cli("inspect", path).stdout
     assert f"  particles     {n}\n" in text and "  normals       yes\n" in text
     assert "color (3 components): 0 to 1" in text and "not a mesh" not in text
+
+
+def test_particles_say_what_their_sampling_is(cli, tmp_path):
+    """The particle report measures the sampling as triangulate will: an even clean sphere;
+    the same moved off its surface by noise of half its spacing (thick: --mls suggested);
+    particles dropped at random (the longer reach triangulate gives them); a block of
+    particles filling a volume (polygonize suggested)."""
+    n = 8000
+    i = np.arange(n) + 0.5
+    z = 1 - 2 * i / n
+    phi = i * np.pi * (3 - np.sqrt(5))
+    ring = np.sqrt(1 - z * z)
+    even = np.c_[ring * np.cos(phi), ring * np.sin(phi), z]
+    rng = np.random.default_rng(4)
+    noisy = even * (1 + rng.normal(0, 0.5 * np.sqrt(4 * np.pi / n), n))[:, None]
+    zr, pr = 2 * rng.random(n) - 1, 2 * np.pi * rng.random(n)
+    random = np.c_[np.sqrt(1 - zr * zr) * np.cos(pr), np.sqrt(1 - zr * zr) * np.sin(pr), zr]
+    block = np.stack(np.meshgrid(*[np.arange(14.0)] * 3), -1).reshape(-1, 3)
+    report, text = {}, {}
+    for name, p in (("even", even), ("noisy", noisy), ("random", random), ("block", block)):
+        path = tmp_path / f"{name}.ply"
+        write_ply(path, p.astype(np.float32), {})
+        report[name] = inspect_json(cli, path)["sampling"]
+        text[name] = cli("inspect", path).stdout
+    assert report["even"]["reach_factor"] == 1 and report["even"]["thickness"] < 0.05
+    assert report["even"]["local_spacing"]["median"] == pytest.approx(1, abs=0.05)
+    assert "an even sampling" in text["even"] and "a clean surface" in text["even"]
+    assert 0.3 < report["noisy"]["thickness"] < 0.45 and "scattered across a surface" in text["noisy"]
+    assert report["random"]["reach_factor"] == 1.75 and 0.44 < report["random"]["irregularity"] < 0.56
+    assert "lengthens its edge limits 1.75 x" in text["random"]
+    assert report["block"]["thickness"] > 0.75 and "polygonize meshes it" in text["block"]

@@ -283,6 +283,7 @@ LocalSpacing estimate_local_spacing(const Vec3* points, size_t n, int threads, c
     detail::SamplingShape shape;
     r.spacing = detail::local_spacing_impl(points, n, r.median_nn, tracker, 0.3, 1.0, &shape);
     r.irregularity = shape.irregularity;
+    r.reach_factor = detail::irregular_reach(shape.irregularity);
     r.thickness = shape.thickness;
     tracker.finish();
     return r;

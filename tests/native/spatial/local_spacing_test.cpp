@@ -62,6 +62,7 @@ TEST(LocalSpacing, IrregularityTellsParticlesAtRandomFromEvenSamplings) {
     const LocalSpacing ls = estimate_local_spacing(c.positions.data(), c.size());
     EXPECT_GE(ls.irregularity, 0.0);
     EXPECT_LT(ls.irregularity, 0.25) << c.size();
+    EXPECT_EQ(ls.reach_factor, 1.0);
   }
   // Particles at random (a Poisson process): their nearest-neighbour distances follow a
   // Rayleigh distribution, coefficient of variation 0.52; 17-point estimates come out lower.
@@ -70,6 +71,7 @@ TEST(LocalSpacing, IrregularityTellsParticlesAtRandomFromEvenSamplings) {
     const LocalSpacing ls = estimate_local_spacing(c.positions.data(), c.size());
     EXPECT_GT(ls.irregularity, 0.44);
     EXPECT_LT(ls.irregularity, 0.56);
+    EXPECT_NEAR(ls.reach_factor, ls.irregularity >= 0.45 ? 1.75 : 1.0 + 0.75 * (ls.irregularity - 0.35) / 0.1, 1e-12);
   }
   // Too few points for any neighbourhood: 0.
   const std::vector<Vec3> three{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};

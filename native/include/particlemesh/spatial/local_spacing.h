@@ -28,6 +28,9 @@ struct LocalSpacing {
   /// surface about 0.5. Above 0.35 triangulation lengthens its edge limits (up to 1.75 x from
   /// 0.45 on): there the triangles that cover the surface reach farther than the spacing says.
   double irregularity = 0;
+  /// The factor triangulation lengthens every edge limit by for that irregularity: 1 up to
+  /// 0.35, 1.75 from 0.45 on, in proportion between.
+  double reach_factor = 1;
   /// How far the points scatter across the surface: the median over the points of
   /// sqrt(lambda_0 / lambda_1), the spread of the point's nearest neighbours off the plane
   /// fitted to them over their spread along its second direction. Evenly sampled clean surfaces
