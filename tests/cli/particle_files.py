@@ -16,6 +16,15 @@ from pathlib import Path
 import numpy as np
 
 
+def fibonacci_sphere(n):
+    """n points of the unit sphere along the Fibonacci spiral: an even surface sampling."""
+    i = np.arange(n) + 0.5
+    z = 1 - 2 * i / n
+    phi = i * np.pi * (3 - np.sqrt(5))
+    ring = np.sqrt(1 - z * z)
+    return np.c_[ring * np.cos(phi), ring * np.sin(phi), z]
+
+
 def particles(frame=0, n=6, seed=1):
     """A small block of n^3 particles (spacing 1/16, jittered on a 1/1024 grid) moving along x
     with frame, carrying velocity (3) and density (1)."""

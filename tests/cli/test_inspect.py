@@ -6,7 +6,7 @@ import struct
 import numpy as np
 import pytest
 
-from particle_files import particles, write_bgeo, write_ply, write_vtk, write_vtu
+from particle_files import fibonacci_sphere, particles, write_bgeo, write_ply, write_vtk, write_vtu
 
 
 def inspect_json(cli, path):
@@ -150,11 +150,7 @@ def test_particles_say_what_their_sampling_is(cli, tmp_path):
     particles dropped at random (the longer reach triangulate gives them); a block of
     particles filling a volume (polygonize suggested)."""
     n = 8000
-    i = np.arange(n) + 0.5
-    z = 1 - 2 * i / n
-    phi = i * np.pi * (3 - np.sqrt(5))
-    ring = np.sqrt(1 - z * z)
-    even = np.c_[ring * np.cos(phi), ring * np.sin(phi), z]
+    even = fibonacci_sphere(n)
     rng = np.random.default_rng(4)
     noisy = even * (1 + rng.normal(0, 0.5 * np.sqrt(4 * np.pi / n), n))[:, None]
     zr, pr = 2 * rng.random(n) - 1, 2 * np.pi * rng.random(n)

@@ -6,7 +6,10 @@ import shutil
 import struct
 import subprocess
 
+import numpy as np
 import pytest
+
+from particle_files import fibonacci_sphere, write_ply
 
 KINECT = "pcd/kinect_frame_20121214T142255.814212.pcd"
 
@@ -167,19 +170,11 @@ def test_moving_least_squares_closes_a_noisy_scan(pcl_cli, tmp_path):
     # A sphere of 20 000 points, each moved along its radius by noise of half the spacing:
     # as it is, the surface falls apart; smoothed with --mls over 2.4 spacings, one closed sphere
     # whose vertices lie closer to it.
-    import numpy as np
-
     n = 20000
-    i = np.arange(n) + 0.5
-    z = 1 - 2 * i / n
-    phi = i * math.pi * (3 - math.sqrt(5))
-    ring = np.sqrt(1 - z * z)
-    p = np.c_[ring * np.cos(phi), ring * np.sin(phi), z]
     spacing = math.sqrt(4 * math.pi / n)
-    p *= (1 + np.random.default_rng(0).normal(0, 0.5 * spacing, n))[:, None]
+    p = fibonacci_sphere(n) * (1 + np.random.default_rng(0).normal(0, 0.5 * spacing, n))[:, None]
     src = tmp_path / "noisy.ply"
-    src.write_bytes(f"ply\nformat binary_little_endian 1.0\nelement vertex {n}\nproperty float x\n"
-                    f"property float y\nproperty float z\nend_header\n".encode() + p.astype("<f4").tobytes())
+    write_ply(src, p, {})
     proc, raw = _report(pcl_cli, tmp_path, src)
     assert raw["topology"]["components"] > 5
     # The summary says the particles scatter across their surface, and what smoothing to try.
@@ -217,16 +212,9 @@ def test_a_far_stray_point_is_named_and_removable(pcl_cli, tmp_path):
     # A sphere of 5000 points and one stray a million away (a particle a simulation flung off,
     # an invalid return): no grid spans both; the error names the point and the switch that
     # drops it, which then gives the closed sphere.
-    import numpy as np
-
     n = 5000
-    i = np.arange(n) + 0.5
-    z = 1 - 2 * i / n
-    phi = i * math.pi * (3 - math.sqrt(5))
-    p = np.r_[np.c_[np.sqrt(1 - z * z) * np.cos(phi), np.sqrt(1 - z * z) * np.sin(phi), z], [[1e6, 0, 0]]]
     src = tmp_path / "stray.ply"
-    src.write_bytes(f"ply\nformat binary_little_endian 1.0\nelement vertex {n + 1}\nproperty double x\n"
-                    f"property double y\nproperty double z\nend_header\n".encode() + p.astype("<f8").tobytes())
+    write_ply(src, np.r_[fibonacci_sphere(n), [[1e6, 0, 0]]], {})
     proc = pcl_cli("triangulate", src, "-o", tmp_path / "x.ply", check=False)
     assert proc.returncode != 0 and not (tmp_path / "x.ply").exists()
     assert f"point {n} (x = 1e+06) lies 1e+06 from the points' median x" in proc.stderr, proc.stderr
