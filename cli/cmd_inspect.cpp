@@ -62,7 +62,13 @@ nlohmann::json particle_summary(const std::string& path, const ParticleInput& in
     j["spacing"] = nullptr;
     j["spacing_error"] = e.what();
   }
-  if (!j["spacing"].is_null()) {
+  // The local spacing measures a particle's neighbourhood from six neighbours on (fewer: the
+  // irregularity and the thickness come out 0, which would read as an even, clean sampling).
+  constexpr size_t kMeasurable = 7;
+  if (!j["spacing"].is_null() && c.size() - j["duplicate_points"].get<size_t>() < kMeasurable) {
+    j["sampling"] = nullptr;
+    j["sampling_error"] = "fewer than " + std::to_string(kMeasurable) + " distinct particles: no neighbourhood to measure";
+  } else if (!j["spacing"].is_null()) {
     try {
       LocalSpacing ls = estimate_local_spacing(c.positions.data(), c.size());
       // The spread of the local spacings, in units of the median nearest-neighbour distance.

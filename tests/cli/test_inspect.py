@@ -169,3 +169,9 @@ def test_particles_say_what_their_sampling_is(cli, tmp_path):
     assert report["random"]["reach_factor"] == 1.75 and 0.44 < report["random"]["irregularity"] < 0.56
     assert "lengthens its edge limits 1.75 x" in text["random"]
     assert report["block"]["thickness"] > 0.75 and "polygonize meshes it" in text["block"]
+    # Too few particles for a neighbourhood: said, not read as an even, clean sampling.
+    few = tmp_path / "few.ply"
+    write_ply(few, even[:6].astype(np.float32), {})
+    r = inspect_json(cli, few)
+    assert r["sampling"] is None and "no neighbourhood to measure" in r["sampling_error"]
+    assert "cannot be measured" in cli("inspect", few).stdout
