@@ -9,6 +9,8 @@ find_package(LibLZMA REQUIRED)   # liblzma-dev: LZMA-compressed VTK XML arrays (
 # liblz4-dev: LZ4-compressed VTK XML arrays. It ships a pkg-config file, not a CMake package.
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(PM_LZ4 REQUIRED IMPORTED_TARGET liblz4)
+# libblosc-dev: Houdini's .bgeo.sc (Blosc-compressed blocks in SideFX's SCF container).
+pkg_check_modules(PM_BLOSC REQUIRED IMPORTED_TARGET blosc)
 # nlohmann-json3-dev (header-only): the CLI's JSON reports, the library's .series collections.
 find_package(nlohmann_json REQUIRED)
 if(PM_BUILD_CLI)

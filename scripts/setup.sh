@@ -14,8 +14,10 @@ PACKAGES=(
   libcli11-dev nlohmann-json3-dev
   libpng-dev
   liblz4-dev liblzma-dev  # VTK XML arrays compressed with LZ4 or LZMA (zlib comes with libpng-dev)
+  libblosc-dev  # Houdini's .bgeo.sc (Blosc-compressed blocks)
   libgtest-dev libgmock-dev
   python3 python3-numpy python3-pytest
+  python3-blosc  # the CLI tests write .bgeo.sc files as Houdini does
   python3-vtk9  # tests/python/test_vtk_files.py: files written by VTK's own writers
   patchelf  # RUNPATH $ORIGIN on the libraries the Python package and the add-on zip carry
   debootstrap  # scripts/test_addon_portable.sh: the add-on zip in a bare Debian 12

@@ -298,13 +298,13 @@ class PARTICLEMESH_OT_smooth(_ModalJob, bpy.types.Operator):
 
 
 class PARTICLEMESH_OT_import_cloud(bpy.types.Operator, ImportHelper):
-    """Import point clouds and simulation particles (.ply, .xyz, .pts, .txt, .csv, .las, .pcd, .vtk, .vtu, .vtp, .pvtu, .pvtp, .prt, .bgeo, .geo) as vertex-only mesh objects; normals, colours, velocity and other channels become attributes"""
+    """Import point clouds and simulation particles (.ply, .xyz, .pts, .txt, .csv, .las, .pcd, .vtk, .vtu, .vtp, .pvtu, .pvtp, .prt, .bgeo, .bgeo.sc, .geo) as vertex-only mesh objects; normals, colours, velocity and other channels become attributes"""
     bl_idname = "particlemesh.import_cloud"
     bl_label = "Import Point Cloud"
     bl_options = {"REGISTER", "UNDO"}
 
     filename_ext = ".ply"
-    filter_glob: StringProperty(default="*.ply;*.xyz;*.pts;*.txt;*.csv;*.pcd;*.vtk;*.vtu;*.vtp;*.pvtu;*.pvtp;*.prt;*.las;*.bgeo;*.bgeo.gz;*.geo;*.geo.gz",
+    filter_glob: StringProperty(default="*.ply;*.xyz;*.pts;*.txt;*.csv;*.pcd;*.vtk;*.vtu;*.vtp;*.pvtu;*.pvtp;*.prt;*.las;*.bgeo;*.bgeo.gz;*.bgeo.sc;*.geo;*.geo.gz;*.geo.sc",
                                 options={"HIDDEN"})
     files: CollectionProperty(type=bpy.types.OperatorFileListElement,
                               options={"HIDDEN", "SKIP_SAVE"})
@@ -528,13 +528,13 @@ class PARTICLEMESH_OT_update(bpy.types.Operator):
 
 
 class PARTICLEMESH_OT_import_sequence(bpy.types.Operator, ImportHelper):
-    """Import a simulation cache (one particle file per frame: .ply, .xyz, .pts, .txt, .csv, .vtk, .vtu, .vtp, .pvtu, .pvtp, .prt, .bgeo, .geo; or a ParaView collection listing them, .pvd or .series) as a live mesh that shows the scene frame's file, meshed"""
+    """Import a simulation cache (one particle file per frame: .ply, .xyz, .pts, .txt, .csv, .vtk, .vtu, .vtp, .pvtu, .pvtp, .prt, .bgeo, .bgeo.sc, .geo; or a ParaView collection listing them, .pvd or .series) as a live mesh that shows the scene frame's file, meshed"""
     bl_idname = "particlemesh.import_sequence"
     bl_label = "Import Particle Sequence"
     bl_options = {"REGISTER", "UNDO"}
 
     filename_ext = ".vtk"
-    filter_glob: StringProperty(default="*.ply;*.xyz;*.pts;*.txt;*.csv;*.vtk;*.vtu;*.vtp;*.pvtu;*.pvtp;*.prt;*.bgeo;*.bgeo.gz;*.geo;*.geo.gz;"
+    filter_glob: StringProperty(default="*.ply;*.xyz;*.pts;*.txt;*.csv;*.vtk;*.vtu;*.vtp;*.pvtu;*.pvtp;*.prt;*.bgeo;*.bgeo.gz;*.bgeo.sc;*.geo;*.geo.gz;*.geo.sc;"
                                         "*.pvd;*.series",
                                 options={"HIDDEN"})
     method: EnumProperty(

@@ -241,7 +241,7 @@ class PARTICLEMESH_PG_object(bpy.types.PropertyGroup):
         name="Particle Files", default="", subtype="FILE_PATH", update=_settings_changed,
         description="With Particle Files: the frame pattern, one field {} (or zero-padded "
                     "{:04d}) for the frame number, e.g. //cache/fluid_{:04d}.vtk (.ply, .xyz, "
-                    ".csv, .vtk, .vtu, .vtp, .pvtu, .pvtp, .prt, .bgeo, .geo); or a ParaView "
+                    ".csv, .vtk, .vtu, .vtp, .pvtu, .pvtp, .prt, .bgeo, .bgeo.sc, .geo); or a ParaView "
                     "collection (.pvd, .series), frame n its n-th file by time")
     frame_offset: IntProperty(
         name="Frame Offset", default=0, update=_settings_changed,

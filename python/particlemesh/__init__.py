@@ -96,8 +96,9 @@ def read_points(path):
     """Particles from a file: .ply (any numeric vertex properties, normals, vertex colours as
     the "color" attribute), .xyz, .pts, .txt and .csv (text; columns by a header line, as
     ParaView's CSV export names them, or by their count),
-    VTK .vtk/.vtu/.vtp/.pvtu/.pvtp, lidar .las, Krakatoa .prt and Houdini .bgeo/.geo (every
-    point-data array / point attribute in `attributes`) through the library; .pcd (ascii, binary, compressed)
+    VTK .vtk/.vtu/.vtp/.pvtu/.pvtp, lidar .las, Krakatoa .prt and Houdini .bgeo/.geo (plain,
+    .gz or Blosc-compressed .sc; every point-data array / point attribute in `attributes`)
+    through the library; .pcd (ascii, binary, compressed)
     through the PCL bridge, which drops points with a NaN coordinate and counts them in
     `info`. Coordinates keep their full precision. Returns Points."""
     lib = _library.load()

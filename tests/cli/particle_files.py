@@ -2,7 +2,8 @@
 (ASCII, BINARY), VTK XML .vtu (ascii, base64, raw appended, zlib, LZMA) and parallel .pvtu
 (pieces in a folder beside it), Krakatoa's .prt, ASPRS LAS, Houdini's classic bgeo
 (plain, gzip) and Houdini 12+'s binary-JSON bgeo (paged, tuples and arrays layouts, either
-byte order, token strings, constant pages, gzip), ASCII .geo, and text columns (ParaView's CSV
+byte order, token strings, constant pages, gzip), ASCII .geo, each also as Houdini's
+Blosc-compressed .sc (write_sc), and text columns (ParaView's CSV
 export, a .txt with a header line). Values are multiples of 1/1024 so that every text form is exact in float32."""
 
 import base64
@@ -351,6 +352,29 @@ def write_bgeo_json(path, p, attrs, big=False, tokens=True, layout="paged", page
         f.write(gzip.compress(data, mtime=0) if compress else data)
 
 
+def scf(data, block=65536, cname="lz4", metadata=b""):
+    """`data` in SideFX's SCF container, as Houdini writes a .bgeo.sc: "scf1", the metadata's
+    length and the metadata, Blosc chunks of `block` bytes (level 9, byte shuffle on 4-byte
+    items), the seek index (each chunk's end but the last's, relative to the first chunk; the
+    chunk size; the last chunk's size) and its length (big-endian uint64s), "1fcs"."""
+    import blosc  # Debian's python3-blosc (the set-up installs it)
+    chunks = [blosc.compress(data[i:i + block], typesize=4, clevel=9, shuffle=blosc.SHUFFLE, cname=cname)
+              for i in range(0, len(data), block)]
+    ends = np.cumsum([len(c) for c in chunks])[:-1]
+    index = b"".join(struct.pack(">Q", int(e)) for e in ends)
+    index += struct.pack(">QQ", block, len(data) - (len(chunks) - 1) * block)
+    return (b"scf1" + struct.pack(">Q", len(metadata)) + metadata + b"".join(chunks) + index
+            + struct.pack(">Q", len(index)) + b"1fcs")
+
+
+def write_sc(writer, **scf_options):
+    """A writer of the same file wrapped in SCF (Houdini's .bgeo.sc, .geo.sc)."""
+    def write(path, p, attrs):
+        writer(path, p, attrs)
+        Path(path).write_bytes(scf(Path(path).read_bytes(), **scf_options))
+    return write
+
+
 def write_csv(path, p, attrs, style="paraview"):
     """Text columns as ParaView's CSV export writes them (quoted names, a vector's components
     as "name:k", the points last) or as a whitespace .txt names them ("x y z vx vy vz ...")."""
@@ -400,6 +424,9 @@ FORMATS = {
     ".json-arrays.bgeo": lambda path, p, a: write_bgeo_json(path, p, a, layout="arrays"),
     ".geo": lambda path, p, a: write_bgeo_json(path, p, a, page=50, ascii=True),
     ".tuples.geo.gz": lambda path, p, a: write_bgeo_json(path, p, a, layout="tuples", ascii=True, compress=True),
+    ".bgeo.sc": write_sc(write_bgeo),
+    ".json.bgeo.sc": write_sc(write_bgeo_json, block=1000, cname="zstd", metadata=b'{"compression": "blosc"}'),
+    ".geo.sc": write_sc(lambda path, p, a: write_bgeo_json(path, p, a, ascii=True), block=4096, cname="blosclz"),
     ".csv": write_csv,
     ".txt": lambda path, p, a: write_csv(path, p, a, style="columns"),
 }

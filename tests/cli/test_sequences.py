@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
-from particle_files import (FORMATS, particles, read_ascii_ply, write_bgeo, write_bgeo_json,  # noqa: E402
+from particle_files import (FORMATS, particles, read_ascii_ply, scf, write_bgeo, write_bgeo_json,  # noqa: E402
                             write_las, write_ply, write_vtk)
 
 POLY = ["--radius", "0.14", "--cell", "0.03"]  # fixed R and h: frames share a lattice
@@ -360,7 +360,7 @@ def test_a_paraview_collection_is_a_sequence(cli, tmp_path):
 def test_binary_json_bgeo_pages_and_clear_errors(cli, tmp_path):
     """Houdini 12+'s binary-JSON bgeo (and ASCII .geo): constant pages (a channel constant over some pages of a
     packed vector and of a scalar) give what the same values as PLY give; a malformed file is
-    an error naming it and what is wrong; .bgeo.sc is refused saying what is read."""
+    an error naming it and what is wrong (a damaged .bgeo.sc container too)."""
     p, a = particles(0)  # 216 particles: pages of 50, the last one short
     a["velocity"][:100, 1:] = [0.25, -0.5]  # pages 0 and 1 of the [1, 2] packing's second part
     a["density"][150:] = 1000.0  # pages 3 and 4 (16 particles)
@@ -382,7 +382,9 @@ def test_binary_json_bgeo_pages_and_clear_errors(cli, tmp_path):
         "token.bgeo": (good[:5] + b"\x99" + good[6:], "unknown binary JSON token 0x99"),
         "undefined.bgeo": (good[:5] + b"\x26\x05" + good[5:], "string token 5, which was never defined"),
         "noP.bgeo": (good.replace(b"\x01P", b"\x01Q", 1), "no position attribute 'P'"),
-        "b.bgeo.sc": (b"\0" * 64, ".bgeo.sc"),
+        "b.bgeo.sc": (b"scf1" + b"\0" * 64, "it does not end with the SCF footer '1fcs'"),
+        "cut.bgeo.sc": (scf(good, block=1000)[:-100], "it does not end with the SCF footer"),
+        "chunk.bgeo.sc": (scf(good, block=1000)[:2000] + scf(good, block=1000)[2100:], "runs past the seek index"),
         "comma.geo": (b'["pointcount", 3 "attributes", []]', "',' or ']' expected in a list"),
         "escape.geo": (b'["pointcount", 1, "\\q"]', "unknown escape"),
         "nan.geo": (b'["pointcount", 1, "attributes", [nan]]', "'nan' is not a JSON value"),

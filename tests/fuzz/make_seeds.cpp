@@ -19,6 +19,7 @@
 #include "particlemesh/io/png.h"
 #include "particlemesh/sample/shapes.h"
 #include "support/compressed_vtu.h"
+#include "support/houdini_scf.h"
 
 namespace fs = std::filesystem;
 using namespace particlemesh;
@@ -242,6 +243,9 @@ void file_seeds() {
   put("read_bgeo", "points_attributes.bgeo", bgeo_seed(5, false));
   put("read_bgeo", "particle_system.bgeo", bgeo_seed(4, true));
   put("read_bgeo", "binary_json.bgeo", bgeo_json_seed(10));
+  // Houdini's .bgeo.sc: Blosc chunks of 64 bytes (several per file) in the SCF container.
+  put("read_bgeo", "blosc_lz4.bgeo.sc", test::scf_wrap(bgeo_json_seed(10), 64, "lz4"));
+  put("read_bgeo", "blosc_zstd_classic.bgeo.sc", test::scf_wrap(bgeo_seed(5, false), 64, "zstd", "{}"));
   {
     // Krakatoa .prt: Position float32[3], Velocity float16[3], Density float64 over 4 particles.
     std::string prt("\xC0PRT\r\n\x1A\n", 8);

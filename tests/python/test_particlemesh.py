@@ -989,20 +989,21 @@ def test_smoother_refuses_other_meshes_and_closed_use(pm):
 
 
 def test_simulator_files_carry_their_channels(pm, tmp_path):
-    """read_points reads VTK, classic and binary-JSON bgeo particles with their channels;
-    polygonize interpolates them onto the vertices (a constant field exactly), triangulate
+    """read_points reads VTK, classic and binary-JSON bgeo particles (Houdini's .bgeo.sc too) with
+    their channels; polygonize interpolates them onto the vertices (a constant field exactly), triangulate
     keeps them."""
     import sys
     from pathlib import Path
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "cli"))
-    from particle_files import particles, write_bgeo, write_bgeo_json, write_vtu
+    from particle_files import particles, write_bgeo, write_bgeo_json, write_sc, write_vtu
 
     p, a = particles(0)
     a["velocity"][:] = np.array([1.0, 0.5, -2.0], np.float32)
     write_vtu(tmp_path / "f.vtu", p, a, "appended")
     write_bgeo(tmp_path / "f.bgeo", p, a)
     write_bgeo_json(tmp_path / "j.bgeo", p, a, page=64)  # velocity: constant pages
-    for name in ("f.vtu", "f.bgeo", "j.bgeo"):
+    write_sc(write_bgeo_json, block=512)(tmp_path / "j.bgeo.sc", p, a)
+    for name in ("f.vtu", "f.bgeo", "j.bgeo", "j.bgeo.sc"):
         cloud = pm.read_points(tmp_path / name)
         np.testing.assert_array_equal(cloud.positions, p.astype(np.float64))
         assert set(cloud.attributes) == {"velocity", "density"}

@@ -124,7 +124,7 @@ struct Node {
 
 class Parser {
  public:
-  Parser(GzipStream& in, const std::string& path, bool big_endian) : in_(in), path_(path), swap_(big_endian) {}
+  Parser(DecompressedStream& in, const std::string& path, bool big_endian) : in_(in), path_(path), swap_(big_endian) {}
 
   /// The file's one value. What may follow it (the seek index of a file whose "hasindex" is
   /// true) is not read.
@@ -294,7 +294,7 @@ class Parser {
     return n;
   }
 
-  GzipStream& in_;
+  DecompressedStream& in_;
   const std::string& path_;
   bool swap_;
   std::unordered_map<uint64_t, std::string> tokens_;
@@ -306,7 +306,7 @@ class Parser {
 /// such lists); any other list as values.
 class TextParser {
  public:
-  TextParser(GzipStream& in, const std::string& path, std::string_view read_already)
+  TextParser(DecompressedStream& in, const std::string& path, std::string_view read_already)
       : in_(in), path_(path), pending_(read_already) {}
 
   /// The file's one value; what follows it is not read.
@@ -479,7 +479,7 @@ class TextParser {
     }
   }
 
-  GzipStream& in_;
+  DecompressedStream& in_;
   const std::string& path_;
   std::string pending_;
   size_t at_ = 0;
@@ -688,13 +688,13 @@ FileContents geometry_of(const Node& root, const std::string& path, bool swap, u
 
 }  // namespace
 
-FileContents read_bgeo_binary_json(GzipStream& in, const std::string& path, bool big_endian) {
+FileContents read_bgeo_binary_json(DecompressedStream& in, const std::string& path, bool big_endian) {
   Parser parser(in, path, big_endian);
   const Node root = parser.parse_document();
   return geometry_of(root, path, big_endian, parser.bytes_read());
 }
 
-FileContents read_geo_text_json(GzipStream& in, const std::string& path, std::string_view read_already) {
+FileContents read_geo_text_json(DecompressedStream& in, const std::string& path, std::string_view read_already) {
   TextParser parser(in, path, read_already);
   const Node root = parser.parse_document();
   return geometry_of(root, path, false, parser.bytes_read());

@@ -1,7 +1,9 @@
 // Houdini's classic binary geometry, .bgeo ("BgeoV", version 5), plain or gzip-compressed:
 // what SPlisHSPlasH, Partio, FLIP Fluids and older Houdini write for particle caches. A file
 // that starts with binary JSON's 0x7f (Houdini 12+'s .bgeo), or with '[' or '{' (its ASCII .geo),
-// goes to bgeo_json.cpp.
+// goes to bgeo_json.cpp. Each may also come gzip-compressed or in SideFX's Blosc-compressed SCF
+// container (.bgeo.sc, .geo.sc: the File Cache node's default), unpacked by
+// DecompressedStream (compressed.h) before the first byte is looked at.
 //
 // Written by hand: no library packaged for Debian reads bgeo (Partio, which does, is not
 // packaged, aborts on some attribute types and trusts every count). Layout (all big-endian):
@@ -21,8 +23,7 @@
 // After the points, primitive and detail sections are read when they hold only what Partio
 // writes (particle-system primitives, detail attributes, no groups), so that a truncated file
 // is refused; anything else after the points is left unread (the points are complete).
-// Houdini's classic ASCII geometry ("PGEOMETRY") and the Blosc-compressed .bgeo.sc are
-// refused with a message saying what is read.
+// Houdini's classic ASCII geometry ("PGEOMETRY") is refused with a message saying what is read.
 #include <algorithm>
 #include <cstring>
 #include <string>
@@ -50,8 +51,8 @@ float be_float(const unsigned char* b) {
 
 const char* const kSupported =
     "particlemesh reads Houdini 12+'s bgeo (binary JSON) and .geo (ASCII JSON) and classic bgeo (\"BgeoV\" version 5: "
-    ".bhclassic, Partio, SPlisHSPlasH), plain or gzip-compressed (.bgeo, .bgeo.gz, .geo, .geo.gz); save the cache in "
-    "one of those, or as .vtk or .ply";
+    ".bhclassic, Partio, SPlisHSPlasH), plain, gzip- or Blosc-compressed (.bgeo, .bgeo.gz, .bgeo.sc, .geo, .geo.gz, "
+    ".geo.sc); save the cache in one of those, or as .vtk or .ply";
 
 class BgeoReader {
  public:
@@ -59,7 +60,7 @@ class BgeoReader {
 
   FileContents read() {
     unsigned char magic[5];
-    if (file_.peek() < 0) fail("the file is empty");
+    if (in_.at_end()) fail(in_.compressed() ? "it holds nothing once decompressed" : "the file is empty");
     if (!in_.read(magic, 4)) fail("too short for a bgeo file (" + std::to_string(in_.offset()) + " bytes)");
     if (magic[0] == 0x7f) {  // Houdini 12+'s binary JSON: 0x7f, then the magic number's bytes
       unsigned char last;
@@ -230,7 +231,7 @@ class BgeoReader {
   }
 
   FileReader file_;
-  GzipStream in_;
+  DecompressedStream in_;
   FileContents out_;
   bool has_normals_ = false;
 };
@@ -238,11 +239,5 @@ class BgeoReader {
 }  // namespace
 
 FileContents read_bgeo(const std::string& path, ReadPurpose purpose) { return BgeoReader(path, purpose).read(); }
-
-FileContents read_bgeo_sc(const std::string& path, ReadPurpose) {
-  FileReader file(path);  // a missing file is named as such first
-  throw Error(Status::FormatError, "'" + path + "': .bgeo.sc (Houdini's Blosc-compressed geometry) is not read; " +
-                                       std::string(kSupported));
-}
 
 }  // namespace particlemesh::detail

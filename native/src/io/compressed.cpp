@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cstring>
 #include <limits>
+#include <new>
 
+#include <blosc.h>
 #include <lz4.h>
 #include <lzma.h>
 #include <zlib.h>
@@ -27,14 +29,20 @@ std::string zlib_message(const z_stream& s, int code) {
 }
 }  // namespace
 
-struct GzipStream::Z {
+struct DecompressedStream::Z {
   z_stream s{};
 };
 
-GzipStream::GzipStream(FileReader& file) : file_(file) {
-  const std::string_view head = file_.look_ahead(2);
-  zipped_ = head.size() == 2 && static_cast<unsigned char>(head[0]) == 0x1f && static_cast<unsigned char>(head[1]) == 0x8b;
-  if (!zipped_) return;
+DecompressedStream::DecompressedStream(FileReader& file) : file_(file) {
+  const std::string_view head = file_.look_ahead(4);
+  if (head == "scf1") {
+    mode_ = Mode::Scf;
+    unpack_scf();
+    return;
+  }
+  if (!(head.size() >= 2 && static_cast<unsigned char>(head[0]) == 0x1f && static_cast<unsigned char>(head[1]) == 0x8b))
+    return;
+  mode_ = Mode::Gzip;
   z_ = new Z;
   // 16 + 15: a gzip wrapper and the largest window.
   if (inflateInit2(&z_->s, 16 + MAX_WBITS) != Z_OK) {
@@ -44,16 +52,100 @@ GzipStream::GzipStream(FileReader& file) : file_(file) {
   }
   in_.resize(kChunk);
   out_.resize(kChunk);
+  data_ = out_.data();
 }
 
-GzipStream::~GzipStream() {
+DecompressedStream::~DecompressedStream() {
   if (z_) {
     inflateEnd(&z_->s);
     delete z_;
   }
 }
 
-bool GzipStream::refill() {
+namespace {
+uint64_t be64(const unsigned char* b) {
+  uint64_t v = 0;
+  for (int k = 0; k < 8; ++k) v = v << 8 | b[k];
+  return v;
+}
+}  // namespace
+
+// SideFX's SCF, the ".sc" of Houdini's .bgeo.sc (written by hand: no Debian package reads it;
+// the layout as the HDK's UT_SCFReader.h / UT_SCFCommon.h name its parts and independent
+// readers of Houdini's files take them apart; integers big-endian):
+//
+//   "scf1", uint64 M, M bytes of metadata (not needed here)
+//   the content as consecutive Blosc chunks, each self-describing (a 16-byte header with its
+//     uncompressed and compressed sizes), all of one uncompressed size but the last
+//   the seek index: uint64s (where each chunk but the last ends, the chunks' uncompressed
+//     size, the last one's), for readers that seek; only its length is used here
+//   uint64: the index's length in bytes, then "1fcs"
+//
+// The chunks must fill the space between the metadata and the index exactly, and each must
+// decompress to the size its header gives: a file cut short, patched or padded is refused.
+// The content is unpacked whole (a .bgeo.sc is read once, front to back, like the others).
+void DecompressedStream::unpack_scf() {
+  const std::string& path = file_.path();
+  const auto fail = [&](const std::string& what) {
+    throw Error(Status::FormatError, "'" + path + "': a damaged .sc file (Houdini's Blosc-compressed SCF): " + what);
+  };
+  const std::string raw = file_.read_rest();
+  const auto* b = reinterpret_cast<const unsigned char*>(raw.data());
+  const size_t n = raw.size();
+  constexpr size_t kHead = 12, kTail = 12;  // "scf1" + metadata length; index length + "1fcs"
+  if (n < kHead + kTail) fail("only " + std::to_string(n) + " bytes");
+  if (std::memcmp(b + n - 4, "1fcs", 4) != 0) fail("truncated (it does not end with the SCF footer '1fcs')");
+  const uint64_t meta = be64(b + 4), index = be64(b + n - kTail);
+  if (meta > n - kHead - kTail) fail("its metadata length (" + std::to_string(meta) + ") runs past its end");
+  const size_t first = kHead + size_t(meta);
+  if (index > n - kTail - first || index % 8 != 0)
+    fail("its seek index length (" + std::to_string(index) + ") does not fit the file");
+  const size_t last = n - kTail - size_t(index);  // where the chunks end
+  // The largest expansion a Blosc chunk can give, with room: its compressors reach about
+  // 250 (LZ4, BloscLZ), 930 (zlib) and 18 400 (Zstandard) to 1 on zeros. A header claiming
+  // more is refused before anything is allocated.
+  constexpr uint64_t kMaxRatio = 65536;
+  struct Chunk {
+    size_t at, bytes;
+  };
+  std::vector<Chunk> chunks;
+  uint64_t total = 0;
+  for (size_t at = first; at < last;) {
+    size_t bytes = 0, cbytes = 0, blocksize = 0;
+    if (last - at < 16) fail("the Blosc chunk at byte " + std::to_string(at) + " runs past the seek index");
+    blosc_cbuffer_sizes(b + at, &bytes, &cbytes, &blocksize);  // the header's 16 bytes
+    if (cbytes < 16 || cbytes > last - at)
+      fail("the Blosc chunk at byte " + std::to_string(at) + " runs past the seek index");
+    // Blosc's own check that decompressing the chunk is safe (its header against its length).
+    if (blosc_cbuffer_validate(b + at, cbytes, &bytes) != 0)
+      fail("the Blosc chunk at byte " + std::to_string(at) + " has a damaged header");
+    if (bytes > cbytes * kMaxRatio)
+      fail("the Blosc chunk at byte " + std::to_string(at) + " claims " + std::to_string(bytes) + " bytes from " +
+           std::to_string(cbytes) + ", more than Blosc's compressors give");
+    chunks.push_back({at, bytes});
+    total += bytes;
+    at += cbytes;
+  }
+  if (chunks.empty()) fail("it holds no compressed data");
+  try {
+    unpacked_.reset(new unsigned char[size_t(std::max<uint64_t>(total, 1))]);  // written below, not zeroed first
+  } catch (const std::bad_alloc&) {
+    throw Error(Status::OutOfMemory, "'" + path + "': no memory for its " + std::to_string(total) + " decompressed bytes");
+  }
+  size_t out = 0;
+  for (const Chunk& c : chunks) {
+    const int got = blosc_decompress_ctx(b + c.at, unpacked_.get() + out, c.bytes, 1);
+    if (got < 0 || size_t(got) != c.bytes)
+      fail("the Blosc chunk at byte " + std::to_string(c.at) + " does not decompress (corrupt data)");
+    out += c.bytes;
+  }
+  data_ = unpacked_.get();
+  pos_ = 0;
+  end_ = size_t(total);
+  finished_ = true;
+}
+
+bool DecompressedStream::refill() {
   consumed_ += end_;
   pos_ = end_ = 0;
   if (finished_) return false;
@@ -91,13 +183,13 @@ bool GzipStream::refill() {
   return true;
 }
 
-bool GzipStream::read(void* out, size_t n) {
-  if (!zipped_) return file_.read(out, n);
+bool DecompressedStream::read(void* out, size_t n) {
+  if (mode_ == Mode::Plain) return file_.read(out, n);
   auto* o = static_cast<unsigned char*>(out);
   while (n > 0) {
     if (pos_ == end_ && !refill()) return false;
     const size_t k = std::min(n, end_ - pos_);
-    std::memcpy(o, out_.data() + pos_, k);
+    std::memcpy(o, data_ + pos_, k);
     pos_ += k;
     o += k;
     n -= k;
@@ -105,8 +197,8 @@ bool GzipStream::read(void* out, size_t n) {
   return true;
 }
 
-bool GzipStream::skip(uint64_t n) {
-  if (!zipped_) return file_.skip(n);
+bool DecompressedStream::skip(uint64_t n) {
+  if (mode_ == Mode::Plain) return file_.skip(n);
   while (n > 0) {
     if (pos_ == end_ && !refill()) return false;
     const size_t k = size_t(std::min<uint64_t>(n, end_ - pos_));
@@ -116,8 +208,8 @@ bool GzipStream::skip(uint64_t n) {
   return true;
 }
 
-bool GzipStream::at_end() {
-  if (!zipped_) return file_.peek() < 0;
+bool DecompressedStream::at_end() {
+  if (mode_ == Mode::Plain) return file_.peek() < 0;
   return pos_ == end_ && !refill();
 }
 

@@ -1,10 +1,12 @@
-// Internal: compressed data inside particle files, through zlib, LZ4 and liblzma (the
-// libraries VTK's own compressors call; zlib is on every system Blender runs on, the add-on zip
-// carries LZ4's and liblzma's).
+// Internal: compressed data inside particle files, through zlib, LZ4, liblzma (the libraries
+// VTK's own compressors call) and Blosc (Houdini's); zlib is on every system Blender runs on,
+// the add-on zip carries the others.
 //
-//  - GzipStream: a file that may be gzip-compressed (Houdini's classic .bgeo usually is),
-//    read front to back: the file's own bytes when it does not start with gzip's magic
-//    bytes (1f 8b), else the decompressed stream (several concatenated gzip members too).
+//  - DecompressedStream: a file that may be compressed, read front to back: the file's own
+//    bytes, or the decompressed stream when it starts with gzip's magic bytes (1f 8b: several
+//    concatenated gzip members too; Houdini's classic .bgeo usually is) or with "scf1"
+//    (SideFX's seekable compressed format around Blosc-compressed blocks: Houdini's .bgeo.sc,
+//    the File Cache node's default; through libblosc).
 //  - decompress_block: one compressed block of a VTK XML array into exactly the bytes its
 //    header promises: vtkZLibDataCompressor (a zlib stream), vtkLZ4DataCompressor (one raw
 //    LZ4 block) or vtkLZMADataCompressor (an .xz stream).
@@ -15,6 +17,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -22,16 +25,17 @@
 
 namespace PM_NAMESPACE::detail {
 
-class GzipStream {
+class DecompressedStream {
  public:
   /// Reads from `file` (which must stay alive), decompressing when it starts with gzip's
-  /// magic bytes.
-  explicit GzipStream(FileReader& file);
-  ~GzipStream();
-  GzipStream(const GzipStream&) = delete;
-  GzipStream& operator=(const GzipStream&) = delete;
+  /// magic bytes; a file that starts with "scf1" is read and decompressed whole here.
+  /// @throws Error(FormatError) naming the file: a malformed SCF container or Blosc block.
+  explicit DecompressedStream(FileReader& file);
+  ~DecompressedStream();
+  DecompressedStream(const DecompressedStream&) = delete;
+  DecompressedStream& operator=(const DecompressedStream&) = delete;
 
-  bool compressed() const { return zipped_; }
+  bool compressed() const { return mode_ != Mode::Plain; }
   /// Exactly `n` bytes into `out`; false when the stream ends first.
   bool read(void* out, size_t n);
   /// Skip `n` bytes; false when the stream ends first.
@@ -40,16 +44,20 @@ class GzipStream {
   bool at_end();
   /// Bytes of the (decompressed) stream consumed so far (of the file itself when it is not
   /// compressed: those are read from it directly).
-  uint64_t offset() const { return zipped_ ? consumed_ + pos_ : file_.offset(); }
+  uint64_t offset() const { return mode_ != Mode::Plain ? consumed_ + pos_ : file_.offset(); }
 
  private:
+  enum class Mode { Plain, Gzip, Scf };
   bool refill();
+  void unpack_scf();
 
   FileReader& file_;
-  bool zipped_ = false;
+  Mode mode_ = Mode::Plain;
   struct Z;
   Z* z_ = nullptr;
   std::vector<unsigned char> in_, out_;
+  std::unique_ptr<unsigned char[]> unpacked_;  ///< an SCF file's whole content
+  const unsigned char* data_ = nullptr;         ///< out_'s or unpacked_'s bytes
   size_t pos_ = 0, end_ = 0;
   uint64_t consumed_ = 0;
   bool finished_ = false;

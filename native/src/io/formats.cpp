@@ -37,7 +37,8 @@ const std::vector<FileFormat>& file_formats() {
       {".bhclassic", "Houdini classic bgeo", &read_bgeo, true, false},
       {".geo", "Houdini geo (ASCII JSON)", &read_bgeo, true, false},
       {".geo.gz", "Houdini geo (ASCII JSON)", &read_bgeo, true, false},
-      {".bgeo.sc", "Houdini bgeo.sc (refused with what is read)", &read_bgeo_sc, true, false},
+      {".bgeo.sc", "Houdini bgeo, Blosc-compressed", &read_bgeo, true, false},
+      {".geo.sc", "Houdini geo (ASCII JSON), Blosc-compressed", &read_bgeo, true, false},
   };
   return formats;
 }
@@ -49,7 +50,7 @@ std::string lower_extension(const std::string& path) {
   if (ext == ".gz" || ext == ".sc") {
     std::string inner = p.stem().extension().string();
     for (char& c : inner) c = char(std::tolower(static_cast<unsigned char>(c)));
-    if (inner == ".bgeo" || (inner == ".geo" && ext == ".gz")) return inner + ext;
+    if (inner == ".bgeo" || inner == ".geo") return inner + ext;
   }
   return ext;
 }

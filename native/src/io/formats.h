@@ -63,7 +63,7 @@ const FileFormat* format_for(const std::string& path);
 std::string known_extensions(bool points);
 
 /// Lower-case extension of `path`, with the dot ("" if none). The compound ".bgeo.gz",
-/// ".bgeo.sc" and ".geo.gz" count as one extension.
+/// ".bgeo.sc", ".geo.gz" and ".geo.sc" count as one extension.
 std::string lower_extension(const std::string& path);
 
 /// `name`, or name_2, name_3 ... when `c` already has an attribute of that name (attribute
@@ -108,8 +108,7 @@ FileContents read_prt(const std::string& path, ReadPurpose purpose);
 FileContents read_las(const std::string& path, ReadPurpose purpose);
 FileContents read_vtk_legacy(const std::string& path, ReadPurpose purpose);
 FileContents read_vtk_xml(const std::string& path, ReadPurpose purpose);
+/// Houdini's geometry in every form bgeo_reader.cpp lists (gzip- and Blosc-compressed too).
 FileContents read_bgeo(const std::string& path, ReadPurpose purpose);
-/// Refuses .bgeo.sc with a message saying what is read.
-FileContents read_bgeo_sc(const std::string& path, ReadPurpose purpose);
 
 }  // namespace particlemesh::detail

@@ -21,6 +21,7 @@
 #include <zlib.h>
 
 #include "support/compressed_vtu.h"
+#include "support/houdini_scf.h"
 #include "support/test_support.h"
 
 using namespace particlemesh;
@@ -739,6 +740,67 @@ TEST(BgeoJsonReader, TypesLimitsAndRefusals) {
                  "tuple 0 does not hold 3 values");
   EXPECT_REFUSED(read_point_cloud(write(dir / "short.bgeo", BinaryJson().geometry(t, 4).s)), Status::FormatError,
                  "\"tuples\" holds 3 tuples for 4 points");
+}
+
+// Houdini's .bgeo.sc (SideFX's SCF around Blosc chunks, compressed.cpp): the same points as
+// the plain file, for each of Blosc's compressors, chunk sizes that split the content into
+// many chunks or one, with and without a metadata section; the .geo.sc of the text form too.
+// A damaged container is refused naming what is wrong, before anything is decompressed.
+TEST(BgeoReader, BloscCompressedScContainers) {
+  const auto dir = test::scratch_dir("bgeo_sc");
+  std::string t;
+  for (int i = 0; i < 300; ++i) {
+    t += std::string("\x40\x19\x03", 3);
+    for (float f : {float(i) * 0.25f, float(i % 17) - 8.0f, 1.0f / float(i + 1)}) append(t, f);
+  }
+  const std::string content = BinaryJson().geometry(t, 300).s;
+  const PointCloud plain = read_point_cloud(write(dir / "plain.bgeo", content));
+  ASSERT_EQ(plain.positions.size(), 300u);
+  for (const char* codec : {"blosclz", "lz4", "zlib", "zstd"})
+    for (size_t block : {size_t(64), size_t(1000), size_t(65536)})
+      for (const std::string& metadata : {std::string(), std::string("{\"software\": \"test\"}")}) {
+        SCOPED_TRACE(std::string(codec) + ", chunks of " + std::to_string(block) + " bytes");
+        const PointCloud c = read_point_cloud(write(dir / "c.bgeo.sc", test::scf_wrap(content, block, codec, metadata)));
+        EXPECT_EQ(c.positions, plain.positions);
+      }
+  const std::string text = "[\"pointcount\", 2, \"attributes\", [\"pointattributes\", [[[\"name\", \"P\", \"type\", "
+                           "\"numeric\"], [\"values\", [\"size\", 3, \"tuples\", [[1, 2, 3], [4, 5, 6.5]]]]]]]]";
+  const PointCloud g = read_point_cloud(write(dir / "t.geo.sc", test::scf_wrap(text, 16, "zstd")));
+  EXPECT_EQ(g.positions, (std::vector<Vec3>{{1, 2, 3}, {4, 5, 6.5}}));
+
+  const std::string good = test::scf_wrap(content, 1000);
+  const auto patched = [&](size_t at, const std::string& bytes) {
+    std::string s = good;
+    s.replace(at, bytes.size(), bytes);
+    return s;
+  };
+  std::string huge(8, '\xff');
+  EXPECT_REFUSED(read_point_cloud(write(dir / "cut.bgeo.sc", good.substr(0, good.size() / 2))), Status::FormatError,
+                 "truncated (it does not end with the SCF footer");
+  EXPECT_REFUSED(read_point_cloud(write(dir / "meta.bgeo.sc", patched(4, huge))), Status::FormatError,
+                 "its metadata length (18446744073709551615) runs past its end");
+  EXPECT_REFUSED(read_point_cloud(write(dir / "index.bgeo.sc", patched(good.size() - 12, huge))), Status::FormatError,
+                 "its seek index length (18446744073709551615) does not fit");
+  // The first chunk's compressed size (bytes 12..15 of its header) past the data.
+  EXPECT_REFUSED(read_point_cloud(write(dir / "chunk.bgeo.sc", patched(12 + 12, std::string("\xff\xff\x00\x00", 4)))),
+                 Status::FormatError, "the Blosc chunk at byte 12 runs past the seek index");
+  // Its uncompressed size (bytes 4..7) beyond anything Blosc makes of its few hundred bytes.
+  EXPECT_REFUSED(read_point_cloud(write(dir / "ratio.bgeo.sc", patched(12 + 4, std::string("\x00\x00\x00\x7f", 4)))),
+                 Status::FormatError, "more than Blosc's compressors give");
+  // A byte between the last chunk and the index.
+  const size_t index = good.size() - 12 - size_t(static_cast<unsigned char>(good[good.size() - 5]));  // < 256 here
+  std::string padded = good;
+  padded.insert(index, 1, '\0');
+  EXPECT_REFUSED(read_point_cloud(write(dir / "pad.bgeo.sc", padded)), Status::FormatError, "runs past the seek index");
+  std::string empty = "scf1";
+  test::append_be64(empty, 0);
+  test::append_be64(empty, 0);
+  test::append_be64(empty, 0);
+  test::append_be64(empty, 16);
+  EXPECT_REFUSED(read_point_cloud(write(dir / "empty.bgeo.sc", empty + "1fcs")), Status::FormatError,
+                 "it holds no compressed data");
+  EXPECT_REFUSED(read_point_cloud(write(dir / "other.bgeo.sc", test::scf_wrap("PLY is not bgeo", 64))),
+                 Status::FormatError, "once decompressed");
 }
 
 // VTK XML arrays compressed by each of VTK's compressors (zlib, LZ4, LZMA), in several blocks
