@@ -261,7 +261,7 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
                   "(out/fluid_{:04d}.ply)")
       ->required();
   app->add_option("--radius", args->radius, kRadiusHelp)
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->check(finite_number());
   auto* channel = app->add_option(
       "--radius-channel", args->radius_channel,
@@ -272,24 +272,24 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
                   "With --radius-channel: the factor F (default 4: a pscale of half the particle spacing gives the "
                   "default R of two spacings). The default threshold is then half the field inside touching "
                   "particles of their size at R = F x size, as in the Blender add-on's Particle Size mode")
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->check(finite_number());
   app->add_option("--threshold", args->threshold,
                   "Iso level T of the summed field (default: half the field inside an evenly packed volume at "
                   "R = 2 spacings: 3.33 wyvill, 3.94 poly4, 2.58 poly6, 1.23 blinn)")
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->check(finite_number());
   app->add_option("--kernel", args->kernel, "Field kernel: wyvill (C1), poly4 (C1), poly6 (C2), blinn (C0)")
       ->check(CLI::IsMember({"wyvill", "poly4", "poly6", "blinn"}, CLI::ignore_case))
       ->capture_default_str();
-  app->add_option("--cell", args->cell, "Grid cell size h, world units (default: R / 4)")->check(CLI::PositiveNumber)->check(finite_number());
+  app->add_option("--cell", args->cell, "Grid cell size h, world units (default: R / 4)")->check(positive_number())->check(finite_number());
   app->add_option("--threads", args->threads, "Worker threads, 0 = all cores (the output does not depend on it)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->capture_default_str();
   app->add_option("--max-grid-mib", args->max_grid_mib,
                   "Fail before the block search, the sparse grid or the grid with the mesh would need more memory "
                   "than this, MiB (0 = no limit; at least one byte, 1e-6 MiB, otherwise)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->check(finite_number())
       ->check(CLI::Validator(
           [](std::string& s) -> std::string {
@@ -305,12 +305,12 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("--min-component-volume", args->min_component_volume,
                   "Drop the pieces of the surface that enclose less than this volume, world units cubed "
                   "(splashes, droplets; default 0: keep all)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->check(finite_number());
   app->add_option("--min-component-particles", args->min_component_particles,
                   "Drop the pieces that enclose less than N particles' worth of volume, N x spacing^3 "
                   "(default 0: keep all)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->check(finite_number());
   app->add_option("--collapse-edges", args->collapse_edges,
                   "Collapse every edge shorter than F x the cell h into one vertex on the surface, where the surface "
@@ -318,18 +318,18 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
                   "(thin triangles where the surface passes near a lattice node) become ordinary triangles "
                   "(0 <= F <= 0.5; 0.3 takes out nine in ten of the triangles with an angle under 10 degrees; "
                   "default 0: off)")
-      ->check(CLI::Range(0.0, 0.5))
+      ->check(in_range(0.0, 0.5))
       ->check(finite_number());
   app->add_option("--taubin", args->taubin,
                   "Smooth the mesh with N iterations of Taubin's volume-keeping lambda|mu filter (default 0: off; "
                   "10 takes out bumps a few cells across)")
-      ->check(CLI::Range(0, 10000));
+      ->check(in_range(0, 10000));
   app->add_option("--taubin-lambda", args->taubin_lambda, "With --taubin: the shrinking step, 0 < lambda <= 1")
-      ->check(CLI::Range(1e-9, 1.0))
+      ->check(in_range(1e-9, 1.0))
       ->check(finite_number())
       ->capture_default_str();
   app->add_option("--taubin-mu", args->taubin_mu, "With --taubin: the inflating step, -1 <= mu < -lambda")
-      ->check(CLI::Range(-1.0, -1e-9))
+      ->check(in_range(-1.0, -1e-9))
       ->check(finite_number())
       ->capture_default_str();
   app->add_option("--lattice-anchor", args->lattice_anchor,

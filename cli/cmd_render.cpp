@@ -120,18 +120,18 @@ void add_render(CLI::App& root, std::vector<Command>& commands) {
       ->required();
   app->add_option("-o,--output", args->output, "Output image (.png; - for standard output)")->required();
   app->add_option("--radius", args->radius, kRadiusHelp)
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->check(finite_number());
   app->add_option("--threshold", args->threshold,
                   "Iso level T of the summed field (default: half the field inside an evenly packed volume)")
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->check(finite_number());
   app->add_option("--kernel", args->kernel, "Field kernel: wyvill (C1), poly4 (C1), poly6 (C2), blinn (C0)")
       ->check(CLI::IsMember({"wyvill", "poly4", "poly6", "blinn"}, CLI::ignore_case))
       ->capture_default_str();
   add_anisotropy_options(*app, args->anisotropy);
-  app->add_option("--width", args->width, "Image width, pixels")->check(CLI::Range(1, 16384))->capture_default_str();
-  app->add_option("--height", args->height, "Image height, pixels")->check(CLI::Range(1, 16384))->capture_default_str();
+  app->add_option("--width", args->width, "Image width, pixels")->check(in_range(1, 16384))->capture_default_str();
+  app->add_option("--height", args->height, "Image height, pixels")->check(in_range(1, 16384))->capture_default_str();
   app->add_option("--camera", args->camera,
                   "Eye and target: EX EY EZ TX TY TZ (default: framing every particle from above, front, right)")
       ->expected(6)
@@ -142,12 +142,12 @@ void add_render(CLI::App& root, std::vector<Command>& commands) {
       ->delimiter(',')
       ->check(finite_number())
       ->capture_default_str();
-  app->add_option("--fov", args->fov, "Vertical field of view, degrees")->check(CLI::Range(1.0, 179.0))->check(finite_number())->capture_default_str();
+  app->add_option("--fov", args->fov, "Vertical field of view, degrees")->check(in_range(1.0, 179.0))->check(finite_number())->capture_default_str();
   app->add_option("--shading", args->shading, "lambert (clay, key light) or normal (normal as colour)")
       ->check(CLI::IsMember({"lambert", "normal"}, CLI::ignore_case))
       ->capture_default_str();
   app->add_option("--threads", args->threads, "Worker threads, 0 = all cores (the image does not depend on it)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->capture_default_str();
   app->add_flag("-q,--quiet", args->quiet, "No summary and no progress line");
   commands.push_back({app, [args] { return run_render(*args); }});

@@ -34,10 +34,10 @@ void add_sample(CLI::App& root, std::vector<Command>& commands) {
       ->capture_default_str();
   app->add_option("-o,--output", args->output, "Output particles (.xyz or .ply; - for .xyz text on standard output)")->required();
   app->add_option("--spacing", args->spacing, "Poisson-disk spacing r0 (every shape but fibonacci)")
-      ->check(CLI::Range(1e-4, 10.0))
+      ->check(in_range(1e-4, 10.0))
       ->check(finite_number())
       ->capture_default_str();
-  app->add_option("--points", args->points, "Number of points (fibonacci)")->check(CLI::Range(size_t(4), size_t(100000000)))->capture_default_str();
+  app->add_option("--points", args->points, "Number of points (fibonacci)")->check(in_range(size_t(4), size_t(100000000)))->capture_default_str();
   app->add_option("--seed", args->seed, "Random seed: an integer from 0 to 18446744073709551615 (2^64 - 1)")
       ->check(CLI::Validator(
           [](std::string& s) -> std::string {

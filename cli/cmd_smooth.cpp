@@ -173,7 +173,7 @@ void add_smooth(CLI::App& root, std::vector<Command>& commands) {
       ->check(CLI::IsMember({"loop", "butterfly"}))
       ->capture_default_str();
   app->add_option("--levels", args->levels, "Subdivision levels; each multiplies the triangles by 4")
-      ->check(CLI::Range(0, kMaxSmoothLevels))
+      ->check(in_range(0, kMaxSmoothLevels))
       ->capture_default_str();
   app->add_flag("--limit,!--no-limit", args->limit,
                 "Loop: move vertices to the exact limit surface, with exact limit normals (default on)");
@@ -190,10 +190,10 @@ void add_smooth(CLI::App& root, std::vector<Command>& commands) {
       ->capture_default_str();
   app->add_option("--max-triangles", args->max_triangles,
                   "Refuse (before any work) results with more triangles than this")
-      ->check(CLI::Range(uint64_t(1), uint64_t(1) << 30))
+      ->check(in_range(uint64_t(1), uint64_t(1) << 30))
       ->capture_default_str();
   app->add_option("--threads", args->threads, "Worker threads, 0 = all cores (the output does not depend on it)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->capture_default_str();
   app->add_option("--report", args->report, "Also write statistics and the topology report as JSON");
   app->add_flag("--ascii", args->ascii, "Write ASCII PLY instead of binary");
@@ -207,7 +207,7 @@ void add_smooth_chain_options(CLI::App* app, SmoothChainArgs& args) {
                       "Smooth the mesh: loop (OpenSubdiv, limit surface) or butterfly (OpenMesh, keeps the particles)")
           ->check(CLI::IsMember({"loop", "butterfly"}));
   app->add_option("--levels", args.levels, "Subdivision levels for --smooth; each multiplies the triangles by 4")
-      ->check(CLI::Range(0, kMaxSmoothLevels))
+      ->check(in_range(0, kMaxSmoothLevels))
       ->needs(smooth)
       ->capture_default_str();
 }

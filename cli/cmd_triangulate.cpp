@@ -388,19 +388,19 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("--spacing", args->spacing,
                   "Particle spacing r0 in world units (default: estimated as the median nearest-neighbour distance); "
                   "the local spacings are scaled to it, unless --global-spacing")
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->check(finite_number());
   app->add_option("--max-edge-factor", args->max_edge_factor,
                   "Longest triangle edge L = factor x r0 (x each particle's local spacing unless --global-spacing; "
                   "where the particles lie at random, up to 1.75 x longer)")
-      ->check(CLI::Range(1e-6, 100.0))
+      ->check(in_range(1e-6, 100.0))
       ->check(finite_number())
       ->capture_default_str();
   app->add_option("--thin", args->thin,
                   "Mesh a subset of the particles, none within FACTOR x its local spacing of a kept one (FACTOR x "
                   "r0 with --global-spacing; r0 from --spacing or estimated; the subset's own spacing is then "
                   "estimated): a coarse preview, and evener input from unevenly sampled clouds. 1 = every particle")
-      ->check(CLI::Range(1.0, 1000.0))
+      ->check(in_range(1.0, 1000.0))
       ->check(finite_number())
       ->capture_default_str();
   app->add_flag("--raw", args->raw,
@@ -415,7 +415,7 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
                 "depth jumps) are not told apart");
   app->add_option("--normal-angle", args->normal_angle,
                   "Co-normality: drop triangles whose corner normals differ by more than this, or whose face normal differs from a corner's by more than min(this, 90) (degrees)")
-      ->check(CLI::Range(1.0, 180.0))
+      ->check(in_range(1.0, 180.0))
       ->check(finite_number())
       ->capture_default_str();
   app->add_option("--normals", args->normals,
@@ -425,25 +425,25 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
       ->capture_default_str();
   app->add_flag("--no-repair", args->no_repair, "Skip the repair stage (hole filling, unpinching)");
   app->add_option("--fill-holes", args->fill_holes, "Fill boundary loops of up to N edges (0 = none)")
-      ->check(CLI::Range(size_t(0), size_t(100000)))
+      ->check(in_range(size_t(0), size_t(100000)))
       ->capture_default_str();
   app->add_option("--fill-edge-factor", args->fill_edge_factor,
                   "Fill triangles' edges at most this x L: wider openings are real and stay open")
-      ->check(CLI::Range(0.1, 10.0))
+      ->check(in_range(0.1, 10.0))
       ->check(finite_number())
       ->capture_default_str();
   app->add_flag("--no-orient", args->no_orient, "Do not turn closed components to face outward (away from the solid each bounds: a hollow object's inner wall into its cavity)");
   app->add_option("--threads", args->threads, "Worker threads, 0 = all cores (the output does not depend on it)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->capture_default_str();
   app->add_option("--max-neighbors", args->max_neighbors,
                   "Fail if a point has more neighbours within L than this (points far denser than the spacing)")
-      ->check(CLI::Range(size_t(2), size_t(100000)))
+      ->check(in_range(size_t(2), size_t(100000)))
       ->capture_default_str();
   app->add_option("--max-triplets-per-point", args->max_triplets_per_point,
                   "Fail before the triangle test if its candidate triplets would average more than this per point "
                   "(L far too large for the spacing; 0 = no limit)")
-      ->check(CLI::Range(size_t(0), size_t(UINT32_MAX)))
+      ->check(in_range(size_t(0), size_t(UINT32_MAX)))
       ->capture_default_str();
   app->add_option("--report", args->report, "Also write statistics and the topology report as JSON");
   app->add_flag("--ascii", args->ascii, "Write ASCII PLY instead of binary");

@@ -15,6 +15,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "commands.h"
 #include "particlemesh/core/error.h"
 #include "attribute_selection.h"
 #include "particlemesh/version.h"
@@ -169,7 +170,7 @@ void add_sequence_options(CLI::App& app, SequenceArgs& args) {
   app.add_option("--jobs", args.jobs,
                  "With a sequence (a frame pattern, or a .pvd or .series collection): mesh N frames at once (the "
                  "--threads are shared among them; each output is the same whatever N)")
-      ->check(CLI::Range(1, 1024))
+      ->check(in_range(1, 1024))
       ->capture_default_str();
   app.add_flag("--dry-run", args.dry_run,
                "With a sequence (a frame pattern, or a .pvd or .series collection): list each frame, its input and "

@@ -121,12 +121,12 @@ void add_particle_input_options(CLI::App& app, ParticleInputArgs& a) {
   const char* group = "Input preprocessing (PCL; off by default)";
   auto* us = app.add_option("--uniform-sampling", a.uniform_sampling,
                             "Downsample with pcl::UniformSampling to this spacing (voxel edge, world units; also r0 unless --spacing)")
-                 ->check(CLI::PositiveNumber)
+                 ->check(positive_number())
                  ->check(finite_number())
                  ->group(group);
   auto* vg = app.add_option("--voxel-grid", a.voxel_grid,
                             "Downsample with pcl::VoxelGrid to this spacing (the input point nearest each voxel's centroid; also r0 unless --spacing)")
-                 ->check(CLI::PositiveNumber)
+                 ->check(positive_number())
                  ->check(finite_number())
                  ->group(group);
   us->excludes(vg);
@@ -134,11 +134,11 @@ void add_particle_input_options(CLI::App& app, ParticleInputArgs& a) {
                "Statistical outlier removal (pcl::StatisticalOutlierRemoval) before downsampling")
       ->group(group);
   app.add_option("--outlier-k", a.outlier_k, "Neighbours for the outlier statistics")
-      ->check(CLI::Range(1, 100000))
+      ->check(in_range(1, 100000))
       ->capture_default_str()
       ->group(group);
   app.add_option("--outlier-std", a.outlier_std, "Outlier threshold: mean + this x stddev")
-      ->check(CLI::Range(0.0, 1e6))
+      ->check(in_range(0.0, 1e6))
       ->check(finite_number())
       ->capture_default_str()
       ->group(group);
@@ -146,18 +146,18 @@ void add_particle_input_options(CLI::App& app, ParticleInputArgs& a) {
                  "Smooth with pcl::MovingLeastSquares, after downsampling: each point moved onto the polynomial "
                  "surface fitted to its neighbours within this radius (world units; a few times the spacing), which "
                  "takes out a scanner's noise. The mesh's vertices are then the moved points")
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->check(finite_number())
       ->group(group);
   app.add_option("--mls-order", a.mls_order, "Order of the polynomial --mls fits (0 or 1: a plane)")
-      ->check(CLI::Range(0, 5))
+      ->check(in_range(0, 5))
       ->capture_default_str()
       ->group(group);
   app.add_flag("--estimate-normals", a.estimate_normals,
                "Estimate normals with PCL (replacing the file's), flipped toward the viewpoint")
       ->group(group);
   app.add_option("--normal-k", a.normal_k, "Neighbours for normal estimation")
-      ->check(CLI::Range(3, 100000))
+      ->check(in_range(3, 100000))
       ->capture_default_str()
       ->group(group);
   app.add_option("--viewpoint", a.viewpoint,

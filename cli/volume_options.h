@@ -23,22 +23,22 @@ inline void add_anisotropy_options(CLI::App& app, AnisotropyOptions& a) {
   app.add_option("--aniso-radius", a.neighbor_radius,
                  "With --anisotropic: radius of the neighbourhood each kernel's PCA looks at, as a multiple of R "
                  "(0 < F <= 10; default 2)")
-      ->check(CLI::Range(1e-9, 10.0))
+      ->check(in_range(1e-9, 10.0))
       ->check(finite_number());
   app.add_option("--aniso-max-stretch", a.max_stretch,
                  "With --anisotropic: largest ratio of an ellipsoid's longest to shortest axis, k_r (1..100; "
                  "default 4)")
-      ->check(CLI::Range(1.0, 100.0))
+      ->check(in_range(1.0, 100.0))
       ->check(finite_number());
   app.add_option("--aniso-min-neighbors", a.min_neighbors,
                  "With --anisotropic: particles with fewer neighbours than this in the PCA neighbourhood keep a "
                  "sphere, N_eps (default 25)")
-      ->check(CLI::Range(0, 100000));
+      ->check(in_range(0, 100000));
   app.add_option("--aniso-smoothing", a.smoothing,
                  "With --anisotropic: how far each kernel centre moves toward its neighbours' weighted mean, "
                  "lambda (0..1; default 0: off; Yu and Turk's 0.9 pulls a face's outer layer in by about a "
                  "spacing)")
-      ->check(CLI::Range(0.0, 1.0))
+      ->check(in_range(0.0, 1.0))
       ->check(finite_number());
 }
 

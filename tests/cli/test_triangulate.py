@@ -344,8 +344,15 @@ def test_bad_inputs_give_one_line_errors(cli, tmp_path):
     data = full.read_bytes()
     (tmp_path / "cut.ply").write_bytes(data[: len(data) // 2])
     _fails(cli, tmp_path, [tmp_path / "cut.ply"], "cut.ply")
-    proc = cli("triangulate", good, "-o", tmp_path / "x.ply", "--spacing", "-1", check=False)
-    assert proc.returncode == 2 and "spacing" in proc.stderr
+    # Out-of-range numbers: the message says what the option takes, with its bounds as written
+    # (not CLI11's "not in range 0.000000 to 1797693134862315708...000000").
+    for args, message in [(("triangulate", "--spacing", "-1"), "--spacing: value -1 is not positive (it must be > 0)"),
+                          (("triangulate", "--threads", "-2"), "--threads: value -2 is negative (it must be >= 0)"),
+                          (("polygonize", "--collapse-edges", "0.7"), "--collapse-edges: value 0.7 is outside [0, 0.5]"),
+                          (("polygonize", "--taubin-mu", "0"), "--taubin-mu: value 0 is outside [-1, -1e-09]")]:
+        proc = cli(args[0], good, "-o", tmp_path / "x.ply", *args[1:], check=False)
+        assert proc.returncode == 2 and message in proc.stderr and "0.000000" not in proc.stderr, proc.stderr
+        assert not (tmp_path / "x.ply").exists()
     # CLI11's range checks let NaN through: every float option also checks it is finite.
     for option in ("--spacing", "--thin", "--max-edge-factor", "--normal-angle", "--fill-edge-factor"):
         proc = cli("triangulate", good, "-o", tmp_path / "x.ply", option, "nan", check=False)
