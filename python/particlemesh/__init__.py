@@ -36,7 +36,7 @@ from ._progress import Hook, Progress
 
 __all__ = [
     "read_points", "read_mesh", "read_frame_collection", "is_frame_collection", "write_mesh",
-    "triangulate", "polygonize",
+    "preprocess_scan", "triangulate", "polygonize",
     "polygonize_attributes",
     "smooth", "Smoother",
     "topology",
@@ -59,6 +59,7 @@ STATUS_INTERNAL = _abi.PM_STATUS_INTERNAL
 NORMAL_SOURCES = _options.enum_names("PM_NORMALS_")
 KERNELS = _options.enum_names("PM_KERNEL_")
 SCHEMES = _options.enum_names("PM_SMOOTH_")
+DOWNSAMPLINGS = _options.enum_names("PM_PCL_DOWNSAMPLE_")
 
 
 # ---- the library ----------------------------------------------------------------------------
@@ -80,14 +81,15 @@ def pcl_bridge_path():
 
 
 def defaults(function):
-    """{keyword: the library's default} of the options of "triangulate", "polygonize" or
-    "smooth", read from its pm_*_options_init (enum options by name)."""
+    """{keyword: the library's default} of the options of "triangulate", "polygonize",
+    "smooth" or "preprocess_scan" (the PCL bridge's), read from its pm_*_options_init (enum
+    options by name)."""
     try:
         spec = _options.SPECS[function]
     except KeyError:
         raise ValueError(f"no options for {function!r}; one of "
                          f"{', '.join(_options.SPECS)}") from None
-    return spec.defaults(_library.load())
+    return spec.defaults(_library.load_pcl() if spec is _options.PCL_PREPROCESS else _library.load())
 
 
 # ---- files ----------------------------------------------------------------------------------
@@ -123,6 +125,58 @@ def read_points(path):
         return read_cloud_handle(lib, handle, details)
     finally:
         lib.pm_cloud_destroy(handle)
+
+
+def preprocess_scan(positions, normals=None, *, attributes=None, viewpoint=None, **options):
+    """Clean up a scan with PCL's filters before triangulating it, through the PCL bridge (the
+    command-line tool's --remove-outliers, --voxel / --uniform-sampling, --mls and
+    --estimate-normals). Each step is off unless asked; they run in this order:
+
+    1. remove_outliers=True: pcl::StatisticalOutlierRemoval drops points whose mean distance
+       to their outlier_mean_k nearest (50) lies beyond outlier_stddev_mul (1) standard
+       deviations of the mean;
+    2. downsampling="uniform" (pcl::UniformSampling: per voxel the point nearest its centre)
+       or "voxel-grid" (pcl::VoxelGrid: the point nearest the voxel's centroid), voxels of
+       edge leaf_size;
+    3. mls_radius=R: pcl::MovingLeastSquares moves each point onto the polynomial
+       (mls_order, 2) fitted to its neighbours within R (a few spacings): takes out a
+       scanner's noise across the surface;
+    4. estimate_normals=True: pcl::NormalEstimationOMP over normal_k (20) neighbours, each
+       normal facing viewpoint=(x, y, z) (the scanner; default the origin).
+
+    threads (0 = all cores): the output is the same for any count. positions: (N, 3) or
+    Points (its normals and attributes come with it). Returns Points: the kept points in input
+    order, each with its normal and attributes; .info holds what each step did
+    (pm_pcl_preprocess_report) and "kept", (M,) int64: the input index of each output point.
+    Raises PclBridgeNotFoundError without the bridge, Error naming a bad parameter."""
+    lib = _library.load()
+    bridge = _library.load_pcl()
+    positions, normals, attributes = _points_args(positions, normals, attributes)
+    opt = _options.PCL_PREPROCESS.build(bridge, options)
+    if viewpoint is not None:
+        v = np.asarray(viewpoint, dtype=np.float64).reshape(-1)
+        if v.size != 3 or not np.all(np.isfinite(v)):
+            raise Error(f"viewpoint must be 3 finite numbers (x, y, z), got {viewpoint!r}",
+                        _abi.PM_STATUS_INVALID_ARGUMENT)
+        opt.viewpoint[:] = [float(x) for x in v]
+    report = _abi.pm_pcl_preprocess_report(struct_size=ctypes.sizeof(_abi.pm_pcl_preprocess_report))
+    cloud = new_cloud(lib, positions, normals, attributes)
+    out = _abi.pm_cloud_p()
+    try:
+        kept = np.empty(len(np.asarray(positions)), dtype=np.uint32)
+        status = bridge.pm_pcl_preprocess(cloud, ctypes.byref(opt), ctypes.byref(out),
+                                          kept.ctypes.data_as(ctypes.POINTER(ctypes.c_uint32)),
+                                          ctypes.byref(report))
+        if status != _abi.PM_OK:
+            message = bridge.pm_pcl_last_error_message().decode(errors="replace")
+            raise Error(message or lib.pm_status_string(status).decode(), status)
+        details = struct_dict(report)
+        details["normals_estimated"] = bool(details["normals_estimated"])
+        details["kept"] = kept[:details["output_points"]].astype(np.int64)
+        return read_cloud_handle(lib, out, details)
+    finally:
+        lib.pm_cloud_destroy(cloud)
+        lib.pm_cloud_destroy(out)
 
 
 def is_frame_collection(path):

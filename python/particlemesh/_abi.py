@@ -378,9 +378,51 @@ class pm_pcl_read_info(Structure):
     ]
 
 
+PM_PCL_DOWNSAMPLE_NONE = 0
+PM_PCL_DOWNSAMPLE_UNIFORM = 1
+PM_PCL_DOWNSAMPLE_VOXEL_GRID = 2
+
+
+class pm_pcl_preprocess_options(Structure):
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("remove_outliers", c_int32),
+        ("outlier_mean_k", c_int32),
+        ("outlier_stddev_mul", c_double),
+        ("downsampling", c_int32),
+        ("leaf_size", c_double),
+        ("mls_radius", c_double),
+        ("mls_order", c_int32),
+        ("estimate_normals", c_int32),
+        ("normal_k", c_int32),
+        ("viewpoint", c_float * 3),
+        ("threads", c_int32),
+    ]
+
+
+class pm_pcl_preprocess_report(Structure):
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("input_points", c_uint64),
+        ("outliers_removed", c_uint64),
+        ("downsampled_away", c_uint64),
+        ("smoothed", c_uint64),
+        ("smoothing_skipped", c_uint64),
+        ("smoothing_mean_shift", c_double),
+        ("smoothing_max_shift", c_double),
+        ("output_points", c_uint64),
+        ("normals_estimated", c_int32),
+        ("normals_failed", c_uint64),
+        ("seconds", c_double),
+    ]
+
+
 #: name: (restype, argtypes) of every function particlemesh_pcl_c.h declares.
 PCL_FUNCTIONS = {
     "pm_pcl_abi_version": (c_uint32, []),
     "pm_pcl_last_error_message": (c_char_p, []),
     "pm_pcl_read_cloud": (pm_status, [c_char_p, _cloudpp, POINTER(pm_pcl_read_info)]),
+    "pm_pcl_preprocess_options_init": (None, [POINTER(pm_pcl_preprocess_options)]),
+    "pm_pcl_preprocess": (pm_status, [pm_cloud_p, POINTER(pm_pcl_preprocess_options), _cloudpp,
+                                      POINTER(c_uint32), POINTER(pm_pcl_preprocess_report)]),
 }

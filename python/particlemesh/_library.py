@@ -98,7 +98,8 @@ class PclBridge:
             cdll = ctypes.CDLL(path)
         except OSError as e:
             raise PclBridgeNotFoundError(
-                f"reading .pcd needs the PCL bridge library, and {path} does not load: {e} "
+                "reading .pcd and preprocess_scan need the PCL bridge library, and "
+                f"{path} does not load: {e} "
                 f"(it needs PCL 1.13's libraries, e.g. Debian's libpcl-io1.13)") from e
         _declare(cdll, _abi.PCL_FUNCTIONS, path, PclBridgeNotFoundError)
         abi = int(cdll.pm_pcl_abi_version())
@@ -184,7 +185,8 @@ def load_pcl(path=None):
             paths, folders = pcl_candidate_paths(core.path)
             _bridges[core.path] = _load_first(
                 paths, PclBridge, PclBridgeNotFoundError,
-                "reading .pcd needs the PCL bridge library libparticlemesh_pcl, which was not "
+                "reading .pcd and preprocess_scan need the PCL bridge library "
+                "libparticlemesh_pcl, which was not "
                 f"found (looked in {', '.join(folders)} and the system library path; set "
                 f"{PCL_LIBRARY_ENV} to the library file)")
         return _bridges[core.path]

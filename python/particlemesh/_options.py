@@ -143,4 +143,9 @@ SMOOTH = OptionsSpec(
     enums={"scheme": enum_names("PM_SMOOTH_"), "boundary": enum_names("PM_BOUNDARY_"),
            "crease_method": enum_names("PM_CREASE_")})
 
-SPECS = {spec.function: spec for spec in (TRIANGULATE, POLYGONIZE, SMOOTH)}
+PCL_PREPROCESS = OptionsSpec(  # the PCL bridge's: its init is libparticlemesh_pcl's
+    "preprocess_scan", _abi.pm_pcl_preprocess_options, "pm_pcl_preprocess_options_init",
+    internal=("viewpoint",),  # viewpoint=
+    enums={"downsampling": enum_names("PM_PCL_DOWNSAMPLE_")})
+
+SPECS = {spec.function: spec for spec in (TRIANGULATE, POLYGONIZE, SMOOTH, PCL_PREPROCESS)}

@@ -13,5 +13,12 @@ int main(void) {
   if (cloud != NULL) return 3;
   if (pm_pcl_last_error_message()[0] == '\0') return 4;
   printf("%s\n", pm_pcl_last_error_message());
+  {
+    pm_pcl_preprocess_options o;
+    pm_pcl_preprocess_options_init(&o);
+    if (o.struct_size != sizeof o || o.normal_k != 20 || o.downsampling != PM_PCL_DOWNSAMPLE_NONE) return 5;
+    /* No cloud: a status and a message, the output untouched. */
+    if (pm_pcl_preprocess(NULL, &o, &cloud, NULL, NULL) != PM_STATUS_INVALID_ARGUMENT || cloud != NULL) return 6;
+  }
   return 0;
 }

@@ -1,12 +1,13 @@
 // particlemesh_pcl/particlemesh_pcl_c.h: pm_pcl_read_cloud gives the same particles as
 // loadParticles as an ordinary pm_cloud (normals, "color" in [0, 1], NaN points dropped and
 // counted), bad files fail with a status and a message naming the file, outputs untouched,
-// no exception crosses.
+// no exception crosses; pm_pcl_preprocess gives what particlemesh_pcl::preprocess gives.
 #include "particlemesh_pcl/particlemesh_pcl_c.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstring>
 #include <filesystem>
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include "particlemesh_pcl/io.h"
+#include "particlemesh_pcl/preprocessing.h"
 #include "support/test_support.h"
 
 namespace {
@@ -185,4 +187,133 @@ TEST(PclBridgeC, AnOlderCallersSmallerInfoGetsItsPrefixOnly) {
   ASSERT_EQ(pm_cloud_has_normals(c, &has_normals), PM_OK);
   EXPECT_EQ(has_normals, 1);
   pm_cloud_destroy(c);
+}
+
+namespace {
+
+/// A unit sphere of `n` Fibonacci points moved radially by noise of 1 % of its radius (a
+/// scanner's noise across the surface), with an "id" channel.
+particlemesh::PointCloud noisy_sphere(size_t n) {
+  particlemesh::PointCloud c;
+  particlemesh::VertexAttribute id{"id", 1, {}};
+  uint64_t state = 12345;
+  for (size_t i = 0; i < n; ++i) {
+    const double z = 1 - 2 * (double(i) + 0.5) / double(n), r = std::sqrt(1 - z * z);
+    const double phi = double(i) * M_PI * (3 - std::sqrt(5.0));
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    const double s = 1 + 0.01 * (double(state >> 11) / double(1ull << 53) - 0.5) * 2;
+    c.positions.push_back(particlemesh::Vec3{r * std::cos(phi), r * std::sin(phi), z} * s);
+    id.values.push_back(float(i));
+  }
+  c.attributes.push_back(id);
+  return c;
+}
+
+pm_cloud* to_handle(const particlemesh::PointCloud& c) {
+  std::vector<double> xyz;
+  for (const auto& p : c.positions) xyz.insert(xyz.end(), {p.x, p.y, p.z});
+  pm_cloud* h = nullptr;
+  EXPECT_EQ(pm_cloud_create(xyz.data(), nullptr, c.size(), &h), PM_OK) << pm_last_error_message();
+  for (const auto& a : c.attributes)
+    EXPECT_EQ(pm_cloud_set_attribute(h, a.name.c_str(), a.components, a.values.data(), c.size()), PM_OK);
+  return h;
+}
+
+}  // namespace
+
+// pm_pcl_preprocess is particlemesh_pcl::preprocess behind the C ABI: the same points, normals,
+// channels, kept indices and counts; bad parameters fail naming them, the output untouched.
+TEST(PclBridgeC, PreprocessGivesWhatPreprocessGives) {
+  const particlemesh::PointCloud input = noisy_sphere(8000);
+  particlemesh_pcl::PreprocessOptions o;
+  o.remove_outliers = true;
+  o.mls_radius = 0.08;
+  o.estimate_normals = true;
+  o.viewpoint[2] = 0.25f;  // inside: the normals face inward
+  particlemesh::PointCloud expected = input;
+  std::vector<uint32_t> expected_kept;
+  const particlemesh_pcl::PreprocessReport want = particlemesh_pcl::preprocess(expected, o, &expected_kept);
+  ASSERT_GT(want.outliers_removed, 0u);
+  ASSERT_GT(want.smoothed, 0u);
+
+  pm_pcl_preprocess_options c;
+  pm_pcl_preprocess_options_init(&c);
+  EXPECT_EQ(c.struct_size, sizeof c);
+  EXPECT_EQ(c.remove_outliers, 0);
+  EXPECT_EQ(c.outlier_mean_k, 50);
+  EXPECT_EQ(c.downsampling, PM_PCL_DOWNSAMPLE_NONE);
+  c.remove_outliers = 1;
+  c.mls_radius = 0.08;
+  c.estimate_normals = 1;
+  c.viewpoint[2] = 0.25f;
+  pm_cloud* in = to_handle(input);
+  pm_cloud* out = nullptr;
+  std::vector<uint32_t> kept(input.size(), 0xffffffffu);
+  pm_pcl_preprocess_report report;
+  report.struct_size = sizeof report;
+  ASSERT_EQ(pm_pcl_preprocess(in, &c, &out, kept.data(), &report), PM_OK) << last();
+  EXPECT_EQ(report.input_points, input.size());
+  EXPECT_EQ(report.outliers_removed, want.outliers_removed);
+  EXPECT_EQ(report.smoothed, want.smoothed);
+  EXPECT_EQ(report.smoothing_max_shift, want.smoothing_max_shift);
+  EXPECT_EQ(report.output_points, expected.size());
+  EXPECT_EQ(report.normals_estimated, 1);
+  kept.resize(expected.size());
+  EXPECT_EQ(kept, expected_kept);
+  size_t n = 0;
+  ASSERT_EQ(pm_cloud_get_count(out, &n), PM_OK);
+  ASSERT_EQ(n, expected.size());
+  std::vector<double> xyz(3 * n), normals(3 * n);
+  ASSERT_EQ(pm_cloud_copy_positions(out, xyz.data(), n), PM_OK);
+  ASSERT_EQ(pm_cloud_copy_normals(out, normals.data(), n), PM_OK);
+  size_t inward = 0;
+  for (size_t i = 0; i < n; ++i) {
+    ASSERT_EQ(xyz[3 * i], expected.positions[i].x) << i;
+    ASSERT_EQ(xyz[3 * i + 2], expected.positions[i].z) << i;
+    ASSERT_EQ(normals[3 * i + 1], expected.normals[i].y) << i;
+    inward += normals[3 * i] * xyz[3 * i] + normals[3 * i + 1] * xyz[3 * i + 1] + normals[3 * i + 2] * xyz[3 * i + 2] < 0;
+  }
+  EXPECT_EQ(inward, n);
+  const std::vector<float> id = copy_attribute(out, "id", 1);
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(id[i], float(kept[i])) << i;
+  pm_cloud_destroy(out);
+
+  // NULL options: every step off, a copy.
+  out = nullptr;
+  ASSERT_EQ(pm_pcl_preprocess(in, nullptr, &out, nullptr, nullptr), PM_OK) << last();
+  ASSERT_EQ(pm_cloud_get_count(out, &n), PM_OK);
+  EXPECT_EQ(n, input.size());
+  pm_cloud_destroy(out);
+
+  // Bad parameters: a status, a message naming what, *out_cloud untouched.
+  pm_cloud* sentinel = reinterpret_cast<pm_cloud*>(0x1);
+  out = sentinel;
+  pm_pcl_preprocess_options bad = c;
+  bad.downsampling = 7;
+  EXPECT_EQ(pm_pcl_preprocess(in, &bad, &out, nullptr, nullptr), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("options->downsampling is 7"), std::string::npos) << last();
+  bad = c;
+  bad.downsampling = PM_PCL_DOWNSAMPLE_VOXEL_GRID;
+  EXPECT_EQ(pm_pcl_preprocess(in, &bad, &out, nullptr, nullptr), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("leaf size > 0"), std::string::npos) << last();
+  bad = c;
+  bad.viewpoint[0] = std::nanf("");
+  EXPECT_EQ(pm_pcl_preprocess(in, &bad, &out, nullptr, nullptr), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("viewpoint"), std::string::npos) << last();
+  bad.struct_size = 0;
+  EXPECT_EQ(pm_pcl_preprocess(in, &bad, &out, nullptr, nullptr), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("struct_size"), std::string::npos) << last();
+  EXPECT_EQ(pm_pcl_preprocess(nullptr, &c, &out, nullptr, nullptr), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(out, sentinel);
+  // An older caller's options ending before the downsampling: the rest from the defaults.
+  pm_pcl_preprocess_options old = c;
+  old.struct_size = uint32_t(offsetof(pm_pcl_preprocess_options, downsampling));
+  old.downsampling = 7;  // past the caller's struct: not read
+  out = nullptr;
+  ASSERT_EQ(pm_pcl_preprocess(in, &old, &out, nullptr, &report), PM_OK) << last();
+  EXPECT_EQ(report.outliers_removed, want.outliers_removed);
+  EXPECT_EQ(report.smoothed, 0u);
+  EXPECT_EQ(report.normals_estimated, 0);
+  pm_cloud_destroy(out);
+  pm_cloud_destroy(in);
 }

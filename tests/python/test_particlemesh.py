@@ -882,11 +882,56 @@ def test_read_malformed_pcd_names_the_file(pm, bridge, tmp_path):
     assert e.value.status == pm.STATUS_FORMAT_ERROR and str(bad) in str(e.value)
 
 
+def test_preprocess_scan_smooths_noise_and_keeps_each_points_channels(pm, bridge):
+    """preprocess_scan (the PCL bridge's pm_pcl_preprocess): moving least squares takes a
+    scanner's noise off a sphere, outlier removal drops the stray points, each output point
+    keeps its channels (by .info["kept"]), the normals face the viewpoint, the output is the
+    same for any thread count; bad parameters are errors naming them."""
+    n = 6000
+    i = np.arange(n) + 0.5
+    z = 1 - 2 * i / n
+    phi = i * np.pi * (3 - np.sqrt(5))
+    sphere = np.c_[np.sqrt(1 - z * z) * np.cos(phi), np.sqrt(1 - z * z) * np.sin(phi), z]
+    rng = np.random.default_rng(3)
+    noisy = sphere * (1 + rng.uniform(-0.02, 0.02, (n, 1)))
+    strays = rng.uniform(-3, 3, (30, 3))
+    strays *= 2.5 / np.linalg.norm(strays, axis=1, keepdims=True)  # all 1.5 off the sphere
+    points = np.vstack([noisy, strays])
+    ids = np.arange(len(points), dtype=np.float32)
+    out = pm.preprocess_scan(points, attributes={"id": ids}, remove_outliers=True, mls_radius=0.12,
+                             estimate_normals=True, viewpoint=(0, 0, 0))
+    kept = out.info["kept"]
+    assert not np.isin(np.arange(n, n + 30), kept).any()  # every stray dropped
+    assert out.info["outliers_removed"] >= 30 and out.info["output_points"] == len(out)
+    np.testing.assert_array_equal(out.attributes["id"].ravel(), ids[kept])
+    before = np.abs(np.linalg.norm(points[kept], axis=1) - 1).mean()
+    after = np.abs(np.linalg.norm(out.positions, axis=1) - 1).mean()
+    assert after < before / 2, (before, after)
+    assert out.info["smoothed"] > 0.99 * len(out) and out.info["normals_estimated"]
+    assert ((out.normals * out.positions).sum(axis=1) < 0).all()  # facing the centre
+    again = pm.preprocess_scan(points, remove_outliers=True, mls_radius=0.12, estimate_normals=True,
+                               threads=1)
+    np.testing.assert_array_equal(again.positions, out.positions)
+    thin = pm.preprocess_scan(points, downsampling="voxel-grid", leaf_size=0.1)
+    assert 0 < len(thin) < len(points) and thin.info["downsampled_away"] == len(points) - len(thin)
+    assert pm.defaults("preprocess_scan")["normal_k"] == 20
+    with pytest.raises(pm.Error, match="leaf size > 0") as e:
+        pm.preprocess_scan(points, downsampling="uniform")
+    assert e.value.status == pm.STATUS_INVALID_ARGUMENT
+    with pytest.raises(pm.Error, match="downsampling is 'cubes'; it must be one of none, uniform, voxel-grid"):
+        pm.preprocess_scan(points, downsampling="cubes")
+    with pytest.raises(pm.Error, match="viewpoint must be 3 finite numbers"):
+        pm.preprocess_scan(points, estimate_normals=True, viewpoint=(0, np.nan, 0))
+    with pytest.raises(TypeError, match="unexpected keyword argument 'radius'"):
+        pm.preprocess_scan(points, radius=1)
+
+
 def test_missing_pcl_bridge_gives_a_clear_message(pm, pm_library, monkeypatch, tmp_path, data_dir):
     monkeypatch.setattr(pm_library, "_bridges", {})
     monkeypatch.setattr(pm_library, "pcl_candidate_paths", lambda core: ([], [str(tmp_path)]))
     with pytest.raises(pm.PclBridgeNotFoundError,
-                       match=r"reading \.pcd needs the PCL bridge library libparticlemesh_pcl") as e:
+                       match=r"reading \.pcd and preprocess_scan need the PCL bridge library "
+                             r"libparticlemesh_pcl") as e:
         pm.read_points(data_dir / "pcd/bun0.pcd")
     assert str(tmp_path) in str(e.value) and "PARTICLEMESH_PCL_LIBRARY" in str(e.value)
     assert len(pm.read_points(data_dir / "points/spot_poisson.ply").positions) == 8747

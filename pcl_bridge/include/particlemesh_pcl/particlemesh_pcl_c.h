@@ -55,6 +55,64 @@ PM_PCL_EXPORT const char* pm_pcl_last_error_message(void);
  *  PM_STATUS_FORMAT_ERROR (malformed), PM_STATUS_INVALID_INPUT (no valid point). */
 PM_PCL_EXPORT pm_status pm_pcl_read_cloud(const char* path, pm_cloud** out_cloud, pm_pcl_read_info* out_info);
 
+/** Which points pm_pcl_preprocess's downsampling keeps (particlemesh_pcl::Downsampling). */
+#define PM_PCL_DOWNSAMPLE_NONE 0         /**< every point */
+#define PM_PCL_DOWNSAMPLE_UNIFORM 1      /**< pcl::UniformSampling: per voxel, the point nearest its centre */
+#define PM_PCL_DOWNSAMPLE_VOXEL_GRID 2   /**< pcl::VoxelGrid: per voxel, the point nearest the points' centroid */
+
+/** The clean-up steps of pm_pcl_preprocess (particlemesh_pcl/preprocessing.h says what each
+ *  does), every one off until switched on; they run in this order. Fill it with
+ *  pm_pcl_preprocess_options_init, then change what you need. */
+typedef struct pm_pcl_preprocess_options {
+  uint32_t struct_size;      /**< set by pm_pcl_preprocess_options_init */
+  /* 1. statistical outlier removal (pcl::StatisticalOutlierRemoval) */
+  int32_t remove_outliers;   /**< non-zero: drop points whose mean distance to their k nearest is an outlier */
+  int32_t outlier_mean_k;    /**< k (default 50, PCL's tutorial) */
+  double outlier_stddev_mul; /**< beyond mean + this x the standard deviation (default 1) */
+  /* 2. downsampling to a spacing */
+  int32_t downsampling;      /**< PM_PCL_DOWNSAMPLE_* (default NONE) */
+  double leaf_size;          /**< the voxels' edge, world units (> 0 when downsampling) */
+  /* 3. smoothing (pcl::MovingLeastSquares) */
+  double mls_radius;         /**< the fit's search radius, world units (0 = no smoothing; a few spacings) */
+  int32_t mls_order;         /**< the fitted polynomial's order, 0..5 (default 2) */
+  /* 4. normal estimation (pcl::NormalEstimationOMP), replacing any normals the cloud had */
+  int32_t estimate_normals;  /**< non-zero: estimate them */
+  int32_t normal_k;          /**< neighbours of each plane fit (default 20) */
+  float viewpoint[3];        /**< each normal is flipped to face this point (the scanner) */
+  int32_t threads;           /**< for the steps that run in parallel; 0 = all cores */
+} pm_pcl_preprocess_options;
+
+/** What pm_pcl_preprocess did, step by step. */
+typedef struct pm_pcl_preprocess_report {
+  uint32_t struct_size;          /**< set by the caller to sizeof(pm_pcl_preprocess_report) */
+  uint64_t input_points;
+  uint64_t outliers_removed;
+  uint64_t downsampled_away;
+  uint64_t smoothed;             /**< points moved onto the fitted surface */
+  uint64_t smoothing_skipped;    /**< left where they were: fewer than 3 neighbours within mls_radius */
+  double smoothing_mean_shift;   /**< the mean distance a smoothed point moved */
+  double smoothing_max_shift;    /**< the farthest any moved */
+  uint64_t output_points;
+  int32_t normals_estimated;     /**< the output's normals come from the estimation */
+  uint64_t normals_failed;       /**< points without an estimated normal (then the output has none) */
+  double seconds;
+} pm_pcl_preprocess_report;
+
+/** Defaults: every step off, PCL's tutorial parameters. Does nothing for NULL. */
+PM_PCL_EXPORT void pm_pcl_preprocess_options_init(pm_pcl_preprocess_options* options);
+
+/** Clean up a scan before triangulating it with PCL's filters (outlier removal, downsampling,
+ *  moving least squares, normal estimation: the command-line tool's --remove-outliers,
+ *  --voxel / --uniform-sampling, --mls and --estimate-normals). Returns a new cloud in
+ *  *out_cloud: the kept points in input order, each with its normal and attributes (smoothing
+ *  moves the positions only). out_kept, if not NULL, must hold the input's point count: entry
+ *  i becomes the input index of output point i. `options` NULL = every step off (a copy);
+ *  `out_report` may be NULL. The same output for any thread count. Failures:
+ *  PM_STATUS_INVALID_ARGUMENT (a bad parameter, named), PM_STATUS_INVALID_INPUT (no point). */
+PM_PCL_EXPORT pm_status pm_pcl_preprocess(const pm_cloud* cloud, const pm_pcl_preprocess_options* options,
+                                          pm_cloud** out_cloud, uint32_t* out_kept,
+                                          pm_pcl_preprocess_report* out_report);
+
 #ifdef __cplusplus
 }
 #endif
