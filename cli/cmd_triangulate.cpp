@@ -202,17 +202,33 @@ std::vector<std::string> surface_hints(const SurfaceResult& r, const Triangulate
   return out;
 }
 
-/// Runs `work`; a grid too large for the points' extent (far outliers, which the library's
-/// message names) gets the switch that drops them, where this build has it.
+/// The largest --max-neighbors.
+constexpr size_t kMaxNeighborsOption = 100000;
+
+/// Runs `work`; a limit the library names gets the switch that lifts it: a grid too large for
+/// the points' extent (far outliers) --remove-outliers, where this build has it; more
+/// neighbours within a point's radius than the limit (a cloud thicker than a surface, e.g.
+/// noise across it) --max-neighbors with the count the library gives, when the spacing was
+/// measured (`measured_spacing`): above a --spacing the caller gave, the spacing is what is
+/// wrong, and the triplet limit would stop the next run.
 template <class Work>
-auto with_outlier_advice(Work&& work) {
+auto with_limit_advice(Work&& work, bool measured_spacing = false) {
   try {
     return work();
   } catch (const Error& e) {
     const std::string what = e.what();
-    if (e.status() != Status::LimitExceeded || what.find("far outliers") == std::string::npos || !has_pcl_preprocessing())
-      throw;
-    throw Error(e.status(), what + " (--remove-outliers drops them)");
+    if (e.status() != Status::LimitExceeded) throw;
+    if (what.find("far outliers") != std::string::npos && has_pcl_preprocessing())
+      throw Error(e.status(), what + " (--remove-outliers drops them)");
+    const std::string key = "raise the neighbour limit to at least ";
+    const size_t at = what.find(key);
+    if (at != std::string::npos && measured_spacing) {
+      const size_t from = at + key.size(), to = what.find_first_not_of("0123456789", from);
+      const std::string most = what.substr(from, to - from);
+      if (!most.empty() && most.size() <= 6 && std::stoul(most) <= kMaxNeighborsOption)
+        throw Error(e.status(), what + " (--max-neighbors " + most + ")");
+    }
+    throw;
   }
 }
 
@@ -245,13 +261,13 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
     const double given = a.spacing > 0 ? a.spacing : input.spacing_hint;
     if (a.global_spacing) {
       thin_distance = a.thin * (given > 0 ? given : estimate_spacing(pts, n, a.threads).spacing);
-      thinned = with_outlier_advice([&] { return thin_cloud(input.cloud, thin_distance); });
+      thinned = with_limit_advice([&] { return thin_cloud(input.cloud, thin_distance); });
     } else {
-      LocalSpacing ls = with_outlier_advice([&] { return estimate_local_spacing(pts, n, a.threads); });
+      LocalSpacing ls = with_limit_advice([&] { return estimate_local_spacing(pts, n, a.threads); });
       const double scale = a.thin * (given > 0 ? given / ls.median_nn : 1.0);
       for (double& h : ls.spacing) h *= scale;
       thin_distance = a.thin * (given > 0 ? given : ls.median_nn);
-      thinned = with_outlier_advice([&] { return thin_cloud(input.cloud, ls.spacing); });
+      thinned = with_limit_advice([&] { return thin_cloud(input.cloud, ls.spacing); });
     }
   }
   const PointCloud& cloud = a.thin > 1 ? thinned : input.cloud;
@@ -280,11 +296,11 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
   SurfaceResult result;
   std::vector<std::string> hints;  // what the summary and the report say might help
   if (a.raw) {
-    TriangulateResult r = with_outlier_advice([&] { return triangulate_raw(cloud, opt); });
+    TriangulateResult r = with_limit_advice([&] { return triangulate_raw(cloud, opt); }, opt.spacing == 0);
     result.mesh = std::move(r.mesh);
     result.triangulation = r.stats;
   } else {
-    result = with_outlier_advice([&] { return reconstruct_surface(cloud, opt); });
+    result = with_limit_advice([&] { return reconstruct_surface(cloud, opt); }, opt.spacing == 0);
     hints = surface_hints(result, a, cloud);
   }
   const double t_tri = std::chrono::duration<double>(Clock::now() - t1).count();
@@ -438,7 +454,7 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
       ->capture_default_str();
   app->add_option("--max-neighbors", args->max_neighbors,
                   "Fail if a point has more neighbours within L than this (points far denser than the spacing)")
-      ->check(in_range(size_t(2), size_t(100000)))
+      ->check(in_range(size_t(2), kMaxNeighborsOption))
       ->capture_default_str();
   app->add_option("--max-triplets-per-point", args->max_triplets_per_point,
                   "Fail before the triangle test if its candidate triplets would average more than this per point "

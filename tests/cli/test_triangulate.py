@@ -1,5 +1,6 @@
 """particlemesh triangulate / inspect / sample, end to end through the binary."""
 import json
+import re
 import math
 import os
 import random
@@ -344,6 +345,19 @@ def test_bad_inputs_give_one_line_errors(cli, tmp_path):
     data = full.read_bytes()
     (tmp_path / "cut.ply").write_bytes(data[: len(data) // 2])
     _fails(cli, tmp_path, [tmp_path / "cut.ply"], "cut.ply")
+    # More neighbours within a point's radius than --max-neighbors: the error names the limit
+    # that lets the run through, and that limit does (the spacing measured; a --spacing far too
+    # large gets no such advice: the spacing is what is wrong there).
+    proc = cli("triangulate", good, "-o", tmp_path / "x.ply", "--max-neighbors", "8", check=False)
+    assert proc.returncode == 1 and "more than the limit of 8" in proc.stderr, proc.stderr
+    most = re.search(r"\(--max-neighbors (\d+)\)", proc.stderr)
+    assert most and not (tmp_path / "x.ply").exists(), proc.stderr
+    cli("triangulate", good, "-o", tmp_path / "x.ply", "--max-neighbors", most.group(1), "-q")
+    assert (tmp_path / "x.ply").exists()
+    (tmp_path / "x.ply").unlink()
+    proc = cli("triangulate", good, "-o", tmp_path / "x.ply", "--spacing", "0.5", check=False)
+    assert proc.returncode == 1 and "more than the limit of 256" in proc.stderr, proc.stderr
+    assert "give a smaller spacing" in proc.stderr and "(--max-neighbors" not in proc.stderr
     # Out-of-range numbers: the message says what the option takes, with its bounds as written
     # (not CLI11's "not in range 0.000000 to 1797693134862315708...000000").
     for args, message in [(("triangulate", "--spacing", "-1"), "--spacing: value -1 is not positive (it must be > 0)"),

@@ -11,12 +11,15 @@ namespace PM_NAMESPACE::detail {
 
 namespace {
 
-[[noreturn]] void too_many(size_t point, size_t max_neighbors, const std::string& within) {
+/// `point` (an input index) has `count` neighbours, over the limit; the most any point has is
+/// `most`: the limit that would let the call through (the command-line tool reads it from
+/// "the neighbour limit to at least N" for its --max-neighbors advice).
+[[noreturn]] void too_many(size_t point, size_t count, size_t most, size_t max_neighbors, const std::string& within) {
   throw Error(Status::LimitExceeded,
-              "point " + std::to_string(point) + " has more than " + std::to_string(max_neighbors) +
-                  " neighbours within " + within +
-                  ": the points are packed far denser than the spacing (raise the neighbour "
-                  "limit, or give a smaller spacing / max edge factor)");
+              "point " + std::to_string(point) + " has " + std::to_string(count) + " neighbours within " + within +
+                  ", more than the limit of " + std::to_string(max_neighbors) +
+                  ": the points are packed far denser than the spacing (raise the neighbour limit to at least " +
+                  std::to_string(most) + ", or give a smaller spacing / max edge factor)");
 }
 
 }  // namespace
@@ -85,7 +88,12 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
   tracker.check();
   for (size_t k = 0; k < chunks; ++k)
     if (chunk_over[k] != UINT32_MAX) cap_point = std::min<size_t>(cap_point, chunk_over[k]);
-  if (cap_point != SIZE_MAX) too_many(cap_point, max_neighbors, std::to_string(radius));
+  if (cap_point != SIZE_MAX) {
+    size_t here = 0;
+    for (size_t s = 0; s < n; ++s)
+      if (grid.original_index(uint32_t(s)) == cap_point) here = count[s];
+    too_many(cap_point, here, *std::max_element(count.begin(), count.end()), max_neighbors, std::to_string(radius));
+  }
 
   NeighborLists lists;
   lists.offset.resize(n + 1);
@@ -163,10 +171,15 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
     }
   }
   if (lists.max_count > max_neighbors) {
-    size_t lowest = SIZE_MAX;
-    for (size_t s = 0; s < n; ++s)
-      if (lists.offset[s + 1] - lists.offset[s] > max_neighbors) lowest = std::min<size_t>(lowest, grid.original_index(uint32_t(s)));
-    too_many(lowest, max_neighbors, "its local radius");
+    size_t lowest = SIZE_MAX, count = 0;
+    for (size_t s = 0; s < n; ++s) {
+      const size_t here = lists.offset[s + 1] - lists.offset[s];
+      if (here > max_neighbors && grid.original_index(uint32_t(s)) < lowest) {
+        lowest = grid.original_index(uint32_t(s));
+        count = here;
+      }
+    }
+    too_many(lowest, count, lists.max_count, max_neighbors, "its local radius");
   }
   lists.index.resize(lists.offset[n]);
   parallel_blocks(chunks, 1, [&](size_t kb, size_t ke) {
