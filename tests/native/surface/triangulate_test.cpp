@@ -298,7 +298,7 @@ TEST(TriangulateRaw, BadInputGivesClearErrors) {
   TriangulateOptions dense;
   dense.spacing = 0.5;  // far larger than the real spacing: every point neighbours dozens
   dense.max_neighbors = 20;
-  expect_error(ok, dense, Status::LimitExceeded, "more than 20 neighbours");
+  expect_error(ok, dense, Status::LimitExceeded, "more than the limit of 20");
   PointCloud mismatch = test::random_cloud(10, 1);
   mismatch.normals.resize(3);
   expect_error(mismatch, def, Status::InvalidInput, "normals");
