@@ -315,13 +315,20 @@ def test_import_every_ply_and_xyz(pm, data_dir, tmp_path):
     assert "Point ID" in obj.data.attributes
 
 
-def test_import_simulation_frames_velocity_reaches_motion_blur(pm, data_dir, clean_scene):
-    """A simulator's frame (.vtk, .bgeo) imports with its channels; its `velocity` becomes the
-    FLOAT_VECTOR point attribute Cycles' motion blur reads, on the import and on the mesh
-    polygonize makes of it (interpolated)."""
-    for name in ["double_dam_break_frame_01_4732_particles.vtk", "ParticleData_Fluid_50.bgeo"]:
-        obj = import_cloud(data_dir / "particles" / name)
-        cloud = pm.particlemesh.read_points(data_dir / "particles" / name)
+def test_import_simulation_frames_velocity_reaches_motion_blur(pm, data_dir, clean_scene, tmp_path):
+    """A simulator's frame (.vtk, .bgeo, Houdini's Blosc-compressed .bgeo.sc) imports with its
+    channels; its `velocity` becomes the FLOAT_VECTOR point attribute Cycles' motion blur
+    reads, on the import and on the mesh polygonize makes of it (interpolated)."""
+    import gzip
+    import sys
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "cli"))
+    from particle_files import scf
+    bgeo = data_dir / "particles" / "ParticleData_Fluid_50.bgeo"
+    sc = tmp_path / "ParticleData_Fluid_50.bgeo.sc"
+    sc.write_bytes(scf(gzip.decompress(bgeo.read_bytes())))
+    for path in [data_dir / "particles" / "double_dam_break_frame_01_4732_particles.vtk", bgeo, sc]:
+        obj = import_cloud(path)
+        cloud = pm.particlemesh.read_points(path)
         assert len(obj.data.vertices) == len(cloud.positions)
         attribute = obj.data.attributes["velocity"]
         assert attribute.data_type == "FLOAT_VECTOR" and attribute.domain == "POINT"
