@@ -37,6 +37,7 @@ struct PolygonizeArgs {
   double collapse_edges = 0;
   int taubin = 0;
   double taubin_lambda = TaubinOptions{}.lambda, taubin_mu = TaubinOptions{}.mu;
+  std::vector<double> crop;  ///< --crop
   std::string attributes = "all";
   std::string lattice_anchor = "space";
   SequenceArgs sequence;
@@ -116,7 +117,9 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
   RunOutputs outputs(with_frame_outputs(output_specs(a), frame), {a.input});
   const auto t0 = Clock::now();
   ProgressLine progress(a.quiet);
-  ParticleInput input = read_particles(a.input, ParticleInputArgs{}, a.threads);
+  ParticleInputArgs input_args;
+  input_args.crop = a.crop;
+  ParticleInput input = read_particles(a.input, input_args, a.threads);
   // Per-particle radii from a channel, taken before --attributes chooses what the mesh carries.
   std::vector<double> radii;
   if (!a.radius_channel.empty()) radii = radii_from_channel(input.cloud, a.radius_channel, a.radius_scale, a.input);
@@ -160,6 +163,9 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
         m.replace(at, lib.size(), "(use a larger --cell or raise --max-grid-mib)");
         throw Error(e.status(), m);
       }
+      // Strays far from the rest (a simulation's particle flung away): keep the rest.
+      if (e.status() == Status::LimitExceeded && m.find("far outliers") != std::string::npos)
+        throw Error(e.status(), m + far_outlier_advice(false));
       throw;
     }
   }();
@@ -283,6 +289,7 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
       ->check(CLI::IsMember({"wyvill", "poly4", "poly6", "blinn"}, CLI::ignore_case))
       ->capture_default_str();
   app->add_option("--cell", args->cell, "Grid cell size h, world units (default: R / 4)")->check(positive_number())->check(finite_number());
+  add_crop_option(*app, args->crop);
   app->add_option("--threads", args->threads, "Worker threads, 0 = all cores (the output does not depend on it)")
       ->check(non_negative_number())
       ->capture_default_str();

@@ -23,6 +23,7 @@ struct RenderArgs {
   std::vector<double> camera, up{0, 1, 0};
   bool quiet = false;
   AnisotropyOptions anisotropy;
+  std::vector<double> crop;  ///< --crop
 };
 
 int run_render(const RenderArgs& a) {
@@ -31,7 +32,9 @@ int run_render(const RenderArgs& a) {
   const auto t0 = Clock::now();
   ProgressLine progress(a.quiet);
   set_phase(Phase::Reading);
-  const ParticleInput input = read_particles(a.input, ParticleInputArgs{}, a.threads);
+  ParticleInputArgs input_args;
+  input_args.crop = a.crop;
+  const ParticleInput input = read_particles(a.input, input_args, a.threads);
   const PointCloud& cloud = input.cloud;
   set_phase(Phase::Computing);
   FieldParams p;
@@ -40,7 +43,16 @@ int run_render(const RenderArgs& a) {
   p.threshold = a.threshold;
   p.anisotropy = a.anisotropy;
   const auto t1 = Clock::now();
-  RayCaster caster(ParticleField(cloud, p, a.threads, progress.callback()));
+  RayCaster caster = [&] {
+    try {
+      return RayCaster(ParticleField(cloud, p, a.threads, progress.callback()));
+    } catch (const Error& e) {
+      // Strays far from the rest (a simulation's particle flung away): keep the rest.
+      if (e.status() == Status::LimitExceeded && std::string(e.what()).find("far outliers") != std::string::npos)
+        throw Error(e.status(), e.what() + far_outlier_advice(false));
+      throw;
+    }
+  }();
   const double t_build = std::chrono::duration<double>(Clock::now() - t1).count();
   RenderOptions o;
   o.width = a.width;
@@ -146,6 +158,7 @@ void add_render(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("--shading", args->shading, "lambert (clay, key light) or normal (normal as colour)")
       ->check(CLI::IsMember({"lambert", "normal"}, CLI::ignore_case))
       ->capture_default_str();
+  add_crop_option(*app, args->crop);
   app->add_option("--threads", args->threads, "Worker threads, 0 = all cores (the image does not depend on it)")
       ->check(non_negative_number())
       ->capture_default_str();

@@ -206,7 +206,7 @@ std::vector<std::string> surface_hints(const SurfaceResult& r, const Triangulate
 constexpr size_t kMaxNeighborsOption = 100000;
 
 /// Runs `work`; a limit the library names gets the switch that lifts it: a grid too large for
-/// the points' extent (far outliers) --remove-outliers, where this build has it; more
+/// the points' extent (far outliers) --crop, and --remove-outliers where this build has it; more
 /// neighbours within a point's radius than the limit (a cloud thicker than a surface, e.g.
 /// noise across it) --max-neighbors with the count the library gives, when the spacing was
 /// measured (`measured_spacing`): above a --spacing the caller gave, the spacing is what is
@@ -218,8 +218,7 @@ auto with_limit_advice(Work&& work, bool measured_spacing = false) {
   } catch (const Error& e) {
     const std::string what = e.what();
     if (e.status() != Status::LimitExceeded) throw;
-    if (what.find("far outliers") != std::string::npos && has_pcl_preprocessing())
-      throw Error(e.status(), what + " (--remove-outliers drops them)");
+    if (what.find("far outliers") != std::string::npos) throw Error(e.status(), what + far_outlier_advice(true));
     const std::string key = "raise the neighbour limit to at least ";
     const size_t at = what.find(key);
     if (at != std::string::npos && measured_spacing) {
@@ -465,6 +464,7 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
   app->add_flag("--ascii", args->ascii, "Write ASCII PLY instead of binary");
   app->add_flag("-q,--quiet", args->quiet, "No summary and no progress line");
   add_particle_input_options(*app, args->input_options);
+  add_crop_option(*app, args->input_options.crop);
   add_smooth_chain_options(app, args->smooth);
   add_attributes_option(*app, args->attributes);
   add_sequence_options(*app, args->sequence);

@@ -4,7 +4,9 @@
 // runs that need no PCL do not pay for linking it at start.
 #include <dlfcn.h>
 
+#include <algorithm>
 #include <cctype>
+#include <cstdio>
 #include <filesystem>
 #include <mutex>
 #include <string>
@@ -172,6 +174,69 @@ void add_particle_input_options(CLI::App& app, ParticleInputArgs& a) {
 void add_particle_input_options(CLI::App&, ParticleInputArgs&) {}
 #endif
 
+void add_crop_option(CLI::App& app, std::vector<double>& crop) {
+  app.add_option("--crop", crop,
+                 "Keep only the particles inside this box, MINX MINY MINZ MAXX MAXY MAXZ (world units; spaces or commas): "
+                 "a region of a large scene, or a simulation's particles without those flung far away (strays make the "
+                 "grid too large). Applied after any preprocessing; the summary and the report count those dropped")
+      ->expected(6)
+      ->delimiter(',')
+      ->check(finite_number());
+}
+
+std::string far_outlier_advice(bool outliers) {
+  std::string advice = "--crop MINX MINY MINZ MAXX MAXY MAXZ keeps the particles inside a box";
+  if (outliers && has_pcl_preprocessing()) advice = "--remove-outliers drops them; " + advice;
+  return " (" + advice + ")";
+}
+
+namespace {
+
+/// --crop: the particles inside the box (bounds included), in their order, with their normals
+/// and channels; counted in the report and the summary.
+void crop_particles(ParticleInput& in, const std::vector<double>& box) {
+  if (box.empty()) return;
+  for (int a = 0; a < 3; ++a)
+    if (!(box[a] <= box[a + 3]))
+      throw Error(Status::InvalidArgument, std::string("--crop: the box's minimum ") + "xyz"[a] + " (" +
+                                               detail::shortest(box[a]) + ") is above its maximum (" +
+                                               detail::shortest(box[a + 3]) + ")");
+  PointCloud& c = in.cloud;
+  const size_t n = c.size();
+  std::vector<size_t> keep;
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3& p = c.positions[i];
+    if (p.x >= box[0] && p.y >= box[1] && p.z >= box[2] && p.x <= box[3] && p.y <= box[4] && p.z <= box[5])
+      keep.push_back(i);
+  }
+  if (keep.empty())
+    throw Error(Status::InvalidInput, "--crop: none of the " + std::to_string(n) + " particles lies inside the box");
+  if (keep.size() < n) {
+    for (size_t k = 0; k < keep.size(); ++k) c.positions[k] = c.positions[keep[k]];
+    c.positions.resize(keep.size());
+    if (c.has_normals()) {
+      for (size_t k = 0; k < keep.size(); ++k) c.normals[k] = c.normals[keep[k]];
+      c.normals.resize(keep.size());
+    }
+    for (VertexAttribute& a : c.attributes) {
+      const size_t w = size_t(a.components);
+      for (size_t k = 0; k < keep.size(); ++k)
+        std::copy_n(a.values.begin() + ptrdiff_t(keep[k] * w), w, a.values.begin() + ptrdiff_t(k * w));
+      a.values.resize(keep.size() * w);
+    }
+  }
+  in.report["crop"] = {{"min", {box[0], box[1], box[2]}},
+                       {"max", {box[3], box[4], box[5]}},
+                       {"kept", keep.size()},
+                       {"dropped", n - keep.size()}};
+  char line[160];
+  std::snprintf(line, sizeof line, "  crop          %zu of %zu particles inside the box (%zu outside, dropped)\n",
+                keep.size(), n, n - keep.size());
+  in.summary += line;
+}
+
+}  // namespace
+
 bool has_pcl_preprocessing() {
 #ifdef PM_CLI_PCL_MODULE
   return true;
@@ -181,9 +246,15 @@ bool has_pcl_preprocessing() {
 }
 
 ParticleInput read_particles(const std::string& path, const ParticleInputArgs& a, int threads) {
-  if (!wants_pcl(path, a)) return read_natively(path, a);
-  const std::string what = lower_extension(path) == ".pcd" ? "'" + path + "': .pcd input" : "PCL preprocessing";
-  return pcl_module(what).read(path, a, threads);
+  ParticleInput in;
+  if (!wants_pcl(path, a)) {
+    in = read_natively(path, a);
+  } else {
+    const std::string what = lower_extension(path) == ".pcd" ? "'" + path + "': .pcd input" : "PCL preprocessing";
+    in = pcl_module(what).read(path, a, threads);
+  }
+  crop_particles(in, a.crop);
+  return in;
 }
 
 void write_pcl_mesh(const TriMesh& mesh, OutputFile& out) {

@@ -35,6 +35,9 @@ struct ParticleInputArgs {
   int normal_k = 20;
   std::vector<double> viewpoint;  ///< empty = the PCD's sensor origin (none for other formats)
   std::string pcl_mesh;           ///< also write a pcl::PolygonMesh PLY here
+  /// --crop: MINX MINY MINZ MAXX MAXY MAXZ, only the particles inside are kept (after any
+  /// preprocessing); empty = all of them.
+  std::vector<double> crop;
 };
 
 struct ParticleInput {
@@ -53,7 +56,14 @@ bool has_pcl_preprocessing();
 /// Add the input options (preprocessing switches, --pcl-mesh) to a subcommand.
 void add_particle_input_options(CLI::App& app, ParticleInputArgs& args);
 
-/// Read `path` (.pcd, .ply, .xyz) and preprocess as asked. @throws Error naming the file.
+/// Add --crop (every command that meshes or renders particles; not PCL's).
+void add_crop_option(CLI::App& app, std::vector<double>& crop);
+
+/// The advice that goes with the library's "far outliers" error (a grid too large for the
+/// particles' extent): --crop, and --remove-outliers where this build has it and `outliers`.
+std::string far_outlier_advice(bool outliers);
+
+/// Read `path` (.pcd, .ply, .xyz), preprocess and crop as asked. @throws Error naming the file.
 ParticleInput read_particles(const std::string& path, const ParticleInputArgs& args, int threads);
 
 /// Write the mesh as a pcl::PolygonMesh PLY (--pcl-mesh) into `out`.

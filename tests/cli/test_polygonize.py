@@ -378,3 +378,33 @@ def test_report_and_summary_describe_the_written_mesh(cli, inspect, tmp_path, co
     assert topo["vertices"] == mesh["vertices"] and topo["closed"] == mesh["closed"] is True
     proc = cli(command, pts, "-o", out)
     assert f"triangles     {mesh['triangles']}\n" in proc.stdout
+
+
+def test_a_stray_particle_far_away_is_cropped_off(cli, inspect, tmp_path):
+    """A particle a simulation flung far away makes the grid too large: the error names it and
+    says --crop; with --crop the rest meshes exactly as without the stray (the same bytes),
+    and the summary and the report count what was dropped. render takes --crop too; a box
+    inside out or holding no particle is an error naming --crop."""
+    block = tmp_path / "block.xyz"
+    n = write_block(block)
+    stray = tmp_path / "stray.xyz"
+    stray.write_text(block.read_text() + "1e6 0.3 0.3\n")
+    proc = cli("polygonize", stray, "-o", tmp_path / "x.ply", check=False)
+    assert proc.returncode == 1 and not (tmp_path / "x.ply").exists(), proc.stderr
+    assert f"point {n} (x = 1e+06)" in proc.stderr and "--crop MINX MINY MINZ MAXX MAXY MAXZ" in proc.stderr
+    cli("polygonize", block, "-o", tmp_path / "block.ply", "-q")
+    report = tmp_path / "r.json"
+    proc = cli("polygonize", stray, "-o", tmp_path / "cropped.ply", "--crop", "-1,-1,-1,2,2,2", "--report", report)
+    assert f"crop          {n} of {n + 1} particles inside the box (1 outside, dropped)" in proc.stdout
+    assert (tmp_path / "cropped.ply").read_bytes() == (tmp_path / "block.ply").read_bytes()
+    crop = json.loads(report.read_text())["read"]["crop"]
+    assert crop == {"min": [-1, -1, -1], "max": [2, 2, 2], "kept": n, "dropped": 1}
+    assert inspect(tmp_path / "cropped.ply")["closed"]
+    cli("render", stray, "-o", tmp_path / "r.png", "--crop", "-1", "-1", "-1", "2", "2", "2", "-q")
+    assert (tmp_path / "r.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    for box, message in [("2,-1,-1,1,2,2", "--crop: the box's minimum x (2) is above its maximum (1)"),
+                         ("5,5,5,6,6,6", f"--crop: none of the {n + 1} particles lies inside the box")]:
+        proc = cli("polygonize", stray, "-o", tmp_path / "y.ply", "--crop", box, check=False)
+        assert proc.returncode == 1 and message in proc.stderr and not (tmp_path / "y.ply").exists(), proc.stderr
+    proc = cli("polygonize", stray, "-o", tmp_path / "y.ply", "--crop", "0,0,nan,1,1,1", check=False)
+    assert proc.returncode == 2 and "not a finite number" in proc.stderr
