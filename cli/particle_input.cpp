@@ -25,9 +25,19 @@ namespace {
 
 namespace fs = std::filesystem;
 
+/// The input's extension in lower case; Houdini's compressed ".bgeo.gz", ".bgeo.sc",
+/// ".geo.gz" and ".geo.sc" as one (the report's "format": "bgeo.sc", not "sc").
 std::string lower_extension(const std::string& path) {
-  std::string ext = fs::path(path).extension().string();
-  for (char& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+  const auto lower = [](std::string e) {
+    for (char& ch : e) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+    return e;
+  };
+  const fs::path p(path);
+  const std::string ext = lower(p.extension().string());
+  if (ext == ".gz" || ext == ".sc") {
+    const std::string inner = lower(p.stem().extension().string());
+    if (inner == ".bgeo" || inner == ".geo") return inner + ext;
+  }
   return ext;
 }
 

@@ -376,6 +376,10 @@ def test_binary_json_bgeo_pages_and_clear_errors(cli, tmp_path):
 
     write_bgeo_json(tmp_path / "good.bgeo", p, a)
     good = (tmp_path / "good.bgeo").read_bytes()
+    # inspect names Houdini's compressed forms whole.
+    (tmp_path / "good.bgeo.sc").write_bytes(scf(good))
+    report = json.loads(cli("inspect", tmp_path / "good.bgeo.sc", "--json").stdout)
+    assert report["input"]["format"] == "bgeo.sc" and report["input"]["points"] == len(p)
     cases = {
         "truncated.bgeo": (good[: len(good) // 2], "truncated"),
         "magic.bgeo": (b"\x7fNSJx" + good[5:], "magic number"),
