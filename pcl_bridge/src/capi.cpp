@@ -49,6 +49,26 @@ namespace
     return particlemesh::run_guarded (setError, body);
   }
 
+  // An output struct sized by the caller (its first member: uint32_t struct_size), checked
+  // before any work: `name` names it in the error.
+  template <class T> void
+  checkSized (const T *out, const char *name, const char *type)
+  {
+    if (out != nullptr && (out->struct_size < sizeof (uint32_t) || out->struct_size > 4096))
+      throw particlemesh::Error (particlemesh::Status::InvalidArgument,
+                                 std::string (name) + "->struct_size must be set to sizeof(" + type + "), is " +
+                                     std::to_string (out->struct_size));
+  }
+
+  // `value` into the caller's struct: an older caller's smaller struct gets its prefix only.
+  template <class T> void
+  writeSized (T *out, const T &value)
+  {
+    const std::size_t size = std::min<std::size_t> (out->struct_size, sizeof (T));
+    std::memcpy (out, &value, size);
+    out->struct_size = static_cast<uint32_t> (size);
+  }
+
   struct CloudDeleter
   {
     void operator() (pm_cloud *c) const { pm_cloud_destroy (c); }
@@ -145,9 +165,7 @@ pm_pcl_read_cloud (const char *path, pm_cloud **out_cloud, pm_pcl_read_info *out
       throw Error (Status::InvalidArgument, "path is NULL");
     if (out_cloud == nullptr)
       throw Error (Status::InvalidArgument, "out_cloud is NULL");
-    if (out_info != nullptr && (out_info->struct_size < sizeof (uint32_t) || out_info->struct_size > 4096))
-      throw Error (Status::InvalidArgument, "out_info->struct_size must be set to sizeof(pm_pcl_read_info), is " +
-                                            std::to_string (out_info->struct_size));
+    checkSized (out_info, "out_info", "pm_pcl_read_info");
     const std::string file (path);
     particlemesh_pcl::LoadReport report;
     const particlemesh::PointCloud particles = particlemesh_pcl::loadParticles (file, &report);
@@ -175,10 +193,7 @@ pm_pcl_read_cloud (const char *path, pm_cloud **out_cloud, pm_pcl_read_info *out
       info.has_intensity = intensity ? 1 : 0;
       for (int c = 0; c < 3; ++c)
         info.origin[c] = report.origin[c];
-      // An older caller's smaller struct gets its prefix only.
-      const std::size_t size = std::min<std::size_t> (out_info->struct_size, sizeof (info));
-      std::memcpy (out_info, &info, size);
-      out_info->struct_size = static_cast<uint32_t> (size);
+      writeSized (out_info, info);
     }
     *out_cloud = cloud.release ();
   });
@@ -218,9 +233,7 @@ pm_pcl_preprocess (const pm_cloud *cloud, const pm_pcl_preprocess_options *optio
       throw Error (Status::InvalidArgument, "cloud is NULL");
     if (out_cloud == nullptr)
       throw Error (Status::InvalidArgument, "out_cloud is NULL");
-    if (out_report != nullptr && (out_report->struct_size < sizeof (uint32_t) || out_report->struct_size > 4096))
-      throw Error (Status::InvalidArgument, "out_report->struct_size must be set to sizeof(pm_pcl_preprocess_report), "
-                                            "is " + std::to_string (out_report->struct_size));
+    checkSized (out_report, "out_report", "pm_pcl_preprocess_report");
     // An older caller's smaller options struct: its prefix over the defaults.
     pm_pcl_preprocess_options o;
     pm_pcl_preprocess_options_init (&o);
@@ -278,9 +291,7 @@ pm_pcl_preprocess (const pm_cloud *cloud, const pm_pcl_preprocess_options *optio
       report.normals_estimated = r.normals_estimated ? 1 : 0;
       report.normals_failed = r.normals_failed;
       report.seconds = r.seconds;
-      const std::size_t size = std::min<std::size_t> (out_report->struct_size, sizeof (report));
-      std::memcpy (out_report, &report, size);
-      out_report->struct_size = static_cast<uint32_t> (size);
+      writeSized (out_report, report);
     }
     if (out_kept != nullptr)
       std::copy (kept.begin (), kept.end (), out_kept);
