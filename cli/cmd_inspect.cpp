@@ -84,7 +84,11 @@ nlohmann::json particle_summary(const std::string& path, const ParticleInput& in
                        {"thickness", ls.thickness}};
     } catch (const Error& e) {
       j["sampling"] = nullptr;
-      j["sampling_error"] = e.what();
+      std::string why = e.what();
+      // Strays far from the rest: say how triangulate and polygonize go on without them.
+      if (e.status() == Status::LimitExceeded && why.find("far outliers") != std::string::npos)
+        why += far_outlier_advice(true);
+      j["sampling_error"] = why;
     }
   }
   j["normals"] = c.has_normals();

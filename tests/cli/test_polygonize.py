@@ -381,8 +381,8 @@ def test_report_and_summary_describe_the_written_mesh(cli, inspect, tmp_path, co
 
 
 def test_a_stray_particle_far_away_is_cropped_off(cli, inspect, tmp_path):
-    """A particle a simulation flung far away makes the grid too large: the error names it and
-    says --crop; with --crop the rest meshes exactly as without the stray (the same bytes),
+    """A particle a simulation flung far away makes the grid too large: the error (and inspect)
+    names it and says --crop; with --crop the rest meshes exactly as without the stray (the same bytes),
     and the summary and the report count what was dropped. render takes --crop too; a box
     inside out or holding no particle is an error naming --crop."""
     block = tmp_path / "block.xyz"
@@ -392,6 +392,8 @@ def test_a_stray_particle_far_away_is_cropped_off(cli, inspect, tmp_path):
     proc = cli("polygonize", stray, "-o", tmp_path / "x.ply", check=False)
     assert proc.returncode == 1 and not (tmp_path / "x.ply").exists(), proc.stderr
     assert f"point {n} (x = 1e+06)" in proc.stderr and "--crop MINX MINY MINZ MAXX MAXY MAXZ" in proc.stderr
+    inspected = cli("inspect", stray).stdout  # inspect names the stray and the way on too
+    assert "sampling      cannot be measured" in inspected and "--crop MINX" in inspected, inspected
     cli("polygonize", block, "-o", tmp_path / "block.ply", "-q")
     report = tmp_path / "r.json"
     proc = cli("polygonize", stray, "-o", tmp_path / "cropped.ply", "--crop", "-1,-1,-1,2,2,2", "--report", report)
