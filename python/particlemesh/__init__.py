@@ -129,7 +129,7 @@ def read_points(path):
 
 def preprocess_scan(positions, normals=None, *, attributes=None, viewpoint=None, **options):
     """Clean up a scan with PCL's filters before triangulating it, through the PCL bridge (the
-    command-line tool's --remove-outliers, --voxel / --uniform-sampling, --mls and
+    command-line tool's --remove-outliers, --voxel-grid / --uniform-sampling, --mls and
     --estimate-normals). Each step is off unless asked; they run in this order:
 
     1. remove_outliers=True: pcl::StatisticalOutlierRemoval drops points whose mean distance

@@ -103,7 +103,7 @@ PM_PCL_EXPORT void pm_pcl_preprocess_options_init(pm_pcl_preprocess_options* opt
 
 /** Clean up a scan before triangulating it with PCL's filters (outlier removal, downsampling,
  *  moving least squares, normal estimation: the command-line tool's --remove-outliers,
- *  --voxel / --uniform-sampling, --mls and --estimate-normals). Returns a new cloud in
+ *  --voxel-grid / --uniform-sampling, --mls and --estimate-normals). Returns a new cloud in
  *  *out_cloud: the kept points in input order, each with its normal and attributes (smoothing
  *  moves the positions only). out_kept, if not NULL, must hold the input's point count: entry
  *  i becomes the input index of output point i. `options` NULL = every step off (a copy);
