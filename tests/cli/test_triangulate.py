@@ -464,3 +464,32 @@ def test_sigint_cancels_without_partial_output(cli, tmp_path):
     assert "cancel" in r.err
     assert not out.exists() and not report.exists()
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".big_")]
+
+
+def test_rows_far_apart_get_the_edge_factor_that_crosses_them(cli, inspect, tmp_path):
+    """A sphere sampled in rings (300 points around, 25 rings: six times closer along a ring
+    than across to the next, as a scanner's rows or a mesh's rings of vertices): the local
+    spacing across lies past the 3 r0 the edge limits stop at, so the surface falls apart into
+    strips; the summary says so and names a --max-edge-factor, which closes it."""
+    lines = []
+    for k in range(25):
+        t = (k + 0.5) / 25 * math.pi
+        m = max(6, round(300 * math.sin(t)))
+        lines += ["%.9g %.9g %.9g" % (math.sin(t) * math.cos(2 * math.pi * j / m), math.sin(t) * math.sin(2 * math.pi * j / m),
+                                      math.cos(t)) for j in range(m)]
+    rings = tmp_path / "rings.xyz"
+    rings.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "rings.ply"
+    proc = cli("triangulate", rings, "-o", out)
+    assert inspect(out)["boundary_loops"] > 100, proc.stdout
+    hint = re.search(r"closer along lines than across them .* --max-edge-factor ([0-9.]+) may let the edges cross",
+                     proc.stdout)
+    assert hint, proc.stdout
+    cli("triangulate", rings, "-o", out, "--max-edge-factor", hint.group(1), "-q")
+    mesh = inspect(out)
+    assert mesh["closed"] and mesh["components"] == 1 and mesh["manifold"], mesh
+    # An even sampling of the same sphere gets no such hint.
+    even = tmp_path / "even.xyz"
+    cli("sample", "fibonacci", "--points", "5000", "-o", even)
+    proc = cli("triangulate", even, "-o", out)
+    assert "closer along lines" not in proc.stdout
