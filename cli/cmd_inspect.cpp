@@ -84,11 +84,9 @@ nlohmann::json particle_summary(const std::string& path, const ParticleInput& in
                        {"thickness", ls.thickness}};
     } catch (const Error& e) {
       j["sampling"] = nullptr;
-      std::string why = e.what();
       // Strays far from the rest: say how triangulate and polygonize go on without them.
-      if (e.status() == Status::LimitExceeded && why.find("far outliers") != std::string::npos)
-        why += far_outlier_advice(true);
-      j["sampling_error"] = why;
+      const std::string advised = with_far_outlier_advice(e, true);
+      j["sampling_error"] = advised.empty() ? std::string(e.what()) : advised;
     }
   }
   j["normals"] = c.has_normals();

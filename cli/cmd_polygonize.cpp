@@ -164,8 +164,8 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
         throw Error(e.status(), m);
       }
       // Strays far from the rest (a simulation's particle flung away): keep the rest.
-      if (e.status() == Status::LimitExceeded && m.find("far outliers") != std::string::npos)
-        throw Error(e.status(), m + far_outlier_advice(false));
+      if (const std::string advised = with_far_outlier_advice(e, false); !advised.empty())
+        throw Error(e.status(), advised);
       throw;
     }
   }();

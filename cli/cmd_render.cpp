@@ -48,8 +48,8 @@ int run_render(const RenderArgs& a) {
       return RayCaster(ParticleField(cloud, p, a.threads, progress.callback()));
     } catch (const Error& e) {
       // Strays far from the rest (a simulation's particle flung away): keep the rest.
-      if (e.status() == Status::LimitExceeded && std::string(e.what()).find("far outliers") != std::string::npos)
-        throw Error(e.status(), e.what() + far_outlier_advice(false));
+      if (const std::string advised = with_far_outlier_advice(e, false); !advised.empty())
+        throw Error(e.status(), advised);
       throw;
     }
   }();

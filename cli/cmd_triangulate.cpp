@@ -247,9 +247,10 @@ auto with_limit_advice(Work&& work, bool measured_spacing = false) {
   try {
     return work();
   } catch (const Error& e) {
+    if (const std::string advised = with_far_outlier_advice(e, true); !advised.empty())
+      throw Error(e.status(), advised);
     const std::string what = e.what();
     if (e.status() != Status::LimitExceeded) throw;
-    if (what.find("far outliers") != std::string::npos) throw Error(e.status(), what + far_outlier_advice(true));
     const std::string key = "raise the neighbour limit to at least ";
     const size_t at = what.find(key);
     if (at != std::string::npos && measured_spacing) {

@@ -20,20 +20,6 @@ struct Command {
   std::function<int()> run;  ///< returns the exit status
 };
 
-/// CLI11's validators and those below let "nan" through (every comparison with NaN is false):
-/// every floating-point option adds this check, so "--spacing nan" is refused, not taken as
-/// "not given".
-inline CLI::Validator finite_number() {
-  return CLI::Validator(
-      [](std::string& s) -> std::string {
-        char* end = nullptr;
-        const double v = std::strtod(s.c_str(), &end);
-        if (end != s.c_str() && *end == '\0' && !std::isfinite(v)) return "value " + s + " is not a finite number";
-        return {};
-      },
-      "FINITE");
-}
-
 namespace detail {
 /// The option's text as a number, or nullopt when it is not one (CLI11's conversion then says so).
 inline std::optional<double> number_in(const std::string& s) {
@@ -48,6 +34,19 @@ inline std::string shortest(double v) {
   return b;
 }
 }  // namespace detail
+
+/// CLI11's validators and those below let "nan" through (every comparison with NaN is false):
+/// every floating-point option adds this check, so "--spacing nan" is refused, not taken as
+/// "not given".
+inline CLI::Validator finite_number() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        const auto v = detail::number_in(s);
+        if (v && !std::isfinite(*v)) return "value " + s + " is not a finite number";
+        return {};
+      },
+      "FINITE");
+}
 
 // CLI11's PositiveNumber, NonNegativeNumber and Range print their bounds with %f: "Value -1 not
 // in range 0.000000 to 1797693134862315708145...000000" (309 digits), a range of 1e-9 to 10 as

@@ -4,7 +4,6 @@
 // runs that need no PCL do not pay for linking it at start.
 #include <dlfcn.h>
 
-#include <algorithm>
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
@@ -194,10 +193,12 @@ void add_crop_option(CLI::App& app, std::vector<double>& crop) {
       ->check(finite_number());
 }
 
-std::string far_outlier_advice(bool outliers) {
+std::string with_far_outlier_advice(const Error& e, bool outliers) {
+  const std::string what = e.what();
+  if (e.status() != Status::LimitExceeded || what.find("far outliers") == std::string::npos) return {};
   std::string advice = "--crop MINX MINY MINZ MAXX MAXY MAXZ keeps the particles inside a box";
   if (outliers && has_pcl_preprocessing()) advice = "--remove-outliers drops them; " + advice;
-  return " (" + advice + ")";
+  return what + " (" + advice + ")";
 }
 
 namespace {
@@ -211,30 +212,16 @@ void crop_particles(ParticleInput& in, const std::vector<double>& box) {
       throw Error(Status::InvalidArgument, std::string("--crop: the box's minimum ") + "xyz"[a] + " (" +
                                                detail::shortest(box[a]) + ") is above its maximum (" +
                                                detail::shortest(box[a + 3]) + ")");
-  PointCloud& c = in.cloud;
-  const size_t n = c.size();
-  std::vector<size_t> keep;
+  const size_t n = in.cloud.size();
+  std::vector<uint32_t> keep;
   for (size_t i = 0; i < n; ++i) {
-    const Vec3& p = c.positions[i];
+    const Vec3& p = in.cloud.positions[i];
     if (p.x >= box[0] && p.y >= box[1] && p.z >= box[2] && p.x <= box[3] && p.y <= box[4] && p.z <= box[5])
-      keep.push_back(i);
+      keep.push_back(uint32_t(i));
   }
   if (keep.empty())
     throw Error(Status::InvalidInput, "--crop: none of the " + std::to_string(n) + " particles lies inside the box");
-  if (keep.size() < n) {
-    for (size_t k = 0; k < keep.size(); ++k) c.positions[k] = c.positions[keep[k]];
-    c.positions.resize(keep.size());
-    if (c.has_normals()) {
-      for (size_t k = 0; k < keep.size(); ++k) c.normals[k] = c.normals[keep[k]];
-      c.normals.resize(keep.size());
-    }
-    for (VertexAttribute& a : c.attributes) {
-      const size_t w = size_t(a.components);
-      for (size_t k = 0; k < keep.size(); ++k)
-        std::copy_n(a.values.begin() + ptrdiff_t(keep[k] * w), w, a.values.begin() + ptrdiff_t(k * w));
-      a.values.resize(keep.size() * w);
-    }
-  }
+  if (keep.size() < n) in.cloud = select_points(in.cloud, keep);
   in.report["crop"] = {{"min", {box[0], box[1], box[2]}},
                        {"max", {box[3], box[4], box[5]}},
                        {"kept", keep.size()},

@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "particlemesh/core/error.h"
 #include "particlemesh/io/output_file.h"
 #include "particlemesh/mesh/point_cloud.h"
 #include "particlemesh/mesh/tri_mesh.h"
@@ -59,9 +60,10 @@ void add_particle_input_options(CLI::App& app, ParticleInputArgs& args);
 /// Add --crop (every command that meshes or renders particles; not PCL's).
 void add_crop_option(CLI::App& app, std::vector<double>& crop);
 
-/// The advice that goes with the library's "far outliers" error (a grid too large for the
-/// particles' extent): --crop, and --remove-outliers where this build has it and `outliers`.
-std::string far_outlier_advice(bool outliers);
+/// For the library's "far outliers" error (a grid too large for the particles' extent), its
+/// message with the switches that go on without them: --crop, and --remove-outliers where this
+/// build has it and `outliers`. "" for any other error.
+std::string with_far_outlier_advice(const Error& e, bool outliers);
 
 /// Read `path` (.pcd, .ply, .xyz), preprocess and crop as asked. @throws Error naming the file.
 ParticleInput read_particles(const std::string& path, const ParticleInputArgs& args, int threads);

@@ -1,6 +1,7 @@
 #include "particlemesh/mesh/point_cloud.h"
 
 #include <cmath>
+#include <cstddef>
 #include <string>
 
 #include "particlemesh/core/error.h"
@@ -21,6 +22,22 @@ void check_vectors(const std::vector<Vec3>& values, const char* what) {
   }
 }
 }  // namespace
+
+PointCloud select_points(const PointCloud& cloud, const std::vector<uint32_t>& indices) {
+  PointCloud out;
+  out.positions.reserve(indices.size());
+  for (uint32_t i : indices) out.positions.push_back(cloud.positions[i]);
+  if (cloud.has_normals())
+    for (uint32_t i : indices) out.normals.push_back(cloud.normals[i]);
+  for (const VertexAttribute& a : cloud.attributes) {
+    VertexAttribute& b = out.attributes.emplace_back(VertexAttribute{a.name, a.components, {}});
+    b.values.reserve(indices.size() * size_t(a.components));
+    for (uint32_t i : indices)
+      b.values.insert(b.values.end(), a.values.begin() + ptrdiff_t(i) * a.components,
+                      a.values.begin() + ptrdiff_t(i + 1) * a.components);
+  }
+  return out;
+}
 
 void validate_point_cloud(const PointCloud& cloud) {
   if (!cloud.normals.empty() && cloud.normals.size() != cloud.positions.size())

@@ -152,22 +152,6 @@ std::vector<uint32_t> thin_greedily(const Vec3* points, size_t n, double max_dis
   return kept;
 }
 
-PointCloud subset(const PointCloud& cloud, const std::vector<uint32_t>& kept) {
-  PointCloud out;
-  out.positions.reserve(kept.size());
-  for (uint32_t i : kept) out.positions.push_back(cloud.positions[i]);
-  if (cloud.has_normals())
-    for (uint32_t i : kept) out.normals.push_back(cloud.normals[i]);
-  for (const VertexAttribute& a : cloud.attributes) {
-    VertexAttribute& b = out.attributes.emplace_back(VertexAttribute{a.name, a.components, {}});
-    b.values.reserve(kept.size() * size_t(a.components));
-    for (uint32_t i : kept)
-      b.values.insert(b.values.end(), a.values.begin() + ptrdiff_t(i) * a.components,
-                      a.values.begin() + ptrdiff_t(i + 1) * a.components);
-  }
-  return out;
-}
-
 }  // namespace
 
 std::vector<uint32_t> thin_points(const Vec3* points, size_t n, double min_distance) {
@@ -193,11 +177,11 @@ std::vector<uint32_t> thin_points(const Vec3* points, size_t n, const std::vecto
 }
 
 PointCloud thin_cloud(const PointCloud& cloud, double min_distance) {
-  return subset(cloud, thin_points(cloud.positions.data(), cloud.size(), min_distance));
+  return select_points(cloud, thin_points(cloud.positions.data(), cloud.size(), min_distance));
 }
 
 PointCloud thin_cloud(const PointCloud& cloud, const std::vector<double>& min_distance) {
-  return subset(cloud, thin_points(cloud.positions.data(), cloud.size(), min_distance));
+  return select_points(cloud, thin_points(cloud.positions.data(), cloud.size(), min_distance));
 }
 
 }  // namespace particlemesh

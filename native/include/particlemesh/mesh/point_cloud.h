@@ -4,6 +4,7 @@
 #include "particlemesh/core/config.h"
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -34,5 +35,9 @@ struct PointCloud {
 /// coordinate and normal component is finite, attribute sizes match.
 /// @throws Error(InvalidInput) naming the first offending element, e.g. "positions[12].y is NaN".
 PM_EXPORT void validate_point_cloud(const PointCloud& cloud);
+
+/// The points `indices` of the cloud (in that order), each with its normal and attribute values.
+/// Every index must be below cloud.size().
+PM_EXPORT PointCloud select_points(const PointCloud& cloud, const std::vector<uint32_t>& indices);
 
 }  // namespace particlemesh
