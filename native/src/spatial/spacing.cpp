@@ -1,9 +1,12 @@
 #include "particlemesh/spatial/spacing.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <string>
+#include <utility>
 
 #include "core/length_limits.h"
 #include "core/parallel.h"
@@ -23,8 +26,12 @@ namespace {
 // bounding box would have (a sphere's points fill those cells about 4 to a cell: one grid,
 // where the spacing itself left ~1 per cell and cost a second build) and corrects by the
 // measured occupancy (which scales as h^2 on surfaces and h^3 in volumes; the loop does not
-// need to know which). The median it finds does not depend on the cell size.
-NeighborGrid occupancy_grid(const Vec3* points, size_t n, ProgressTracker& tracker) {
+// need to know which). The median it finds does not depend on the cell size. `crowded`: the
+// cells hold few points on average, but a point's cell holds many (over 64, averaged over the
+// points): a few points far from a cluster (a particle a simulation flung away, two objects
+// far apart for their size) keep cells fine enough for the cluster from fitting the grid's
+// key, or many copies of a few points share cells (see far_apart_parts).
+NeighborGrid occupancy_grid(const Vec3* points, size_t n, ProgressTracker& tracker, bool& crowded) {
   Vec3 lo = points[0], hi = points[0];
   for (size_t i = 1; i < n; ++i) {
     lo = {std::min(lo.x, points[i].x), std::min(lo.y, points[i].y), std::min(lo.z, points[i].z)};
@@ -42,11 +49,131 @@ NeighborGrid occupancy_grid(const Vec3* points, size_t n, ProgressTracker& track
     tracker.check();
     NeighborGrid grid(points, n, h);
     const double per_cell = double(n) / double(grid.cell_count());
-    if (it == 5 || (per_cell >= 2.0 && per_cell <= 8.0)) return grid;
     const double next = std::max(h * std::clamp(std::sqrt(4.0 / per_cell), 0.25, 4.0), finest);
-    if (next == h) return grid;
+    if (it == 5 || (per_cell >= 2.0 && per_cell <= 8.0) || next == h) {
+      // The points in a point's cell, averaged over the points: what the search costs a point.
+      double shared = 0;
+      for (uint32_t c = 0; c < grid.cell_count(); ++c) {
+        const double k = double(grid.cell_end(c) - grid.cell_begin(c));
+        shared += k * k;
+      }
+      crowded = shared > 64.0 * double(n);
+      return grid;
+    }
     h = next;
   }
+}
+
+/// Points searched on a grid of their own (copies, with their input indices).
+struct Part {
+  std::vector<Vec3> points;
+  std::vector<uint32_t> original;
+};
+
+/// The corners of the points' bounding box.
+std::pair<Vec3, Vec3> box_of(const std::vector<Vec3>& points) {
+  Vec3 lo = points[0], hi = points[0];
+  for (const Vec3& p : points) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  return {lo, hi};
+}
+
+double largest_side(const std::vector<Vec3>& points) {
+  const auto [lo, hi] = box_of(points);
+  return std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+}
+
+/// Splits `part` at the widest empty slab across it (along x, y or z) when the slab is wider
+/// than either side's bounding box is long (its diagonal), and each side again: every point is
+/// then nearer to every other of its side than to any across, so its nearest neighbour is
+/// found on its side's own grid, but for a point alone on its side, whose distance (infinite
+/// there, at least the slab's width in truth) is above every other either way. So the median
+/// is the same.
+void split_at_gaps(Part part, std::vector<Part>& out) {
+  const size_t m = part.points.size();
+  if (m >= 2 && out.size() < 4096) {
+    std::vector<double> along(m);
+    for (int a = 0; a < 3; ++a) {
+      for (size_t i = 0; i < m; ++i) along[i] = part.points[i][a];
+      std::sort(along.begin(), along.end());
+      double gap = 0, cut = 0;
+      for (size_t i = 1; i < m; ++i)
+        if (along[i] - along[i - 1] > gap) gap = along[i] - along[i - 1], cut = along[i - 1];
+      if (!(gap > 0)) continue;
+      Part low, high;
+      for (size_t i = 0; i < m; ++i) {
+        Part& to = part.points[i][a] <= cut ? low : high;
+        to.points.push_back(part.points[i]);
+        to.original.push_back(part.original[i]);
+      }
+      const auto [llo, lhi] = box_of(low.points);
+      const auto [hlo, hhi] = box_of(high.points);
+      if (!(gap > distance(llo, lhi) && gap > distance(hlo, hhi))) continue;
+      split_at_gaps(std::move(low), out);
+      split_at_gaps(std::move(high), out);
+      return;
+    }
+  }
+  out.push_back(std::move(part));
+}
+
+/// The middle of a part still crowded without a gap to split at (particles flung far and wide
+/// from a simulation): the points within 8 interquartile ranges (the widest axis') of the
+/// middle half along every axis, if that leaves out at most a tenth of them (else the part
+/// whole: many copies of a few points crowd the middle half, not strays). Those left out count
+/// as infinitely far; as strays their nearest neighbours are farther than the median anyway.
+Part middle_of(const Part& part) {
+  const size_t m = part.points.size();
+  std::vector<double> along(m);
+  std::array<double, 3> lo{}, hi{};
+  double widest = 0;
+  for (int a = 0; a < 3; ++a) {
+    for (size_t i = 0; i < m; ++i) along[i] = part.points[i][a];
+    const auto quantile = [&](double f) {
+      const auto k = ptrdiff_t(f * double(m - 1));
+      std::nth_element(along.begin(), along.begin() + k, along.end());
+      return along[size_t(k)];
+    };
+    lo[size_t(a)] = quantile(0.25);
+    hi[size_t(a)] = quantile(0.75);
+    widest = std::max(widest, hi[size_t(a)] - lo[size_t(a)]);
+  }
+  Part middle;
+  for (size_t i = 0; i < m; ++i) {
+    const Vec3& p = part.points[i];
+    bool inside = true;
+    for (int a = 0; a < 3; ++a)
+      inside = inside && p[a] >= lo[size_t(a)] - 8 * widest && p[a] <= hi[size_t(a)] + 8 * widest;
+    if (inside) {
+      middle.points.push_back(p);
+      middle.original.push_back(part.original[i]);
+    }
+  }
+  return middle.points.size() * 10 >= m * 9 ? middle : part;
+}
+
+/// The points as searched, when one grid cannot hold them finely enough (occupancy_grid's
+/// `crowded`: a few particles flung a million times the cloud's size away, two objects as far
+/// apart): the clusters split at the gaps between them, each on its own grid; and of a
+/// cluster still crowded, its middle. Empty when one grid serves all after all (as for copies
+/// of a few points, which crowd their cells at any cell size).
+std::vector<Part> far_apart_parts(const Vec3* points, size_t n, ProgressTracker& tracker) {
+  Part all;
+  all.points.assign(points, points + n);
+  all.original.resize(n);
+  std::iota(all.original.begin(), all.original.end(), 0u);
+  std::vector<Part> parts;
+  split_at_gaps(std::move(all), parts);
+  for (Part& part : parts) {
+    if (part.points.size() < 2) continue;
+    bool crowded = false;
+    if (largest_side(part.points) > 0) (void)occupancy_grid(part.points.data(), part.points.size(), tracker, crowded);
+    if (crowded) part = middle_of(part);
+  }
+  if (parts.size() == 1 && parts[0].points.size() == n) parts.clear();  // one grid serves after all
+  return parts;
 }
 
 }  // namespace
@@ -55,78 +182,117 @@ SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTrac
                                       double begin, double end, size_t stride) {
   if (n < 2) throw Error(Status::InvalidInput, "at least two points are needed to estimate the spacing");
   tracker.stage("estimating spacing", begin, begin + 0.2 * (end - begin));
-  NeighborGrid grid = occupancy_grid(points, n, tracker);
+  // One grid over every point, or (points far apart) one per part.
+  std::vector<NeighborGrid> grids;
+  std::vector<Part> parts;
+  {
+    bool crowded = false;
+    grids.push_back(occupancy_grid(points, n, tracker, crowded));
+    if (crowded) parts = far_apart_parts(points, n, tracker);
+    if (!parts.empty()) {
+      grids.clear();
+      for (const Part& part : parts) {
+        bool still_crowded = false;
+        if (part.points.size() >= 2 && largest_side(part.points) > 0)
+          grids.push_back(occupancy_grid(part.points.data(), part.points.size(), tracker, still_crowded));
+        else
+          grids.emplace_back(part.points.data(), part.points.size(), 1.0);  // a point alone, or coincident ones
+      }
+    }
+  }
+  // The input points that count but lie in no part (left out of a part's middle): all of them,
+  // or those of the sample.
+  size_t outside = 0;
+  if (!parts.empty()) {
+    std::vector<uint8_t> searched(n);
+    for (const Part& part : parts)
+      for (uint32_t i : part.original) searched[i] = 1;
+    for (size_t i = 0; i < n; ++i) outside += !searched[i] && (stride == 1 || i % stride == 0);
+  }
 
   constexpr double kInf = std::numeric_limits<double>::infinity();
   constexpr int kMaxRing = 3;
   for (int attempt = 0; attempt < 8; ++attempt) {
     tracker.check();
-    if (attempt > 0) grid = NeighborGrid(points, n, grid.cell_size() * 4.0);
-    const double h = grid.cell_size();
-    size_t duplicates = 0;
-    std::vector<uint32_t> rep;
-    if (stride == 1) rep = find_duplicates(grid, &duplicates);
+    if (attempt > 0)
+      for (size_t g = 0; g < grids.size(); ++g)
+        grids[g] = parts.empty() ? NeighborGrid(points, n, grids[g].cell_size() * 4.0)
+                                 : NeighborGrid(parts[g].points.data(), parts[g].points.size(), grids[g].cell_size() * 4.0);
+    size_t duplicates = 0, cells = 0;
+    std::vector<std::vector<uint32_t>> reps(grids.size());
+    for (size_t g = 0; g < grids.size(); ++g) {
+      size_t d = 0;
+      if (stride == 1) reps[g] = find_duplicates(grids[g], &d);
+      duplicates += d;
+      cells += grids[g].cell_count();
+    }
     const size_t distinct = n - duplicates;
     if (distinct < 2) throw Error(Status::InvalidInput, "all points coincide: there is no spacing");
-    // The points whose distance counts: each distinct point once, or the sample.
-    const auto counted = [&](uint32_t s) {
-      return stride == 1 ? rep[s] == s : grid.original_index(s) % stride == 0;
-    };
     tracker.check();
 
-    tracker.stage("estimating spacing", begin + 0.2 * (end - begin), end, grid.cell_count());
-    // nn2[s] = squared distance from sorted point s to its nearest distinct point, +inf when
-    // that is farther than kMaxRing cells (such points are above the median unless h is far
-    // too small, which the retry below detects).
-    std::vector<double> nn2(n, kInf);
-    parallel_blocks(grid.cell_count(), 512, [&](size_t cb, size_t ce) {
-      if (tracker.cancelled()) return;
-      uint32_t around[27];
-      NeighborCellWalk walk(grid);
-      for (size_t c = cb; c < ce; ++c) {
-        bool any = false;
-        for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)) && !any; ++s) any = counted(s);
-        if (!any) {
-          tracker.tick(1);
-          continue;
-        }
-        const int na = walk.around(uint32_t(c), around);
-        for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) {
-          if (!counted(s)) continue;
-          const Vec3 p = grid.sorted_point(s);
-          double best = kInf;
-          for (int a = 0; a < na; ++a)
-            for (uint32_t t = grid.cell_begin(around[a]); t < grid.cell_end(around[a]); ++t) {
-              const double d2 = squared_distance(grid.sorted_point(t), p);
-              if (d2 > 0 && d2 < best) best = d2;
-            }
-          // Every point within h of p is in the 27 cells; beyond that, widen ring by ring.
-          const auto cc = grid.cell_coord(uint32_t(c));
-          for (int r = 2; best > double(r - 1) * h * double(r - 1) * h && r <= kMaxRing; ++r) {
-            for (int dx = -r; dx <= r; ++dx)
-              for (int dy = -r; dy <= r; ++dy)
-                for (int dz = -r; dz <= r; ++dz) {
-                  if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != r) continue;
-                  const uint32_t nc = grid.find_cell({cc[0] + dx, cc[1] + dy, cc[2] + dz});
-                  if (nc == NeighborGrid::kNoCell) continue;
-                  for (uint32_t t = grid.cell_begin(nc); t < grid.cell_end(nc); ++t) {
-                    const double d2 = squared_distance(grid.sorted_point(t), p);
-                    if (d2 > 0 && d2 < best) best = d2;
-                  }
-                }
-          }
-          if (best > double(kMaxRing) * h * double(kMaxRing) * h) best = kInf;
-          nn2[s] = best;
-        }
-        tracker.tick(1);
-      }
-    });
-    tracker.check();
-
+    tracker.stage("estimating spacing", begin + 0.2 * (end - begin), end, cells);
     std::vector<double> values;
     values.reserve(distinct / stride + 1);
-    for (size_t s = 0; s < n; ++s)
-      if (counted(uint32_t(s))) values.push_back(nn2[s]);
+    for (size_t g = 0; g < grids.size(); ++g) {
+      const NeighborGrid& grid = grids[g];
+      const std::vector<uint32_t>& rep = reps[g];
+      const double h = grid.cell_size();
+      // The points whose distance counts: each distinct point once, or the sample.
+      const auto counted = [&](uint32_t s) {
+        const uint32_t i = grid.original_index(s);
+        return stride == 1 ? rep[s] == s : (parts.empty() ? i : parts[g].original[i]) % stride == 0;
+      };
+      // nn2[s] = squared distance from sorted point s to its nearest distinct point, +inf when
+      // that is farther than kMaxRing cells (such points are above the median unless h is far
+      // too small, which the retry below detects).
+      std::vector<double> nn2(grid.point_count(), kInf);
+      parallel_blocks(grid.cell_count(), 512, [&](size_t cb, size_t ce) {
+        if (tracker.cancelled()) return;
+        uint32_t around[27];
+        NeighborCellWalk walk(grid);
+        for (size_t c = cb; c < ce; ++c) {
+          bool any = false;
+          for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)) && !any; ++s) any = counted(s);
+          if (!any) {
+            tracker.tick(1);
+            continue;
+          }
+          const int na = walk.around(uint32_t(c), around);
+          for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) {
+            if (!counted(s)) continue;
+            const Vec3 p = grid.sorted_point(s);
+            double best = kInf;
+            for (int a = 0; a < na; ++a)
+              for (uint32_t t = grid.cell_begin(around[a]); t < grid.cell_end(around[a]); ++t) {
+                const double d2 = squared_distance(grid.sorted_point(t), p);
+                if (d2 > 0 && d2 < best) best = d2;
+              }
+            // Every point within h of p is in the 27 cells; beyond that, widen ring by ring.
+            const auto cc = grid.cell_coord(uint32_t(c));
+            for (int r = 2; best > double(r - 1) * h * double(r - 1) * h && r <= kMaxRing; ++r) {
+              for (int dx = -r; dx <= r; ++dx)
+                for (int dy = -r; dy <= r; ++dy)
+                  for (int dz = -r; dz <= r; ++dz) {
+                    if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != r) continue;
+                    const uint32_t nc = grid.find_cell({cc[0] + dx, cc[1] + dy, cc[2] + dz});
+                    if (nc == NeighborGrid::kNoCell) continue;
+                    for (uint32_t t = grid.cell_begin(nc); t < grid.cell_end(nc); ++t) {
+                      const double d2 = squared_distance(grid.sorted_point(t), p);
+                      if (d2 > 0 && d2 < best) best = d2;
+                    }
+                  }
+            }
+            if (best > double(kMaxRing) * h * double(kMaxRing) * h) best = kInf;
+            nn2[s] = best;
+          }
+          tracker.tick(1);
+        }
+      });
+      tracker.check();
+      for (size_t s = 0; s < nn2.size(); ++s)
+        if (counted(uint32_t(s))) values.push_back(nn2[s]);
+    }
+    values.insert(values.end(), outside, kInf);
     const size_t mid = (values.size() - 1) / 2;  // the lower median: an actual NN distance
     std::nth_element(values.begin(), values.begin() + long(mid), values.end());
     if (values[mid] == kInf) continue;  // most points are isolated at this cell size: widen

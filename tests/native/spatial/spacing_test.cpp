@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <random>
 
 #include "particlemesh/core/error.h"
 #include "particlemesh/sample/shapes.h"
@@ -48,6 +49,64 @@ TEST(EstimateSpacing, ExactWithOutliersClustersAndDuplicates) {
   EXPECT_DOUBLE_EQ(e.spacing, brute_force_median_nn(c.positions));
   EXPECT_EQ(e.duplicate_points, 2u);
   EXPECT_EQ(e.distinct_points, c.size() - 2);
+}
+
+// Clusters a million times their size apart (a particle flung far from a simulation, dead
+// particles parked far away, objects far apart): cells fine enough for the clusters would not
+// fit one grid's key, and cells that do put each cluster in one cell. Each is then searched on
+// a grid of its own (split at the empty slabs between them; the middle of a cluster with
+// strays scattered far and wide): the median must stay exactly the brute-force one, whole and
+// sampled, at any thread count.
+TEST(EstimateSpacing, ExactForClustersFarApart) {
+  const std::vector<Vec3> sphere = fibonacci_sphere(2000).positions;
+  auto with = [&](std::vector<Vec3> extra) {
+    std::vector<Vec3> p = sphere;
+    p.insert(p.end(), extra.begin(), extra.end());
+    p.push_back(sphere[3]);  // and a copy in the cluster
+    return p;
+  };
+  std::vector<Vec3> three = fibonacci_sphere(1000, 0.5, {0, 1e8, 0}).positions;
+  for (const Vec3& q : fibonacci_sphere(700, 2.0, {0, 0, -3e8}).positions) three.push_back(q);
+  std::vector<Vec3> scattered;
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> far(0, 1e7);
+  for (int i = 0; i < 100; ++i) scattered.push_back({far(rng), far(rng), far(rng)});
+  const struct {
+    const char* what;
+    std::vector<Vec3> points;
+    size_t duplicates;
+  } cases[] = {
+      {"one stray", with({{1e9, 0, 0}}), 1},
+      {"three clusters", with(three), 1},
+      {"600 parked at one place", with(std::vector<Vec3>(600, Vec3{1e9, 1e9, 1e9})), 600},
+      {"5 % scattered far and wide", with(scattered), 1},
+      {"a stray on each side", with({{-4e9, 1, 2}, {0, 7e9, 0}}), 1},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.what);
+    const double expected = brute_force_median_nn(c.points);
+    for (int threads : {1, 3}) {
+      const SpacingEstimate e = estimate_spacing(c.points.data(), c.points.size(), threads);
+      EXPECT_DOUBLE_EQ(e.spacing, expected);
+      EXPECT_EQ(e.duplicate_points, c.duplicates);
+      EXPECT_EQ(e.distinct_points, c.points.size() - c.duplicates);
+    }
+    // Sampled: every 7th point's nearest neighbour among all (the clusters after the first
+    // start at indices that are not multiples of 7).
+    std::vector<double> nn;
+    for (size_t i = 0; i < c.points.size(); i += 7) {
+      double best = std::numeric_limits<double>::infinity();
+      for (size_t j = 0; j < c.points.size(); ++j) {
+        const double d = squared_distance(c.points[i], c.points[j]);
+        if (d > 0) best = std::min(best, d);
+      }
+      nn.push_back(best);
+    }
+    std::sort(nn.begin(), nn.end());
+    const size_t samples = (c.points.size() + 6) / 7;
+    EXPECT_DOUBLE_EQ(estimate_spacing_sampled(c.points.data(), c.points.size(), samples).spacing,
+                     std::sqrt(nn[(nn.size() - 1) / 2]));
+  }
 }
 
 TEST(EstimateSpacing, SurfaceSampleIsCloseToThePoissonRadius) {
