@@ -150,6 +150,14 @@ std::vector<std::vector<uint32_t>> EditableSurface::trace_loops() const {
   // Next boundary edge after a -> b: leave b along the wedge that follows, counter-clockwise,
   // the gap where a -> b's triangle ends.
   auto next_edge = [&](uint32_t a, uint32_t b) -> int64_t {
+    // b's boundary edges are a run of bnd (sorted by their first vertex): nearly always one
+    // is left, and it is the next; only where the boundary passes b more than once do the
+    // angles choose.
+    size_t unused = 0, last = 0;
+    for (auto i = size_t(std::lower_bound(bnd.begin(), bnd.end(), half_key(b, 0)) - bnd.begin());
+         i < bnd.size() && uint32_t(bnd[i] >> 32) == b; ++i)
+      if (!used[i]) ++unused, last = i;
+    if (unused < 2) return unused == 0 ? -1 : int64_t(last);
     const double gap = angle_of(frame_[b], P_[a] - P_[b]);
     double best = INFINITY;
     int64_t best_e = -1;
@@ -169,6 +177,11 @@ std::vector<std::vector<uint32_t>> EditableSurface::trace_loops() const {
     return best_e;
   };
   std::vector<std::vector<uint32_t>> loops;
+  // Where each vertex stands in the path being traced (a vertex is there at most once: a
+  // repeat is cut off at once), so that a repeat is found without searching the path: a
+  // depth camera's frame has loops of tens of thousands of edges.
+  constexpr uint32_t kAbsent = 0xffffffffu;
+  std::vector<uint32_t> at(P_.size(), kAbsent);
   for (size_t start = 0; start < bnd.size(); ++start) {
     if (used[start]) continue;
     std::vector<uint32_t> path;
@@ -177,15 +190,18 @@ std::vector<std::vector<uint32_t>> EditableSurface::trace_loops() const {
       used[size_t(e)] = 1;
       const uint32_t a = uint32_t(bnd[size_t(e)] >> 32), b = uint32_t(bnd[size_t(e)]);
       // Split at a repeated vertex: the part since its last visit is a loop of its own.
-      auto it = std::find(path.begin(), path.end(), a);
-      if (it != path.end()) {
+      if (at[a] != kAbsent) {
+        const auto it = path.begin() + ptrdiff_t(at[a]);
+        for (auto v = it; v != path.end(); ++v) at[*v] = kAbsent;
         loops.emplace_back(it, path.end());
         path.erase(it, path.end());
       }
+      at[a] = uint32_t(path.size());
       path.push_back(a);
       if (b == path.front()) break;
       e = next_edge(a, b);
     }
+    for (uint32_t v : path) at[v] = kAbsent;
     if (path.size() >= 3) loops.push_back(std::move(path));
   }
   for (auto& l : loops) std::rotate(l.begin(), std::min_element(l.begin(), l.end()), l.end());

@@ -105,7 +105,7 @@ bool proper(const std::vector<Vec3>& P, uint32_t a, uint32_t b, uint32_t c) {
 }  // namespace
 
 size_t insert_unused(EditableSurface& s, const std::vector<uint8_t>& active, const std::vector<Triangle>& raw,
-                     const FillOptions& o) {
+                     const FillOptions& o, std::unique_ptr<NeighborGrid>& near) {
   const std::vector<Vec3>& P = s.positions();
   const std::vector<double>& Lp = *o.max_edge;
   std::vector<uint32_t> unused;
@@ -117,13 +117,14 @@ size_t insert_unused(EditableSurface& s, const std::vector<uint8_t>& active, con
   }
   if (unused.empty()) return 0;
   // The raw triangles at each unused particle tell which surface is around it.
+  constexpr uint32_t kUsed = 0xffffffffu;
+  std::vector<uint32_t> slot(P.size(), kUsed);  // each particle's place in `unused`
+  for (size_t u = 0; u < unused.size(); ++u) slot[unused[u]] = uint32_t(u);
   std::vector<std::vector<uint32_t>> around(unused.size());
   for (const Triangle& t : raw)
-    for (int k = 0; k < 3; ++k) {
-      auto it = std::lower_bound(unused.begin(), unused.end(), t[k]);
-      if (it != unused.end() && *it == t[k])
-        for (int q = 1; q < 3; ++q) around[size_t(it - unused.begin())].push_back(t[(k + q) % 3]);
-    }
+    for (int k = 0; k < 3; ++k)
+      if (slot[t[k]] != kUsed)
+        for (int q = 1; q < 3; ++q) around[slot[t[k]]].push_back(t[(k + q) % 3]);
   // A new edge from p to the surface's vertex v is held to the fill limit at the surface's
   // scale or p's, whichever is larger: p is a sample of the surface around v (a stray one: its
   // own spacing, from the few particles around it, says little).
@@ -131,7 +132,6 @@ size_t insert_unused(EditableSurface& s, const std::vector<uint8_t>& active, con
     return distance(P[p], P[v]) <= std::min(o.fill_edge_factor * std::max(Lp[p], Lp[v]), o.edge_cap) &&
            !o.view.along_ray(P[p], P[v]);
   };
-  std::unique_ptr<NeighborGrid> near;
   // The largest limit among the surface's vertices: the farthest any of them may reach out.
   double surface_scale = 0;
   for (size_t v = 0; v < P.size(); ++v)
@@ -156,8 +156,9 @@ size_t insert_unused(EditableSurface& s, const std::vector<uint8_t>& active, con
       // In no raw triangle with the surface (fewer than two neighbours within L, e.g. at the
       // rim of a real opening, or only particles the surface passed by too): take the surface's
       // vertices within p's reach as its neighbours.
-      // A grid over the particles, built at the first such particle: scanning the whole
-      // surface per particle is quadratic on scans with many openings.
+      // A grid over the particles, built at the first such particle (and kept for the next
+      // rounds: the particles do not move): scanning the whole surface per particle is
+      // quadratic on scans with many openings.
       if (!near) {
         std::vector<double> l(Lp);
         std::nth_element(l.begin(), l.begin() + ptrdiff_t(l.size() / 2), l.end());
@@ -332,8 +333,9 @@ void repair_surface(EditableSurface& s, const std::vector<uint8_t>& active, cons
   // Particles inserted next to the surface give the ones beyond them something to attach to:
   // a few rounds, until none is left that fits.
   size_t inserted = 0;
+  std::unique_ptr<NeighborGrid> near;  // built by the first round that needs it
   for (int round = 0; round < kInsertRounds; ++round) {
-    const size_t now = insert_unused(s, active, raw, f);
+    const size_t now = insert_unused(s, active, raw, f, near);
     tracker.check();
     if (now == 0) break;
     inserted += now;

@@ -15,11 +15,13 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <utility>
 #include <vector>
 
 #include "core/progress_tracker.h"
 #include "particlemesh/mesh/tri_mesh.h"
+#include "particlemesh/spatial/neighbor_grid.h"
 #include "surface/editable_surface.h"
 #include "surface/hole_fill.h"
 
@@ -56,8 +58,9 @@ size_t unpinch(EditableSurface& s);
 /// as a new triangle on it, else splitting the edge. Every new edge is within the fill limit
 /// (FillOptions::fill_limit), no new triangle folds back over the surface or overlaps a
 /// vertex's fan. Particles that fit nowhere stay out. Returns how many were inserted.
+/// `near`: a grid over the particles, built when first needed and kept for the next round.
 size_t insert_unused(EditableSurface& s, const std::vector<uint8_t>& active, const std::vector<Triangle>& raw,
-                     const FillOptions& o);
+                     const FillOptions& o, std::unique_ptr<NeighborGrid>& near);
 
 /// Fragments of a few triangles that lie against a larger piece of surface (a lone triangle
 /// or a tiny closed "bubble" grown from particles the main surface passed by, where it is

@@ -39,7 +39,8 @@ TEST(Repair, UnusedParticlesAreInsertedIntoTheTriangleOrEdgeUnderThem) {
   const std::vector<double> L(s.P.size(), 2.0);
   FillOptions o;
   o.max_edge = &L;
-  EXPECT_EQ(insert_unused(e, active, raw, o), 2u);
+  std::unique_ptr<NeighborGrid> near;
+  EXPECT_EQ(insert_unused(e, active, raw, o, near), 2u);
   const auto tris = e.take();
   EXPECT_EQ(tris.size(), 18u + 2 + 1);  // a triangle split in three, an edge's triangle in two
   size_t at_over = 0, at_edge = 0;
@@ -111,7 +112,8 @@ TEST(Repair, InsertedParticlesStayWithinTheFillLimit) {
   const std::vector<double> L(s.P.size(), 2.0);
   FillOptions o;
   o.max_edge = &L;
-  EXPECT_EQ(insert_unused(e, active, raw, o), 1u);
+  std::unique_ptr<NeighborGrid> near;
+  EXPECT_EQ(insert_unused(e, active, raw, o, near), 1u);
   const auto tris = e.take();
   EXPECT_EQ(tris.size(), s.tris.size() + 1);  // an ear: nothing split
   bool ear = false;
