@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include "particlemesh/core/error.h"
 #include "particlemesh/sample/shapes.h"
 #include "support/test_support.h"
@@ -59,6 +61,40 @@ TEST(NeighborGrid, CellQueriesMatchALookUpPerCell) {
       }
     }
     EXPECT_EQ(differ, 0u) << "cell size " << h;
+  }
+}
+
+TEST(NeighborGrid, BoxesOfEveryShapeMatchALookUpPerCell) {
+  // for_each_cell_in walks a tall box's columns through the sorted keys and a short one by
+  // look-ups: boxes of every extent from 1 to 9 cells per axis, partly outside the grid, on a
+  // surface (most cells empty) and in a volume (columns full), against a look-up per
+  // coordinate, cells and order.
+  const PointCloud shell = fibonacci_sphere(20000);
+  const PointCloud solid = test::random_cloud(20000, 3, 1.0);
+  std::mt19937 rng(11);
+  for (const PointCloud* c : {&shell, &solid}) {
+    const NeighborGrid grid(c->positions.data(), c->size(), 0.05);
+    size_t differ = 0, cells = 0;
+    for (int q = 0; q < 3000; ++q) {
+      const auto cc = grid.cell_coord(uint32_t(rng() % grid.cell_count()));
+      NeighborGrid::CellCoord lo, hi;
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = cc[a] - int32_t(rng() % 6);
+        hi[a] = lo[a] + int32_t(rng() % 9);
+      }
+      std::vector<uint32_t> want, got;
+      for (int32_t x = lo[0]; x <= hi[0]; ++x)
+        for (int32_t y = lo[1]; y <= hi[1]; ++y)
+          for (int32_t z = lo[2]; z <= hi[2]; ++z) {
+            const uint32_t b = grid.find_cell({x, y, z});
+            if (b != NeighborGrid::kNoCell) want.push_back(b);
+          }
+      grid.for_each_cell_in(lo, hi, [&](uint32_t b) { got.push_back(b); });
+      differ += got != want;
+      cells += want.size();
+    }
+    EXPECT_EQ(differ, 0u);
+    EXPECT_GT(cells, 3000u);  // the boxes do hold cells
   }
 }
 

@@ -97,6 +97,30 @@ class PM_EXPORT NeighborGrid {
       if (lo[a] > hi[a]) return;
     }
     const double box = double(hi[0] - lo[0] + 1) * double(hi[1] - lo[1] + 1) * double(hi[2] - lo[2] + 1);
+    const auto begin = cell_keys_.begin();
+    if (box <= double(cell_keys_.size()) && hi[2] - lo[2] >= 3) {
+      // A tall box (a point's surroundings to a few cells: on a surface most of its cells
+      // are empty): each column (x, y) of it is a run of the sorted keys, found from the last
+      // one by a galloping search, where looking every cell up missed on most of them.
+      auto it = begin;
+      for (int32_t x = lo[0]; x <= hi[0]; ++x) {
+        it = gallop(it, pack({x, lo[1], lo[2]}));
+        const uint64_t last = pack({x, hi[1], hi[2]});
+        while (it != cell_keys_.end() && *it <= last) {
+          const CellCoord cc = unpack(*it);
+          if (cc[2] < lo[2]) {
+            it = gallop(it, pack({x, cc[1], lo[2]}));
+          } else if (cc[2] > hi[2]) {
+            if (cc[1] == hi[1]) break;
+            it = gallop(it, pack({x, cc[1] + 1, lo[2]}));
+          } else {
+            f(uint32_t(it - begin));
+            ++it;
+          }
+        }
+      }
+      return;
+    }
     if (box <= double(cell_keys_.size())) {
       // Along z a run of occupied cells is a run of the sorted keys: one look-up per run (and
       // the cell after a run is empty).
@@ -112,7 +136,6 @@ class PM_EXPORT NeighborGrid {
       return;
     }
     // Keys are sorted: the cells with x in [lo.x, hi.x] are one run of them.
-    const auto begin = cell_keys_.begin();
     for (auto it = std::lower_bound(begin, cell_keys_.end(), pack({lo[0], 0, 0}));
          it != cell_keys_.end() && int32_t(*it >> 42) <= hi[0]; ++it) {
       const CellCoord cc = unpack(*it);
@@ -146,6 +169,20 @@ class PM_EXPORT NeighborGrid {
     return {int32_t(k >> 42), int32_t((k >> 21) & 0x1fffff), int32_t(k & 0x1fffff)};
   }
   uint32_t find_key(uint64_t key) const;
+  /// The first key at or after `from` that is not below `key` (keys before `from` are): a
+  /// galloping search, a few steps when the key is near.
+  std::vector<uint64_t>::const_iterator gallop(std::vector<uint64_t>::const_iterator from, uint64_t key) const {
+    const auto end = cell_keys_.end();
+    size_t step = 1;
+    auto lo = from;
+    while (lo != end && *lo < key) {
+      const auto next = size_t(end - lo) > step ? lo + ptrdiff_t(step) : end;
+      if (next == end || *next >= key) return std::lower_bound(lo + 1, next, key);
+      lo = next;
+      step *= 2;
+    }
+    return lo;
+  }
   void build(const Vec3* points, size_t n, double cell_size, const Vec3* lower);
 
   double cell_size_ = 0;
