@@ -182,6 +182,10 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
   const PolygonizeStats& st = result.stats;
   std::string warning =
       radius_warning(st.enclosed_fraction, st.density_radius, st.radius, st.threshold, true);
+  // A surface in about as many pieces as particles (taken from the topology report, so not
+  // with -q and no --report): one layer of particles, blobs around them.
+  if (const std::string pieces = pieces_warning(written.report.components, st.particles); !pieces.empty())
+    warning = warning.empty() ? pieces : warning + "; " + pieces;
   if (result.mesh.triangles.empty()) {
     char w[400];
     std::snprintf(w, sizeof w,

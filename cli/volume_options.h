@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstddef>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -93,6 +94,26 @@ inline std::string radius_warning(double enclosed_fraction, double density_radiu
   if (surface_method && n > 0 && size_t(n) < sizeof w)
     std::snprintf(w + n, sizeof w - size_t(n), " (particles that sample a surface rather than fill a volume: "
                                                "`particlemesh triangulate`)");
+  return w;
+}
+
+/// More pieces than one for every this many particles (and at least kManyPiecesMin) make
+/// polygonize say that the particles may sample a surface rather than fill a volume.
+constexpr size_t kParticlesPerPiece = 10;
+constexpr size_t kManyPiecesMin = 100;
+
+/// The warning when the surface fell into about as many pieces as there are particles: one
+/// layer of particles (the samples of a surface, not a fluid's volume) gives a blob around
+/// each particle or each few, since the default threshold is half the field inside a packed
+/// volume. Empty otherwise.
+inline std::string pieces_warning(size_t pieces, size_t particles) {
+  if (pieces < kManyPiecesMin || pieces * kParticlesPerPiece <= particles) return {};
+  char w[400];
+  std::snprintf(w, sizeof w,
+                "the surface fell into %zu pieces, one for every %.1f particles: particles that sample a surface "
+                "(one layer) rather than fill a volume give a blob around each few; `particlemesh triangulate` meshes "
+                "such particles (or raise --radius, or lower --threshold, to join the blobs)",
+                pieces, double(particles) / double(pieces));
   return w;
 }
 

@@ -160,6 +160,27 @@ def test_a_radius_far_larger_than_the_packing_is_said(cli, inspect, tmp_path):
     assert "warning" not in proc.stderr and "warning" not in json.loads(report.read_text())
 
 
+def test_a_surface_sampling_that_falls_into_blobs_is_said(cli, inspect, tmp_path):
+    """One layer of particles (the samples of a sphere's surface) under the volume defaults:
+    every particle inside, but the surface a blob around each few; said, with the command that
+    meshes a surface sampling, in the summary's warning and the report. A block of volume
+    particles, and the sphere's layer with a radius that joins it, are not."""
+    layer, out, report = tmp_path / "layer.ply", tmp_path / "m.ply", tmp_path / "r.json"
+    cli("sample", "fibonacci", "--points", "5000", "-o", layer, "-q")
+    proc = cli("polygonize", layer, "-o", out, "--report", report)
+    pieces = inspect(out)["components"]
+    assert pieces * 10 > 5000
+    assert "warning: the surface fell into %d pieces" % pieces in proc.stderr
+    assert "`particlemesh triangulate` meshes such particles" in proc.stderr
+    assert "fell into %d pieces" % pieces in json.loads(report.read_text())["warning"]
+    proc = cli("polygonize", layer, "-o", out, "--radius", "0.15")
+    assert "fell into" not in proc.stderr and inspect(out)["components"] <= 2
+    block = tmp_path / "block.xyz"
+    write_block(block)
+    proc = cli("polygonize", block, "-o", out)
+    assert "warning" not in proc.stderr
+
+
 def test_an_sph_frame_in_motion_is_one_body_by_default(cli, inspect, tmp_path, data_dir):
     """SPH particles in motion sit closer than their rest spacing (a median nearest-neighbour
     distance of 0.036 where it is 0.05): at 2 x 0.036 the surface is mostly blobs, said, with
