@@ -310,6 +310,24 @@ def enclosure_warning(stats):
             f"{radius:.4g} is small for how sparsely they are packed{advice}")
 
 
+#: More pieces than one for every this many particles (and at least PIECES_MIN) make
+#: pieces_warning speak (as the command-line tool's polygonize).
+PARTICLES_PER_PIECE = 10
+PIECES_MIN = 100
+
+
+def pieces_warning(pieces, particles):
+    """A warning when the polygonized surface fell into about as many pieces as there are
+    particles: one layer of particles (a surface's samples, not a fluid's volume) gives a blob
+    around each few, since the automatic threshold is half the field inside a packed volume;
+    Triangulate meshes such particles. None otherwise."""
+    if pieces < PIECES_MIN or pieces * PARTICLES_PER_PIECE <= particles:
+        return None
+    return (f"the surface fell into {pieces} pieces, one for every {particles / pieces:.1f} particles: particles "
+            "that sample a surface rather than fill a volume give a blob around each few: use Triangulate (or "
+            "raise the radius to join the blobs)")
+
+
 def polygonize_radii(particles, settings):
     """(radius, radii): one radius for all (0 = the library's default from the packing), or
     per-particle radii from the particles' sizes."""

@@ -189,7 +189,9 @@ class _Generate(SourceProps, CommonProps, SmoothProps, _ModalJob):
             warnings = (generate.volume_particles_warning(stats), generate.uneven_spacing_warning(stats),
                         jittered or generate.narrow_holes_warning(stats, settings))
         else:
-            warnings = (generate.enclosure_warning(stats),)
+            # The pieces from the mesh's topology (about 50 ms per million triangles).
+            pieces = pm.topology(data)["components"] if stats.get("particles", 0) >= generate.PIECES_MIN else 0
+            warnings = (generate.enclosure_warning(stats), generate.pieces_warning(pieces, stats.get("particles", 0)))
         for warning in warnings:
             if warning:
                 self.report({"WARNING"}, f"{obj.name}: {warning}")

@@ -919,6 +919,25 @@ def test_particles_left_outside_a_polygonized_surface_warn(pm, clean_scene):
     assert warning and warning.startswith("the radius 1 is large") and "Fixed radius of 0.2" in warning
 
 
+def test_a_surface_sampling_polygonized_into_blobs_warns(pm, clean_scene):
+    """One layer of particles (a sphere's Fibonacci samples) polygonized with the automatic
+    settings: every particle inside, but the surface falls into about a piece for every
+    particle or two: a warning naming Triangulate; packed particles do not warn."""
+    n = 5000
+    i = np.arange(n) + 0.5
+    phi, theta = np.arccos(1 - 2 * i / n), np.pi * (1 + 5 ** 0.5) * i
+    layer = np.c_[np.cos(theta) * np.sin(phi), np.sin(theta) * np.sin(phi), np.cos(phi)]
+    data = pm.generate.run("POLYGONIZE", pm.generate.Particles(layer), {"radius_mode": "AUTO"})
+    pieces = pm.particlemesh.topology(data)["components"]
+    assert pieces * 10 > n and data.stats["particles"] == n
+    assert pm.generate.enclosure_warning(data.stats) is None
+    warning = pm.generate.pieces_warning(pieces, data.stats["particles"])
+    assert warning and f"fell into {pieces} pieces" in warning and "use Triangulate" in warning
+    g = np.stack(np.meshgrid(*[np.arange(10.0)] * 3, indexing="ij"), -1).reshape(-1, 3) * 0.1
+    packed = pm.generate.run("POLYGONIZE", pm.generate.Particles(g), {"radius_mode": "AUTO"})
+    assert pm.generate.pieces_warning(pm.particlemesh.topology(packed)["components"], len(g)) is None
+
+
 def test_unevenly_spaced_particles_warn(pm, clean_scene):
     """A sphere sampled 2.8x sparser on its upper half. With Local Spacing (the default) each
     particle's longest edge follows its neighbours and the sphere closes; with one longest edge
