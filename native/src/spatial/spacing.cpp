@@ -21,6 +21,16 @@ namespace detail {
 
 namespace {
 
+/// The corners of the bounding box of n >= 1 points.
+std::pair<Vec3, Vec3> box_of(const Vec3* points, size_t n) {
+  Vec3 lo = points[0], hi = points[0];
+  for (size_t i = 1; i < n; ++i) {
+    lo = {std::min(lo.x, points[i].x), std::min(lo.y, points[i].y), std::min(lo.z, points[i].z)};
+    hi = {std::max(hi.x, points[i].x), std::max(hi.y, points[i].y), std::max(hi.z, points[i].z)};
+  }
+  return {lo, hi};
+}
+
 // A grid whose cells hold a few points each, so that a point's nearest neighbour is almost
 // always in the 27 cells around it. Starts from twice the spacing a surface sample of the
 // bounding box would have (a sphere's points fill those cells about 4 to a cell: one grid,
@@ -32,11 +42,7 @@ namespace {
 // far apart for their size) keep cells fine enough for the cluster from fitting the grid's
 // key, or many copies of a few points share cells (see far_apart_parts).
 NeighborGrid occupancy_grid(const Vec3* points, size_t n, ProgressTracker& tracker, bool& crowded) {
-  Vec3 lo = points[0], hi = points[0];
-  for (size_t i = 1; i < n; ++i) {
-    lo = {std::min(lo.x, points[i].x), std::min(lo.y, points[i].y), std::min(lo.z, points[i].z)};
-    hi = {std::max(hi.x, points[i].x), std::max(hi.y, points[i].y), std::max(hi.z, points[i].z)};
-  }
+  const auto [lo, hi] = box_of(points, n);
   // The largest side, not the diagonal: squaring a side of 1e-300 underflows to 0, and the
   // points would be called coincident.
   const double side = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
@@ -70,18 +76,8 @@ struct Part {
   std::vector<uint32_t> original;
 };
 
-/// The corners of the points' bounding box.
-std::pair<Vec3, Vec3> box_of(const std::vector<Vec3>& points) {
-  Vec3 lo = points[0], hi = points[0];
-  for (const Vec3& p : points) {
-    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
-    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
-  }
-  return {lo, hi};
-}
-
 double largest_side(const std::vector<Vec3>& points) {
-  const auto [lo, hi] = box_of(points);
+  const auto [lo, hi] = box_of(points.data(), points.size());
   return std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
 }
 
@@ -108,8 +104,8 @@ void split_at_gaps(Part part, std::vector<Part>& out) {
         to.points.push_back(part.points[i]);
         to.original.push_back(part.original[i]);
       }
-      const auto [llo, lhi] = box_of(low.points);
-      const auto [hlo, hhi] = box_of(high.points);
+      const auto [llo, lhi] = box_of(low.points.data(), low.points.size());
+      const auto [hlo, hhi] = box_of(high.points.data(), high.points.size());
       if (!(gap > distance(llo, lhi) && gap > distance(hlo, hhi))) continue;
       split_at_gaps(std::move(low), out);
       split_at_gaps(std::move(high), out);
