@@ -183,7 +183,8 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
   std::string warning =
       radius_warning(st.enclosed_fraction, st.density_radius, st.radius, st.threshold, true);
   // A surface in about as many pieces as particles (taken from the topology report, so not
-  // with -q and no --report): one layer of particles, blobs around them.
+  // with -q and no --report, nor per frame of a sequence): one layer of particles, blobs
+  // around them.
   if (const std::string pieces = pieces_warning(written.report.components, st.particles); !pieces.empty())
     warning = warning.empty() ? pieces : warning + "; " + pieces;
   if (result.mesh.triangles.empty()) {
