@@ -115,6 +115,14 @@ TEST(Limits, FarOutlierGivesAGridLimitNotAHugeAllocation) {
   PM_EXPECT_ERROR(triangulate_raw(c, o), Status::LimitExceeded, "far outliers");
   // The message names the stray point: the one farthest from the others' median.
   PM_EXPECT_ERROR(triangulate_raw(c, o), Status::LimitExceeded, "point 1000 (x = 1e+12) lies 1e+12 from");
+  // And the widest empty stretch along the axis, with the points on each side: where to crop.
+  PM_EXPECT_ERROR(triangulate_raw(c, o), Status::LimitExceeded, " and 1e+12 (1000 below, 1 above)");
+  // Two groups alike: the median lies in one, the "farthest" point in the other; the stretch
+  // between them says both.
+  PointCloud two = fibonacci_sphere(500);
+  for (const Vec3& p : fibonacci_sphere(500, 1.0, {0, 1e9, 0}).positions) two.positions.push_back(p);
+  two.normals.clear();
+  PM_EXPECT_ERROR(triangulate_raw(two, o), Status::LimitExceeded, "(500 below, 500 above)");
   c.positions.back() = {1e300, -1e300, 0};
   PM_EXPECT_ERROR(triangulate_raw(c, o), Status::LimitExceeded, "cells");
   PM_EXPECT_ERROR(NeighborGrid(c.positions.data(), c.size(), 1e-300), Status::LimitExceeded, "cells");

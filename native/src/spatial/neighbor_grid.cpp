@@ -108,7 +108,8 @@ void NeighborGrid::build(const Vec3* points, size_t n, double cell_size, const V
     if (!(cells < double(kMaxCellsPerAxis - 4))) {
       // Name the point farthest from the others' median along the axis: usually a stray one (a
       // particle a simulation flung away, a scanner's invalid return at the origin of
-      // georeferenced coordinates). Only on this error's path: O(n).
+      // georeferenced coordinates); and the widest empty stretch along it, with the points on
+      // each side (two objects far apart: which box to crop to). Only on this error's path.
       std::vector<double> along(n);
       for (size_t i = 0; i < n; ++i) along[i] = points[i][a];
       std::nth_element(along.begin(), along.begin() + ptrdiff_t(n / 2), along.end());
@@ -116,6 +117,10 @@ void NeighborGrid::build(const Vec3* points, size_t n, double cell_size, const V
       size_t far = 0;
       for (size_t i = 1; i < n; ++i)
         if (std::abs(points[i][a] - median) > std::abs(points[far][a] - median)) far = i;
+      std::sort(along.begin(), along.end());
+      size_t below = 1;  // the points at or below the widest gap's lower end
+      for (size_t i = 2; i < n; ++i)
+        if (along[i] - along[i - 1] > along[below] - along[below - 1]) below = i;
       const std::string axis(1, "xyz"[a]);
       throw Error(Status::LimitExceeded,
                   "the points span " + detail::format_number(cells) + " cells of size " +
@@ -123,7 +128,9 @@ void NeighborGrid::build(const Vec3* points, size_t n, double cell_size, const V
                       std::to_string(far) + " (" + axis + " = " + detail::format_number(points[far][a]) +
                       ") lies " + detail::format_number(std::abs(points[far][a] - median)) +
                       " from the points' median " + axis + " = " + detail::format_number(median) +
-                      "; remove far outliers, or use larger cells");
+                      "; none lies between " + axis + " = " + detail::format_number(along[below - 1]) + " and " +
+                      detail::format_number(along[below]) + " (" + std::to_string(below) + " below, " +
+                      std::to_string(n - below) + " above); remove far outliers, or use larger cells");
     }
   }
 
