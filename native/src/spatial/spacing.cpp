@@ -150,25 +150,42 @@ Part middle_of(const Part& part) {
   return middle.points.size() * 10 >= m * 9 ? middle : part;
 }
 
+/// The occupancy grid of a part, or for a point alone (or copies of one) a grid of one cell.
+NeighborGrid grid_of(const Part& part, ProgressTracker& tracker, bool& crowded) {
+  crowded = false;
+  if (part.points.size() >= 2 && largest_side(part.points) > 0)
+    return occupancy_grid(part.points.data(), part.points.size(), tracker, crowded);
+  return NeighborGrid(part.points.data(), part.points.size(), 1.0);
+}
+
 /// The points as searched, when one grid cannot hold them finely enough (occupancy_grid's
 /// `crowded`: a few particles flung a million times the cloud's size away, two objects as far
-/// apart): the clusters split at the gaps between them, each on its own grid; and of a
-/// cluster still crowded, its middle. Empty when one grid serves all after all (as for copies
-/// of a few points, which crowd their cells at any cell size).
-std::vector<Part> far_apart_parts(const Vec3* points, size_t n, ProgressTracker& tracker) {
+/// apart): the clusters split at the gaps between them, each on its own grid (into `grids`);
+/// and of a cluster still crowded, its middle. Empty, and `grids` untouched, when one grid
+/// serves all after all (as for copies of a few points, which crowd their cells at any size).
+std::vector<Part> far_apart_parts(const Vec3* points, size_t n, ProgressTracker& tracker,
+                                  std::vector<NeighborGrid>& grids) {
   Part all;
   all.points.assign(points, points + n);
   all.original.resize(n);
   std::iota(all.original.begin(), all.original.end(), 0u);
   std::vector<Part> parts;
   split_at_gaps(std::move(all), parts);
+  std::vector<NeighborGrid> own;
   for (Part& part : parts) {
-    if (part.points.size() < 2) continue;
     bool crowded = false;
-    if (largest_side(part.points) > 0) (void)occupancy_grid(part.points.data(), part.points.size(), tracker, crowded);
-    if (crowded) part = middle_of(part);
+    NeighborGrid grid = grid_of(part, tracker, crowded);
+    if (crowded) {
+      Part middle = middle_of(part);
+      if (middle.points.size() != part.points.size()) {
+        part = std::move(middle);
+        grid = grid_of(part, tracker, crowded);
+      }
+    }
+    own.push_back(std::move(grid));
   }
-  if (parts.size() == 1 && parts[0].points.size() == n) parts.clear();  // one grid serves after all
+  if (parts.size() == 1 && parts[0].points.size() == n) return {};  // one grid serves after all
+  grids = std::move(own);
   return parts;
 }
 
@@ -184,17 +201,7 @@ SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTrac
   {
     bool crowded = false;
     grids.push_back(occupancy_grid(points, n, tracker, crowded));
-    if (crowded) parts = far_apart_parts(points, n, tracker);
-    if (!parts.empty()) {
-      grids.clear();
-      for (const Part& part : parts) {
-        bool still_crowded = false;
-        if (part.points.size() >= 2 && largest_side(part.points) > 0)
-          grids.push_back(occupancy_grid(part.points.data(), part.points.size(), tracker, still_crowded));
-        else
-          grids.emplace_back(part.points.data(), part.points.size(), 1.0);  // a point alone, or coincident ones
-      }
-    }
+    if (crowded) parts = far_apart_parts(points, n, tracker, grids);
   }
   // The input points that count but lie in no part (left out of a part's middle): all of them,
   // or those of the sample.
