@@ -40,7 +40,7 @@ __all__ = [
     "polygonize_attributes",
     "smooth", "Smoother",
     "topology",
-    "estimate_spacing", "thin", "triangle_edges", "ray_crossings", "default_radius", "lattice_field", "defaults", "version",
+    "estimate_spacing", "thin", "triangle_edges", "ray_crossings", "default_radius", "particle_grid_radius", "lattice_field", "defaults", "version",
     "library_path", "pcl_bridge_path", "Mesh", "Points", "Progress", "Error", "CancelledError",
     "LibraryNotFoundError", "PclBridgeNotFoundError",
 ]
@@ -356,11 +356,12 @@ def polygonize(positions, radius=None, threshold=None, kernel=None, cell=None, *
     with the normalised kernel weights. lattice_anchor "particles" (the lattice at the
     particles' box) or "space" (its nodes at multiples of the cell: the frames of a sequence
     do not shimmer; what the command-line tool uses). Other options (pm_polygonize_options):
-    threads, max_grid_bytes, domain_max_radius.
+    threads, max_grid_bytes, domain_max_radius, domain_grid_radius.
 
     A tile of a larger cloud (what particlemesh.distributed.polygonize_tiled runs):
     domain_min=(x, y, z), the whole cloud's lower corner, anchors the lattice and the particle
-    grid as for the whole cloud; domain_max_radius its largest radius; cells=((i0, j0, k0),
+    grid as for the whole cloud; domain_max_radius its largest radius and, with radii,
+    domain_grid_radius its particle_grid_radius(radii); cells=((i0, j0, k0),
     (i1, j1, k1)) meshes only the lattice cells in that range (stats["origin"] is the
     lattice's node 0). Returns Mesh; mesh.stats holds pm_polygonize_stats."""
     lib = _library.load()
@@ -680,6 +681,19 @@ def default_radius(positions, strengths=None, kernel=None, threads=0):
         return out.value
     finally:
         lib.pm_cloud_destroy(cloud)
+
+
+def particle_grid_radius(radii):
+    """The radius the field's particle grid is sized by for per-particle radii (polygonize's
+    radii=): the largest, or, where a few are far larger than the rest (one particle 20 times
+    the others), a smaller one, the particles above it kept apart and visited by every
+    evaluation. For callers that mesh a cloud in tiles: give every tile
+    domain_grid_radius=particle_grid_radius(all radii) with domain_max_radius=max(all radii)."""
+    lib = _library.load()
+    r = np.ascontiguousarray(radii, dtype=np.float64).reshape(-1)
+    out = c_double(0)
+    lib.check(lib.pm_particle_grid_radius(ptr(r, c_double), len(r), ctypes.byref(out)))
+    return out.value
 
 
 def lattice_field(kernel, radius, spacing):

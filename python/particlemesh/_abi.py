@@ -182,6 +182,7 @@ class pm_polygonize_options(Structure):
         ("cell_min", c_int64 * 3),
         ("cell_max", c_int64 * 3),
         ("collapse_edges", c_double),
+        ("domain_grid_radius", c_double),
     ]
 
 
@@ -330,6 +331,7 @@ FUNCTIONS = {
                                              _f32p, c_size_t]),
     "pm_lattice_field": (pm_status, [c_int32, c_double, c_double, _f64p]),
     "pm_default_radius": (pm_status, [pm_cloud_p, _f64p, c_int32, c_int32, _f64p]),
+    "pm_particle_grid_radius": (pm_status, [_f64p, c_size_t, _f64p]),
     # volume particles: ray casting
     "pm_field_options_init": (None, [POINTER(pm_field_options)]),
     "pm_field_create": (pm_status, [pm_cloud_p, _f64p, _f64p, POINTER(pm_field_options),

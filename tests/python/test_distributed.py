@@ -261,6 +261,14 @@ def test_polygonize_tiled_is_the_one_machine_mesh_bit_for_bit(pm, pmd, client):
     tiled = pmd.polygonize_tiled(client, p, tiles=(3, 1, 2), radii=radii, strengths=strengths,
                                  kernel="poly6")
     assert_identical(tiled, one)
+    # Two particles 15 times larger than the rest: the whole cloud keeps them apart from its
+    # particle grid's cells (particle_grid_radius), and so does every tile.
+    radii[[5, 15000]] = 1.8, 2.4
+    assert pm.particle_grid_radius(radii) == radii[radii < 1].max()
+    one = pmd.canonical_mesh(pm.polygonize(p, radii=radii, strengths=strengths, kernel="poly6"))
+    tiled = pmd.polygonize_tiled(client, p, tiles=(2, 1, 2), radii=radii, strengths=strengths,
+                                 kernel="poly6")
+    assert_identical(tiled, one)
 
 
 def test_polygonize_tiles_are_the_whole_clouds_cells(pm):

@@ -426,6 +426,10 @@ typedef struct pm_polygonize_options {
   double collapse_edges;    /**< collapse every edge shorter than this x h into one vertex on
                                  the surface where the surface stays a closed 2-manifold
                                  (marching cubes' slivers), in [0, 0.5]; 0 = off (default) */
+  /* -- appended -- */
+  double domain_grid_radius; /**< with domain_max_radius and per-particle radii: 0 (default),
+                                  or the whole cloud's pm_particle_grid_radius (a tile then
+                                  keeps the few far larger particles apart as the cloud does) */
 } pm_polygonize_options;
 
 /** pm_polygonize_options.flags: anchor the lattice and the particle grid at domain_min. */
@@ -514,6 +518,13 @@ PM_EXPORT pm_status pm_lattice_field(int32_t kernel, double radius, double spaci
  *  estimated (fewer than two distinct particles). */
 PM_EXPORT pm_status pm_default_radius(const pm_cloud* cloud, const double* strengths, int32_t kernel,
                                       int32_t threads, double* out_radius);
+/** The radius the field's particle grid is sized by for per-particle radii (count values > 0):
+ *  the largest, or, where a few are far larger than the rest (one particle 20 times the
+ *  others), a smaller one, the particles above it kept apart from the grid's cells and
+ *  visited by every evaluation (particlemesh/volume/field.h, particle_grid_radius). For
+ *  callers that cut a cloud into tiles: pm_polygonize_options.domain_grid_radius.
+ *  PM_STATUS_INVALID_ARGUMENT for a radius that is not a finite length > 0 (naming it). */
+PM_EXPORT pm_status pm_particle_grid_radius(const double* radii, size_t count, double* out_radius);
 
 /* ---- volume particles: exact ray casting of the iso-surface --------------------------- */
 

@@ -39,6 +39,7 @@ void pm_polygonize_options_init(pm_polygonize_options* options) {
   options->flags = 0;
   options->domain_max_radius = d.domain_max_radius;
   options->collapse_edges = d.collapse_edges;
+  options->domain_grid_radius = d.domain_grid_radius;
 }
 
 }  // extern "C"
@@ -66,6 +67,7 @@ PolygonizeOptions polygonize_options_from_c(const pm_polygonize_options& o, cons
   if (o.flags & PM_POLYGONIZE_ANCHOR_IN_SPACE) opt.lattice_anchor = LatticeAnchor::Space;
   if (o.flags & PM_POLYGONIZE_DOMAIN_MIN) opt.domain_min = Vec3{o.domain_min[0], o.domain_min[1], o.domain_min[2]};
   opt.domain_max_radius = o.domain_max_radius;
+  opt.domain_grid_radius = o.domain_grid_radius;
   if (o.flags & PM_POLYGONIZE_CELL_RANGE) {
     PolygonizeOptions::CellRange range;
     for (int a = 0; a < 3; ++a) {
@@ -171,6 +173,14 @@ pm_status pm_default_radius(const pm_cloud* cloud, const double* strengths, int3
     if (strengths) p.strengths.assign(strengths, strengths + cloud->cloud.size());
     const double r = ParticleField(cloud->cloud, p, threads).params().radius;
     *out_radius = r;
+  });
+}
+
+pm_status pm_particle_grid_radius(const double* radii, size_t count, double* out_radius) {
+  return guarded([&] {
+    require(out_radius, "out_radius");
+    if (count > 0) require(radii, "radii");
+    *out_radius = particle_grid_radius(radii, count);
   });
 }
 

@@ -48,13 +48,19 @@ void sort_by_key(std::vector<Entry>& entries, const std::array<int32_t, 3>& top)
 
 }  // namespace
 
-NeighborGrid::NeighborGrid(const Vec3* points, size_t n, double cell_size) { build(points, n, cell_size, nullptr); }
-
-NeighborGrid::NeighborGrid(const Vec3* points, size_t n, double cell_size, const Vec3& lower) {
-  build(points, n, cell_size, &lower);
+NeighborGrid::NeighborGrid(const Vec3* points, size_t n, double cell_size) {
+  build(points, n, cell_size, nullptr, nullptr);
 }
 
-void NeighborGrid::build(const Vec3* points, size_t n, double cell_size, const Vec3* lower) {
+NeighborGrid::NeighborGrid(const Vec3* points, size_t n, double cell_size, const Vec3& lower) {
+  build(points, n, cell_size, &lower, nullptr);
+}
+
+NeighborGrid::NeighborGrid(const Vec3* points, size_t n, double cell_size, const Vec3* lower, const uint8_t* apart) {
+  build(points, n, cell_size, lower, apart);
+}
+
+void NeighborGrid::build(const Vec3* points, size_t n, double cell_size, const Vec3* lower, const uint8_t* apart) {
   if (!(cell_size > 0) || !std::isfinite(cell_size))
     throw Error(Status::InvalidArgument, "grid cell size must be positive and finite");
   if (n >= size_t(std::numeric_limits<uint32_t>::max()))
@@ -134,35 +140,49 @@ void NeighborGrid::build(const Vec3* points, size_t n, double cell_size, const V
     }
   }
 
-  std::vector<Entry> entries(n);
-  detail::parallel_blocks(n, 4096, [&](size_t b, size_t e) {
-    for (size_t i = b; i < e; ++i) entries[i] = {pack(coord_of(points[i])), uint32_t(i)};
-  });
+  // The points in cells (all but those apart), m of them.
+  std::vector<Entry> entries;
+  if (apart == nullptr) {
+    entries.resize(n);
+    detail::parallel_blocks(n, 4096, [&](size_t b, size_t e) {
+      for (size_t i = b; i < e; ++i) entries[i] = {pack(coord_of(points[i])), uint32_t(i)};
+    });
+  } else {
+    for (size_t i = 0; i < n; ++i)
+      if (!apart[i]) entries.push_back({pack(coord_of(points[i])), uint32_t(i)});
+  }
+  const size_t m = entries.size();
   sort_by_key(entries, n == 0 ? CellCoord{0, 0, 0} : coord_of(hi));
 
   sorted_points_.resize(n);
   original_index_.resize(n);
-  detail::parallel_blocks(n, 4096, [&](size_t b, size_t e) {
+  detail::parallel_blocks(m, 4096, [&](size_t b, size_t e) {
     for (size_t s = b; s < e; ++s) {
       original_index_[s] = entries[s].index;
       sorted_points_[s] = points[entries[s].index];
     }
   });
+  for (size_t i = 0, s = m; s < n; ++i)
+    if (apart[i]) {
+      original_index_[s] = uint32_t(i);
+      sorted_points_[s++] = points[i];
+    }
   // The cells: where the key changes. Counted per fixed block, then written at each block's
   // offset.
-  std::vector<size_t> first_cell(blocks + 1, 0);
+  const size_t cell_blocks = (m + kBlock - 1) / kBlock;
+  std::vector<size_t> first_cell(cell_blocks + 1, 0);
   const auto starts_cell = [&](size_t s) { return s == 0 || entries[s].key != entries[s - 1].key; };
-  detail::parallel_blocks(blocks, 1, [&](size_t kb, size_t ke) {
+  detail::parallel_blocks(cell_blocks, 1, [&](size_t kb, size_t ke) {
     for (size_t k = kb; k < ke; ++k)
-      for (size_t s = k * kBlock; s < std::min(n, (k + 1) * kBlock); ++s) first_cell[k + 1] += starts_cell(s);
+      for (size_t s = k * kBlock; s < std::min(m, (k + 1) * kBlock); ++s) first_cell[k + 1] += starts_cell(s);
   });
-  for (size_t k = 0; k < blocks; ++k) first_cell[k + 1] += first_cell[k];
-  cell_start_.assign(first_cell[blocks] + 1, uint32_t(n));
-  cell_keys_.resize(first_cell[blocks]);
-  detail::parallel_blocks(blocks, 1, [&](size_t kb, size_t ke) {
+  for (size_t k = 0; k < cell_blocks; ++k) first_cell[k + 1] += first_cell[k];
+  cell_start_.assign(first_cell[cell_blocks] + 1, uint32_t(m));
+  cell_keys_.resize(first_cell[cell_blocks]);
+  detail::parallel_blocks(cell_blocks, 1, [&](size_t kb, size_t ke) {
     for (size_t k = kb; k < ke; ++k) {
       size_t c = first_cell[k];
-      for (size_t s = k * kBlock; s < std::min(n, (k + 1) * kBlock); ++s)
+      for (size_t s = k * kBlock; s < std::min(m, (k + 1) * kBlock); ++s)
         if (starts_cell(s)) {
           cell_start_[c] = uint32_t(s);
           cell_keys_[c++] = entries[s].key;

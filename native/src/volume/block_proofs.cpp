@@ -17,9 +17,9 @@ constexpr int kG = kB / 2;  // group centres per block edge (groups of 2 x 2 x 2
 typedef float Float4 __attribute__((vector_size(4 * sizeof(float))));
 typedef int32_t Int4 __attribute__((vector_size(4 * sizeof(int32_t))));
 
-// The particles whose support can reach the block's nodes, in grid order: f(sorted index,
-// position in node units relative to the block's first node, radius in node units, s per
-// squared node unit, strength) returns whether to go on.
+// The particles whose support can reach the block's nodes, in grid order (those kept apart
+// from the cells last): f(sorted index, position in node units relative to the block's first
+// node, radius in node units, s per squared node unit, strength) returns whether to go on.
 template <class F>
 void for_each_particle_near(const ParticleField& field, const Vec3& o, double h, F&& f) {
   const NeighborGrid& grid = field.grid();
@@ -28,24 +28,26 @@ void for_each_particle_near(const ParticleField& field, const Vec3& o, double h,
   const auto& ws = field.sorted_strengths();
   const bool uniform = field.uniform_radius();
   const double inv_h = 1.0 / h;
-  const double rmax = field.max_radius(), span = double(kB - 1) * h;
+  const double rmax = field.cell_reach(), span = double(kB - 1) * h;
   const double c2_common = h * h / (field.params().radius * field.params().radius);
   const double rn_common = std::sqrt(1.0 / c2_common);
   const NeighborGrid::CellCoord clo = grid.coord_of(o - Vec3{rmax, rmax, rmax});
   const NeighborGrid::CellCoord chi = grid.coord_of(o + Vec3{span + rmax, span + rmax, span + rmax});
   bool go_on = true;
+  auto visit = [&](uint32_t s) {
+    const double w = ws.empty() ? 1.0 : ws[s];
+    if (w == 0) return;
+    const double c2 = uniform ? c2_common : h * h * inv_r2s[s];
+    const double rn = uniform ? rn_common : std::sqrt(1.0 / c2);
+    const double ux = (P[s].x - o.x) * inv_h, uy = (P[s].y - o.y) * inv_h, uz = (P[s].z - o.z) * inv_h;
+    if (ux + rn < 0 || ux - rn > kB - 1 || uy + rn < 0 || uy - rn > kB - 1 || uz + rn < 0 || uz - rn > kB - 1)
+      return;
+    go_on = f(s, ux, uy, uz, rn, c2, w);
+  };
   field.for_each_cell_in(clo, chi, [&](uint32_t c) {
-    for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c) && go_on; ++s) {
-      const double w = ws.empty() ? 1.0 : ws[s];
-      if (w == 0) continue;
-      const double c2 = uniform ? c2_common : h * h * inv_r2s[s];
-      const double rn = uniform ? rn_common : std::sqrt(1.0 / c2);
-      const double ux = (P[s].x - o.x) * inv_h, uy = (P[s].y - o.y) * inv_h, uz = (P[s].z - o.z) * inv_h;
-      if (ux + rn < 0 || ux - rn > kB - 1 || uy + rn < 0 || uy - rn > kB - 1 || uz + rn < 0 || uz - rn > kB - 1)
-        continue;
-      go_on = f(s, ux, uy, uz, rn, c2, w);
-    }
+    for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c) && go_on; ++s) visit(s);
   });
+  for (uint32_t s = grid.apart_begin(); s < grid.point_count() && go_on; ++s) visit(s);
 }
 
 // Upper bound of F over the block's nodes: each particle at its nearest point of the nodes'

@@ -12,10 +12,13 @@
 namespace PM_NAMESPACE::detail {
 
 /// A tile's field anchored as its whole cloud's (see PolygonizeOptions::domain_min): the
-/// cloud's lower corner (at or below every particle) and largest radius (0: these particles').
+/// cloud's lower corner (at or below every particle), largest radius (0: these particles')
+/// and, with per-particle radii, its particle_grid_radius (0: the largest radius when
+/// max_radius is given, else these particles').
 struct FieldDomain {
   std::optional<Vec3> min;
   double max_radius = 0;
+  double grid_radius = 0;
 };
 
 struct FieldBuilder {

@@ -251,7 +251,7 @@ bool block_reached(const ParticleField& field, const Grid& g, uint64_t key) {
   const auto& inv_r2s = field.sorted_inverse_squared_radii();
   const bool uniform = field.uniform_radius();
   const double r_common = field.params().radius;
-  const double rmax = field.max_radius();
+  const double rmax = field.cell_reach();
   double lo[3], hi[3];
   const double o[3] = {g.origin.x, g.origin.y, g.origin.z};
   for (int a = 0; a < 3; ++a) {
@@ -263,18 +263,20 @@ bool block_reached(const ParticleField& field, const Grid& g, uint64_t key) {
   const NeighborGrid::CellCoord clo = grid.coord_of({lo[0] - rmax, lo[1] - rmax, lo[2] - rmax});
   const NeighborGrid::CellCoord chi = grid.coord_of({hi[0] + rmax, hi[1] + rmax, hi[2] + rmax});
   bool reached = false;
-  field.for_each_cell_in(clo, chi, [&](uint32_t c) {
-    for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c) && !reached; ++s) {
-      const double r = uniform ? r_common : 1.0 / std::sqrt(inv_r2s[s]);
-      double d2 = 0;
-      const double p[3] = {P[s].x, P[s].y, P[s].z};
-      for (int a = 0; a < 3; ++a) {
-        const double d = p[a] < lo[a] ? lo[a] - p[a] : (p[a] > hi[a] ? p[a] - hi[a] : 0.0);
-        d2 += d * d;
-      }
-      reached = d2 < r * r;
+  auto test = [&](uint32_t s) {
+    const double r = uniform ? r_common : 1.0 / std::sqrt(inv_r2s[s]);
+    double d2 = 0;
+    const double p[3] = {P[s].x, P[s].y, P[s].z};
+    for (int a = 0; a < 3; ++a) {
+      const double d = p[a] < lo[a] ? lo[a] - p[a] : (p[a] > hi[a] ? p[a] - hi[a] : 0.0);
+      d2 += d * d;
     }
+    reached = d2 < r * r;
+  };
+  field.for_each_cell_in(clo, chi, [&](uint32_t c) {
+    for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c) && !reached; ++s) test(s);
   });
+  for (uint32_t s = grid.apart_begin(); s < grid.point_count() && !reached; ++s) test(s);
   return reached;
 }
 
@@ -475,7 +477,8 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
 
   const NeighborGrid& pgrid = field.grid();
   const auto& P = pgrid.sorted_points();
-  const size_t ncells = pgrid.cell_count();
+  // The particle grid's cells, then each particle kept apart from them as a unit of its own.
+  const size_t ncells = pgrid.cell_count() + (pgrid.point_count() - pgrid.apart_begin());
 
   // ---- 1. candidate blocks: the blocks each particle-grid cell's supports reach ------------
   tracker.stage("finding blocks", begin, begin + 0.05 * (1 - begin), ncells);
@@ -484,7 +487,10 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
     // below the grid origin, and the block index overflowed int64 (found by fuzzing).
     constexpr double kInf = std::numeric_limits<double>::infinity();
     double lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
-    for (uint32_t s = pgrid.cell_begin(c); s < pgrid.cell_end(c); ++s) {
+    const bool apart = c >= pgrid.cell_count();
+    const uint32_t first = apart ? pgrid.apart_begin() + (c - uint32_t(pgrid.cell_count())) : pgrid.cell_begin(c);
+    const uint32_t last = apart ? first + 1 : pgrid.cell_end(c);
+    for (uint32_t s = first; s < last; ++s) {
       const double r = field.uniform_radius() ? R : 1.0 / std::sqrt(field.sorted_inverse_squared_radii()[s]);
       for (int a = 0; a < 3; ++a) {
         // The support's half extent: the radius, or the ellipsoid's along this axis.

@@ -127,7 +127,7 @@ inline ParticleField polygonize_field_of(const PointCloud& cloud, const Polygoni
   params.anisotropy = options.anisotropy;
   tracker.stage("estimating spacing", begin, end);
   return FieldBuilder::build(cloud.positions.data(), cloud.positions.size(), params, tracker, begin, end,
-                             {options.domain_min, options.domain_max_radius});
+                             {options.domain_min, options.domain_max_radius, options.domain_grid_radius});
 }
 
 }  // namespace particlemesh::detail

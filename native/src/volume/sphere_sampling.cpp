@@ -33,7 +33,8 @@ inline void add_row(float* row, const float* dx2, float syz, float a, float b) {
     store4(row + 4 * half, add_kernel<K>(load4(row + 4 * half), load4(dx2 + 4 * half) + syz, a, b));
 }
 
-// Sum every particle's contribution into the samples of one block, in grid order.
+// Sum every particle's contribution into the samples of one block, in grid order (the cells
+// around the block, then the particles kept apart from the cells).
 // The samples are float (as stored), and each row of 8 nodes is summed whole, branch-free
 // (nodes outside the support get exactly 0): fixed-length float loops that the compiler
 // vectorises with baseline SSE2, several times faster than finding each row's exact ends.
@@ -48,7 +49,7 @@ void sample_block(const ParticleField& field, const Vec3& first, double h, float
   const auto& ws = field.sorted_strengths();
   const bool uniform = field.uniform_radius();
   const double inv_r2_common = 1.0 / (field.params().radius * field.params().radius);
-  const double rmax = field.max_radius();
+  const double rmax = field.cell_reach();
   const double ox = first.x, oy = first.y, oz = first.z;
   const Vec3 lo{ox - rmax, oy - rmax, oz - rmax};
   const Vec3 hi{ox + double(kB - 1) * h + rmax, oy + double(kB - 1) * h + rmax, oz + double(kB - 1) * h + rmax};
@@ -58,10 +59,9 @@ void sample_block(const ParticleField& field, const Vec3& first, double h, float
   double c2 = h * h * inv_r2_common;  // (node units)^2 -> s
   double rn = std::sqrt(1.0 / c2);    // radius in node units
   alignas(32) float dx2[kB];
-  field.for_each_cell_in(clo, chi, [&](uint32_t c) {
-    for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) {
+  auto add = [&](uint32_t s) {
       const float w = ws.empty() ? 1.0f : float(ws[s]);
-      if (w == 0.0f) continue;
+      if (w == 0.0f) return;
       float wa, wb;
       row_weights<K>(w, &wa, &wb);
       if (!uniform) {
@@ -73,11 +73,11 @@ void sample_block(const ParticleField& field, const Vec3& first, double h, float
       const double ux = (P[s].x - ox) * inv_h, uy = (P[s].y - oy) * inv_h, uz = (P[s].z - oz) * inv_h;
       if (ux + rn < 0 || ux - rn > kB - 1 || uy + rn < 0 || uy - rn > kB - 1 || uz + rn < 0 ||
           uz - rn > kB - 1)
-        continue;  // the support misses the block's nodes (most scanned particles)
+        return;  // the support misses the block's nodes (most scanned particles)
       const int x0 = std::max(iceil(ux - rn), 0), x1 = std::min(ifloor(ux + rn), kB - 1);
       const int y0 = std::max(iceil(uy - rn), 0), y1 = std::min(ifloor(uy + rn), kB - 1);
       const int z0 = std::max(iceil(uz - rn), 0), z1 = std::min(ifloor(uz + rn), kB - 1);
-      if (x0 > x1 || y0 > y1 || z0 > z1) continue;
+      if (x0 > x1 || y0 > y1 || z0 > z1) return;
       for (int x = 0; x < kB; ++x) {
         const double d = double(x) - ux;
         dx2[x] = float(d * d * c2);
@@ -101,8 +101,11 @@ void sample_block(const ParticleField& field, const Vec3& first, double h, float
           }
         }
       }
-    }
+  };
+  field.for_each_cell_in(clo, chi, [&](uint32_t c) {
+    for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) add(s);
   });
+  for (uint32_t s = grid.apart_begin(); s < grid.point_count(); ++s) add(s);
 }
 
 }  // namespace

@@ -24,7 +24,7 @@ void EdgeNeighbours::gather(const ParticleField& field, const Vec3& a, int axis,
 template <int A>
 void EdgeNeighbours::gather_along(const ParticleField& field, const Vec3& a, double h) {
   constexpr int U = (A + 1) % 3, W = (A + 2) % 3;
-  const double r = field.max_radius();
+  const double r = field.cell_reach();
   const double r2 = r * r;
   const NeighborGrid& grid = field.grid();
   // The points on the edge are a + t h e_axis, 0 <= t <= 1, computed as at() in refine():
@@ -78,6 +78,15 @@ void EdgeNeighbours::gather_along(const ParticleField& field, const Vec3& a, dou
     }
   }
   count_ = n;
+  // The particles kept apart from the cells (radii far above the rest), by their own radius.
+  apart_.clear();
+  const std::vector<double>& inv_r2s = field.sorted_inverse_squared_radii();
+  for (uint32_t s = grid.apart_begin(); s < grid.point_count(); ++s) {
+    const Vec3& p = points[s];
+    const double pa = get<A>(p);
+    const double da = pa - std::clamp(pa, lo_a, hi_a), du = get<U>(p) - au, dw = get<W>(p) - aw;
+    if ((da * da + du * du + dw * dw) * inv_r2s[s] <= 1.0 + 1e-12) apart_.push_back(s);
+  }
 }
 
 template <Kernel K, bool General, bool AllCells>
@@ -89,7 +98,7 @@ double EdgeNeighbours::sum(const Vec3& x, Vec3* gradient, int32_t lo, int32_t hi
   // the whole gathered box's (most points of an edge: its box is a quarter cell longer), so
   // every gathered particle passes the cell test.
   const ParticleField& field = *field_;
-  const double r = field.max_radius();
+  const double r = field.cell_reach();
   const double r2 = r * r;
   const NeighborGrid& grid = field.grid();
   const bool uniform = !General || field.uniform_radius();
@@ -135,13 +144,23 @@ double EdgeNeighbours::sum(const Vec3& x, Vec3* gradient, int32_t lo, int32_t hi
     v += w * kernel_value_t<K>(q);
     if (with_gradient) g += (xl - p) * (2.0 * w * inv_r2 * kernel_derivative_t<K>(q));
   }
+  // The particles kept apart (none with one radius: General only), as the field adds them.
+  for (const uint32_t t : apart_) {
+    const Vec3& p = points[t];
+    const double inv_r2 = inv_r2s[t];
+    const double q = squared_distance(p, xl) * inv_r2;
+    if (!(q < 1.0)) continue;
+    const double w = unit ? 1.0 : ws[t];
+    v += w * kernel_value_t<K>(q);
+    if (with_gradient) g += (xl - p) * (2.0 * w * inv_r2 * kernel_derivative_t<K>(q));
+  }
   if (with_gradient) *gradient = g;
   return v;
 }
 
 double EdgeNeighbours::value_and_gradient(const Vec3& x, Vec3* gradient) const {
   const bool general = !field_->uniform_radius() || !field_->sorted_strengths().empty() || gradient == nullptr;
-  const double r = field_->max_radius();
+  const double r = field_->cell_reach();
   const NeighborGrid& grid = field_->grid();
   // The cells along the edge's axis that the field's query at x visits.
   const int32_t lo = grid.coord_on_axis(x[axis_] - r, axis_), hi = grid.coord_on_axis(x[axis_] + r, axis_);

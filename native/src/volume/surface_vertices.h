@@ -26,7 +26,8 @@ constexpr double kEdgeClamp = 1e-3;
 /// in them; the particles near an edge are about a third of those, so each evaluation here
 /// tests only them. Every result is bit for bit the field's own: the same particles (those
 /// in the cells the field's query would visit and within its radius), in the same order
-/// (increasing grid index), with the same arithmetic. Spherical kernels only
+/// (increasing grid index; the particles kept apart from the grid's cells last, those whose
+/// support meets the edge), with the same arithmetic. Spherical kernels only
 /// (ParticleField::anisotropic() false); one per thread, reused from edge to edge.
 class EdgeNeighbours {
  public:
@@ -39,7 +40,7 @@ class EdgeNeighbours {
   /// measured 3-4 % slower polygonize (sum() is its innermost loop).
   template <class F>
   void for_each_contributor(const Vec3& x, F&& f) const {
-    const double r = field_->max_reach();  // = max_radius() for spheres
+    const double r = field_->cell_reach();
     const double r2 = r * r;
     const NeighborGrid& grid = field_->grid();
     const int32_t lo = grid.coord_on_axis(x[axis_] - r, axis_), hi = grid.coord_on_axis(x[axis_] + r, axis_);
@@ -52,6 +53,10 @@ class EdgeNeighbours {
       if (!(d2 <= r2)) continue;
       const double s = d2 * (uniform ? inv_r2_ : inv_r2s[n.sorted]);
       if (s < 1.0) f(size_t(grid.original_index(n.sorted)), s);
+    }
+    for (const uint32_t t : apart_) {
+      const double s = squared_distance(grid.sorted_point(t), x) * inv_r2s[t];
+      if (s < 1.0) f(size_t(grid.original_index(t)), s);
     }
   }
 
@@ -74,6 +79,7 @@ class EdgeNeighbours {
   double inv_r2_ = 0;
   std::vector<Near> near_;  // the first count_ are the edge's
   size_t count_ = 0;
+  std::vector<uint32_t> apart_;  // the particles kept apart from the cells whose support meets the edge
   int32_t box_lo_ = 0, box_hi_ = 0;  // the gathered box's cells along the edge's axis
   struct Run {
     uint32_t begin, end;  // sorted indices

@@ -14,7 +14,7 @@ import uuid
 import numpy as np
 
 from .. import _abi, _library, _options
-from .. import default_radius, lattice_field, polygonize
+from .. import default_radius, lattice_field, particle_grid_radius, polygonize
 from .._errors import Error
 from ._dask import check_client, distributed, gather_in_order
 from ._merge import merge_by_position
@@ -62,7 +62,8 @@ def polygonize_tiled(client, particles, tiles=(2, 2, 1), *, bounds=None, radius=
     or a dict (positions, radii, strengths, attributes), called on the workers, always in the
     cloud's order (the order the whole cloud would list them in); with a loader, bounds=(lo,
     hi) is the cloud's box (lo at or below every particle) and radius= (or, with per-particle
-    radii, domain_max_radius=, their maximum) is needed. tiles=(nx, ny, nz): the lattice cut
+    radii, domain_max_radius=, their maximum, and where a few radii are far above the rest
+    domain_grid_radius=particlemesh.particle_grid_radius(all radii)) is needed. tiles=(nx, ny, nz): the lattice cut
     evenly along each axis. The other arguments are polygonize's (lattice_anchor="space"
     too: the tiles round the same origin).
 
@@ -114,6 +115,10 @@ def polygonize_tiled(client, particles, tiles=(2, 2, 1), *, bounds=None, radius=
                 raise invalid("radii must be finite lengths > 0")
             R = _median(r)
             R_max = max(float(r.max()), float(domain_max_radius))
+            if not domain_max_radius and not options.get("domain_grid_radius"):
+                # The particle grid as the whole cloud's: its few far larger particles (if
+                # any) kept apart in every tile alike.
+                tile_options["domain_grid_radius"] = particle_grid_radius(r)
         else:
             R = float(radius) if radius else default_radius(p["positions"], p["strengths"], kernel)
             R_max = max(R, float(domain_max_radius))

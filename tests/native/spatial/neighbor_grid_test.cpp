@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 #include "particlemesh/core/error.h"
@@ -153,4 +154,44 @@ TEST(NeighborGrid, RejectsBadCellSizeAndAbsurdExtent) {
     EXPECT_EQ(e.status(), Status::LimitExceeded);
     EXPECT_NE(std::string(e.what()).find("outliers"), std::string::npos);
   }
+}
+
+// Points kept apart follow every cell's points, in input order; no cell holds them, the cells
+// hold the others as a grid of those alone would, and the bounds are every point's.
+TEST(NeighborGrid, PointsKeptApartFollowTheCellsAndNoQueryFindsThem) {
+  const PointCloud c = test::random_cloud(2000, 21);
+  std::vector<uint8_t> apart(c.size(), 0);
+  std::vector<Vec3> rest;
+  std::vector<uint32_t> apart_ids;
+  for (size_t i = 0; i < c.size(); ++i) {
+    apart[i] = i % 97 == 3;
+    if (apart[i]) apart_ids.push_back(uint32_t(i));
+    else rest.push_back(c.positions[i]);
+  }
+  Vec3 lo = c.positions[0];
+  for (const Vec3& p : c.positions) lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+  const NeighborGrid grid(c.positions.data(), c.size(), 0.1, &lo, apart.data());
+  const NeighborGrid alone(rest.data(), rest.size(), 0.1, lo);
+  ASSERT_EQ(grid.point_count(), c.size());
+  ASSERT_EQ(grid.apart_begin(), rest.size());
+  for (size_t k = 0; k < apart_ids.size(); ++k) {
+    EXPECT_EQ(grid.original_index(uint32_t(rest.size() + k)), apart_ids[k]);
+    EXPECT_TRUE(grid.sorted_point(uint32_t(rest.size() + k)) == c.positions[apart_ids[k]]);
+  }
+  // The same cells, holding the same points in the same order.
+  ASSERT_EQ(grid.cell_count(), alone.cell_count());
+  for (uint32_t cell = 0; cell < grid.cell_count(); ++cell) {
+    ASSERT_EQ(grid.cell_coord(cell), alone.cell_coord(cell));
+    ASSERT_EQ(grid.cell_begin(cell), alone.cell_begin(cell));
+    ASSERT_EQ(grid.cell_end(cell), alone.cell_end(cell));
+    for (uint32_t s = grid.cell_begin(cell); s < grid.cell_end(cell); ++s)
+      ASSERT_TRUE(grid.sorted_point(s) == alone.sorted_point(s));
+  }
+  EXPECT_EQ(grid.cell_end(uint32_t(grid.cell_count() - 1)), grid.apart_begin());
+  for (const uint32_t i : apart_ids)
+    grid.for_each_within(c.positions[i], 0.3, [&](uint32_t s, double) { EXPECT_LT(s, grid.apart_begin()); });
+  // Without flags: none apart; the same grid as the constructor without them.
+  const NeighborGrid plain(c.positions.data(), c.size(), 0.1, nullptr, nullptr);
+  EXPECT_EQ(plain.apart_begin(), c.size());
+  EXPECT_TRUE(plain.original_indices() == NeighborGrid(c.positions.data(), c.size(), 0.1).original_indices());
 }

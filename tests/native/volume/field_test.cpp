@@ -345,3 +345,70 @@ TEST(ParticleField, ColumnRunsAreTheBoxCellsInOrder) {
     else EXPECT_GT(longest, 2u);         // the dense table: whole columns
   }
 }
+
+// Three particles of a radius 20 times the others': the grid's cells are sized by the others
+// and those three kept apart; F, its gradient and the contributors are still every particle's.
+TEST(ParticleField, AFewFarLargerRadiiAreKeptApartFromTheCells) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(0, 1), w(-0.5, 2.0);
+  const PointCloud c = test::random_cloud(3000, 17);
+  std::vector<double> radii(c.size(), 0.05), strengths;
+  for (size_t i = 0; i < c.size(); ++i) strengths.push_back(w(rng));
+  radii[10] = radii[2000] = 1.0;
+  radii[2999] = 0.8;
+  EXPECT_DOUBLE_EQ(particle_grid_radius(radii.data(), radii.size()), 0.05);
+  FieldParams p;
+  p.kernel = Kernel::Poly6;
+  p.threshold = 0.5;
+  p.radii = radii;
+  p.strengths = strengths;
+  const ParticleField f(c, p);
+  EXPECT_DOUBLE_EQ(f.cell_reach(), 0.05);
+  EXPECT_DOUBLE_EQ(f.max_radius(), 1.0);
+  EXPECT_DOUBLE_EQ(f.grid().cell_size(), 0.05);
+  ASSERT_EQ(f.grid().apart_begin(), c.size() - 3);
+  for (int q = 0; q < 300; ++q) {
+    // Inside the cloud and up to a large radius outside it (only the large ones reach there).
+    const Vec3 x{u(rng) * 2.6 - 0.8, u(rng) * 2.6 - 0.8, u(rng) * 2.6 - 0.8};
+    Vec3 gb, gf;
+    const double vb = brute_value(c.positions, radii, strengths, p.kernel, x, &gb);
+    ASSERT_NEAR(f.value_and_gradient(x, &gf), vb, 1e-12);
+    ASSERT_NEAR(norm(gf - gb), 0.0, 1e-9);
+    std::vector<size_t> got, want;
+    f.for_each_contributor(x, [&](size_t i, double) { got.push_back(i); });
+    for (size_t i = 0; i < c.size(); ++i)
+      if (squared_distance(x, c.positions[i]) < radii[i] * radii[i]) want.push_back(i);
+    std::sort(got.begin(), got.end());
+    ASSERT_EQ(got, want);
+  }
+}
+
+// Which radii are kept apart: only a few far above the rest, never an even spread.
+TEST(ParticleField, ParticleGridRadiusKeepsOnlyAFewFarLargerApart) {
+  std::vector<double> one(10000, 0.3);
+  EXPECT_EQ(particle_grid_radius(one.data(), one.size()), 0.3);
+  one[77] = 6.0;  // one 20 times the rest
+  EXPECT_EQ(particle_grid_radius(one.data(), one.size()), 0.3);
+  one[78] = 0.6;  // twice the rest: cheaper apart too
+  EXPECT_EQ(particle_grid_radius(one.data(), one.size()), 0.3);
+  for (size_t i = 100; i < 5100; ++i) one[i] = 0.45;  // too many to keep apart: the cells' radius
+  EXPECT_EQ(particle_grid_radius(one.data(), one.size()), 0.45);
+  // A spread of 5 (Blender's random size, Houdini's pscale drawn from a range): cells of the
+  // largest, as before.
+  std::vector<double> spread;
+  for (int i = 0; i < 10000; ++i) spread.push_back(0.01 + 0.04 * double(i) / 9999.0);
+  EXPECT_EQ(particle_grid_radius(spread.data(), spread.size()), 0.05);
+  // Twice the radius for a tenth of them: too many to visit at every evaluation.
+  std::vector<double> tenth(10000, 1.0);
+  for (size_t i = 0; i < tenth.size(); i += 10) tenth[i] = 2.0;
+  EXPECT_EQ(particle_grid_radius(tenth.data(), tenth.size()), 2.0);
+  // The order of the radii does not matter.
+  std::vector<double> mixed = one;
+  std::reverse(mixed.begin(), mixed.end());
+  EXPECT_EQ(particle_grid_radius(mixed.data(), mixed.size()), 0.45);
+  EXPECT_EQ(particle_grid_radius(nullptr, 0), 0.0);
+  one[5] = -1;
+  const Error e = error_of([&] { particle_grid_radius(one.data(), one.size()); });
+  EXPECT_EQ(e.status(), Status::InvalidArgument);
+  EXPECT_NE(std::string(e.what()).find("radii[5]"), std::string::npos) << e.what();
+}

@@ -451,14 +451,15 @@ TEST(Polygonize, OutputDoesNotDependOnTheThreadCount) {
 // distance |F - T| / |grad F|), its normal is -grad F there, and the particles' attributes
 // at it are the field's normalised kernel weights summed in the field's own order, bit for
 // bit; the same at any thread count. With one radius, with per-particle radii and strengths
-// (negative ones too), and with every kernel.
+// (negative ones too), with three particles of a radius ten times the rest (kept apart from
+// the field's grid cells), and with every kernel.
 TEST(Polygonize, VerticesOnTheFieldAndAttributesAsItsWeights) {
   struct Case {
     Kernel kernel;
-    bool radii, strengths;
+    bool radii, strengths, big = false;
   };
   for (const Case cs : {Case{Kernel::Wyvill, false, false}, Case{Kernel::Poly6, true, true}, Case{Kernel::Blinn, false, true},
-                        Case{Kernel::Poly4, true, false}}) {
+                        Case{Kernel::Poly4, true, false}, Case{Kernel::Wyvill, true, true, true}}) {
     const PointCloud base = test::random_cloud(4000, 31, 1.6);
     PointCloud c = base;
     std::mt19937_64 rng(7);
@@ -472,6 +473,11 @@ TEST(Polygonize, VerticesOnTheFieldAndAttributesAsItsWeights) {
       for (size_t i = 0; i < c.positions.size(); ++i) o.radii.push_back(0.12 + 0.08 * u());
     if (cs.strengths)
       for (size_t i = 0; i < c.positions.size(); ++i) o.strengths.push_back(i % 50 == 0 ? -0.5 : 0.7 + 0.6 * u());
+    if (cs.big)
+      for (const size_t i : {size_t(5), size_t(1700), size_t(3999)}) {
+        o.radii[i] = 1.2 + 0.2 * double(i % 3);
+        o.strengths[i] = 0.3;  // the surface of the others, raised within a radius of 1.2-1.6
+      }
     VertexAttribute a{"velocity", 3, {}}, b{"heat", 1, {}};
     for (size_t i = 0; i < c.positions.size(); ++i) {
       for (int k = 0; k < 3; ++k) a.values.push_back(float(u() - 0.5));
@@ -483,6 +489,14 @@ TEST(Polygonize, VerticesOnTheFieldAndAttributesAsItsWeights) {
     ASSERT_GT(r.mesh.positions.size(), 1000u) << kernel_name(cs.kernel);
     ASSERT_EQ(r.mesh.attributes.size(), 2u);
     const ParticleField f(c.positions, FieldParams{cs.kernel, o.radius, o.threshold, o.radii, o.strengths, {}});
+    if (cs.big) {
+      EXPECT_GT(f.cell_reach(), 0.19);  // the others' largest
+      EXPECT_LE(f.cell_reach(), 0.2);
+      EXPECT_EQ(f.grid().apart_begin(), c.size() - 3);
+    } else {
+      EXPECT_EQ(f.cell_reach(), f.max_radius());
+      EXPECT_EQ(f.grid().apart_begin(), c.size());
+    }
     const double T = o.threshold, h = o.cell_size;
     const Vec3 O = r.stats.origin;
     size_t on_edges = 0, mismatched = 0;

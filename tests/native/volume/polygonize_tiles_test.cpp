@@ -104,6 +104,55 @@ TEST(PolygonizeTiles, TwoTilesAreTheWholeCloudsMesh) {
   EXPECT_TRUE(together == faces(whole.mesh));  // every triangle once, none changed
 }
 
+// A few particles far larger than the rest are kept apart from the particle grid's cells
+// (particle_grid_radius): tiles given the cloud's grid radius keep the same ones apart and
+// again give exactly the whole cloud's triangles.
+TEST(PolygonizeTiles, TilesKeepTheCloudsFewFarLargerParticlesApart) {
+  const PointCloud c = test::jittered(test::random_cloud(12000, 3, 2.0), 0.01, 4);
+  PolygonizeOptions o;
+  o.kernel = Kernel::Poly6;
+  o.radii.assign(c.size(), 0.22);
+  o.radii[100] = 1.6;
+  o.radii[7000] = 2.2;
+  o.threshold = 1.5;
+  const double grid_radius = particle_grid_radius(o.radii.data(), o.radii.size());
+  ASSERT_EQ(grid_radius, 0.22);
+  const PolygonizeResult whole = polygonize(c, o);
+  ASSERT_GT(whole.mesh.triangles.size(), 5000u);
+  const double h = whole.stats.cell_size, reach = 2.2 + h;
+  const int64_t cut = int64_t((1.0 - whole.stats.origin.x) / h);
+  const double seam = whole.stats.origin.x + double(cut) * h;
+  constexpr int64_t kFar = int64_t(1) << 40;
+  std::multiset<Face> together;
+  for (int side = 0; side < 2; ++side) {
+    PolygonizeOptions t = o;
+    t.radii.clear();
+    t.domain_min = lowest(c);
+    t.domain_max_radius = 2.2;
+    t.domain_grid_radius = grid_radius;
+    t.cells = PolygonizeOptions::CellRange{{side ? cut : -kFar, -kFar, -kFar}, {side ? kFar : cut, kFar, kFar}};
+    PointCloud part;
+    for (size_t i = 0; i < c.size(); ++i) {
+      const double x = c.positions[i].x;
+      if (side ? x >= seam - reach : x <= seam + reach) {
+        part.positions.push_back(c.positions[i]);
+        t.radii.push_back(o.radii[i]);
+      }
+    }
+    const PolygonizeResult r = polygonize(part, t);
+    EXPECT_TRUE(r.stats.origin == whole.stats.origin);
+    for (const Face& f : faces(r.mesh)) together.insert(f);
+  }
+  EXPECT_TRUE(together == faces(whole.mesh));
+  // A grid radius above the largest radius is refused, naming it.
+  PolygonizeOptions bad = o;
+  bad.domain_max_radius = 2.2;
+  bad.domain_grid_radius = 3.0;
+  std::string msg;
+  EXPECT_EQ(status_of([&] { polygonize(c, bad); }, &msg), Status::InvalidArgument);
+  EXPECT_NE(msg.find("domain_grid_radius"), std::string::npos) << msg;
+}
+
 TEST(PolygonizeTiles, PerParticleRadiiNeedTheWholeCloudsLargestRadius) {
   const PointCloud c = test::random_cloud(4000, 5, 2.0);
   std::vector<double> radii(c.size());

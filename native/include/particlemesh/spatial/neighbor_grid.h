@@ -42,10 +42,20 @@ class PM_EXPORT NeighborGrid {
   /// @throws Error(InvalidArgument) a point below `lower` or `lower` not finite;
   ///         Error(LimitExceeded) as above, measured from `lower`.
   NeighborGrid(const Vec3* points, size_t n, double cell_size, const Vec3& lower);
+  /// The same (anchored at *lower, or at the points' smallest coordinates when it is null),
+  /// with the points flagged in `apart` (n flags, non-zero = apart) kept out of the cells:
+  /// they follow every cell's points in the sorted order, in input order (sorted indices
+  /// [apart_begin(), point_count())), and no cell query finds them. For a few points whose
+  /// reach is far beyond the others' (one huge particle among small ones), so that the cells
+  /// can be sized by the others; the caller visits those apart itself. The bounds (and so the
+  /// span limit) are taken over every point.
+  NeighborGrid(const Vec3* points, size_t n, double cell_size, const Vec3* lower, const uint8_t* apart);
 
   double cell_size() const { return cell_size_; }
   size_t point_count() const { return sorted_points_.size(); }
   size_t cell_count() const { return cell_keys_.size(); }
+  /// The first sorted index of the points kept apart (point_count() when none are).
+  uint32_t apart_begin() const { return cell_start_.empty() ? 0 : cell_start_.back(); }
 
   /// Points in cell order: sorted_point(s) is the position of input point original_index(s).
   const Vec3& sorted_point(uint32_t s) const { return sorted_points_[s]; }
@@ -183,7 +193,7 @@ class PM_EXPORT NeighborGrid {
     }
     return lo;
   }
-  void build(const Vec3* points, size_t n, double cell_size, const Vec3* lower);
+  void build(const Vec3* points, size_t n, double cell_size, const Vec3* lower, const uint8_t* apart);
 
   double cell_size_ = 0;
   double inv_cell_ = 0;

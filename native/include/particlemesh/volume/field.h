@@ -16,8 +16,10 @@
 // uniform grid over the kernel centres of cell the largest reach of a kernel (max_i R_i, or
 // the longest semi-axis of any ellipsoid), so that one evaluation of F or its gradient
 // touches only the particles in the few cells around x (about 30 particles at the default
-// radius on evenly spaced input), independent of N. Radii that differ by a large factor make
-// the cells, and so every evaluation, correspondingly larger.
+// radius on evenly spaced input), independent of N. Where a few per-particle radii are far
+// larger than the rest (particle_grid_radius), the cells are sized by the rest and those few
+// are kept apart, visited by every evaluation; radii spread more evenly make the cells, and
+// so every evaluation, larger.
 #pragma once
 
 #include "particlemesh/core/config.h"
@@ -92,6 +94,18 @@ inline constexpr double kMaxCalibrationRatio = 8.0;
 PM_EXPORT double lattice_face_field(Kernel kernel, double radius, const AnisotropyOptions& anisotropy = {});
 
 class ParticleField;
+
+/// The radius the particle grid's cells are sized by, for per-particle spherical radii (n
+/// values > 0): the particles with a larger radius are kept apart from the cells, in a list
+/// every evaluation visits whole. Cells as wide as the largest radius hold, where one
+/// particle is 20 times the rest, 8000 times the particles an evaluation needs (polygonize
+/// 100 times slower); the list costs each evaluation a test per particle in it. Chosen to
+/// minimise the particles one evaluation looks at: those apart, plus about
+/// 216 (R_cell / R_median)^3 from the cells (27 cells of R_cell, the median radius taken as
+/// two spacings); at most 4096 apart, and only where that costs at most a quarter of what
+/// cells of the largest radius do. Otherwise the largest radius (none apart). Depends on the
+/// set of radii only (not their order).
+PM_EXPORT double particle_grid_radius(const double* radii, size_t n);
 
 /// How the particles sit in their own field, from F at (up to 4096 of) their centres.
 struct FieldAtParticles {
@@ -190,6 +204,11 @@ class PM_EXPORT ParticleField {
   /// The farthest any kernel reaches from its centre: max_radius(), or with anisotropic
   /// kernels the longest semi-axis of any of them (at most max_stretch^(2/3) x max_radius()).
   double max_reach() const { return reach_; }
+  /// The farthest the kernel of a particle in the grid's cells reaches, and the cells' size:
+  /// max_reach(), or with spherical per-particle radii far apart the particle_grid_radius of
+  /// them (the particles of larger radius are then kept apart: sorted indices from
+  /// grid().apart_begin() on, visited by every evaluation).
+  double cell_reach() const { return cell_reach_; }
 
   /// Anisotropic kernels in use (params().anisotropy.enabled).
   bool anisotropic() const { return params_.anisotropy.enabled; }
@@ -201,7 +220,7 @@ class PM_EXPORT ParticleField {
   /// Smallest axis-aligned box holding every particle's support (centre +- R_i).
   Vec3 support_min() const { return support_lo_; }
   Vec3 support_max() const { return support_hi_; }
-  /// The corner the particle grid (cells of max_radius(), from lower_corner() - max_radius())
+  /// The corner the particle grid (cells of cell_reach(), from lower_corner() - cell_reach())
   /// is anchored to: the particles' smallest coordinates, or the whole cloud's when these
   /// particles are a tile of it (PolygonizeOptions::domain_min).
   Vec3 lower_corner() const { return lower_; }
@@ -230,15 +249,19 @@ class PM_EXPORT ParticleField {
       });
       return;
     }
-    for_each_within(x, reach_, [&](uint32_t sorted, double d2) {
+    for_each_within(x, cell_reach_, [&](uint32_t sorted, double d2) {
       const double s = d2 * (uniform_ ? inv_r2_ : sorted_inv_r2_[sorted]);
       if (s < 1.0) f(size_t(grid_.original_index(sorted)), s);
     });
+    for (uint32_t sorted = grid_.apart_begin(); sorted < grid_.point_count(); ++sorted) {
+      const double s = squared_distance(grid_.sorted_point(sorted), x) * sorted_inv_r2_[sorted];
+      if (s < 1.0) f(size_t(grid_.original_index(sorted)), s);
+    }
   }
 
   /// As NeighborGrid::for_each_within on grid() (f(sorted index, squared distance) for every
-  /// centre within `radius` of p, in increasing sorted index), its cells found through
-  /// for_each_cell_in.
+  /// centre in the grid's cells within `radius` of p, in increasing sorted index; none of
+  /// those kept apart), its cells found through for_each_cell_in.
   template <class F>
   void for_each_within(const Vec3& p, double radius, F&& f) const {
     const double r2 = radius * radius;
@@ -343,8 +366,9 @@ class PM_EXPORT ParticleField {
     }
   }
 
-  /// The grid over the kernel centres (cell = max_reach()), for callers with their own
-  /// traversal.
+  /// The grid over the kernel centres (cell = cell_reach()), for callers with their own
+  /// traversal: they visit the particles of the cells within cell_reach() of where they look,
+  /// then every particle from grid().apart_begin() on (none, unless radii are far apart).
   const NeighborGrid& grid() const { return grid_; }
   /// Per sorted grid index: 1 / R^2 and strength (empty when uniform / all 1).
   const std::vector<double>& sorted_inverse_squared_radii() const { return sorted_inv_r2_; }
@@ -375,6 +399,7 @@ class PM_EXPORT ParticleField {
   double inv_r2_ = 0;
   double max_radius_ = 0;
   double reach_ = 0;
+  double cell_reach_ = 0;
   double spacing_ = 0;
   double calibration_ratio_ = 0;
   bool radius_defaulted_ = false;

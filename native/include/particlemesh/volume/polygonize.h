@@ -44,11 +44,13 @@
 // (i..i+1, j..j+1, k..k+1), with origin = (lower - R_max) - 9 h on each axis (computed in that
 // order), lower = the particles' smallest coordinates (or domain_min), R_max = the largest
 // radius (or domain_max_radius). Every node's sample sums its particles in the order of the
-// particle grid (cells of R_max anchored at lower - R_max, then input order). Tiles of one
-// cloud therefore polygonize exactly as the whole cloud when each is given the whole cloud's
-// domain_min and domain_max_radius, the particles within reach of its cells (R_max) in their
-// order in the whole cloud, and its cell range: the tiles' meshes share the vertices on their
-// seams bit for bit, and together they are the whole cloud's mesh (particlemesh.distributed).
+// particle grid (cells of R_max anchored at lower - R_max, then input order; with per-particle
+// radii cells of particle_grid_radius, the few particles of larger radius after all others).
+// Tiles of one cloud therefore polygonize exactly as the whole cloud when each is given the
+// whole cloud's domain_min, domain_max_radius (and domain_grid_radius), the particles within
+// reach of its cells (R_max) in their order in the whole cloud, and its cell range: the
+// tiles' meshes share the vertices on their seams bit for bit, and together they are the
+// whole cloud's mesh (particlemesh.distributed).
 #pragma once
 
 #include "particlemesh/core/config.h"
@@ -153,6 +155,10 @@ struct PolygonizeOptions {
   std::optional<Vec3> domain_min;
   /// 0, or the whole cloud's largest radius (at least every radius here; see the top).
   double domain_max_radius = 0;
+  /// With domain_max_radius and per-particle radii: 0 (the particle grid's cells are as wide
+  /// as domain_max_radius), or the whole cloud's particle_grid_radius (field.h): the cells
+  /// are that wide and the particles of larger radius are kept apart, as for the whole cloud.
+  double domain_grid_radius = 0;
   /// Polygonize only the lattice cells with cell_min <= (i, j, k) < cell_max on every axis
   /// (cell indices as at the top). The result holds the triangles of those cells and the
   /// vertices they use (on the range's faces too), in the order the whole lattice would give
