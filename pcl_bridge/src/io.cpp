@@ -131,6 +131,22 @@ namespace particlemesh_pcl
 
     constexpr std::size_t kMaxHeader = 1 << 20;
 
+    // PDAL writes its dimension names (X Y Z Intensity); PCL's point types, and so the
+    // conversion to particles, name the fields x y z intensity. A field whose name is one of
+    // those in other letter case is taken as it where the file has none of that exact name.
+    void
+    lowerCaseFieldNames (const std::vector<std::string *> &names)
+    {
+      for (const std::string wanted : {"x", "y", "z", "intensity"})
+      {
+        if (std::any_of (names.begin (), names.end (), [&] (const std::string *f) { return *f == wanted; }))
+          continue;
+        const auto it = std::find_if (names.begin (), names.end (), [&] (const std::string *f) { return lower (*f) == wanted; });
+        if (it != names.end ())
+          **it = wanted;
+      }
+    }
+
   // The header (and the sizes of a binary body) of the PCD file whose bytes are `file`;
   // `line_no` gets the number of the DATA line.
   PCDHeader
@@ -324,6 +340,12 @@ namespace particlemesh_pcl
       if (!ok)
         fail (path, "bad header: field '" + h.fields[f] + "' has TYPE " + h.types[f] + " with SIZE " + std::to_string (s));
       h.point_size += std::size_t (s) * std::size_t (h.counts[f]);
+    }
+    {
+      std::vector<std::string *> names;
+      for (std::string &f : h.fields)
+        names.push_back (&f);
+      lowerCaseFieldNames (names);
     }
     for (const char *axis : {"x", "y", "z"})
     {
@@ -521,6 +543,10 @@ namespace particlemesh_pcl
     int rc = reader.readHeader (header, file.cloud, origin, orientation, version, data_type, data_idx);
     if (rc >= 0)
     {
+      std::vector<std::string *> names;
+      for (pcl::PCLPointField &f : file.cloud.fields)
+        names.push_back (&f.name);
+      lowerCaseFieldNames (names);
       if (data_type == 0)
         readAsciiBody (path, bytes, file.header, line_no, &file.cloud);
       else if (data_idx > bytes.size ())

@@ -172,6 +172,11 @@ TEST(FileLimits, OffPromisingMore) {
   EXPECT_EQ(read_mesh(write(dir / "cok.off", "OFF # the keyword\n# a comment\n3 1 0\n0 0 0 # a vertex\n1 0 0\n0 1 0\n3 0 1 2\n"))
                 .triangles.size(),
             1u);
+  // ModelNet's files glue the vertex count to the keyword (and trimesh's test file indents it).
+  const TriMesh glued = read_mesh(write(dir / "glued.off", "\t  OFF3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"));
+  EXPECT_EQ(glued.positions.size(), 3u);
+  EXPECT_EQ(glued.triangles.size(), 1u);
+  expect_refused(write(dir / "glued_bad.off", "OFF3x 1 0\n"), "bad OFF header: '3x' is not a vertex/face/edge count", false);
   // Found by fuzzing: the whole file on the keyword's line (OpenMesh then read its counts from
   // a failed stream: uninitialized, an allocation of GBs).
   expect_refused(write(dir / "line.off", "COFF \xff\xff 05 0OF 5"), "bad OFF header: '?\?' is not a vertex/face/edge count", false);

@@ -203,6 +203,35 @@ TEST(PcdIO, MalformedFilesNameTheFileAndTheProblem) {
   for (const auto& good : {bunny, milk, milk_bin}) EXPECT_NO_THROW(particlemesh_pcl::loadParticles(good));
 }
 
+// PDAL names the coordinates X Y Z and the intensity Intensity: read as x y z and intensity,
+// in every encoding; a file with both keeps the lower-case ones.
+TEST(PcdIO, UpperCaseCoordinatesAsPdalWritesThem) {
+  const auto dir = test::scratch_dir("upper");
+  const std::string head = "VERSION 0.7\nFIELDS X Y Z Intensity\nSIZE 8 8 8 4\nTYPE F F F F\nCOUNT 1 1 1 1\n"
+                           "WIDTH 3\nHEIGHT 1\nPOINTS 3\n";
+  write_bytes(dir / "ascii.pcd", head + "DATA ascii\n1 2 3 10\n4 5 6 20\n7 8 9.5 30\n");
+  const double xyz[3][3] = {{1, 2, 3}, {4, 5, 6}, {7, 8, 9.5}};
+  const float intensity[3] = {10, 20, 30};
+  std::string body;
+  for (int i = 0; i < 3; ++i) {
+    body.append(reinterpret_cast<const char*>(xyz[i]), sizeof xyz[i]);
+    body.append(reinterpret_cast<const char*>(&intensity[i]), sizeof intensity[i]);
+  }
+  write_bytes(dir / "binary.pcd", head + "DATA binary\n" + body);
+  for (const char* name : {"ascii.pcd", "binary.pcd"}) {
+    const PointCloud c = particlemesh_pcl::loadParticles((dir / name).string());
+    ASSERT_EQ(c.size(), 3u) << name;
+    EXPECT_EQ(c.positions[2], (Vec3{7, 8, 9.5})) << name;
+    ASSERT_EQ(c.attributes.size(), 1u) << name;
+    EXPECT_EQ(c.attributes[0].name, "intensity") << name;
+    EXPECT_EQ(c.attributes[0].values[1], 20.0f) << name;
+  }
+  write_bytes(dir / "both.pcd", "VERSION 0.7\nFIELDS x y z X\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\n"
+                                "WIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3 9\n");
+  const PointCloud both = particlemesh_pcl::loadParticles((dir / "both.pcd").string());
+  EXPECT_EQ(both.positions[0], (Vec3{1, 2, 3}));
+}
+
 TEST(PcdIO, OtherFormatsGoThroughTheCoreReader) {
   const auto dir = test::scratch_dir("xyz");
   write_point_cloud(fibonacci_sphere(100), (dir / "s.xyz").string());

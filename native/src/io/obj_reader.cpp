@@ -39,6 +39,11 @@ class ObjReader {
 
   FileContents read() {
     if (in_.peek() < 0) fail_file("the file is empty");
+    if (in_.look_ahead(3) == "\xEF\xBB\xBF") in_.skip(3);
+    // Read as bytes, UTF-16 text has no statement at all: named instead of an empty mesh.
+    if (const std::string_view bom = in_.look_ahead(2); bom == "\xFF\xFE" || bom == "\xFE\xFF")
+      fail_file("the file is UTF-16 text (it starts with the byte order mark " +
+                std::string(bom[0] == '\xFF' ? "FF FE" : "FE FF") + "): save it as UTF-8 or ASCII text");
     std::string_view line;
     std::vector<std::string_view> w;
     std::string continued;  // a statement whose lines end with a backslash, joined
@@ -156,13 +161,24 @@ class ObjReader {
       if (ok && a != std::string_view::npos) {
         const std::string_view rest = c.substr(a + 1);
         const size_t b = rest.find('/');
-        uint32_t vt = 0;
-        bool no_vt = false;
-        ok = index(rest.substr(0, b), size_t(UINT32_MAX), vt, &no_vt);
+        // The texture coordinate is not used: any non-zero integer (or none) will do, a
+        // negative one too (-1: the last 'vt').
+        const std::string_view vt = rest.substr(0, b);
+        int64_t vt_index = 0;
+        ok = vt.empty() || (parse_integer(vt, vt_index) && vt_index != 0);
         if (ok && b != std::string_view::npos) {
           bool no_vn = false;
-          ok = index(rest.substr(b + 1), normals_.size(), vn, &no_vn) && rest.substr(b + 1).find('/') == std::string_view::npos;
-          has_vn = ok && !no_vn;
+          const std::string_view vn_text = rest.substr(b + 1);
+          if (normals_.empty()) {
+            // Normal indices in a file with no 'vn' at all (placeholders some tools write;
+            // tinyobjloader and trimesh read such files) are ignored: the normals are then
+            // estimated.
+            int64_t vn_index = 0;
+            ok = vn_text.empty() || (parse_integer(vn_text, vn_index) && vn_index != 0);
+          } else {
+            ok = index(vn_text, normals_.size(), vn, &no_vn) && vn_text.find('/') == std::string_view::npos;
+            has_vn = ok && !no_vn;
+          }
         }
       }
       if (!ok)

@@ -4,6 +4,7 @@
 // the rest of the line). '#' starts a comment anywhere. Written by hand (a few dozen lines;
 // OpenMesh's reader, the one we had, kept float32, read counts from a failed stream and
 // looped on them). Binary OFF and 4D / n-D variants are refused by name.
+#include <cctype>
 #include <cmath>
 #include <string>
 
@@ -24,8 +25,13 @@ class OffReader {
     if (in_.peek() < 0) fail("the file is empty");
     bool ended = false;
     if (!next(&ended)) fail("the file is empty");
-    // The keyword: [ST][C][N][4][n]OFF.
-    const size_t off = tok_.rfind("OFF");
+    // The keyword: [ST][C][N][4][n]OFF. ModelNet's files glue the vertex count to it
+    // ("OFF490 518 0"): the digits after OFF are the first count.
+    size_t off = tok_.rfind("OFF");
+    if (off != std::string::npos && off + 3 < tok_.size() && std::isdigit(static_cast<unsigned char>(tok_[off + 3]))) {
+      pending_ = tok_.substr(off + 3);
+      tok_.resize(off + 3);
+    }
     if (off == std::string::npos || off + 3 != tok_.size()) fail("not an OFF file (no OFF keyword first)");
     const std::string prefix = tok_.substr(0, off);
     size_t k = 0;
@@ -101,6 +107,11 @@ class OffReader {
   }
   // The next token that is not in a comment.
   bool next(bool* ended) {
+    if (!pending_.empty()) {
+      tok_.swap(pending_);
+      pending_.clear();
+      return true;  // *ended as the keyword's token left it
+    }
     while (in_.token(tok_, 256, ended)) {
       if (tok_[0] != '#') return true;
       if (!*ended) in_.skip_line();
@@ -112,7 +123,7 @@ class OffReader {
   ReadPurpose purpose_;
   bool normals_ = false;
   uint64_t nv_ = 0, nf_ = 0;
-  std::string tok_;
+  std::string tok_, pending_;
   std::vector<uint32_t> corners_;
 };
 

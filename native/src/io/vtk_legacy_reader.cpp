@@ -97,10 +97,14 @@ class VtkLegacyReader {
     if (line.substr(0, 6) != "# vtk " || !equals_ignoring_case(std::string(line.substr(6, 8)), "datafile"))
       fail("not a legacy VTK file (the first line is not '# vtk DataFile Version ...')");
     if (!in_.line(line, kMaxLine)) fail("truncated: no title line");
-    if (!in_.line(line, kMaxLine)) fail("truncated: no ASCII / BINARY line");
+    // Blank lines before it are skipped, as vtkDataReader does (some of VTK's own sample
+    // files have one).
+    do {
+      if (!in_.line(line, kMaxLine)) fail("truncated: no ASCII / BINARY line");
+    } while (trim(line).empty());
     const std::string mode = upper(std::string(trim(line)));
     if (mode == "BINARY") binary_ = true;
-    else if (mode != "ASCII") fail("line 3 is '" + shown(line) + "', not ASCII or BINARY");
+    else if (mode != "ASCII") fail("the line after the title is '" + shown(line) + "', not ASCII or BINARY");
 
     std::string kw;
     if (!word(kw)) fail("no DATASET");
@@ -322,7 +326,9 @@ class VtkLegacyReader {
     const bool wanted = purpose_ == ReadPurpose::Mesh && (k == "POLYGONS" || k == "TRIANGLE_STRIPS" || k == "CELLS");
     Cells cells;
     cells.kind = k;
-    end_line();
+    // Binary data starts on the next line; text values may follow the counts on their own
+    // line (VTK's sample data writes "LINES 1 348 347"): vtkDataReader reads them as words.
+    if (binary_) end_line();
     // Version 5.1: OFFSETS follows (binary data would start right here).
     std::string_view ahead = in_.look_ahead(16);
     if (!binary_)

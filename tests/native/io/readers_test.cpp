@@ -351,6 +351,43 @@ TEST(ObjReader, ValuesAndCornersNamedWithTheirLine) {
   EXPECT_EQ(wrapped.triangles[2], (Triangle{0, 2, 3}));
   EXPECT_REFUSED(read_mesh(write(dir / "wrapbad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 \\\n 9\n")),
                  Status::FormatError, "line 5: face corner '9' names vertex 9");
+  // Negative texture indices, -1 too (the last 'vt'; trimesh's negative_indices.obj).
+  const TriMesh neg = read_mesh(write(dir / "neg.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n"
+                                                      "vn 0 0 1\nf -3/-3/-1 -2/-2/-1 -1/-1/-1\n"));
+  ASSERT_EQ(neg.triangles.size(), 1u);
+  EXPECT_EQ(neg.triangles[0], (Triangle{0, 1, 2}));
+  // Normal indices in a file with no 'vn' (placeholders) are ignored; with some normals, an
+  // index beyond them is still refused.
+  const TriMesh placeholders = read_mesh(write(dir / "novn.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1//1 2//1 3//-1\n"));
+  ASSERT_EQ(placeholders.triangles.size(), 1u);
+  EXPECT_REFUSED(read_mesh(write(dir / "badvn.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//2\n")),
+                 Status::FormatError, "face corner '3//2' names normal 2, but only 1 are defined so far");
+  // A UTF-8 byte order mark is skipped; UTF-16 is named (before: an empty mesh, no error).
+  EXPECT_EQ(read_mesh(write(dir / "bom.obj", "\xEF\xBB\xBFv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")).triangles.size(), 1u);
+  std::string utf16 = "\xFF\xFE";
+  for (char ch : std::string("v 0 0 0\n")) utf16 += std::string{ch, '\0'};
+  EXPECT_REFUSED(read_mesh(write(dir / "utf16.obj", utf16)), Status::FormatError,
+                 "the file is UTF-16 text (it starts with the byte order mark FF FE)");
+  EXPECT_REFUSED(read_mesh(write(dir / "badvt.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/x 2/1 3/1\n")),
+                 Status::FormatError, "face corner '1/x' is not v, v/vt, v//vn or v/vt/vn");
+}
+
+// Legacy VTK as VTK's own sample data writes it: a cell list's first values on the line of its
+// counts ("LINES 1 348 347 ..."), a blank line before ASCII; read as vtkDataReader reads them.
+TEST(VtkLegacyReader, ValuesOnTheHeaderLineAndABlankLineBeforeAscii) {
+  const auto dir = test::scratch_dir("vtk_legacy");
+  const std::string points = "POINTS 4 float\n0 0 0 1 0 0 1 1 0 0 1 0\n";
+  const TriMesh m = read_mesh(write(dir / "same_line.vtk", "# vtk DataFile Version 2.0\nsample\n\nASCII\n"
+                                                          "DATASET POLYDATA\n" + points +
+                                                          "POLYGONS 2 8 3 0 1 2\n3 0 2 3\nLINES 1 3 2\n0 1\n"));
+  ASSERT_EQ(m.triangles.size(), 2u);
+  EXPECT_EQ(m.triangles[0], (Triangle{0, 1, 2}));
+  EXPECT_EQ(m.triangles[1], (Triangle{0, 2, 3}));
+  EXPECT_REFUSED(read_mesh(write(dir / "short.vtk", "# vtk DataFile Version 2.0\nsample\nASCII\nDATASET POLYDATA\n" +
+                                                        points + "POLYGONS 1 4 3 0 1\n")),
+                 Status::FormatError, "POLYGONS");
+  EXPECT_REFUSED(read_mesh(write(dir / "mode.vtk", "# vtk DataFile Version 2.0\nsample\n\nTEXT\n")),
+                 Status::FormatError, "the line after the title is 'TEXT', not ASCII or BINARY");
 }
 
 // .xyz: a UTF-8 byte order mark is skipped (before: "not a number"); a line that never ends
