@@ -16,7 +16,9 @@
 // a one-component attribute of its name, except that properties name_0, name_1, .., name_k
 // declared one after another (as our writers write a vector channel; or vx vy vz, name_x
 // name_y name_z, as vector_component reads them) are one (k + 1)-component attribute "name";
-// and the "face" element's vertex_indices (or vertex_index) lists, fanned into triangles. List
+// and the "face" element's vertex_indices (or vertex_index) lists, fanned into triangles (or,
+// in a file without faces, the "tristrips" element's lists: triangle strips, -1 restarting a
+// strip, as the Stanford repository's older models hold them). List
 // properties anywhere (a vertex element with a list, an "edge" or "material" element) are
 // walked and skipped. After the last element the file must end
 // (whitespace aside): data beyond what the header declares means a count is wrong.
@@ -253,6 +255,13 @@ class PlyReader {
       if (!vertex && equals_ignoring_case(e.name, "vertex")) vertex = &e;
       if (!face && equals_ignoring_case(e.name, "face")) face = &e;
     }
+    if (!face)
+      for (Element& e : elements_)
+        if (equals_ignoring_case(e.name, "tristrips")) {
+          face = &e;
+          strips_ = true;
+          break;
+        }
     if (!vertex) fail("no 'vertex' element (the header declares " + declared() + ")");
     vertex_ = vertex;
     static const char* const kNames[9] = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue"};
@@ -303,13 +312,13 @@ class PlyReader {
         if (p.list && (equals_ignoring_case(p.name, "vertex_indices") || equals_ignoring_case(p.name, "vertex_index"))) {
           if (purpose_ == ReadPurpose::Points) break;  // walked, not read
           if (!is_integer(p.type))
-            fail("the 'face' element's " + p.name + " list holds non-integer values (indices must be integers)");
+            fail("the '" + face->name + "' element's " + p.name + " list holds non-integer values (indices must be integers)");
           p.role = kIndices;
           face_ = face;
           break;
         }
       if (!face_ && purpose_ == ReadPurpose::Mesh && face->count > 0)
-        fail("the 'face' element has no vertex_indices list");
+        fail("the '" + face->name + "' element has no vertex_indices list");
     }
   }
 
@@ -372,7 +381,9 @@ class PlyReader {
         if (binary && mul_add(n, uint64_t(scalar_size(p.type)), 0) > bytes_left())
           fail("'" + e.name + "' element " + std::to_string(i) + " has a list of " + std::to_string(n) +
                " items, more than the rest of the file holds");
-        if (p.role == kIndices) {
+        if (p.role == kIndices && strips_) {
+          read_strips(e, i, p, n);
+        } else if (p.role == kIndices) {
           if (n < 3)
             fail("'" + e.name + "' element " + std::to_string(i) + " has " + std::to_string(n) +
                  " corner" + (n == 1 ? "" : "s") + " (a face needs at least 3)");
@@ -396,6 +407,37 @@ class PlyReader {
         }
       }
     }
+    if (is_face && strips_) out_.faces = out_.triangles.size();  // the faces are the strips' triangles
+  }
+
+  // A list of triangle strips, each ended by -1 (or by the list's end): triangle k of a strip
+  // is (s_k, s_k+1, s_k+2), every other one turned (s_k+1, s_k, s_k+2) to keep the strip's
+  // orientation; triangles with a repeated corner (the joins strippers put between strips)
+  // are dropped.
+  void read_strips(const Element& e, uint64_t i, const Property& p, uint64_t n) {
+    corners_.clear();
+    auto flush = [&] {
+      for (size_t k = 0; k + 2 < corners_.size(); ++k) {
+        const uint32_t a = corners_[k], b = corners_[k + 1], c = corners_[k + 2];
+        if (a == b || b == c || a == c) continue;
+        out_.triangles.push_back(k % 2 ? Triangle{b, a, c} : Triangle{a, b, c});
+      }
+      corners_.clear();
+    };
+    for (uint64_t k = 0; k < n; ++k) {
+      const double v = scalar(e, i, p);
+      if (v == -1) {
+        flush();
+        continue;
+      }
+      if (v < 0)
+        fail("'" + e.name + "' element " + std::to_string(i) + " refers to vertex " + format(v) +
+             " (indices start at 0; -1 ends a strip)");
+      if (v > double(UINT32_MAX - 1))
+        fail("'" + e.name + "' element " + std::to_string(i) + " refers to vertex " + format(v) + ", beyond 2^32 - 2");
+      corners_.push_back(uint32_t(v));
+    }
+    flush();
   }
 
   static std::string format(double v) {
@@ -474,6 +516,7 @@ class PlyReader {
   std::vector<Element> elements_;
   const Element* vertex_ = nullptr;
   const Element* face_ = nullptr;
+  bool strips_ = false;  // face_ is a "tristrips" element
   bool has_normals_ = false, has_colors_ = false;
   FileContents out_;
   std::vector<float> colors_;

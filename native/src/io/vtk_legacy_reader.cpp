@@ -116,9 +116,12 @@ class VtkLegacyReader {
     std::string type;
     if (!word(type)) fail("truncated after DATASET");
     type = upper(type);
-    if (type != "POLYDATA" && type != "UNSTRUCTURED_GRID")
-      fail("DATASET " + shown(type) + " is not a set of points (read: POLYDATA, UNSTRUCTURED_GRID)");
+    // A structured grid lists its points too (their cells are implied by DIMENSIONS: read as
+    // particles); structured points and rectilinear grids give only the axes of a lattice.
+    if (type != "POLYDATA" && type != "UNSTRUCTURED_GRID" && type != "STRUCTURED_GRID")
+      fail("DATASET " + shown(type) + " lists no points (read: POLYDATA, UNSTRUCTURED_GRID, STRUCTURED_GRID)");
     polydata_ = type == "POLYDATA";
+    const bool structured = type == "STRUCTURED_GRID";
 
     bool have_points = false;
     while (word(kw)) {
@@ -127,10 +130,16 @@ class VtkLegacyReader {
         if (have_points) fail("a second POINTS section");
         have_points = true;
         read_points();
-      } else if (k == "VERTICES" || k == "LINES" || k == "POLYGONS" || k == "TRIANGLE_STRIPS" || k == "CELLS") {
+      } else if (k == "DIMENSIONS" && structured) {
+        std::string t;
+        uint64_t d = 0;
+        for (int a = 0; a < 3; ++a)
+          if (!word(t) || !parse_count(t, d)) fail("DIMENSIONS needs three counts");
+      } else if ((k == "VERTICES" || k == "LINES" || k == "POLYGONS" || k == "TRIANGLE_STRIPS" || k == "CELLS") &&
+                 !structured) {
         if ((k == "CELLS") == polydata_) fail(k + " in a " + type + " data set");
         read_cells(k);
-      } else if (k == "CELL_TYPES") {
+      } else if (k == "CELL_TYPES" && !structured) {
         read_cell_types();
       } else if (k == "POINT_DATA" || k == "CELL_DATA") {
         uint64_t n = 0;

@@ -140,6 +140,18 @@ TEST(PlyReader, ElementOrderAndFaceCorners) {
                                               "property float z\n" + kTriangle + "end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n"))
                 .triangles,
             (std::vector<Triangle>{{0, 1, 2}, {0, 2, 3}}));
+  // Triangle strips (a "tristrips" element, -1 restarting a strip), as the Stanford
+  // repository's older models hold them: every other triangle turned to keep the strip's
+  // orientation; the joins' triangles with a repeated corner dropped.
+  const std::string v6 = "element vertex 6\nproperty float x\nproperty float y\nproperty float z\n";
+  const std::string grid = "0 0 0\n0 1 0\n1 0 0\n1 1 0\n2 0 0\n2 1 0\n";
+  const std::string strips = "element tristrips 1\nproperty list int int vertex_indices\n";
+  const TriMesh s = read_mesh(write(dir / "strips.ply", "ply\nformat ascii 1.0\n" + v6 + strips + "end_header\n" + grid +
+                                                          "11 0 1 2 3 -1 2 3 4 4 4 5\n"));
+  EXPECT_EQ(s.triangles, (std::vector<Triangle>{{0, 1, 2}, {2, 1, 3}, {2, 3, 4}}));
+  EXPECT_REFUSED(read_mesh(write(dir / "strips_bad.ply", "ply\nformat ascii 1.0\n" + v6 + strips + "end_header\n" +
+                                                             grid + "4 0 1 2 -2\n")),
+                 Status::FormatError, "'tristrips' element 0 refers to vertex -2 (indices start at 0; -1 ends a strip)");
 }
 
 // Header counts smaller than the data: refused, ASCII and binary (before: the rest ignored
@@ -388,6 +400,19 @@ TEST(VtkLegacyReader, ValuesOnTheHeaderLineAndABlankLineBeforeAscii) {
                  Status::FormatError, "POLYGONS");
   EXPECT_REFUSED(read_mesh(write(dir / "mode.vtk", "# vtk DataFile Version 2.0\nsample\n\nTEXT\n")),
                  Status::FormatError, "the line after the title is 'TEXT', not ASCII or BINARY");
+  // A structured grid's points are particles (its cells are implied); a lattice given by its
+  // axes alone is refused by name.
+  const PointCloud grid = read_point_cloud(write(dir / "grid.vtk", "# vtk DataFile Version 2.0\ng\nASCII\n"
+                                                                   "DATASET STRUCTURED_GRID\nDIMENSIONS 2 2 1\n" + points +
+                                                                   "POINT_DATA 4\nSCALARS t float 1\nLOOKUP_TABLE default\n"
+                                                                   "1 2 3 4\n"));
+  ASSERT_EQ(grid.size(), 4u);
+  EXPECT_EQ(grid.positions[2], (Vec3{1, 1, 0}));
+  ASSERT_EQ(grid.attributes.size(), 1u);
+  EXPECT_EQ(grid.attributes[0].values[3], 4.0f);
+  EXPECT_REFUSED(read_point_cloud(write(dir / "image.vtk", "# vtk DataFile Version 2.0\ni\nASCII\n"
+                                                            "DATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 2\n")),
+                 Status::FormatError, "DATASET STRUCTURED_POINTS lists no points");
 }
 
 // .xyz: a UTF-8 byte order mark is skipped (before: "not a number"); a line that never ends
