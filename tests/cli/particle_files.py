@@ -221,6 +221,30 @@ def write_bgeo(path, p, attrs, compress=False):
         f.write(gzip.compress(data, mtime=0) if compress else data)
 
 
+def write_geo_classic(path, p, attrs, compress=False):
+    """Classic ASCII .geo ("PGEOMETRY V5"), as Partio writes it: the points with their
+    attributes in parentheses, one particle-system primitive, an empty extra block. Values as
+    the shortest text of their float32 (read back exactly)."""
+    n = len(p)
+    cols = [a.reshape(n, -1) for a in attrs.values()]
+    text = [f"PGEOMETRY V5\nNPoints {n} NPrims 1\nNPointGroups 0 NPrimGroups 0\n"
+            f"NPointAttrib {len(attrs)} NVertexAttrib 0 NPrimAttrib 1 NAttrib 0\nPointAttrib\n"]
+    for name, c in zip(attrs, cols):
+        kind = "vector" if c.shape[1] == 3 else "float"
+        text.append(f"{name} {c.shape[1]} {kind} " + " ".join(["0"] * c.shape[1]) + "\n")
+
+    def num(x):
+        return repr(float(np.float32(x)))
+    for i in range(n):
+        values = " ".join(num(x) for c in cols for x in c[i])
+        text.append(" ".join(num(x) for x in p[i]) + " 1" + (f" ({values})" if cols else "") + "\n")
+    text.append("PrimitiveAttrib\ngenerator 1 index 1 papi\nPart " + str(n) + " " +
+                " ".join(str(i) for i in range(n)) + " [0]\nbeginExtra\nendExtra\n")
+    data = "".join(text).encode()
+    with open(path, "wb") as f:
+        f.write(gzip.compress(data, mtime=0) if compress else data)
+
+
 def _length(n, e):
     """Binary JSON's encoded length (UT_JSONDefines.h)."""
     if n < 0xF1:
@@ -427,6 +451,8 @@ FORMATS = {
     ".bgeo.sc": write_sc(write_bgeo),
     ".json.bgeo.sc": write_sc(write_bgeo_json, block=1000, cname="zstd", metadata=b'{"compression": "blosc"}'),
     ".geo.sc": write_sc(lambda path, p, a: write_bgeo_json(path, p, a, ascii=True), block=4096, cname="blosclz"),
+    ".classic.geo": write_geo_classic,
+    ".classic.geo.gz": lambda path, p, a: write_geo_classic(path, p, a, compress=True),
     ".csv": write_csv,
     ".txt": lambda path, p, a: write_csv(path, p, a, style="columns"),
 }

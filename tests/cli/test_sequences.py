@@ -11,7 +11,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 from particle_files import (FORMATS, particles, read_ascii_ply, scf, write_bgeo, write_bgeo_json,  # noqa: E402
-                            write_las, write_ply, write_vtk)
+                            write_geo_classic, write_las, write_ply, write_vtk)
 
 POLY = ["--radius", "0.14", "--cell", "0.03"]  # fixed R and h: frames share a lattice
 
@@ -392,7 +392,11 @@ def test_binary_json_bgeo_pages_and_clear_errors(cli, tmp_path):
         "comma.geo": (b'["pointcount", 3 "attributes", []]', "',' or ']' expected in a list"),
         "escape.geo": (b'["pointcount", 1, "\\q"]', "unknown escape"),
         "nan.geo": (b'["pointcount", 1, "attributes", [nan]]', "'nan' is not a JSON value"),
-        "classic.geo": (b"PGEOMETRY V5\nNPoints 1 NPrims 0\n", "classic ASCII .geo"),
+        "classic.geo": (b"PGEOMETRY V5\nNPoints 1 NPrims 0\n", "truncated: the file ends in the header"),
+        "classic4.geo": (b"PGEOMETRY V4\n", "classic .geo version 'V4' (only V5 is read)"),
+        "classic_cut.geo": (b"PGEOMETRY V5\nNPoints 2 NPrims 0\nNPointGroups 0 NPrimGroups 0\n"
+                            b"NPointAttrib 0 NVertexAttrib 0 NPrimAttrib 0 NAttrib 0\n0 0 0 1\n1 0",
+                            "truncated: the file ends in point 1 of the 2 the header promises"),
     }
     for name, (data, message) in cases.items():
         (tmp_path / name).write_bytes(data)
@@ -407,7 +411,8 @@ def test_houdini_velocity_v_is_the_velocity_channel(cli, tmp_path):
     p, a = particles(0)
     houdini = {"v": a["velocity"], "density": a["density"]}
     forms = {"classic.bgeo": write_bgeo, "json.bgeo": write_bgeo_json,
-             "text.geo": lambda path, p, a: write_bgeo_json(path, p, a, ascii=True)}
+             "text.geo": lambda path, p, a: write_bgeo_json(path, p, a, ascii=True),
+             "classic.geo": write_geo_classic}
     for name, write in forms.items():
         src = tmp_path / name
         write(src, p, houdini)

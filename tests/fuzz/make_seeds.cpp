@@ -243,6 +243,10 @@ void file_seeds() {
   put("read_bgeo", "points_attributes.bgeo", bgeo_seed(5, false));
   put("read_bgeo", "particle_system.bgeo", bgeo_seed(4, true));
   put("read_bgeo", "binary_json.bgeo", bgeo_json_seed(10));
+  put("read_bgeo", "classic_ascii.geo",
+      "PGEOMETRY V5\nNPoints 3 NPrims 0\nNPointGroups 0 NPrimGroups 0\n"
+      "NPointAttrib 3 NVertexAttrib 0 NPrimAttrib 0 NAttrib 0\nPointAttrib\nv 3 vector 0 0 0\nid 1 int 0\n"
+      "name 1 index 2 a b\n0 0 0 1 (1 2 3 7 0)\n1 0 0 1 (4 5 6 8 1)\n0 1 0 1 (7 8 9 9 0)\nbeginExtra\nendExtra\n");
   // Houdini's .bgeo.sc: Blosc chunks of 64 bytes (several per file) in the SCF container.
   put("read_bgeo", "blosc_lz4.bgeo.sc", test::scf_wrap(bgeo_json_seed(10), 64, "lz4"));
   put("read_bgeo", "blosc_zstd_classic.bgeo.sc", test::scf_wrap(bgeo_seed(5, false), 64, "zstd", "{}"));

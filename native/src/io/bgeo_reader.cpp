@@ -23,7 +23,7 @@
 // After the points, primitive and detail sections are read when they hold only what Partio
 // writes (particle-system primitives, detail attributes, no groups), so that a truncated file
 // is refused; anything else after the points is left unread (the points are complete).
-// Houdini's classic ASCII geometry ("PGEOMETRY") is refused with a message saying what is read.
+// Houdini's classic ASCII geometry ("PGEOMETRY V5") goes to geo_classic.cpp.
 #include <algorithm>
 #include <cstring>
 #include <string>
@@ -33,6 +33,7 @@
 #include "io/compressed.h"
 #include "io/file_reader.h"
 #include "io/formats.h"
+#include "io/geo_classic.h"
 #include "io/text_numbers.h"
 #include "particlemesh/core/error.h"
 
@@ -50,8 +51,8 @@ float be_float(const unsigned char* b) {
 }
 
 const char* const kSupported =
-    "particlemesh reads Houdini 12+'s bgeo (binary JSON) and .geo (ASCII JSON) and classic bgeo (\"BgeoV\" version 5: "
-    ".bhclassic, Partio, SPlisHSPlasH), plain, gzip- or Blosc-compressed (.bgeo, .bgeo.gz, .bgeo.sc, .geo, .geo.gz, "
+    "particlemesh reads Houdini 12+'s bgeo (binary JSON) and .geo (ASCII JSON), classic bgeo (\"BgeoV\" version 5: "
+    ".bhclassic, Partio, SPlisHSPlasH) and classic ASCII .geo (\"PGEOMETRY V5\"), plain, gzip- or Blosc-compressed (.bgeo, .bgeo.gz, .bgeo.sc, .geo, .geo.gz, "
     ".geo.sc); save the cache in one of those, or as .vtk or .ply";
 
 class BgeoReader {
@@ -72,7 +73,7 @@ class BgeoReader {
     }
     if (magic[0] == '[' || magic[0] == '{')  // Houdini 12+'s ASCII geometry: the same schema as text
       return read_geo_text_json(in_, file_.path(), std::string_view(reinterpret_cast<const char*>(magic), 4));
-    if (std::memcmp(magic, "PGEO", 4) == 0) unsupported("this is Houdini's classic ASCII .geo, which particlemesh does not read");
+    if (std::memcmp(magic, "PGEO", 4) == 0) return read_geo_classic(in_, file_.path());  // classic ASCII .geo
     if (std::memcmp(magic, "Bgeo", 4) != 0)
       fail(std::string("not a bgeo file (it does not start with 'Bgeo'") + (in_.compressed() ? " once decompressed" : "") +
            "); " + kSupported);
