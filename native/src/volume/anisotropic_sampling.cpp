@@ -31,7 +31,7 @@ void sample(const ParticleField& field, const Vec3& o, double h, float* out) {
   const auto& ws = field.sorted_strengths();
   const auto& M = field.sorted_metrics();
   const auto& E = field.sorted_half_extents();
-  const double reach = field.max_reach();
+  const double reach = field.cell_reach();
   const double inv_h = 1.0 / h, h2 = h * h;
   const double span = double(kB - 1) * h;
   std::fill(out, out + kB * kB * kB, 0.0f);
@@ -39,15 +39,9 @@ void sample(const ParticleField& field, const Vec3& o, double h, float* out) {
   const NeighborGrid::CellCoord chi = grid.coord_of(o + Vec3{span + reach, span + reach, span + reach});
   alignas(16) float a2[kB], dxs[kB];
   const auto& B = field.cell_support_boxes();
-  field.for_each_cell_in(clo, chi, [&](uint32_t c) {
-    // The cell's kernels' boxes against the block's nodes: most cells in range miss them.
-    const float* b = &B[6 * size_t(c)];
-    if (double(b[3]) < o.x || double(b[4]) < o.y || double(b[5]) < o.z || double(b[0]) > o.x + span ||
-        double(b[1]) > o.y + span || double(b[2]) > o.z + span)
-      return;
-    for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) {
+  auto add = [&](uint32_t s) {
       const float w = ws.empty() ? 1.0f : float(ws[s]);
-      if (w == 0.0f) continue;
+      if (w == 0.0f) return;
       float wa, wb;
       row_weights<K>(w, &wa, &wb);
       // Centre and half extents in node units, relative to the block's first node.
@@ -55,10 +49,10 @@ void sample(const ParticleField& field, const Vec3& o, double h, float* out) {
       const double ex = double(E[3 * size_t(s)]) * inv_h, ey = double(E[3 * size_t(s) + 1]) * inv_h,
                    ez = double(E[3 * size_t(s) + 2]) * inv_h;
       if (ux + ex < 0 || ux - ex > kB - 1 || uy + ey < 0 || uy - ey > kB - 1 || uz + ez < 0 || uz - ez > kB - 1)
-        continue;
+        return;
       const int y0 = std::max(iceil(uy - ey), 0), y1 = std::min(ifloor(uy + ey), kB - 1);
       const int z0 = std::max(iceil(uz - ez), 0), z1 = std::min(ifloor(uz + ez), kB - 1);
-      if (y0 > y1 || z0 > z1) continue;
+      if (y0 > y1 || z0 > z1) return;
       // The quadratic form in node units, and its Schur complements: minimised over x, s is
       // Syy dy^2 + 2 Syz dy dz + Szz dz^2; minimised over y as well, Q dz^2. So the slice z
       // meets the support for Q dz^2 < 1, and its rows y for dy around -Syz dz / Syy.
@@ -94,8 +88,16 @@ void sample(const ParticleField& field, const Vec3& o, double h, float* out) {
           }
         }
       }
-    }
+  };
+  field.for_each_cell_in(clo, chi, [&](uint32_t c) {
+    // The cell's kernels' boxes against the block's nodes: most cells in range miss them.
+    const float* b = &B[6 * size_t(c)];
+    if (double(b[3]) < o.x || double(b[4]) < o.y || double(b[5]) < o.z || double(b[0]) > o.x + span ||
+        double(b[1]) > o.y + span || double(b[2]) > o.z + span)
+      return;
+    for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) add(s);
   });
+  for (uint32_t s = grid.apart_begin(); s < grid.point_count(); ++s) add(s);  // kept apart: last
 }
 
 }  // namespace
@@ -108,25 +110,27 @@ bool anisotropic_support_meets_box(const ParticleField& field, const Vec3& lo, c
   const NeighborGrid& grid = field.grid();
   const auto& P = grid.sorted_points();
   const auto& E = field.sorted_half_extents();
-  const double reach = field.max_reach();
+  const double reach = field.cell_reach();
   const NeighborGrid::CellCoord clo = grid.coord_of(lo - Vec3{reach, reach, reach});
   const NeighborGrid::CellCoord chi = grid.coord_of(hi + Vec3{reach, reach, reach});
   const auto& B = field.cell_support_boxes();
   bool met = false;
+  auto test = [&](uint32_t s) {
+    bool in = true;
+    for (int a = 0; a < 3 && in; ++a) {
+      const double e = double(E[3 * size_t(s) + size_t(a)]);
+      in = P[s][a] - e < hi[a] && P[s][a] + e > lo[a];
+    }
+    met = in;
+  };
   field.for_each_cell_in(clo, chi, [&](uint32_t c) {
     const float* b = &B[6 * size_t(c)];
     if (met || double(b[3]) <= lo.x || double(b[4]) <= lo.y || double(b[5]) <= lo.z || double(b[0]) >= hi.x ||
         double(b[1]) >= hi.y || double(b[2]) >= hi.z)
       return;
-    for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c) && !met; ++s) {
-      bool in = true;
-      for (int a = 0; a < 3 && in; ++a) {
-        const double e = double(E[3 * size_t(s) + size_t(a)]);
-        in = P[s][a] - e < hi[a] && P[s][a] + e > lo[a];
-      }
-      met = in;
-    }
+    for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c) && !met; ++s) test(s);
   });
+  for (uint32_t s = grid.apart_begin(); s < grid.point_count() && !met; ++s) test(s);
   return met;
 }
 

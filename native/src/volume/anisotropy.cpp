@@ -13,6 +13,7 @@
 #include "core/progress_tracker.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/spatial/neighbor_grid.h"
+#include "particlemesh/volume/field.h"
 #include "volume/anisotropy_impl.h"
 
 namespace PM_NAMESPACE {
@@ -183,10 +184,14 @@ std::vector<KernelEllipsoid> anisotropic_kernels_impl(const Vec3* positions, siz
   if (radii) rmax = *std::max_element(radii, radii + n);
   const double reach = o.neighbor_radius * rmax;
   // Cells of half the query radius: a query scans 5^3 cells, about a quarter of whose volume
-  // is inside the ball (cells of the full radius scan 27 cells, a seventh inside).
+  // is inside the ball (cells of the full radius scan 27 cells, a seventh inside). The radius
+  // is the field grid's (particle_grid_radius): a few particles far larger than the rest
+  // search their larger neighbourhoods over more cells, rather than every cell being theirs.
+  const double cell_radius = radii ? particle_grid_radius(radii, n) : radius;
+  const double cell_reach = o.neighbor_radius * cell_radius;
   NeighborGrid grid;
   try {
-    grid = NeighborGrid(positions, n, 0.5 * reach);
+    grid = NeighborGrid(positions, n, 0.5 * cell_reach);
   } catch (const Error& e) {
     if (e.status() != Status::LimitExceeded) throw;
     throw Error(Status::LimitExceeded, "the anisotropic kernels' neighbourhood (neighbor_radius x R = " + num(reach) +
@@ -194,7 +199,7 @@ std::vector<KernelEllipsoid> anisotropic_kernels_impl(const Vec3* positions, siz
   }
   const auto& P = grid.sorted_points();
   const size_t ncells = grid.cell_count();
-  const int32_t K = int32_t(std::ceil(reach / grid.cell_size()));
+  const int32_t K = int32_t(std::ceil(cell_reach / grid.cell_size()));
   tracker.stage("anisotropic kernels", begin, end, ncells);
   // The points as float arrays, cell by cell, each cell's relative to its first point, in units
   // of the largest neighbourhood radius (so that float holds any radius the field accepts),
@@ -230,7 +235,7 @@ std::vector<KernelEllipsoid> anisotropic_kernels_impl(const Vec3* positions, siz
   // depend on the thread count.
   detail::parallel_blocks(ncells, 16, [&](size_t cb, size_t ce) {
     if (tracker.cancelled()) return;
-    std::vector<uint32_t> near;
+    std::vector<uint32_t> near, wide;
     for (size_t c = cb; c < ce; ++c) {
       const NeighborGrid::CellCoord cc = grid.cell_coord(uint32_t(c));
       near.clear();
@@ -241,8 +246,17 @@ std::vector<KernelEllipsoid> anisotropic_kernels_impl(const Vec3* positions, siz
         const Vec3 p = P[s];
         const double R = radii ? radii[i] : radius;
         const double r = o.neighbor_radius * R, r2 = (r * inv_unit) * (r * inv_unit);
+        // A particle reaching beyond the cells' radius: the cells of its own reach.
+        const std::vector<uint32_t>* cells = &near;
+        if (R > cell_radius) {
+          const int32_t Ki = int32_t(std::ceil(r / grid.cell_size()));
+          wide.clear();
+          grid.for_each_cell_in({cc[0] - Ki, cc[1] - Ki, cc[2] - Ki}, {cc[0] + Ki, cc[1] + Ki, cc[2] + Ki},
+                                [&](uint32_t d) { wide.push_back(d); });
+          cells = &wide;
+        }
         WeightedSums acc(r * inv_unit);
-        for (const uint32_t d : near) {
+        for (const uint32_t d : *cells) {
           const Vec3 pd = (p - P[grid.cell_begin(d)]) * inv_unit;  // the particle in the cell's frame
           double gap2 = 0;
           for (int a = 0; a < 3; ++a) {

@@ -385,18 +385,25 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
     f.max_radius_ = domain.max_radius;
   }
   // The cells' radius: per-particle radii far apart keep their largest apart (above it).
-  f.cell_reach_ = f.max_radius_;
-  if (!aniso && !params.radii.empty()) {
+  double cell = f.max_radius_;
+  if (!params.radii.empty()) {
     if (domain.grid_radius != 0) {
       if (!(domain.grid_radius > 0) || !(domain.grid_radius <= f.max_radius_))
         throw Error(Status::InvalidArgument, "domain_grid_radius is " + num(domain.grid_radius) +
                                                  " (must be > 0 and at most the largest radius, " +
                                                  num(f.max_radius_) + ", or 0)");
-      f.cell_reach_ = domain.grid_radius;
+      cell = domain.grid_radius;
     } else if (domain.max_radius == 0) {
-      f.cell_reach_ = particle_grid_radius(params.radii.data(), n);
+      cell = particle_grid_radius(params.radii.data(), n);
     }
   }
+  // The particles kept apart from the cells (a radius above the cells').
+  std::vector<uint8_t> apart;
+  if (cell < f.max_radius_) {
+    apart.resize(n);
+    for (size_t i = 0; i < n; ++i) apart[i] = params.radii[i] > cell;
+  }
+  f.cell_reach_ = cell;
   f.inv_r2_ = 1.0 / (f.params_.radius * f.params_.radius);
   if (!std::isfinite(f.inv_r2_) || !std::isfinite(f.max_radius_ * f.max_radius_))
     throw Error(Status::InvalidArgument, "radius " + num(f.max_radius_) + " is out of the usable range");
@@ -413,21 +420,17 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
     centres.resize(n);
     extents.resize(n);
     f.reach_ = 0;
+    f.cell_reach_ = 0;  // the longest reach of the ellipsoids in the cells
     for (size_t i = 0; i < n; ++i) {
       centres[i] = kernels[i].centre;
       extents[i] = ellipsoid_half_extent(kernels[i].metric);
-      f.reach_ = std::max({f.reach_, extents[i].x, extents[i].y, extents[i].z});
+      const double e = std::max({extents[i].x, extents[i].y, extents[i].z});
+      f.reach_ = std::max(f.reach_, e);
+      if (apart.empty() || !apart[i]) f.cell_reach_ = std::max(f.cell_reach_, e);
       f.anisotropic_count_ += kernels[i].anisotropic;
     }
     if (!std::isfinite(f.reach_ * f.reach_))
       throw Error(Status::InvalidArgument, "radius " + num(f.max_radius_) + " is out of the usable range");
-    f.cell_reach_ = f.max_radius_;  // the grid's cells, for_each_ellipsoid_near's reach_ beyond
-  }
-  // The particles kept apart from the cells (a radius above the cells').
-  std::vector<uint8_t> apart;
-  if (f.cell_reach_ < f.max_radius_ && !params.radii.empty()) {
-    apart.resize(n);
-    for (size_t i = 0; i < n; ++i) apart[i] = params.radii[i] > f.cell_reach_;
   }
   const Vec3* C = aniso ? centres.data() : positions;
 
@@ -461,12 +464,12 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
                                                      " (it must be at or below every particle)");
       }
       f.lower_ = d;
-      f.grid_ = NeighborGrid(C, n, f.cell_reach_, &d, apart.empty() ? nullptr : apart.data());
+      f.grid_ = NeighborGrid(C, n, cell, &d, apart.empty() ? nullptr : apart.data());
     } else {
       Vec3 m = C[0];
       for (size_t i = 1; i < n; ++i) m = {std::min(m.x, C[i].x), std::min(m.y, C[i].y), std::min(m.z, C[i].z)};
       f.lower_ = m;
-      f.grid_ = NeighborGrid(C, n, f.cell_reach_, nullptr, apart.empty() ? nullptr : apart.data());
+      f.grid_ = NeighborGrid(C, n, cell, nullptr, apart.empty() ? nullptr : apart.data());
     }
   } catch (const Error& e) {
     if (e.status() != Status::LimitExceeded) throw;

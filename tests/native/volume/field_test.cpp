@@ -412,3 +412,43 @@ TEST(ParticleField, ParticleGridRadiusKeepsOnlyAFewFarLargerApart) {
   EXPECT_EQ(e.status(), Status::InvalidArgument);
   EXPECT_NE(std::string(e.what()).find("radii[5]"), std::string::npos) << e.what();
 }
+
+// The same with anisotropic kernels: the cells are sized by the others' radius, the three far
+// larger kept apart; F and the contributors are still every ellipsoid's (summed by brute force
+// from each particle's own centre and matrix).
+TEST(ParticleField, AnisotropicKernelsKeepTheFewFarLargerApartToo) {
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> u(0, 1);
+  const PointCloud c = test::jittered(test::random_cloud(4000, 23), 0.002, 5);
+  std::vector<double> radii(c.size(), 0.12);
+  radii[3] = radii[1500] = radii[3999] = 1.5;
+  FieldParams p;
+  p.threshold = 0.5;
+  p.radii = radii;
+  p.anisotropy.enabled = true;
+  const ParticleField f(c, p);
+  EXPECT_EQ(f.grid().cell_size(), 0.12);
+  ASSERT_EQ(f.grid().apart_begin(), c.size() - 3);
+  EXPECT_LT(f.cell_reach(), 0.12 * std::pow(p.anisotropy.max_stretch, 2.0 / 3.0) + 1e-12);
+  EXPECT_GT(f.max_reach(), 1.4);
+  for (int q = 0; q < 200; ++q) {
+    const Vec3 x{u(rng) * 2.4 - 0.7, u(rng) * 2.4 - 0.7, u(rng) * 2.4 - 0.7};
+    double want = 0;
+    std::vector<size_t> inside;
+    for (size_t i = 0; i < c.size(); ++i) {
+      const std::array<double, 6> m = f.metric(i);
+      const Vec3 d = x - f.position(i);
+      const double s = m[0] * d.x * d.x + m[1] * d.y * d.y + m[2] * d.z * d.z +
+                       2.0 * (m[3] * d.x * d.y + m[4] * d.x * d.z + m[5] * d.y * d.z);
+      if (s < 1.0) {
+        want += kernel_value(p.kernel, s);
+        inside.push_back(i);
+      }
+    }
+    ASSERT_NEAR(f.value(x), want, 1e-12 * std::max(1.0, want));
+    std::vector<size_t> got;
+    f.for_each_contributor(x, [&](size_t i, double) { got.push_back(i); });
+    std::sort(got.begin(), got.end());
+    ASSERT_EQ(got, inside);
+  }
+}

@@ -447,6 +447,35 @@ TEST(Polygonize, OutputDoesNotDependOnTheThreadCount) {
   }
 }
 
+// Anisotropic kernels with two particles far larger than the rest (kept apart from the
+// field's cells and searched over more cells for their neighbourhoods): a closed 2-manifold,
+// the same for any thread count.
+TEST(Polygonize, AnisotropicKernelsWithAFewFarLargerParticles) {
+  PointCloud block;
+  for (int z = 0; z < 16; ++z)
+    for (int y = 0; y < 16; ++y)
+      for (int x = 0; x < 24; ++x) block.positions.push_back({0.05 * x, 0.05 * y, 0.05 * z});
+  block = test::jittered(block, 0.005, 8);
+  PolygonizeOptions o;
+  o.radii.assign(block.size(), 0.1);
+  o.radii[10] = o.radii[5000] = 1.2;
+  o.anisotropy.enabled = true;
+  PolygonizeResult ref;
+  for (int threads : {1, 2}) {
+    o.threads = threads;
+    PolygonizeResult r = polygonize(block, o);
+    if (threads == 1) {
+      ref = std::move(r);
+      ASSERT_GT(ref.mesh.triangles.size(), 2000u);
+      const TopologyReport t = topology_report(ref.mesh);
+      EXPECT_TRUE(t.closed && t.manifold && t.consistently_oriented);
+      continue;
+    }
+    EXPECT_TRUE(r.mesh.positions == ref.mesh.positions);
+    EXPECT_TRUE(r.mesh.triangles == ref.mesh.triangles);
+  }
+}
+
 // Every vertex on a lattice edge sits on the iso-surface of the true field (to the first-order
 // distance |F - T| / |grad F|), its normal is -grad F there, and the particles' attributes
 // at it are the field's normalised kernel weights summed in the field's own order, bit for

@@ -204,10 +204,10 @@ class PM_EXPORT ParticleField {
   /// The farthest any kernel reaches from its centre: max_radius(), or with anisotropic
   /// kernels the longest semi-axis of any of them (at most max_stretch^(2/3) x max_radius()).
   double max_reach() const { return reach_; }
-  /// The farthest the kernel of a particle in the grid's cells reaches, and the cells' size:
-  /// max_reach(), or with spherical per-particle radii far apart the particle_grid_radius of
-  /// them (the particles of larger radius are then kept apart: sorted indices from
-  /// grid().apart_begin() on, visited by every evaluation).
+  /// The farthest the kernel of a particle in the grid's cells reaches: max_reach(), or with
+  /// per-particle radii far apart less (the grid's cells are then as wide as their
+  /// particle_grid_radius, and the particles of larger radius are kept apart: sorted indices
+  /// from grid().apart_begin() on, visited by every evaluation). Spheres: the cells' size.
   double cell_reach() const { return cell_reach_; }
 
   /// Anisotropic kernels in use (params().anisotropy.enabled).
@@ -275,13 +275,14 @@ class PM_EXPORT ParticleField {
   }
 
   /// With anisotropic kernels: f(sorted index, x - c) for every particle whose ellipsoid's
-  /// bounding box contains x, in grid order. The grid's cells are as wide as the largest
-  /// radius; the cells within the longest kernel's reach of x are looked up in a dense table
+  /// bounding box contains x, in grid order (those kept apart last). The grid's cells are as
+  /// wide as the largest radius (of those in cells); the cells within the longest such
+  /// kernel's reach of x are looked up in a dense table
   /// when the occupied cells' box is small enough (else through the grid's hash), and a cell
   /// whose kernels' boxes all miss x is skipped whole.
   template <class F>
   void for_each_ellipsoid_near(const Vec3& x, F&& f) const {
-    const Vec3 r{reach_, reach_, reach_};
+    const Vec3 r{cell_reach_, cell_reach_, cell_reach_};
     auto visit = [&](uint32_t c) {
       const float* b = &cell_support_[6 * size_t(c)];
       if (x.x < b[0] || x.y < b[1] || x.z < b[2] || x.x > b[3] || x.y > b[4] || x.z > b[5]) return;
@@ -293,6 +294,12 @@ class PM_EXPORT ParticleField {
       }
     };
     for_each_cell_in(grid_.coord_of(x - r), grid_.coord_of(x + r), visit);
+    for (uint32_t s = grid_.apart_begin(); s < grid_.point_count(); ++s) {  // kept apart: last
+      const Vec3 d = x - grid_.sorted_point(s);
+      const float* e = &sorted_extent_[3 * size_t(s)];
+      if (std::abs(d.x) > e[0] || std::abs(d.y) > e[1] || std::abs(d.z) > e[2]) continue;
+      f(s, d);
+    }
   }
 
   /// f(c) for every occupied cell c of grid() whose coordinate lies in [lo, hi], in increasing
