@@ -21,7 +21,8 @@ namespace particlemesh::cli {
 inline const std::string kParticleFormats =
     ".ply (x y z [nx ny nz or normal_x ..], other properties as channels), .xyz/.pts/.txt/.csv (x y z [nx ny nz] per line, "
     "or columns named by a header line), .obj (v x y z "
-    "[r g b] lines, vn normals), VTK .vtk/.vtu/.vtp/.pvtu/.pvtp, Houdini .bgeo/.geo (.gz, .sc), lidar .las, Krakatoa .prt or, "
+    "[r g b] lines, vn normals), a mesh's vertices from .off or .stl, VTK .vtk/.vtu/.vtp/.pvtu/.pvtp, Houdini .bgeo/.geo "
+    "(.gz, .sc), lidar .las, Krakatoa .prt or, "
     "with the PCL bridge, .pcd (ascii, binary, binary_compressed)";
 
 struct ParticleInputArgs {

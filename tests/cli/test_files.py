@@ -425,3 +425,31 @@ def test_smooth_keeps_vertex_colours(cli, tmp_path):
     body = lines[lines.index("end_header") + 1:]
     # Butterfly keeps the control vertices: the first keeps its colour exactly.
     assert body[0].split()[-3:] == ["200", "30", "40"]
+
+
+def test_a_meshs_vertices_are_particles_in_every_mesh_format(cli, tmp_path, sphere):
+    """triangulate re-meshes a model from its vertices whatever file holds it: an OFF (no
+    faces, or faces that are ignored) gives the mesh of the same points as text, byte for
+    byte; a binary STL's corners, shared, are the particles once each."""
+    lines = [ln.split() for ln in sphere.read_text().splitlines() if ln.strip()]
+    off = tmp_path / "v.off"
+    off.write_text(f"OFF\n{len(lines)} 1 0\n" + "".join(" ".join(ln) + "\n" for ln in lines) + "3 0 1 2\n")
+    cli("triangulate", sphere, "-o", tmp_path / "from_xyz.ply", "-q")
+    cli("triangulate", off, "-o", tmp_path / "from_off.ply", "-q")
+    assert (tmp_path / "from_off.ply").read_bytes() == (tmp_path / "from_xyz.ply").read_bytes()
+    # The mesh as a binary STL (float32 corners, each triangle's own), then its vertices again.
+    r = cli("triangulate", sphere, "-o", tmp_path / "m.obj", "-q")
+    obj = (tmp_path / "m.obj").read_text().splitlines()
+    v = [tuple(map(float, ln.split()[1:4])) for ln in obj if ln.startswith("v ")]
+    f = [tuple(int(x.split("/")[0]) - 1 for x in ln.split()[1:4]) for ln in obj if ln.startswith("f ")]
+    stl = tmp_path / "m.stl"
+    with open(stl, "wb") as out:
+        out.write(b"\0" * 80 + struct.pack("<I", len(f)))
+        for t in f:
+            out.write(struct.pack("<3f", 0, 0, 0) + b"".join(struct.pack("<3f", *v[i]) for i in t) + b"\0\0")
+    r = cli("inspect", stl, "--json")
+    assert json.loads(r.stdout)["vertices"] == len(v)
+    cli("triangulate", stl, "-o", tmp_path / "from_stl.ply", "--report", tmp_path / "r.json", "-q")
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["triangulation"]["points"] == len(v)
+    assert report["topology"]["closed"] and report["topology"]["components"] == 1

@@ -146,7 +146,9 @@ TEST(MeshIO, ObjPointCloudsReadVerticesColoursAndNormals) {
 TEST(MeshIO, FormatsReadAsMeshesOrPoints) {
   EXPECT_TRUE(reads_format("a/b.PLY", false) && reads_format("a/b.PLY", true));
   EXPECT_TRUE(reads_format("m.obj", false) && reads_format("m.obj", true));  // OBJ point clouds too
-  EXPECT_TRUE(reads_format("m.off", false) && !reads_format("m.off", true));
+  // A mesh's vertices as particles (re-meshing a model from its vertices): OFF and STL too.
+  EXPECT_TRUE(reads_format("m.off", false) && reads_format("m.off", true));
+  EXPECT_TRUE(reads_format("m.STL", false) && reads_format("m.stl", true));
   EXPECT_TRUE(!reads_format("f.bgeo.gz", false) && reads_format("f.bgeo.gz", true));
   EXPECT_TRUE(reads_format("f.vtu", false) && reads_format("f.vtu", true));
   EXPECT_FALSE(reads_format("f.pcd", true));  // the PCL bridge's, not the core reader's
