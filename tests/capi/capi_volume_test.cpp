@@ -392,6 +392,26 @@ TEST(CApiPolygonize, DefaultRadiusIsPolygonizes) {
   EXPECT_NE(last().find("give a radius"), std::string::npos) << last();
 }
 
+// The particle grid's radius a caller cutting a cloud into tiles gives every tile with
+// per-particle radii: the C++ value, and the usual statuses for misuse (the output untouched).
+TEST(CApiPolygonize, ParticleGridRadius) {
+  std::vector<double> radii(5000, 0.1);
+  radii[42] = 2.0;
+  double r = -1;
+  ASSERT_EQ(pm_particle_grid_radius(radii.data(), radii.size(), &r), PM_OK) << last();
+  EXPECT_EQ(r, 0.1);
+  EXPECT_EQ(r, particle_grid_radius(radii.data(), radii.size()));
+  ASSERT_EQ(pm_particle_grid_radius(nullptr, 0, &r), PM_OK) << last();
+  EXPECT_EQ(r, 0.0);
+  radii[7] = std::nan("");
+  r = -1;
+  EXPECT_EQ(pm_particle_grid_radius(radii.data(), radii.size(), &r), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("radii[7]"), std::string::npos) << last();
+  EXPECT_EQ(r, -1);
+  EXPECT_EQ(pm_particle_grid_radius(nullptr, 3, &r), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(pm_particle_grid_radius(radii.data(), radii.size(), nullptr), PM_STATUS_INVALID_ARGUMENT);
+}
+
 // pm_polygonize_attributes at the vertices of a mesh made without attributes: the values
 // pm_polygonize gives its vertices, bit for bit, laid out attribute after attribute; the usual
 // statuses and messages for misuse, and the output untouched on failure.
