@@ -76,36 +76,6 @@ nlohmann::json stats_json(const PolygonizeStats& s) {
                        {"finishing", s.seconds_finishing}}}};
 }
 
-/// R_i = scale x the cloud's one-component channel `name`. @throws Error(InvalidArgument)
-/// naming the channels the particles carry when it is not one of them or has several
-/// components, Error(InvalidInput) naming the particle whose radius is not positive.
-std::vector<double> radii_from_channel(const PointCloud& cloud, const std::string& name, double scale,
-                                       const std::string& path) {
-  std::string names;
-  for (const VertexAttribute& x : cloud.attributes) {
-    if (x.name != name) {
-      names += (names.empty() ? "" : ", ") + x.name;
-      continue;
-    }
-    if (x.components != 1)
-      throw Error(Status::InvalidArgument, "--radius-channel " + name + ": the channel has " +
-                                               std::to_string(x.components) + " components (one is needed)");
-    std::vector<double> radii(x.values.size());
-    for (size_t i = 0; i < radii.size(); ++i) {
-      radii[i] = scale * double(x.values[i]);
-      if (!(radii[i] > 0) || !std::isfinite(radii[i])) {
-        char value[32];
-        std::snprintf(value, sizeof value, "%g", double(x.values[i]));
-        throw Error(Status::InvalidInput, "'" + path + "': particle " + std::to_string(i) + "'s " + name + " is " +
-                                              value + " (a radius must be positive)");
-      }
-    }
-    return radii;
-  }
-  throw Error(Status::InvalidArgument, "--radius-channel " + name + ": '" + path + "' has no such channel (" +
-                                           (names.empty() ? std::string("it has none") : "it has " + names) + ")");
-}
-
 std::vector<OutputSpec> output_specs(const PolygonizeArgs& a) {
   return {{"-o", a.output, OutputKind::Mesh, a.ascii ? MeshFormat::PlyAscii : MeshFormat::Auto},
           {"--report", a.report, OutputKind::Text}};
@@ -132,11 +102,9 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
   opt.radius = a.radius;
   opt.radii = std::move(radii);
   opt.threshold = a.threshold;
-  // Radii from sizes: the size says the spacing (touching particles of size s lie 2 s apart),
-  // so the default threshold is half the field inside such a packing at R = F s, as the
-  // Blender add-on's Particle Size mode sets it (at F = 4 it is the library's own default).
-  const bool sized_threshold = !a.radius_channel.empty() && a.threshold == 0 && !a.anisotropy.enabled;
-  if (sized_threshold) opt.threshold = 0.5 * lattice_field(opt.kernel, a.radius_scale, 2.0);
+  // Radii from sizes: the default threshold for sizes (volume_options.h).
+  const bool from_sizes = !a.radius_channel.empty() && a.threshold == 0 && !a.anisotropy.enabled;
+  if (from_sizes) opt.threshold = sized_threshold(opt.kernel, a.radius_scale);
   opt.cell_size = a.cell;
   opt.threads = a.threads;
   opt.max_grid_bytes = uint64_t(a.max_grid_mib * double(1 << 20));
@@ -229,7 +197,7 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
     if (s.threshold_defaulted && s.anisotropic)
       std::printf("  threshold T   %.6g (default: a packed face half a spacing out, calibrated at R = %.3g spacings)\n",
                   s.threshold, s.calibration_ratio);
-    else if (sized_threshold)
+    else if (from_sizes)
       std::printf("  threshold T   %.6g (default: half the field inside touching particles at R = %g x size)\n",
                   s.threshold, a.radius_scale);
     else
@@ -274,17 +242,7 @@ void add_polygonize(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("--radius", args->radius, kRadiusHelp)
       ->check(positive_number())
       ->check(finite_number());
-  auto* channel = app->add_option(
-      "--radius-channel", args->radius_channel,
-      "Per-particle radius: R_i = F x the input's one-component channel NAME (Houdini's pscale, a radius or size "
-      "channel), F from --radius-scale; instead of --radius");
-  channel->excludes(app->get_option("--radius"));
-  app->add_option("--radius-scale", args->radius_scale,
-                  "With --radius-channel: the factor F (default 4: a pscale of half the particle spacing gives the "
-                  "default R of two spacings). The default threshold is then half the field inside touching "
-                  "particles of their size at R = F x size, as in the Blender add-on's Particle Size mode")
-      ->check(positive_number())
-      ->check(finite_number());
+  add_radius_channel_options(*app, args->radius_channel, args->radius_scale);
   app->add_option("--threshold", args->threshold,
                   "Iso level T of the summed field (default: half the field inside an evenly packed volume at "
                   "R = 2 spacings: 3.33 wyvill, 3.94 poly4, 2.58 poly6, 1.23 blinn)")

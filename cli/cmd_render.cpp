@@ -19,6 +19,8 @@ namespace {
 struct RenderArgs {
   std::string input, output, kernel = "wyvill", shading = "lambert";
   double radius = 0, threshold = 0, fov = 40;
+  std::string radius_channel;  ///< --radius-channel
+  double radius_scale = 4;     ///< --radius-scale
   int width = 640, height = 480, threads = 0;
   std::vector<double> camera, up{0, 1, 0};
   bool quiet = false;
@@ -42,6 +44,12 @@ int run_render(const RenderArgs& a) {
   p.radius = a.radius;
   p.threshold = a.threshold;
   p.anisotropy = a.anisotropy;
+  // Per-particle radii from a channel, with polygonize's default threshold for sizes: the
+  // image of the surface polygonize meshes from the same options.
+  if (!a.radius_channel.empty()) {
+    p.radii = radii_from_channel(cloud, a.radius_channel, a.radius_scale, a.input);
+    if (a.threshold == 0 && !a.anisotropy.enabled) p.threshold = sized_threshold(p.kernel, a.radius_scale);
+  }
   const auto t1 = Clock::now();
   RayCaster caster = [&] {
     try {
@@ -102,9 +110,17 @@ int run_render(const RenderArgs& a) {
     if (f.anisotropic())
       std::printf("  anisotropic   %zu of %zu particles got an ellipsoid (the others: too few neighbours)\n",
                   f.anisotropic_count(), f.size());
-    std::printf("  radius R      %.6g (%s)\n", f.params().radius,
-                f.radius_defaulted() ? default_radius_note(f.params().radius, f.spacing()).c_str() : "given");
-    if (f.threshold_defaulted() && f.anisotropic())
+    if (!a.radius_channel.empty())
+      std::printf("  radius R      per particle: %g x '%s' (median %.6g, largest %.6g)\n", a.radius_scale,
+                  a.radius_channel.c_str(), f.params().radius, f.max_radius());
+    else
+      std::printf("  radius R      %.6g (%s)\n", f.params().radius,
+                  f.radius_defaulted() ? default_radius_note(f.params().radius, f.spacing()).c_str() : "given");
+    const bool from_sizes = !a.radius_channel.empty() && a.threshold == 0 && !a.anisotropy.enabled;
+    if (from_sizes)
+      std::printf("  threshold T   %.6g (default: half the field inside touching particles at R = %g x size)\n",
+                  f.threshold(), a.radius_scale);
+    else if (f.threshold_defaulted() && f.anisotropic())
       std::printf("  threshold T   %.6g (default: a packed face half a spacing out, calibrated at R = %.3g spacings)\n",
                   f.threshold(), f.calibration_ratio());
     else
@@ -134,6 +150,7 @@ void add_render(CLI::App& root, std::vector<Command>& commands) {
   app->add_option("--radius", args->radius, kRadiusHelp)
       ->check(positive_number())
       ->check(finite_number());
+  add_radius_channel_options(*app, args->radius_channel, args->radius_scale);
   app->add_option("--threshold", args->threshold,
                   "Iso level T of the summed field (default: half the field inside an evenly packed volume)")
       ->check(positive_number())

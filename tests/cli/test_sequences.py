@@ -139,6 +139,26 @@ def test_radius_from_a_channel(cli, tmp_path):
     assert not (tmp_path / "x.ply").exists()
 
 
+def test_render_takes_the_radius_from_a_channel_as_polygonize_does(cli, tmp_path):
+    """render --radius-channel: the image of the field polygonize meshes from the same options
+    (a constant pscale gives the image of the same --radius; the threshold for sizes); bad
+    channels refused as polygonize refuses them."""
+    p, a = particles(0)
+    src = tmp_path / "in.bgeo"
+    write_bgeo(src, p, {"pscale": np.full(len(p), 1 / 32, np.float32), "density": a["density"]})
+    cli("render", src, "-o", tmp_path / "ch.png", "--radius-channel", "pscale", "--width", "96", "--height", "64", "-q")
+    cli("render", src, "-o", tmp_path / "r.png", "--radius", "0.125", "--width", "96", "--height", "64", "-q")
+    assert (tmp_path / "ch.png").read_bytes() == (tmp_path / "r.png").read_bytes()
+    r = cli("render", src, "-o", tmp_path / "ch.png", "--radius-channel", "pscale", "--radius-scale", "6",
+            "--width", "96", "--height", "64")
+    assert "per particle: 6 x 'pscale'" in r.stdout and "touching particles at R = 6 x size" in r.stdout
+    r = cli("render", src, "-o", tmp_path / "x.png", "--radius-channel", "size", check=False)
+    assert r.returncode == 1 and "has no such channel (it has pscale, density)" in r.stderr
+    assert not (tmp_path / "x.png").exists()
+    r = cli("render", src, "-o", tmp_path / "x.png", "--radius-channel", "pscale", "--radius", "1", check=False)
+    assert r.returncode == 2 and "--radius excludes --radius-channel" in r.stderr
+
+
 def test_las_lidar_files(cli, tmp_path):
     """ASPRS LAS 1.2 (formats 0-3) and 1.4 (formats 6-8, a VLR, extra bytes per record): the
     positions exactly (the PLY's mesh byte for byte), intensity, classification and colours
