@@ -95,12 +95,12 @@ PM_EXPORT double lattice_face_field(Kernel kernel, double radius, const Anisotro
 
 class ParticleField;
 
-/// The radius the particle grid's cells are sized by, for per-particle spherical radii (n
-/// values > 0): the particles with a larger radius are kept apart from the cells, in a list
-/// every evaluation visits whole. Cells as wide as the largest radius hold, where one
-/// particle is 20 times the rest, 8000 times the particles an evaluation needs (polygonize
-/// 100 times slower); the list costs each evaluation a test per particle in it. Chosen to
-/// minimise the particles one evaluation looks at: those apart, plus about
+/// The radius the particle grid's cells are sized by, for per-particle radii (n values > 0;
+/// spheres or ellipsoids): the particles with a larger radius are kept apart from the cells,
+/// in a list every evaluation visits whole. Cells as wide as the largest radius hold, where
+/// one particle is 20 times the rest, 8000 times the particles an evaluation needs
+/// (polygonize 100 times slower); the list costs each evaluation a test per particle in it.
+/// Chosen to minimise the particles one evaluation looks at: those apart, plus about
 /// 216 (R_cell / R_median)^3 from the cells (27 cells of R_cell, the median radius taken as
 /// two spacings); at most 4096 apart, and only where that costs at most a quarter of what
 /// cells of the largest radius do. Otherwise the largest radius (none apart). Depends on the
@@ -220,7 +220,7 @@ class PM_EXPORT ParticleField {
   /// Smallest axis-aligned box holding every particle's support (centre +- R_i).
   Vec3 support_min() const { return support_lo_; }
   Vec3 support_max() const { return support_hi_; }
-  /// The corner the particle grid (cells of cell_reach(), from lower_corner() - cell_reach())
+  /// The corner the particle grid (cells of grid().cell_size(), from lower_corner() minus one cell)
   /// is anchored to: the particles' smallest coordinates, or the whole cloud's when these
   /// particles are a tile of it (PolygonizeOptions::domain_min).
   Vec3 lower_corner() const { return lower_; }
@@ -373,9 +373,10 @@ class PM_EXPORT ParticleField {
     }
   }
 
-  /// The grid over the kernel centres (cell = cell_reach()), for callers with their own
-  /// traversal: they visit the particles of the cells within cell_reach() of where they look,
-  /// then every particle from grid().apart_begin() on (none, unless radii are far apart).
+  /// The grid over the kernel centres (cells of the largest radius of the particles in them:
+  /// cell_reach() for spheres), for callers with their own traversal: they visit the particles
+  /// of the cells within cell_reach() of where they look, then every particle from
+  /// grid().apart_begin() on (none, unless radii are far apart).
   const NeighborGrid& grid() const { return grid_; }
   /// Per sorted grid index: 1 / R^2 and strength (empty when uniform / all 1).
   const std::vector<double>& sorted_inverse_squared_radii() const { return sorted_inv_r2_; }
