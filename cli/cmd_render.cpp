@@ -46,10 +46,9 @@ int run_render(const RenderArgs& a) {
   p.anisotropy = a.anisotropy;
   // Per-particle radii from a channel, with polygonize's default threshold for sizes: the
   // image of the surface polygonize meshes from the same options.
-  if (!a.radius_channel.empty()) {
-    p.radii = radii_from_channel(cloud, a.radius_channel, a.radius_scale, a.input);
-    if (a.threshold == 0 && !a.anisotropy.enabled) p.threshold = sized_threshold(p.kernel, a.radius_scale);
-  }
+  if (!a.radius_channel.empty()) p.radii = radii_from_channel(cloud, a.radius_channel, a.radius_scale, a.input);
+  const bool from_sizes = !a.radius_channel.empty() && a.threshold == 0 && !a.anisotropy.enabled;
+  if (from_sizes) p.threshold = sized_threshold(p.kernel, a.radius_scale);
   const auto t1 = Clock::now();
   RayCaster caster = [&] {
     try {
@@ -116,7 +115,6 @@ int run_render(const RenderArgs& a) {
     else
       std::printf("  radius R      %.6g (%s)\n", f.params().radius,
                   f.radius_defaulted() ? default_radius_note(f.params().radius, f.spacing()).c_str() : "given");
-    const bool from_sizes = !a.radius_channel.empty() && a.threshold == 0 && !a.anisotropy.enabled;
     if (from_sizes)
       std::printf("  threshold T   %.6g (default: half the field inside touching particles at R = %g x size)\n",
                   f.threshold(), a.radius_scale);

@@ -148,6 +148,13 @@ class ObjReader {
     return true;
   }
 
+  // An index that is not looked up (a texture coordinate's; a normal's in a file without
+  // 'vn'): any non-zero integer, negative too, or none.
+  static bool unused_index(std::string_view s) {
+    int64_t v = 0;
+    return s.empty() || (parse_integer(s, v) && v != 0);
+  }
+
   void face(const std::vector<std::string_view>& w) {
     ++faces_;
     const size_t n = w.size() - 1;
@@ -161,11 +168,8 @@ class ObjReader {
       if (ok && a != std::string_view::npos) {
         const std::string_view rest = c.substr(a + 1);
         const size_t b = rest.find('/');
-        // The texture coordinate is not used: any non-zero integer (or none) will do, a
-        // negative one too (-1: the last 'vt').
-        const std::string_view vt = rest.substr(0, b);
-        int64_t vt_index = 0;
-        ok = vt.empty() || (parse_integer(vt, vt_index) && vt_index != 0);
+        // The texture coordinate is not used (-1: the last 'vt').
+        ok = unused_index(rest.substr(0, b));
         if (ok && b != std::string_view::npos) {
           bool no_vn = false;
           const std::string_view vn_text = rest.substr(b + 1);
@@ -173,8 +177,7 @@ class ObjReader {
             // Normal indices in a file with no 'vn' at all (placeholders some tools write;
             // tinyobjloader and trimesh read such files) are ignored: the normals are then
             // estimated.
-            int64_t vn_index = 0;
-            ok = vn_text.empty() || (parse_integer(vn_text, vn_index) && vn_index != 0);
+            ok = unused_index(vn_text);
           } else {
             ok = index(vn_text, normals_.size(), vn, &no_vn) && vn_text.find('/') == std::string_view::npos;
             has_vn = ok && !no_vn;

@@ -175,8 +175,9 @@ Vec3 ellipsoid_half_extent(const std::array<double, 6>& m) {
 namespace detail {
 
 std::vector<KernelEllipsoid> anisotropic_kernels_impl(const Vec3* positions, size_t n, double radius,
-                                                      const double* radii, const AnisotropyOptions& o,
-                                                      ProgressTracker& tracker, double begin, double end) {
+                                                      const double* radii, double cell_radius,
+                                                      const AnisotropyOptions& o, ProgressTracker& tracker,
+                                                      double begin, double end) {
   validate_anisotropy(o);
   std::vector<KernelEllipsoid> out(n);
   if (n == 0) return out;
@@ -187,7 +188,6 @@ std::vector<KernelEllipsoid> anisotropic_kernels_impl(const Vec3* positions, siz
   // is inside the ball (cells of the full radius scan 27 cells, a seventh inside). The radius
   // is the field grid's (particle_grid_radius): a few particles far larger than the rest
   // search their larger neighbourhoods over more cells, rather than every cell being theirs.
-  const double cell_radius = radii ? particle_grid_radius(radii, n) : radius;
   const double cell_reach = o.neighbor_radius * cell_radius;
   NeighborGrid grid;
   try {
@@ -303,7 +303,8 @@ std::vector<KernelEllipsoid> anisotropic_kernels(const std::vector<Vec3>& positi
   detail::ProgressTracker tracker(progress);
   auto r = detail::with_threads(threads, [&] {
     return detail::anisotropic_kernels_impl(positions.data(), n, radius, radii.empty() ? nullptr : radii.data(),
-                                            options, tracker, 0.0, 1.0);
+                                            radii.empty() ? radius : particle_grid_radius(radii.data(), n), options,
+                                            tracker, 0.0, 1.0);
   });
   tracker.finish();
   return r;

@@ -11,10 +11,13 @@
 namespace PM_NAMESPACE::detail {
 
 /// Kernels of particles with finite positions; radius(i) = radii ? radii[i] : radius, all > 0.
+/// The neighbour search's cells follow `cell_radius` (the field grid's: the largest radius, or
+/// particle_grid_radius); particles of a larger radius search over the cells of their reach.
 /// Runs in the caller's TBB arena; reports progress in [begin, end).
 std::vector<KernelEllipsoid> anisotropic_kernels_impl(const Vec3* positions, size_t n, double radius,
-                                                      const double* radii, const AnisotropyOptions& options,
-                                                      ProgressTracker& tracker, double begin, double end);
+                                                      const double* radii, double cell_radius,
+                                                      const AnisotropyOptions& options, ProgressTracker& tracker,
+                                                      double begin, double end);
 
 /// The kernel of a particle at p (radius R, neighbourhood radius r) from the weighted sums over
 /// its `count` neighbours within r (itself included), d = p_j - p, w = 1 - (|d| / r)^3:

@@ -414,9 +414,13 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
   std::vector<Vec3> centres;
   std::vector<Vec3> extents;
   if (aniso) {
+    // The kernels' neighbour grid: the cells' radius, at most these particles' largest (a
+    // tile's domain_max_radius sizes only the field's cells).
+    const double largest =
+        params.radii.empty() ? f.params_.radius : *std::max_element(params.radii.begin(), params.radii.end());
     kernels = anisotropic_kernels_impl(positions, n, f.params_.radius,
-                                       params.radii.empty() ? nullptr : params.radii.data(), params.anisotropy,
-                                       tracker, mid, end);
+                                       params.radii.empty() ? nullptr : params.radii.data(),
+                                       std::min(cell, largest), params.anisotropy, tracker, mid, end);
     centres.resize(n);
     extents.resize(n);
     f.reach_ = 0;
