@@ -116,6 +116,41 @@ TEST(EstimateSpacing, SurfaceSampleIsCloseToThePoissonRadius) {
   EXPECT_LT(e.spacing, 0.05 * 1.3);  // and a maximal sample leaves no wide gaps
 }
 
+// Each point's nearest neighbour must be found exactly, also where it lies just across a cell
+// face (the search skips cells that cannot hold a nearer point). A sample of one point (the
+// first: max_samples 1) makes the estimate that point's own nearest distance, so every point
+// is checked in turn: random clouds, and lattices (many points on or next to cell faces) at
+// several scales and offsets (rounding), slightly jittered so that distances differ.
+TEST(EstimateSpacing, EveryPointsNearestNeighbourExactly) {
+  std::vector<std::vector<Vec3>> clouds;
+  for (uint64_t seed = 1; seed <= 3; ++seed) clouds.push_back(test::random_cloud(300, seed).positions);
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> jitter(-1e-6, 1e-6);
+  for (const double step : {1.0, 1e-3})
+    for (const double offset : {0.0, 1e6}) {
+      std::vector<Vec3> p;
+      for (int i = 0; i < 7; ++i)
+        for (int j = 0; j < 7; ++j)
+          for (int k = 0; k < 7; ++k)
+            p.push_back(Vec3{offset + (i + jitter(rng)) * step, offset + (j + jitter(rng)) * step,
+                             offset + (k + jitter(rng)) * step});
+      clouds.push_back(p);
+    }
+  for (size_t c = 0; c < clouds.size(); ++c) {
+    const std::vector<Vec3>& p = clouds[c];
+    size_t wrong = 0;
+    for (size_t i = 0; i < p.size(); ++i) {
+      double best = std::numeric_limits<double>::infinity();
+      for (size_t j = 0; j < p.size(); ++j)
+        if (j != i) best = std::min(best, squared_distance(p[i], p[j]));
+      std::vector<Vec3> q = p;
+      std::swap(q[0], q[i]);
+      wrong += estimate_spacing_sampled(q.data(), q.size(), 1).spacing != std::sqrt(best);
+    }
+    EXPECT_EQ(wrong, 0u) << "cloud " << c;
+  }
+}
+
 TEST(EstimateSpacing, IndependentOfThreadsAndOrder) {
   PointCloud c = fibonacci_sphere(20000);
   const double a = estimate_spacing(c.positions.data(), c.size(), 1).spacing;
