@@ -17,6 +17,7 @@
 #include "sampling_shape.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/io/mesh_io.h"
+#include "particlemesh/mesh/components.h"
 #include "particlemesh/mesh/topology_report.h"
 #include "particlemesh/sample/thin.h"
 #include "particlemesh/spatial/local_spacing.h"
@@ -45,6 +46,7 @@ struct TriangulateArgs {
   std::string normals = "auto";
   size_t fill_holes = 100;
   double fill_edge_factor = 1.5;
+  size_t min_component_triangles = 0;
   double normal_angle = 120.0;
   bool ascii = false;
   bool quiet = false;
@@ -219,6 +221,28 @@ std::string capped_spacing_hint(const SurfaceResult& r, const TriangulateArgs& a
   return s;
 }
 
+/// When at least 5 pieces of fewer than 10 triangles lie apart from the rest and hold under
+/// 5 % of the triangles (a scan's stray triangles among its rows), the --min-component-triangles
+/// that removes just them. Empty otherwise, or when pieces are removed already.
+std::string stray_pieces_hint(const SurfaceResult& r, const TriangulateArgs& a) {
+  if (a.min_component_triangles > 0 || r.mesh.triangles.empty()) return {};
+  const MeshComponents c = mesh_components(r.mesh);
+  size_t pieces = 0, triangles = 0, largest = 0;
+  for (size_t t : c.triangles)
+    if (t > 0 && t < 10) ++pieces, triangles += t, largest = std::max(largest, t);
+  if (pieces < 5 || triangles * 20 > r.mesh.triangles.size()) return {};
+  char text[200];
+  if (largest == 1)
+    std::snprintf(text, sizeof text, "%zu lone triangles lie apart from the rest: --min-component-triangles 2 removes them",
+                  pieces);
+  else
+    std::snprintf(text, sizeof text,
+                  "%zu pieces of at most %zu triangles lie apart from the rest (%zu triangles): "
+                  "--min-component-triangles %zu removes them",
+                  pieces, largest, triangles, largest + 1);
+  return text;
+}
+
 /// Every hint that applies, most important first.
 std::vector<std::string> surface_hints(const SurfaceResult& r, const TriangulateArgs& a, const PointCloud& cloud) {
   std::vector<std::string> out;
@@ -228,7 +252,7 @@ std::vector<std::string> surface_hints(const SurfaceResult& r, const Triangulate
   for (std::string h : {volume_particles_hint(r), noisy_surface_hint(r, a), std::move(given),
                         spacing_named ? std::string() : capped_spacing_hint(r, a, cloud),
                         spacing_named ? std::string() : uneven_spacing_hint(r, a.thin, a.global_spacing), short_edges,
-                        short_edges.empty() ? narrow_loops_hint(r, a) : std::string()})
+                        short_edges.empty() ? narrow_loops_hint(r, a) : std::string(), stray_pieces_hint(r, a)})
     if (!h.empty()) out.push_back(std::move(h));
   return out;
 }
@@ -316,6 +340,7 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
   opt.repair = !a.no_repair;
   opt.fill_holes = a.fill_holes;
   opt.fill_edge_factor = a.fill_edge_factor;
+  opt.min_component_triangles = a.min_component_triangles;
   opt.orient = !a.no_orient;
   opt.local_spacing = !a.global_spacing;
   opt.has_viewpoint = input.has_viewpoint && !a.no_viewpoint;
@@ -409,6 +434,9 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
         std::printf("  viewpoint     %.6g %.6g %.6g: %s\n", opt.viewpoint.x, opt.viewpoint.y, opt.viewpoint.z,
                     f.viewpoint_used ? (std::to_string(f.rejected_shadow) + " triangles across depth jumps dropped").c_str()
                                      : "not taken (the particles do not look scanned from there)");
+      if (f.components_removed)
+        std::printf("  removed       %zu piece%s of fewer than %zu triangles (%zu triangles)\n", f.components_removed,
+                    f.components_removed == 1 ? "" : "s", a.min_component_triangles, f.component_triangles_removed);
       if (f.unused_points) std::printf("  unused        %zu particles in no triangle\n", f.unused_points);
       for (const std::string& h : hints)
         std::printf("  hint          %s\n", h.c_str());
@@ -478,6 +506,11 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
                   "Fill triangles' edges at most this x L: wider openings are real and stay open")
       ->check(in_range(0.1, 10.0))
       ->check(finite_number())
+      ->capture_default_str();
+  app->add_option("--min-component-triangles", args->min_component_triangles,
+                  "Remove every piece of the surface of fewer than N triangles (the stray triangles a scan leaves "
+                  "among its rows or at its fringe); their particles are then in no triangle. 0 = keep every piece")
+      ->check(in_range(size_t(0), size_t(UINT32_MAX)))
       ->capture_default_str();
   app->add_flag("--no-orient", args->no_orient, "Do not turn closed components to face outward (away from the solid each bounds: a hollow object's inner wall into its cavity)");
   app->add_option("--threads", args->threads, "Worker threads, 0 = all cores (the output does not depend on it)")

@@ -83,6 +83,8 @@ nlohmann::json to_json(const SurfaceStats& s) {
                             {"edges", s.narrow_loops.edges}}},
           {"components_flipped", s.components_flipped},
           {"unused_points", s.unused_points},
+          {"components_removed", s.components_removed},
+          {"component_triangles_removed", s.component_triangles_removed},
           {"local_spacing", {{"unit", "r0"}, {"min", s.local_spacing.min}, {"p10", s.local_spacing.p10},
                              {"median", s.local_spacing.median}, {"p90", s.local_spacing.p90}, {"max", s.local_spacing.max}}},
           {"viewpoint_used", s.viewpoint_used},

@@ -4,7 +4,8 @@ tests outside Blender.
 
 Settings keys (the operators' and the generated objects' property names):
   triangulate: auto_spacing, spacing, max_edge_factor, local_spacing, thin, raw, normal_angle (radians),
-               fill_holes, fill_edge_factor, normal_source, repair, orient; viewport_budget
+               fill_holes, fill_edge_factor, min_component_triangles, normal_source, repair, orient;
+               viewport_budget
                (live mode adds it in the viewport: thin out bigger systems to about that many)
   polygonize:  kernel, anisotropic, radius_mode, radius, radius_factor, threshold, auto_cell,
                cell_size, clean_slivers
@@ -197,6 +198,7 @@ def triangulate(particles, settings, progress=None, reuse=None):
                       else None),
         fill_holes=settings.get("fill_holes"),
         fill_edge_factor=settings.get("fill_edge_factor"),
+        min_component_triangles=settings.get("min_component_triangles"),
         normal_source=settings.get("normal_source"),
         repair=settings.get("repair"), orient=settings.get("orient"),
         local_spacing=bool(settings.get("local_spacing", True)), progress=progress)

@@ -226,6 +226,7 @@ def draw_method_settings(layout, props, method):
         fill.active = props.repair
         fill.prop(props, "fill_holes")
         fill.prop(props, "fill_edge_factor")
+        sub.prop(props, "min_component_triangles")
         sub.prop(props, "orient")
     else:
         col.prop(props, "kernel")

@@ -76,6 +76,11 @@ class TriangulateProps:
         update=_settings_changed,
         description="Filling triangles' edges are at most this times the longest edge: wider "
                     "openings are real and stay open")
+    min_component_triangles: IntProperty(
+        name="Min Piece Triangles", default=0, min=0, soft_max=100, max=1_000_000,
+        update=_settings_changed,
+        description="Remove every piece of the surface with fewer triangles than this (the stray "
+                    "triangles a scan leaves among its rows); 0 keeps every piece")
     orient: BoolProperty(
         name="Face Outward", default=True, update=_settings_changed,
         description="Turn every closed part to face outward")

@@ -262,7 +262,8 @@ def triangulate(positions, normals=None, *, attributes=None, raw=None, repair=No
     particle i. Options (pm_triangulate_options, defaults from the library): spacing (0 =
     estimate), max_edge_factor, threads, max_neighbors, normal_angle, fill_holes,
     fill_edge_factor, normal_source ("auto", "input", "estimate"; the C field `normals`),
-    max_triplets_per_point. Returns Mesh; mesh.stats holds pm_triangulate_stats."""
+    max_triplets_per_point, min_component_triangles (remove pieces of fewer triangles; 0 keeps
+    every piece). Returns Mesh; mesh.stats holds pm_triangulate_stats."""
     lib = _library.load()
     positions, normals, attributes = _points_args(positions, normals, attributes)
     opt = _options.TRIANGULATE.build(lib, options)

@@ -67,6 +67,7 @@ class pm_triangulate_options(Structure):
         ("normals", c_int32),
         ("max_triplets_per_point", c_uint32),
         ("viewpoint", c_double * 3),
+        ("min_component_triangles", c_uint32),
     ]
 
 
@@ -99,6 +100,8 @@ class pm_triangulate_stats(Structure):
         ("sampling_irregularity", c_double),
         ("reach_factor", c_double),
         ("sampling_thickness", c_double),
+        ("components_removed", c_uint64),
+        ("component_triangles_removed", c_uint64),
     ]
 
 

@@ -131,6 +131,7 @@ def test_property_defaults_are_the_library_defaults(pm):
     assert np.degrees(props["normal_angle"].default) == pytest.approx(opt["normal_angle"])
     assert props["fill_holes"].default == opt["fill_holes"]
     assert props["fill_edge_factor"].default == pytest.approx(opt["fill_edge_factor"])
+    assert props["min_component_triangles"].default == opt["min_component_triangles"] == 0
     assert props["normal_source"].default.lower() == opt["normal_source"]
     assert props["auto_spacing"].default and opt["spacing"] == 0
     assert props["threads"].default == opt["threads"] == 0
@@ -159,6 +160,19 @@ def test_options_reach_the_library(pm):
     direct = pm.particlemesh.triangulate(p, fill_holes=0, normal_angle=np.degrees(0.5))
     assert len(bpy.context.active_object.data.polygons) == direct.triangle_count
     assert source.name in bpy.data.objects
+    # Min Piece Triangles: a lone triangle beside the sphere is kept, then removed.
+    r0 = np.sqrt(4 * np.pi / 3000)
+    with_lone = np.concatenate([p, [[3, 0, 0], [3 + r0, 0, 0], [3 + r0 / 2, 0.87 * r0, 0]]])
+    lone = point_cloud_object("sphere_and_lone", with_lone)
+    counts = []
+    for minimum in (0, 2):
+        bpy.context.view_layer.objects.active = lone
+        assert bpy.ops.particlemesh.triangulate(min_component_triangles=minimum) == {"FINISHED"}
+        assert bpy.context.active_object.particlemesh.viewport.min_component_triangles == minimum
+        counts.append(len(bpy.context.active_object.data.polygons))
+    assert counts == [pm.particlemesh.triangulate(with_lone).triangle_count,
+                      pm.particlemesh.triangulate(with_lone, min_component_triangles=2).triangle_count]
+    assert counts[1] == counts[0] - 1
 
 
 def test_world_transform_is_applied(pm):

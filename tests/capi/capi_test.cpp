@@ -112,6 +112,45 @@ TEST(CApi, NarrowLoopsLeftOpenAreTheLibrarys) {
   pm_cloud_destroy(cloud);
 }
 
+// The appended min_component_triangles reaches the library, and its counts come back; an
+// options struct of the size before it (an older caller) keeps every piece.
+TEST(CApi, SmallComponentsRemovedAsTheLibraryDoes) {
+  const auto triangles = [](const pm_mesh* m) {
+    size_t v = 0, t = 0;
+    EXPECT_EQ(pm_mesh_get_counts(m, &v, &t), PM_OK);
+    return t;
+  };
+  PointCloud c = fibonacci_sphere(3000);
+  for (const Vec3& v : {Vec3{3, 0, 0}, Vec3{3.06, 0, 0}, Vec3{3.03, 0.05, 0}}) c.positions.push_back(v);
+  c.normals.clear();
+  const auto pos = flat(c.positions);
+  pm_cloud* cloud = nullptr;
+  ASSERT_EQ(pm_cloud_create(pos.data(), nullptr, c.size(), &cloud), PM_OK);
+  pm_triangulate_options opt;
+  pm_triangulate_options_init(&opt);
+  EXPECT_EQ(opt.min_component_triangles, 0u);
+  opt.min_component_triangles = 2;
+  pm_triangulate_stats stats{};
+  stats.struct_size = sizeof(stats);
+  pm_mesh* mesh = nullptr;
+  ASSERT_EQ(pm_triangulate(cloud, &opt, &mesh, &stats), PM_OK) << last();
+  SurfaceOptions o;
+  o.min_component_triangles = 2;
+  const SurfaceResult ref = reconstruct_surface(c, o);
+  EXPECT_EQ(stats.components_removed, 1u);
+  EXPECT_EQ(stats.component_triangles_removed, 1u);
+  EXPECT_EQ(stats.components_removed, ref.surface.components_removed);
+  EXPECT_EQ(stats.unused_points, ref.surface.unused_points);
+  EXPECT_EQ(triangles(mesh), ref.mesh.triangles.size());
+  pm_mesh_destroy(mesh);
+  opt.struct_size = uint32_t(offsetof(pm_triangulate_options, min_component_triangles));
+  ASSERT_EQ(pm_triangulate(cloud, &opt, &mesh, &stats), PM_OK) << last();
+  EXPECT_EQ(stats.components_removed, 0u);
+  EXPECT_EQ(triangles(mesh), ref.mesh.triangles.size() + 1);
+  pm_mesh_destroy(mesh);
+  pm_cloud_destroy(cloud);
+}
+
 TEST(CApi, ParticlesAtRandomReportTheirLongerReach) {
   pm_triangulate_stats stats;
   pm_mesh* mesh = triangulate_with_stats(particlemesh::test::random_sphere(3000, 9), &stats);

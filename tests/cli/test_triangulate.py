@@ -250,6 +250,36 @@ def test_loops_the_settings_left_open_get_a_hint(cli, tmp_path):
     assert "--fill-edge-factor" not in r["hint"]
 
 
+def test_stray_pieces_are_named_and_removed_on_request(cli, inspect, tmp_path):
+    """Lone triangles apart from a surface (a scanner's strays) are kept by default, and a hint
+    names the --min-component-triangles that removes just them; with it they are gone (their
+    particles unused, their outlines no loops left open) and the sphere stays closed."""
+    pts, rep, out = tmp_path / "s.xyz", tmp_path / "r.json", tmp_path / "m.ply"
+    cli("sample", "fibonacci", "--points", "4000", "-o", pts, "-q")
+    lines = [" ".join(line.split()[:3]) for line in pts.read_text().splitlines() if line.strip()]
+    r0 = math.sqrt(4 * math.pi / 4000)
+    for k in range(6):  # six lone triangles on a ring far from the unit sphere
+        x, y = 3 * math.cos(k), 3 * math.sin(k)
+        lines += [f"{x} {y} 0", f"{x + r0} {y} 0", f"{x + r0 / 2} {y + 0.87 * r0} 0"]
+    pts.write_text("\n".join(lines) + "\n")
+    proc = cli("triangulate", pts, "-o", out, "--report", rep)
+    r = json.loads(rep.read_text())
+    assert r["topology"]["components"] == 7 and r["surface"]["components_removed"] == 0
+    assert "6 lone triangles lie apart from the rest: --min-component-triangles 2 removes them" \
+        in r["hint"], r["hint"]
+    assert "--min-component-triangles 2" in proc.stdout
+    before = r["surface"]["unused_points"]
+    proc = cli("triangulate", pts, "-o", out, "--report", rep, "--min-component-triangles", "2")
+    r = json.loads(rep.read_text())
+    assert "removed       6 pieces of fewer than 2 triangles (6 triangles)" in proc.stdout
+    assert r["surface"]["components_removed"] == 6 and r["surface"]["component_triangles_removed"] == 6
+    assert r["surface"]["unused_points"] == before + 18 and r["surface"]["holes_left"] == 0
+    assert "hint" not in r
+    mesh = inspect(out)
+    assert mesh["components"] == 1 and mesh["closed"] and mesh["manifold"] and mesh["outward"]
+    assert mesh["vertices"] == 4018 and mesh["vertices_used"] == 4000
+
+
 def test_a_models_vertices_get_the_fill_that_closes_them(cli, tmp_path, data_dir):
     """The vertices of a coarse closed model (long thin triangles: an uneven sampling) leave one
     loop 1.6 L across at the default fill limit of 1.5 L: named, and the fill it names closes

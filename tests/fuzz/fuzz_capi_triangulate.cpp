@@ -117,6 +117,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (which & 64) {
     opt.fill_holes = uint32_t(in.take<uint32_t>() % 200001);
     opt.fill_edge_factor = in.number(0.25);
+    opt.min_component_triangles = in.flag() ? uint32_t(in.range(0, 8)) : in.take<uint32_t>();
   }
   if (which & 128) opt.normals = int32_t(in.range(0, 4)) - 1;
   const uint8_t size_mode = in.take<uint8_t>();

@@ -388,6 +388,27 @@ def test_triangulate_tiled_keeps_an_open_surface_open_and_facing_as_one_machine(
     assert np.median(np.einsum("ij,ij->i", tiled.normals, one.normals)) > 0.99
 
 
+def test_triangulate_tiled_removes_small_pieces_of_the_stitched_surface(pm, pmd, client):
+    """min_component_triangles applies to the stitched surface, as one machine removes them:
+    the sphere's pieces in each tile (cut by the seams, some of them small) all stay, the lone
+    triangles apart from it go."""
+    s = fibonacci_sphere(6000)
+    r0 = np.sqrt(4 * np.pi / 6000)
+    lone = [[3 * np.cos(k), 3 * np.sin(k), 0.0] for k in range(4)]
+    lone = np.concatenate([np.array(p) + np.array([[0, 0, 0], [r0, 0, 0], [r0 / 2, 0.87 * r0, 0]])
+                           for p in lone])
+    points = np.concatenate([s, lone])
+    one = pm.triangulate(points, min_component_triangles=2)
+    assert one.stats["components_removed"] == 4
+    tiled = pmd.triangulate_tiled(client, points, tiles=(2, 2, 1), min_component_triangles=2)
+    assert tiled.stats["components_removed"] == 4 and tiled.stats["component_triangles_removed"] == 4
+    top = pm.topology(tiled)
+    assert top["components"] == 1 and top["closed"] and top["manifold"]
+    assert top["vertices_used"] == len(s) == pm.topology(one)["vertices_used"]
+    kept = pmd.triangulate_tiled(client, points, tiles=(2, 2, 1))
+    assert pm.topology(kept)["components"] == 5 and kept.stats["components_removed"] == 0
+
+
 def test_triangulate_tiled_from_a_loader(pm, pmd, client, torus):
     pts = pm.read_points(torus)
     loader = pmd.files_loader([torus])

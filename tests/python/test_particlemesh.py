@@ -130,6 +130,23 @@ def test_raw_is_the_seeds_triangle_set(pm):
     assert raw.triangle_count > pm.triangulate(p, raw=False).triangle_count
 
 
+def test_small_pieces_removed_on_request(pm):
+    p = fibonacci_sphere(3000)
+    r0 = np.sqrt(4 * np.pi / 3000)
+    lone = np.array([[3, 0, 0], [3 + r0, 0, 0], [3 + r0 / 2, 0.87 * r0, 0]])
+    points = np.concatenate([p, lone])
+    kept = pm.triangulate(points)
+    assert pm.topology(kept)["components"] == 2 and kept.stats["components_removed"] == 0
+    mesh = pm.triangulate(points, min_component_triangles=2)
+    assert mesh.stats["components_removed"] == 1 and mesh.stats["component_triangles_removed"] == 1
+    assert mesh.triangle_count == kept.triangle_count - 1
+    assert mesh.stats["unused_points"] == kept.stats["unused_points"] + 3
+    assert pm.topology(mesh)["components"] == 1 and pm.topology(mesh)["closed"]
+    assert pm.defaults("triangulate")["min_component_triangles"] == 0
+    with pytest.raises(pm.Error):
+        pm.triangulate(points, min_component_triangles=-1)
+
+
 def test_options_are_the_c_fields_with_the_librarys_defaults(pm):
     d = pm.defaults("triangulate")
     assert list(d)[:9] == ["spacing", "max_edge_factor", "threads", "max_neighbors",

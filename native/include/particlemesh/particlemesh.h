@@ -153,6 +153,10 @@ typedef struct pm_triangulate_options {
                                         candidate triplets average more per point (default 4096; 0 = no limit) */
   /* -- appended -- */
   double viewpoint[3];      /**< the scan's sensor position, read with PM_TRIANGULATE_VIEWPOINT */
+  /* -- appended -- */
+  uint32_t min_component_triangles; /**< remove pieces of fewer triangles (a scan's stray
+                                         triangles); their particles are then unused (default 0:
+                                         keep every piece) */
 } pm_triangulate_options;
 
 typedef struct pm_triangulate_stats {
@@ -203,6 +207,9 @@ typedef struct pm_triangulate_stats {
                                   surface, sqrt(lambda0 / lambda1) of each one's neighbourhood,
                                   median (clean surfaces under 0.2, noisy scans 0.25 and more,
                                   a volume ~0.85) */
+  /* -- appended -- */
+  uint64_t components_removed; /**< pieces removed for min_component_triangles */
+  uint64_t component_triangles_removed; /**< their triangles */
 } pm_triangulate_stats;
 
 PM_EXPORT void pm_triangulate_options_init(pm_triangulate_options* options);

@@ -28,6 +28,7 @@ void pm_triangulate_options_init(pm_triangulate_options* options) {
   options->fill_edge_factor = d.fill_edge_factor;
   options->normals = PM_NORMALS_AUTO;
   options->max_triplets_per_point = uint32_t(d.max_triplets_per_point);
+  options->min_component_triangles = uint32_t(d.min_component_triangles);
 }
 
 pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* options,
@@ -55,6 +56,7 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
     opt.normal_angle = o.normal_angle;
     opt.fill_holes = o.fill_holes;
     opt.fill_edge_factor = o.fill_edge_factor;
+    opt.min_component_triangles = o.min_component_triangles;
     opt.repair = !(o.flags & PM_TRIANGULATE_NO_REPAIR);
     opt.orient = !(o.flags & PM_TRIANGULATE_NO_ORIENT);
     opt.local_spacing = !(o.flags & PM_TRIANGULATE_GLOBAL_SPACING);
@@ -107,6 +109,8 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
       s.sampling_irregularity = r.triangulation.sampling_irregularity;
       s.reach_factor = r.triangulation.reach_factor;
       s.sampling_thickness = r.triangulation.sampling_thickness;
+      s.components_removed = r.surface.components_removed;
+      s.component_triangles_removed = r.surface.component_triangles_removed;
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();

@@ -155,6 +155,7 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     bo.max_hole = options.fill_holes;
     bo.small_hole = std::min<size_t>(6, options.fill_holes);
     bo.fill_edge_factor = options.fill_edge_factor;
+    bo.min_component_triangles = options.min_component_triangles;
     detail::BuilderStats bs;
     std::vector<Vec3> vertex_normals;
     tris = detail::build_surface(P, normals, active, candidates, bo, options.repair, bs, tracker, vertex_normals);
@@ -179,6 +180,8 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     st.largest_hole_left = bs.largest_hole_left;
     st.components_flipped = bs.components_flipped;
     st.unused_points = bs.unused_points;
+    st.components_removed = bs.components_removed;
+    st.component_triangles_removed = bs.component_triangles_removed;
     for (const auto& [edges, width] : bs.open_loops) {
       st.open_loops.push_back({edges, width});
       if (options.repair && options.fill_holes > 0 && std::isfinite(width) && width <= kNarrowLoopWidth &&

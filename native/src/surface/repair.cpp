@@ -310,6 +310,21 @@ size_t drop_fragments(EditableSurface& s, const std::vector<Triangle>& raw) {
   return dropped;
 }
 
+void drop_small_components(EditableSurface& s, size_t min_triangles, size_t& pieces, size_t& triangles) {
+  if (min_triangles <= 1) return;
+  std::vector<uint32_t> piece, count;
+  s.surface_pieces(piece, count);
+  for (uint32_t v = 0; v < piece.size(); ++v)
+    if (piece[v] == v && count[v] > 0 && count[v] < min_triangles) ++pieces;
+  for (uint32_t t = 0; t < s.triangle_slots(); ++t) {
+    if (!s.alive(t)) continue;
+    const uint32_t r = piece[s.triangle(t)[0]];
+    if (count[r] < min_triangles) {
+      s.kill_triangle(t);
+      ++triangles;
+    }
+  }
+}
 
 void repair_surface(EditableSurface& s, const std::vector<uint8_t>& active, const std::vector<Triangle>& raw,
                     const RepairOptions& o, RepairStats& stats, ProgressTracker& tracker) {
@@ -349,6 +364,8 @@ void repair_surface(EditableSurface& s, const std::vector<uint8_t>& active, cons
     tracker.check();
     stats.pinches_resolved += unpinch(s);
   }
+  tracker.check();
+  drop_small_components(s, o.min_component_triangles, stats.components_removed, stats.component_triangles_removed);
   tracker.check();
   if (!s.closed()) {
     const auto left = s.trace_loops();

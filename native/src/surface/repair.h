@@ -8,7 +8,9 @@
 //  4. open fragments of a few triangles joined to another piece by a raw triangle are
 //     dissolved, and particles the surface passed by are inserted into the triangle or edge
 //     they lie over;
-//  5. loops that only a sharper fold closes are filled inside large components.
+//  5. loops that only a sharper fold closes are filled inside large components;
+//  6. with min_component_triangles, pieces of fewer triangles are removed (a scan's stray
+//     triangles among its rows), before the loops left open are counted.
 #pragma once
 
 #include "particlemesh/core/config.h"
@@ -30,6 +32,7 @@ namespace PM_NAMESPACE::detail {
 struct RepairOptions {
   FillOptions fill;
   size_t max_hole = 100;  ///< loops up to this many edges may be filled (0 = none)
+  size_t min_component_triangles = 0;  ///< pieces of fewer triangles are removed (0 = none)
 };
 
 struct RepairStats : FillStats {
@@ -38,6 +41,8 @@ struct RepairStats : FillStats {
   size_t largest_hole_left = 0;   ///< edges of the largest loop left open
   std::vector<std::pair<size_t, double>> open_loops;  ///< (edges, width / L) of loops left open (at most 1000)
   std::vector<size_t> holes_left_edges;  ///< the edges of every loop left open, ascending
+  size_t components_removed = 0;           ///< pieces removed for min_component_triangles
+  size_t component_triangles_removed = 0;  ///< their triangles
 };
 
 /// Fragments of at most this many triangles may be dissolved (see drop_fragments).
@@ -69,6 +74,11 @@ size_t insert_unused(EditableSurface& s, const std::vector<uint8_t>& active, con
 /// own and stays: a fragment is only dissolved if a raw triangle joins it to a larger piece.
 /// Returns the triangles removed.
 size_t drop_fragments(EditableSurface& s, const std::vector<Triangle>& raw);
+
+/// Removes every piece (triangles joined through shared vertices) of fewer than
+/// `min_triangles` triangles; its particles are then in no triangle. Adds the pieces and
+/// triangles removed to `pieces` and `triangles`.
+void drop_small_components(EditableSurface& s, size_t min_triangles, size_t& pieces, size_t& triangles);
 
 /// The whole repair, in the order above; then counts the loops left open.
 void repair_surface(EditableSurface& s, const std::vector<uint8_t>& active, const std::vector<Triangle>& raw,

@@ -39,6 +39,7 @@ std::vector<Triangle> build_surface(const std::vector<Vec3>& positions, const st
     ro.fill.view = options.view;
     ro.fill.small_hole = options.small_hole;
     ro.max_hole = options.max_hole;
+    ro.min_component_triangles = options.min_component_triangles;
     RepairStats rs;
     repair_surface(surface, active, raw, ro, rs, tracker);
     stats.pinches_resolved = rs.pinches_resolved;
@@ -48,6 +49,11 @@ std::vector<Triangle> build_surface(const std::vector<Vec3>& positions, const st
     stats.largest_hole_left = rs.largest_hole_left;
     stats.open_loops = std::move(rs.open_loops);
     stats.holes_left_edges = std::move(rs.holes_left_edges);
+    stats.components_removed = rs.components_removed;
+    stats.component_triangles_removed = rs.component_triangles_removed;
+  } else {
+    drop_small_components(surface, options.min_component_triangles, stats.components_removed,
+                          stats.component_triangles_removed);
   }
   stats.seconds_repair = since(t0);
   stats.boundary = surface.boundary();

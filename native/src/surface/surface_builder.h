@@ -29,6 +29,7 @@ struct BuilderOptions {
   size_t small_hole = 6;          ///< loops up to this many edges are filled before unpinching
   size_t max_hole = 100;          ///< loops up to this many edges may be filled (0 = none)
   double fill_edge_factor = 1.5;  ///< fill triangles' edges at most this x L
+  size_t min_component_triangles = 0;  ///< pieces of fewer triangles are removed (0 = none)
   ViewRays view;                  ///< a scan's sensor: no triangle bridges a depth jump
 };
 
@@ -45,6 +46,8 @@ struct BuilderStats {
   size_t largest_hole_left = 0;   ///< edges of the largest loop left open
   size_t components_flipped = 0;  ///< closed components turned to face outward
   size_t unused_points = 0;       ///< distinct points in no triangle
+  size_t components_removed = 0;  ///< pieces removed for min_component_triangles
+  size_t component_triangles_removed = 0;
   double seconds_candidates = 0, seconds_growth = 0, seconds_repair = 0;
   std::vector<uint64_t> boundary;  ///< boundary half-edges (a << 32 | b), sorted
   std::vector<std::pair<size_t, double>> open_loops;  ///< (edges, width / L) of loops left open

@@ -267,7 +267,8 @@ def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attri
     box. tiles=(nx, ny, nz): the box cut evenly. halo: the width around each tile, in units of
     the longest edge L (at least 3). Options are triangulate's (spacing, max_edge_factor,
     normal_angle, fill_holes, fill_edge_factor, normal_source, threads, ...; raw=True is not
-    distributed). spacing defaults to the whole cloud's estimate (with a loader, the median of
+    distributed; min_component_triangles applies to the stitched surface, whose pieces may
+    span tiles). spacing defaults to the whole cloud's estimate (with a loader, the median of
     the tiles' estimates: give spacing= for the one-machine value).
 
     Returns a Mesh: vertex i is particle i (with a loader: the tiles' particles in tile order,
@@ -277,8 +278,8 @@ def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attri
     particle used that the tiles use; near the seams some triangles differ from the
     one-machine choice. A closed component inside another (a cavity's wall) faces into its
     cavity, as on one machine. mesh.stats: spacing, max_edge, tiles, halo, seam triangles,
-    holes filled and left, pieces turned, nested components, unused particles, bytes moved,
-    seconds."""
+    holes filled and left, pieces turned, nested components, unused particles, pieces and
+    triangles removed for min_component_triangles, bytes moved, seconds."""
     distributed()
     check_client(client)
     lib = _library.load()
@@ -315,7 +316,10 @@ def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attri
             weights = np.cumsum([c for _, c in est])
             spacing = est[int(np.searchsorted(weights, weights[-1] / 2))][0]
     L = factor * spacing
-    tile_options = dict(options, spacing=spacing)
+    # Small pieces are removed from the stitched surface, not from the tiles: a piece cut by a
+    # tile's halo may be small there and large across the seams.
+    min_triangles = int(options.get("min_component_triangles") or 0)
+    tile_options = dict(options, spacing=spacing, min_component_triangles=0)
     t_setup = time.perf_counter() - t0
 
     # ---- the tiles, each its whole chain; only the seams come back now -------------------
@@ -411,6 +415,15 @@ def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attri
     ids, nrm = seams.normals()
     vnormals[ids] = nrm
     triangles = np.concatenate([d["triangles"] for d in done] + [seams.triangles()])
+    pieces_removed = triangles_removed = 0
+    if min_triangles > 1 and len(triangles):
+        labels = _components(total, triangles)
+        per_piece = np.bincount(labels[triangles[:, 0]], minlength=int(labels.max()) + 1)
+        small = per_piece < min_triangles
+        keep = ~small[labels[triangles[:, 0]]]
+        pieces_removed = int((small & (per_piece > 0)).sum())
+        triangles_removed = int((~keep).sum())
+        triangles = triangles[keep]
     used = np.zeros(total, dtype=bool)
     used[triangles.ravel()] = True
     mesh = Mesh(vertices, canonical_triangles(triangles), vnormals, attrs)
@@ -424,6 +437,7 @@ def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attri
         "nested_components": int((depth > 0).sum()), "nesting_tests": sum(len(c) for c, _ in pairs.values()),
         "holes_filled": len(seams.loops) - len(seams.left), "fill_triangles": len(seams.fills),
         "holes_left": len(seams.left), "unused_points": int((~used).sum()),
+        "components_removed": pieces_removed, "component_triangles_removed": triangles_removed,
         "bytes_sent": sent, "bytes_received": received, "seconds_tiles": t_tiles,
         "seconds_seams": t_seams, "seconds": time.perf_counter() - t0,
     }

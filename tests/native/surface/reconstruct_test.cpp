@@ -11,6 +11,7 @@
 
 #include "particlemesh/core/error.h"
 #include "particlemesh/io/mesh_io.h"
+#include "particlemesh/mesh/components.h"
 #include "particlemesh/mesh/topology_report.h"
 #include "particlemesh/sample/shapes.h"
 #include "support/test_support.h"
@@ -421,6 +422,61 @@ TEST(ReconstructSurface, OpenDiskKeepsItsOneBoundary) {
         EXPECT_GT(norm(c.positions[e.first]), 1.0 - 2 * 0.04);
       }
     }
+  }
+}
+
+// min_component_triangles removes the pieces of fewer triangles, with or without the repair,
+// and nothing else: a sphere with a lone triangle, a lone quad (2 triangles) and a lone
+// pentagon fan (3) of particles far from it. Their outlines are then no loops left open and
+// their particles are in no triangle; the sphere's triangles stay exactly as they were.
+TEST(ReconstructSurface, SmallComponentsRemovedOnRequest) {
+  PointCloud cloud = fibonacci_sphere(4000);
+  cloud.normals.clear();  // estimated, for the lone pieces too
+  const double r0 = std::sqrt(4 * std::numbers::pi / 4000.0);  // the sphere's spacing, about
+  const std::vector<std::vector<Vec3>> pieces = {
+      {{3, 0, 0}, {3 + r0, 0, 0}, {3 + 0.5 * r0, 0.87 * r0, 0}},
+      {{0, 3, 0}, {r0, 3, 0}, {r0, 3 + r0, 0}, {0, 3 + r0, 0}},
+      {{0, 0, 3}, {r0, 0, 3}, {1.3 * r0, 0.95 * r0, 3}, {0.5 * r0, 1.54 * r0, 3}, {-0.3 * r0, 0.95 * r0, 3}}};
+  for (const auto& p : pieces)
+    for (const Vec3& v : p) cloud.positions.push_back(v);
+  const size_t sphere_points = 4000, extra = cloud.size() - sphere_points;
+  for (const bool repair : {true, false}) {
+    SurfaceOptions o;
+    o.repair = repair;
+    const SurfaceResult all = reconstruct_surface(cloud, o);
+    const MeshComponents c = mesh_components(all.mesh);
+    ASSERT_EQ(c.triangles.size(), 4u) << "repair " << repair;
+    std::vector<size_t> sizes(c.triangles.begin(), c.triangles.end());
+    std::sort(sizes.begin(), sizes.end());
+    ASSERT_EQ(std::vector<size_t>(sizes.begin(), sizes.begin() + 3), (std::vector<size_t>{1, 2, 3}));
+    EXPECT_EQ(all.surface.components_removed, 0u);
+    o.min_component_triangles = 3;
+    const SurfaceResult some = reconstruct_surface(cloud, o);
+    EXPECT_EQ(some.surface.components_removed, 2u);
+    EXPECT_EQ(some.surface.component_triangles_removed, 3u);
+    EXPECT_EQ(mesh_components(some.mesh).triangles.size(), 2u);
+    EXPECT_EQ(some.mesh.triangles.size(), all.mesh.triangles.size() - 3);
+    EXPECT_EQ(some.surface.unused_points, all.surface.unused_points + 7);
+    if (repair) {
+      EXPECT_EQ(some.surface.holes_left, all.surface.holes_left - 2);
+    }
+    o.min_component_triangles = 4;
+    const SurfaceResult sphere_only = reconstruct_surface(cloud, o);
+    EXPECT_EQ(sphere_only.surface.components_removed, 3u);
+    EXPECT_EQ(sphere_only.surface.unused_points, all.surface.unused_points + extra);
+    std::vector<Triangle> kept;  // the sphere's triangles of the first result, in order
+    for (const Triangle& t : all.mesh.triangles)
+      if (t[0] < sphere_points) kept.push_back(t);
+    EXPECT_EQ(sphere_only.mesh.triangles, kept);
+    const TopologyReport report = topology_report(sphere_only.mesh);
+    EXPECT_EQ(report.components, 1u);
+    if (repair) {
+      EXPECT_TRUE(report.closed);
+      EXPECT_EQ(sphere_only.surface.holes_left, 0u);
+    }
+    // 1 (and 0) remove nothing: every piece has at least one triangle.
+    o.min_component_triangles = 1;
+    EXPECT_EQ(reconstruct_surface(cloud, o).mesh.triangles, all.mesh.triangles);
   }
 }
 

@@ -60,6 +60,13 @@ struct SurfaceOptions : TriangulateOptions {
   /// Fill triangles' edges are at most fill_edge_factor x L: the documented criterion that
   /// tells a hole (narrower) from a real opening (wider).
   double fill_edge_factor = 1.5;
+  /// Remove every piece of the surface (triangles joined through shared vertices) of fewer
+  /// than this many triangles: the stray triangles and slivers a scan leaves among its rows
+  /// or at its fringe (MeshLab's "remove isolated pieces"). Their particles are then in no
+  /// triangle (SurfaceStats::unused_points), and their outlines are not counted as loops
+  /// left open. 0 (default) keeps every piece: a few particles apart from the rest (a
+  /// droplet, a small part) are a surface of their own.
+  size_t min_component_triangles = 0;
   /// Turn each closed component to face outward: away from the solid it bounds (positive
   /// signed volume), or into the cavity for a closed component inside another (a hollow
   /// object's inner wall; by how many enclose it, as topology_report's outward judges).
@@ -126,6 +133,8 @@ struct SurfaceStats {
   std::vector<size_t> holes_left_edges;
   size_t components_flipped = 0;  ///< closed components turned outward
   size_t unused_points = 0;       ///< distinct particles in no triangle
+  size_t components_removed = 0;  ///< pieces removed for min_component_triangles
+  size_t component_triangles_removed = 0;  ///< their triangles
   /// The particles' local spacings in units of r0 (all 1 without local_spacing): smallest,
   /// 10th percentile, median, 90th percentile, largest, over the distinct particles.
   struct Spread {
