@@ -30,6 +30,7 @@ namespace particlemesh_pcl::detail
     options.max_neighbors = surface.max_neighbors;
     options.normal_angle = surface.normal_angle;
     options.fill_holes = surface.fill_holes;
+    options.min_component_triangles = surface.min_component_triangles;
     options.local_spacing = surface.local_spacing;
     options.has_viewpoint = surface.use_viewpoint;
     options.viewpoint = {preprocessing.viewpoint[0], preprocessing.viewpoint[1], preprocessing.viewpoint[2]};

@@ -381,6 +381,28 @@ TEST(ParticleTriangulation, ParametersAndThreads) {
     }
 }
 
+// setMinimumComponentTriangles reaches the surface: a lone triangle beside a sphere (facing
+// the cloud's sensor origin, the sphere's centre, so that no edge lies along a view ray) is
+// kept by default and removed with 2, its points then in no triangle.
+TEST(ParticleTriangulation, SmallComponentsRemovedOnRequest) {
+  pcl::PointCloud<pcl::PointXYZ>::Ptr c(new pcl::PointCloud<pcl::PointXYZ>);
+  for (const Vec3& p : fibonacci_sphere(3000).positions) c->push_back({float(p.x), float(p.y), float(p.z)});
+  for (const Vec3& p : {Vec3{3, 0, 0}, Vec3{3, 0.06, 0}, Vec3{3, 0.03, 0.05}})
+    c->push_back({float(p.x), float(p.y), float(p.z)});
+  ParticleTriangulation<pcl::PointXYZ> pt;
+  pt.setInputCloud(c);
+  EXPECT_EQ(pt.getMinimumComponentTriangles(), 0u);
+  std::vector<pcl::Vertices> all, some;
+  pt.reconstruct(all);
+  EXPECT_EQ(all.size(), 5997u);  // the closed sphere's 2 x 3000 - 4, and the lone one
+  pt.setMinimumComponentTriangles(2);
+  pt.reconstruct(some);
+  EXPECT_EQ(some.size(), all.size() - 1);
+  EXPECT_EQ(pt.getReport().surface.components_removed, 1u);
+  for (const auto& t : some)
+    for (const auto v : t.vertices) EXPECT_LT(v, 3000u);
+}
+
 TEST(ParticleTriangulation, PreprocessingSwitchesKeepInputIndices) {
   // A sphere with a stray point floating next to it, as scanners produce.
   pcl::PointCloud<pcl::PointXYZ>::Ptr c(new pcl::PointCloud<pcl::PointXYZ>);

@@ -44,6 +44,7 @@ namespace particlemesh_pcl
     std::size_t max_neighbors = 256; ///< see particlemesh::TriangulateOptions::max_neighbors
     double normal_angle = 120.0;     ///< co-normality limit, degrees (SurfaceOptions::normal_angle)
     std::size_t fill_holes = 100;    ///< largest boundary loop filled, edges (SurfaceOptions::fill_holes)
+    std::size_t min_component_triangles = 0; ///< pieces of fewer triangles removed (SurfaceOptions::min_component_triangles)
     bool raw = false;                ///< the smallest-sphere test's exact triangle set instead of the surface
     bool local_spacing = true;       ///< each point's own edge limit (SurfaceOptions::local_spacing)
     bool use_viewpoint = true;       ///< keep depth jumps seen from the viewpoint open (SurfaceOptions::viewpoint)
@@ -189,6 +190,16 @@ namespace particlemesh_pcl
       /** \brief Get the largest boundary loop that may be filled. */
       inline std::size_t
       getMaximumHoleSize () const { return (surface_.fill_holes); }
+
+      /** \brief Remove every piece of the surface with fewer than this many triangles (the
+        * stray triangles a scan leaves among its rows; default 0 keeps every piece). Their
+        * points are then in no triangle. */
+      inline void
+      setMinimumComponentTriangles (std::size_t triangles) { surface_.min_component_triangles = triangles; }
+
+      /** \brief Get the smallest piece, in triangles, that is kept (0: every piece). */
+      inline std::size_t
+      getMinimumComponentTriangles () const { return (surface_.min_component_triangles); }
 
       /** \brief Give each point its own longest edge from the spacing of the points around it
         * (default true): unevenly sampled scans (a depth camera's samples spread with the
