@@ -223,9 +223,11 @@ std::string capped_spacing_hint(const SurfaceResult& r, const TriangulateArgs& a
 
 /// When at least 5 pieces of fewer than 10 triangles lie apart from the rest and hold under
 /// 5 % of the triangles (a scan's stray triangles among its rows), the --min-component-triangles
-/// that removes just them. Empty otherwise, or when pieces are removed already.
+/// that removes just them. Empty otherwise, or when pieces are removed already. Each such
+/// piece leaves a loop open: with fewer than 5 loops left the pieces are not counted at all
+/// (a pass over the mesh, which a closed surface does not pay).
 std::string stray_pieces_hint(const SurfaceResult& r, const TriangulateArgs& a) {
-  if (a.min_component_triangles > 0 || r.mesh.triangles.empty()) return {};
+  if (a.min_component_triangles > 0 || r.surface.holes_left < 5) return {};
   const MeshComponents c = mesh_components(r.mesh);
   size_t pieces = 0, triangles = 0, largest = 0;
   for (size_t t : c.triangles)
