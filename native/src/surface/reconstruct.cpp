@@ -34,13 +34,18 @@ SurfaceStats::Spread spacing_spread(const detail::RawTriangulation& raw) {
     if (raw.rep[s] == s) h.push_back(raw.max_edge[s] / raw.stats.max_edge);
   SurfaceStats::Spread out;
   if (h.empty()) return out;
-  std::sort(h.begin(), h.end());
-  auto at = [&](double f) { return h[size_t(f * double(h.size() - 1) + 0.5)]; };
-  out.min = h.front();
-  out.p10 = at(0.1);
-  out.median = at(0.5);
-  out.p90 = at(0.9);
-  out.max = h.back();
+  // The sorted order's elements at the quantiles' ranks, by selection (a sort of a million
+  // spacings took ~70 ms, on one core, at the end of the run).
+  auto rank = [&](double f) { return h.begin() + ptrdiff_t(f * double(h.size() - 1) + 0.5); };
+  const auto p10 = rank(0.1), median = rank(0.5), p90 = rank(0.9);
+  std::nth_element(h.begin(), median, h.end());
+  if (p10 < median) std::nth_element(h.begin(), p10, median);
+  if (p90 > median) std::nth_element(median + 1, p90, h.end());
+  out.min = *std::min_element(h.begin(), p10 + 1);
+  out.p10 = *p10;
+  out.median = *median;
+  out.p90 = *p90;
+  out.max = *std::max_element(p90, h.end());
   return out;
 }
 
