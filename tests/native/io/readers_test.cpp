@@ -305,6 +305,89 @@ TEST(PlyReader, BinaryVerticesInBlocksAreTheValuesOfEveryEncoding) {
                  "truncated: the header promises 70000 'vertex' elements");
 }
 
+// Binary faces of indices only are parsed a buffer at a time: the same triangles as the ASCII
+// file and a FIFO give, for int and uint indices in either byte order, with triangles, quads
+// and a polygon of 220 corners among them (records cut by every buffer's end); a bad face
+// anywhere (too few corners, a negative index, 2^32 - 1) is named as before, with its element
+// number, and so is a file cut inside its last face.
+TEST(PlyReader, BinaryFacesInBlocksAreTheFacesOfEveryEncoding) {
+  const auto dir = test::scratch_dir("faces");
+  const uint32_t vertices = 3000;
+  std::vector<std::vector<uint32_t>> faces;
+  for (uint32_t f = 0; f < 20000; ++f) {
+    const uint32_t n = f == 7777 ? 220 : 3 + (f % 7 == 0);  // triangles, quads, one long polygon
+    std::vector<uint32_t> c;
+    for (uint32_t k = 0; k < n; ++k) c.push_back((f * 31 + k * 17) % vertices);
+    faces.push_back(c);
+  }
+  auto header = [&](const char* format, const char* index_type, size_t count) {
+    return std::string("ply\nformat ") + format + " 1.0\nelement vertex " + std::to_string(vertices) +
+           "\nproperty float x\nproperty float y\nproperty float z\nelement face " + std::to_string(count) +
+           "\nproperty list uchar " + index_type + " vertex_indices\nend_header\n";
+  };
+  auto binary = [&](bool big_endian, const char* index_type, const std::vector<std::vector<uint32_t>>& fs) {
+    std::string b = header(big_endian ? "binary_big_endian" : "binary_little_endian", index_type, fs.size());
+    auto put = [&](auto v) {
+      char raw[sizeof v];
+      std::memcpy(raw, &v, sizeof v);
+      if (big_endian) std::reverse(raw, raw + sizeof v);
+      b.append(raw, sizeof v);
+    };
+    for (uint32_t v = 0; v < vertices; ++v) put(float(v)), put(float(v % 13)), put(float(v % 7));
+    for (const auto& c : fs) {
+      b += char(uint8_t(c.size()));
+      for (uint32_t v : c) put(v);
+    }
+    return b;
+  };
+  std::string ascii = header("ascii", "int", faces.size());
+  for (uint32_t v = 0; v < vertices; ++v)
+    ascii += std::to_string(v) + " " + std::to_string(v % 13) + " " + std::to_string(v % 7) + "\n";
+  for (const auto& c : faces) {
+    ascii += std::to_string(c.size());
+    for (uint32_t v : c) ascii += " " + std::to_string(v);
+    ascii += "\n";
+  }
+  const TriMesh want = read_mesh(write(dir / "a.ply", ascii));
+  size_t fanned = 0;
+  for (const auto& c : faces) fanned += c.size() - 2;
+  ASSERT_EQ(want.triangles.size(), fanned);
+  for (const bool big_endian : {false, true})
+    for (const char* type : {"int", "uint"}) {
+      const std::string what = std::string(big_endian ? "big-endian " : "little-endian ") + type;
+      const std::string b = binary(big_endian, type, faces);
+      EXPECT_EQ(read_mesh(write(dir / "b.ply", b)).triangles, want.triangles) << what;
+      const fs::path fifo = dir / "pipe.ply";
+      fs::remove(fifo);
+      ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+      std::thread writer([&] { std::ofstream(fifo, std::ios::binary).write(b.data(), std::streamsize(b.size())); });
+      TriMesh piped;
+      std::string msg;
+      const Status st = status_of([&] { piped = read_mesh(fifo.string()); }, &msg);
+      writer.join();
+      ASSERT_EQ(st, Status::Ok) << msg << " " << what;
+      EXPECT_EQ(piped.triangles, want.triangles) << what << " (FIFO)";
+    }
+  // Bad faces, named by their element number, wherever they lie.
+  for (const size_t at : {size_t(0), size_t(4000), size_t(19999)}) {
+    auto bad = faces;
+    bad[at] = {1, 2};
+    EXPECT_REFUSED(read_mesh(write(dir / "c.ply", binary(false, "int", bad))), Status::FormatError,
+                   "'face' element " + std::to_string(at) + " has 2 corners (a face needs at least 3)");
+    bad[at] = {1, 2, uint32_t(-5)};
+    EXPECT_REFUSED(read_mesh(write(dir / "d.ply", binary(true, "int", bad))), Status::FormatError,
+                   "'face' element " + std::to_string(at) + " refers to vertex -5 (indices start at 0)");
+    bad[at] = {1, 2, UINT32_MAX};
+    EXPECT_REFUSED(read_mesh(write(dir / "e.ply", binary(false, "uint", bad))), Status::FormatError,
+                   "'face' element " + std::to_string(at) + " refers to vertex 4294967295, beyond 2^32 - 2");
+  }
+  // Cut inside the last face: the general path names the truncation.
+  const std::string b = binary(false, "int", faces);
+  std::string msg;
+  EXPECT_EQ(status_of([&] { (void)read_mesh(write(dir / "f.ply", b.substr(0, b.size() - 2))); }, &msg), Status::FormatError);
+  EXPECT_NE(msg.find("19999"), std::string::npos) << msg;
+}
+
 // Properties name_0 .. name_k one after another are one vector channel "name" (our writers'
 // spelling of a vector), interleaved per vertex; properties not declared one after another,
 // runs that do not start at 0, have one member, skip an index or whose "name" is taken stay
