@@ -261,53 +261,17 @@ SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTrac
             continue;
           }
           const int na = walk.around(uint32_t(c), around);
-          const auto cc = grid.cell_coord(uint32_t(c));
-          // The cells around, own cell first; each with its side (-1, 0, 1) per axis, or
-          // none where a cell may hold points clamped into it from beyond the grid's range
-          // (then it is always searched).
-          const Vec3 low = grid.origin() + Vec3{double(cc[0]), double(cc[1]), double(cc[2])} * h;
-          constexpr int32_t kTopCell = NeighborGrid::kMaxCellsPerAxis + 3;
-          const bool clamped = cc[0] >= kTopCell || cc[1] >= kTopCell || cc[2] >= kTopCell;
-          int order[27], side[27][3], no = 0;
-          bool always[27];
-          for (int a = 0; a < na; ++a)
-            if (around[a] == uint32_t(c)) order[no++] = a;
-          for (int a = 0; a < na; ++a) {
-            if (around[a] != uint32_t(c)) order[no++] = a;
-            const auto nc = grid.cell_coord(around[a]);
-            always[a] = clamped || nc[0] >= kTopCell || nc[1] >= kTopCell || nc[2] >= kTopCell;
-            for (int k = 0; k < 3; ++k) side[a][k] = nc[size_t(k)] - cc[size_t(k)];
-          }
           for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) {
             if (!counted(s)) continue;
             const Vec3 p = grid.sorted_point(s);
-            // How far p lies inside its cell from each face, less a margin for the rounding of
-            // a point's cell: a cell beyond a face is at least that far away.
-            double below[3], above[3];
-            for (int k = 0; k < 3; ++k) {
-              const double margin = 1e-7 * h + 1e-15 * (std::abs(p[k]) + std::abs(low[k]) + h);
-              below[k] = std::max(0.0, p[k] - low[k] - margin);
-              above[k] = std::max(0.0, low[k] + h - p[k] - margin);
-            }
             double best = kInf;
-            for (int i = 0; i < no; ++i) {
-              const int a = order[i];
-              if (!always[a]) {
-                // The cell's least distance from p (a lower bound): skipped when no point in
-                // it can come nearer than the nearest found so far. The minimum is the same.
-                double lb2 = 0;
-                for (int k = 0; k < 3; ++k) {
-                  const double g = side[a][k] < 0 ? below[k] : side[a][k] > 0 ? above[k] : 0.0;
-                  lb2 += g * g;
-                }
-                if (lb2 >= best) continue;
-              }
+            for (int a = 0; a < na; ++a)
               for (uint32_t t = grid.cell_begin(around[a]); t < grid.cell_end(around[a]); ++t) {
                 const double d2 = squared_distance(grid.sorted_point(t), p);
                 if (d2 > 0 && d2 < best) best = d2;
               }
-            }
             // Every point within h of p is in the 27 cells; beyond that, widen ring by ring.
+            const auto cc = grid.cell_coord(uint32_t(c));
             for (int r = 2; best > double(r - 1) * h * double(r - 1) * h && r <= kMaxRing; ++r) {
               for (int dx = -r; dx <= r; ++dx)
                 for (int dy = -r; dy <= r; ++dy)

@@ -117,7 +117,7 @@ TEST(EstimateSpacing, SurfaceSampleIsCloseToThePoissonRadius) {
 }
 
 // Each point's nearest neighbour must be found exactly, also where it lies just across a cell
-// face (the search skips cells that cannot hold a nearer point). A sample of one point (the
+// face (a search that skips cells must not skip that one). A sample of one point (the
 // first: max_samples 1) makes the estimate that point's own nearest distance, so every point
 // is checked in turn: random clouds, and lattices (many points on or next to cell faces) at
 // several scales and offsets (rounding), slightly jittered so that distances differ.

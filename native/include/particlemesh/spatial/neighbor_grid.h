@@ -52,9 +52,6 @@ class PM_EXPORT NeighborGrid {
   NeighborGrid(const Vec3* points, size_t n, double cell_size, const Vec3* lower, const uint8_t* apart);
 
   double cell_size() const { return cell_size_; }
-  /// The corner of cell (0, 0, 0): cell (i, j, k) spans origin + (i, j, k) x cell_size to one
-  /// cell size above (to rounding: a point's cell is computed as in coord_of).
-  const Vec3& origin() const { return origin_; }
   size_t point_count() const { return sorted_points_.size(); }
   size_t cell_count() const { return cell_keys_.size(); }
   /// The first sorted index of the points kept apart (point_count() when none are).
