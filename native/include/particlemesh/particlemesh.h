@@ -156,7 +156,7 @@ typedef struct pm_triangulate_options {
   /* -- appended -- */
   uint32_t min_component_triangles; /**< remove pieces of fewer triangles (a scan's stray
                                          triangles); their particles are then unused (default 0:
-                                         keep every piece) */
+                                         keep every piece; ignored with PM_TRIANGULATE_RAW) */
 } pm_triangulate_options;
 
 typedef struct pm_triangulate_stats {
