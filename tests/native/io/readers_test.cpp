@@ -49,6 +49,21 @@ std::string two_vertex_ply_header(std::initializer_list<const char*> props) {
   return h + "end_header\n";
 }
 
+/// `read(path)` of a FIFO at `fifo` (made afresh) that a thread writes `bytes` into: how a
+/// reader takes a stream whose length it does not know. The status, its message in `msg`.
+template <class F>
+Status read_through_fifo(const fs::path& fifo, const std::string& bytes, F&& read, std::string& msg) {
+  fs::remove(fifo);
+  if (::mkfifo(fifo.c_str(), 0600) != 0) {
+    msg = "mkfifo failed";
+    return Status::IoError;
+  }
+  std::thread writer([&] { std::ofstream(fifo, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size())); });
+  const Status s = status_of([&] { read(fifo.string()); }, &msg);
+  writer.join();
+  return s;
+}
+
 template <class T>
 void append(std::string& s, T v) {
   s.append(reinterpret_cast<const char*>(&v), sizeof v);
@@ -291,14 +306,10 @@ TEST(PlyReader, BinaryVerticesInBlocksAreTheValuesOfEveryEncoding) {
   };
   same(read_point_cloud(write(dir / "le.ply", le)), "little-endian");
   same(read_point_cloud(write(dir / "be.ply", be)), "big-endian");
-  const fs::path fifo = dir / "pipe.ply";
-  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
-  std::thread writer([&] { std::ofstream(fifo, std::ios::binary).write(le.data(), std::streamsize(le.size())); });
   PointCloud piped;
   std::string msg;
-  const Status st = status_of([&] { piped = read_point_cloud(fifo.string()); }, &msg);
-  writer.join();
-  ASSERT_EQ(st, Status::Ok) << msg;
+  ASSERT_EQ(read_through_fifo(dir / "pipe.ply", le, [&](const std::string& f) { piped = read_point_cloud(f); }, msg),
+            Status::Ok) << msg;
   same(piped, "FIFO");
   // One record short: refused before anything is read, naming the count.
   EXPECT_REFUSED(read_point_cloud(write(dir / "short.ply", le.substr(0, le.size() - 1))), Status::FormatError,
@@ -357,15 +368,10 @@ TEST(PlyReader, BinaryFacesInBlocksAreTheFacesOfEveryEncoding) {
       const std::string what = std::string(big_endian ? "big-endian " : "little-endian ") + type;
       const std::string b = binary(big_endian, type, faces);
       EXPECT_EQ(read_mesh(write(dir / "b.ply", b)).triangles, want.triangles) << what;
-      const fs::path fifo = dir / "pipe.ply";
-      fs::remove(fifo);
-      ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
-      std::thread writer([&] { std::ofstream(fifo, std::ios::binary).write(b.data(), std::streamsize(b.size())); });
       TriMesh piped;
       std::string msg;
-      const Status st = status_of([&] { piped = read_mesh(fifo.string()); }, &msg);
-      writer.join();
-      ASSERT_EQ(st, Status::Ok) << msg << " " << what;
+      ASSERT_EQ(read_through_fifo(dir / "pipe.ply", b, [&](const std::string& f) { piped = read_mesh(f); }, msg),
+                Status::Ok) << msg << " " << what;
       EXPECT_EQ(piped.triangles, want.triangles) << what << " (FIFO)";
     }
   // Bad faces, named by their element number, wherever they lie.
@@ -831,14 +837,10 @@ TEST(FileReaders, EachFileIsReadOnceFrontToBack) {
     SCOPED_TRACE(ext);
     std::ifstream in(dir / (std::string("ico") + ext), std::ios::binary);
     const std::string bytes((std::istreambuf_iterator<char>(in)), {});
-    const fs::path fifo = dir / (std::string("pipe") + ext);
-    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
-    std::thread writer([&] { std::ofstream(fifo, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size())); });
     TriMesh m;
     std::string msg;
-    const Status s = status_of([&] { m = read_mesh(fifo.string()); }, &msg);
-    writer.join();
-    EXPECT_EQ(s, Status::Ok) << msg;
+    EXPECT_EQ(read_through_fifo(dir / (std::string("pipe") + ext), bytes, [&](const std::string& f) { m = read_mesh(f); }, msg),
+              Status::Ok) << msg;
     EXPECT_EQ(m.triangles, ico.triangles);
   }
 }
