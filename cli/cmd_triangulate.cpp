@@ -17,7 +17,6 @@
 #include "sampling_shape.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/io/mesh_io.h"
-#include "particlemesh/mesh/components.h"
 #include "particlemesh/mesh/topology_report.h"
 #include "particlemesh/sample/thin.h"
 #include "particlemesh/spatial/local_spacing.h"
@@ -222,17 +221,12 @@ std::string capped_spacing_hint(const SurfaceResult& r, const TriangulateArgs& a
 }
 
 /// When at least 5 pieces of fewer than 10 triangles lie apart from the rest and hold under
-/// 5 % of the triangles (a scan's stray triangles among its rows), the --min-component-triangles
-/// that removes just them. Empty otherwise, or when pieces are removed already. Each such
-/// piece leaves a loop open: with fewer than 5 loops left the pieces are not counted at all
-/// (a pass over the mesh, which a closed surface does not pay).
+/// 5 % of the triangles (the library's stray_pieces: a scan's stray triangles among its rows),
+/// the --min-component-triangles that removes just them. Empty otherwise, or when pieces are
+/// removed already.
 std::string stray_pieces_hint(const SurfaceResult& r, const TriangulateArgs& a) {
-  if (a.min_component_triangles > 0 || r.surface.holes_left < 5) return {};
-  const MeshComponents c = mesh_components(r.mesh);
-  size_t pieces = 0, triangles = 0, largest = 0;
-  for (size_t t : c.triangles)
-    if (t > 0 && t < 10) ++pieces, triangles += t, largest = std::max(largest, t);
-  if (pieces < 5 || triangles * 20 > r.mesh.triangles.size()) return {};
+  const auto& [pieces, triangles, largest] = r.surface.stray_pieces;
+  if (a.min_component_triangles > 0 || pieces < 5 || triangles * 20 > r.mesh.triangles.size()) return {};
   char text[200];
   if (largest == 1)
     std::snprintf(text, sizeof text, "%zu lone triangles lie apart from the rest: --min-component-triangles 2 removes them",

@@ -85,6 +85,8 @@ nlohmann::json to_json(const SurfaceStats& s) {
           {"unused_points", s.unused_points},
           {"components_removed", s.components_removed},
           {"component_triangles_removed", s.component_triangles_removed},
+          {"stray_pieces", {{"count", s.stray_pieces.count}, {"triangles", s.stray_pieces.triangles},
+                            {"largest", s.stray_pieces.largest}}},
           {"local_spacing", {{"unit", "r0"}, {"min", s.local_spacing.min}, {"p10", s.local_spacing.p10},
                              {"median", s.local_spacing.median}, {"p90", s.local_spacing.p90}, {"max", s.local_spacing.max}}},
           {"viewpoint_used", s.viewpoint_used},

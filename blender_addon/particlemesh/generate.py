@@ -261,6 +261,21 @@ def narrow_holes_warning(stats, settings):
             f"{'it' if left == 1 else 'them'}")
 
 
+def stray_pieces_warning(stats, settings, triangles):
+    """A warning when at least 5 pieces of fewer than 10 triangles lie apart from the rest and
+    hold under 5 % of the `triangles` (the library's stray_pieces: a scan's stray triangles),
+    with the Min Piece Triangles that removes just them (as the CLI's hint). None otherwise,
+    or when Min Piece Triangles is set already."""
+    count = int(stats.get("stray_pieces", 0))
+    if stats.get("raw") or int(settings.get("min_component_triangles", 0) or 0) > 0 or count < 5:
+        return None
+    if int(stats.get("stray_piece_triangles", 0)) * 20 > triangles:
+        return None
+    largest = int(stats.get("stray_piece_largest", 0))
+    what = "lone triangles" if largest == 1 else f"pieces of at most {largest} triangles"
+    return f"{count} {what} lie apart from the rest: set Min Piece Triangles to {largest + 1} to remove them"
+
+
 def jittered_emission_warning(stats, settings, emission):
     """A warning when holes were left open and the particles come from a system emitting from
     faces with Distribution Jittered (Blender's default): each face gets a jitter pattern with

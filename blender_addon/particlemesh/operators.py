@@ -187,7 +187,8 @@ class _Generate(SourceProps, CommonProps, SmoothProps, _ModalJob):
             jittered = generate.jittered_emission_warning(stats, settings, emission)
             # (A fill does not close the gaps of a jittered emission: its advice would mislead.)
             warnings = (generate.volume_particles_warning(stats), generate.uneven_spacing_warning(stats),
-                        jittered or generate.narrow_holes_warning(stats, settings))
+                        jittered or generate.narrow_holes_warning(stats, settings),
+                        generate.stray_pieces_warning(stats, settings, data.triangle_count))
         else:
             # The pieces from the mesh's topology (about 50 ms per million triangles).
             pieces = pm.topology(data)["components"] if stats.get("particles", 0) >= generate.PIECES_MIN else 0

@@ -102,6 +102,9 @@ class pm_triangulate_stats(Structure):
         ("sampling_thickness", c_double),
         ("components_removed", c_uint64),
         ("component_triangles_removed", c_uint64),
+        ("stray_pieces", c_uint64),
+        ("stray_piece_triangles", c_uint64),
+        ("stray_piece_largest", c_uint64),
     ]
 
 

@@ -139,6 +139,7 @@ TEST(CApi, SmallComponentsRemovedAsTheLibraryDoes) {
   const SurfaceResult ref = reconstruct_surface(c, o);
   EXPECT_EQ(stats.components_removed, 1u);
   EXPECT_EQ(stats.component_triangles_removed, 1u);
+  EXPECT_EQ(stats.stray_pieces, ref.surface.stray_pieces.count);
   EXPECT_EQ(stats.components_removed, ref.surface.components_removed);
   EXPECT_EQ(stats.unused_points, ref.surface.unused_points);
   EXPECT_EQ(triangles(mesh), ref.mesh.triangles.size());
@@ -147,6 +148,9 @@ TEST(CApi, SmallComponentsRemovedAsTheLibraryDoes) {
   ASSERT_EQ(pm_triangulate(cloud, &opt, &mesh, &stats), PM_OK) << last();
   EXPECT_EQ(stats.components_removed, 0u);
   EXPECT_EQ(triangles(mesh), ref.mesh.triangles.size() + 1);
+  EXPECT_EQ(stats.stray_pieces, 1u);  // the lone triangle, kept
+  EXPECT_EQ(stats.stray_piece_triangles, 1u);
+  EXPECT_EQ(stats.stray_piece_largest, 1u);
   pm_mesh_destroy(mesh);
   pm_cloud_destroy(cloud);
 }

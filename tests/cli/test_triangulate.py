@@ -265,6 +265,7 @@ def test_stray_pieces_are_named_and_removed_on_request(cli, inspect, tmp_path):
     proc = cli("triangulate", pts, "-o", out, "--report", rep)
     r = json.loads(rep.read_text())
     assert r["topology"]["components"] == 7 and r["surface"]["components_removed"] == 0
+    assert r["surface"]["stray_pieces"] == {"count": 6, "triangles": 6, "largest": 1}
     assert "6 lone triangles lie apart from the rest: --min-component-triangles 2 removes them" \
         in r["hint"], r["hint"]
     assert "--min-component-triangles 2" in proc.stdout

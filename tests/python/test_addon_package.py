@@ -353,6 +353,24 @@ def test_narrow_holes_warn_with_the_fill_that_reaches_them(pkg):
     assert pkg.pm.topology(filled)["closed"]
 
 
+def test_stray_pieces_warn_with_the_min_piece_triangles_that_removes_them(pkg):
+    """Six lone triangles far from a sphere: the warning names Min Piece Triangles 2, which
+    removes them; none once it is set, none for fewer than five strays."""
+    p = sphere(3000)
+    r0 = np.sqrt(4 * np.pi / 3000)
+    lone = [np.array([3 * np.cos(k), 3 * np.sin(k), 0.0]) + np.array([[0, 0, 0], [r0, 0, 0], [r0 / 2, 0.87 * r0, 0]])
+            for k in range(6)]
+    points = np.concatenate([p] + lone).astype(np.float32)
+    data = pkg.generate.run("TRIANGULATE", pkg.generate.Particles(points), {})
+    warning = pkg.generate.stray_pieces_warning(data.stats, {}, data.triangle_count)
+    assert warning == "6 lone triangles lie apart from the rest: set Min Piece Triangles to 2 to remove them"
+    assert pkg.generate.stray_pieces_warning(data.stats, {"min_component_triangles": 2}, data.triangle_count) is None
+    assert pkg.generate.stray_pieces_warning({**data.stats, "stray_pieces": 4}, {}, data.triangle_count) is None
+    removed = pkg.generate.run("TRIANGULATE", pkg.generate.Particles(points), {"min_component_triangles": 2})
+    assert removed.stats["components_removed"] == 6 and removed.stats["stray_pieces"] == 0
+    assert pkg.pm.topology(removed)["components"] == 1
+
+
 def test_generate_raw_is_wound_by_the_normals(pkg):
     p = sphere(2000)
     out = pkg.generate.run("TRIANGULATE", pkg.generate.Particles(p, normals=p), {"raw": True})

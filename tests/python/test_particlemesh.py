@@ -137,6 +137,7 @@ def test_small_pieces_removed_on_request(pm):
     points = np.concatenate([p, lone])
     kept = pm.triangulate(points)
     assert pm.topology(kept)["components"] == 2 and kept.stats["components_removed"] == 0
+    assert (kept.stats["stray_pieces"], kept.stats["stray_piece_largest"]) == (1, 1)
     mesh = pm.triangulate(points, min_component_triangles=2)
     assert mesh.stats["components_removed"] == 1 and mesh.stats["component_triangles_removed"] == 1
     assert mesh.triangle_count == kept.triangle_count - 1

@@ -210,6 +210,11 @@ typedef struct pm_triangulate_stats {
   /* -- appended -- */
   uint64_t components_removed; /**< pieces removed for min_component_triangles */
   uint64_t component_triangles_removed; /**< their triangles */
+  uint64_t stray_pieces;    /**< pieces of fewer than 10 triangles left, counted when loops are
+                                 left open (a scan's stray triangles) */
+  uint64_t stray_piece_triangles; /**< their triangles */
+  uint64_t stray_piece_largest;   /**< the most triangles of one: min_component_triangles of
+                                       one more removes them all */
 } pm_triangulate_stats;
 
 PM_EXPORT void pm_triangulate_options_init(pm_triangulate_options* options);

@@ -111,6 +111,9 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
       s.sampling_thickness = r.triangulation.sampling_thickness;
       s.components_removed = r.surface.components_removed;
       s.component_triangles_removed = r.surface.component_triangles_removed;
+      s.stray_pieces = r.surface.stray_pieces.count;
+      s.stray_piece_triangles = r.surface.stray_pieces.triangles;
+      s.stray_piece_largest = r.surface.stray_pieces.largest;
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();

@@ -161,6 +161,7 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     bo.small_hole = std::min<size_t>(6, options.fill_holes);
     bo.fill_edge_factor = options.fill_edge_factor;
     bo.min_component_triangles = options.min_component_triangles;
+    bo.stray_below = kStrayPieceTriangles;
     detail::BuilderStats bs;
     std::vector<Vec3> vertex_normals;
     tris = detail::build_surface(P, normals, active, candidates, bo, options.repair, bs, tracker, vertex_normals);
@@ -187,6 +188,7 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     st.unused_points = bs.unused_points;
     st.components_removed = bs.components_removed;
     st.component_triangles_removed = bs.component_triangles_removed;
+    st.stray_pieces = {bs.stray_pieces, bs.stray_triangles, bs.stray_largest};
     for (const auto& [edges, width] : bs.open_loops) {
       st.open_loops.push_back({edges, width});
       if (options.repair && options.fill_holes > 0 && std::isfinite(width) && width <= kNarrowLoopWidth &&

@@ -450,6 +450,10 @@ TEST(ReconstructSurface, SmallComponentsRemovedOnRequest) {
     std::sort(sizes.begin(), sizes.end());
     ASSERT_EQ(std::vector<size_t>(sizes.begin(), sizes.begin() + 3), (std::vector<size_t>{1, 2, 3}));
     EXPECT_EQ(all.surface.components_removed, 0u);
+    // The strays counted: the pieces of 1, 2 and 3 triangles (the sphere has more).
+    EXPECT_EQ(all.surface.stray_pieces.count, 3u);
+    EXPECT_EQ(all.surface.stray_pieces.triangles, 6u);
+    EXPECT_EQ(all.surface.stray_pieces.largest, 3u);
     o.min_component_triangles = 3;
     const SurfaceResult some = reconstruct_surface(cloud, o);
     EXPECT_EQ(some.surface.components_removed, 2u);
@@ -457,6 +461,8 @@ TEST(ReconstructSurface, SmallComponentsRemovedOnRequest) {
     EXPECT_EQ(mesh_components(some.mesh).triangles.size(), 2u);
     EXPECT_EQ(some.mesh.triangles.size(), all.mesh.triangles.size() - 3);
     EXPECT_EQ(some.surface.unused_points, all.surface.unused_points + 7);
+    EXPECT_EQ(some.surface.stray_pieces.count, 1u);  // the 3-triangle piece is left
+    EXPECT_EQ(some.surface.stray_pieces.largest, 3u);
     if (repair) {
       EXPECT_EQ(some.surface.holes_left, all.surface.holes_left - 2);
     }
@@ -473,6 +479,7 @@ TEST(ReconstructSurface, SmallComponentsRemovedOnRequest) {
     if (repair) {
       EXPECT_TRUE(report.closed);
       EXPECT_EQ(sphere_only.surface.holes_left, 0u);
+      EXPECT_EQ(sphere_only.surface.stray_pieces.count, 0u);  // closed: nothing searched
     }
     // 1 (and 0) remove nothing: every piece has at least one triangle.
     o.min_component_triangles = 1;

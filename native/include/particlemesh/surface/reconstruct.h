@@ -97,6 +97,10 @@ struct SurfaceOptions : TriangulateOptions {
 /// holes are many times wider (3.7 L and more on the shared scans and models).
 inline constexpr double kNarrowLoopWidth = 3.0;
 
+/// Pieces of the surface with fewer triangles than this are counted as strays
+/// (SurfaceStats::stray_pieces).
+inline constexpr size_t kStrayPieceTriangles = 10;
+
 struct SurfaceStats {
   bool normals_estimated = false;
   size_t candidates = 0;          ///< raw triangles that passed co-normality
@@ -135,6 +139,14 @@ struct SurfaceStats {
   size_t unused_points = 0;       ///< distinct particles in no triangle
   size_t components_removed = 0;  ///< pieces removed for min_component_triangles
   size_t component_triangles_removed = 0;  ///< their triangles
+  /// The pieces of fewer than kStrayPieceTriangles triangles left in the surface (after
+  /// min_component_triangles), counted when loops are left open (a closed surface is not
+  /// searched): a scan's stray triangles among its rows. `largest`: the most triangles of one;
+  /// min_component_triangles = largest + 1 removes them all.
+  struct StrayPieces {
+    size_t count = 0, triangles = 0, largest = 0;
+  };
+  StrayPieces stray_pieces;
   /// The particles' local spacings in units of r0 (all 1 without local_spacing): smallest,
   /// 10th percentile, median, 90th percentile, largest, over the distinct particles.
   struct Spread {
