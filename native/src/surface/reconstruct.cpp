@@ -161,7 +161,6 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     bo.small_hole = std::min<size_t>(6, options.fill_holes);
     bo.fill_edge_factor = options.fill_edge_factor;
     bo.min_component_triangles = options.min_component_triangles;
-    bo.stray_below = kStrayPieceTriangles;
     detail::BuilderStats bs;
     std::vector<Vec3> vertex_normals;
     tris = detail::build_surface(P, normals, active, candidates, bo, options.repair, bs, tracker, vertex_normals);
@@ -186,9 +185,9 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     st.largest_hole_left = bs.largest_hole_left;
     st.components_flipped = bs.components_flipped;
     st.unused_points = bs.unused_points;
-    st.components_removed = bs.components_removed;
-    st.component_triangles_removed = bs.component_triangles_removed;
-    st.stray_pieces = {bs.stray_pieces, bs.stray_triangles, bs.stray_largest};
+    st.components_removed = bs.pieces.removed;
+    st.component_triangles_removed = bs.pieces.removed_triangles;
+    st.stray_pieces = bs.pieces.strays;
     for (const auto& [edges, width] : bs.open_loops) {
       st.open_loops.push_back({edges, width});
       if (options.repair && options.fill_holes > 0 && std::isfinite(width) && width <= kNarrowLoopWidth &&

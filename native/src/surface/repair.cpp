@@ -310,18 +310,28 @@ size_t drop_fragments(EditableSurface& s, const std::vector<Triangle>& raw) {
   return dropped;
 }
 
-void drop_small_components(EditableSurface& s, size_t min_triangles, size_t& pieces, size_t& triangles) {
-  if (min_triangles <= 1) return;
-  std::vector<uint32_t> piece, count;
+void sort_out_pieces(EditableSurface& s, size_t min_triangles, PieceStats& out) {
+  out = {};
+  const bool removing = min_triangles > 1;
+  if (!removing && s.closed()) return;
+  std::vector<uint32_t> piece, count;  // count: triangles per piece, at its root
   s.surface_pieces(piece, count);
-  for (uint32_t v = 0; v < piece.size(); ++v)
-    if (piece[v] == v && count[v] > 0 && count[v] < min_triangles) ++pieces;
-  for (uint32_t t = 0; t < s.triangle_slots(); ++t) {
-    if (!s.alive(t)) continue;
-    const uint32_t r = piece[s.triangle(t)[0]];
-    if (count[r] < min_triangles) {
-      s.kill_triangle(t);
-      ++triangles;
+  if (removing) {
+    for (uint32_t t = 0; t < s.triangle_slots(); ++t)
+      if (s.alive(t) && count[piece[s.triangle(t)[0]]] < min_triangles) {
+        s.kill_triangle(t);
+        ++out.removed_triangles;
+      }
+  }
+  const bool open = !s.closed();
+  for (uint32_t v = 0; v < piece.size(); ++v) {
+    if (piece[v] != v || count[v] == 0) continue;
+    if (count[v] < min_triangles) {
+      ++out.removed;
+    } else if (open && count[v] < kStrayPieceTriangles) {
+      ++out.strays.count;
+      out.strays.triangles += count[v];
+      out.strays.largest = std::max<size_t>(out.strays.largest, count[v]);
     }
   }
 }
@@ -365,7 +375,7 @@ void repair_surface(EditableSurface& s, const std::vector<uint8_t>& active, cons
     stats.pinches_resolved += unpinch(s);
   }
   tracker.check();
-  drop_small_components(s, o.min_component_triangles, stats.components_removed, stats.component_triangles_removed);
+  sort_out_pieces(s, o.min_component_triangles, stats.pieces);
   tracker.check();
   if (!s.closed()) {
     const auto left = s.trace_loops();

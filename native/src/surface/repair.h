@@ -24,6 +24,7 @@
 #include "core/progress_tracker.h"
 #include "particlemesh/mesh/tri_mesh.h"
 #include "particlemesh/spatial/neighbor_grid.h"
+#include "particlemesh/surface/reconstruct.h"
 #include "surface/editable_surface.h"
 #include "surface/hole_fill.h"
 
@@ -35,14 +36,21 @@ struct RepairOptions {
   size_t min_component_triangles = 0;  ///< pieces of fewer triangles are removed (0 = none)
 };
 
+/// What sort_out_pieces did: the pieces removed for min_component_triangles and their
+/// triangles; of the pieces left, when the surface is open, those of fewer than
+/// kStrayPieceTriangles (SurfaceStats::stray_pieces).
+struct PieceStats {
+  size_t removed = 0, removed_triangles = 0;
+  SurfaceStats::StrayPieces strays;
+};
+
 struct RepairStats : FillStats {
   size_t pinches_resolved = 0;    ///< fans removed at pinched vertices
   size_t holes_left = 0;          ///< boundary loops left open
   size_t largest_hole_left = 0;   ///< edges of the largest loop left open
   std::vector<std::pair<size_t, double>> open_loops;  ///< (edges, width / L) of loops left open (at most 1000)
   std::vector<size_t> holes_left_edges;  ///< the edges of every loop left open, ascending
-  size_t components_removed = 0;           ///< pieces removed for min_component_triangles
-  size_t component_triangles_removed = 0;  ///< their triangles
+  PieceStats pieces;                     ///< sort_out_pieces'
 };
 
 /// Fragments of at most this many triangles may be dissolved (see drop_fragments).
@@ -76,9 +84,10 @@ size_t insert_unused(EditableSurface& s, const std::vector<uint8_t>& active, con
 size_t drop_fragments(EditableSurface& s, const std::vector<Triangle>& raw);
 
 /// Removes every piece (triangles joined through shared vertices) of fewer than
-/// `min_triangles` triangles; its particles are then in no triangle. Adds the pieces and
-/// triangles removed to `pieces` and `triangles`.
-void drop_small_components(EditableSurface& s, size_t min_triangles, size_t& pieces, size_t& triangles);
+/// `min_triangles` triangles (their particles are then in no triangle), and, when the surface
+/// left is open, counts its pieces of fewer than kStrayPieceTriangles: one pass over the
+/// pieces, none for a closed surface with nothing to remove.
+void sort_out_pieces(EditableSurface& s, size_t min_triangles, PieceStats& out);
 
 /// The whole repair, in the order above; then counts the loops left open.
 void repair_surface(EditableSurface& s, const std::vector<uint8_t>& active, const std::vector<Triangle>& raw,

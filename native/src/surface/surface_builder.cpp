@@ -49,21 +49,9 @@ std::vector<Triangle> build_surface(const std::vector<Vec3>& positions, const st
     stats.largest_hole_left = rs.largest_hole_left;
     stats.open_loops = std::move(rs.open_loops);
     stats.holes_left_edges = std::move(rs.holes_left_edges);
-    stats.components_removed = rs.components_removed;
-    stats.component_triangles_removed = rs.component_triangles_removed;
+    stats.pieces = rs.pieces;
   } else {
-    drop_small_components(surface, options.min_component_triangles, stats.components_removed,
-                          stats.component_triangles_removed);
-  }
-  if (!surface.closed()) {
-    std::vector<uint32_t> piece, count;
-    surface.surface_pieces(piece, count);
-    for (uint32_t v = 0; v < piece.size(); ++v)
-      if (piece[v] == v && count[v] > 0 && count[v] < options.stray_below) {
-        ++stats.stray_pieces;
-        stats.stray_triangles += count[v];
-        stats.stray_largest = std::max<size_t>(stats.stray_largest, count[v]);
-      }
+    sort_out_pieces(surface, options.min_component_triangles, stats.pieces);
   }
   stats.seconds_repair = since(t0);
   stats.boundary = surface.boundary();

@@ -17,6 +17,7 @@
 #include "core/progress_tracker.h"
 #include "particlemesh/core/vec3.h"
 #include "particlemesh/mesh/tri_mesh.h"
+#include "surface/repair.h"
 #include "surface/view_rays.h"
 
 namespace PM_NAMESPACE::detail {
@@ -30,7 +31,6 @@ struct BuilderOptions {
   size_t max_hole = 100;          ///< loops up to this many edges may be filled (0 = none)
   double fill_edge_factor = 1.5;  ///< fill triangles' edges at most this x L
   size_t min_component_triangles = 0;  ///< pieces of fewer triangles are removed (0 = none)
-  size_t stray_below = 10;  ///< pieces of fewer triangles left are counted (BuilderStats::stray_pieces)
   ViewRays view;                  ///< a scan's sensor: no triangle bridges a depth jump
 };
 
@@ -47,11 +47,7 @@ struct BuilderStats {
   size_t largest_hole_left = 0;   ///< edges of the largest loop left open
   size_t components_flipped = 0;  ///< closed components turned to face outward
   size_t unused_points = 0;       ///< distinct points in no triangle
-  size_t components_removed = 0;  ///< pieces removed for min_component_triangles
-  size_t component_triangles_removed = 0;
-  /// Pieces of fewer than `stray_below` triangles left, counted when the surface is open:
-  /// how many, their triangles, the most of one (SurfaceStats::stray_pieces).
-  size_t stray_pieces = 0, stray_triangles = 0, stray_largest = 0;
+  PieceStats pieces;  ///< removed for min_component_triangles, and the strays left
   double seconds_candidates = 0, seconds_growth = 0, seconds_repair = 0;
   std::vector<uint64_t> boundary;  ///< boundary half-edges (a << 32 | b), sorted
   std::vector<std::pair<size_t, double>> open_loops;  ///< (edges, width / L) of loops left open
