@@ -204,6 +204,11 @@ def triangulate(particles, settings, progress=None, reuse=None):
         local_spacing=bool(settings.get("local_spacing", True)), progress=progress)
     mesh.stats["raw"] = raw
     mesh.stats["global_spacing"] = not bool(settings.get("local_spacing", True))
+    if mesh.triangle_count == 0 and mesh.stats.get("components_removed"):
+        raise EmptyResult(
+            f"no triangles: every piece of the surface ({mesh.stats['component_triangles_removed']} triangles in "
+            f"{mesh.stats['components_removed']} pieces) has fewer than Min Piece Triangles "
+            f"({settings.get('min_component_triangles')}): lower it")
     if mesh.triangle_count == 0:
         raise EmptyResult(
             f"no triangles: with spacing {mesh.stats['spacing']:.6g} the longest edge is "

@@ -369,6 +369,9 @@ def test_stray_pieces_warn_with_the_min_piece_triangles_that_removes_them(pkg):
     removed = pkg.generate.run("TRIANGULATE", pkg.generate.Particles(points), {"min_component_triangles": 2})
     assert removed.stats["components_removed"] == 6 and removed.stats["stray_pieces"] == 0
     assert pkg.pm.topology(removed)["components"] == 1
+    # A limit above every piece leaves nothing: the error names the setting, not the spacing.
+    with pytest.raises(pkg.generate.EmptyResult, match="fewer than Min Piece Triangles \\(100000\\): lower it"):
+        pkg.generate.run("TRIANGULATE", pkg.generate.Particles(points), {"min_component_triangles": 100000})
 
 
 def test_generate_raw_is_wound_by_the_normals(pkg):
