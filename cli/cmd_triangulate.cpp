@@ -170,7 +170,7 @@ std::string narrow_loops_hint(const SurfaceResult& r, const TriangulateArgs& a) 
                   r.surface.holes_left);
   char s[400];
   std::snprintf(s, sizeof s,
-                "%s needs edges of at most %.2f x L): gaps in the sampling rather than openings; try "
+                "%s needs edges of at most %.2f x L): gaps in the sampling, or small openings; try "
                 "--fill-edge-factor %g%s (wider loops stay open)",
                 which, n.width, factor, n.edges > a.fill_holes ? (" --fill-holes " + std::to_string(n.edges)).c_str() : "");
   return s;
@@ -499,7 +499,8 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
       ->check(in_range(size_t(0), size_t(100000)))
       ->capture_default_str();
   app->add_option("--fill-edge-factor", args->fill_edge_factor,
-                  "Fill triangles' edges at most this x L: wider openings are real and stay open")
+                  "Fill triangles' edges at most this x L: wider openings are real and stay open (above 1.5, "
+                  "only the loops left after every other repair step are filled that wide)")
       ->check(in_range(0.1, 10.0))
       ->check(finite_number())
       ->capture_default_str();

@@ -262,8 +262,8 @@ def narrow_holes_warning(stats, settings):
     which = ("the hole left open is a narrow gap" if left == 1 else
              f"all {count} holes left open are narrow gaps" if count == left else
              f"{count} of the {left} holes left open are narrow gaps")
-    return (f"{which} in the sampling: set Fill Edge Factor to {factor:g}{more} to fill "
-            f"{'it' if left == 1 else 'them'}")
+    return (f"{which} in the sampling (or small openings): set Fill Edge Factor to "
+            f"{factor:g}{more} to fill {'it' if left == 1 else 'them'}")
 
 
 def stray_pieces_warning(stats, settings, triangles):

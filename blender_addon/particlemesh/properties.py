@@ -75,7 +75,8 @@ class TriangulateProps:
         name="Fill Edge Factor", default=1.5, min=1.0, soft_max=4.0, max=100.0,
         update=_settings_changed,
         description="Filling triangles' edges are at most this times the longest edge: wider "
-                    "openings are real and stay open")
+                    "openings are real and stay open (above 1.5, only the loops left after "
+                    "every other repair step are filled that wide)")
     min_component_triangles: IntProperty(
         name="Min Piece Triangles", default=0, min=0, soft_max=100, max=1_000_000,
         update=_settings_changed,

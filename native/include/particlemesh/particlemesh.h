@@ -146,7 +146,9 @@ typedef struct pm_triangulate_options {
   /* -- finishing stages (ignored with PM_TRIANGULATE_RAW) -- */
   double normal_angle;      /**< co-normality limit in degrees (default 120) */
   uint32_t fill_holes;      /**< fill boundary loops of up to this many edges (default 100, 0 = none) */
-  double fill_edge_factor;  /**< fill edges at most this x L: wider openings stay open (default 1.5) */
+  double fill_edge_factor;  /**< fill edges at most this x L: wider openings stay open (default 1.5;
+                                 above 1.5 only the loops left open by the other repair steps are
+                                 filled that wide) */
   int32_t normals;          /**< PM_NORMALS_* (default PM_NORMALS_AUTO) */
   /* -- appended -- */
   uint32_t max_triplets_per_point; /**< fail with PM_STATUS_LIMIT_EXCEEDED before the test when the

@@ -339,7 +339,11 @@ void sort_out_pieces(EditableSurface& s, size_t min_triangles, PieceStats& out) 
 void repair_surface(EditableSurface& s, const std::vector<uint8_t>& active, const std::vector<Triangle>& raw,
                     const RepairOptions& o, RepairStats& stats, ProgressTracker& tracker) {
   tracker.stage("repairing", 0.85, 0.97);
-  const FillOptions& f = o.fill;
+  // Every pass before the last fills with edges of at most kFirstFillFactor x L (or the
+  // caller's factor, if smaller): particles put back later close many of the loops left
+  // with shorter edges than a wide fill would use.
+  FillOptions f = o.fill;
+  f.fill_edge_factor = std::min(f.fill_edge_factor, kFirstFillFactor);
   // Small loops first (wrong diagonals, sampling gaps), then pinches, then larger loops.
   // A check between the steps: each is a pass over the whole mesh (up to a second at 1M
   // points), and a host's cancel request is only seen in a check.
@@ -375,6 +379,14 @@ void repair_surface(EditableSurface& s, const std::vector<uint8_t>& active, cons
     stats.pinches_resolved += unpinch(s);
   }
   tracker.check();
+  // The loops still open once every particle that fits is in, filled up to the caller's
+  // factor: gaps in the sampling wider than the first passes' limit.
+  if (o.max_hole > 0 && o.fill.fill_edge_factor > f.fill_edge_factor && !s.closed()) {
+    size_t wide = fill_loops(s, o.max_hole, o.fill, stats);
+    wide += fill_folded_loops(s, o.max_hole, o.fill, stats);
+    if (wide > 0) stats.pinches_resolved += unpinch(s);
+    tracker.check();
+  }
   sort_out_pieces(s, o.min_component_triangles, stats.pieces);
   tracker.check();
   if (!s.closed()) {

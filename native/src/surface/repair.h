@@ -9,6 +9,10 @@
 //     dissolved, and particles the surface passed by are inserted into the triangle or edge
 //     they lie over;
 //  5. loops that only a sharper fold closes are filled inside large components;
+//  (steps 1-5 fill with edges of at most kFirstFillFactor x L, or the caller's factor if
+//  smaller; with a larger factor, the loops still open are then filled up to it, so that a
+//  wide limit patches only the gaps left, not loops the particles put back would close with
+//  short edges;)
 //  6. with min_component_triangles, pieces of fewer triangles are removed (a scan's stray
 //     triangles among its rows), before the loops left open are counted.
 #pragma once
@@ -52,6 +56,9 @@ struct RepairStats : FillStats {
   std::vector<size_t> holes_left_edges;  ///< the edges of every loop left open, ascending
   PieceStats pieces;                     ///< sort_out_pieces'
 };
+
+/// The fill factor of every repair pass but the last (RepairOptions::fill's, if smaller).
+constexpr double kFirstFillFactor = 1.5;
 
 /// Fragments of at most this many triangles may be dissolved (see drop_fragments).
 constexpr uint32_t kMaxFragment = 12;

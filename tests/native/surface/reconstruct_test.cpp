@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
+#include <map>
 #include <numbers>
 #include <random>
 
@@ -528,6 +530,55 @@ TEST(ReconstructSurface, NarrowLoopsLeftOpenSayWhichFillReachesThem) {
   const SurfaceResult open = reconstruct_surface(poisson_disk_sample(disk, 0.04, 2), SurfaceOptions{});
   EXPECT_EQ(open.surface.holes_left, 1u);
   EXPECT_EQ(open.surface.narrow_loops.count, 0u);
+}
+
+// A fill factor above the first passes' (kFirstFillFactor) only patches the loops those passes
+// leave open: every triangle of the default surface is kept, every new one has its corners on
+// a loop the default left open, no particle is left out that the default took in; a surface
+// the default closes is the same triangles. (Filling wide from the start closed loops over
+// particles that were later put in with short edges, and changed closed surfaces.)
+TEST(ReconstructSurface, AWiderFillOnlyPatchesTheLoopsLeftOpen) {
+  auto sorted_triangles = [](const TriMesh& m) {
+    std::vector<Triangle> t(m.triangles);
+    for (Triangle& x : t) std::sort(x.begin(), x.end());
+    std::sort(t.begin(), t.end());
+    return t;
+  };
+  SurfaceOptions wide;
+  wide.fill_edge_factor = 2.5;
+  size_t loops_before = 0, loops_after = 0;
+  for (uint64_t seed : {1u, 2u, 3u}) {
+    const PointCloud cloud = jittered(fibonacci_sphere(3000), 0.02, seed);
+    const SurfaceResult base = reconstruct_surface(cloud, SurfaceOptions{});
+    const SurfaceResult r = reconstruct_surface(cloud, wide);
+    loops_before += base.surface.holes_left;
+    loops_after += r.surface.holes_left;
+    EXPECT_LE(r.surface.holes_left, base.surface.holes_left) << seed;
+    EXPECT_LE(r.surface.unused_points, base.surface.unused_points) << seed;
+    const std::vector<Triangle> before = sorted_triangles(base.mesh), after = sorted_triangles(r.mesh);
+    std::vector<Triangle> kept, added;
+    std::set_intersection(before.begin(), before.end(), after.begin(), after.end(), std::back_inserter(kept));
+    std::set_difference(after.begin(), after.end(), before.begin(), before.end(), std::back_inserter(added));
+    EXPECT_EQ(kept.size(), before.size()) << seed;
+    std::map<std::pair<uint32_t, uint32_t>, int> edge_uses;
+    for (const Triangle& t : base.mesh.triangles)
+      for (int k = 0; k < 3; ++k) ++edge_uses[std::minmax(t[k], t[(k + 1) % 3])];
+    std::vector<uint8_t> on_loop(cloud.size(), 0);  // the default's boundary vertices
+    for (const auto& [e, uses] : edge_uses)
+      if (uses == 1) on_loop[e.first] = on_loop[e.second] = 1;
+    for (const Triangle& t : added) EXPECT_TRUE(on_loop[t[0]] && on_loop[t[1]] && on_loop[t[2]]) << seed;
+  }
+  EXPECT_GT(loops_before, 0u);  // the clouds leave loops open under the default
+  EXPECT_LT(loops_after, loops_before);
+  size_t closed = 0;
+  for (uint64_t seed : {4u, 5u, 6u}) {
+    const PointCloud cloud = test::random_sphere(3000, seed);
+    const SurfaceResult base = reconstruct_surface(cloud, SurfaceOptions{});
+    if (base.surface.holes_left > 0) continue;
+    ++closed;
+    EXPECT_EQ(reconstruct_surface(cloud, wide).mesh.triangles, base.mesh.triangles) << seed;
+  }
+  EXPECT_GT(closed, 0u);
 }
 
 TEST(ReconstructSurface, SmallIsolatedPatchesAreNotCappedIntoPillows) {

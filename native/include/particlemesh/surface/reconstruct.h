@@ -20,7 +20,9 @@
 //     edges. A loop is filled only if it can be triangulated with edges no longer than
 //     fill_edge_factor x L that keep every fan a disk, winding with the normals: holes left by
 //     sampling and extraction are that narrow; a real opening (no particles within that
-//     distance across it) is wider and stays open, and is reported.
+//     distance across it) is wider and stays open, and is reported. Above 1.5, every pass
+//     but the last fills within 1.5 x L, and the last fills the loops still open within
+//     fill_edge_factor x L.
 //  6. Orientation: every closed component is turned to face outward: to enclose positive
 //     volume, or negative for one inside another (a hollow object's inner wall faces into
 //     its cavity; mesh/nesting.h).
@@ -58,7 +60,10 @@ struct SurfaceOptions : TriangulateOptions {
   /// Largest boundary loop, in edges, that may be filled (0 = fill none).
   size_t fill_holes = 100;
   /// Fill triangles' edges are at most fill_edge_factor x L: the documented criterion that
-  /// tells a hole (narrower) from a real opening (wider).
+  /// tells a hole (narrower) from a real opening (wider). Above 1.5, the repair's passes fill
+  /// with edges of at most 1.5 x L first, and only the loops still open after the particles
+  /// are put back are filled up to this factor: a wider limit then patches those gaps and
+  /// changes nothing else.
   double fill_edge_factor = 1.5;
   /// Remove every piece of the surface (triangles joined through shared vertices) of fewer
   /// than this many triangles: the stray triangles and slivers a scan leaves among its rows
