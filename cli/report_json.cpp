@@ -75,6 +75,7 @@ nlohmann::json to_json(const SurfaceStats& s) {
           {"grown", s.grown},
           {"seeds", s.seeds},
           {"pinches_resolved", s.pinches_resolved},
+          {"small_handles_removed", s.small_handles_removed},
           {"holes_filled", s.holes_filled},
           {"hole_triangles", s.hole_triangles},
           {"holes_left", s.holes_left},

@@ -105,6 +105,7 @@ class pm_triangulate_stats(Structure):
         ("stray_pieces", c_uint64),
         ("stray_piece_triangles", c_uint64),
         ("stray_piece_largest", c_uint64),
+        ("small_handles_removed", c_uint64),
     ]
 
 

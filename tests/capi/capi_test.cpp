@@ -147,6 +147,34 @@ TEST(CApi, SmallComponentsRemovedAsTheLibraryDoes) {
   pm_mesh_destroy(mesh);
 }
 
+// The appended small_handles_removed comes back as the library counts it: a Fibonacci sphere
+// flattened to 0.12 of its width has a rim thinner than its spacing, where the surface had a
+// tunnel.
+TEST(CApi, SmallHandlesRemovedAsTheLibraryCounts) {
+  PointCloud c = fibonacci_sphere(800);
+  for (Vec3& p : c.positions) p.z *= 0.12;
+  c.normals.clear();
+  pm_triangulate_stats stats;
+  pm_mesh* mesh = triangulate_with_stats(c, &stats);
+  ASSERT_NE(mesh, nullptr) << last();
+  const SurfaceResult ref = reconstruct_surface(c, SurfaceOptions{});
+  EXPECT_EQ(ref.surface.small_handles_removed, 1u);
+  EXPECT_EQ(stats.small_handles_removed, ref.surface.small_handles_removed);
+  pm_mesh_destroy(mesh);
+  // A caller's struct of the size before the field is filled up to its size.
+  stats = {};
+  stats.struct_size = uint32_t(offsetof(pm_triangulate_stats, small_handles_removed));
+  stats.small_handles_removed = 77;
+  const auto pos = flat(c.positions);
+  pm_cloud* cloud = nullptr;
+  ASSERT_EQ(pm_cloud_create(pos.data(), nullptr, c.size(), &cloud), PM_OK);
+  mesh = nullptr;
+  ASSERT_EQ(pm_triangulate(cloud, nullptr, &mesh, &stats), PM_OK) << last();
+  EXPECT_EQ(stats.small_handles_removed, 77u);  // not written
+  pm_mesh_destroy(mesh);
+  pm_cloud_destroy(cloud);
+}
+
 TEST(CApi, ParticlesAtRandomReportTheirLongerReach) {
   pm_triangulate_stats stats;
   pm_mesh* mesh = triangulate_with_stats(particlemesh::test::random_sphere(3000, 9), &stats);

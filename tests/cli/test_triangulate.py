@@ -250,6 +250,20 @@ def test_loops_the_settings_left_open_get_a_hint(cli, tmp_path):
     assert "--fill-edge-factor" not in r["hint"]
 
 
+def test_a_small_handle_taken_out_is_in_the_summary_and_report(cli, tmp_path):
+    """A sphere flattened to 0.12 of its width has a rim thinner than its spacing; the tunnel
+    the surface had there is taken out: the summary and the report say so, genus 0."""
+    pts, rep, out = tmp_path / "s.xyz", tmp_path / "r.json", tmp_path / "m.ply"
+    cli("sample", "fibonacci", "--points", "800", "-o", pts, "-q")
+    rows = [line.split()[:3] for line in pts.read_text().splitlines() if line.strip()]
+    pts.write_text("".join(f"{x} {y} {float(z) * 0.12!r}\n" for x, y, z in rows))
+    proc = cli("triangulate", pts, "-o", out, "--report", rep)
+    assert "1 small handle removed" in proc.stdout, proc.stdout
+    r = json.loads(rep.read_text())
+    assert r["surface"]["small_handles_removed"] == 1
+    assert r["topology"]["closed"] and r["topology"]["euler_characteristic"] == 2
+
+
 def test_stray_pieces_are_named_and_removed_on_request(cli, inspect, tmp_path):
     """Lone triangles apart from a surface (a scanner's strays) are kept by default, and a hint
     names the --min-component-triangles that removes just them; with it they are gone (their

@@ -130,6 +130,17 @@ def test_raw_is_the_seeds_triangle_set(pm):
     assert raw.triangle_count > pm.triangulate(p, raw=False).triangle_count
 
 
+def test_a_tunnel_at_a_rim_thinner_than_the_spacing_is_taken_out(pm):
+    """A sphere flattened to 0.12 of its width: at its rim, thinner than the spacing, the
+    surface had a tunnel (genus 1); the repair takes it out and says so."""
+    p = fibonacci_sphere(800) * [1, 1, 0.12]
+    mesh = pm.triangulate(p)
+    assert mesh.stats["small_handles_removed"] == 1
+    t = pm.topology(mesh)
+    assert t["closed"] and t["components"] == 1 and t["euler_characteristic"] == 2
+    assert mesh.stats["unused_points"] == 0
+
+
 def test_small_pieces_removed_on_request(pm):
     p = fibonacci_sphere(3000)
     r0 = np.sqrt(4 * np.pi / 3000)

@@ -217,6 +217,9 @@ typedef struct pm_triangulate_stats {
   uint64_t stray_piece_triangles; /**< their triangles */
   uint64_t stray_piece_largest;   /**< the most triangles of one: min_component_triangles of
                                        one more removes them all */
+  /* -- appended -- */
+  uint64_t small_handles_removed; /**< handles smaller than the sampling taken out (a part
+                                       thinner than the spacing joined across) */
 } pm_triangulate_stats;
 
 PM_EXPORT void pm_triangulate_options_init(pm_triangulate_options* options);

@@ -178,6 +178,7 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     st.grown = bs.grown;
     st.seeds = bs.seeds;
     st.pinches_resolved = bs.pinches_resolved;
+    st.small_handles_removed = bs.small_handles_removed;
     st.holes_filled = bs.holes_filled;
     st.hole_triangles = bs.hole_triangles;
     st.holes_left = bs.holes_left;

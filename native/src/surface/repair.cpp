@@ -6,6 +6,7 @@
 #include <numeric>
 
 #include "particlemesh/spatial/neighbor_grid.h"
+#include "surface/small_handles.h"
 #include "surface/tangent_arcs.h"
 #include "surface/triangle_angles.h"
 
@@ -387,6 +388,16 @@ void repair_surface(EditableSurface& s, const std::vector<uint8_t>& active, cons
     if (wide > 0) stats.pinches_resolved += unpinch(s);
     tracker.check();
   }
+  // Handles smaller than the sampling, where a part thinner than the spacing was joined
+  // across: each replaced by a fill of its outline, its particles put back.
+  stats.small_handles_removed = remove_small_handles(s, o.fill);
+  if (stats.small_handles_removed > 0) {
+    for (int round = 0; round < kInsertRounds; ++round)
+      if (insert_unused(s, active, raw, o.fill, near) == 0) break;
+    fill_loops(s, f.small_hole, f, stats);
+    stats.pinches_resolved += unpinch(s);
+  }
+  tracker.check();
   sort_out_pieces(s, o.min_component_triangles, stats.pieces);
   tracker.check();
   if (!s.closed()) {

@@ -13,6 +13,8 @@
 //  smaller; with a larger factor, the loops still open are then filled up to it, so that a
 //  wide limit patches only the gaps left, not loops the particles put back would close with
 //  short edges;)
+//  then handles smaller than the sampling are taken out (small_handles.h) and their particles
+//  put back;
 //  6. with min_component_triangles, pieces of fewer triangles are removed (a scan's stray
 //     triangles among its rows), before the loops left open are counted.
 #pragma once
@@ -50,6 +52,7 @@ struct PieceStats {
 
 struct RepairStats : FillStats {
   size_t pinches_resolved = 0;    ///< fans removed at pinched vertices
+  size_t small_handles_removed = 0;  ///< handles smaller than the sampling taken out (small_handles.h)
   size_t holes_left = 0;          ///< boundary loops left open
   size_t largest_hole_left = 0;   ///< edges of the largest loop left open
   std::vector<std::pair<size_t, double>> open_loops;  ///< (edges, width / L) of loops left open (at most 1000)

@@ -43,6 +43,7 @@ std::vector<Triangle> build_surface(const std::vector<Vec3>& positions, const st
     RepairStats rs;
     repair_surface(surface, active, raw, ro, rs, tracker);
     stats.pinches_resolved = rs.pinches_resolved;
+    stats.small_handles_removed = rs.small_handles_removed;
     stats.holes_filled = rs.holes_filled;
     stats.hole_triangles = rs.hole_triangles;
     stats.holes_left = rs.holes_left;

@@ -41,6 +41,7 @@ struct BuilderStats {
   size_t grown = 0;               ///< triangles accepted by growth
   size_t seeds = 0;
   size_t pinches_resolved = 0;    ///< fans removed at pinched vertices
+  size_t small_handles_removed = 0;  ///< handles smaller than the sampling taken out
   size_t holes_filled = 0;
   size_t hole_triangles = 0;
   size_t holes_left = 0;          ///< boundary loops left open

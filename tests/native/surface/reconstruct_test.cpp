@@ -581,6 +581,19 @@ TEST(ReconstructSurface, AWiderFillOnlyPatchesTheLoopsLeftOpen) {
   EXPECT_GT(closed, 0u);
 }
 
+// A Fibonacci sphere flattened to 0.12 of its width: its rim is thinner than the spacing
+// (its radius of curvature 0.014 against r0 0.082), and the test and the fills joined its
+// sides into a tunnel there (a closed surface of genus 1). The tunnel is taken out: one closed
+// surface of genus 0 with every particle in it.
+TEST(ReconstructSurface, ATunnelAtARimThinnerThanTheSpacingIsTakenOut) {
+  PointCloud c = fibonacci_sphere(800);
+  for (Vec3& p : c.positions) p.z *= 0.12;
+  c.normals.clear();
+  const SurfaceResult r = reconstruct_surface(c, SurfaceOptions{});
+  EXPECT_EQ(r.surface.small_handles_removed, 1u);
+  expect_closed_surfaces(c, r, 1, 0, "flattened sphere");
+}
+
 TEST(ReconstructSurface, SmallIsolatedPatchesAreNotCappedIntoPillows) {
   // A flat disk (it sets the spacing, r0 ~ 0.04) and, far from it, patches of a few points
   // each: two triangles on a square (the flat rows of a depth scan), a pentagon around a

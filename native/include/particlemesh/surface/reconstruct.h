@@ -113,6 +113,11 @@ struct SurfaceStats {
   size_t grown = 0;               ///< triangles accepted by the extraction
   size_t seeds = 0;               ///< growth regions started
   size_t pinches_resolved = 0;    ///< extra fans removed at pinched vertices
+  /// Handles smaller than the sampling taken out: where a part thinner than the particles'
+  /// spacing was joined across (a tunnel through a claw's tip), the patch within 1.5 L that
+  /// holds the handle is replaced by a fill of its outline, its particles put back where they
+  /// fit (Guskov and Wood, "Topological noise removal", 2001).
+  size_t small_handles_removed = 0;
   size_t holes_filled = 0;
   size_t hole_triangles = 0;
   size_t holes_left = 0;          ///< boundary loops left open (real openings, or too large)

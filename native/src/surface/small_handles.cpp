@@ -1,0 +1,243 @@
+#include "surface/small_handles.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+#include "surface/triangle_angles.h"
+
+namespace PM_NAMESPACE::detail {
+
+namespace {
+
+constexpr uint32_t kNone = 0xffffffffu;
+
+/// The live triangle holding the half-edge a -> b, or kNone.
+uint32_t triangle_with(const EditableSurface& s, uint32_t a, uint32_t b) {
+  uint32_t found = kNone;
+  s.for_each_tri(a, [&](uint32_t t) {
+    const Triangle& T = s.triangle(t);
+    if (T[(corner_of(T, a) + 1) % 3] == b) found = t;
+  });
+  return found;
+}
+
+/// Which pieces of the surface (triangles joined through shared vertices, named by their
+/// root: EditableSurface::surface_pieces) have a handle: per root, 1 where the genus is above
+/// zero. From the Euler characteristic V - E + F and the boundary loops b of a connected
+/// orientable surface: genus = (2 - (V - E + F) - b) / 2, with E = (3 F + boundary edges) / 2.
+/// A piece that is not a 2-manifold (two parts sharing one vertex) can come out at a fraction
+/// or below zero: it is never above zero for want of a handle.
+std::vector<uint8_t> pieces_with_handles(const EditableSurface& s, const std::vector<uint32_t>& piece,
+                                         const std::vector<uint32_t>& triangles) {
+  const size_t n = piece.size();
+  std::vector<uint8_t> handled(n, 0);
+  // Per piece, in the order of their roots: vertices, boundary half-edges, loops.
+  std::vector<uint32_t> slot(n, 0), roots;
+  for (uint32_t r = 0; r < n; ++r)
+    if (piece[r] == r && triangles[r] > 0) slot[r] = uint32_t(roots.size()), roots.push_back(r);
+  std::vector<int64_t> vertices(roots.size(), 0), boundary(roots.size(), 0), loops(roots.size(), 0);
+  for (uint32_t v = 0; v < n; ++v)
+    if (triangles[piece[v]] > 0) ++vertices[slot[piece[v]]];
+  for (uint64_t e : s.boundary_set()) ++boundary[slot[piece[uint32_t(e >> 32)]]];
+  // Twice the Euler characteristic (E may be a half-integer until the sum).
+  auto chi2 = [&](size_t i) {
+    return 2 * vertices[i] - (3 * int64_t(triangles[roots[i]]) + boundary[i]) + 2 * int64_t(triangles[roots[i]]);
+  };
+  // Loops are traced only if some open piece could have a handle: genus >= 1 with b >= 1
+  // loops needs V - E + F <= 2 - 2 - b < 0.
+  bool trace = false;
+  for (size_t i = 0; i < roots.size(); ++i) trace |= boundary[i] > 0 && chi2(i) < 0;
+  if (trace)
+    for (const auto& loop : s.trace_loops()) ++loops[slot[piece[loop[0]]]];
+  for (size_t i = 0; i < roots.size(); ++i) {
+    const int64_t four_genus = 4 - chi2(i) - 2 * loops[i];  // 2 x (2 - chi - b)
+    handled[roots[i]] = four_genus >= 4 && four_genus % 4 == 0;
+  }
+  return handled;
+}
+
+/// The triangles around a vertex within a ball, as a patch of the surface, and its topology.
+class Patch {
+ public:
+  explicit Patch(const EditableSurface& s) : s_(s), in_(s.triangle_slots(), 0), seen_(s.point_count(), 0) {}
+
+  /// The triangles joined to `centre`'s through edges, every corner within `reach` of it.
+  void grow(uint32_t centre, double reach) {
+    if (in_.size() < s_.triangle_slots()) in_.resize(s_.triangle_slots(), 0);
+    ++epoch_;
+    tris_.clear();
+    const auto& P = s_.positions();
+    const double r2 = reach * reach;
+    auto inside = [&](uint32_t t) {
+      for (uint32_t v : s_.triangle(t))
+        if (squared_distance(P[v], P[centre]) > r2) return false;
+      return true;
+    };
+    s_.for_each_tri(centre, [&](uint32_t t) {
+      if (in_[t] != epoch_ && inside(t)) in_[t] = epoch_, tris_.push_back(t);
+    });
+    for (size_t i = 0; i < tris_.size(); ++i) {
+      const Triangle T = s_.triangle(tris_[i]);
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t u = triangle_with(s_, T[(k + 1) % 3], T[k]);
+        if (u != kNone && in_[u] != epoch_ && inside(u)) in_[u] = epoch_, tris_.push_back(u);
+      }
+    }
+  }
+
+  const std::vector<uint32_t>& triangles() const { return tris_; }
+  bool holds(uint32_t t) const { return t < in_.size() && in_[t] == epoch_; }
+
+  /// The patch's genus and its outline (the half-edges whose other side is not in the
+  /// patch), traced into loops keeping the patch on their left. `interior`: every outline
+  /// half-edge has a triangle of the surface on its other side.
+  struct Shape {
+    int64_t genus = 0;
+    std::vector<std::vector<uint32_t>> loops;
+    bool interior = true;
+    std::vector<uint32_t> vertices;
+  };
+  Shape shape() {
+    Shape out;
+    size_t boundary = 0;
+    for (uint32_t t : tris_)
+      for (uint32_t v : s_.triangle(t))
+        if (seen_[v] != epoch_) seen_[v] = epoch_, out.vertices.push_back(v);
+    // Outline half-edges, each with the triangle that holds it.
+    std::vector<std::pair<uint64_t, uint32_t>> outline;
+    for (uint32_t t : tris_) {
+      const Triangle& T = s_.triangle(t);
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t a = T[k], b = T[(k + 1) % 3];
+        const uint32_t other = triangle_with(s_, b, a);
+        if (holds(other)) continue;
+        ++boundary;
+        if (other == kNone) out.interior = false;
+        outline.push_back({EditableSurface::half_key(a, b), t});
+      }
+    }
+    std::sort(outline.begin(), outline.end());
+    std::vector<uint8_t> used(outline.size(), 0);
+    auto find = [&](uint32_t a, uint32_t b) {
+      const auto it = std::lower_bound(outline.begin(), outline.end(), std::make_pair(EditableSurface::half_key(a, b), 0u));
+      return it != outline.end() && it->first == EditableSurface::half_key(a, b) ? size_t(it - outline.begin())
+                                                                                 : outline.size();
+    };
+    for (size_t start = 0; start < outline.size(); ++start) {
+      if (used[start]) continue;
+      std::vector<uint32_t> loop;
+      size_t e = start;
+      while (!used[e]) {
+        used[e] = 1;
+        uint32_t a = uint32_t(outline[e].first >> 32), b = uint32_t(outline[e].first);
+        loop.push_back(a);
+        // The next outline half-edge leaves b: turn about b through the patch's triangles,
+        // from a -> b's, until a half-edge out of b has no patch triangle on its other side.
+        uint32_t t = outline[e].second;
+        for (size_t turns = 0;; ++turns) {
+          const Triangle& T = s_.triangle(t);
+          const uint32_t c = T[(corner_of(T, b) + 1) % 3];
+          const uint32_t u = triangle_with(s_, c, b);
+          if (!holds(u) || turns > tris_.size()) {
+            e = find(b, c);
+            break;
+          }
+          t = u;
+        }
+        if (e == outline.size()) {  // the outline does not go on (not a 2-manifold here)
+          out.genus = 0;
+          return out;
+        }
+      }
+      if (e != start) {  // the walk closed elsewhere than where it began: the same
+        out.genus = 0;
+        return out;
+      }
+      out.loops.push_back(std::move(loop));
+    }
+    // V - E + F with E = (3 F + outline) / 2; genus = (2 - chi - loops) / 2.
+    const int64_t twice_chi = 2 * int64_t(out.vertices.size()) - (3 * int64_t(tris_.size()) + int64_t(boundary)) +
+                              2 * int64_t(tris_.size());
+    const int64_t four_genus = 4 - twice_chi - 2 * int64_t(out.loops.size());
+    out.genus = four_genus > 0 && four_genus % 4 == 0 ? four_genus / 4 : 0;
+    return out;
+  }
+
+ private:
+  const EditableSurface& s_;
+  std::vector<uint32_t> in_, seen_;
+  uint32_t epoch_ = 0;
+  std::vector<uint32_t> tris_;
+};
+
+/// Does the surface fold sharply at v: two of its triangles on an edge at v with normals
+/// more than 90 degrees apart?
+bool folds_sharply(const EditableSurface& s, uint32_t v) {
+  bool sharp = false;
+  s.for_each_tri(v, [&](uint32_t t) {
+    if (sharp) return;
+    const Triangle& T = s.triangle(t);
+    const uint32_t next = T[(corner_of(T, v) + 1) % 3];
+    const uint32_t u = triangle_with(s, next, v);
+    if (u != kNone && dot(s.face_normal(T), s.face_normal(s.triangle(u))) < kSharpFoldCosine) sharp = true;
+  });
+  return sharp;
+}
+
+}  // namespace
+
+size_t remove_small_handles(EditableSurface& s, const FillOptions& o) {
+  if (s.triangle_slots() == 0) return 0;
+  std::vector<uint32_t> piece, triangles;
+  s.surface_pieces(piece, triangles);
+  const std::vector<uint8_t> handled = pieces_with_handles(s, piece, triangles);
+  const size_t n = piece.size();
+  std::vector<uint32_t> seeds;
+  for (uint32_t v = 0; v < n; ++v)
+    if (handled[piece[v]] && folds_sharply(s, v)) seeds.push_back(v);
+  if (seeds.empty()) return 0;
+  const auto& P = s.positions();
+  const std::vector<double>& L = *o.max_edge;
+  std::vector<uint8_t> covered(n, 0);
+  Patch patch(s);
+  size_t removed = 0;
+  for (uint32_t v : seeds) {
+    if (covered[v]) continue;
+    const double reach = kHandleReach * L[v];
+    patch.grow(v, reach);
+    if (patch.triangles().empty()) continue;
+    Patch::Shape shape = patch.shape();
+    // The patch's vertices near the centre need no patch of their own: one around them
+    // would hold nearly the same triangles.
+    for (uint32_t w : shape.vertices)
+      if (distance(P[w], P[v]) <= 0.5 * reach) covered[w] = 1;
+    if (shape.genus < 1 || shape.loops.size() != 1 || !shape.interior) continue;
+    // The outline, as the surface's boundary once the patch is gone: its half-edges reversed.
+    std::vector<uint32_t> loop(shape.loops[0].rbegin(), shape.loops[0].rend());
+    std::vector<uint32_t> sorted(loop);
+    std::sort(sorted.begin(), sorted.end());
+    if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) continue;  // through a vertex twice
+    std::vector<Triangle> taken;
+    for (uint32_t t : patch.triangles()) {
+      taken.push_back(s.triangle(t));
+      s.kill_triangle(t);
+    }
+    // The outline is now a loop of the surface's boundary, each half-edge held on its far side.
+    bool boundary = true;
+    for (size_t i = 0; i < loop.size(); ++i) {
+      const uint32_t a = loop[i], b = loop[(i + 1) % loop.size()];
+      boundary = boundary && s.directed_used(a, b) && !s.directed_used(b, a);
+    }
+    FillStats fill;  // not a hole of the surface: not counted as one
+    if (boundary && (fill_loop(s, loop, o, fill) || fill_loop(s, loop, o, fill, kMaxCreaseDihedral))) {
+      removed += size_t(shape.genus);
+      for (uint32_t w : shape.vertices) covered[w] = 1;
+    } else {
+      for (const Triangle& T : taken) s.add_triangle(T);
+    }
+  }
+  return removed;
+}
+
+}  // namespace particlemesh::detail
