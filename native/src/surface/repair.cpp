@@ -390,7 +390,7 @@ void repair_surface(EditableSurface& s, const std::vector<uint8_t>& active, cons
   }
   // Handles smaller than the sampling, where a part thinner than the spacing was joined
   // across: each replaced by a fill of its outline, its particles put back.
-  stats.small_handles_removed = remove_small_handles(s, o.fill);
+  stats.small_handles_removed = remove_small_handles(s, o.fill, o.max_hole);
   if (stats.small_handles_removed > 0) {
     for (int round = 0; round < kInsertRounds; ++round)
       if (insert_unused(s, active, raw, o.fill, near) == 0) break;

@@ -187,7 +187,7 @@ bool folds_sharply(const EditableSurface& s, uint32_t v) {
 
 }  // namespace
 
-size_t remove_small_handles(EditableSurface& s, const FillOptions& o) {
+size_t remove_small_handles(EditableSurface& s, const FillOptions& o, size_t max_loop) {
   if (s.triangle_slots() == 0) return 0;
   std::vector<uint32_t> piece, triangles;
   s.surface_pieces(piece, triangles);
@@ -212,7 +212,7 @@ size_t remove_small_handles(EditableSurface& s, const FillOptions& o) {
     // would hold nearly the same triangles.
     for (uint32_t w : shape.vertices)
       if (distance(P[w], P[v]) <= 0.5 * reach) covered[w] = 1;
-    if (shape.genus < 1 || shape.loops.size() != 1 || !shape.interior) continue;
+    if (shape.genus < 1 || shape.loops.size() != 1 || !shape.interior || shape.loops[0].size() > max_loop) continue;
     // The outline, as the surface's boundary once the patch is gone: its half-edges reversed.
     std::vector<uint32_t> loop(shape.loops[0].rbegin(), shape.loops[0].rend());
     std::vector<uint32_t> sorted(loop);

@@ -12,9 +12,10 @@
 // Only pieces whose genus (from their Euler characteristic and loops) is above zero are
 // searched, and only around vertices where the surface folds sharply (two triangles over 90
 // degrees apart: the crumpled triangles of a part thinner than the spacing); a patch with a
-// handle and one outline is replaced by a fill of its outline (the fill's rules: edges within
-// the limit, no fold back), and its inner particles are left for the insertion to put back.
-// A patch whose outline does not fill stays as it is.
+// handle and one outline inside the surface is replaced by a fill of its outline (the fill's
+// rules: edges within the limit, no fold back), and its inner particles are left for the
+// insertion to put back. A patch whose outline does not fill, or that reaches a loop the
+// surface left open, stays as it is.
 #pragma once
 
 #include "particlemesh/core/config.h"
@@ -31,8 +32,9 @@ constexpr double kHandleReach = 1.5;
 /// Two triangles on an edge fold sharply when their normals are over 90 degrees apart.
 constexpr double kSharpFoldCosine = 0.0;
 
-/// Replaces every patch of the kind above by a fill of its outline; returns the handles
-/// removed (the genus taken out).
-size_t remove_small_handles(EditableSurface& s, const FillOptions& o);
+/// Replaces every patch of the kind above whose outline has at most `max_loop` edges (the
+/// fill's loop limit) by a fill of its outline; returns the handles removed (the genus taken
+/// out).
+size_t remove_small_handles(EditableSurface& s, const FillOptions& o, size_t max_loop);
 
 }  // namespace particlemesh::detail

@@ -99,7 +99,10 @@ TEST(SmallHandles, ATunnelThroughAThinPartIsReplacedByAFillOfItsOutline) {
   const std::vector<double> L(f.P.size(), 1.5);
   FillOptions o;
   o.max_edge = &L;
-  EXPECT_EQ(remove_small_handles(e, o), 1u);
+  // An outline longer than the fill's loop limit (fill_holes) is not filled.
+  EXPECT_EQ(remove_small_handles(e, o, 3), 0u);
+  EXPECT_EQ(test::canonical(e.take()), test::canonical(f.tris));
+  EXPECT_EQ(remove_small_handles(e, o, 100), 1u);
   const std::vector<Triangle> after = e.take();
   const TopologyReport r = report_of(f.P, after);
   EXPECT_EQ(r.components, 1u);
@@ -111,7 +114,7 @@ TEST(SmallHandles, ATunnelThroughAThinPartIsReplacedByAFillOfItsOutline) {
   for (const Triangle& t : f.tris)
     if (f.P[t[0]].x < 6 && f.P[t[1]].x < 6 && f.P[t[2]].x < 6)
       EXPECT_EQ(std::count(after.begin(), after.end(), t), 1) << t[0] << " " << t[1] << " " << t[2];
-  EXPECT_EQ(remove_small_handles(e, o), 0u);  // nothing left to take out
+  EXPECT_EQ(remove_small_handles(e, o, 100), 0u);  // nothing left to take out
 }
 
 TEST(SmallHandles, LargerHandlesAndSurfacesOfGenusZeroStay) {
@@ -124,13 +127,13 @@ TEST(SmallHandles, LargerHandlesAndSurfacesOfGenusZeroStay) {
   const std::vector<double> L(far.P.size(), 1.5);
   FillOptions o;
   o.max_edge = &L;
-  EXPECT_EQ(remove_small_handles(e, o), 0u);
+  EXPECT_EQ(remove_small_handles(e, o, 100), 0u);
   EXPECT_EQ(test::canonical(e.take()), test::canonical(far.tris));
   // The finger without a tunnel: genus 0, nothing searched.
   const Finger plain(12, 0);
   EditableSurface g(plain.P, plain.frames, plain.tris);
   const std::vector<double> L2(plain.P.size(), 1.5);
   o.max_edge = &L2;
-  EXPECT_EQ(remove_small_handles(g, o), 0u);
+  EXPECT_EQ(remove_small_handles(g, o, 100), 0u);
   EXPECT_EQ(test::canonical(g.take()), test::canonical(plain.tris));
 }
