@@ -133,6 +133,15 @@ void EditableSurface::kill_triangle(uint32_t t) {
   }
 }
 
+void EditableSurface::revive_triangle(uint32_t t) {
+  alive_[t] = 1;
+  const Triangle& T = tris_[t];
+  for (int k = 0; k < 3; ++k) {
+    const uint32_t a = T[k], b = T[(k + 1) % 3];
+    if (!boundary_.erase(half_key(b, a))) boundary_.insert(half_key(a, b));
+  }
+}
+
 std::vector<uint32_t> EditableSurface::vertices_with_added_triangles() const {
   std::vector<uint32_t> out;
   for (const auto& [v, list] : extra_) out.push_back(v);

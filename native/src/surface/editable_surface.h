@@ -63,6 +63,8 @@ class EditableSurface {
 
   void add_triangle(const Triangle& T);
   void kill_triangle(uint32_t t);
+  /// Brings a killed triangle back in its slot, as if it had never been killed.
+  void revive_triangle(uint32_t t);
 
   static uint64_t half_key(uint32_t a, uint32_t b) { return (uint64_t(a) << 32) | b; }
   /// Boundary half-edges (a << 32 | b), unordered.

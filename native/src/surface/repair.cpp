@@ -390,7 +390,8 @@ void repair_surface(EditableSurface& s, const std::vector<uint8_t>& active, cons
   }
   // Handles smaller than the sampling, where a part thinner than the spacing was joined
   // across: each replaced by a fill of its outline, its particles put back.
-  stats.small_handles_removed = remove_small_handles(s, o.fill, o.max_hole);
+  std::vector<std::vector<uint32_t>> loops;  // the loops, if traced for the pieces' genus
+  stats.small_handles_removed = remove_small_handles(s, o.fill, o.max_hole, &loops);
   if (stats.small_handles_removed > 0) {
     for (int round = 0; round < kInsertRounds; ++round)
       if (insert_unused(s, active, raw, o.fill, near) == 0) break;
@@ -401,7 +402,8 @@ void repair_surface(EditableSurface& s, const std::vector<uint8_t>& active, cons
   sort_out_pieces(s, o.min_component_triangles, stats.pieces);
   tracker.check();
   if (!s.closed()) {
-    const auto left = s.trace_loops();
+    // The loops traced above are still the surface's unless a piece was removed since.
+    const auto left = loops.empty() || stats.pieces.removed > 0 ? s.trace_loops() : std::move(loops);
     stats.holes_left = left.size();
     for (const auto& l : left) {
       stats.largest_hole_left = std::max(stats.largest_hole_left, l.size());

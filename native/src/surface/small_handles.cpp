@@ -29,7 +29,8 @@ uint32_t triangle_with(const EditableSurface& s, uint32_t a, uint32_t b) {
 /// A piece that is not a 2-manifold (two parts sharing one vertex) can come out at a fraction
 /// or below zero: it is never above zero for want of a handle.
 std::vector<uint8_t> pieces_with_handles(const EditableSurface& s, const std::vector<uint32_t>& piece,
-                                         const std::vector<uint32_t>& triangles) {
+                                         const std::vector<uint32_t>& triangles,
+                                         std::vector<std::vector<uint32_t>>& traced) {
   const size_t n = piece.size();
   std::vector<uint8_t> handled(n, 0);
   // Per piece, in the order of their roots: vertices, boundary half-edges, loops.
@@ -48,8 +49,10 @@ std::vector<uint8_t> pieces_with_handles(const EditableSurface& s, const std::ve
   // loops needs V - E + F <= 2 - 2 - b < 0.
   bool trace = false;
   for (size_t i = 0; i < roots.size(); ++i) trace |= boundary[i] > 0 && chi2(i) < 0;
-  if (trace)
-    for (const auto& loop : s.trace_loops()) ++loops[slot[piece[loop[0]]]];
+  if (trace) {
+    traced = s.trace_loops();
+    for (const auto& loop : traced) ++loops[slot[piece[loop[0]]]];
+  }
   for (size_t i = 0; i < roots.size(); ++i) {
     const int64_t four_genus = 4 - chi2(i) - 2 * loops[i];  // 2 x (2 - chi - b)
     handled[roots[i]] = four_genus >= 4 && four_genus % 4 == 0;
@@ -185,13 +188,13 @@ bool folds_sharply(const EditableSurface& s, uint32_t v) {
   return sharp;
 }
 
-}  // namespace
-
-size_t remove_small_handles(EditableSurface& s, const FillOptions& o, size_t max_loop) {
+/// remove_small_handles, with the loops traced for the pieces' genus (if any were) in `traced`.
+size_t take_out_small_handles(EditableSurface& s, const FillOptions& o, size_t max_loop,
+                              std::vector<std::vector<uint32_t>>& traced) {
   if (s.triangle_slots() == 0) return 0;
   std::vector<uint32_t> piece, triangles;
   s.surface_pieces(piece, triangles);
-  const std::vector<uint8_t> handled = pieces_with_handles(s, piece, triangles);
+  const std::vector<uint8_t> handled = pieces_with_handles(s, piece, triangles, traced);
   const size_t n = piece.size();
   std::vector<uint32_t> seeds;
   for (uint32_t v = 0; v < n; ++v)
@@ -218,11 +221,7 @@ size_t remove_small_handles(EditableSurface& s, const FillOptions& o, size_t max
     std::vector<uint32_t> sorted(loop);
     std::sort(sorted.begin(), sorted.end());
     if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) continue;  // through a vertex twice
-    std::vector<Triangle> taken;
-    for (uint32_t t : patch.triangles()) {
-      taken.push_back(s.triangle(t));
-      s.kill_triangle(t);
-    }
+    for (uint32_t t : patch.triangles()) s.kill_triangle(t);
     // The outline is now a loop of the surface's boundary, each half-edge held on its far side.
     bool boundary = true;
     for (size_t i = 0; i < loop.size(); ++i) {
@@ -234,9 +233,19 @@ size_t remove_small_handles(EditableSurface& s, const FillOptions& o, size_t max
       removed += size_t(shape.genus);
       for (uint32_t w : shape.vertices) covered[w] = 1;
     } else {
-      for (const Triangle& T : taken) s.add_triangle(T);
+      for (uint32_t t : patch.triangles()) s.revive_triangle(t);  // as it was, slot for slot
     }
   }
+  return removed;
+}
+
+}  // namespace
+
+size_t remove_small_handles(EditableSurface& s, const FillOptions& o, size_t max_loop,
+                            std::vector<std::vector<uint32_t>>* loops) {
+  std::vector<std::vector<uint32_t>> traced;
+  const size_t removed = take_out_small_handles(s, o, max_loop, traced);
+  if (loops) *loops = removed == 0 ? std::move(traced) : std::vector<std::vector<uint32_t>>{};
   return removed;
 }
 

@@ -21,6 +21,8 @@
 #include "particlemesh/core/config.h"
 
 #include <cstddef>
+#include <cstdint>
+#include <vector>
 
 #include "surface/editable_surface.h"
 #include "surface/hole_fill.h"
@@ -35,6 +37,10 @@ constexpr double kSharpFoldCosine = 0.0;
 /// Replaces every patch of the kind above whose outline has at most `max_loop` edges (the
 /// fill's loop limit) by a fill of its outline; returns the handles removed (the genus taken
 /// out).
-size_t remove_small_handles(EditableSurface& s, const FillOptions& o, size_t max_loop);
+/// `loops`, if given, receives the surface's boundary loops (EditableSurface::trace_loops) when
+/// they were traced and nothing was removed (the surface is then as it was), else is emptied:
+/// the caller counting the loops left need not trace them again.
+size_t remove_small_handles(EditableSurface& s, const FillOptions& o, size_t max_loop,
+                            std::vector<std::vector<uint32_t>>* loops = nullptr);
 
 }  // namespace particlemesh::detail
