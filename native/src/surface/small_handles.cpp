@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/parallel.h"
 #include "surface/triangle_angles.h"
 
 namespace PM_NAMESPACE::detail {
@@ -175,17 +176,22 @@ class Patch {
 };
 
 /// Does the surface fold sharply at v: two of its triangles on an edge at v with normals
-/// more than 90 degrees apart?
-bool folds_sharply(const EditableSurface& s, uint32_t v) {
-  bool sharp = false;
+/// more than 90 degrees apart (a negative dot product of their unnormalised normals)? Both
+/// triangles of an edge v -> w are at v: the other holds w -> v, its corner at v has w before
+/// it. `work`: scratch space.
+bool folds_sharply(const EditableSurface& s, uint32_t v, std::vector<std::pair<Vec3, uint64_t>>& work) {
+  const auto& P = s.positions();
+  work.clear();
   s.for_each_tri(v, [&](uint32_t t) {
-    if (sharp) return;
     const Triangle& T = s.triangle(t);
-    const uint32_t next = T[(corner_of(T, v) + 1) % 3];
-    const uint32_t u = triangle_with(s, next, v);
-    if (u != kNone && dot(s.face_normal(T), s.face_normal(s.triangle(u))) < kSharpFoldCosine) sharp = true;
+    const int k = corner_of(T, v);
+    const uint64_t succ = T[(k + 1) % 3], pred = T[(k + 2) % 3];
+    work.push_back({cross(P[T[1]] - P[T[0]], P[T[2]] - P[T[0]]), succ << 32 | pred});
   });
-  return sharp;
+  for (const auto& [n, a] : work)
+    for (const auto& [m, b] : work)
+      if (uint32_t(b) == uint32_t(a >> 32) && dot(n, m) < 0) return true;  // b's pred is a's succ
+  return false;
 }
 
 /// remove_small_handles, with the loops traced for the pieces' genus (if any were) in `traced`.
@@ -196,9 +202,14 @@ size_t take_out_small_handles(EditableSurface& s, const FillOptions& o, size_t m
   s.surface_pieces(piece, triangles);
   const std::vector<uint8_t> handled = pieces_with_handles(s, piece, triangles, traced);
   const size_t n = piece.size();
+  std::vector<uint8_t> sharp(n, 0);
+  parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+    std::vector<std::pair<Vec3, uint64_t>> work;
+    for (size_t v = b; v < e; ++v) sharp[v] = handled[piece[v]] && folds_sharply(s, uint32_t(v), work);
+  });
   std::vector<uint32_t> seeds;
   for (uint32_t v = 0; v < n; ++v)
-    if (handled[piece[v]] && folds_sharply(s, v)) seeds.push_back(v);
+    if (sharp[v]) seeds.push_back(v);
   if (seeds.empty()) return 0;
   const auto& P = s.positions();
   const std::vector<double>& L = *o.max_edge;

@@ -31,8 +31,6 @@ namespace PM_NAMESPACE::detail {
 
 /// A patch searched for a handle reaches this many times its centre's edge limit L.
 constexpr double kHandleReach = 1.5;
-/// Two triangles on an edge fold sharply when their normals are over 90 degrees apart.
-constexpr double kSharpFoldCosine = 0.0;
 
 /// Replaces every patch of the kind above whose outline has at most `max_loop` edges (the
 /// fill's loop limit) by a fill of its outline; returns the handles removed (the genus taken
