@@ -70,20 +70,16 @@ EditableSurface::EditableSurface(const std::vector<Vec3>& P, const std::vector<F
   std::vector<uint32_t> fill(vt_off_.begin(), vt_off_.end() - 1);
   for (uint32_t t = 0; t < tris_.size(); ++t)
     for (uint32_t v : tris_[t]) vt_[fill[v]++] = t;
-  for (const Triangle& T : tris_)
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t a = T[k], b = T[(k + 1) % 3];
-      if (!boundary_.erase(half_key(b, a))) boundary_.insert(half_key(a, b));
-    }
+  for (const Triangle& T : tris_) toggle_boundary(T, true);
 }
 
-bool EditableSurface::directed_used(uint32_t a, uint32_t b) const {
-  bool used = false;
+uint32_t EditableSurface::triangle_with(uint32_t a, uint32_t b) const {
+  uint32_t found = kNoTriangle;
   for_each_tri(a, [&](uint32_t t) {
     const Triangle& T = tris_[t];
-    if (T[(corner_of(T, a) + 1) % 3] == b) used = true;
+    if (T[(corner_of(T, a) + 1) % 3] == b) found = t;
   });
-  return used;
+  return found;
 }
 
 bool EditableSurface::triangle_exists(uint32_t a, uint32_t b, uint32_t c) const {
@@ -118,26 +114,23 @@ void EditableSurface::add_triangle(const Triangle& T) {
     extra_[v].push_back(id);
     has_extra_[v] = 1;
   }
-  for (int k = 0; k < 3; ++k) {
-    const uint32_t a = T[k], b = T[(k + 1) % 3];
-    if (!boundary_.erase(half_key(b, a))) boundary_.insert(half_key(a, b));
-  }
+  toggle_boundary(T, true);
 }
 
 void EditableSurface::kill_triangle(uint32_t t) {
   alive_[t] = 0;
-  const Triangle& T = tris_[t];
-  for (int k = 0; k < 3; ++k) {
-    const uint32_t a = T[k], b = T[(k + 1) % 3];
-    if (!boundary_.erase(half_key(a, b))) boundary_.insert(half_key(b, a));
-  }
+  toggle_boundary(tris_[t], false);
 }
 
 void EditableSurface::revive_triangle(uint32_t t) {
   alive_[t] = 1;
-  const Triangle& T = tris_[t];
+  toggle_boundary(tris_[t], true);
+}
+
+void EditableSurface::toggle_boundary(const Triangle& T, bool entering) {
   for (int k = 0; k < 3; ++k) {
-    const uint32_t a = T[k], b = T[(k + 1) % 3];
+    uint32_t a = T[k], b = T[(k + 1) % 3];
+    if (!entering) std::swap(a, b);  // leaving: a -> b goes, b -> a is left open
     if (!boundary_.erase(half_key(b, a))) boundary_.insert(half_key(a, b));
   }
 }

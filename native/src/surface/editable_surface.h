@@ -54,8 +54,11 @@ class EditableSurface {
   bool alive(uint32_t t) const { return alive_[t] != 0; }
   Vec3 face_normal(const Triangle& T) const { return normalized(cross(P_[T[1]] - P_[T[0]], P_[T[2]] - P_[T[0]])); }
 
+  static constexpr uint32_t kNoTriangle = 0xffffffffu;
+  /// The live triangle that holds the directed edge a -> b, or kNoTriangle.
+  uint32_t triangle_with(uint32_t a, uint32_t b) const;
   /// Is the directed edge a -> b in a live triangle?
-  bool directed_used(uint32_t a, uint32_t b) const;
+  bool directed_used(uint32_t a, uint32_t b) const { return triangle_with(a, b) != kNoTriangle; }
   bool edge_exists(uint32_t a, uint32_t b) const { return directed_used(a, b) || directed_used(b, a); }
   bool triangle_exists(uint32_t a, uint32_t b, uint32_t c) const;
   /// Does a boundary half-edge start at v (an edge v -> w of a triangle with no w -> v)?
@@ -82,6 +85,14 @@ class EditableSurface {
   /// each vertex's piece, named by the piece's lowest vertex, and each piece's triangles,
   /// counted at that vertex.
   void surface_pieces(std::vector<uint32_t>& piece, std::vector<uint32_t>& triangles) const;
+  struct Pieces {
+    std::vector<uint32_t> piece, triangles;  ///< as surface_pieces gives them
+  };
+  Pieces pieces() const {
+    Pieces p;
+    surface_pieces(p.piece, p.triangles);
+    return p;
+  }
 
   /// The live triangles, in order.
   std::vector<Triangle> take() const;
@@ -89,6 +100,10 @@ class EditableSurface {
   std::vector<uint64_t> boundary() const;
 
  private:
+  /// The boundary half-edges as T enters the surface (its edges' twins stop being boundary,
+  /// its other edges become boundary) or, with entering false, leaves it.
+  void toggle_boundary(const Triangle& T, bool entering);
+
   const std::vector<Vec3>& P_;
   const std::vector<Frame>& frame_;
   std::vector<Triangle> tris_;

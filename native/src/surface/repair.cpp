@@ -311,12 +311,13 @@ size_t drop_fragments(EditableSurface& s, const std::vector<Triangle>& raw) {
   return dropped;
 }
 
-void sort_out_pieces(EditableSurface& s, size_t min_triangles, PieceStats& out) {
+void sort_out_pieces(EditableSurface& s, size_t min_triangles, PieceStats& out, const EditableSurface::Pieces* known) {
   out = {};
   const bool removing = min_triangles > 1;
   if (!removing && s.closed()) return;
-  std::vector<uint32_t> piece, count;  // count: triangles per piece, at its root
-  s.surface_pieces(piece, count);
+  const EditableSurface::Pieces found = known ? EditableSurface::Pieces{} : s.pieces();
+  const std::vector<uint32_t>& piece = known ? known->piece : found.piece;
+  const std::vector<uint32_t>& count = known ? known->triangles : found.triangles;  // at each root
   if (removing) {
     for (uint32_t t = 0; t < s.triangle_slots(); ++t)
       if (s.alive(t) && count[piece[s.triangle(t)[0]]] < min_triangles) {
@@ -390,8 +391,8 @@ void repair_surface(EditableSurface& s, const std::vector<uint8_t>& active, cons
   }
   // Handles smaller than the sampling, where a part thinner than the spacing was joined
   // across: each replaced by a fill of its outline, its particles put back.
-  std::vector<std::vector<uint32_t>> loops;  // the loops, if traced for the pieces' genus
-  stats.small_handles_removed = remove_small_handles(s, o.fill, o.max_hole, &loops);
+  HandleSearch seen;  // the surface's pieces (and loops, if traced), while it is unchanged
+  stats.small_handles_removed = remove_small_handles(s, o.fill, o.max_hole, &seen);
   if (stats.small_handles_removed > 0) {
     for (int round = 0; round < kInsertRounds; ++round)
       if (insert_unused(s, active, raw, o.fill, near) == 0) break;
@@ -399,11 +400,11 @@ void repair_surface(EditableSurface& s, const std::vector<uint8_t>& active, cons
     stats.pinches_resolved += unpinch(s);
   }
   tracker.check();
-  sort_out_pieces(s, o.min_component_triangles, stats.pieces);
+  sort_out_pieces(s, o.min_component_triangles, stats.pieces, seen.pieces.piece.empty() ? nullptr : &seen.pieces);
   tracker.check();
   if (!s.closed()) {
     // The loops traced above are still the surface's unless a piece was removed since.
-    const auto left = loops.empty() || stats.pieces.removed > 0 ? s.trace_loops() : std::move(loops);
+    const auto left = seen.loops.empty() || stats.pieces.removed > 0 ? s.trace_loops() : std::move(seen.loops);
     stats.holes_left = left.size();
     for (const auto& l : left) {
       stats.largest_hole_left = std::max(stats.largest_hole_left, l.size());

@@ -96,8 +96,10 @@ size_t drop_fragments(EditableSurface& s, const std::vector<Triangle>& raw);
 /// Removes every piece (triangles joined through shared vertices) of fewer than
 /// `min_triangles` triangles (their particles are then in no triangle), and, when the surface
 /// left is open, counts its pieces of fewer than kStrayPieceTriangles: one pass over the
-/// pieces, none for a closed surface with nothing to remove.
-void sort_out_pieces(EditableSurface& s, size_t min_triangles, PieceStats& out);
+/// pieces, none for a closed surface with nothing to remove. `known`: the surface's pieces,
+/// if the caller has them (EditableSurface::pieces) and the surface has not changed since.
+void sort_out_pieces(EditableSurface& s, size_t min_triangles, PieceStats& out,
+                     const EditableSurface::Pieces* known = nullptr);
 
 /// The whole repair, in the order above; then counts the loops left open.
 void repair_surface(EditableSurface& s, const std::vector<uint8_t>& active, const std::vector<Triangle>& raw,

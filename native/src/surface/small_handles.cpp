@@ -11,29 +11,30 @@ namespace PM_NAMESPACE::detail {
 
 namespace {
 
-constexpr uint32_t kNone = 0xffffffffu;
+constexpr uint32_t kNone = EditableSurface::kNoTriangle;
 
-/// The live triangle holding the half-edge a -> b, or kNone.
-uint32_t triangle_with(const EditableSurface& s, uint32_t a, uint32_t b) {
-  uint32_t found = kNone;
-  s.for_each_tri(a, [&](uint32_t t) {
-    const Triangle& T = s.triangle(t);
-    if (T[(corner_of(T, a) + 1) % 3] == b) found = t;
-  });
-  return found;
+/// Twice the Euler characteristic V - E + F of a surface of V vertices, F triangles and B
+/// boundary half-edges (E = (3 F + B) / 2).
+int64_t twice_euler(int64_t vertices, int64_t triangles, int64_t boundary) {
+  return 2 * vertices - triangles - boundary;
 }
 
-/// Which pieces of the surface (triangles joined through shared vertices, named by their
-/// root: EditableSurface::surface_pieces) have a handle: per root, 1 where the genus is above
-/// zero. From the Euler characteristic V - E + F and the boundary loops b of a connected
-/// orientable surface: genus = (2 - (V - E + F) - b) / 2, with E = (3 F + boundary edges) / 2.
-/// A piece that is not a 2-manifold (two parts sharing one vertex) can come out at a fraction
-/// or below zero: it is never above zero for want of a handle.
-std::vector<uint8_t> pieces_with_handles(const EditableSurface& s, const std::vector<uint32_t>& piece,
-                                         const std::vector<uint32_t>& triangles,
-                                         std::vector<std::vector<uint32_t>>& traced) {
+/// The genus of a connected orientable surface, (2 - (V - E + F) - loops) / 2; -1 where that
+/// is not a whole number >= 0 (not a 2-manifold: two parts sharing one vertex).
+int64_t genus_of(int64_t twice_chi, int64_t loops) {
+  const int64_t four = 4 - twice_chi - 2 * loops;
+  return four >= 0 && four % 4 == 0 ? four / 4 : -1;
+}
+
+/// Which pieces of the surface (EditableSurface::surface_pieces) have a handle: per root, 1
+/// where the genus is above zero (genus_of); whether any has. `traced` receives the surface's
+/// loops when they had to be traced.
+bool pieces_with_handles(const EditableSurface& s, const EditableSurface::Pieces& pieces, std::vector<uint8_t>& handled,
+                         std::vector<std::vector<uint32_t>>& traced) {
+  const std::vector<uint32_t>& piece = pieces.piece;
+  const std::vector<uint32_t>& triangles = pieces.triangles;
   const size_t n = piece.size();
-  std::vector<uint8_t> handled(n, 0);
+  handled.assign(n, 0);
   // Per piece, in the order of their roots: vertices, boundary half-edges, loops.
   std::vector<uint32_t> slot(n, 0), roots;
   for (uint32_t r = 0; r < n; ++r)
@@ -42,10 +43,7 @@ std::vector<uint8_t> pieces_with_handles(const EditableSurface& s, const std::ve
   for (uint32_t v = 0; v < n; ++v)
     if (triangles[piece[v]] > 0) ++vertices[slot[piece[v]]];
   for (uint64_t e : s.boundary_set()) ++boundary[slot[piece[uint32_t(e >> 32)]]];
-  // Twice the Euler characteristic (E may be a half-integer until the sum).
-  auto chi2 = [&](size_t i) {
-    return 2 * vertices[i] - (3 * int64_t(triangles[roots[i]]) + boundary[i]) + 2 * int64_t(triangles[roots[i]]);
-  };
+  auto chi2 = [&](size_t i) { return twice_euler(vertices[i], triangles[roots[i]], boundary[i]); };
   // Loops are traced only if some open piece could have a handle: genus >= 1 with b >= 1
   // loops needs V - E + F <= 2 - 2 - b < 0.
   bool trace = false;
@@ -54,11 +52,12 @@ std::vector<uint8_t> pieces_with_handles(const EditableSurface& s, const std::ve
     traced = s.trace_loops();
     for (const auto& loop : traced) ++loops[slot[piece[loop[0]]]];
   }
+  bool any = false;
   for (size_t i = 0; i < roots.size(); ++i) {
-    const int64_t four_genus = 4 - chi2(i) - 2 * loops[i];  // 2 x (2 - chi - b)
-    handled[roots[i]] = four_genus >= 4 && four_genus % 4 == 0;
+    handled[roots[i]] = genus_of(chi2(i), loops[i]) >= 1;
+    any |= handled[roots[i]] != 0;
   }
-  return handled;
+  return any;
 }
 
 /// The triangles around a vertex within a ball, as a patch of the surface, and its topology.
@@ -84,7 +83,7 @@ class Patch {
     for (size_t i = 0; i < tris_.size(); ++i) {
       const Triangle T = s_.triangle(tris_[i]);
       for (int k = 0; k < 3; ++k) {
-        const uint32_t u = triangle_with(s_, T[(k + 1) % 3], T[k]);
+        const uint32_t u = s_.triangle_with(T[(k + 1) % 3], T[k]);
         if (u != kNone && in_[u] != epoch_ && inside(u)) in_[u] = epoch_, tris_.push_back(u);
       }
     }
@@ -114,7 +113,7 @@ class Patch {
       const Triangle& T = s_.triangle(t);
       for (int k = 0; k < 3; ++k) {
         const uint32_t a = T[k], b = T[(k + 1) % 3];
-        const uint32_t other = triangle_with(s_, b, a);
+        const uint32_t other = s_.triangle_with(b, a);
         if (holds(other)) continue;
         ++boundary;
         if (other == kNone) out.interior = false;
@@ -142,7 +141,7 @@ class Patch {
         for (size_t turns = 0;; ++turns) {
           const Triangle& T = s_.triangle(t);
           const uint32_t c = T[(corner_of(T, b) + 1) % 3];
-          const uint32_t u = triangle_with(s_, c, b);
+          const uint32_t u = s_.triangle_with(c, b);
           if (!holds(u) || turns > tris_.size()) {
             e = find(b, c);
             break;
@@ -160,11 +159,9 @@ class Patch {
       }
       out.loops.push_back(std::move(loop));
     }
-    // V - E + F with E = (3 F + outline) / 2; genus = (2 - chi - loops) / 2.
-    const int64_t twice_chi = 2 * int64_t(out.vertices.size()) - (3 * int64_t(tris_.size()) + int64_t(boundary)) +
-                              2 * int64_t(tris_.size());
-    const int64_t four_genus = 4 - twice_chi - 2 * int64_t(out.loops.size());
-    out.genus = four_genus > 0 && four_genus % 4 == 0 ? four_genus / 4 : 0;
+    out.genus = std::max<int64_t>(
+        0, genus_of(twice_euler(int64_t(out.vertices.size()), int64_t(tris_.size()), int64_t(boundary)),
+                    int64_t(out.loops.size())));
     return out;
   }
 
@@ -194,13 +191,13 @@ bool folds_sharply(const EditableSurface& s, uint32_t v, std::vector<std::pair<V
   return false;
 }
 
-/// remove_small_handles, with the loops traced for the pieces' genus (if any were) in `traced`.
-size_t take_out_small_handles(EditableSurface& s, const FillOptions& o, size_t max_loop,
-                              std::vector<std::vector<uint32_t>>& traced) {
+/// remove_small_handles, with what the search found on the surface in `found`.
+size_t take_out_small_handles(EditableSurface& s, const FillOptions& o, size_t max_loop, HandleSearch& found) {
   if (s.triangle_slots() == 0) return 0;
-  std::vector<uint32_t> piece, triangles;
-  s.surface_pieces(piece, triangles);
-  const std::vector<uint8_t> handled = pieces_with_handles(s, piece, triangles, traced);
+  found.pieces = s.pieces();
+  const std::vector<uint32_t>& piece = found.pieces.piece;
+  std::vector<uint8_t> handled;
+  if (!pieces_with_handles(s, found.pieces, handled, found.loops)) return 0;
   const size_t n = piece.size();
   std::vector<uint8_t> sharp(n, 0);
   parallel_blocks(n, 8192, [&](size_t b, size_t e) {
@@ -252,11 +249,10 @@ size_t take_out_small_handles(EditableSurface& s, const FillOptions& o, size_t m
 
 }  // namespace
 
-size_t remove_small_handles(EditableSurface& s, const FillOptions& o, size_t max_loop,
-                            std::vector<std::vector<uint32_t>>* loops) {
-  std::vector<std::vector<uint32_t>> traced;
-  const size_t removed = take_out_small_handles(s, o, max_loop, traced);
-  if (loops) *loops = removed == 0 ? std::move(traced) : std::vector<std::vector<uint32_t>>{};
+size_t remove_small_handles(EditableSurface& s, const FillOptions& o, size_t max_loop, HandleSearch* unchanged) {
+  HandleSearch found;
+  const size_t removed = take_out_small_handles(s, o, max_loop, found);
+  if (unchanged) *unchanged = removed == 0 ? std::move(found) : HandleSearch{};
   return removed;
 }
 

@@ -32,13 +32,19 @@ namespace PM_NAMESPACE::detail {
 /// A patch searched for a handle reaches this many times its centre's edge limit L.
 constexpr double kHandleReach = 1.5;
 
+/// What the search saw of the surface on its way: its pieces, and its boundary loops if it
+/// had to trace them (empty otherwise).
+struct HandleSearch {
+  EditableSurface::Pieces pieces;
+  std::vector<std::vector<uint32_t>> loops;
+};
+
 /// Replaces every patch of the kind above whose outline has at most `max_loop` edges (the
 /// fill's loop limit) by a fill of its outline; returns the handles removed (the genus taken
-/// out).
-/// `loops`, if given, receives the surface's boundary loops (EditableSurface::trace_loops) when
-/// they were traced and nothing was removed (the surface is then as it was), else is emptied:
-/// the caller counting the loops left need not trace them again.
+/// out). `unchanged`, if given, receives what the search saw when nothing was removed (the
+/// surface is then as it was, and its caller need not find its pieces or trace its loops
+/// again), else is emptied.
 size_t remove_small_handles(EditableSurface& s, const FillOptions& o, size_t max_loop,
-                            std::vector<std::vector<uint32_t>>* loops = nullptr);
+                            HandleSearch* unchanged = nullptr);
 
 }  // namespace particlemesh::detail
