@@ -250,6 +250,13 @@ ParticleInput read_particles(const std::string& path, const ParticleInputArgs& a
     const std::string what = lower_extension(path) == ".pcd" ? "'" + path + "': .pcd input" : "PCL preprocessing";
     in = pcl_module(what).read(path, a, threads);
   }
+  if (!in.cloud.not_read.empty()) {
+    // Said, not dropped silently: what the file holds per particle that no channel carries.
+    std::string joined;
+    for (const std::string& what : in.cloud.not_read) joined += (joined.empty() ? "" : "; ") + what;
+    in.summary += "  not read      " + joined + "\n";
+    in.report["not_read"] = in.cloud.not_read;
+  }
   crop_particles(in, a.crop);
   return in;
 }

@@ -22,6 +22,7 @@ ParticleInput read_with_pcl(const std::string& path, const ParticleInputArgs& a,
   ParticleInput in;
   particlemesh_pcl::LoadReport load;
   in.cloud = particlemesh_pcl::loadParticles(path, &load);
+  const std::vector<std::string> not_read = in.cloud.not_read;  // about the file: kept through preprocessing
   const auto& c = load.conversion;
   in.report = {{"format", load.format},
                {"encoding", load.encoding},
@@ -111,6 +112,7 @@ ParticleInput read_with_pcl(const std::string& path, const ParticleInputArgs& a,
     s.back() = '\n';
     in.summary += s;
   }
+  in.cloud.not_read = not_read;
   return in;
 }
 

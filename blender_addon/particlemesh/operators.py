@@ -9,6 +9,7 @@ the same work synchronously."""
 import os
 import re
 import traceback
+import warnings
 
 import bpy
 from bpy.props import BoolProperty, CollectionProperty, EnumProperty, IntProperty, StringProperty
@@ -321,7 +322,9 @@ class PARTICLEMESH_OT_import_cloud(bpy.types.Operator, ImportHelper):
         made, failures, notes = [], [], []
         for path in paths:
             try:
-                cloud = pm.read_points(path)
+                with warnings.catch_warnings():  # said in the operator's report instead
+                    warnings.simplefilter("ignore", pm.NotReadWarning)
+                    cloud = pm.read_points(path)
             except pm.Error as e:
                 failures.append(str(e))
                 continue
@@ -338,6 +341,8 @@ class PARTICLEMESH_OT_import_cloud(bpy.types.Operator, ImportHelper):
             dropped = cloud.info.get("invalid_points", 0)
             if dropped:  # e.g. a depth-camera frame's pixels without depth
                 notes.append(f"{obj.name}: {dropped} points with a NaN coordinate dropped")
+            if cloud.info.get("not_read"):  # string attributes, list properties: no point channel
+                notes.append(f"{obj.name}: not read: " + "; ".join(cloud.info["not_read"]))
         if not made:
             self.report({"ERROR"}, "; ".join(failures) or "nothing to import")
             return {"CANCELLED"}

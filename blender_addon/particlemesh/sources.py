@@ -6,6 +6,7 @@ command-line tool takes)."""
 import glob
 import os
 import re
+import warnings
 
 import bpy
 import numpy as np
@@ -127,7 +128,9 @@ def read_file_frame(pattern, frame):
     path = frame_file(pattern, frame)
     if not os.path.isfile(path):
         raise SourceError(f"no particle file for frame {frame}: '{path}' does not exist")
-    cloud = pm.read_points(path)
+    with warnings.catch_warnings():  # only positions, normals, velocity and sizes are used here
+        warnings.simplefilter("ignore", pm.NotReadWarning)
+        cloud = pm.read_points(path)
     velocity = cloud.attributes.get("velocity")
     if velocity is not None and velocity.shape[1] != 3:
         velocity = None

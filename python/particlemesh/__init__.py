@@ -24,6 +24,7 @@ the Blender add-on carries this same package."""
 
 import ctypes
 import os
+import warnings
 from ctypes import c_double, c_float, c_size_t, c_uint32, c_uint64
 
 import numpy as np
@@ -31,7 +32,7 @@ import numpy as np
 from . import _abi, _library, _options
 from ._data import (Mesh, Points, channels, new_cloud, new_mesh, path_bytes, per_point, ptr, vec3,
                     vertex_indices, read_cloud_handle, read_mesh_handle, struct_dict)
-from ._errors import CancelledError, Error, LibraryNotFoundError, PclBridgeNotFoundError
+from ._errors import CancelledError, Error, LibraryNotFoundError, NotReadWarning, PclBridgeNotFoundError
 from ._progress import Hook, Progress
 
 __all__ = [
@@ -42,7 +43,7 @@ __all__ = [
     "topology",
     "estimate_spacing", "thin", "triangle_edges", "ray_crossings", "default_radius", "particle_grid_radius", "lattice_field", "defaults", "version",
     "library_path", "pcl_bridge_path", "Mesh", "Points", "Progress", "Error", "CancelledError",
-    "LibraryNotFoundError", "PclBridgeNotFoundError",
+    "LibraryNotFoundError", "PclBridgeNotFoundError", "NotReadWarning",
 ]
 
 #: pm_status values (Error.status).
@@ -102,7 +103,10 @@ def read_points(path):
     .gz or Blosc-compressed .sc; every point-data array / point attribute in `attributes`)
     through the library; .pcd (ascii, binary, compressed)
     through the PCL bridge, which drops points with a NaN coordinate and counts them in
-    `info`. Coordinates keep their full precision. Returns Points."""
+    `info`. Coordinates keep their full precision. Returns Points; for the library's formats
+    `info["not_read"]` lists, a line each, what the file holds per particle that is not read
+    (string attributes, list properties, a LAS file's other fields), and a warning
+    (NotReadWarning) names them."""
     lib = _library.load()
     if str(path).lower().endswith(".pcd"):
         bridge = _library.load_pcl()
@@ -120,11 +124,26 @@ def read_points(path):
     else:
         handle = _abi.pm_cloud_p()
         lib.check(lib.pm_cloud_read(path_bytes(path), ctypes.byref(handle)))
-        details = None
+        details = {"not_read": _not_read(lib, handle)}
+        if details["not_read"]:
+            warnings.warn(f"{os.fspath(path)}: not read: {'; '.join(details['not_read'])}",
+                          NotReadWarning, stacklevel=2)
     try:
         return read_cloud_handle(lib, handle, details)
     finally:
         lib.pm_cloud_destroy(handle)
+
+
+def _not_read(lib, handle):
+    """The lines of pm_cloud_get_not_read."""
+    count = ctypes.c_size_t(0)
+    lib.check(lib.pm_cloud_get_not_read_count(handle, ctypes.byref(count)))
+    lines = []
+    for i in range(count.value):
+        text = ctypes.c_char_p()
+        lib.check(lib.pm_cloud_get_not_read(handle, i, ctypes.byref(text)))
+        lines.append(text.value.decode(errors="replace"))
+    return lines
 
 
 def preprocess_scan(positions, normals=None, *, attributes=None, viewpoint=None, **options):

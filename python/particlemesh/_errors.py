@@ -50,3 +50,10 @@ class PclBridgeNotFoundError(Error):
 
     def __init__(self, message):
         super().__init__(message, _abi.PM_STATUS_IO_ERROR)
+
+
+class NotReadWarning(UserWarning):
+    """read_points found data per particle in the file that it does not read (a string
+    attribute, a list property, a LAS file's other fields); the message names it, and the
+    Points' info["not_read"] lists it. Silence it with warnings.simplefilter("ignore",
+    NotReadWarning)."""

@@ -391,6 +391,36 @@ def packed_rgb(values):
     return np.stack([(v >> 16) & 255, (v >> 8) & 255, v & 255], 1).astype(np.float32) / 255.0
 
 
+def test_import_names_what_the_file_holds_but_does_not_read(pm, clean_scene, tmp_path):
+    """A Houdini string attribute (no per-point number) is named in the import's report, not
+    dropped silently; the import itself, with its channels, goes on. The package's
+    NotReadWarning is the report's, not printed to the console."""
+    import sys
+    import warnings
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "cli"))
+    from particle_files import particles, write_bgeo
+    p, a = particles(0)
+    path = tmp_path / "named.bgeo"
+    write_bgeo(path, p, a, names=["water", "foam"])
+
+    class Importer:  # the operator's properties and report(), as Blender gives them to execute
+        filepath, directory, files = str(path), "", []
+
+        def __init__(self):
+            self.reports = []
+
+        def report(self, kind, message):
+            self.reports.append((kind, message))
+    op = Importer()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert pm.operators.PARTICLEMESH_OT_import_cloud.execute(op, bpy.context) == {"FINISHED"}
+    obj = bpy.context.active_object
+    assert len(obj.data.vertices) == len(p) and "velocity" in obj.data.attributes
+    assert op.reports == [({"INFO"}, f"{obj.name}: {len(p)} points, {obj.name}: not read: "
+                                     "point attribute 'name' (strings)")]
+
+
 def test_import_every_pcd(pm, data_dir):
     """Every .pcd of the shared data through File > Import (the PCL bridge shipped in the
     zip): point counts after dropping NaN points, normals where the file has them."""

@@ -176,3 +176,34 @@ TEST(CapiCloudAttributes, PlyWithoutColoursHasNoAttribute) {
   EXPECT_TRUE(names(c).empty());
   pm_cloud_destroy(c);
 }
+
+// What the file holds per particle but no channel carries is named, line by line; a cloud not
+// read from a file (or whose file was read whole) names nothing.
+TEST(CapiCloudAttributes, WhatAFileHoldsButIsNotReadIsNamed) {
+  const std::string path = (particlemesh::test::scratch_dir("capi_not_read") / "lists.ply").string();
+  std::ofstream(path) << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                         "property float z\nproperty list uchar int ids\nproperty float mass\nend_header\n"
+                         "0 0 0 1 7 1\n1 0 0 0 2\n0 1 0 2 8 9 3\n";
+  pm_cloud* c = nullptr;
+  ASSERT_EQ(pm_cloud_read(path.c_str(), &c), PM_OK) << last();
+  EXPECT_EQ(names(c), std::vector<std::string>{"mass"});
+  size_t n = 99;
+  ASSERT_EQ(pm_cloud_get_not_read_count(c, &n), PM_OK) << last();
+  ASSERT_EQ(n, 1u);
+  const char* text = nullptr;
+  ASSERT_EQ(pm_cloud_get_not_read(c, 0, &text), PM_OK) << last();
+  EXPECT_STREQ(text, "vertex list property 'ids' (lists)");
+  const char* untouched = "x";
+  const char* out = untouched;
+  EXPECT_EQ(pm_cloud_get_not_read(c, 1, &out), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("index 1 is out of range"), std::string::npos) << last();
+  EXPECT_EQ(out, untouched);
+  EXPECT_EQ(pm_cloud_get_not_read(c, 0, nullptr), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(pm_cloud_get_not_read_count(nullptr, &n), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(pm_cloud_get_not_read_count(c, nullptr), PM_STATUS_INVALID_ARGUMENT);
+  pm_cloud_destroy(c);
+  pm_cloud* made = three_points();
+  ASSERT_EQ(pm_cloud_get_not_read_count(made, &n), PM_OK);
+  EXPECT_EQ(n, 0u);
+  pm_cloud_destroy(made);
+}

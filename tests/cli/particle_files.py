@@ -203,32 +203,40 @@ def write_las(path, p, intensity, rgb=None, point_format=2, minor=2, extra_bytes
         f.write(bytes(h) + vlrs + bytes(recs))
 
 
-def write_bgeo(path, p, attrs, compress=False):
-    """Classic bgeo ("BgeoV" 5), as Partio writes it: points, no primitives, 00 ff."""
+def write_bgeo(path, p, attrs, compress=False, names=None):
+    """Classic bgeo ("BgeoV" 5), as Partio writes it: points, no primitives, 00 ff. `names`
+    (a list of strings): also an index (string) attribute "name", point i taking names[i % len]."""
     n = len(p)
-    out = [b"BgeoV", struct.pack(">9i", 5, n, 0, 0, 0, len(attrs), 0, 0, 0)]
-    cols = [p.reshape(n, 3), np.ones((n, 1), np.float32)]
+    out = [b"BgeoV", struct.pack(">9i", 5, n, 0, 0, 0, len(attrs) + bool(names), 0, 0, 0)]
+    cols = [p.reshape(n, 3).astype(">f4").view(">u4"), np.ones((n, 1), ">f4").view(">u4")]
+    if names:
+        out.append(struct.pack(">H", 4) + b"name" + struct.pack(">Hii", 1, 4, len(names)))
+        out.extend(struct.pack(">H", len(t)) + t.encode() for t in names)
+        cols.append((np.arange(n) % len(names)).astype(">u4").reshape(n, 1))
     for name, a in attrs.items():
         a = a.reshape(n, -1)
         size = a.shape[1]
         out.append(struct.pack(">H", len(name)) + name.encode() + struct.pack(">Hi", size, 5 if size == 3 else 0))
         out.append(b"\0" * (4 * size))
-        cols.append(a)
-    out.append(np.hstack(cols).astype(">f4").tobytes())
+        cols.append(a.astype(">f4").view(">u4"))
+    out.append(np.hstack(cols).astype(">u4").tobytes())
     out.append(b"\x00\xff")
     data = b"".join(out)
     with open(path, "wb") as f:
         f.write(gzip.compress(data, mtime=0) if compress else data)
 
 
-def write_geo_classic(path, p, attrs, compress=False):
+def write_geo_classic(path, p, attrs, compress=False, names=None):
     """Classic ASCII .geo ("PGEOMETRY V5"), as Partio writes it: the points with their
     attributes in parentheses, one particle-system primitive, an empty extra block. Values as
-    the shortest text of their float32 (read back exactly)."""
+    the shortest text of their float32 (read back exactly). `names`: also an index (string)
+    attribute "name", first, point i taking names[i % len]."""
     n = len(p)
     cols = [a.reshape(n, -1) for a in attrs.values()]
     text = [f"PGEOMETRY V5\nNPoints {n} NPrims 1\nNPointGroups 0 NPrimGroups 0\n"
-            f"NPointAttrib {len(attrs)} NVertexAttrib 0 NPrimAttrib 1 NAttrib 0\nPointAttrib\n"]
+            f"NPointAttrib {len(attrs) + bool(names)} NVertexAttrib 0 NPrimAttrib 1 NAttrib 0\nPointAttrib\n"]
+    if names:
+        text.append(f"name 1 index {len(names)} " + " ".join(names) + "\n")
     for name, c in zip(attrs, cols):
         kind = "vector" if c.shape[1] == 3 else "float"
         text.append(f"{name} {c.shape[1]} {kind} " + " ".join(["0"] * c.shape[1]) + "\n")
@@ -236,7 +244,7 @@ def write_geo_classic(path, p, attrs, compress=False):
     def num(x):
         return repr(float(np.float32(x)))
     for i in range(n):
-        values = " ".join(num(x) for c in cols for x in c[i])
+        values = " ".join(([str(i % len(names))] if names else []) + [num(x) for c in cols for x in c[i]])
         text.append(" ".join(num(x) for x in p[i]) + " 1" + (f" ({values})" if cols else "") + "\n")
     text.append("PrimitiveAttrib\ngenerator 1 index 1 papi\nPart " + str(n) + " " +
                 " ".join(str(i) for i in range(n)) + " [0]\nbeginExtra\nendExtra\n")

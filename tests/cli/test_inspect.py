@@ -6,7 +6,8 @@ import struct
 import numpy as np
 import pytest
 
-from particle_files import fibonacci_sphere, particles, write_bgeo, write_ply, write_vtk, write_vtu
+from particle_files import (fibonacci_sphere, particles, write_bgeo, write_bgeo_json, write_geo_classic, write_las,
+                            write_ply, write_vtk, write_vtu)
 
 
 def inspect_json(cli, path):
@@ -48,6 +49,64 @@ def test_particle_files_summarised(cli, tmp_path, kind):
     assert f"particles     {len(p)} (3 exact duplicates)" in text
     # (PLY: the properties velocity_0, velocity_1, velocity_2 are the one vector channel)
     assert "velocity (3 components): " in text and "density: " in text
+
+
+NAME_STRINGS = "point attribute 'name' (strings)"
+
+
+def files_with_data_not_read(folder, p, attrs):
+    """{file: what its reader names as not read}: a string attribute of each Houdini format, a
+    VTK string array (legacy FIELD data and a .vtu's PointData), a PLY list property on the
+    vertices, a LAS file's other fields and extra bytes; a PLY whose every property is read."""
+    n = len(p)
+    f = {name: folder / name for name in ("a.bgeo", "a.geo", "a.json.bgeo", "a.vtk", "a.vtu", "a.ply", "a.las",
+                                           "plain.ply")}
+    write_bgeo(f["a.bgeo"], p, attrs, names=["fluid", "foam"])
+    write_geo_classic(f["a.geo"], p, attrs, names=["fluid", "foam"])
+    write_bgeo_json(f["a.json.bgeo"], p, attrs)  # it carries a string attribute "name"
+    write_vtk(f["a.vtk"], p, attrs)
+    with open(f["a.vtk"], "a") as out:
+        out.write(f"FIELD FieldData 1\nlabel 1 {n} string\n" + "".join(f"p{i}\n" for i in range(n)))
+    write_vtu(f["a.vtu"], p, attrs)
+    text = f["a.vtu"].read_text().replace(
+        "<PointData>\n", '<PointData>\n<Array type="String" Name="label" format="ascii">'  # as VTK writes it
+        + " ".join("112 0" for _ in range(n)) + "</Array>\n")
+    f["a.vtu"].write_text(text)
+    head = f"ply\nformat ascii 1.0\nelement vertex {n}\nproperty float x\nproperty float y\nproperty float z\n" \
+           "property list uchar int neighbours\nend_header\n"
+    f["a.ply"].write_text(head + "".join(f"{x!r} {y!r} {z!r} 2 {i} {i}\n" for i, (x, y, z) in
+                                         enumerate(p.astype(np.float64))))
+    write_las(f["a.las"], p, np.arange(n) % 7, point_format=0, extra_bytes=4)
+    write_ply(f["plain.ply"], p, attrs)
+    las = "the LAS fields return number, number of returns, scan angle, user data, point source ID"
+    return {f["a.bgeo"]: [NAME_STRINGS], f["a.geo"]: [NAME_STRINGS], f["a.json.bgeo"]: [NAME_STRINGS],
+            f["a.vtk"]: ["POINT_DATA FIELD array 'label' (strings)"], f["a.vtu"]: ["PointData array 'label' (strings)"],
+            f["a.ply"]: ["vertex list property 'neighbours' (lists)"], f["a.las"]: [las, "extra bytes (4 per point)"],
+            f["plain.ply"]: []}
+
+
+def test_what_a_file_holds_per_particle_but_does_not_read_is_named(cli, tmp_path):
+    """Nothing is dropped silently: inspect, the meshing commands' summary and their reports
+    name the per-particle data no channel carries; the rest of the file is read as before."""
+    p, attrs = particles(n=5)
+    for path, expected in files_with_data_not_read(tmp_path, p, attrs).items():
+        r = inspect_json(cli, path)
+        assert r["particles"] == len(p), path
+        assert r["input"].get("not_read", []) == expected, path
+        line = "  not read      " + "; ".join(expected)
+        assert (line in cli("inspect", path).stdout) == bool(expected), path
+        if path.name not in ("a.las", "a.ply"):  # (LAS: intensity and classification; the PLY: none)
+            assert {c["name"] for c in r["channels"]} == set(attrs), path
+    # The meshing commands: the same line in the summary, the same list in the report.
+    bgeo = tmp_path / "a.bgeo"
+    out = cli("triangulate", bgeo, "-o", tmp_path / "m.ply", "--report", tmp_path / "m.json").stdout
+    assert "  not read      " + NAME_STRINGS in out
+    assert json.loads((tmp_path / "m.json").read_text())["input_cloud"]["not_read"] == [NAME_STRINGS]
+    out = cli("polygonize", bgeo, "-o", tmp_path / "v.ply", "--report", tmp_path / "v.json").stdout
+    assert "  not read      " + NAME_STRINGS in out
+    assert json.loads((tmp_path / "v.json").read_text())["read"]["not_read"] == [NAME_STRINGS]
+    out = cli("triangulate", tmp_path / "plain.ply", "-o", tmp_path / "m.ply", "--report", tmp_path / "m.json").stdout
+    assert "not read" not in out and "not_read" not in json.loads((tmp_path / "m.json").read_text())["input_cloud"]
 
 
 def test_a_mesh_keeps_its_topology_report(cli, tmp_path):

@@ -550,7 +550,7 @@ def test_points_keep_their_full_precision(pm, tmp_path):
     np.testing.assert_array_equal(points.positions[0], [500000.123456789, 4649776.987654321,
                                                         213.000000001])
     np.testing.assert_array_equal(points.normals, [[0, 0, 1]] * 3)
-    assert len(points) == 3 and points.attributes == {} and points.info == {}
+    assert len(points) == 3 and points.attributes == {} and points.info == {"not_read": []}
 
 
 def test_csv_as_numpy_and_paraview_write_it(pm, tmp_path):
@@ -1062,11 +1062,36 @@ def test_smoother_refuses_other_meshes_and_closed_use(pm):
         pm.Smoother(base, levels=2, progress=lambda stage, f: False)
 
 
+def test_what_a_file_holds_but_does_not_read_is_said(pm, tmp_path):
+    """read_points names the per-particle data it does not carry (a Houdini string attribute, a
+    VTK string array) in info["not_read"] and in a NotReadWarning; a file whose every value is
+    read gives an empty list and no warning."""
+    import sys
+    import warnings
+    from pathlib import Path
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "cli"))
+    from particle_files import particles, write_bgeo, write_ply
+
+    p, a = particles(0)
+    write_bgeo(tmp_path / "named.bgeo", p, a, names=["water", "foam"])
+    write_ply(tmp_path / "plain.ply", p, a)
+    with pytest.warns(pm.NotReadWarning, match=r"named\.bgeo: not read: point attribute 'name' \(strings\)"):
+        cloud = pm.read_points(tmp_path / "named.bgeo")
+    assert cloud.info["not_read"] == ["point attribute 'name' (strings)"]
+    assert set(cloud.attributes) == {"velocity", "density"}
+    np.testing.assert_array_equal(cloud.positions, p.astype(np.float64))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert pm.read_points(tmp_path / "plain.ply").info["not_read"] == []
+    assert issubclass(pm.NotReadWarning, UserWarning)
+
+
 def test_simulator_files_carry_their_channels(pm, tmp_path):
     """read_points reads VTK, classic and binary-JSON bgeo particles (Houdini's .bgeo.sc too) with
     their channels; polygonize interpolates them onto the vertices (a constant field exactly), triangulate
     keeps them."""
     import sys
+    import warnings
     from pathlib import Path
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "cli"))
     from particle_files import particles, write_bgeo, write_bgeo_json, write_sc, write_vtu
@@ -1078,7 +1103,10 @@ def test_simulator_files_carry_their_channels(pm, tmp_path):
     write_bgeo_json(tmp_path / "j.bgeo", p, a, page=64)  # velocity: constant pages
     write_sc(write_bgeo_json, block=512)(tmp_path / "j.bgeo.sc", p, a)
     for name in ("f.vtu", "f.bgeo", "j.bgeo", "j.bgeo.sc"):
-        cloud = pm.read_points(tmp_path / name)
+        with warnings.catch_warnings():  # the binary-JSON files' string attribute "name" is said
+            warnings.simplefilter("ignore", pm.NotReadWarning)
+            cloud = pm.read_points(tmp_path / name)
+        assert cloud.info["not_read"] == (["point attribute 'name' (strings)"] if name.startswith("j") else []), name
         np.testing.assert_array_equal(cloud.positions, p.astype(np.float64))
         assert set(cloud.attributes) == {"velocity", "density"}
         np.testing.assert_array_equal(cloud.attributes["density"].ravel(), a["density"])

@@ -242,7 +242,7 @@ def test_legacy_files_read_as_vtks_own_reader_reads_them(pm, tmp_path):
     colour), bit arrays and string arrays, as vtkPolyDataWriter / vtkUnstructuredGridWriter
     write them in ASCII and BINARY: every numeric array comes back as vtkDataReader gives it
     (unsigned chars 0..255, bits 0 / 1), string arrays (per point and the data set's own) are
-    skipped, and the particles are read."""
+    skipped (the per-point one named in info["not_read"]), and the particles are read."""
     n = 13  # bits: not a whole number of bytes
     rng = np.random.default_rng(3)
     p = rng.normal(size=(n, 3)).astype(np.float32)
@@ -289,10 +289,13 @@ def test_legacy_files_read_as_vtks_own_reader_reads_them(pm, tmp_path):
                 reader.SetFileName(str(path))
                 reader.Update()
                 theirs = reader.GetOutput().GetPointData()
-                c = pm.read_points(path)
+                with pytest.warns(pm.NotReadWarning, match="'label'"):
+                    c = pm.read_points(path)
                 np.testing.assert_allclose(c.positions, p.astype(np.float64), rtol=0 if binary else 5e-6,
                                            err_msg=str(path))
                 assert set(c.attributes) == {active, "flag", "density"}, path
+                # The string array per point is named; the data set's own FIELD (CaseName) is not per point.
+                assert c.info["not_read"] == ["POINT_DATA FIELD array 'label' (strings)"], path
                 for name in (active, "flag"):
                     a = theirs.GetAbstractArray(name)
                     values = [a.GetValue(i) for i in range(a.GetNumberOfValues())]
@@ -306,7 +309,7 @@ def test_legacy_files_read_as_vtks_own_reader_reads_them(pm, tmp_path):
 @pytest.mark.parametrize("kind", ["grid", "poly"])
 def test_bit_arrays_in_every_xml_mode(pm, tmp_path, kind):
     """A vtkBitArray per point (a flag) comes back as 0 / 1 in every data mode and with every
-    compressor, as VTK's own XML reader gives it; a string array beside it is skipped."""
+    compressor, as VTK's own XML reader gives it; a string array beside it is skipped and named."""
     data = point_set(kind)
     flag = vtk.vtkBitArray()
     flag.SetName("flag")
@@ -332,7 +335,9 @@ def test_bit_arrays_in_every_xml_mode(pm, tmp_path, kind):
             reader.Update()
             theirs = reader.GetOutput().GetPointData().GetAbstractArray("flag")
             assert [theirs.GetValue(i) for i in range(2 * N)] == expected, path
-            c = pm.read_points(path)
+            with pytest.warns(pm.NotReadWarning, match="PointData array 'label'"):
+                c = pm.read_points(path)
             assert set(c.attributes) == {"density", "velocity", "flag"}, path
+            assert c.info["not_read"] == ["PointData array 'label' (strings)"], path
             np.testing.assert_array_equal(c.attributes["flag"].reshape(N, 2).ravel(), np.array(expected, np.float32),
                                           err_msg=str(path))

@@ -66,9 +66,18 @@ PM_EXPORT pm_status pm_cloud_create(const double* positions, const double* norma
 /** The same from float32 arrays (numpy / Blender buffers). */
 PM_EXPORT pm_status pm_cloud_create_f32(const float* positions, const float* normals, size_t count,
                                         pm_cloud** out_cloud);
-/** Read a .ply or .xyz file, once and exactly (see particlemesh/io/mesh_io.h); a malformed
- *  file is PM_STATUS_FORMAT_ERROR naming the file and the element or line. */
+/** Read a file of particles, once and exactly (any format read_point_cloud reads, see
+ *  particlemesh/io/mesh_io.h); a malformed file is PM_STATUS_FORMAT_ERROR naming the file and
+ *  the element or line. What the file holds per particle but is not read (string attributes,
+ *  list properties, LAS fields) is named by pm_cloud_get_not_read. */
 PM_EXPORT pm_status pm_cloud_read(const char* path, pm_cloud** out_cloud);
+/** How many lines pm_cloud_get_not_read has: per-particle data in the file pm_cloud_read
+ *  did not carry (PointCloud::not_read); 0 for a cloud not read from a file. */
+PM_EXPORT pm_status pm_cloud_get_not_read_count(const pm_cloud* cloud, size_t* out_count);
+/** Line `index` (0-based) of what was not read, naming it and why, e.g. "point attribute
+ *  'name' (strings)"; the string stays valid until the cloud is destroyed.
+ *  PM_STATUS_INVALID_ARGUMENT when index >= the count. */
+PM_EXPORT pm_status pm_cloud_get_not_read(const pm_cloud* cloud, size_t index, const char** out_text);
 PM_EXPORT pm_status pm_cloud_get_count(const pm_cloud* cloud, size_t* out_count);
 /** 1 if the cloud carries normals, else 0. */
 PM_EXPORT pm_status pm_cloud_has_normals(const pm_cloud* cloud, int32_t* out_has_normals);

@@ -44,6 +44,26 @@ pm_status pm_cloud_get_attribute_name(const pm_cloud* cloud, size_t index, const
   });
 }
 
+pm_status pm_cloud_get_not_read_count(const pm_cloud* cloud, size_t* out_count) {
+  return guarded([&] {
+    require(cloud, "cloud");
+    require(out_count, "out_count");
+    *out_count = cloud->cloud.not_read.size();
+  });
+}
+
+pm_status pm_cloud_get_not_read(const pm_cloud* cloud, size_t index, const char** out_text) {
+  return guarded([&] {
+    require(cloud, "cloud");
+    require(out_text, "out_text");
+    const auto& lines = cloud->cloud.not_read;
+    if (index >= lines.size())
+      throw Error(Status::InvalidArgument, "index " + std::to_string(index) + " is out of range: " +
+                                               std::to_string(lines.size()) + " lines name what was not read");
+    *out_text = lines[index].c_str();
+  });
+}
+
 pm_status pm_cloud_get_attribute_components(const pm_cloud* cloud, const char* name, int32_t* out_components) {
   return guarded([&] {
     const VertexAttribute& a = find(cloud, name);

@@ -16,9 +16,10 @@
 //
 // What comes back: P as the positions, N (3 values) as the normals, and every other numeric
 // point attribute under its Houdini name, as floats ("v" becomes the channel "velocity":
-// name_the_velocity). String attributes, vertex, primitive and detail attributes, groups and
-// primitives are walked (a truncated or malformed file is refused) but not carried, nor
-// anything after the geometry's value (the seek index of a file written with "hasindex").
+// name_the_velocity). String attributes (named in not_read), vertex, primitive and detail
+// attributes, groups and primitives are walked (a truncated or malformed file is refused) but
+// not carried, nor anything after the geometry's value (the seek index of a file written
+// with "hasindex").
 // Bounded: nesting depth, string lengths, the structure's node count, and the values a file
 // may expand to through constant pages (at most 64 per stored byte), so that a hostile file
 // is refused before it takes memory out of proportion to its size.
@@ -651,7 +652,12 @@ FileContents geometry_of(const Node& root, const std::string& path, bool swap, u
       if (name_node == nullptr || name_node->kind != Node::Kind::String) s.fail("a point attribute without a name");
       const std::string name = name_node->text;
       const std::string what = "point attribute '" + shown(name) + "'";
-      if (type_node == nullptr || type_node->kind != Node::Kind::String || type_node->text != "numeric") continue;  // strings, dicts
+      if (type_node == nullptr || type_node->kind != Node::Kind::String || type_node->text != "numeric") {
+        // Strings, dictionaries: no per-particle number.
+        const std::string type = type_node != nullptr && type_node->kind == Node::Kind::String ? type_node->text : "";
+        note_not_read(out, what + " (" + (type == "string" ? std::string("strings") : type.empty() ? std::string("no type") : shown(type) + " values") + ")");
+        continue;
+      }
       const Node* values = s.find(entry.items[1], "values");
       if (values == nullptr) s.fail(what + " has no \"values\"");
       const Node* size_node = s.find(*values, "size");

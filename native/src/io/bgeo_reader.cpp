@@ -18,7 +18,8 @@
 //   primitives, groups, detail attributes, and the bytes 00 ff at the end.
 //
 // What comes back: the points' x y z (exact float32 values), every float / int / vector
-// attribute under its Houdini name (P's w and index (string) attributes are not carried),
+// attribute under its Houdini name (P's w and index (string) attributes are not carried; the
+// latter are named in not_read),
 // "N" (3 floats) as the normals ("v" becomes the channel "velocity": name_the_velocity).
 // After the points, primitive and detail sections are read when they hold only what Partio
 // writes (particle-system primitives, detail attributes, no groups), so that a truncated file
@@ -199,7 +200,11 @@ class BgeoReader {
            " bytes), the file has " + std::to_string(file_.size()) + " bytes");
     const size_t plausible = size_t(std::min<uint64_t>(points, in_.compressed() ? (1u << 16) : points));
     for (Attribute& a : attrs) {
-      if (a.type == 4 || a.size == 0) continue;  // string indices: not carried
+      if (a.size == 0) continue;
+      if (a.type == 4) {  // indices into the attribute's strings: no per-particle number
+        note_not_read(out_, "point attribute '" + shown(a.name) + "' (strings)");
+        continue;
+      }
       if (a.name == "N" && a.size == 3 && a.type != 1 && out_.normals.empty() && !has_normals_) {
         has_normals_ = true;
         a.target = -2;

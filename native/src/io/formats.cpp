@@ -65,6 +65,10 @@ bool path_inside_folder(const std::string& listed, std::string& portable) {
   return !outside;
 }
 
+void note_not_read(FileContents& c, std::string what) {
+  if (std::find(c.not_read.begin(), c.not_read.end(), what) == c.not_read.end()) c.not_read.push_back(std::move(what));
+}
+
 std::string unique_attribute_name(const FileContents& c, const std::string& name) {
   auto taken = [&](const std::string& n) {
     for (const VertexAttribute& a : c.attributes)

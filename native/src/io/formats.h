@@ -37,7 +37,13 @@ struct FileContents {
   /// The number of faces the file declares (before fanning): a mesh file that declares faces
   /// but yields no triangle is an error, never an empty mesh.
   uint64_t faces = 0;
+  /// Per-point data the file holds that the reader does not carry (PointCloud::not_read), one
+  /// line each in the order met, added with note_not_read.
+  std::vector<std::string> not_read;
 };
+
+/// Adds `what` ("point attribute 'name' (strings)") to c.not_read, once.
+void note_not_read(FileContents& c, std::string what);
 
 /// Why a file is read: for a mesh (faces wanted) or for its points (faces skipped, though
 /// still walked, so that a truncated file is refused either way).

@@ -13,7 +13,7 @@
 //
 // What comes back is what the classic binary bgeo reader gives (bgeo_reader.cpp): x y z,
 // every float / int / vector attribute under its Houdini name, "N" (3 floats) as the normals,
-// index (string) attributes not carried. Written by hand: no Debian package reads it (Partio,
+// index (string) attributes not carried but named in not_read. Written by hand: no Debian package reads it (Partio,
 // which does, is not packaged).
 #include "io/geo_classic.h"
 
@@ -56,7 +56,10 @@ class ClassicGeoReader {
       }
     }
     for (Attribute& a : attrs) {
-      if (a.index) continue;  // string indices: not carried
+      if (a.index) {  // indices into the attribute's strings: no per-particle number
+        note_not_read(out_, "point attribute '" + shown(a.name) + "' (strings)");
+        continue;
+      }
       if (a.name == "N" && a.size == 3 && !a.integer && !has_normals_) {
         has_normals_ = true;
         a.target = -2;

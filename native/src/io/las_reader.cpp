@@ -6,9 +6,10 @@
 // Read: the positions (X Y Z as 32-bit integers, times the scale plus the offset, in double),
 // and as channels "intensity", "classification" and, in the formats that carry it, "color"
 // (red green blue, 16-bit in the specification: divided by 65535, or by 255 where no value
-// exceeds 255, as some writers store 8-bit values). Bytes a writer adds after the standard
-// fields of a record ("extra bytes") are skipped. LAZ (compressed LAS, the point format's top
-// bits set) is refused with a message saying how to decompress it.
+// exceeds 255, as some writers store 8-bit values). The other standard fields, and bytes a
+// writer adds after them ("extra bytes"), are skipped and named in FileContents::not_read.
+// LAZ (compressed LAS, the point format's top bits set) is refused with a message saying how
+// to decompress it.
 //
 // Written by hand: Debian's PDAL and libLAS would bring large dependency trees into the core
 // library for a format whose uncompressed form is a header and fixed records.
@@ -116,6 +117,13 @@ FileContents read_las(const std::string& path, ReadPurpose) {
     for (size_t c = 0; c < rgb.size(); ++c) color.values[c] = float(rgb[c]) * scale_rgb;
     out.attributes.push_back(std::move(color));
   }
+  // What else each record holds, said rather than dropped silently.
+  const bool gps = format_byte != 0 && format_byte != 2, nir = format_byte == 8 || format_byte == 10,
+             waves = format_byte == 4 || format_byte == 5 || format_byte == 9 || format_byte == 10;
+  note_not_read(out, std::string("the LAS fields return number, number of returns, scan angle, user data, point source ID") +
+                         (gps ? ", GPS time" : "") + (nir ? ", NIR" : "") + (waves ? ", wave packet" : ""));
+  if (record_length > layout.size)
+    note_not_read(out, "extra bytes (" + std::to_string(record_length - layout.size) + " per point)");
   return out;
 }
 

@@ -20,7 +20,7 @@
 // in a file without faces, the "tristrips" element's lists: triangle strips, -1 restarting a
 // strip, as the Stanford repository's older models hold them). List
 // properties anywhere (a vertex element with a list, an "edge" or "material" element) are
-// walked and skipped. After the last element the file must end
+// walked and skipped (a vertex list is named in not_read). After the last element the file must end
 // (whitespace aside): data beyond what the header declares means a count is wrong.
 #include <algorithm>
 #include <cmath>
@@ -301,8 +301,15 @@ class PlyReader {
     has_normals_ = found[kNX] && found[kNX]->role == kNX;
     has_colors_ = found[kRed] && found[kRed]->role == kRed;
     for (Property& p : vertex->properties) {
-      if (p.list || p.role != kSkip) continue;
-      if (has_colors_ && p.name == "color") continue;  // the colour channel's name is taken
+      if (p.role != kSkip) continue;
+      if (p.list) {  // no channel of one value per vertex
+        note_not_read(out_, vertex->name + " list property '" + shown(p.name) + "' (lists)");
+        continue;
+      }
+      if (has_colors_ && p.name == "color") {  // the colour channel's name is taken
+        note_not_read(out_, vertex->name + " property 'color' (the red, green and blue properties are the channel \"color\")");
+        continue;
+      }
       p.role = kAttribute;
       p.attribute = out_.attributes.size();
       out_.attributes.push_back({p.name, 1, {}});

@@ -18,7 +18,8 @@
 // (any numeric type, bit arrays as 0 / 1; one attribute each, named as in the file with %XX
 // escapes decoded; COLOR_SCALARS as VTK's reader gives them: unsigned chars 0..255, which is
 // how VTK writes any unsigned-char array set as the active scalars, a material or type id as
-// much as a colour), string arrays walked and skipped (they are no per-particle number), and
+// much as a colour), string arrays walked and skipped (they are no per-particle number; named
+// in not_read), and
 // for meshes POLYGONS and TRIANGLE_STRIPS (POLYDATA) or triangle, polygon and quad CELLS
 // (UNSTRUCTURED_GRID), fanned. Cells in both layouts (the classic counts-and-ids list and
 // version 5.1's OFFSETS / CONNECTIVITY), CELL_DATA, lookup tables, METADATA and field data
@@ -438,6 +439,7 @@ class VtkLegacyReader {
     }
     const uint64_t n = count_;
     const bool keep = section_ == Section::Points && type != Type::String;
+    if (section_ == Section::Points && type == Type::String) note_not_read(out_, "POINT_DATA " + what + " (strings)");
     if (!keep) {
       values(type, saturating_mul(n, uint64_t(components)), what, {});
       return;
@@ -489,6 +491,8 @@ class VtkLegacyReader {
         fail(what + " needs: components tuples type");
       const Type type = data_type(what);
       const bool take = keep && section_ == Section::Points && type != Type::String;
+      if (keep && section_ == Section::Points && type == Type::String)
+        note_not_read(out_, "POINT_DATA " + what + " (strings)");
       if (take && tuples != out_.positions.size())
         fail(what + " has " + std::to_string(tuples) + " tuples for " + std::to_string(out_.positions.size()) + " points");
       if (take && (components < 1 || components > 65535)) fail(what + " has " + std::to_string(components) + " components");

@@ -14,7 +14,7 @@
 // PointData array as an attribute of its name (the one PointData's Normals="..." names, with
 // 3 components, as the normals; a Bit array as 0 / 1), and for meshes the triangle, polygon
 // and quad cells of an UnstructuredGrid or the Polys and Strips of a PolyData, fanned. String
-// arrays are skipped.
+// arrays (VTK writes them as <Array type="String">) are skipped and named in not_read.
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
@@ -234,11 +234,14 @@ class VtkXmlReader {
   /// (names and components) and normals as the first one.
   void add_piece_file(FileContents&& c, const std::string& label) {
     out_.faces += c.faces;
+    for (std::string& what : c.not_read) note_not_read(out_, std::move(what));
     if (c.positions.empty()) return;  // a process that held no particles
     if (out_.positions.empty()) {
       const uint64_t faces = out_.faces;
+      std::vector<std::string> not_read = std::move(out_.not_read);
       out_ = std::move(c);
       out_.faces = faces;
+      out_.not_read = std::move(not_read);
       return;
     }
     bool same = c.attributes.size() == out_.attributes.size() && c.normals.empty() == out_.normals.empty();
@@ -568,10 +571,18 @@ class VtkXmlReader {
     if (const Node* pd = piece.child("PointData")) {
       const std::string normals = pd->get("Normals");
       for (const Node& a : pd->children) {
-        if (a.name != "DataArray") continue;
         const std::string name = a.get("Name");
+        if (a.name == "Array") {  // VTK's element for arrays of other than numbers (vtkStringArray)
+          const std::string type = a.get("type");
+          note_not_read(out_, "PointData array '" + shown(name) + "' (" + (type == "String" ? "strings" : shown(type) + " values") + ")");
+          continue;
+        }
+        if (a.name != "DataArray") continue;
         const std::string what = label + " PointData array '" + shown(name) + "'";
-        if (type_of(a.get("type")) == Type::String) continue;  // not a per-point number
+        if (type_of(a.get("type")) == Type::String) {  // not a per-point number
+          note_not_read(out_, "PointData array '" + shown(name) + "' (strings)");
+          continue;
+        }
         int comps = 0;
         std::vector<double> v = array(a, n, &comps, what);
         if (!normals.empty() && name == normals && comps == 3 && (pieces_ == 1 || normals_)) {

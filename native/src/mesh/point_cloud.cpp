@@ -36,6 +36,7 @@ PointCloud select_points(const PointCloud& cloud, const std::vector<uint32_t>& i
       b.values.insert(b.values.end(), a.values.begin() + ptrdiff_t(i) * a.components,
                       a.values.begin() + ptrdiff_t(i + 1) * a.components);
   }
+  out.not_read = cloud.not_read;
   return out;
 }
 

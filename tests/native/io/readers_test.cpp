@@ -110,6 +110,9 @@ TEST(PlyReader, ListPropertyInsideTheVertexElement) {
   ASSERT_EQ(c.size(), 3u);
   EXPECT_EQ(c.positions[1], (Vec3{1, 0, 0}));
   EXPECT_EQ(c.positions[2], (Vec3{0, 1, 0}));
+  // Not a channel (a list per vertex), and said so.
+  EXPECT_EQ(c.not_read, std::vector<std::string>{"vertex list property 'ids' (lists)"});
+  EXPECT_TRUE(c.attributes.empty());
   EXPECT_EQ(read_mesh((dir / "b.ply").string()).triangles.size(), 1u);
 }
 

@@ -26,6 +26,11 @@ struct PointCloud {
   std::vector<Vec3> positions;
   std::vector<Vec3> normals;
   std::vector<VertexAttribute> attributes;
+  /// What read_point_cloud found in the file for each particle but does not carry, one line
+  /// each naming it and why: "point attribute 'name' (strings)", "PointData array 'label'
+  /// (strings)", "vertex list property 'ids' (lists)", "extra bytes (4 per point)". Empty for
+  /// a cloud that was not read from a file, and when everything per particle was read.
+  std::vector<std::string> not_read;
 
   size_t size() const { return positions.size(); }
   bool has_normals() const { return !normals.empty(); }
@@ -36,8 +41,8 @@ struct PointCloud {
 /// @throws Error(InvalidInput) naming the first offending element, e.g. "positions[12].y is NaN".
 PM_EXPORT void validate_point_cloud(const PointCloud& cloud);
 
-/// The points `indices` of the cloud (in that order), each with its normal and attribute values.
-/// Every index must be below cloud.size().
+/// The points `indices` of the cloud (in that order), each with its normal and attribute values
+/// (and the cloud's not_read). Every index must be below cloud.size().
 PM_EXPORT PointCloud select_points(const PointCloud& cloud, const std::vector<uint32_t>& indices);
 
 }  // namespace particlemesh
