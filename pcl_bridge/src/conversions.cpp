@@ -132,9 +132,17 @@ namespace particlemesh_pcl
       }
     }
 
+    /// A field carried as a channel of its name: one reader per value (a field's COUNT).
+    struct ExtraField
+    {
+      std::string name;
+      std::vector<FieldReader> values;
+    };
+
     struct Channels
     {
       std::optional<FieldReader> x, y, z, nx, ny, nz, rgb, intensity;
+      std::vector<ExtraField> extra;  ///< every other field, in the cloud's order
     };
 
     Channels
@@ -171,8 +179,29 @@ namespace particlemesh_pcl
         rgb = findField (cloud, "rgba");
       if (rgb && FieldReader::sizeOf (rgb->datatype) == 4)
         c.rgb.emplace (cloud, *rgb);
-      if (const pcl::PCLPointField *in = findField (cloud, "intensity"))
+      const pcl::PCLPointField *in = findField (cloud, "intensity");
+      if (in)
         c.intensity.emplace (cloud, *in);
+      // Every other field (a segmentation's label, PCL's curvature, a descriptor) travels as a
+      // channel of its name, as a PLY file's other vertex properties do; "_" is PCL's padding.
+      for (const auto &f : cloud.fields)
+      {
+        const bool used = f.name == "x" || f.name == "y" || f.name == "z" || &f == in ||
+                          (&f == rgb && c.rgb) || (c.nx && (f.name == "normal_x" || f.name == "normal_y" || f.name == "normal_z"));
+        if (used || f.name.empty () || f.name[0] == '_')
+          continue;
+        ExtraField e{f.name, {}};
+        if (e.name == kColorAttribute || e.name == kIntensityAttribute)
+          e.name += "_field";  // the names of the colour and intensity channels are taken
+        const std::size_t size = FieldReader::sizeOf (f.datatype);
+        for (std::uint32_t k = 0; k < std::max<std::uint32_t> (f.count, 1); ++k)
+        {
+          pcl::PCLPointField one = f;
+          one.offset = static_cast<std::uint32_t> (f.offset + k * size);
+          e.values.emplace_back (cloud, one);
+        }
+        c.extra.push_back (std::move (e));
+      }
       return c;
     }
 
@@ -211,6 +240,9 @@ namespace particlemesh_pcl
     pcl::Indices map;
     particlemesh::VertexAttribute color{kColorAttribute, 3, {}};
     particlemesh::VertexAttribute intensity{kIntensityAttribute, 1, {}};
+    std::vector<particlemesh::VertexAttribute> extra;
+    for (const ExtraField &e : c.extra)
+      extra.push_back ({e.name, int (e.values.size ()), {}});
     out.positions.reserve (n);
     map.reserve (n);
     for (std::size_t i = 0; i < n; ++i)
@@ -234,6 +266,9 @@ namespace particlemesh_pcl
         appendColor (color.values, c.rgb->bits32 (i));
       if (c.intensity)
         intensity.values.push_back (float (c.intensity->value (i)));
+      for (std::size_t e = 0; e < extra.size (); ++e)
+        for (const FieldReader &r : c.extra[e].values)
+          extra[e].values.push_back (float (r.value (i)));
     }
     if (report.invalid_normals > 0)
       out.normals.clear ();
@@ -241,6 +276,8 @@ namespace particlemesh_pcl
       out.attributes.push_back (std::move (color));
     if (c.intensity)
       out.attributes.push_back (std::move (intensity));
+    for (auto &a : extra)
+      out.attributes.push_back (std::move (a));
     report.valid_points = out.positions.size ();
     report.has_normals = !out.normals.empty ();
     report.has_color = c.rgb.has_value ();

@@ -232,6 +232,42 @@ TEST(PcdIO, UpperCaseCoordinatesAsPdalWritesThem) {
   EXPECT_EQ(both.positions[0], (Vec3{1, 2, 3}));
 }
 
+// A segmentation's label, a descriptor of several values, PCL's curvature: every field that is
+// not a coordinate, normal, colour or intensity is a channel of its name (as a PLY file's other
+// vertex properties are), in the file's order, in ascii and binary alike; "_" (PCL's padding)
+// is none.
+TEST(PcdIO, EveryOtherFieldIsAChannelOfItsName) {
+  const auto dir = test::scratch_dir("fields");
+  const std::string head = "VERSION 0.7\nFIELDS x y z label _ desc curvature\nSIZE 4 4 4 4 1 2 8\nTYPE F F F U U I F\n"
+                           "COUNT 1 1 1 1 4 3 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\n";
+  write_bytes(dir / "ascii.pcd", head + "DATA ascii\n0 0 0 7 0 0 0 0 -1 2 3 0.25\n1 0 0 9 0 0 0 0 4 5 -6 0.5\n");
+  std::string body;
+  auto put = [&body](const auto& v) { body.append(reinterpret_cast<const char*>(&v), sizeof v); };
+  for (int i = 0; i < 2; ++i) {
+    put(float(i)), put(0.0f), put(0.0f), put(uint32_t(i ? 9 : 7));
+    body.append(4, '\0');
+    const int16_t d[2][3] = {{-1, 2, 3}, {4, 5, -6}};
+    for (int16_t v : d[i]) put(v);
+    put(i ? 0.5 : 0.25);
+  }
+  write_bytes(dir / "binary.pcd", head + "DATA binary\n" + body);
+  for (const char* name : {"ascii.pcd", "binary.pcd"}) {
+    SCOPED_TRACE(name);
+    const PointCloud c = particlemesh_pcl::loadParticles((dir / name).string());
+    ASSERT_EQ(c.size(), 2u);
+    EXPECT_EQ(c.positions[1], (Vec3{1, 0, 0}));
+    ASSERT_EQ(c.attributes.size(), 3u);
+    EXPECT_EQ(c.attributes[0].name, "label");
+    EXPECT_EQ(c.attributes[0].values, (std::vector<float>{7, 9}));
+    EXPECT_EQ(c.attributes[1].name, "desc");
+    EXPECT_EQ(c.attributes[1].components, 3);
+    EXPECT_EQ(c.attributes[1].values, (std::vector<float>{-1, 2, 3, 4, 5, -6}));
+    EXPECT_EQ(c.attributes[2].name, "curvature");
+    EXPECT_EQ(c.attributes[2].values, (std::vector<float>{0.25f, 0.5f}));
+    validate_point_cloud(c);
+  }
+}
+
 TEST(PcdIO, OtherFormatsGoThroughTheCoreReader) {
   const auto dir = test::scratch_dir("xyz");
   write_point_cloud(fibonacci_sphere(100), (dir / "s.xyz").string());

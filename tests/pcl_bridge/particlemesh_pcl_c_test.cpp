@@ -75,13 +75,16 @@ TEST(PclBridgeC, ColoredCloudMatchesLoadParticles) {
   }
   size_t count = 0;
   ASSERT_EQ(pm_cloud_get_attribute_count(c, &count), PM_OK);
-  ASSERT_EQ(count, 1u);
+  ASSERT_EQ(count, 2u);  // the colour, and the file's curvature field
   const char* name = nullptr;
   ASSERT_EQ(pm_cloud_get_attribute_name(c, 0, &name), PM_OK);
   EXPECT_STREQ(name, "color");
+  ASSERT_EQ(pm_cloud_get_attribute_name(c, 1, &name), PM_OK);
+  EXPECT_STREQ(name, "curvature");
   const std::vector<float> colour = copy_attribute(c, "color", 3);
-  ASSERT_EQ(ref.attributes.size(), 1u);
+  ASSERT_EQ(ref.attributes.size(), 2u);
   EXPECT_EQ(colour, ref.attributes[0].values);
+  EXPECT_EQ(copy_attribute(c, "curvature", 1), ref.attributes[1].values);
   float lo = 1, hi = 0;
   for (float x : colour) lo = std::min(lo, x), hi = std::max(hi, x);
   EXPECT_GE(lo, 0.0f);

@@ -74,7 +74,10 @@ namespace particlemesh_pcl
 
   /** \brief Convert a binary blob cloud (what pcl::PCDReader and the PolygonMesh hold) to
     * particles. Fields are found by name whatever their numeric type: x y z (required),
-    * normal_x normal_y normal_z, rgb or rgba (packed 0x00RRGGBB), intensity.
+    * normal_x normal_y normal_z, rgb or rgba (packed 0x00RRGGBB), intensity; every other field
+    * (a label, PCL's curvature, a descriptor of COUNT values) is an attribute of its name with
+    * COUNT components ("_", PCL's padding, is skipped; a field named "color" or "intensity"
+    * beside those channels becomes "color_field" / "intensity_field").
     * \throws particlemesh::Error(FormatError) if x, y or z is missing or the blob's sizes
     * are inconsistent.
     */

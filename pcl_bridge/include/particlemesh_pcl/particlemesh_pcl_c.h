@@ -50,7 +50,8 @@ PM_PCL_EXPORT const char* pm_pcl_last_error_message(void);
  *  reads it) through PCL, anything else (.ply, .xyz) through libparticlemesh's reader.
  *  Points with a NaN or infinite coordinate are dropped (counted in out_info); normals are
  *  kept when every kept point has a usable one; rgb/rgba become the "color" attribute and
- *  intensity the "intensity" attribute (pm_cloud_get_attribute_count and friends).
+ *  intensity the "intensity" attribute, every other field (label, curvature, ...) an attribute
+ *  of its name (pm_cloud_get_attribute_count and friends).
  *  `out_info` may be NULL. Failures: PM_STATUS_IO_ERROR (no such file, unreadable),
  *  PM_STATUS_FORMAT_ERROR (malformed), PM_STATUS_INVALID_INPUT (no valid point). */
 PM_PCL_EXPORT pm_status pm_pcl_read_cloud(const char* path, pm_cloud** out_cloud, pm_pcl_read_info* out_info);
