@@ -40,7 +40,7 @@ __all__ = [
     "preprocess_scan", "triangulate", "polygonize",
     "polygonize_attributes",
     "smooth", "Smoother",
-    "topology",
+    "topology", "components",
     "estimate_spacing", "thin", "triangle_edges", "ray_crossings", "default_radius", "particle_grid_radius", "lattice_field", "defaults", "version",
     "library_path", "pcl_bridge_path", "Mesh", "Points", "Progress", "Error", "CancelledError",
     "LibraryNotFoundError", "PclBridgeNotFoundError", "NotReadWarning",
@@ -606,6 +606,33 @@ def topology(mesh):
     for flag in ("manifold", "closed", "consistently_oriented", "outward"):
         out[flag] = bool(out[flag])
     return out
+
+
+def components(mesh):
+    """The mesh's connected pieces (triangles that share vertices), numbered in the order of
+    their first triangle, as a dict of numpy arrays: "vertex" (V,) int64, each vertex's piece
+    (-1 for a vertex no triangle uses; a triangle's piece is its corners'), and per piece
+    "triangles" (C,) int64, "area" (C,) and "volume" (C,) float64 (the volume it encloses: exact
+    for a closed, consistently oriented piece, positive when it faces outward). E.g. the
+    droplets of a fluid surface: keep = c["volume"][c["vertex"][mesh.triangles[:, 0]]] > v."""
+    lib = _library.load()
+    handle = new_mesh(lib, mesh, with_attributes=False)
+    try:
+        count = c_size_t(0)
+        lib.check(lib.pm_mesh_components(handle, ctypes.byref(count), None, None, None, None, 0))
+        n = count.value
+        vertex = np.empty(len(mesh.vertices), dtype=np.uint32)
+        triangles = np.empty(n, dtype=np.uint64)
+        area = np.empty(n, dtype=np.float64)
+        volume = np.empty(n, dtype=np.float64)
+        lib.check(lib.pm_mesh_components(handle, ctypes.byref(count), ptr(vertex, c_uint32),
+                                         ptr(triangles, c_uint64), ptr(area, c_double),
+                                         ptr(volume, c_double), n))
+    finally:
+        lib.pm_mesh_destroy(handle)
+    labels = vertex.astype(np.int64)
+    labels[vertex == np.iinfo(np.uint32).max] = -1
+    return {"vertex": labels, "triangles": triangles.astype(np.int64), "area": area, "volume": volume}
 
 
 # ---- helpers --------------------------------------------------------------------------------

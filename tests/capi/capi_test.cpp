@@ -469,6 +469,41 @@ TEST(CApi, RayCrossingsCountEveryTriangleTheRayCrosses) {
   pm_mesh_destroy(mesh);
 }
 
+// Pieces numbered by their first triangle, each vertex's piece (none for an unused one), and
+// per piece its triangles, area and enclosed volume; too small a capacity fails with the count
+// set and the outputs untouched.
+TEST(CApi, ComponentsOfAMeshAndTheirVolumes) {
+  // The outward unit corner tetrahedron, one triangle at z = 2 (open: the cone over it from
+  // its own corner, 0), and a vertex no triangle uses.
+  const double p[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 2, 1, 0, 2, 0, 1, 2, 5, 5, 5};
+  const int32_t tri[] = {0, 2, 1, 0, 1, 3, 4, 5, 6, 0, 3, 2, 1, 2, 3};
+  pm_mesh* mesh = nullptr;
+  ASSERT_EQ(pm_mesh_create(p, 8, tri, 5, nullptr, &mesh), PM_OK) << last();
+  size_t count = 0;
+  ASSERT_EQ(pm_mesh_components(mesh, &count, nullptr, nullptr, nullptr, nullptr, 0), PM_OK) << last();
+  ASSERT_EQ(count, 2u);
+  uint32_t vertex[8];
+  uint64_t triangles[2] = {9, 9};
+  double area[2], volume[2];
+  ASSERT_EQ(pm_mesh_components(mesh, &count, vertex, triangles, area, volume, 2), PM_OK) << last();
+  EXPECT_EQ(std::vector<uint32_t>(vertex, vertex + 8), (std::vector<uint32_t>{0, 0, 0, 0, 1, 1, 1, UINT32_MAX}));
+  EXPECT_EQ(triangles[0], 4u);
+  EXPECT_EQ(triangles[1], 1u);
+  EXPECT_NEAR(area[0], 1.5 + std::sqrt(3.0) / 2, 1e-12);
+  EXPECT_NEAR(area[1], 0.5, 1e-12);
+  EXPECT_NEAR(volume[0], 1.0 / 6, 1e-12);
+  EXPECT_EQ(volume[1], 0.0);
+  uint64_t untouched[1] = {7};
+  count = 0;
+  EXPECT_EQ(pm_mesh_components(mesh, &count, nullptr, untouched, nullptr, nullptr, 1), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last().find("capacity 1 is below the mesh's 2 components"), std::string::npos) << last();
+  EXPECT_EQ(count, 2u);
+  EXPECT_EQ(untouched[0], 7u);
+  EXPECT_EQ(pm_mesh_components(nullptr, &count, nullptr, nullptr, nullptr, nullptr, 0), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(pm_mesh_components(mesh, nullptr, nullptr, nullptr, nullptr, nullptr, 0), PM_STATUS_INVALID_ARGUMENT);
+  pm_mesh_destroy(mesh);
+}
+
 // A collection's frames by time, through the handle; misuse is named, outputs left alone.
 TEST(CApi, FrameCollectionsListTheirFilesByTime) {
   const auto dir = particlemesh::test::scratch_dir("collection");

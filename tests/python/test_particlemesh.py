@@ -526,6 +526,25 @@ def test_topology_of_a_closed_outward_tetrahedron(pm):
         pm.topology(pm.Mesh(p, t.astype(float)))
 
 
+def test_components_number_the_pieces_with_their_volumes(pm):
+    """Two tetrahedra (one turned inside out) and a vertex no triangle uses: each vertex's
+    piece (-1 for the unused one), per piece its triangles, area and signed enclosed volume;
+    dropping the pieces below a volume by the triangles' pieces keeps the other whole."""
+    p, t = tetrahedron()
+    q = np.vstack([p, 2 * p + 10, [[50, 50, 50]]])
+    tris = np.vstack([t, t[:, ::-1] + 4]).astype(np.int32)
+    c = pm.components(pm.Mesh(q, tris))
+    np.testing.assert_array_equal(c["vertex"], [0, 0, 0, 0, 1, 1, 1, 1, -1])
+    np.testing.assert_array_equal(c["triangles"], [4, 4])
+    side = np.sqrt(8.0)  # a regular tetrahedron of edge sqrt(8): volume 8/3, area sqrt(3) side^2
+    np.testing.assert_allclose(c["area"], [np.sqrt(3) * side ** 2, 4 * np.sqrt(3) * side ** 2])
+    np.testing.assert_allclose(c["volume"], [8 / 3, -8 * 8 / 3])
+    keep = np.abs(c["volume"][c["vertex"][tris[:, 0]]]) > 10
+    np.testing.assert_array_equal(tris[keep], t[:, ::-1] + 4)
+    empty = pm.components(pm.Mesh(p, np.zeros((0, 3), np.int32)))
+    assert list(empty["vertex"]) == [-1] * 4 and len(empty["volume"]) == 0
+
+
 def test_mesh_write_read_roundtrip(pm, tmp_path):
     p, t = tetrahedron()
     n = p / np.linalg.norm(p, axis=1, keepdims=True)

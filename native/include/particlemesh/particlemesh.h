@@ -300,6 +300,18 @@ PM_EXPORT pm_status pm_triangle_edges(const uint32_t* triangles, size_t triangle
 PM_EXPORT pm_status pm_mesh_ray_crossings(const pm_mesh* mesh, const double* points, size_t point_count,
                                           int32_t threads, uint64_t* out_crossings);
 
+/** The mesh's connected pieces (triangles that share vertices), numbered in the order of their
+ *  first triangle: *out_component_count receives their number; out_vertex_component (NULL,
+ *  or vertex_count values) each vertex's piece, UINT32_MAX for a vertex no triangle uses; and
+ *  per piece (each output NULL, or room for `capacity` pieces, at least the count, else
+ *  PM_STATUS_INVALID_ARGUMENT with the count still set) its triangle count, area and enclosed
+ *  volume (the divergence theorem over its triangles: exact for a closed, consistently
+ *  oriented piece, positive when it faces outward; for an open one the cone over it from its
+ *  first corner). A triangle's piece is its corners'. */
+PM_EXPORT pm_status pm_mesh_components(const pm_mesh* mesh, size_t* out_component_count,
+                                       uint32_t* out_vertex_component, uint64_t* out_triangles,
+                                       double* out_area, double* out_volume, size_t capacity);
+
 /* ---- per-vertex attributes ---------------------------------------------------------- */
 
 /* Named float channels per vertex (colour, velocity, radius, ...): `components` floats per

@@ -11,6 +11,7 @@
 #include "capi/handles.h"
 #include "mesh/edges_impl.h"
 #include "particlemesh/io/mesh_io.h"
+#include "particlemesh/mesh/components.h"
 #include "particlemesh/mesh/edges.h"
 #include "particlemesh/mesh/ray_crossings.h"
 #include "particlemesh/mesh/topology_report.h"
@@ -205,6 +206,24 @@ pm_status pm_mesh_ray_crossings(const pm_mesh* mesh, const double* points, size_
     for (size_t i = 0; i < point_count; ++i) q[i] = {points[3 * i], points[3 * i + 1], points[3 * i + 2]};
     const std::vector<uint64_t> counts = ray_crossings(mesh->mesh, q, threads);
     std::copy(counts.begin(), counts.end(), out_crossings);
+  });
+}
+
+pm_status pm_mesh_components(const pm_mesh* mesh, size_t* out_component_count, uint32_t* out_vertex_component,
+                             uint64_t* out_triangles, double* out_area, double* out_volume, size_t capacity) {
+  return guarded([&] {
+    require(mesh, "mesh");
+    require(out_component_count, "out_component_count");
+    const MeshComponents c = mesh_components(mesh->mesh);
+    const size_t count = c.triangles.size();
+    *out_component_count = count;
+    if ((out_triangles || out_area || out_volume) && capacity < count)
+      throw Error(Status::InvalidArgument, "capacity " + std::to_string(capacity) + " is below the mesh's " +
+                                               std::to_string(count) + " components");
+    if (out_vertex_component) std::copy(c.vertex_component.begin(), c.vertex_component.end(), out_vertex_component);
+    if (out_triangles) std::copy(c.triangles.begin(), c.triangles.end(), out_triangles);
+    if (out_area) std::copy(c.area.begin(), c.area.end(), out_area);
+    if (out_volume) std::copy(c.volume.begin(), c.volume.end(), out_volume);
   });
 }
 

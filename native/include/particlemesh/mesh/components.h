@@ -19,7 +19,8 @@ struct MeshComponents {
   std::vector<uint32_t> vertex_component;
   /// Per component: triangles, area and enclosed volume (the divergence theorem over its
   /// triangles: exact for a closed, consistently oriented piece, positive when it faces
-  /// outward; for an open piece, the volume of the cone from the origin over it).
+  /// outward; for an open piece, the volume of the cone over it from the first corner of its
+  /// first triangle: 0 for a flat piece).
   std::vector<size_t> triangles;
   std::vector<double> area;
   std::vector<double> volume;
