@@ -66,7 +66,17 @@ bool path_inside_folder(const std::string& listed, std::string& portable) {
 }
 
 void note_not_read(FileContents& c, std::string what) {
-  if (std::find(c.not_read.begin(), c.not_read.end(), what) == c.not_read.end()) c.not_read.push_back(std::move(what));
+  if (std::find(c.not_read.begin(), c.not_read.end(), what) != c.not_read.end()) return;
+  if (c.not_read.size() < kMaxNotRead)
+    c.not_read.push_back(std::move(what));
+  else
+    ++c.not_read_more;
+}
+
+std::vector<std::string> not_read_lines(FileContents& c) {
+  std::vector<std::string> lines = std::move(c.not_read);
+  if (c.not_read_more > 0) lines.push_back("and " + std::to_string(c.not_read_more) + " more");
+  return lines;
 }
 
 std::string unique_attribute_name(const FileContents& c, const std::string& name) {

@@ -38,12 +38,19 @@ struct FileContents {
   /// but yields no triangle is an error, never an empty mesh.
   uint64_t faces = 0;
   /// Per-point data the file holds that the reader does not carry (PointCloud::not_read), one
-  /// line each in the order met, added with note_not_read.
+  /// line each in the order met, added with note_not_read: at most kMaxNotRead lines, the
+  /// others only counted in not_read_more (a file may declare tens of thousands).
   std::vector<std::string> not_read;
+  uint64_t not_read_more = 0;
 };
+
+constexpr size_t kMaxNotRead = 32;
 
 /// Adds `what` ("point attribute 'name' (strings)") to c.not_read, once.
 void note_not_read(FileContents& c, std::string what);
+
+/// c.not_read, with a last line for the ones only counted ("and 5 more").
+std::vector<std::string> not_read_lines(FileContents& c);
 
 /// Why a file is read: for a mesh (faces wanted) or for its points (faces skipped, though
 /// still walked, so that a truncated file is refused either way).

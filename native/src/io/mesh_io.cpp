@@ -68,7 +68,7 @@ TriMesh read_mesh(const std::string& path) {
 PointCloud read_point_cloud(const std::string& path) {
   detail::FileContents c = read_file(path, detail::ReadPurpose::Points);
   PointCloud cloud = take_vertices<PointCloud>(c);
-  cloud.not_read = std::move(c.not_read);
+  cloud.not_read = detail::not_read_lines(c);
   if (cloud.positions.empty()) throw Error(Status::InvalidInput, "'" + path + "' holds no points");
   try {
     validate_point_cloud(cloud);

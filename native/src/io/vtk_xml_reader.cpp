@@ -235,13 +235,16 @@ class VtkXmlReader {
   void add_piece_file(FileContents&& c, const std::string& label) {
     out_.faces += c.faces;
     for (std::string& what : c.not_read) note_not_read(out_, std::move(what));
+    out_.not_read_more += c.not_read_more;
     if (c.positions.empty()) return;  // a process that held no particles
     if (out_.positions.empty()) {
       const uint64_t faces = out_.faces;
       std::vector<std::string> not_read = std::move(out_.not_read);
+      const uint64_t more = out_.not_read_more;
       out_ = std::move(c);
       out_.faces = faces;
       out_.not_read = std::move(not_read);
+      out_.not_read_more = more;
       return;
     }
     bool same = c.attributes.size() == out_.attributes.size() && c.normals.empty() == out_.normals.empty();

@@ -113,6 +113,15 @@ TEST(PlyReader, ListPropertyInsideTheVertexElement) {
   // Not a channel (a list per vertex), and said so.
   EXPECT_EQ(c.not_read, std::vector<std::string>{"vertex list property 'ids' (lists)"});
   EXPECT_TRUE(c.attributes.empty());
+  // A file may declare thousands: 32 are named, the rest counted (no quadratic search).
+  std::string many = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n";
+  for (int k = 0; k < 40; ++k) many += "property list uchar int l" + std::to_string(k) + "\n";
+  many += "end_header\n0 0 0";
+  for (int k = 0; k < 40; ++k) many += " 0";
+  const PointCloud d = read_point_cloud(write(dir / "many.ply", many + "\n"));
+  ASSERT_EQ(d.not_read.size(), 33u);
+  EXPECT_EQ(d.not_read[31], "vertex list property 'l31' (lists)");
+  EXPECT_EQ(d.not_read[32], "and 8 more");
   EXPECT_EQ(read_mesh((dir / "b.ply").string()).triangles.size(), 1u);
 }
 

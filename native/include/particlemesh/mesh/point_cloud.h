@@ -28,8 +28,9 @@ struct PointCloud {
   std::vector<VertexAttribute> attributes;
   /// What read_point_cloud found in the file for each particle but does not carry, one line
   /// each naming it and why: "point attribute 'name' (strings)", "PointData array 'label'
-  /// (strings)", "vertex list property 'ids' (lists)", "extra bytes (4 per point)". Empty for
-  /// a cloud that was not read from a file, and when everything per particle was read.
+  /// (strings)", "vertex list property 'ids' (lists)", "extra bytes (4 per point)"; past 32
+  /// names, a last line "and N more". Empty for a cloud that was not read from a file, and
+  /// when everything per particle was read.
   std::vector<std::string> not_read;
 
   size_t size() const { return positions.size(); }
