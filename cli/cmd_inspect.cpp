@@ -247,10 +247,15 @@ void add_inspect(CLI::App& root, std::vector<Command>& commands) {
                           // vertex-only PLY, a VTK particle file); an empty mesh stays a mesh.
                           if (mesh && (!mesh->triangles.empty() || mesh->positions.empty())) {
                             const TopologyReport r = topology_report(*mesh);
-                            if (args->json)
-                              std::printf("%s\n", to_json(r).dump(2).c_str());
-                            else
+                            if (args->json) {
+                              nlohmann::json j = to_json(r);
+                              if (!mesh->not_read.empty()) j["not_read"] = mesh->not_read;
+                              std::printf("%s\n", j.dump(2).c_str());
+                            } else {
                               std::printf("%s\n%s", args->input.c_str(), describe(r).c_str());
+                              if (!mesh->not_read.empty())
+                                std::printf("  not read      %s\n", joined_not_read(mesh->not_read).c_str());
+                            }
                             return 0;
                           }
                         }

@@ -139,12 +139,14 @@ int run_smooth(const SmoothArgs& a) {
                      {"smooth", smooth_stats_json(result.stats)},
                      {"topology", to_json(written.report)},
                      {"seconds", {{"read", t_read}, {"smooth", t_smooth}, {"write", written.seconds}}}};
+    if (!mesh.not_read.empty()) j["not_read"] = mesh.not_read;
     outputs.open("--report").write(json_text(j));
   }
   outputs.commit_all();
   if (!a.quiet) {
     const auto& s = result.stats;
     std::printf("particlemesh smooth: %s -> %s\n", a.input.c_str(), a.output.c_str());
+    if (!mesh.not_read.empty()) std::printf("  not read      %s\n", joined_not_read(mesh.not_read).c_str());
     std::printf("  scheme        %s, %d level%s%s\n", a.scheme.c_str(), s.levels, s.levels == 1 ? "" : "s",
                 s.limit ? ", limit positions and normals" : "");
     std::printf("  control mesh  %zu vertices, %zu triangles, %zu edges (%zu boundary)\n", s.control_vertices,

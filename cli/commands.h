@@ -35,6 +35,14 @@ inline std::string shortest(double v) {
 }
 }  // namespace detail
 
+/// What a file held but the reader did not carry (PointCloud::not_read, TriMesh::not_read),
+/// as the summaries' one "not read" line says it.
+inline std::string joined_not_read(const std::vector<std::string>& lines) {
+  std::string out;
+  for (const std::string& what : lines) out += (out.empty() ? "" : "; ") + what;
+  return out;
+}
+
 /// CLI11's validators and those below let "nan" through (every comparison with NaN is false):
 /// every floating-point option adds this check, so "--spacing nan" is refused, not taken as
 /// "not given".

@@ -252,9 +252,7 @@ ParticleInput read_particles(const std::string& path, const ParticleInputArgs& a
   }
   if (!in.cloud.not_read.empty()) {
     // Said, not dropped silently: what the file holds per particle that no channel carries.
-    std::string joined;
-    for (const std::string& what : in.cloud.not_read) joined += (joined.empty() ? "" : "; ") + what;
-    in.summary += "  not read      " + joined + "\n";
+    in.summary += "  not read      " + joined_not_read(in.cloud.not_read) + "\n";
     in.report["not_read"] = in.cloud.not_read;
   }
   crop_particles(in, a.crop);

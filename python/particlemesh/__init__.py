@@ -134,14 +134,14 @@ def read_points(path):
         lib.pm_cloud_destroy(handle)
 
 
-def _not_read(lib, handle):
-    """The lines of pm_cloud_get_not_read."""
+def _not_read(lib, handle, kind="cloud"):
+    """The lines of pm_cloud_get_not_read (kind "mesh": pm_mesh_get_not_read)."""
     count = ctypes.c_size_t(0)
-    lib.check(lib.pm_cloud_get_not_read_count(handle, ctypes.byref(count)))
+    lib.check(getattr(lib, f"pm_{kind}_get_not_read_count")(handle, ctypes.byref(count)))
     lines = []
     for i in range(count.value):
         text = ctypes.c_char_p()
-        lib.check(lib.pm_cloud_get_not_read(handle, i, ctypes.byref(text)))
+        lib.check(getattr(lib, f"pm_{kind}_get_not_read")(handle, i, ctypes.byref(text)))
         lines.append(text.value.decode(errors="replace"))
     return lines
 
@@ -233,14 +233,21 @@ def read_frame_collection(path):
 
 def read_mesh(path):
     """A triangle mesh from .ply, .obj, .off or .stl (polygons are fanned into triangles).
-    Returns Mesh."""
+    Returns Mesh; what the file holds but the mesh does not carry (texture coordinates, face
+    properties, other elements) is listed in its stats["not_read"] and named by a
+    NotReadWarning."""
     lib = _library.load()
     handle = _abi.pm_mesh_p()
     lib.check(lib.pm_mesh_read(path_bytes(path), ctypes.byref(handle)))
     try:
-        return read_mesh_handle(lib, handle)
+        not_read = _not_read(lib, handle, "mesh")
+        mesh = read_mesh_handle(lib, handle)  # (takes the handle over)
     finally:
         lib.pm_mesh_destroy(handle)
+    if not_read:
+        mesh.stats["not_read"] = not_read
+        warnings.warn(f"{os.fspath(path)}: not read: {'; '.join(not_read)}", NotReadWarning, stacklevel=2)
+    return mesh
 
 
 def write_mesh(mesh, path):

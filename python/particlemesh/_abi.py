@@ -366,6 +366,8 @@ FUNCTIONS = {
     "pm_cloud_copy_attribute": (pm_status, [pm_cloud_p, c_char_p, _f32p, c_size_t]),
     "pm_mesh_components": (pm_status, [pm_mesh_p, _sizep, _u32p, _u64p, _f64p, _f64p, c_size_t]),
     "pm_cloud_get_not_read_count": (pm_status, [pm_cloud_p, _sizep]),
+    "pm_mesh_get_not_read_count": (pm_status, [pm_mesh_p, _sizep]),
+    "pm_mesh_get_not_read": (pm_status, [pm_mesh_p, c_size_t, POINTER(c_char_p)]),
     "pm_cloud_get_not_read": (pm_status, [pm_cloud_p, c_size_t, POINTER(c_char_p)]),
 }
 

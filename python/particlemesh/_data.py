@@ -105,7 +105,8 @@ class Mesh:
     """A triangle mesh: `vertices` (V, 3) float64, `triangles` (T, 3) int32 vertex indices
     (counter-clockwise seen from outside where the mesh is oriented), `normals` (V, 3) float64
     or None, `attributes` {name: (V, C) float32} per-vertex channels, `stats` (dict: what the
-    call that made it measured; empty for a mesh made or read here)."""
+    call that made it measured; empty for a mesh made here, and for one read_mesh read but for
+    "not_read", the lines naming what the file held that the mesh does not carry)."""
 
     __slots__ = ("vertices", "triangles", "normals", "attributes", "stats")
 

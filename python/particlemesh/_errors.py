@@ -54,6 +54,7 @@ class PclBridgeNotFoundError(Error):
 
 class NotReadWarning(UserWarning):
     """read_points found data per particle in the file that it does not read (a string
-    attribute, a list property, a LAS file's other fields); the message names it, and the
-    Points' info["not_read"] lists it. Silence it with warnings.simplefilter("ignore",
+    attribute, a list property, a LAS file's other fields), or read_mesh data the mesh does
+    not carry (texture coordinates, face properties); the message names it, and the Points'
+    info["not_read"] (the Mesh's stats["not_read"]) lists it. Silence it with warnings.simplefilter("ignore",
     NotReadWarning)."""

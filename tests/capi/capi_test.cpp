@@ -504,6 +504,33 @@ TEST(CApi, ComponentsOfAMeshAndTheirVolumes) {
   pm_mesh_destroy(mesh);
 }
 
+// What pm_mesh_read does not carry is named line by line; a mesh made here names nothing.
+TEST(CApi, WhatAMeshFileHoldsButIsNotReadIsNamed) {
+  const std::string path = (particlemesh::test::scratch_dir("capi_mesh_not_read") / "uv.obj").string();
+  std::ofstream(path) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\n";
+  pm_mesh* mesh = nullptr;
+  ASSERT_EQ(pm_mesh_read(path.c_str(), &mesh), PM_OK) << last();
+  size_t n = 9;
+  ASSERT_EQ(pm_mesh_get_not_read_count(mesh, &n), PM_OK) << last();
+  ASSERT_EQ(n, 1u);
+  const char* text = nullptr;
+  ASSERT_EQ(pm_mesh_get_not_read(mesh, 0, &text), PM_OK) << last();
+  EXPECT_STREQ(text, "texture coordinates (1 vt)");
+  const char* untouched = "x";
+  text = untouched;
+  EXPECT_EQ(pm_mesh_get_not_read(mesh, 1, &text), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(text, untouched);
+  EXPECT_EQ(pm_mesh_get_not_read(nullptr, 0, &text), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(pm_mesh_get_not_read_count(mesh, nullptr), PM_STATUS_INVALID_ARGUMENT);
+  pm_mesh_destroy(mesh);
+  const double p[] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  const int32_t tri[] = {0, 1, 2};
+  ASSERT_EQ(pm_mesh_create(p, 3, tri, 1, nullptr, &mesh), PM_OK) << last();
+  ASSERT_EQ(pm_mesh_get_not_read_count(mesh, &n), PM_OK);
+  EXPECT_EQ(n, 0u);
+  pm_mesh_destroy(mesh);
+}
+
 // A collection's frames by time, through the handle; misuse is named, outputs left alone.
 TEST(CApi, FrameCollectionsListTheirFilesByTime) {
   const auto dir = particlemesh::test::scratch_dir("collection");

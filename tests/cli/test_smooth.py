@@ -245,3 +245,22 @@ def test_sigint_cancels_without_output(cli, tmp_path):
     assert "cancel" in err or "interrupted" in err
     assert not out.exists()
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".big_s")]
+
+
+def test_what_the_input_mesh_holds_but_is_not_smoothed_is_named(cli, tmp_path):
+    """An OBJ's texture coordinates and materials are not carried through the smoothing: the
+    summary, the report and inspect name them; a plain mesh names nothing."""
+    obj = tmp_path / "uv.obj"
+    _octahedron(tmp_path / "octa.obj")
+    text = (tmp_path / "octa.obj").read_text()
+    obj.write_text("mtllib m.mtl\nusemtl skin\nvt 0 0\nvt 1 1\n" + text)
+    line = "  not read      texture coordinates (2 vt); materials (1 usemtl)"
+    out = cli("smooth", obj, "-o", tmp_path / "s.ply", "--report", tmp_path / "s.json").stdout
+    assert line in out
+    assert json.loads((tmp_path / "s.json").read_text())["not_read"] == ["texture coordinates (2 vt)",
+                                                                         "materials (1 usemtl)"]
+    assert line in cli("inspect", obj).stdout
+    assert json.loads(cli("inspect", obj, "--json").stdout)["not_read"][0] == "texture coordinates (2 vt)"
+    out = cli("smooth", tmp_path / "octa.obj", "-o", tmp_path / "t.ply", "--report", tmp_path / "t.json").stdout
+    assert "not read" not in out and "not_read" not in json.loads((tmp_path / "t.json").read_text())
+    assert "not_read" not in json.loads(cli("inspect", tmp_path / "octa.obj", "--json").stdout)

@@ -526,6 +526,23 @@ def test_topology_of_a_closed_outward_tetrahedron(pm):
         pm.topology(pm.Mesh(p, t.astype(float)))
 
 
+def test_read_mesh_names_what_the_mesh_does_not_carry(pm, tmp_path):
+    """An OBJ's texture coordinates: in stats["not_read"] and a NotReadWarning; a plain
+    mesh file warns of nothing and has no such entry."""
+    import warnings
+    path = tmp_path / "uv.obj"
+    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 1\nf 1/1 2/2 3/1\n")
+    with pytest.warns(pm.NotReadWarning, match=r"uv\.obj: not read: texture coordinates \(2 vt\)"):
+        mesh = pm.read_mesh(path)
+    assert mesh.stats == {"not_read": ["texture coordinates (2 vt)"]}
+    np.testing.assert_array_equal(mesh.triangles, [[0, 1, 2]])
+    p, t = tetrahedron()
+    pm.write_mesh(pm.Mesh(p, t), tmp_path / "tet.ply")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert pm.read_mesh(tmp_path / "tet.ply").stats == {}
+
+
 def test_components_number_the_pieces_with_their_volumes(pm):
     """Two tetrahedra (one turned inside out) and a vertex no triangle uses: each vertex's
     piece (-1 for the unused one), per piece its triangles, area and signed enclosed volume;

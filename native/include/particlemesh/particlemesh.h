@@ -247,6 +247,11 @@ PM_EXPORT pm_status pm_mesh_create(const double* positions, size_t vertex_count,
                                    const double* normals, pm_mesh** out_mesh);
 /** Read .ply / .obj / .off (ASCII) / .stl, once and exactly. */
 PM_EXPORT pm_status pm_mesh_read(const char* path, pm_mesh** out_mesh);
+/** What pm_mesh_read found in the file but does not carry (texture coordinates, face
+ *  properties, other elements, cell data), as pm_cloud_get_not_read: a count, then line
+ *  `index`, valid until the mesh is destroyed; 0 lines for a mesh not read from a file. */
+PM_EXPORT pm_status pm_mesh_get_not_read_count(const pm_mesh* mesh, size_t* out_count);
+PM_EXPORT pm_status pm_mesh_get_not_read(const pm_mesh* mesh, size_t index, const char** out_text);
 /** Write .ply (binary) or .obj: a regular file through an exclusively created temporary in
  *  its folder, renamed into place when complete (an existing file keeps its mode); a device
  *  or FIFO written straight through (PLY when the name has no .ply / .obj extension). */

@@ -209,6 +209,26 @@ pm_status pm_mesh_ray_crossings(const pm_mesh* mesh, const double* points, size_
   });
 }
 
+pm_status pm_mesh_get_not_read_count(const pm_mesh* mesh, size_t* out_count) {
+  return guarded([&] {
+    require(mesh, "mesh");
+    require(out_count, "out_count");
+    *out_count = mesh->mesh.not_read.size();
+  });
+}
+
+pm_status pm_mesh_get_not_read(const pm_mesh* mesh, size_t index, const char** out_text) {
+  return guarded([&] {
+    require(mesh, "mesh");
+    require(out_text, "out_text");
+    const auto& lines = mesh->mesh.not_read;
+    if (index >= lines.size())
+      throw Error(Status::InvalidArgument, "index " + std::to_string(index) + " is out of range: " +
+                                               std::to_string(lines.size()) + " lines name what was not read");
+    *out_text = lines[index].c_str();
+  });
+}
+
 pm_status pm_mesh_components(const pm_mesh* mesh, size_t* out_component_count, uint32_t* out_vertex_component,
                              uint64_t* out_triangles, double* out_area, double* out_volume, size_t capacity) {
   return guarded([&] {

@@ -1,7 +1,8 @@
 // Wavefront OBJ meshes: v (x y z, optional w, or x y z r g b), vn, and f with v, v/vt, v//vn
 // or v/vt/vn corners (1-based, or negative: relative to the vertices so far); polygons are
 // fanned; a line ending in a backslash continues on the next. Other statements (vt, o, g, s,
-// usemtl, mtllib, l, p, ...) are skipped.
+// usemtl, mtllib, l, p, ...) are skipped; texture coordinates, materials and l / p elements
+// of a mesh are named in not_read.
 //
 // Also particles (ReadPurpose::Points): the point clouds MeshLab, Blender and CloudCompare
 // export are v lines (often v x y z r g b), sometimes one vn per v in the same order, and no
@@ -55,7 +56,9 @@ class ObjReader {
       else if (w[0] == "f") {
         if (purpose_ == ReadPurpose::Mesh) face(w);
         else ++faces_;  // skipped for points; counted (a file with faces has no per-v normals)
-      }
+      } else if (w[0] == "vt") ++texture_coordinates_;
+      else if (w[0] == "usemtl") ++materials_;
+      else if (w[0] == "l" || w[0] == "p") ++lines_and_points_;
     };
     while (in_.line(line, kMaxLine)) {
       if (const size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
@@ -91,6 +94,16 @@ class ObjReader {
       out.normals = std::move(vertex_normals_);
     }
     if (colored_ == out.positions.size() && colored_ > 0) out.attributes.push_back({"color", 3, std::move(colors_)});
+    // Said rather than dropped silently: what a mesh read here does not carry.
+    if (colored_ > 0 && colored_ < out.positions.size())
+      note_not_read(out, "vertex colours (" + std::to_string(colored_) + " of the " + std::to_string(out.positions.size()) +
+                             " vertices have one: a channel needs every vertex's)");
+    if (purpose_ == ReadPurpose::Mesh) {
+      if (texture_coordinates_ > 0 && faces_ > 0)
+        note_not_read(out, "texture coordinates (" + std::to_string(texture_coordinates_) + " vt)");
+      if (materials_ > 0) note_not_read(out, "materials (" + std::to_string(materials_) + " usemtl)");
+      if (lines_and_points_ > 0) note_not_read(out, "line and point elements (" + std::to_string(lines_and_points_) + " l / p)");
+    }
     return out;
   }
 
@@ -208,6 +221,7 @@ class ObjReader {
   std::vector<Vec3> positions_, normals_, vertex_normals_;
   std::vector<float> colors_;
   size_t colored_ = 0;
+  uint64_t texture_coordinates_ = 0, materials_ = 0, lines_and_points_ = 0;
   bool any_vertex_normal_ = false;
   std::vector<Triangle> triangles_;
   std::vector<uint32_t> corners_;

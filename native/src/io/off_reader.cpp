@@ -70,7 +70,10 @@ class OffReader {
       }
       out.positions.push_back({c[0], c[1], c[2]});
       if (normals_) out.normals.push_back({c[3], c[4], c[5]});
-      if (!ended) in_.skip_line();  // colours, texture coordinates
+      if (!ended) {  // colours, texture coordinates (or a comment)
+        extra_vertex_values_ = extra_vertex_values_ || in_.look_ahead(1) != "#";
+        in_.skip_line();
+      }
     }
     for (uint64_t f = 0; f < nf_; ++f) {
       if (!next(&ended)) truncated("face " + std::to_string(f));
@@ -89,11 +92,16 @@ class OffReader {
       }
       if (purpose_ == ReadPurpose::Mesh)
         for (size_t k = 1; k + 1 < corners_.size(); ++k) out.triangles.push_back({corners_[0], corners_[k], corners_[k + 1]});
-      if (!ended) in_.skip_line();  // a face colour
+      if (!ended) {  // a face colour (or a comment)
+        face_colours_ = face_colours_ || in_.look_ahead(1) != "#";
+        in_.skip_line();
+      }
     }
     while (next(&ended))
       fail("more data after the " + std::to_string(nv_) + " vertices and " + std::to_string(nf_) +
            " faces the header declares ('" + shown(tok_) + "'): a count in the header is too small");
+    if (extra_vertex_values_) note_not_read(out, "vertex colours or texture coordinates (the values after x y z" + std::string(normals_ ? " nx ny nz" : "") + ")");
+    if (face_colours_ && purpose_ == ReadPurpose::Mesh) note_not_read(out, "face colours");
     return out;
   }
 
@@ -122,6 +130,7 @@ class OffReader {
   FileReader in_;
   ReadPurpose purpose_;
   bool normals_ = false;
+  bool extra_vertex_values_ = false, face_colours_ = false;
   uint64_t nv_ = 0, nf_ = 0;
   std::string tok_, pending_;
   std::vector<uint32_t> corners_;

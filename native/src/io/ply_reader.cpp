@@ -327,6 +327,16 @@ class PlyReader {
       if (!face_ && purpose_ == ReadPurpose::Mesh && face->count > 0)
         fail("the '" + face->name + "' element has no vertex_indices list");
     }
+    if (purpose_ == ReadPurpose::Mesh) {
+      // What a mesh read here does not carry: the faces' other properties (a colour, a
+      // texture's corners), and other elements (edges, materials, ...).
+      if (face_)
+        for (const Property& p : face_->properties)
+          if (p.role != kIndices) note_not_read(out_, face_->name + " property '" + shown(p.name) + "'" + (p.list ? " (a list)" : ""));
+      for (const Element& e : elements_)
+        if (&e != vertex_ && &e != face && e.count > 0)
+          note_not_read(out_, "element '" + shown(e.name) + "' (" + std::to_string(e.count) + ")");
+    }
   }
 
   // ---- data -----------------------------------------------------------------------------

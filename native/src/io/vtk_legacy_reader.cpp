@@ -440,6 +440,7 @@ class VtkLegacyReader {
     const uint64_t n = count_;
     const bool keep = section_ == Section::Points && type != Type::String;
     if (section_ == Section::Points && type == Type::String) note_not_read(out_, "POINT_DATA " + what + " (strings)");
+    if (section_ == Section::Cells && purpose_ == ReadPurpose::Mesh) note_not_read(out_, "CELL_DATA " + what);
     if (!keep) {
       values(type, saturating_mul(n, uint64_t(components)), what, {});
       return;
@@ -493,6 +494,7 @@ class VtkLegacyReader {
       const bool take = keep && section_ == Section::Points && type != Type::String;
       if (keep && section_ == Section::Points && type == Type::String)
         note_not_read(out_, "POINT_DATA " + what + " (strings)");
+      if (section_ == Section::Cells && purpose_ == ReadPurpose::Mesh) note_not_read(out_, "CELL_DATA " + what);
       if (take && tuples != out_.positions.size())
         fail(what + " has " + std::to_string(tuples) + " tuples for " + std::to_string(out_.positions.size()) + " points");
       if (take && (components < 1 || components > 65535)) fail(what + " has " + std::to_string(components) + " components");

@@ -610,7 +610,12 @@ class VtkXmlReader {
       if (x.values.size() != out_.positions.size() * size_t(x.components))
         fail(label + " lacks PointData array '" + shown(x.name) + "' (pieces must carry the same arrays)");
     if (normals_ && out_.normals.size() != out_.positions.size()) fail(label + " lacks the normals array");
-    if (purpose_ == ReadPurpose::Mesh) read_cells(piece, polydata, base, n, label);
+    if (purpose_ == ReadPurpose::Mesh) {
+      read_cells(piece, polydata, base, n, label);
+      if (const Node* cd = piece.child("CellData"))  // per cell: nothing a triangle mesh's vertices carry
+        for (const Node& a : cd->children)
+          if (a.name == "DataArray" || a.name == "Array") note_not_read(out_, "CellData array '" + shown(a.get("Name")) + "'");
+    }
   }
 
   void read_cells(const Node& piece, bool polydata, size_t base, uint64_t n, const std::string& label) {

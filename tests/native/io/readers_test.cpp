@@ -508,6 +508,39 @@ TEST(PlyReader, VectorSpellingsAndNormalFieldNames) {
 // OBJ: NaN and values beyond double named with their line (before: "a face refers to a
 // vertex that does not exist"); 1e39 is a double like any other; a corner before its vertex
 // is named.
+// What a triangle mesh does not carry is named, not dropped silently: an OBJ's texture
+// coordinates, materials and line elements (and colours on only some vertices), a PLY's face
+// properties and other elements, an OFF's colours, VTK cell data. The mesh itself reads as
+// before; read for its points, the faces' extras are not named (faces are not read then).
+TEST(MeshReaders, WhatATriangleMeshDoesNotCarryIsNamed) {
+  const auto dir = test::scratch_dir("mesh_not_read");
+  const std::string obj = write(dir / "a.obj", "mtllib a.mtl\nv 0 0 0 1 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\n"
+                                               "usemtl skin\nf 1/1 2/2 3/1\nl 1 2\n");
+  const TriMesh a = read_mesh(obj);
+  EXPECT_EQ(a.triangles.size(), 1u);
+  EXPECT_EQ(a.not_read, (std::vector<std::string>{"vertex colours (1 of the 3 vertices have one: a channel needs every vertex's)",
+                                                  "texture coordinates (2 vt)", "materials (1 usemtl)",
+                                                  "line and point elements (1 l / p)"}));
+  EXPECT_EQ(read_point_cloud(obj).not_read,
+            std::vector<std::string>{"vertex colours (1 of the 3 vertices have one: a channel needs every vertex's)"});
+  const std::string ply = write(dir / "a.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                               "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                                               "property uchar red\nelement edge 1\nproperty int vertex1\nproperty int vertex2\n"
+                                               "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 255\n0 1\n");
+  EXPECT_EQ(read_mesh(ply).not_read, (std::vector<std::string>{"face property 'red'", "element 'edge' (1)"}));
+  EXPECT_TRUE(read_point_cloud(ply).not_read.empty());
+  const std::string off = write(dir / "a.off", "OFF\n3 1 0\n0 0 0 255 0 0 # red\n1 0 0\n0 1 0 # a comment\n3 0 1 2 0.5 0.5 0.5\n");
+  EXPECT_EQ(read_mesh(off).not_read, (std::vector<std::string>{"vertex colours or texture coordinates (the values after x y z)",
+                                                               "face colours"}));
+  const std::string plain_off = write(dir / "b.off", "OFF\n3 1 0\n0 0 0 # a comment\n1 0 0\n0 1 0\n3 0 1 2 # one\n");
+  EXPECT_TRUE(read_mesh(plain_off).not_read.empty());
+  const std::string vtk = write(dir / "a.vtk", "# vtk DataFile Version 3.0\nm\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n"
+                                               "0 0 0 1 0 0 0 1 0\nPOLYGONS 1 4\n3 0 1 2\nCELL_DATA 1\nSCALARS pressure float 1\n"
+                                               "LOOKUP_TABLE default\n7\n");
+  EXPECT_EQ(read_mesh(vtk).not_read, std::vector<std::string>{"CELL_DATA SCALARS 'pressure'"});
+  EXPECT_TRUE(read_point_cloud(vtk).not_read.empty());
+}
+
 TEST(ObjReader, ValuesAndCornersNamedWithTheirLine) {
   const auto dir = test::scratch_dir("obj");
   EXPECT_REFUSED(read_mesh(write(dir / "nan.obj", "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n")), Status::FormatError,

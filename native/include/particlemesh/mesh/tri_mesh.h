@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "particlemesh/core/vec3.h"
@@ -23,6 +24,10 @@ struct TriMesh {
   std::vector<Vec3> normals;  ///< empty or one per vertex
   std::vector<Triangle> triangles;
   std::vector<VertexAttribute> attributes;
+  /// What read_mesh found in the file but does not carry, one line each naming it (as
+  /// PointCloud::not_read): "texture coordinates (120 vt)", "face property 'red'", "element
+  /// 'edge' (12)", "CELL_DATA SCALARS 'pressure'". Empty for a mesh not read from a file.
+  std::vector<std::string> not_read;
 
   size_t vertex_count() const { return positions.size(); }
   size_t triangle_count() const { return triangles.size(); }
