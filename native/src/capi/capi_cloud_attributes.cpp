@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <string>
 
+#include "capi/conversions.h"
 #include "capi/firewall.h"
 #include "capi/handles.h"
 
@@ -56,11 +57,7 @@ pm_status pm_cloud_get_not_read(const pm_cloud* cloud, size_t index, const char*
   return guarded([&] {
     require(cloud, "cloud");
     require(out_text, "out_text");
-    const auto& lines = cloud->cloud.not_read;
-    if (index >= lines.size())
-      throw Error(Status::InvalidArgument, "index " + std::to_string(index) + " is out of range: " +
-                                               std::to_string(lines.size()) + " lines name what was not read");
-    *out_text = lines[index].c_str();
+    *out_text = capi::not_read_line(cloud->cloud.not_read, index);
   });
 }
 

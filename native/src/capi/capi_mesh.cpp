@@ -221,11 +221,7 @@ pm_status pm_mesh_get_not_read(const pm_mesh* mesh, size_t index, const char** o
   return guarded([&] {
     require(mesh, "mesh");
     require(out_text, "out_text");
-    const auto& lines = mesh->mesh.not_read;
-    if (index >= lines.size())
-      throw Error(Status::InvalidArgument, "index " + std::to_string(index) + " is out of range: " +
-                                               std::to_string(lines.size()) + " lines name what was not read");
-    *out_text = lines[index].c_str();
+    *out_text = capi::not_read_line(mesh->mesh.not_read, index);
   });
 }
 

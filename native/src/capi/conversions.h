@@ -26,6 +26,16 @@ inline ProgressCallback wrap_progress(pm_progress_fn fn, void* user) {
   };
 }
 
+/// Line `index` of what a reader did not carry (PointCloud::not_read, TriMesh::not_read), for
+/// pm_cloud_get_not_read and pm_mesh_get_not_read: valid while the list lives.
+/// @throws Error(InvalidArgument) for an index past the last line.
+inline const char* not_read_line(const std::vector<std::string>& lines, size_t index) {
+  if (index >= lines.size())
+    throw Error(Status::InvalidArgument, "index " + std::to_string(index) + " is out of range: " +
+                                             std::to_string(lines.size()) + " lines name what was not read");
+  return lines[index].c_str();
+}
+
 /// A PM_KERNEL_* number as a Kernel (the numbers are the enumerators').
 /// @throws Error(InvalidArgument) for a number that is none of them.
 inline Kernel to_kernel(int32_t k) {
