@@ -115,6 +115,12 @@ TEST(CApiHostile, EveryNullPointerIsNamed) {
       {"mesh", [&] { return pm_mesh_ray_crossings(nullptr, dbuf, 1, 0, reinterpret_cast<uint64_t*>(ibuf)); }},
       {"points", [&] { return pm_mesh_ray_crossings(h.mesh, nullptr, 1, 0, reinterpret_cast<uint64_t*>(ibuf)); }},
       {"out_crossings", [&] { return pm_mesh_ray_crossings(h.mesh, dbuf, 1, 0, nullptr); }},
+      {"mesh", [&] { return pm_mesh_components(nullptr, &n, nullptr, nullptr, nullptr, nullptr, 0); }},
+      {"out_component_count", [&] { return pm_mesh_components(h.mesh, nullptr, nullptr, nullptr, nullptr, nullptr, 0); }},
+      {"mesh", [&] { return pm_mesh_get_not_read_count(nullptr, &n); }},
+      {"out_count", [&] { return pm_mesh_get_not_read_count(h.mesh, nullptr); }},
+      {"mesh", [&] { return pm_mesh_get_not_read(nullptr, 0, &name); }},
+      {"out_text", [&] { return pm_mesh_get_not_read(h.mesh, 0, nullptr); }},
       {"out_edge_count", [&] { return pm_triangle_edges(reinterpret_cast<const uint32_t*>(tri), 1, 3, 0, reinterpret_cast<uint32_t*>(ibuf), 3, reinterpret_cast<uint32_t*>(ibuf) + 6, nullptr); }},
       {"path", [&] { return pm_frame_collection_read(nullptr, reinterpret_cast<pm_frame_collection**>(&m)); }},
       {"out_collection", [&] { return pm_frame_collection_read("x.pvd", nullptr); }},
@@ -242,6 +248,10 @@ TEST(CApiHostile, EveryNullPointerIsNamedVolumeRaysAndAttributes) {
       {"cloud", [&] { return pm_cloud_copy_attribute(nullptr, "a", buf, 256); }},
       {"name", [&] { return pm_cloud_copy_attribute(h.cloud, nullptr, buf, 256); }},
       {"out", [&] { return pm_cloud_copy_attribute(h.cloud, "a", nullptr, 256); }},
+      {"cloud", [&] { return pm_cloud_get_not_read_count(nullptr, &n); }},
+      {"out_count", [&] { return pm_cloud_get_not_read_count(h.cloud, nullptr); }},
+      {"cloud", [&] { return pm_cloud_get_not_read(nullptr, 0, &name); }},
+      {"out_text", [&] { return pm_cloud_get_not_read(h.cloud, 0, nullptr); }},
   };
   expect_each_null_named(cases);
   EXPECT_EQ(m, reinterpret_cast<pm_mesh*>(0x1));
