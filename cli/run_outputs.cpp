@@ -111,6 +111,15 @@ void RunOutputs::write_mesh(const std::string& option, const TriMesh& mesh) {
   throw Error(Status::Internal, "no output " + option);
 }
 
+std::vector<std::string> RunOutputs::channels_not_written(const std::string& option, const TriMesh& mesh) const {
+  std::vector<std::string> out;
+  for (const OutputSpec& o : specs_)
+    if (o.option == option && !o.path.empty() && mesh_output_format(o.path, o.format) == MeshFormat::Obj)
+      for (const VertexAttribute& a : mesh.attributes)
+        if (!(a.name == "color" && a.components == 3)) out.push_back(a.name);  // OBJ's v x y z r g b holds a colour
+  return out;
+}
+
 void RunOutputs::commit_all() {
   for (auto& [option, file] : open_) file->finish();
   // Hold off the signals while the files go in place: all of them, or none.

@@ -52,6 +52,9 @@ class RunOutputs {
   OutputFile& open(const std::string& option);
   /// Opens `option`'s output and writes `mesh` into it, in the format its spec asks for.
   void write_mesh(const std::string& option, const TriMesh& mesh);
+  /// The channels of `mesh` that `option`'s format cannot hold (OBJ: every one but the
+  /// 3-component "color"), for the summary's "not written" line; empty when not asked for.
+  std::vector<std::string> channels_not_written(const std::string& option, const TriMesh& mesh) const;
   /// Finish every opened output and put them all in place.
   void commit_all();
 

@@ -427,6 +427,35 @@ def test_smooth_keeps_vertex_colours(cli, tmp_path):
     assert body[0].split()[-3:] == ["200", "30", "40"]
 
 
+def test_channels_an_obj_cannot_hold_are_said(cli, tmp_path):
+    """An OBJ output holds a colour per vertex and no other channel: the summary's "not
+    written" line and the report's not_written name the channels left out (triangulate,
+    polygonize, smooth); a PLY output, --attributes none, and a colour alone name nothing."""
+    import sys
+    from pathlib import Path
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from particle_files import particles, write_ply
+    p, attrs = particles(n=6)
+    src = tmp_path / "p.ply"
+    write_ply(src, p, attrs)
+    line = "  not written   velocity, density (OBJ holds a colour per vertex only"
+    for command in ("triangulate", "polygonize"):
+        out = cli(command, src, "-o", tmp_path / "m.obj", "--report", tmp_path / "m.json").stdout
+        assert line in out, command
+        assert json.loads((tmp_path / "m.json").read_text())["not_written"] == ["velocity", "density"], command
+        out = cli(command, src, "-o", tmp_path / "m.ply", "--report", tmp_path / "m.json").stdout
+        assert "not written" not in out and "not_written" not in json.loads((tmp_path / "m.json").read_text())
+        assert "not written" not in cli(command, src, "-o", tmp_path / "n.obj", "--attributes", "none").stdout
+    cli("triangulate", src, "-o", tmp_path / "m.ply", "-q")
+    out = cli("smooth", tmp_path / "m.ply", "-o", tmp_path / "s.obj").stdout
+    assert line in out
+    coloured = tmp_path / "c.ply"  # a colour alone: OBJ's v x y z r g b holds it
+    coloured.write_text("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                        "property uchar red\nproperty uchar green\nproperty uchar blue\nelement face 1\n"
+                        "property list uchar int vertex_indices\nend_header\n0 0 0 1 2 3\n1 0 0 4 5 6\n0 1 0 7 8 9\n3 0 1 2\n")
+    assert "not written" not in cli("smooth", coloured, "-o", tmp_path / "c.obj").stdout
+
+
 def test_a_meshs_vertices_are_particles_in_every_mesh_format(cli, tmp_path, sphere):
     """triangulate re-meshes a model from its vertices whatever file holds it: an OFF (no
     faces, or faces that are ignored) gives the mesh of the same points as text, byte for
