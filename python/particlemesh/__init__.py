@@ -32,7 +32,8 @@ import numpy as np
 from . import _abi, _library, _options
 from ._data import (Mesh, Points, channels, new_cloud, new_mesh, path_bytes, per_point, ptr, vec3,
                     vertex_indices, read_cloud_handle, read_mesh_handle, struct_dict)
-from ._errors import CancelledError, Error, LibraryNotFoundError, NotReadWarning, PclBridgeNotFoundError
+from ._errors import (CancelledError, Error, LibraryNotFoundError, NotReadWarning, NotWrittenWarning,
+                      PclBridgeNotFoundError)
 from ._progress import Hook, Progress
 
 __all__ = [
@@ -43,7 +44,7 @@ __all__ = [
     "topology", "components",
     "estimate_spacing", "thin", "triangle_edges", "ray_crossings", "default_radius", "particle_grid_radius", "lattice_field", "defaults", "version",
     "library_path", "pcl_bridge_path", "Mesh", "Points", "Progress", "Error", "CancelledError",
-    "LibraryNotFoundError", "PclBridgeNotFoundError", "NotReadWarning",
+    "LibraryNotFoundError", "PclBridgeNotFoundError", "NotReadWarning", "NotWrittenWarning",
 ]
 
 #: pm_status values (Error.status).
@@ -251,14 +252,22 @@ def read_mesh(path):
 
 
 def write_mesh(mesh, path):
-    """Write a Mesh as .ply (binary, float32 unless far from the origin) or .obj, with its
-    normals, atomically: under a temporary name, renamed when complete."""
+    """Write a Mesh as .ply (binary, float32 unless far from the origin), .obj, .vtk, .vtu or
+    .vtp, with its normals and attributes, atomically: under a temporary name, renamed when
+    complete. An .obj holds a colour per vertex ("color", 3 components) and no other channel:
+    a NotWrittenWarning names those it leaves out."""
     lib = _library.load()
-    handle = new_mesh(lib, mesh, with_attributes=False)
+    handle = new_mesh(lib, mesh)
     try:
         lib.check(lib.pm_mesh_write(handle, path_bytes(path)))
     finally:
         lib.pm_mesh_destroy(handle)
+    if os.fspath(path).lower().endswith(".obj"):
+        left = [name for name, values in mesh.attributes.items()
+                if not (name == "color" and np.shape(values)[-1:] == (3,))]
+        if left:
+            warnings.warn(f"{os.fspath(path)}: not written: {', '.join(left)} (OBJ holds a colour per vertex "
+                          "only; .ply, .vtk, .vtu and .vtp hold every channel)", NotWrittenWarning, stacklevel=2)
 
 
 # ---- meshing --------------------------------------------------------------------------------

@@ -58,3 +58,8 @@ class NotReadWarning(UserWarning):
     not carry (texture coordinates, face properties); the message names it, and the Points'
     info["not_read"] (the Mesh's stats["not_read"]) lists it. Silence it with warnings.simplefilter("ignore",
     NotReadWarning)."""
+
+
+class NotWrittenWarning(UserWarning):
+    """write_mesh wrote a format that cannot hold some of the mesh's channels (an .obj holds a
+    colour per vertex only); the message names them."""

@@ -526,6 +526,31 @@ def test_topology_of_a_closed_outward_tetrahedron(pm):
         pm.topology(pm.Mesh(p, t.astype(float)))
 
 
+def test_write_mesh_writes_the_attributes_and_says_what_obj_leaves_out(pm, tmp_path):
+    """A Mesh's attributes reach the file (they were dropped: write_mesh gave the library the
+    mesh without them): PLY and VTK hold every channel, read back; an OBJ holds the colour, and a
+    NotWrittenWarning names the rest."""
+    import warnings
+    p, t = tetrahedron()
+    velocity = np.arange(12, dtype=np.float32).reshape(4, 3)
+    colour = np.array([[0, 0.5, 1]] * 4, np.float32)
+    mesh = pm.Mesh(p, t, attributes={"velocity": velocity, "color": colour})
+    for ext in ("ply", "vtk", "vtu"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            pm.write_mesh(mesh, tmp_path / f"m.{ext}")
+        back = pm.read_mesh(tmp_path / f"m.{ext}")
+        np.testing.assert_array_equal(back.attributes["velocity"], velocity, err_msg=ext)
+        np.testing.assert_allclose(back.attributes["color"], colour, atol=1 / 255, err_msg=ext)
+    with pytest.warns(pm.NotWrittenWarning, match=r"m\.obj: not written: velocity \(OBJ holds a colour"):
+        pm.write_mesh(mesh, tmp_path / "m.obj")
+    back = pm.read_mesh(tmp_path / "m.obj")
+    assert set(back.attributes) == {"color"}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        pm.write_mesh(pm.Mesh(p, t, attributes={"color": colour}), tmp_path / "c.obj")
+
+
 def test_read_mesh_names_what_the_mesh_does_not_carry(pm, tmp_path):
     """An OBJ's texture coordinates: in stats["not_read"] and a NotReadWarning; a plain
     mesh file warns of nothing and has no such entry."""
