@@ -187,7 +187,7 @@ int run_polygonize(const PolygonizeArgs& a, FrameContext* frame = nullptr) {
     std::printf("particlemesh polygonize: %s -> %s\n", a.input.c_str(), a.output.c_str());
     std::printf("  particles     %zu\n", s.particles);
     if (!input.summary.empty()) std::printf("%s", input.summary.c_str());
-    std::printf("%s", not_written_line(outputs.channels_not_written("-o", result.mesh)).c_str());
+    std::printf("%s", not_written_lines(outputs, result.mesh).c_str());
     if (s.spacing > 0) std::printf("  spacing       %.6g (median nearest-neighbour distance)\n", s.spacing);
     std::printf("  kernel        %s (C%d at R)\n", kernel_name(s.kernel), kernel_continuity(s.kernel));
     if (!a.radius_channel.empty())

@@ -377,6 +377,7 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
                      {"seconds", {{"read", t_read}, {"triangulate", t_tri}, {"write", written.seconds}}}};
     if (!input.report.is_null()) j["input_cloud"] = input.report;
     if (const auto nw = outputs.channels_not_written("-o", result.mesh); !nw.empty()) j["not_written"] = nw;
+    if (const auto nw = outputs.channels_not_written("--pcl-mesh", result.mesh); !nw.empty()) j["pcl_mesh_not_written"] = nw;
     if (a.thin > 1)
       j["thin"] = {{"factor", a.thin}, {"local", !a.global_spacing}, {"distance", thin_distance}, {"kept", cloud.size()}, {"of", input.cloud.size()}};
     if (!a.raw) {
@@ -393,7 +394,7 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
     const auto& s = result.triangulation;
     std::printf("particlemesh triangulate: %s -> %s\n", a.input.c_str(), a.output.c_str());
     std::printf("%s", input.summary.c_str());
-    std::printf("%s", not_written_line(outputs.channels_not_written("-o", result.mesh)).c_str());
+    std::printf("%s", not_written_lines(outputs, result.mesh).c_str());
     if (a.thin > 1)
       std::printf("  thinned       %zu of %zu particles kept, none closer than %g x %s\n", cloud.size(),
                   input.cloud.size(), a.thin, a.global_spacing ? ("r0 = " + std::to_string(thin_distance)).c_str() : "its local spacing");

@@ -43,15 +43,6 @@ inline std::string joined_not_read(const std::vector<std::string>& lines) {
   return out;
 }
 
-/// The summary's line for the channels an output's format cannot hold
-/// (RunOutputs::channels_not_written), "" when there are none.
-inline std::string not_written_line(const std::vector<std::string>& names) {
-  if (names.empty()) return "";
-  std::string list;
-  for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
-  return "  not written   " + list + " (OBJ holds a colour per vertex only; .ply, .vtk, .vtu and .vtp hold every channel)\n";
-}
-
 /// CLI11's validators and those below let "nan" through (every comparison with NaN is false):
 /// every floating-point option adds this check, so "--spacing nan" is refused, not taken as
 /// "not given".

@@ -111,13 +111,37 @@ void RunOutputs::write_mesh(const std::string& option, const TriMesh& mesh) {
   throw Error(Status::Internal, "no output " + option);
 }
 
-std::vector<std::string> RunOutputs::channels_not_written(const std::string& option, const TriMesh& mesh) const {
+std::vector<std::string> RunOutputs::channels_not_written(const std::string& option, const TriMesh& mesh,
+                                                          std::string* why) const {
   std::vector<std::string> out;
-  for (const OutputSpec& o : specs_)
-    if (o.option == option && !o.path.empty() && mesh_output_format(o.path, o.format) == MeshFormat::Obj)
-      for (const VertexAttribute& a : mesh.attributes)
-        if (!(a.name == "color" && a.components == 3)) out.push_back(a.name);  // OBJ's v x y z r g b holds a colour
+  for (const OutputSpec& o : specs_) {
+    if (o.option != option || o.path.empty()) continue;
+    // OBJ's "v x y z r g b" holds a colour; PCL's PLY writer knows rgb and intensity.
+    const bool obj = o.kind == OutputKind::Mesh && mesh_output_format(o.path, o.format) == MeshFormat::Obj;
+    const bool pcl = o.kind == OutputKind::PlyOnly;
+    if (!obj && !pcl) continue;
+    for (const VertexAttribute& a : mesh.attributes)
+      if (!(a.name == "color" && a.components == 3) && !(pcl && a.name == "intensity" && a.components == 1))
+        out.push_back(a.name);
+    if (why)
+      *why = obj ? "OBJ holds a colour per vertex only; .ply, .vtk, .vtu and .vtp hold every channel"
+                 : "PCL's PLY writer holds rgb and intensity only; -o with .ply holds every channel";
+  }
   return out;
+}
+
+std::string not_written_lines(const RunOutputs& outputs, const TriMesh& mesh) {
+  std::string lines;
+  for (const char* option : {"-o", "--pcl-mesh"}) {
+    std::string why;
+    const std::vector<std::string> names = outputs.channels_not_written(option, mesh, &why);
+    if (names.empty()) continue;
+    std::string list;
+    for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+    lines += std::string("  not written   ") + (option == std::string("-o") ? "" : std::string(option) + ": ") + list +
+             " (" + why + ")\n";
+  }
+  return lines;
 }
 
 void RunOutputs::commit_all() {

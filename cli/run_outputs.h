@@ -53,8 +53,10 @@ class RunOutputs {
   /// Opens `option`'s output and writes `mesh` into it, in the format its spec asks for.
   void write_mesh(const std::string& option, const TriMesh& mesh);
   /// The channels of `mesh` that `option`'s format cannot hold (OBJ: every one but the
-  /// 3-component "color"), for the summary's "not written" line; empty when not asked for.
-  std::vector<std::string> channels_not_written(const std::string& option, const TriMesh& mesh) const;
+  /// 3-component "color"; PCL's PLY writer: every one but it and "intensity"), for the
+  /// summary's "not written" line; empty when not asked for. `why` receives the reason.
+  std::vector<std::string> channels_not_written(const std::string& option, const TriMesh& mesh,
+                                                std::string* why = nullptr) const;
   /// Finish every opened output and put them all in place.
   void commit_all();
 
@@ -62,6 +64,10 @@ class RunOutputs {
   std::vector<OutputSpec> specs_;
   std::vector<std::pair<std::string, std::unique_ptr<OutputFile>>> open_;
 };
+
+/// The summary's "not written" lines: per mesh output (-o, --pcl-mesh) whose format cannot
+/// hold some of `mesh`'s channels, those channels and why ("" when every output holds all).
+std::string not_written_lines(const RunOutputs& outputs, const TriMesh& mesh);
 
 /// What the mesh outputs' writing gives the summary and --report: the written mesh's topology
 /// report (empty when not asked for) and the seconds the writing took.

@@ -202,6 +202,31 @@ namespace particlemesh_pcl
         }
         c.extra.push_back (std::move (e));
       }
+      // Fields name_0, name_1, ... in a row (how particlemesh's PLY writer stores a vector
+      // channel) are one channel "name" again.
+      std::vector<ExtraField> joined;
+      for (std::size_t i = 0; i < c.extra.size ();)
+      {
+        const std::string &first = c.extra[i].name;
+        std::size_t k = 0;
+        const bool vector_start = first.size () > 2 && first.compare (first.size () - 2, 2, "_0") == 0 &&
+                                  c.extra[i].values.size () == 1;
+        const std::string base = vector_start ? first.substr (0, first.size () - 2) : std::string ();
+        while (vector_start && i + k < c.extra.size () && c.extra[i + k].values.size () == 1 &&
+               c.extra[i + k].name == base + "_" + std::to_string (k))
+          ++k;
+        if (k < 2)
+        {
+          joined.push_back (std::move (c.extra[i++]));
+          continue;
+        }
+        ExtraField v{base, {}};
+        for (std::size_t j = 0; j < k; ++j)
+          v.values.push_back (c.extra[i + j].values[0]);
+        joined.push_back (std::move (v));
+        i += k;
+      }
+      c.extra = std::move (joined);
       return c;
     }
 
@@ -406,6 +431,15 @@ namespace particlemesh_pcl
       for (std::size_t i = 0; i < n; ++i)
         in.values.push_back (float (c.intensity->value (i)));
       out.attributes.push_back (std::move (in));
+    }
+    for (const ExtraField &e : c.extra)
+    {
+      particlemesh::VertexAttribute a{e.name, int (e.values.size ()), {}};
+      a.values.reserve (n * e.values.size ());
+      for (std::size_t i = 0; i < n; ++i)
+        for (const FieldReader &r : e.values)
+          a.values.push_back (float (r.value (i)));
+      out.attributes.push_back (std::move (a));
     }
 
     for (std::size_t p = 0; p < input.polygons.size (); ++p)

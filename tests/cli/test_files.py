@@ -454,6 +454,13 @@ def test_channels_an_obj_cannot_hold_are_said(cli, tmp_path):
                         "property uchar red\nproperty uchar green\nproperty uchar blue\nelement face 1\n"
                         "property list uchar int vertex_indices\nend_header\n0 0 0 1 2 3\n1 0 0 4 5 6\n0 1 0 7 8 9\n3 0 1 2\n")
     assert "not written" not in cli("smooth", coloured, "-o", tmp_path / "c.obj").stdout
+    if has_pcl(cli):  # PCL's PLY writer holds rgb and intensity: said for --pcl-mesh too
+        out = cli("triangulate", src, "-o", tmp_path / "m.ply", "--pcl-mesh", tmp_path / "pcl.ply",
+                  "--report", tmp_path / "m.json")
+        assert "  not written   --pcl-mesh: velocity, density (PCL's PLY writer" in out.stdout
+        assert "unknown field" not in out.stderr
+        report = json.loads((tmp_path / "m.json").read_text())
+        assert report["pcl_mesh_not_written"] == ["velocity", "density"] and "not_written" not in report
 
 
 def test_a_meshs_vertices_are_particles_in_every_mesh_format(cli, tmp_path, sphere):

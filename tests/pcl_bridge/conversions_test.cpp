@@ -285,6 +285,38 @@ TEST(Conversions, PolygonMeshRoundTripKeepsEverything) {
   EXPECT_NEAR(back.attributes[0].values[3 * 7], 7.f / 255.f, 1e-6);
   EXPECT_EQ(back.attributes[1].values, in.values);
 
+  // A PolygonMesh whose cloud holds other fields (PCL's curvature; a vector stored as name_0,
+  // name_1, name_2, as particlemesh's PLY writer names it): each an attribute of its name, the
+  // vector one attribute again.
+  pcl::PCLPointCloud2& c = pm.cloud;
+  const auto base = c.point_step;
+  for (const char* name : {"curvature", "velocity_0", "velocity_1", "velocity_2"}) {
+    pcl::PCLPointField f;
+    f.name = name;
+    f.offset = c.point_step;
+    f.datatype = pcl::PCLPointField::FLOAT32;
+    f.count = 1;
+    c.fields.push_back(f);
+    c.point_step += 4;
+  }
+  std::vector<std::uint8_t> data(size_t(c.point_step) * c.width);
+  for (size_t i = 0; i < c.width; ++i) {
+    std::memcpy(data.data() + i * c.point_step, c.data.data() + i * base, base);
+    const float extra[4] = {0.25f, float(i), -float(i), 2.0f};
+    std::memcpy(data.data() + i * c.point_step + base, extra, sizeof extra);
+  }
+  c.data = std::move(data);
+  c.row_step = c.point_step * c.width;
+  particlemesh_pcl::fromPolygonMesh(pm, back);
+  ASSERT_EQ(back.attributes.size(), 4u);
+  EXPECT_EQ(back.attributes[2].name, "curvature");
+  EXPECT_EQ(back.attributes[2].values[3], 0.25f);
+  EXPECT_EQ(back.attributes[3].name, "velocity");
+  EXPECT_EQ(back.attributes[3].components, 3);
+  EXPECT_EQ(back.attributes[3].values[3 * 9], 9.f);
+  EXPECT_EQ(back.attributes[3].values[3 * 9 + 1], -9.f);
+  EXPECT_EQ(back.attributes[3].values[3 * 9 + 2], 2.f);
+
   // Quads are fanned; an index outside the cloud is a FormatError.
   pcl::PolygonMesh quad;
   particlemesh_pcl::toPolygonMesh(m, quad);

@@ -96,8 +96,9 @@ namespace particlemesh_pcl
 
   /** \brief A self-contained pcl::PolygonMesh of \a mesh: its cloud has fields x y z
     * (float32), normal_x normal_y normal_z when the mesh has normals, rgb (PCL's packed
-    * float) when it has the "color" attribute, intensity when it has "intensity";
-    * polygons are the triangles. pcl::io::savePLYFile and PCL's viewers read it.
+    * float) when it has the "color" attribute, intensity when it has "intensity" (PCL's PLY
+    * writer knows no other field); polygons are the triangles. pcl::io::savePLYFile and PCL's
+    * viewers read it.
     */
   void
   toPolygonMesh (const particlemesh::TriMesh &mesh, pcl::PolygonMesh &output);
