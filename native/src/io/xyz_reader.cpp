@@ -25,7 +25,9 @@
 //    are named), Normals / Normal / N the normals, Color / Colour / RGB / Cd the colour; any
 //    other (vx vy vz as "v") a channel of its name and that many components (V, Vel or
 //    Velocity of 3 then becomes the channel "velocity", as in every format:
-//    name_the_velocity). Every other column is a channel of its name.
+//    name_the_velocity). Every other column is a channel of its name, but for one whose first
+//    value is a word (a label, a material: "water"), which is not read and is named in
+//    not_read.
 //  - Without a header, by their count and values (the conventions of scanners and of
 //    CloudCompare's two column orders, "point, colour, scalars, normal" and, in .pts,
 //    "point, scalars, colour, normal"):
@@ -193,8 +195,28 @@ class XyzReader {
       if (count != columns_)
         fail(std::to_string(count) + " values where " + (header.empty() ? "earlier lines have " : "the header names ") +
              std::to_string(columns_));
-      for (std::string_view t : words) {
+      if (!header.empty() && text_.empty()) {
+        // A column the header names whose first value is a word ("water", "rock": a CSV's
+        // label or type column) is text: not read, and named, rather than the whole file
+        // refused. A column of numbers with a word further down is still an error.
+        text_.assign(size_t(columns_), false);
+        for (size_t c = 0; c < words.size(); ++c) {
+          double v = 0;
+          if (parse_number(words[c], v) == NumberText::NotANumber) {
+            const std::string n = lower(header[c]);
+            if (n == "x" || n == "y" || n == "z")
+              fail("the column '" + shown(header[c]) + "' holds '" + shown(words[c]) + "', not a coordinate");
+            text_[c] = true;
+          }
+        }
+      }
+      for (size_t c = 0; c < words.size(); ++c) {
+        const std::string_view t = words[c];
         double v = 0;
+        if (!text_.empty() && text_[c]) {  // a text column: its place kept, its words not read
+          values_.push_back(0);
+          continue;
+        }
         // NaN and inf are read here and refused by name with the point's index
         // (validate_point_cloud: "positions[7].x is NaN"); overflowing text is named here.
         switch (parse_number(t, v)) {
@@ -206,7 +228,10 @@ class XyzReader {
       }
     }
     if (columns_ <= 0 || values_.empty()) return {};
-    return contents(header.empty() ? guess() : named(header));
+    FileContents out = contents(header.empty() ? guess() : named(header));
+    for (size_t c = 0; c < text_.size(); ++c)
+      if (text_[c]) note_not_read(out, "column '" + shown(header[c]) + "' (text)");
+    return out;
   }
 
  private:
@@ -314,12 +339,14 @@ class XyzReader {
     // Vectors first: runs of two or more columns base + component 0, 1, ...
     std::vector<Channel> vectors;
     std::vector<bool> in_vector(size_t(count), false);
+    auto text = [&](int c) { return !text_.empty() && text_[size_t(c)]; };
     for (int c = 0; c < count;) {
       std::string base, next;
       int run = 0;
-      if (vector_component(names[size_t(c)], base) == 0) {
+      if (!text(c) && vector_component(names[size_t(c)], base) == 0) {
         run = 1;
-        while (c + run < count && vector_component(names[size_t(c + run)], next) == run && next == base) ++run;
+        while (c + run < count && !text(c + run) && vector_component(names[size_t(c + run)], next) == run && next == base)
+          ++run;
       }
       if (run < 2) {
         ++c;
@@ -331,7 +358,7 @@ class XyzReader {
     }
     // Single columns.
     for (int c = 0; c < count; ++c) {
-      if (in_vector[size_t(c)]) continue;
+      if (in_vector[size_t(c)] || text(c)) continue;
       const std::string n = lower(names[size_t(c)]);
       bool taken = false;
       for (int k = 0; k < 3 && !taken; ++k) {
@@ -489,6 +516,7 @@ class XyzReader {
   std::string header_text_;
   int columns_ = -1;
   std::vector<double> values_;  ///< rows x columns_
+  std::vector<bool> text_;      ///< per column a header names: text (not read), told by the first data line
 };
 
 }  // namespace

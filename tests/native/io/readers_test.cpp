@@ -755,6 +755,27 @@ TEST(XyzReader, ColumnsNamedByAHeaderOrToldByTheirValues) {
 // unnamed index column), DualSPHysics' "Pos.x;Pos.y;Pos.z", our PLY naming "name_k". A vector
 // of 3 is the positions, the normals, the colour or the velocity by its name; any other keeps
 // its name and components; runs that are not 0, 1, 2, ... stay single channels.
+// A column of words (a label, a material) is not read and is named, the rest of the file read
+// (it refused the whole file); a word in a column of numbers, or in x, is still an error.
+TEST(XyzReader, TextColumnsAreNamedNotRead) {
+  const auto dir = test::scratch_dir("xyz_text");
+  const PointCloud c = read_point_cloud(write(dir / "a.csv", "id,type,vx,vy,vz,x,y,z\n1,water,1,2,3,0,0,0\n"
+                                                              "2,foam,4,5,6,1,0,0\n3,water,7,8,9,0,1,0\n"));
+  ASSERT_EQ(c.size(), 3u);
+  EXPECT_EQ(c.positions[1], (Vec3{1, 0, 0}));
+  ASSERT_EQ(c.attributes.size(), 2u);
+  EXPECT_EQ(c.attributes[0].name, "id");
+  EXPECT_EQ(c.attributes[1].name, "velocity");
+  EXPECT_EQ(c.attributes[1].values, (std::vector<float>{1, 2, 3, 4, 5, 6, 7, 8, 9}));
+  EXPECT_EQ(c.not_read, std::vector<std::string>{"column 'type' (text)"});
+  EXPECT_REFUSED(read_point_cloud(write(dir / "b.csv", "x,y,z,mass\n0,0,0,1\n1,0,0,heavy\n")), Status::FormatError,
+                 "b.csv' line 3: not a number: 'heavy'");
+  EXPECT_REFUSED(read_point_cloud(write(dir / "c.csv", "x,y,z\nnorth,0,0\n")), Status::FormatError,
+                 "c.csv' line 2: the column 'x' holds 'north', not a coordinate");
+  EXPECT_REFUSED(read_point_cloud(write(dir / "d.xyz", "0 0 0\n1 0 zero\n")), Status::FormatError,
+                 "not a number: 'zero'");  // without a header every column is a number
+}
+
 TEST(XyzReader, CsvHeadersNameVectorsAsParaViewAndPandasWriteThem) {
   const auto dir = test::scratch_dir("xyz_csv");
   auto read = [&](const std::string& name, const std::string& text) { return read_point_cloud(write(dir / name, text)); };
