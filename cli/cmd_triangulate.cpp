@@ -377,7 +377,8 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
                      {"seconds", {{"read", t_read}, {"triangulate", t_tri}, {"write", written.seconds}}}};
     if (!input.report.is_null()) j["input_cloud"] = input.report;
     if (const auto nw = outputs.channels_not_written("-o", result.mesh); !nw.empty()) j["not_written"] = nw;
-    if (const auto nw = outputs.channels_not_written("--pcl-mesh", result.mesh); !nw.empty()) j["pcl_mesh_not_written"] = nw;
+    if (const auto nw = outputs.channels_not_written("--pcl-mesh", result.mesh); !nw.empty())
+      j["pcl_mesh_not_written"] = nw;
     if (a.thin > 1)
       j["thin"] = {{"factor", a.thin}, {"local", !a.global_spacing}, {"distance", thin_distance}, {"kept", cloud.size()}, {"of", input.cloud.size()}};
     if (!a.raw) {

@@ -655,7 +655,8 @@ FileContents geometry_of(const Node& root, const std::string& path, bool swap, u
       if (type_node == nullptr || type_node->kind != Node::Kind::String || type_node->text != "numeric") {
         // Strings, dictionaries: no per-particle number.
         const std::string type = type_node != nullptr && type_node->kind == Node::Kind::String ? type_node->text : "";
-        note_not_read(out, what + " (" + (type == "string" ? std::string("strings") : type.empty() ? std::string("no type") : shown(type) + " values") + ")");
+        const std::string kind = type == "string" ? "strings" : type.empty() ? "no type" : shown(type) + " values";
+        note_not_read(out, what + " (" + kind + ")");
         continue;
       }
       const Node* values = s.find(entry.items[1], "values");

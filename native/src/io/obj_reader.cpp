@@ -102,7 +102,8 @@ class ObjReader {
       if (texture_coordinates_ > 0 && faces_ > 0)
         note_not_read(out, "texture coordinates (" + std::to_string(texture_coordinates_) + " vt)");
       if (materials_ > 0) note_not_read(out, "materials (" + std::to_string(materials_) + " usemtl)");
-      if (lines_and_points_ > 0) note_not_read(out, "line and point elements (" + std::to_string(lines_and_points_) + " l / p)");
+      if (lines_and_points_ > 0)
+        note_not_read(out, "line and point elements (" + std::to_string(lines_and_points_) + " l / p)");
     }
     return out;
   }

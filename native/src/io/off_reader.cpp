@@ -100,7 +100,9 @@ class OffReader {
     while (next(&ended))
       fail("more data after the " + std::to_string(nv_) + " vertices and " + std::to_string(nf_) +
            " faces the header declares ('" + shown(tok_) + "'): a count in the header is too small");
-    if (extra_vertex_values_) note_not_read(out, "vertex colours or texture coordinates (the values after x y z" + std::string(normals_ ? " nx ny nz" : "") + ")");
+    if (extra_vertex_values_)
+      note_not_read(out, std::string("vertex colours or texture coordinates (the values after x y z") +
+                             (normals_ ? " nx ny nz" : "") + ")");
     if (face_colours_ && purpose_ == ReadPurpose::Mesh) note_not_read(out, "face colours");
     return out;
   }

@@ -307,7 +307,8 @@ class PlyReader {
         continue;
       }
       if (has_colors_ && p.name == "color") {  // the colour channel's name is taken
-        note_not_read(out_, vertex->name + " property 'color' (the red, green and blue properties are the channel \"color\")");
+        note_not_read(out_, vertex->name + " property 'color' (the red, green and blue properties are the channel "
+                                             "\"color\")");
         continue;
       }
       p.role = kAttribute;
@@ -332,7 +333,8 @@ class PlyReader {
       // texture's corners), and other elements (edges, materials, ...).
       if (face_)
         for (const Property& p : face_->properties)
-          if (p.role != kIndices) note_not_read(out_, face_->name + " property '" + shown(p.name) + "'" + (p.list ? " (a list)" : ""));
+          if (p.role != kIndices)
+            note_not_read(out_, face_->name + " property '" + shown(p.name) + "'" + (p.list ? " (a list)" : ""));
       for (const Element& e : elements_)
         if (&e != vertex_ && &e != face && e.count > 0)
           note_not_read(out_, "element '" + shown(e.name) + "' (" + std::to_string(e.count) + ")");

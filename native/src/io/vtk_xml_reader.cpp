@@ -577,7 +577,8 @@ class VtkXmlReader {
         const std::string name = a.get("Name");
         if (a.name == "Array") {  // VTK's element for arrays of other than numbers (vtkStringArray)
           const std::string type = a.get("type");
-          note_not_read(out_, "PointData array '" + shown(name) + "' (" + (type == "String" ? "strings" : shown(type) + " values") + ")");
+          const std::string kind = type == "String" ? "strings" : shown(type) + " values";
+          note_not_read(out_, "PointData array '" + shown(name) + "' (" + kind + ")");
           continue;
         }
         if (a.name != "DataArray") continue;
@@ -614,7 +615,8 @@ class VtkXmlReader {
       read_cells(piece, polydata, base, n, label);
       if (const Node* cd = piece.child("CellData"))  // per cell: nothing a triangle mesh's vertices carry
         for (const Node& a : cd->children)
-          if (a.name == "DataArray" || a.name == "Array") note_not_read(out_, "CellData array '" + shown(a.get("Name")) + "'");
+          if (a.name == "DataArray" || a.name == "Array")
+            note_not_read(out_, "CellData array '" + shown(a.get("Name")) + "'");
     }
   }
 
