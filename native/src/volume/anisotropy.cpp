@@ -249,7 +249,11 @@ std::vector<KernelEllipsoid> anisotropic_kernels_impl(const Vec3* positions, siz
         // A particle reaching beyond the cells' radius: the cells of its own reach.
         const std::vector<uint32_t>* cells = &near;
         if (R > cell_radius) {
-          const int32_t Ki = int32_t(std::ceil(r / grid.cell_size()));
+          // Clamped before the conversion (a radius of 1e14 cells overflowed int): a reach past
+          // the grid's whole span takes every cell, as for_each_cell_in clamps the box anyway.
+          const double reach_cells = std::ceil(r / grid.cell_size());
+          constexpr int32_t kWhole = NeighborGrid::kMaxCellsPerAxis + 4;
+          const int32_t Ki = reach_cells < double(kWhole) ? int32_t(reach_cells) : kWhole;
           wide.clear();
           grid.for_each_cell_in({cc[0] - Ki, cc[1] - Ki, cc[2] - Ki}, {cc[0] + Ki, cc[1] + Ki, cc[2] + Ki},
                                 [&](uint32_t d) { wide.push_back(d); });
