@@ -252,9 +252,8 @@ void add_inspect(CLI::App& root, std::vector<Command>& commands) {
                               if (!mesh->not_read.empty()) j["not_read"] = mesh->not_read;
                               std::printf("%s\n", j.dump(2).c_str());
                             } else {
-                              std::printf("%s\n%s", args->input.c_str(), describe(r).c_str());
-                              if (!mesh->not_read.empty())
-                                std::printf("  not read      %s\n", joined_not_read(mesh->not_read).c_str());
+                              std::printf("%s\n%s%s", args->input.c_str(), describe(r).c_str(),
+                                          not_read_line(mesh->not_read).c_str());
                             }
                             return 0;
                           }

@@ -147,7 +147,7 @@ int run_smooth(const SmoothArgs& a) {
   if (!a.quiet) {
     const auto& s = result.stats;
     std::printf("particlemesh smooth: %s -> %s\n", a.input.c_str(), a.output.c_str());
-    if (!mesh.not_read.empty()) std::printf("  not read      %s\n", joined_not_read(mesh.not_read).c_str());
+    std::printf("%s", not_read_line(mesh.not_read).c_str());
     std::printf("%s", not_written_lines(outputs, result.mesh).c_str());
     std::printf("  scheme        %s, %d level%s%s\n", a.scheme.c_str(), s.levels, s.levels == 1 ? "" : "s",
                 s.limit ? ", limit positions and normals" : "");

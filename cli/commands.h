@@ -35,12 +35,13 @@ inline std::string shortest(double v) {
 }
 }  // namespace detail
 
-/// What a file held but the reader did not carry (PointCloud::not_read, TriMesh::not_read),
-/// as the summaries' one "not read" line says it.
-inline std::string joined_not_read(const std::vector<std::string>& lines) {
+/// The summaries' "not read" line: what a file held but the reader did not carry
+/// (PointCloud::not_read, TriMesh::not_read); "" when it carried everything.
+inline std::string not_read_line(const std::vector<std::string>& lines) {
+  if (lines.empty()) return "";
   std::string out;
   for (const std::string& what : lines) out += (out.empty() ? "" : "; ") + what;
-  return out;
+  return "  not read      " + out + "\n";
 }
 
 /// CLI11's validators and those below let "nan" through (every comparison with NaN is false):

@@ -252,7 +252,7 @@ ParticleInput read_particles(const std::string& path, const ParticleInputArgs& a
   }
   if (!in.cloud.not_read.empty()) {
     // Said, not dropped silently: what the file holds per particle that no channel carries.
-    in.summary += "  not read      " + joined_not_read(in.cloud.not_read) + "\n";
+    in.summary += not_read_line(in.cloud.not_read);
     in.report["not_read"] = in.cloud.not_read;
   }
   crop_particles(in, a.crop);
