@@ -25,7 +25,8 @@
 // --no-gp3 leaves PCL's greedy projection out (CGAL's advancing front still runs).
 // --viewpoint adds particlemesh given the file's sensor origin (PCD VIEWPOINT), where it is
 // taken (SurfaceOptions::viewpoint). Printed per scan and method: small holes (boundary loops of fewer than 10 edges), all
-// boundary loops, the share of the prepared points in a triangle, the longest triangle edge
+// boundary loops, the pieces (connected components; in brackets those closed), the share of
+// the prepared points in a triangle, the longest triangle edge
 // / r0 and how many triangles have an edge over 6 r0, non-manifold edges, orientation
 // conflicts, and the time; then the sums. A Markdown table (bench/RESULTS.md).
 #include <algorithm>
@@ -105,11 +106,18 @@ struct Scan {
   particlemesh::Vec3 origin;  ///< the file's sensor origin (PCD VIEWPOINT)
 };
 
+/// A .pcd through PCL (its sensor origin with it); any other file particlemesh reads as points
+/// (.ply, .xyz, a mesh's vertices from .obj / .off / .stl, VTK, ...) through particlemesh's
+/// reader: PCL's loadPCDFile crashes on a file that is not a PCD.
 XYZ::Ptr read_scan(const std::string& path) {
   XYZ::Ptr c(new XYZ);
-  const std::string ext = std::filesystem::path(path).extension().string();
-  const int rc = ext == ".ply" ? pcl::io::loadPLYFile(path, *c) : pcl::io::loadPCDFile(path, *c);
-  if (rc < 0) throw std::runtime_error("cannot read " + path);
+  if (std::filesystem::path(path).extension() == ".pcd") {
+    if (pcl::io::loadPCDFile(path, *c) < 0) throw std::runtime_error("cannot read " + path);
+    return c;
+  }
+  const particlemesh::PointCloud cloud = particlemesh::read_point_cloud(path);
+  c->reserve(cloud.size());
+  for (const particlemesh::Vec3& p : cloud.positions) c->push_back(pcl::PointXYZ(float(p.x), float(p.y), float(p.z)));
   return c;
 }
 
@@ -145,7 +153,8 @@ Scan prepare(const std::string& name, const XYZ& input, bool as_is) {
 struct Metrics {
   bool ran = false;
   double seconds = 0;
-  size_t triangles = 0, small_holes = 0, loops = 0, used = 0, points = 0, over6 = 0, nonmanifold = 0, conflicts = 0;
+  size_t triangles = 0, small_holes = 0, loops = 0, used = 0, points = 0, over6 = 0, nonmanifold = 0, conflicts = 0, pieces = 0,
+         closed_pieces = 0;
   double longest = 0;  ///< in r0
 };
 
@@ -168,6 +177,8 @@ Metrics measure(const std::vector<particlemesh::Vec3>& P, const std::vector<part
   m.points = P.size();
   m.used = r.vertices_used;
   m.loops = r.boundary_loops;
+  m.pieces = r.components;
+  m.closed_pieces = r.closed_components;
   for (size_t e : r.boundary_loop_edges) m.small_holes += e < 10;
   m.nonmanifold = r.nonmanifold_edges;
   m.conflicts = r.orientation_conflicts;
@@ -188,9 +199,9 @@ std::vector<particlemesh::Triangle> cut(const std::vector<particlemesh::Vec3>& P
 
 void row(const Scan& s, const char* method, const Metrics& m) {
   if (!m.ran) return;
-  std::printf("| %s | %zu | %s | %zu | %zu | %.2f %% | %.1f | %zu | %zu | %zu | %.3f |\n", s.name.c_str(),
-              s.prepared->size(), method, m.small_holes, m.loops, 100.0 * double(m.used) / double(m.points), m.longest,
-              m.over6, m.nonmanifold, m.conflicts, m.seconds);
+  std::printf("| %s | %zu | %s | %zu | %zu | %zu (%zu) | %.2f %% | %.1f | %zu | %zu | %zu | %.3f |\n", s.name.c_str(),
+              s.prepared->size(), method, m.small_holes, m.loops, m.pieces, m.closed_pieces,
+              100.0 * double(m.used) / double(m.points), m.longest, m.over6, m.nonmanifold, m.conflicts, m.seconds);
 }
 
 void write_mesh(const std::string& dir, const std::string& name, const std::vector<particlemesh::Vec3>& P,
@@ -238,9 +249,10 @@ int main(int argc, char** argv) {
   std::fprintf(stderr, "built without CGAL: the advancing front is not run\n");
 #endif
 
-  std::printf("| scan | prepared points | method | small holes (< 10 edges) | boundary loops | points in the mesh "
-              "| longest edge / r0 | triangles > 6 r0 | non-manifold edges | orientation conflicts | seconds |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("| scan | prepared points | method | small holes (< 10 edges) | boundary loops | pieces (closed) "
+              "| points in the mesh | longest edge / r0 | triangles > 6 r0 | non-manifold edges | orientation conflicts "
+              "| seconds |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   struct Sum {
     size_t small_holes = 0;
     double worst_used = 100, longest = 0, seconds = 0;

@@ -28,6 +28,9 @@ constexpr double kCreaseCos = 0.8;
 // this fraction of the radius of it. A sheet across a gap (1.2 spacings or more, 0.6 of the
 // radius) does not.
 constexpr double kCreaseReach = 0.5;
+// A plane's outliers lie on one side of it when those on the other side weigh at most this
+// fraction of them (see the choice of a thick point's plane below).
+constexpr double kOneSided = 0.05;
 // Above this fraction of same-sheet neighbours facing opposite ways, reference normals are
 // not a consistent orientation and only vote per piece.
 constexpr double kMaxReferenceDisagreement = 0.01;
@@ -198,6 +201,9 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
         Vec3 normal;
         double score;  // inliers weighted by closeness
         size_t count;  // inliers
+        // The outliers on either side of the plane, weighted as the inliers: one side nearly
+        // empty where the plane is the surface's own (see one_sided).
+        double above, below;
       };
       std::vector<Candidate> tried;
       for (size_t i = b; i < e; ++i) {
@@ -217,30 +223,53 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
           bool seen = false;
           for (const Candidate& x : tried) seen |= std::abs(dot(x.normal, tn)) > 0.99;
           if (seen) continue;
-          double score = 0;
+          double score = 0, above = 0, below = 0;
           size_t count = 0;
-          for (const Vec3& d : near)
-            if (std::abs(dot(d, tn)) <= band) {
-              const double w = 1.0 - squared_norm(d) / r2;  // ~exp(-4 d^2 / r^2), 0 at the radius
-              score += (w * w) * (w * w);
+          for (const Vec3& d : near) {
+            const double w = 1.0 - squared_norm(d) / r2;  // ~exp(-4 d^2 / r^2), 0 at the radius
+            const double h = dot(d, tn), weight = (w * w) * (w * w);
+            if (std::abs(h) <= band) {
+              score += weight;
               ++count;
+            } else {
+              (h > 0 ? above : below) += weight;
             }
-          tried.push_back({tn, score, count});
+          }
+          tried.push_back({tn, score, count, above, below});
         }
-        const auto best_plane = [&](const Vec3* other) {
+        const auto one_sided = [](const Candidate& c) {
+          return std::min(c.above, c.below) <= kOneSided * (c.above + c.below);
+        };
+        const auto best_plane = [&](const Vec3* other, bool sided) {
           int best = -1;
           for (int c = 0; c < int(tried.size()); ++c) {
             if (other && (tried[c].count < 3 || std::abs(dot(tried[c].normal, *other)) > kCreaseCos)) continue;
+            if (sided && !one_sided(tried[c])) continue;
             if (best < 0 || tried[c].score > tried[best].score) best = c;
           }
           return best;
         };
-        const int first = best_plane(nullptr);
+        // A surface lies on one side of its own plane at the sampling's scale: the other sheet
+        // of a thin part, the other face of a crease, the rest of a curved surface all lie on
+        // the side it bends to. A plane with neighbours well out on both sides cuts across the
+        // surface: around a thin part sampled in rings (a limb of a quad mesh, a turned part,
+        // a scanner's rows across a pole) one ring lies in one plane, outscores the surface's
+        // own plane and would turn the normal along the part, so that no triangle along it
+        // passes co-normality and the part falls apart into capped pieces. Such a best plane
+        // gives way to the best one-sided plane when that one also lies nearer the plain PCA
+        // normal of the neighbourhood (the average, which a plane across the part is far
+        // from; at a saddle, where the surface's own plane is two-sided too, it keeps it).
+        int first = best_plane(nullptr, false);
+        if (first >= 0 && !one_sided(tried[first])) {
+          const int sided = best_plane(nullptr, true);
+          if (sided >= 0 && std::abs(dot(tried[sided].normal, normals[s])) > std::abs(dot(tried[first].normal, normals[s])))
+            first = sided;
+        }
         if (first < 0 || !(tried[first].score > 0) || tried[first].count < 3) continue;
         const Plane A = fit_plane(near, tried[first].normal, band);
         normals[s] = A.normal;
         // A crease: a second plane, at a clear angle to the first, through the point too.
-        const int second = best_plane(&A.normal);
+        const int second = best_plane(&A.normal, false);
         if (second < 0) continue;
         const Plane B = fit_plane(near, tried[second].normal, band);
         if (B.count < 3 || std::abs(dot(A.normal, B.normal)) > kCreaseCos) continue;

@@ -357,6 +357,29 @@ TEST(ReconstructSurface, HollowBallsInnerWallFacesIntoTheCavity) {
   }
 }
 
+// Thin tubes sampled in rings (a quad mesh's legs, a turned part): 8 or 10 samples around,
+// rings 1.6 or 2 times as far apart as the samples on a ring, in line or offset by half a
+// step. With each ring's plane taken for the surface's, no triangle along the tube passed
+// co-normality: five of the eight came apart (into up to 40 pieces) or kept loops open.
+TEST(ReconstructSurface, ARingSampledThinTubeStaysOneClosedPiece) {
+  const double rho = 0.1;
+  for (int around : {8, 10})
+    for (double ratio : {1.6, 2.0})
+      for (double offset : {0.0, 0.5}) {
+        const double a = 2 * std::numbers::pi * rho / around;
+        const int rings = int(std::lround(2 * std::numbers::pi / (ratio * a)));
+        PointCloud c;
+        for (int i = 0; i < rings; ++i)
+          for (int j = 0; j < around; ++j) {
+            const double u = 2 * std::numbers::pi * i / rings, v = 2 * std::numbers::pi * (j + offset * i) / around;
+            c.positions.push_back({(1 + rho * std::cos(v)) * std::cos(u), (1 + rho * std::cos(v)) * std::sin(u), rho * std::sin(v)});
+          }
+        expect_closed_surfaces(c, reconstruct_surface(c), 1, 1,
+                               std::to_string(around) + " around, rings " + std::to_string(ratio) + " x apart, offset " +
+                                   std::to_string(offset));
+      }
+}
+
 TEST(ReconstructSurface, FoldedSheetIsNotJoinedAcrossTheGap) {
   // A strip of width 2 folded back on itself: arm z = 0 for x in [0, 3], a half circle of
   // radius g/2 at x = 3, arm z = g going back. The gap g is below L = 2 r0.

@@ -22,7 +22,10 @@ struct NormalOptions {
 /// Unit normals by a robust local plane fit: among the planes of the raw triangles (edge
 /// limit L = radius) at a point, the one with the most neighbours close to it, refined by a
 /// PCA of those neighbours, so that a second sheet passing within the radius (a fold, a thin
-/// part, a nearby surface) does not tilt the normal. Oriented consistently as Hoppe et al.
+/// part, a nearby surface) does not tilt the normal. A plane with neighbours well out on both
+/// sides cuts across the surface (the plane of one ring of samples around a thin part): it
+/// gives way to the best plane whose neighbours off it lie on one side, when that one is
+/// nearer the neighbourhood's plain PCA normal. Oriented consistently as Hoppe et al.
 /// (1992) do, along a minimum spanning tree of the neighbour graph, with signed edges: an edge
 /// in the tangent planes keeps the orientation, an edge across a gap between two sheets
 /// reverses it (outward normals of a closed surface face each other across any gap). Each
