@@ -21,7 +21,9 @@ namespace PM_NAMESPACE::detail {
 /// `triangles` (the raw smallest-sphere triangles, sorted indices) are given, the plane comes from
 /// the raw triangle at the point with the most neighbours within a quarter of the radius of
 /// its plane (the point's own sheet is the denser one near it), refined by a PCA of those
-/// inliers. Without triangles, or where none has three inliers, the plain PCA is used.
+/// inliers; a plane whose other neighbours lie well out on both sides of it (one ring of
+/// samples around a thin part) gives way to the best one-sided plane nearer the plain PCA's
+/// normal. Without triangles, or where none has three inliers, the plain PCA is used.
 std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
                                      const NeighborLists& lists, const std::vector<double>& radius,
                                      ProgressTracker& tracker, const std::vector<Triangle>* triangles = nullptr);
