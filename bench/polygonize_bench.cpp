@@ -1,4 +1,4 @@
-// Polygonization of volume particles (issue 7) beside OpenVDB's particle meshing pipeline
+// Polygonization of volume particles beside OpenVDB's particle meshing pipeline
 // (tools::ParticlesToLevelSet + tools::volumeToMesh), on the same particles, same grid
 // resolution, same run. Prints a table; numbers and machine go to bench/RESULTS.md.
 //

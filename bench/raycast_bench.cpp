@@ -1,4 +1,4 @@
-// Ray casting of particle iso-surfaces (issue 8) beside POV-Ray's blob primitive, rendering
+// Ray casting of particle iso-surfaces beside POV-Ray's blob primitive, rendering
 // the same particles, same surface, same camera and image size, in the same run. Prints a
 // table; numbers and machine go to bench/RESULTS.md.
 //

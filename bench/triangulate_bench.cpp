@@ -49,7 +49,7 @@ BENCHMARK(BM_TriangulateRaw)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
-// The whole chain of issue 3 (raw test + normals + extraction + repair + orientation), to set
+// The whole finished surface (raw test + normals + extraction + repair + orientation), to set
 // beside BM_TriangulateRaw on the same points. Normals: estimated (the cloud's are dropped),
 // the slower and more general path.
 static void BM_ReconstructSurface(benchmark::State& state) {
