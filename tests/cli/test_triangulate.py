@@ -35,6 +35,34 @@ def test_sample_then_triangulate_knot(cli, inspect, tmp_path):
     assert r["surface"]["unused_points"] == 0
 
 
+def test_the_vertices_of_a_quad_mesh_with_a_thin_tube_stay_one_surface(cli, inspect, tmp_path):
+    # A modeller's quad mesh of a thin torus (8 quads around, each twice as long as it is
+    # wide, as a quad-meshed animal's legs are), its vertices triangulated as particles.
+    # Each ring of vertices lies in one plane that once outvoted the tube's own, turned the
+    # normals along the tube and left it in 40 capped pieces.
+    rings, around, rho = 40, 8, 0.1
+    lines = []
+    for i in range(rings):
+        u = 2 * math.pi * i / rings
+        for j in range(around):
+            v = 2 * math.pi * j / around
+            lines.append(f"v {(1 + rho * math.cos(v)) * math.cos(u)} {(1 + rho * math.cos(v)) * math.sin(u)} "
+                         f"{rho * math.sin(v)}")
+    for i in range(rings):
+        for j in range(around):
+            a, b = i * around + j, i * around + (j + 1) % around
+            c, d = ((i + 1) % rings) * around + (j + 1) % around, ((i + 1) % rings) * around + j
+            lines.append(f"f {a + 1} {b + 1} {c + 1} {d + 1}")
+    obj = tmp_path / "tube.obj"
+    obj.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "tube.ply"
+    cli("triangulate", obj, "-o", out, "-q")
+    mesh = inspect(out)
+    assert mesh["components"] == 1 and mesh["closed"] and mesh["manifold"] and mesh["outward"]
+    assert mesh["per_component"][0]["genus"] == 1
+    assert mesh["vertices_used"] == rings * around
+
+
 def test_sharp_shapes_close_and_the_old_normal_angle_leaves_a_slit(cli, inspect, tmp_path):
     # Machined-part creases: the cone's rim is a 63-degree crease, the prism's edges 60
     # degrees; bare points (.xyz), so the normals are estimated.
