@@ -252,17 +252,18 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
         // A surface lies on one side of its own plane at the sampling's scale: the other sheet
         // of a thin part, the other face of a crease, the rest of a curved surface all lie on
         // the side it bends to. A plane with neighbours well out on both sides cuts across the
-        // surface: around a thin part sampled in rings (a limb of a quad mesh, a turned part,
-        // a scanner's rows across a pole) one ring lies in one plane, outscores the surface's
-        // own plane and would turn the normal along the part, so that no triangle along it
-        // passes co-normality and the part falls apart into capped pieces. Such a best plane
-        // gives way to the best one-sided plane when that one also lies nearer the plain PCA
-        // normal of the neighbourhood (the average, which a plane across the part is far
-        // from; at a saddle, where the surface's own plane is two-sided too, it keeps it).
+        // surface: around a thin part sampled in rings (a limb of a quad mesh, a turned part)
+        // one ring lies in one plane, outscores the surface's own plane and would turn the
+        // normal along the part, so that no triangle along it passes co-normality and the
+        // part falls apart into capped pieces. Such a best plane gives way to the best
+        // one-sided plane when that one also lies nearer the plain PCA normal of the
+        // neighbourhood (the average, which a plane across the part is far from; at a saddle,
+        // where the surface's own plane is two-sided too, it keeps it).
+        const Vec3 pca = normals[s];  // step 1's, not replaced yet
         int first = best_plane(nullptr, false);
         if (first >= 0 && !one_sided(tried[first])) {
           const int sided = best_plane(nullptr, true);
-          if (sided >= 0 && std::abs(dot(tried[sided].normal, normals[s])) > std::abs(dot(tried[first].normal, normals[s])))
+          if (sided >= 0 && std::abs(dot(tried[sided].normal, pca)) > std::abs(dot(tried[first].normal, pca)))
             first = sided;
         }
         if (first < 0 || !(tried[first].score > 0) || tried[first].count < 3) continue;
