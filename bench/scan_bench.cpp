@@ -61,6 +61,7 @@
 #include "particlemesh/mesh/topology_report.h"
 #include "particlemesh/spatial/spacing.h"
 #include "particlemesh/surface/reconstruct.h"
+#include "particlemesh_pcl/io.h"
 
 namespace {
 
@@ -106,18 +107,16 @@ struct Scan {
   particlemesh::Vec3 origin;  ///< the file's sensor origin (PCD VIEWPOINT)
 };
 
-/// A .pcd through PCL (its sensor origin with it); any other file particlemesh reads as points
-/// (.ply, .xyz, a mesh's vertices from .obj / .off / .stl, VTK, ...) through particlemesh's
-/// reader: PCL's loadPCDFile crashes on a file that is not a PCD.
+/// Any file the PCL bridge reads as particles: a .pcd checked, then read by PCL (its sensor
+/// origin with it), anything else through particlemesh's readers (.ply, .xyz, a mesh's
+/// vertices from .obj / .off / .stl, VTK, ...). Invalid (NaN) points are dropped there.
 XYZ::Ptr read_scan(const std::string& path) {
+  particlemesh_pcl::LoadReport report;
+  const particlemesh::PointCloud cloud = particlemesh_pcl::loadParticles(path, &report);
   XYZ::Ptr c(new XYZ);
-  if (std::filesystem::path(path).extension() == ".pcd") {
-    if (pcl::io::loadPCDFile(path, *c) < 0) throw std::runtime_error("cannot read " + path);
-    return c;
-  }
-  const particlemesh::PointCloud cloud = particlemesh::read_point_cloud(path);
   c->reserve(cloud.size());
   for (const particlemesh::Vec3& p : cloud.positions) c->push_back(pcl::PointXYZ(float(p.x), float(p.y), float(p.z)));
+  c->sensor_origin_ = Eigen::Vector4f(report.origin[0], report.origin[1], report.origin[2], 0);
   return c;
 }
 
@@ -263,7 +262,14 @@ int main(int argc, char** argv) {
   std::vector<std::string> notes;
   for (const std::string& path : scans) {
     const std::string name = std::filesystem::path(path).stem().string();
-    Scan s = prepare(name, *read_scan(path), as_is);
+    XYZ::Ptr input;
+    try {
+      input = read_scan(path);
+    } catch (const std::exception& e) {  // a file that cannot be read is skipped, as a missing one is
+      std::fprintf(stderr, "skipping %s: %s\n", path.c_str(), e.what());
+      continue;
+    }
+    Scan s = prepare(name, *input, as_is);
     char note[400];
     if (as_is)
       std::snprintf(note, sizeof note, "%s: %zu finite points, taken as they are (--as-is), r0 %.4g", name.c_str(),
