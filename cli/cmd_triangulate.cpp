@@ -407,6 +407,9 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
       const auto& h = result.surface.local_spacing;
       std::printf("  local spacing %.2g-%.2g r0 (10%%-90%%: %.2g-%.2g, median %.2g): each particle's L = %g x its own\n",
                   h.min, h.max, h.p10, h.p90, h.median, a.max_edge_factor);
+      if (s.shortened_limits)
+        std::printf("  crowded       %zu particles' L shortened so that each reaches at most %zu others (--max-neighbors)\n",
+                    s.shortened_limits, a.max_neighbors);
       if (s.reach_factor > 1)
         std::printf("  sampling      irregular (nearest-neighbour distances vary by %.0f %%, as where particles lie at "
                     "random): the local spacings above are %.2g x the sampling's, so that triangles reach across its gaps\n",
@@ -521,7 +524,8 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
       ->check(non_negative_number())
       ->capture_default_str();
   app->add_option("--max-neighbors", args->max_neighbors,
-                  "Fail if a point has more neighbours within L than this (points far denser than the spacing)")
+                  "Fail if a point has more neighbours within 2L/sqrt(3) than this (points far denser than the spacing "
+                  "given); with the spacing estimated and each particle's own L, such a point's L is shortened instead")
       ->check(in_range(size_t(2), kMaxNeighborsOption))
       ->capture_default_str();
   app->add_option("--max-triplets-per-point", args->max_triplets_per_point,

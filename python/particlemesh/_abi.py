@@ -106,6 +106,7 @@ class pm_triangulate_stats(Structure):
         ("stray_piece_triangles", c_uint64),
         ("stray_piece_largest", c_uint64),
         ("small_handles_removed", c_uint64),
+        ("shortened_limits", c_uint64),
     ]
 
 

@@ -418,15 +418,22 @@ def test_bad_inputs_give_one_line_errors(cli, tmp_path):
     data = full.read_bytes()
     (tmp_path / "cut.ply").write_bytes(data[: len(data) // 2])
     _fails(cli, tmp_path, [tmp_path / "cut.ply"], "cut.ply")
-    # More neighbours within a point's radius than --max-neighbors: the error names the limit
-    # that lets the run through, and that limit does (the spacing measured; a --spacing far too
-    # large gets no such advice: the spacing is what is wrong there).
-    proc = cli("triangulate", good, "-o", tmp_path / "x.ply", "--max-neighbors", "8", check=False)
+    # More neighbours within a point's radius than --max-neighbors, with one L for the whole
+    # cloud: the error names the limit that lets the run through, and that limit does (the
+    # spacing measured; a --spacing far too large gets no such advice: the spacing is what is
+    # wrong there). With each particle's own L (the default) the crowded points' L are
+    # shortened instead, and the summary says how many.
+    proc = cli("triangulate", good, "-o", tmp_path / "x.ply", "--max-neighbors", "8", "--global-spacing", check=False)
     assert proc.returncode == 1 and "more than the limit of 8" in proc.stderr, proc.stderr
     most = re.search(r"\(--max-neighbors (\d+)\)", proc.stderr)
     assert most and not (tmp_path / "x.ply").exists(), proc.stderr
-    cli("triangulate", good, "-o", tmp_path / "x.ply", "--max-neighbors", most.group(1), "-q")
+    cli("triangulate", good, "-o", tmp_path / "x.ply", "--max-neighbors", most.group(1), "--global-spacing", "-q")
     assert (tmp_path / "x.ply").exists()
+    (tmp_path / "x.ply").unlink()
+    proc = cli("triangulate", good, "-o", tmp_path / "x.ply", "--max-neighbors", "8", "--report", tmp_path / "r.json")
+    crowded = re.search(r"crowded +(\d+) particles' L shortened so that each reaches at most 8 others", proc.stdout)
+    assert crowded and int(crowded.group(1)) > 500, proc.stdout
+    assert json.loads((tmp_path / "r.json").read_text())["triangulation"]["shortened_limits"] == int(crowded.group(1))
     (tmp_path / "x.ply").unlink()
     proc = cli("triangulate", good, "-o", tmp_path / "x.ply", "--spacing", "0.5", check=False)
     assert proc.returncode == 1 and "more than the limit of 256" in proc.stderr, proc.stderr

@@ -229,6 +229,9 @@ typedef struct pm_triangulate_stats {
   /* -- appended -- */
   uint64_t small_handles_removed; /**< handles smaller than the sampling taken out (a part
                                        thinner than the spacing joined across) */
+  /* -- appended -- */
+  uint64_t shortened_limits; /**< particles whose edge limit was shortened to hold at most
+                                  max_neighbors neighbours (local spacing, r0 estimated) */
 } pm_triangulate_stats;
 
 PM_EXPORT void pm_triangulate_options_init(pm_triangulate_options* options);

@@ -115,6 +115,7 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
       s.stray_piece_triangles = r.surface.stray_pieces.triangles;
       s.stray_piece_largest = r.surface.stray_pieces.largest;
       s.small_handles_removed = r.surface.small_handles_removed;
+      s.shortened_limits = r.triangulation.shortened_limits;
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();

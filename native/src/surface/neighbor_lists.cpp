@@ -1,6 +1,7 @@
 #include "surface/neighbor_lists.h"
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 #include <utility>
 
@@ -117,8 +118,32 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
   return lists;
 }
 
+namespace {
+
+/// The longest radius around point s that holds at most `most` of the others (distinct
+/// representatives) now within radius[s]: the (most)-th nearest's distance, or, where the
+/// (most + 1)-th lies at the same distance, the last shorter one (0 if none is shorter).
+double crowded_radius(const NeighborGrid& grid, const std::vector<uint32_t>& rep, const std::vector<double>& radius,
+                      uint32_t s, size_t most) {
+  std::vector<double> d2;
+  grid.for_each_within(grid.sorted_point(s), radius[s], [&](uint32_t t, double d) {
+    if (t != s && rep[t] == t) d2.push_back(d);
+  });
+  std::sort(d2.begin(), d2.end());
+  const double over = d2[most];  // the first that must be left out
+  const auto last = std::lower_bound(d2.begin(), d2.end(), over);
+  if (last == d2.begin()) return 0.0;
+  const double keep = *(last - 1);
+  double r = std::sqrt(keep);
+  // for_each_within takes d2 <= r * r: r * r must stay below `over` after rounding.
+  while (r > 0 && r * r >= over) r = std::nextafter(r, 0.0);
+  return r;
+}
+
+}  // namespace
+
 NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
-                                   const std::vector<double>& radius, size_t max_neighbors,
+                                   std::vector<double>& radius, size_t max_neighbors, bool shorten,
                                    ProgressTracker& tracker) {
   const size_t n = grid.point_count();
   // Per fixed chunk of points: each point's own neighbours (within its radius, ascending), and
@@ -145,6 +170,24 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
     }
   });
   tracker.check();
+  if (shorten) {
+    // Radii that hold more than max_neighbors shortened; the lists then built again (only a
+    // cloud with such points pays the second pass). A point's own count never grows, so
+    // once is enough.
+    std::vector<uint32_t> crowded;
+    for (size_t s = 0; s < n; ++s)
+      if (own_count[s] > max_neighbors) crowded.push_back(uint32_t(s));
+    if (!crowded.empty()) {
+      std::vector<double> shorter(crowded.size());
+      parallel_blocks(crowded.size(), 16, [&](size_t b, size_t e) {
+        for (size_t i = b; i < e; ++i) shorter[i] = crowded_radius(grid, rep, radius, crowded[i], max_neighbors);
+      });
+      for (size_t i = 0; i < crowded.size(); ++i) radius[crowded[i]] = shorter[i];
+      NeighborLists again = build_neighbor_lists(grid, rep, radius, max_neighbors, true, tracker);
+      again.shortened = crowded.size();
+      return again;
+    }
+  }
   // The pairs by their first point (stable: for each t its s ascend, chunks being in order).
   std::vector<uint64_t> pairs;
   for (auto& b : back) {
@@ -170,7 +213,7 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
       lists.max_point = uint32_t(s);
     }
   }
-  if (lists.max_count > max_neighbors) {
+  if (!shorten && lists.max_count > max_neighbors) {
     size_t lowest = SIZE_MAX, count = 0;
     for (size_t s = 0; s < n; ++s) {
       const size_t here = lists.offset[s + 1] - lists.offset[s];

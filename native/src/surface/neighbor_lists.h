@@ -19,6 +19,7 @@ struct NeighborLists {
   std::vector<uint32_t> index;
   size_t max_count = 0;
   uint32_t max_point = 0;  ///< sorted index of a point with max_count neighbours
+  size_t shortened = 0;    ///< radii shortened to hold max_neighbors (the per-point build's `shorten`)
 
   const uint32_t* begin(uint32_t s) const { return index.data() + offset[s]; }
   const uint32_t* end(uint32_t s) const { return index.data() + offset[s + 1]; }
@@ -32,8 +33,13 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
 
 /// The same over a radius per point (sorted index): s's list holds every t with
 /// |s t| <= max(radius[s], radius[t]) (so t is in s's list iff s is in t's). Any cell size.
+/// Without `shorten` it fails as above when a list holds more than max_neighbors. With it, a
+/// point whose own radius holds more than max_neighbors others gets the longest radius that
+/// holds at most max_neighbors (written to `radius`; NeighborLists::shortened counts them),
+/// and a list may then hold more through the radii of others (at most max_neighbors of its
+/// own, so the lists hold at most 2 max_neighbors per point on average).
 NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
-                                   const std::vector<double>& radius, size_t max_neighbors,
+                                   std::vector<double>& radius, size_t max_neighbors, bool shorten,
                                    ProgressTracker& tracker);
 
 }  // namespace particlemesh::detail

@@ -120,6 +120,7 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
   t0 = Clock::now();
   tracker.stage("neighbour search", at(0.3), at(0.55), n);
   const auto to_radius = [](double L) { return L * (2.0 / std::sqrt(3.0)) * (1.0 + 1e-6); };
+  const auto from_radius = [](double R) { return R / ((2.0 / std::sqrt(3.0)) * (1.0 + 1e-6)); };
   const double neighbor_radius = to_radius(st.max_edge);
   double cell = neighbor_radius;
   if (local) {
@@ -154,12 +155,33 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
       }
     });
     for (size_t s = 0; s < n; ++s) Lp[s] = Lp[raw.rep[s]], radius[s] = radius[raw.rep[s]];
+    // A point whose own reach holds more than max_neighbors others (a scanner's rows: the
+    // spacing across them sets L, and the rows are sampled far denser along) has its L
+    // shortened to the reach that holds max_neighbors when the spacing was estimated: it is
+    // the cloud's, not the caller's, so this is no error of theirs. Every blocker of a
+    // triangle is still in the list of its corner with the largest L (R = 2L/sqrt(3) per
+    // point, as below).
+    const bool shorten = st.spacing_estimated;
     // Every particle at r0 (an even sampling): the lists of one radius, as without local
     // spacing (the same lists, built faster).
-    if (std::all_of(Lp.begin(), Lp.end(), [&](double l) { return l == st.max_edge; }))
-      raw.neighbors = build_neighbor_lists(grid, raw.rep, neighbor_radius, options.max_neighbors, tracker);
-    else
-      raw.neighbors = build_neighbor_lists(grid, raw.rep, radius, options.max_neighbors, tracker);
+    bool uniform = std::all_of(Lp.begin(), Lp.end(), [&](double l) { return l == st.max_edge; });
+    if (uniform) {
+      try {
+        raw.neighbors = build_neighbor_lists(grid, raw.rep, neighbor_radius, options.max_neighbors, tracker);
+      } catch (const Error& e) {
+        if (!shorten || e.status() != Status::LimitExceeded) throw;
+        uniform = false;  // the per-point lists below, shortened where crowded
+      }
+    }
+    if (!uniform) {
+      raw.neighbors = build_neighbor_lists(grid, raw.rep, radius, options.max_neighbors, shorten, tracker);
+      if (raw.neighbors.shortened > 0) {
+        for (size_t s = 0; s < n; ++s)
+          if (raw.rep[s] == s && radius[s] < to_radius(Lp[s]) * (1 - 1e-12)) Lp[s] = from_radius(radius[s]);
+        for (size_t s = 0; s < n; ++s) Lp[s] = Lp[raw.rep[s]];
+      }
+      st.shortened_limits = raw.neighbors.shortened;
+    }
   } else {
     Lp.assign(n, st.max_edge);
     raw.neighbors = build_neighbor_lists(grid, raw.rep, neighbor_radius, options.max_neighbors, tracker);

@@ -103,6 +103,51 @@ TEST(UnevenSampling, ExactCopiesOfParticlesAtRandomMeshAsWithout) {
   EXPECT_EQ(got, expected);
 }
 
+TEST(UnevenSampling, CrowdedPointsGetShorterLimitsInsteadOfAnError) {
+  // With the spacing estimated, each particle's L is the cloud's measure, not the caller's: a
+  // point whose reach holds more than max_neighbors others (a scanner's rows, a dense patch
+  // beside a sparse one) gets a shorter L instead of failing the call. Particles at random
+  // reach ~50 others at L = 2 x 1.75 x their spacing; a limit of 24 shortens most of them.
+  const PointCloud c = particlemesh::test::random_sphere(3000, 7);
+  SurfaceOptions o;
+  o.max_neighbors = 24;
+  const SurfaceResult r = reconstruct_surface(c, o);
+  EXPECT_GT(r.triangulation.shortened_limits, c.size() / 4);
+  EXPECT_LT(r.triangulation.shortened_limits, c.size());
+  const TopologyReport t = topology_report(r.mesh);
+  EXPECT_TRUE(t.manifold && t.consistently_oriented);
+  EXPECT_GT(t.vertices_used * 10, c.size() * 9);
+  // (The test stays exact for the shorter limits: NeighborLists.ShortenedRadiiHoldEveryPairWithinEither.)
+  // The default limit shortens nothing here; the shortened limits show in the spread.
+  const SurfaceResult plain = reconstruct_surface(c);
+  EXPECT_EQ(plain.triangulation.shortened_limits, 0u);
+  EXPECT_LT(r.surface.local_spacing.p10, plain.surface.local_spacing.p10 * 0.95);
+  // A limit just as large as the most any point has: nothing shortened, the same surface.
+  SurfaceOptions enough;
+  enough.max_neighbors = plain.triangulation.max_neighbors_seen;
+  const SurfaceResult same = reconstruct_surface(c, enough);
+  EXPECT_EQ(same.triangulation.shortened_limits, 0u);
+  EXPECT_EQ(same.mesh.triangles, plain.mesh.triangles);
+  // With the spacing given (the caller's measure) or one L for all, the limit still fails.
+  SurfaceOptions given = o;
+  given.spacing = r.triangulation.spacing;
+  EXPECT_THROW(
+      {
+        try {
+          reconstruct_surface(c, given);
+        } catch (const Error& e) {
+          EXPECT_EQ(e.status(), Status::LimitExceeded);
+          EXPECT_NE(std::string(e.what()).find("more than the limit of 24"), std::string::npos) << e.what();
+          throw;
+        }
+      },
+      Error);
+  SurfaceOptions one = o;
+  one.local_spacing = false;
+  one.max_neighbors = 6;
+  EXPECT_THROW(reconstruct_surface(c, one), Error);
+}
+
 TEST(UnevenSampling, EvenSamplingsKeepTheirLimits) {
   // The reach is lengthened only for particles at random: every even sampling measures far
   // below where it starts, and keeps the factor 1 exactly.

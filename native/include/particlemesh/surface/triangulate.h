@@ -50,6 +50,9 @@ struct TriangulateOptions {
   int threads = 0;
   /// Fail with LimitExceeded if a point has more neighbours within L than this: a sign the
   /// points are packed far denser than the spacing, where the triplet count would explode.
+  /// With a local spacing (reconstruct_surface's default) the spacing is the cloud's own, not
+  /// the caller's: a point whose reach (2L/sqrt(3)) holds more has its L shortened to the
+  /// reach that holds this many (TriangulateStats::shortened_limits), and nothing fails.
   size_t max_neighbors = 256;
   /// Fail with LimitExceeded, before the test starts, if the candidate triplets it would
   /// examine (pairs of a point's higher-index neighbours within L) average more than this
@@ -82,6 +85,9 @@ struct TriangulateStats {
   /// With a local spacing: how far the particles scatter across the surface
   /// (LocalSpacing::thickness; noisy scans ~0.3 and more, a volume ~0.85), 0 otherwise.
   double sampling_thickness = 0;
+  /// With a local spacing: particles whose edge limit was shortened so that their reach
+  /// holds at most max_neighbors others (see TriangulateOptions::max_neighbors).
+  size_t shortened_limits = 0;
   double seconds_spacing = 0;
   double seconds_neighbors = 0;
   double seconds_test = 0;

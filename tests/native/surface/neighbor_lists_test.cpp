@@ -1,0 +1,121 @@
+// The neighbour lists the smallest-sphere test reads: with a radius per point, every pair
+// within the larger of its two radii is in both lists (so every blocker of a triangle is in
+// the list of its corner with the largest L), also where crowded radii were shortened.
+#include "surface/neighbor_lists.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "particlemesh/core/error.h"
+#include "particlemesh/sample/shapes.h"
+#include "support/test_support.h"
+
+using namespace particlemesh;
+
+namespace {
+
+// Points on a plane, a dense patch (spacing 0.002) inside a sparse field (spacing 0.03),
+// each with the radius of its own spacing x 4: the sparse points beside the patch reach
+// hundreds of its points.
+struct Crowd {
+  std::vector<Vec3> points;
+  std::vector<double> radius;
+};
+
+Crowd dense_patch_in_sparse_field() {
+  Crowd c;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> jitter(-0.3, 0.3);
+  for (int i = 0; i < 34; ++i)
+    for (int j = 0; j < 34; ++j) {
+      c.points.push_back({(i + jitter(rng)) * 0.03, (j + jitter(rng)) * 0.03, 0});
+      c.radius.push_back(0.12);
+    }
+  for (int i = 0; i < 60; ++i)
+    for (int j = 0; j < 60; ++j) {
+      c.points.push_back({0.45 + (i + jitter(rng)) * 0.002, 0.45 + (j + jitter(rng)) * 0.002, 0});
+      c.radius.push_back(0.008);
+    }
+  return c;
+}
+
+}  // namespace
+
+TEST(NeighborLists, ShortenedRadiiHoldEveryPairWithinEither) {
+  const Crowd c = dense_patch_in_sparse_field();
+  const size_t n = c.points.size();
+  const NeighborGrid grid(c.points.data(), n, 0.05);
+  std::vector<uint32_t> rep(n);
+  for (uint32_t s = 0; s < n; ++s) rep[s] = s;
+  std::vector<double> radius(n);
+  for (uint32_t s = 0; s < n; ++s) radius[s] = c.radius[grid.original_index(s)];
+  detail::ProgressTracker tracker{ProgressCallback{}};
+
+  // Without shortening the limit fails, naming the most any point holds.
+  std::vector<double> unchanged = radius;
+  try {
+    detail::build_neighbor_lists(grid, rep, unchanged, 64, false, tracker);
+    FAIL() << "no limit error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.status(), Status::LimitExceeded);
+    EXPECT_NE(std::string(e.what()).find("more than the limit of 64"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(unchanged, radius);
+
+  std::vector<double> shortened = radius;
+  const detail::NeighborLists lists = detail::build_neighbor_lists(grid, rep, shortened, 64, true, tracker);
+  size_t changed = 0;
+  for (uint32_t s = 0; s < n; ++s) {
+    EXPECT_LE(shortened[s], radius[s]);
+    if (shortened[s] == radius[s]) continue;
+    ++changed;
+    // The longest radius that holds at most 64: exactly 64 within it (the plane's jittered
+    // points have no ties), the 65th beyond it.
+    std::vector<double> d;
+    for (uint32_t t = 0; t < n; ++t)
+      if (t != s) d.push_back(distance(grid.sorted_point(s), grid.sorted_point(t)));
+    std::sort(d.begin(), d.end());
+    EXPECT_LE(d[63], shortened[s] * (1 + 1e-15));
+    EXPECT_GT(d[64], shortened[s]);
+  }
+  EXPECT_EQ(lists.shortened, changed);
+  EXPECT_GT(changed, 50u);
+  EXPECT_LT(changed, 34u * 34u);  // only the sparse points near the patch
+  // Every pair within the larger of its shortened radii is in both lists, and nothing else.
+  size_t pairs = 0;
+  for (uint32_t s = 0; s < n; ++s) {
+    std::vector<uint32_t> want;
+    for (uint32_t t = 0; t < n; ++t) {
+      if (t == s) continue;
+      const double d2 = squared_distance(grid.sorted_point(s), grid.sorted_point(t));
+      const double r = std::max(shortened[s], shortened[t]);
+      if (d2 <= r * r) want.push_back(t);
+    }
+    const std::vector<uint32_t> got(lists.begin(s), lists.end(s));
+    ASSERT_EQ(got, want) << "point " << s;
+    pairs += got.size();
+  }
+  // At most 64 of a point's own, so at most 2 x 64 per point on average.
+  EXPECT_LE(pairs, 2 * 64 * n);
+}
+
+TEST(NeighborLists, NothingCrowdedNothingShortened) {
+  const Crowd c = dense_patch_in_sparse_field();
+  const size_t n = c.points.size();
+  const NeighborGrid grid(c.points.data(), n, 0.05);
+  std::vector<uint32_t> rep(n);
+  for (uint32_t s = 0; s < n; ++s) rep[s] = s;
+  std::vector<double> radius(n);
+  for (uint32_t s = 0; s < n; ++s) radius[s] = c.radius[grid.original_index(s)];
+  detail::ProgressTracker tracker{ProgressCallback{}};
+  std::vector<double> kept = radius;
+  const detail::NeighborLists shortening = detail::build_neighbor_lists(grid, rep, kept, 100000, true, tracker);
+  const detail::NeighborLists plain = detail::build_neighbor_lists(grid, rep, radius, 100000, false, tracker);
+  EXPECT_EQ(kept, radius);
+  EXPECT_EQ(shortening.shortened, 0u);
+  EXPECT_EQ(shortening.offset, plain.offset);
+  EXPECT_EQ(shortening.index, plain.index);
+}
