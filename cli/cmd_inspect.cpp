@@ -57,6 +57,7 @@ nlohmann::json particle_summary(const std::string& path, const ParticleInput& in
     const SpacingEstimate s = estimate_spacing(c.positions.data(), c.size());
     j["spacing"] = s.spacing;
     j["duplicate_points"] = s.duplicate_points;
+    j["near_duplicates"] = s.near_duplicates;
   } catch (const Error& e) {
     // Too few or coinciding points: said, not fatal (the file itself read).
     j["spacing"] = nullptr;
@@ -130,6 +131,11 @@ std::string describe_particles(const nlohmann::json& j, const std::string& read_
   line("bounds", point(j["bounds"]["min"]) + " to " + point(j["bounds"]["max"]));
   line("spacing", j["spacing"].is_null() ? "cannot be estimated: " + j["spacing_error"].get<std::string>()
                                          : number(j["spacing"].get<double>()) + " (median nearest-neighbour distance)");
+  if (j.contains("near_duplicates") && j["near_duplicates"].get<size_t>() > 0)
+    line("near copies", std::to_string(j["near_duplicates"].get<size_t>()) +
+                            " particles lie ten times nearer to another than to every other (a scanner's first and last "
+                            "returns, a cloud merged with a shifted copy): the spacing above is their offset; triangulate "
+                            "sets them aside and measures the rest, unlike the sampling below");
   if (j.contains("sampling") && !j["sampling"].is_null()) {
     const auto& sm = j["sampling"];
     char text[400];

@@ -399,8 +399,12 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
     if (a.thin > 1)
       std::printf("  thinned       %zu of %zu particles kept, none closer than %g x %s\n", cloud.size(),
                   input.cloud.size(), a.thin, a.global_spacing ? ("r0 = " + std::to_string(thin_distance)).c_str() : "its local spacing");
-    std::printf("  points        %zu%s\n", s.points,
-                s.duplicate_points ? (" (" + std::to_string(s.duplicate_points) + " exact duplicates set aside)").c_str() : "");
+    std::string aside;
+    if (s.duplicate_points) aside = std::to_string(s.duplicate_points) + " exact duplicates";
+    if (s.near_duplicates)
+      aside += (aside.empty() ? "" : ", ") + std::to_string(s.near_duplicates) +
+               " near copies (a neighbour ten times nearer than every other)";
+    std::printf("  points        %zu%s\n", s.points, aside.empty() ? "" : (" (" + aside + " set aside)").c_str());
     std::printf("  spacing r0    %.6g (%s)\n", s.spacing, s.spacing_estimated ? "estimated: median nearest-neighbour distance" : "given");
     std::printf("  max edge L    %.6g (%g x r0)\n", s.max_edge, a.max_edge_factor);
     if (!a.raw && !a.global_spacing) {

@@ -52,6 +52,7 @@ nlohmann::json to_json(const TriangulateStats& s) {
           {"max_edge", s.max_edge},
           {"points", s.points},
           {"duplicate_points", s.duplicate_points},
+          {"near_duplicates", s.near_duplicates},
           {"max_neighbors_seen", s.max_neighbors_seen},
           {"triplets", s.triplets},
           {"candidates", s.candidates},

@@ -107,6 +107,7 @@ class pm_triangulate_stats(Structure):
         ("stray_piece_largest", c_uint64),
         ("small_handles_removed", c_uint64),
         ("shortened_limits", c_uint64),
+        ("near_duplicates", c_uint64),
     ]
 
 

@@ -167,6 +167,36 @@ def test_georeferenced_coordinates_mesh_as_at_the_origin(cli, inspect, tmp_path)
     assert first == (rows[0][0] + offset[0], rows[0][1] + offset[1], rows[0][2] + offset[2])
 
 
+def test_near_copies_of_most_particles_are_set_aside(cli, inspect, tmp_path):
+    """Every particle with a copy a fiftieth of the spacing away (an airborne scanner's first
+    and last returns): the copies are set aside, named by the summary, the report and
+    `inspect`, and the rest meshes as the particles alone do (before, nothing was meshed)."""
+    pts = tmp_path / "s.xyz"
+    cli("sample", "fibonacci", "--points", "3000", "-o", pts)
+    rows = [tuple(map(float, line.split()[:3])) for line in pts.read_text().splitlines() if line.strip()]
+    rng = random.Random(5)
+    copies = []
+    for x, y, z in rows:
+        d = [rng.gauss(0, 1) for _ in range(3)]
+        n = math.sqrt(sum(v * v for v in d))
+        copies.append(tuple(p + 0.0012 * v / n for p, v in zip((x, y, z), d)))  # spacing ~0.065
+    both = tmp_path / "twinned.xyz"
+    both.write_text("".join("%.9f %.9f %.9f\n" % r for r in rows + copies))
+    alone = tmp_path / "alone.xyz"
+    alone.write_text("".join("%.9f %.9f %.9f\n" % r for r in rows))
+    proc = cli("triangulate", both, "-o", tmp_path / "both.ply", "--report", tmp_path / "r.json")
+    assert "(3000 near copies (a neighbour ten times nearer than every other) set aside)" in proc.stdout, proc.stdout
+    assert json.loads((tmp_path / "r.json").read_text())["triangulation"]["near_duplicates"] == 3000
+    cli("triangulate", alone, "-o", tmp_path / "alone.ply", "-q")
+    got, want = inspect(tmp_path / "both.ply"), inspect(tmp_path / "alone.ply")
+    assert got["closed"] and got["components"] == 1 and got["vertices_used"] == 3000
+    assert got["triangles"] == want["triangles"] and got["vertices"] == 6000
+    text = cli("inspect", both).stdout
+    assert re.search(r"near copies +3000 particles lie ten times nearer to another", text), text
+    assert json.loads(cli("inspect", both, "--json").stdout)["near_duplicates"] == 3000
+    assert json.loads(cli("inspect", alone, "--json").stdout)["near_duplicates"] == 0
+
+
 def test_unevenly_spaced_particles_get_a_hint(cli, tmp_path):
     """A sphere sampled 2.8x sparser on its upper half. By default each particle's L follows
     its own spacing and the sphere closes through every particle. With --global-spacing the

@@ -232,6 +232,9 @@ typedef struct pm_triangulate_stats {
   /* -- appended -- */
   uint64_t shortened_limits; /**< particles whose edge limit was shortened to hold at most
                                   max_neighbors neighbours (local spacing, r0 estimated) */
+  uint64_t near_duplicates; /**< near copies set aside (local spacing; at least a
+                                 quarter of the points with a neighbour ten times nearer than
+                                 every other: each such pair is one particle) */
 } pm_triangulate_stats;
 
 PM_EXPORT void pm_triangulate_options_init(pm_triangulate_options* options);

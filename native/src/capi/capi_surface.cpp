@@ -116,6 +116,7 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
       s.stray_piece_largest = r.surface.stray_pieces.largest;
       s.small_handles_removed = r.surface.small_handles_removed;
       s.shortened_limits = r.triangulation.shortened_limits;
+      s.near_duplicates = r.triangulation.near_duplicates;
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();

@@ -191,8 +191,67 @@ std::vector<Part> far_apart_parts(const Vec3* points, size_t n, ProgressTracker&
 
 }  // namespace
 
+namespace {
+
+/// For each distinct point of `grid` whose nearest distinct neighbour (nn2: squared distance)
+/// lies within kTwinRatio of the cell size, and every other distinct point beyond
+/// 1 / kTwinRatio times that: twin[its input index] = its neighbour's. Both are within the 27
+/// cells around the point, which hold every point within one cell size of it, so the test is
+/// exact. On an even sampling nearly no point has so near a neighbour (a cell holds a few
+/// points), and the pass costs a look at nn2. An exact copy's twin is the first copy.
+void find_twins(const NeighborGrid& grid, const std::vector<uint32_t>& rep, const std::vector<double>& nn2,
+                const std::vector<uint32_t>* original, std::vector<uint32_t>& twin) {
+  const double h = grid.cell_size(), near2 = kTwinRatio * kTwinRatio * h * h;
+  const auto input = [&](uint32_t s) { return original ? (*original)[grid.original_index(s)] : grid.original_index(s); };
+  parallel_blocks(grid.cell_count(), 512, [&](size_t cb, size_t ce) {
+    uint32_t around[27];
+    NeighborCellWalk walk(grid);
+    for (size_t c = cb; c < ce; ++c) {
+      int na = -1;
+      for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) {
+        if (rep[s] != s) twin[input(s)] = input(rep[s]);  // an exact copy goes with its first
+        if (rep[s] != s || !(nn2[s] <= near2)) continue;
+        if (na < 0) na = walk.around(uint32_t(c), around);
+        const Vec3 p = grid.sorted_point(s);
+        const double far2 = nn2[s] / (kTwinRatio * kTwinRatio);
+        uint32_t partner = s, within = 0;
+        for (int a = 0; a < na && within < 2; ++a)
+          for (uint32_t t = grid.cell_begin(around[a]); t < grid.cell_end(around[a]); ++t) {
+            if (t == s || rep[t] != t) continue;
+            const double d2 = squared_distance(grid.sorted_point(t), p);
+            if (d2 < far2) {
+              partner = t;
+              if (++within == 2) break;
+            }
+          }
+        if (within == 1) twin[input(s)] = input(partner);
+      }
+    }
+  });
+}
+
+/// Each group of points joined by twins' links (and exact copies) as its lowest input index:
+/// twin[i] becomes that index.
+void merge_twins(std::vector<uint32_t>& twin) {
+  const size_t n = twin.size();
+  std::vector<uint32_t> root(n);
+  std::iota(root.begin(), root.end(), 0u);
+  const auto find = [&](uint32_t i) {
+    while (root[i] != i) i = root[i] = root[root[i]];
+    return i;
+  };
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t a = find(i), b = find(twin[i]);
+    if (a != b) root[std::max(a, b)] = std::min(a, b);  // the lower index is the root
+  }
+  for (uint32_t i = 0; i < n; ++i) twin[i] = find(i);
+}
+
+}  // namespace
+
 SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTracker& tracker,
-                                      double begin, double end, size_t stride) {
+                                      double begin, double end, size_t stride, std::vector<uint32_t>* twin_of) {
+  if (twin_of) twin_of->clear();
   if (n < 2) throw Error(Status::InvalidInput, "at least two points are needed to estimate the spacing");
   tracker.stage("estimating spacing", begin, begin + 0.2 * (end - begin));
   // One grid over every point, or (points far apart) one per part.
@@ -234,6 +293,11 @@ SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTrac
     tracker.check();
 
     tracker.stage("estimating spacing", begin + 0.2 * (end - begin), end, cells);
+    std::vector<uint32_t> twins;
+    if (stride == 1) {
+      twins.resize(n);
+      std::iota(twins.begin(), twins.end(), 0u);
+    }
     std::vector<double> values;
     values.reserve(distinct / stride + 1);
     for (size_t g = 0; g < grids.size(); ++g) {
@@ -294,12 +358,24 @@ SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTrac
       tracker.check();
       for (size_t s = 0; s < nn2.size(); ++s)
         if (counted(uint32_t(s))) values.push_back(nn2[s]);
+      if (stride == 1) find_twins(grid, rep, nn2, parts.empty() ? nullptr : &parts[g].original, twins);
     }
     values.insert(values.end(), outside, kInf);
     const size_t mid = (values.size() - 1) / 2;  // the lower median: an actual NN distance
     std::nth_element(values.begin(), values.begin() + long(mid), values.end());
     if (values[mid] == kInf) continue;  // most points are isolated at this cell size: widen
     SpacingEstimate result;
+    if (stride == 1) {
+      size_t count = 0;
+      for (size_t i = 0; i < twins.size(); ++i) count += twins[i] != i;
+      if (double(count - std::min(count, duplicates)) >= kTwinnedFraction * double(distinct)) {
+        merge_twins(twins);
+        size_t merged = 0;
+        for (size_t i = 0; i < twins.size(); ++i) merged += twins[i] != i;
+        result.near_duplicates = merged - std::min(merged, duplicates);
+        if (twin_of) *twin_of = std::move(twins);
+      }
+    }
     result.spacing = std::sqrt(values[mid]);
     result.distinct_points = distinct;
     result.duplicate_points = duplicates;

@@ -10,6 +10,7 @@
 
 #include "core/progress_tracker.h"
 #include "particlemesh/spatial/neighbor_grid.h"
+#include "particlemesh/spatial/spacing.h"
 #include "particlemesh/surface/triangulate.h"
 #include "surface/neighbor_lists.h"
 
@@ -46,10 +47,11 @@ enum class TriangleIndices { Original, Sorted };
 /// point's edge limit is max_edge_factor x its own spacing (estimate_local_spacing, scaled by
 /// r0 / the measured median nearest-neighbour distance when options.spacing gives r0, and by
 /// the sampling's reach factor, irregular_reach) instead of max_edge_factor x r0; the test
-/// itself is unchanged.
+/// itself is unchanged. `known`: the cloud's spacing estimate (estimate_spacing_impl), when
+/// the caller already took it.
 RawTriangulation run_raw_triangulation(const PointCloud& cloud, const TriangulateOptions& options,
                                        ProgressTracker& tracker, double begin, double end,
                                        TriangleIndices indices = TriangleIndices::Original,
-                                       bool local_spacing = false);
+                                       bool local_spacing = false, const SpacingEstimate* known = nullptr);
 
 }  // namespace particlemesh::detail

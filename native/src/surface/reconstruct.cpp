@@ -13,6 +13,7 @@
 #include "core/parallel.h"
 #include "core/progress_tracker.h"
 #include "particlemesh/core/error.h"
+#include "spatial/spacing_impl.h"
 #include "surface/normals_impl.h"
 #include "surface/raw_triangulation.h"
 #include "surface/orient_outward.h"
@@ -68,15 +69,18 @@ bool usable_normal(const Vec3& n) {
 
 }  // namespace
 
-SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions& options) {
-  check_surface_options(options);
-  detail::ProgressTracker tracker(options.progress);
+namespace {
+
+/// The surface of `cloud` (the steps after the options' check), in the caller's arena;
+/// `known`: the cloud's spacing estimate when already taken.
+SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options, detail::ProgressTracker& tracker,
+                          const SpacingEstimate* known) {
   SurfaceResult result;
   SurfaceStats& st = result.surface;
   std::vector<Triangle> tris;
-  detail::with_threads(options.threads, [&] {
+  {
     detail::RawTriangulation raw = detail::run_raw_triangulation(cloud, options, tracker, 0.0, 0.55,
-                                                                   detail::TriangleIndices::Sorted, options.local_spacing);
+                                                                   detail::TriangleIndices::Sorted, options.local_spacing, known);
     result.triangulation = raw.stats;
     const NeighborGrid& grid = *raw.grid;
     const size_t n = cloud.size();
@@ -210,11 +214,63 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
       for (size_t i = b; i < e; ++i)
         for (uint32_t& v : tris[i]) v = original[v];
     });
-  });
+  }
   tracker.check();
   result.mesh.positions = cloud.positions;
   result.mesh.triangles = std::move(tris);
   result.mesh.attributes = cloud.attributes;
+  return result;
+}
+
+}  // namespace
+
+SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions& options) {
+  check_surface_options(options);
+  detail::ProgressTracker tracker(options.progress);
+  SurfaceResult result = detail::with_threads(options.threads, [&] {
+    if (!options.local_spacing) return reconstruct(cloud, options, tracker, nullptr);
+    // The spacing estimate first (with a spacing given too: the local spacings are measured
+    // against it), to see whether the cloud is twinned: most of its points
+    // have a near copy (detail::kTwinRatio), so its median nearest-neighbour distance is the
+    // copies' offset and every point's neighbourhood ends at its copy (nothing would be
+    // meshed). Then the copies are set aside as exact duplicates are, and the cloud of the
+    // rest is meshed.
+    validate_point_cloud(cloud);
+    if (cloud.size() < 3) return reconstruct(cloud, options, tracker, nullptr);  // its error
+    std::vector<uint32_t> twin_of;
+    const SpacingEstimate est =
+        detail::estimate_spacing_impl(cloud.positions.data(), cloud.size(), tracker, 0.0, 0.15, 1, &twin_of);
+    if (twin_of.empty()) return reconstruct(cloud, options, tracker, &est);
+    const std::vector<uint32_t>& root = twin_of;
+    const size_t n = cloud.size();
+    std::vector<uint32_t> kept, index_in_kept(n);
+    for (uint32_t i = 0; i < n; ++i)
+      if (root[i] == i) {
+        index_in_kept[i] = uint32_t(kept.size());
+        kept.push_back(i);
+      }
+    PointCloud reduced;
+    reduced.positions.resize(kept.size());
+    if (cloud.has_normals()) reduced.normals.resize(kept.size());
+    for (size_t k = 0; k < kept.size(); ++k) {
+      reduced.positions[k] = cloud.positions[kept[k]];
+      if (cloud.has_normals()) reduced.normals[k] = cloud.normals[kept[k]];
+    }
+    SurfaceResult r = reconstruct(reduced, options, tracker, nullptr);
+    for (Triangle& t : r.mesh.triangles)
+      for (uint32_t& v : t) v = kept[v];
+    std::vector<Vec3> normals(n);
+    for (uint32_t i = 0; i < n; ++i) normals[i] = r.mesh.normals[index_in_kept[root[i]]];
+    r.mesh.normals = std::move(normals);
+    r.mesh.positions = cloud.positions;
+    r.mesh.attributes = cloud.attributes;
+    // The exact copies merged count as the exact duplicates they are (those the estimate
+    // found: every one but among stray points it left out, which the rest's run counts).
+    r.triangulation.points = n;
+    r.triangulation.duplicate_points += est.duplicate_points;
+    r.triangulation.near_duplicates = n - kept.size() - est.duplicate_points;
+    return r;
+  });
   tracker.finish();
   return result;
 }

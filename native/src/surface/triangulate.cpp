@@ -64,7 +64,7 @@ double r0_with_band(double h, double r0, double band) {
 
 RawTriangulation run_raw_triangulation(const PointCloud& cloud, const TriangulateOptions& options,
                                        ProgressTracker& tracker, double begin, double end,
-                                       TriangleIndices indices, bool local) {
+                                       TriangleIndices indices, bool local, const SpacingEstimate* known) {
   check_options(options);
   validate_point_cloud(cloud);
   const size_t n = cloud.size();
@@ -81,7 +81,8 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
   if (options.spacing > 0) {
     st.spacing = options.spacing;
   } else {
-    const SpacingEstimate est = estimate_spacing_impl(cloud.positions.data(), n, tracker, at(0.0), at(local ? 0.15 : 0.3));
+    const SpacingEstimate est =
+        known ? *known : estimate_spacing_impl(cloud.positions.data(), n, tracker, at(0.0), at(local ? 0.15 : 0.3));
     st.spacing = est.spacing;
     st.spacing_estimated = true;
   }
@@ -93,9 +94,9 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
   // nearest-neighbour distance is r0 (unchanged when r0 was estimated).
   std::vector<double> local_spacing;
   if (local) {
-    const double measured = st.spacing_estimated
-                                ? st.spacing
-                                : estimate_spacing_impl(cloud.positions.data(), n, tracker, at(0.0), at(0.15)).spacing;
+    const double measured = st.spacing_estimated ? st.spacing
+                            : known              ? known->spacing
+                                                 : estimate_spacing_impl(cloud.positions.data(), n, tracker, at(0.0), at(0.15)).spacing;
     SamplingShape shape;
     local_spacing = local_spacing_impl(cloud.positions.data(), n, measured, tracker, at(0.15), at(0.3), &shape);
     st.sampling_irregularity = shape.irregularity;

@@ -9,6 +9,7 @@
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
 #include "particlemesh/sample/shapes.h"
+#include "particlemesh/spatial/spacing.h"
 #include "particlemesh/surface/reconstruct.h"
 #include "particlemesh/surface/triangulate.h"
 #include "support/test_support.h"
@@ -146,6 +147,79 @@ TEST(UnevenSampling, CrowdedPointsGetShorterLimitsInsteadOfAnError) {
   one.local_spacing = false;
   one.max_neighbors = 6;
   EXPECT_THROW(reconstruct_surface(c, one), Error);
+}
+
+namespace {
+
+// Every particle of `c` followed, after all of them, by a near copy of every `every`-th one:
+// moved by `offset` x the spacing r0 in a direction of its own (an airborne scanner's first
+// and last returns off hard ground).
+PointCloud with_near_copies(const PointCloud& c, double r0, double offset, size_t every) {
+  PointCloud out = c;
+  std::mt19937 rng(3);
+  std::normal_distribution<double> g;
+  for (size_t i = 0; i < c.size(); i += every) {
+    const Vec3 d = normalized(Vec3{g(rng), g(rng), g(rng)});
+    out.positions.push_back(c.positions[i] + d * (offset * r0));
+    if (c.has_normals()) out.normals.push_back(c.normals[i]);
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(UnevenSampling, NearCopiesOfMostParticlesAreSetAside) {
+  // Each particle with a copy 0.02 r0 away: the median nearest-neighbour distance is the
+  // copies' offset, and each particle's neighbourhood ended at its copy (nothing was meshed).
+  // The copies are set aside as exact duplicates are: the surface of the particles alone.
+  const PointCloud sphere = fibonacci_sphere(3000);
+  const double r0 = estimate_spacing(sphere.positions.data(), sphere.size()).spacing;
+  const PointCloud twinned = with_near_copies(sphere, r0, 0.02, 1);
+  const SurfaceResult alone = reconstruct_surface(sphere);
+  const SurfaceResult r = reconstruct_surface(twinned);
+  EXPECT_EQ(r.triangulation.near_duplicates, sphere.size());
+  EXPECT_EQ(r.triangulation.duplicate_points, 0u);
+  EXPECT_EQ(r.triangulation.points, twinned.size());
+  EXPECT_DOUBLE_EQ(r.triangulation.spacing, alone.triangulation.spacing);
+  EXPECT_EQ(r.mesh.triangles, alone.mesh.triangles);
+  ASSERT_EQ(r.mesh.positions.size(), twinned.size());
+  ASSERT_EQ(r.mesh.normals.size(), twinned.size());
+  for (size_t i = 0; i < sphere.size(); ++i) {
+    EXPECT_EQ(r.mesh.normals[i], alone.mesh.normals[i]);
+    EXPECT_EQ(r.mesh.normals[sphere.size() + i], alone.mesh.normals[i]);  // a copy faces as its first
+  }
+  const TopologyReport t = topology_report(r.mesh);
+  EXPECT_TRUE(t.closed && t.manifold && t.consistently_oriented && t.outward);
+  EXPECT_EQ(t.components, 1u);
+  EXPECT_EQ(t.vertices_used, sphere.size());
+  // Exact copies of the twinned cloud's particles stay exact duplicates.
+  const PointCloud copies = particlemesh::test::with_copies(twinned, 2);
+  const SurfaceResult rc = reconstruct_surface(copies);
+  EXPECT_EQ(rc.triangulation.duplicate_points, twinned.size());
+  EXPECT_EQ(rc.triangulation.near_duplicates, sphere.size());
+  EXPECT_EQ(topology_report(rc.mesh).vertices_used, sphere.size());
+  // With the spacing given, the same: the local spacings are measured against it.
+  SurfaceOptions given;
+  given.spacing = r0;
+  const SurfaceResult rg = reconstruct_surface(twinned, given);
+  EXPECT_EQ(rg.triangulation.near_duplicates, sphere.size());
+  EXPECT_EQ(rg.mesh.triangles, reconstruct_surface(sphere, given).mesh.triangles);
+}
+
+TEST(UnevenSampling, FewNearCopiesOrOneLimitMergeNothing) {
+  const PointCloud sphere = fibonacci_sphere(3000);
+  const double r0 = estimate_spacing(sphere.positions.data(), sphere.size()).spacing;
+  // A copy of every tenth particle: 18 % of the points are twins, under the quarter that
+  // makes a cloud twinned (its median nearest-neighbour distance is still the sampling's).
+  const SurfaceResult some = reconstruct_surface(with_near_copies(sphere, r0, 0.02, 10));
+  EXPECT_EQ(some.triangulation.near_duplicates, 0u);
+  // Particles at random: about 1 % have a neighbour ten times nearer than the next.
+  const SurfaceResult random = reconstruct_surface(particlemesh::test::random_sphere(5000, 9));
+  EXPECT_EQ(random.triangulation.near_duplicates, 0u);
+  // One L for all (the seed's test as it is): nothing merged.
+  SurfaceOptions one;
+  one.local_spacing = false;
+  EXPECT_EQ(reconstruct_surface(with_near_copies(sphere, r0, 0.02, 1), one).triangulation.near_duplicates, 0u);
 }
 
 TEST(UnevenSampling, EvenSamplingsKeepTheirLimits) {

@@ -15,6 +15,13 @@ struct SpacingEstimate {
   double spacing = 0;          ///< median nearest-neighbour distance over distinct points
   size_t distinct_points = 0;  ///< points left after exact duplicates are set aside
   size_t duplicate_points = 0; ///< points with exactly the coordinates of a lower-index point
+  /// Near copies, where the cloud is twinned: at least a quarter of its distinct points have
+  /// a neighbour ten times nearer than every other (an airborne scanner's first and last
+  /// returns off hard ground, a cloud merged with itself shifted by a hair). `spacing` is then
+  /// the copies' offset, not the sampling's; reconstruct_surface sets them aside (each pair is
+  /// one particle, its lower index) and measures the rest. 0 otherwise (as by chance about 1 %
+  /// of particles dropped at random on a surface have such a neighbour).
+  size_t near_duplicates = 0;
 };
 
 /// Median nearest-neighbour distance of the distinct points: exact (not sampled), so it does

@@ -71,6 +71,11 @@ struct TriangulateStats {
   double max_edge = 0;           ///< L used
   size_t points = 0;
   size_t duplicate_points = 0;   ///< exact duplicates set aside
+  /// Near copies set aside (reconstruct_surface with a local spacing): where
+  /// at least a quarter of the distinct points have a neighbour ten times nearer than every
+  /// other (an airborne scanner's first and last returns off hard ground), each such pair
+  /// is one particle, its lower index, as exact duplicates are.
+  size_t near_duplicates = 0;
   size_t max_neighbors_seen = 0; ///< the largest neighbour count within L
   size_t triplets = 0;           ///< pairs of higher neighbours within L, over all points (see max_triplets_per_point)
   size_t candidates = 0;         ///< non-degenerate triplets with all edges <= L
