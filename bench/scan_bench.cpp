@@ -93,9 +93,11 @@ std::vector<particlemesh::Vec3> positions_of(const XYZ& c) {
   return p;
 }
 
+/// The median nearest-neighbour distance, of the cloud apart from near copies (a twinned
+/// scan's first and last returns: particlemesh sets them aside, and their offset is no r0).
 double median_nn(const XYZ& c) {
   const auto p = positions_of(c);
-  return particlemesh::estimate_spacing(p.data(), p.size()).spacing;
+  return particlemesh::estimate_spacing(p.data(), p.size()).spacing_apart;
 }
 
 struct Scan {

@@ -58,6 +58,7 @@ nlohmann::json particle_summary(const std::string& path, const ParticleInput& in
     j["spacing"] = s.spacing;
     j["duplicate_points"] = s.duplicate_points;
     j["near_duplicates"] = s.near_duplicates;
+    j["spacing_apart"] = s.spacing_apart;
   } catch (const Error& e) {
     // Too few or coinciding points: said, not fatal (the file itself read).
     j["spacing"] = nullptr;
@@ -135,7 +136,8 @@ std::string describe_particles(const nlohmann::json& j, const std::string& read_
     line("near copies", std::to_string(j["near_duplicates"].get<size_t>()) +
                             " particles lie ten times nearer to another than to every other (a scanner's first and last "
                             "returns, a cloud merged with a shifted copy): the spacing above is their offset; triangulate "
-                            "sets them aside and measures the rest, unlike the sampling below");
+                            "sets them aside and measures the rest (spacing " + number(j["spacing_apart"].get<double>()) +
+                            "), unlike the sampling below");
   if (j.contains("sampling") && !j["sampling"].is_null()) {
     const auto& sm = j["sampling"];
     char text[400];

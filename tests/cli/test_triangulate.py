@@ -193,8 +193,10 @@ def test_near_copies_of_most_particles_are_set_aside(cli, inspect, tmp_path):
     assert got["triangles"] == want["triangles"] and got["vertices"] == 6000
     text = cli("inspect", both).stdout
     assert re.search(r"near copies +3000 particles lie ten times nearer to another", text), text
-    assert json.loads(cli("inspect", both, "--json").stdout)["near_duplicates"] == 3000
-    assert json.loads(cli("inspect", alone, "--json").stdout)["near_duplicates"] == 0
+    twinned, single = json.loads(cli("inspect", both, "--json").stdout), json.loads(cli("inspect", alone, "--json").stdout)
+    assert twinned["near_duplicates"] == 3000 and single["near_duplicates"] == 0
+    # The spacing with the copies is their offset; apart from them, the particles' own.
+    assert twinned["spacing"] < 0.0013 and twinned["spacing_apart"] == single["spacing"] == single["spacing_apart"]
 
 
 def test_unevenly_spaced_particles_get_a_hint(cli, tmp_path):

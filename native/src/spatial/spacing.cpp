@@ -404,7 +404,16 @@ SpacingEstimate estimate_spacing(const Vec3* points, size_t n, int threads,
   check_points(points, n);
   detail::ProgressTracker tracker(progress);
   return detail::with_threads(threads, [&] {
-    auto r = detail::estimate_spacing_impl(points, n, tracker, 0.0, 1.0);
+    std::vector<uint32_t> group;
+    auto r = detail::estimate_spacing_impl(points, n, tracker, 0.0, 0.8, 1, &group);
+    r.spacing_apart = r.spacing;
+    if (!group.empty()) {
+      // Twinned: the spacing of the first point of each group, as reconstruct_surface meshes.
+      std::vector<Vec3> firsts;
+      for (size_t i = 0; i < n; ++i)
+        if (group[i] == i) firsts.push_back(points[i]);
+      r.spacing_apart = detail::estimate_spacing_impl(firsts.data(), firsts.size(), tracker, 0.8, 1.0).spacing;
+    }
     tracker.finish();
     return r;
   });

@@ -22,6 +22,9 @@ struct SpacingEstimate {
   /// one particle, its lower index) and measures the rest. 0 otherwise (as by chance about 1 %
   /// of particles dropped at random on a surface have such a neighbour).
   size_t near_duplicates = 0;
+  /// The median nearest-neighbour distance with the near copies set aside: reconstruct_surface's
+  /// r0 (`spacing` where near_duplicates is 0). Only estimate_spacing fills it; 0 elsewhere.
+  double spacing_apart = 0;
 };
 
 /// Median nearest-neighbour distance of the distinct points: exact (not sampled), so it does
