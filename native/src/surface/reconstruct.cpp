@@ -67,10 +67,6 @@ bool usable_normal(const Vec3& n) {
   return std::isfinite(m) && m >= double(std::numeric_limits<float>::min());
 }
 
-}  // namespace
-
-namespace {
-
 /// The surface of `cloud` (the steps after the options' check), in the caller's arena;
 /// `known`: the cloud's spacing estimate when already taken.
 SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options, detail::ProgressTracker& tracker,
@@ -230,45 +226,62 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
   SurfaceResult result = detail::with_threads(options.threads, [&] {
     if (!options.local_spacing) return reconstruct(cloud, options, tracker, nullptr);
     // The spacing estimate first (with a spacing given too: the local spacings are measured
-    // against it), to see whether the cloud is twinned: most of its points
-    // have a near copy (detail::kTwinRatio), so its median nearest-neighbour distance is the
-    // copies' offset and every point's neighbourhood ends at its copy (nothing would be
-    // meshed). Then the copies are set aside as exact duplicates are, and the cloud of the
-    // rest is meshed.
+    // against it), to see whether the cloud is twinned: many of its points have a near copy
+    // (detail::kTwinRatio), so its median nearest-neighbour distance is the copies' offset
+    // and every point's neighbourhood ends at its copy (nothing would be meshed). Then the
+    // copies are set aside as exact duplicates are, and the cloud of the rest is meshed.
     validate_point_cloud(cloud);
     if (cloud.size() < 3) return reconstruct(cloud, options, tracker, nullptr);  // its error
-    std::vector<uint32_t> twin_of;
-    const SpacingEstimate est =
-        detail::estimate_spacing_impl(cloud.positions.data(), cloud.size(), tracker, 0.0, 0.15, 1, &twin_of);
-    if (twin_of.empty()) return reconstruct(cloud, options, tracker, &est);
-    const std::vector<uint32_t>& root = twin_of;
     const size_t n = cloud.size();
-    std::vector<uint32_t> kept, index_in_kept(n);
-    for (uint32_t i = 0; i < n; ++i)
-      if (root[i] == i) {
-        index_in_kept[i] = uint32_t(kept.size());
-        kept.push_back(i);
-      }
+    std::vector<uint32_t> twin_of;
+    SpacingEstimate est = detail::estimate_spacing_impl(cloud.positions.data(), n, tracker, 0.0, 0.15, 1, &twin_of);
+    if (twin_of.empty()) return reconstruct(cloud, options, tracker, &est);
+    // kept: the input index of each particle meshed; first: per input index, the input index
+    // of the particle that stands for it. Copies of copies (a second offset, ten times the
+    // first) are merged round by round, as long as the rest is twinned.
+    std::vector<uint32_t> kept(n), first(n);
+    std::iota(kept.begin(), kept.end(), 0u);
+    std::iota(first.begin(), first.end(), 0u);
+    size_t exact = 0;
     PointCloud reduced;
-    reduced.positions.resize(kept.size());
-    if (cloud.has_normals()) reduced.normals.resize(kept.size());
-    for (size_t k = 0; k < kept.size(); ++k) {
-      reduced.positions[k] = cloud.positions[kept[k]];
-      if (cloud.has_normals()) reduced.normals[k] = cloud.normals[kept[k]];
+    for (int round = 0; round < 8 && !twin_of.empty(); ++round) {
+      exact += est.duplicate_points;
+      // twin_of[k] (an index into this round's cloud, whose particles ascend in input index)
+      // is the lowest of k's group: the group's lowest input index stands for it.
+      std::vector<uint32_t> next_kept;
+      for (size_t k = 0; k < twin_of.size(); ++k)
+        if (twin_of[k] == k) next_kept.push_back(kept[k]);
+      for (uint32_t i = 0; i < n; ++i) {
+        // first[i] is in `kept`; its position there, k, has twin_of[k] standing for it.
+        const size_t k = size_t(std::lower_bound(kept.begin(), kept.end(), first[i]) - kept.begin());
+        first[i] = kept[twin_of[k]];
+      }
+      kept = std::move(next_kept);
+      PointCloud smaller;
+      smaller.positions.resize(kept.size());
+      if (cloud.has_normals()) smaller.normals.resize(kept.size());
+      for (size_t k = 0; k < kept.size(); ++k) {
+        smaller.positions[k] = cloud.positions[kept[k]];
+        if (cloud.has_normals()) smaller.normals[k] = cloud.normals[kept[k]];
+      }
+      reduced = std::move(smaller);
+      if (reduced.size() < 3) break;
+      est = detail::estimate_spacing_impl(reduced.positions.data(), reduced.size(), tracker, 0.0, 0.15, 1, &twin_of);
     }
-    SurfaceResult r = reconstruct(reduced, options, tracker, nullptr);
+    SurfaceResult r = reconstruct(reduced, options, tracker, reduced.size() < 3 ? nullptr : &est);
     for (Triangle& t : r.mesh.triangles)
       for (uint32_t& v : t) v = kept[v];
     std::vector<Vec3> normals(n);
-    for (uint32_t i = 0; i < n; ++i) normals[i] = r.mesh.normals[index_in_kept[root[i]]];
+    for (uint32_t i = 0; i < n; ++i)
+      normals[i] = r.mesh.normals[size_t(std::lower_bound(kept.begin(), kept.end(), first[i]) - kept.begin())];
     r.mesh.normals = std::move(normals);
     r.mesh.positions = cloud.positions;
     r.mesh.attributes = cloud.attributes;
-    // The exact copies merged count as the exact duplicates they are (those the estimate
-    // found: every one but among stray points it left out, which the rest's run counts).
+    // The exact copies merged count as the exact duplicates they are (those the estimates
+    // found: every one but among stray points they left out, which the last run counts).
     r.triangulation.points = n;
-    r.triangulation.duplicate_points += est.duplicate_points;
-    r.triangulation.near_duplicates = n - kept.size() - est.duplicate_points;
+    r.triangulation.duplicate_points += exact;
+    r.triangulation.near_duplicates = n - kept.size() - exact;
     return r;
   });
   tracker.finish();
