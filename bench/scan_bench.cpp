@@ -12,7 +12,7 @@
 //   the raw finite cloud -> pcl::StatisticalOutlierRemoval (meanK 20, stddev 2)
 //   r0 = the prepared cloud's median nearest-neighbour distance; every method gets it.
 // Methods (each timed as the best of --runs, default 3, all on the prepared points):
-//   particlemesh   reconstruct_surface, default options, spacing r0 (all cores)
+//   particlemesh   reconstruct_surface, default options (its spacing estimate is r0; all cores)
 //   CGAL AF        CGAL::advancing_front_surface_reconstruction, default parameters (one core:
 //                  CGAL's Delaunay triangulation is sequential); its metrics also with its
 //                  triangles longer than 6 r0 cut, as they bridge depth jumps
@@ -288,12 +288,19 @@ int main(int argc, char** argv) {
       if (k == 4 && !viewpoint) continue;
       particlemesh::PointCloud cloud;
       cloud.positions = P;
+      // The defaults: the spacing estimated, which is r0 (the same estimate; a spacing given
+      // would make a crowded point an error rather than a shorter edge limit).
       particlemesh::SurfaceOptions o;
-      o.spacing = s.r0;
       o.has_viewpoint = k == 4;
       o.viewpoint = s.origin;
       particlemesh::SurfaceResult r;
-      const double t = best_of(runs, [&] { r = particlemesh::reconstruct_surface(cloud, o); }, "particlemesh");
+      double t = 0;
+      try {
+        t = best_of(runs, [&] { r = particlemesh::reconstruct_surface(cloud, o); }, "particlemesh");
+      } catch (const std::exception& e) {  // the library's Error: a limit or a bad input
+        std::fprintf(stderr, "%s: particlemesh failed: %s\n", name.c_str(), e.what());
+        continue;
+      }
       m[k] = measure(P, r.mesh.triangles, s.r0, t);
       if (k == 4 && !r.surface.viewpoint_used) m[k].ran = false;
       write_mesh(meshes_dir, name + (k == 4 ? "_particlemesh_viewpoint" : "_particlemesh"), P, r.mesh.triangles);

@@ -52,7 +52,8 @@ TEST(NeighborLists, ShortenedRadiiHoldEveryPairWithinEither) {
   for (uint32_t s = 0; s < n; ++s) rep[s] = s;
   std::vector<double> radius(n);
   for (uint32_t s = 0; s < n; ++s) radius[s] = c.radius[grid.original_index(s)];
-  detail::ProgressTracker tracker{ProgressCallback{}};
+  const ProgressCallback none;  // the tracker keeps a reference: a temporary would dangle
+  detail::ProgressTracker tracker(none);
 
   // Without shortening the limit fails, naming the most any point holds.
   std::vector<double> unchanged = radius;
@@ -110,7 +111,8 @@ TEST(NeighborLists, NothingCrowdedNothingShortened) {
   for (uint32_t s = 0; s < n; ++s) rep[s] = s;
   std::vector<double> radius(n);
   for (uint32_t s = 0; s < n; ++s) radius[s] = c.radius[grid.original_index(s)];
-  detail::ProgressTracker tracker{ProgressCallback{}};
+  const ProgressCallback none;  // the tracker keeps a reference: a temporary would dangle
+  detail::ProgressTracker tracker(none);
   std::vector<double> kept = radius;
   const detail::NeighborLists shortening = detail::build_neighbor_lists(grid, rep, kept, 100000, true, tracker);
   const detail::NeighborLists plain = detail::build_neighbor_lists(grid, rep, radius, 100000, false, tracker);
