@@ -432,9 +432,12 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
                   f.rejected_conormal, f.grown, f.seeds);
       const size_t small = size_t(std::count_if(f.holes_left_edges.begin(), f.holes_left_edges.end(),
                                                  [](size_t e) { return e < 10; }));
-      const std::string handles = f.small_handles_removed == 0 ? std::string()
-                                  : std::to_string(f.small_handles_removed) + " small handle" +
-                                        (f.small_handles_removed == 1 ? "" : "s") + " removed, ";
+      std::string handles = f.small_handles_removed == 0 ? std::string()
+                            : std::to_string(f.small_handles_removed) + " small handle" +
+                                  (f.small_handles_removed == 1 ? "" : "s") + " removed, ";
+      if (f.flat_pieces_removed)
+        handles += std::to_string(f.flat_pieces_removed) + " flat closed piece" + (f.flat_pieces_removed == 1 ? "" : "s") +
+                   " removed, ";
       std::printf("  repair        %zu holes filled (%zu triangles), %zu pinches resolved, %s%zu loops left open%s\n",
                   f.holes_filled, f.hole_triangles, f.pinches_resolved, handles.c_str(), f.holes_left,
                   f.holes_left ? (" (largest " + std::to_string(f.largest_hole_left) + " edges, " +

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <numeric>
 #include <utility>
 
@@ -13,7 +14,8 @@
 namespace PM_NAMESPACE::detail {
 
 size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<Triangle>& T,
-                                        const std::vector<uint64_t>& boundary, std::vector<Vec3>* vertex_normals) {
+                                        const std::vector<uint64_t>& boundary, std::vector<Vec3>* vertex_normals,
+                                        bool turn, FlatPieces* flat) {
   // Components by shared vertices (the same as by shared edges on a manifold without
   // pinches); a component is open if it holds a boundary half-edge. Joined concurrently (a
   // serial pass is a visible cost at millions of triangles): each component's root is its
@@ -52,6 +54,26 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
   std::vector<double> vol(n, 0.0);
   for (const auto& pt : part)
     for (const auto& [r, v] : pt) vol[r] += v;
+  if (flat) {
+    // No volume: |6 V| within 1e-9 of (its area)^(3/2), the volume a closed piece of that
+    // area has when it is not flat (a regular tetrahedron: 0.0517 A^(3/2) x 6); within
+    // rounding of 0 where the plane is tilted, exactly 0 where it is a plane of coordinates.
+    std::vector<double> area(n, 0.0);
+    for (const Triangle& t : T) area[root[t[0]]] += 0.5 * norm(cross(P[t[1]] - P[t[0]], P[t[2]] - P[t[0]]));
+    std::vector<uint8_t> gone(n, 0);
+    for (size_t v = 0; v < n; ++v)
+      if (root[v] == v && area[v] > 0 && !open[v] && std::abs(vol[v]) <= 1e-9 * area[v] * std::sqrt(area[v])) {
+        gone[v] = 1;
+        ++flat->pieces;
+      }
+    if (flat->pieces > 0) {
+      for (size_t v = 0; v < n; ++v) flat->points += gone[root[v]];
+      const size_t before = T.size();
+      T.erase(std::remove_if(T.begin(), T.end(), [&](const Triangle& t) { return gone[root[t[0]]] != 0; }), T.end());
+      flat->triangles = before - T.size();
+    }
+  }
+  if (!turn) return 0;
   // A closed component inside another faces into the cavity it bounds, one inside that
   // outward again (nesting.h): its depth decides. Pieces (the roots of triangles) numbered in
   // root order.

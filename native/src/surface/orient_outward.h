@@ -18,8 +18,16 @@ namespace PM_NAMESPACE::detail {
 /// its points' `vertex_normals` (if given) to match; returns how many flipped. Components are
 /// by shared vertices (the same as by shared edges on a manifold without pinches). The result
 /// does not depend on the thread count.
+/// With `flat` given, closed components that enclose no volume (flat pillows: a patch and a
+/// reversed copy of it, as points exactly in one plane, e.g. quantized coordinates, can give)
+/// are taken out first, their triangles removed (the rest keep their order) and counted in
+/// `flat`; with `turn` false nothing is turned.
+struct FlatPieces {
+  size_t pieces = 0, triangles = 0, points = 0;
+};
 size_t orient_closed_components_outward(const std::vector<Vec3>& positions, std::vector<Triangle>& triangles,
                                         const std::vector<uint64_t>& boundary,
-                                        std::vector<Vec3>* vertex_normals = nullptr);
+                                        std::vector<Vec3>* vertex_normals = nullptr, bool turn = true,
+                                        FlatPieces* flat = nullptr);
 
 }  // namespace particlemesh::detail

@@ -169,7 +169,11 @@ SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options
     st.seconds_extraction = bs.seconds_candidates + bs.seconds_growth;
     st.seconds_repair = bs.seconds_repair;
     t0 = Clock::now();
-    if (options.orient) bs.components_flipped = detail::orient_closed_components_outward(P, tris, bs.boundary, &vertex_normals);
+    // Flat closed pieces (a patch and its reversed copy) out, whichever way the rest faces.
+    detail::FlatPieces flat;
+    bs.components_flipped =
+        detail::orient_closed_components_outward(P, tris, bs.boundary, &vertex_normals, options.orient, &flat);
+    st.flat_pieces_removed = flat.pieces;
     st.seconds_orient = seconds_since(t0);
     tracker.check();
     st.candidates = bs.candidates;
@@ -185,7 +189,7 @@ SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options
     st.looks_like_volume = st.holes_left > 0 && st.rejected_conormal * 20 > result.triangulation.kept * 7;
     st.largest_hole_left = bs.largest_hole_left;
     st.components_flipped = bs.components_flipped;
-    st.unused_points = bs.unused_points;
+    st.unused_points = bs.unused_points + flat.points;
     st.components_removed = bs.pieces.removed;
     st.component_triangles_removed = bs.pieces.removed_triangles;
     st.stray_pieces = bs.pieces.strays;
