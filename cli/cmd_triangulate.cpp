@@ -435,9 +435,9 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
       std::string handles = f.small_handles_removed == 0 ? std::string()
                             : std::to_string(f.small_handles_removed) + " small handle" +
                                   (f.small_handles_removed == 1 ? "" : "s") + " removed, ";
-      if (f.flat_pieces_removed)
-        handles += std::to_string(f.flat_pieces_removed) + " flat closed piece" + (f.flat_pieces_removed == 1 ? "" : "s") +
-                   " removed, ";
+      if (f.flat_pieces_opened)
+        handles += std::to_string(f.flat_pieces_opened) + " flat closed piece" + (f.flat_pieces_opened == 1 ? "" : "s") +
+                   " opened, ";
       std::printf("  repair        %zu holes filled (%zu triangles), %zu pinches resolved, %s%zu loops left open%s\n",
                   f.holes_filled, f.hole_triangles, f.pinches_resolved, handles.c_str(), f.holes_left,
                   f.holes_left ? (" (largest " + std::to_string(f.largest_hole_left) + " edges, " +

@@ -85,7 +85,7 @@ nlohmann::json to_json(const SurfaceStats& s) {
           {"narrow_loops", {{"count", s.narrow_loops.count}, {"width_over_L", s.narrow_loops.width},
                             {"edges", s.narrow_loops.edges}}},
           {"components_flipped", s.components_flipped},
-          {"flat_pieces_removed", s.flat_pieces_removed},
+          {"flat_pieces_opened", s.flat_pieces_opened},
           {"unused_points", s.unused_points},
           {"components_removed", s.components_removed},
           {"component_triangles_removed", s.component_triangles_removed},

@@ -108,7 +108,7 @@ class pm_triangulate_stats(Structure):
         ("small_handles_removed", c_uint64),
         ("shortened_limits", c_uint64),
         ("near_duplicates", c_uint64),
-        ("flat_pieces_removed", c_uint64),
+        ("flat_pieces_opened", c_uint64),
     ]
 
 

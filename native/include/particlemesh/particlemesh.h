@@ -235,8 +235,9 @@ typedef struct pm_triangulate_stats {
   uint64_t near_duplicates; /**< near copies set aside (local spacing; at least a
                                  quarter of the points with a neighbour ten times nearer than
                                  every other: each such pair is one particle) */
-  uint64_t flat_pieces_removed; /**< closed pieces that enclosed no volume (a patch and its
-                                     reversed copy, on particles exactly in one plane), removed */
+  uint64_t flat_pieces_opened; /**< closed pieces that enclosed no volume (a patch and its
+                                    reversed copy, on particles exactly in one plane), opened:
+                                    the side facing as the particles' normals kept */
 } pm_triangulate_stats;
 
 PM_EXPORT void pm_triangulate_options_init(pm_triangulate_options* options);

@@ -117,7 +117,7 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
       s.small_handles_removed = r.surface.small_handles_removed;
       s.shortened_limits = r.triangulation.shortened_limits;
       s.near_duplicates = r.triangulation.near_duplicates;
-      s.flat_pieces_removed = r.surface.flat_pieces_removed;
+      s.flat_pieces_opened = r.surface.flat_pieces_opened;
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();

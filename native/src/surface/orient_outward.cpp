@@ -67,10 +67,67 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
         ++flat->pieces;
       }
     if (flat->pieces > 0) {
-      for (size_t v = 0; v < n; ++v) flat->points += gone[root[v]];
-      const size_t before = T.size();
-      T.erase(std::remove_if(T.begin(), T.end(), [&](const Triangle& t) { return gone[root[t[0]]] != 0; }), T.end());
-      flat->triangles = before - T.size();
+      // Per flat piece (in root order), its triangles; they are few and rare: serial.
+      std::vector<std::vector<size_t>> of(n);
+      for (size_t i = 0; i < T.size(); ++i)
+        if (gone[root[T[i][0]]]) of[root[T[i][0]]].push_back(i);
+      std::vector<uint8_t> drop(T.size(), 0);
+      for (size_t r = 0; r < n; ++r) {
+        if (!gone[r]) continue;
+        std::vector<size_t> side;
+        if (flat->sides)
+          for (size_t i : of[r]) {
+            const Triangle& t = T[i];
+            const Vec3 f = cross(P[t[1]] - P[t[0]], P[t[2]] - P[t[0]]);
+            if (dot(f, (*flat->sides)[t[0]] + (*flat->sides)[t[1]] + (*flat->sides)[t[2]]) > 0) side.push_back(i);
+          }
+        // The side's outline: its half-edges whose reverse it does not hold; simple loops
+        // when no corner starts two of them.
+        std::vector<std::pair<uint32_t, uint32_t>> half;
+        for (size_t i : side)
+          for (int k = 0; k < 3; ++k) half.push_back({T[i][k], T[i][(k + 1) % 3]});
+        std::sort(half.begin(), half.end());
+        std::vector<std::pair<uint32_t, uint32_t>> outline;
+        for (const auto& [a, b] : half)
+          if (!std::binary_search(half.begin(), half.end(), std::make_pair(b, a))) outline.push_back({a, b});
+        bool simple = !side.empty() && side.size() < of[r].size() && !outline.empty();
+        for (size_t k = 1; k < outline.size() && simple; ++k) simple = outline[k].first != outline[k - 1].first;
+        if (!simple) {
+          ++flat->removed;
+          side.clear();
+        } else {
+          // The loops: each corner starts one outline edge, so following them closes cycles.
+          std::vector<uint8_t> walked(outline.size(), 0);
+          for (size_t k = 0; k < outline.size(); ++k) {
+            if (walked[k]) continue;
+            size_t edges = 0;
+            for (size_t at = k; !walked[at];) {
+              walked[at] = 1;
+              ++edges;
+              const auto next = std::lower_bound(outline.begin(), outline.end(), std::make_pair(outline[at].second, 0u));
+              if (next == outline.end() || next->first != outline[at].second) break;
+              at = size_t(next - outline.begin());
+            }
+            flat->loops.push_back(edges);
+          }
+        }
+        std::sort(side.begin(), side.end());
+        for (size_t i : of[r])
+          if (!std::binary_search(side.begin(), side.end(), i)) drop[i] = 1;
+      }
+      std::vector<uint8_t> used(n, 0);
+      for (size_t i = 0; i < T.size(); ++i)
+        if (!drop[i])
+          for (uint32_t v : T[i]) used[v] = 1;
+      for (size_t v = 0; v < n; ++v) flat->points += gone[root[v]] && !used[v];
+      size_t w = 0;
+      for (size_t i = 0; i < T.size(); ++i)
+        if (!drop[i]) T[w++] = T[i];
+      flat->triangles = T.size() - w;
+      T.resize(w);
+      // The kept sides are open now: none is turned below.
+      for (size_t v = 0; v < n; ++v)
+        if (gone[v]) open[v] = 1;
     }
   }
   if (!turn) return 0;

@@ -20,10 +20,17 @@ namespace PM_NAMESPACE::detail {
 /// does not depend on the thread count.
 /// With `flat` given, closed components that enclose no volume (flat pillows: a patch and a
 /// reversed copy of it, as points exactly in one plane, e.g. quantized coordinates, can give)
-/// are taken out first, their triangles removed (the rest keep their order) and counted in
-/// `flat`; with `turn` false nothing is turned.
+/// are opened first: of each, the side that faces as its corners' `sides` normals (the
+/// particles') is kept, the other side's triangles removed (the rest keep their order); where
+/// that side is not a surface with simple outlines (or no `sides` are given), the whole piece
+/// goes. With `turn` false nothing is turned.
 struct FlatPieces {
-  size_t pieces = 0, triangles = 0, points = 0;
+  const std::vector<Vec3>* sides = nullptr;  ///< in: the particles' normals
+  size_t pieces = 0;                         ///< flat closed pieces found
+  size_t removed = 0;                        ///< of those, removed whole
+  size_t triangles = 0;                      ///< triangles removed
+  size_t points = 0;                         ///< particles left in no triangle
+  std::vector<size_t> loops;                 ///< the edges of each outline the kept sides have
 };
 size_t orient_closed_components_outward(const std::vector<Vec3>& positions, std::vector<Triangle>& triangles,
                                         const std::vector<uint64_t>& boundary,

@@ -169,11 +169,12 @@ SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options
     st.seconds_extraction = bs.seconds_candidates + bs.seconds_growth;
     st.seconds_repair = bs.seconds_repair;
     t0 = Clock::now();
-    // Flat closed pieces (a patch and its reversed copy) out, whichever way the rest faces.
+    // Flat closed pieces (a patch and its reversed copy) opened, whichever way the rest faces.
     detail::FlatPieces flat;
+    flat.sides = &normals;
     bs.components_flipped =
         detail::orient_closed_components_outward(P, tris, bs.boundary, &vertex_normals, options.orient, &flat);
-    st.flat_pieces_removed = flat.pieces;
+    st.flat_pieces_opened = flat.pieces;
     st.seconds_orient = seconds_since(t0);
     tracker.check();
     st.candidates = bs.candidates;
@@ -185,9 +186,16 @@ SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options
     st.small_handles_removed = bs.small_handles_removed;
     st.holes_filled = bs.holes_filled;
     st.hole_triangles = bs.hole_triangles;
-    st.holes_left = bs.holes_left;
+    // A flat piece's kept side is open: its outlines are loops left open too.
+    st.holes_left = bs.holes_left + flat.loops.size();
     st.looks_like_volume = st.holes_left > 0 && st.rejected_conormal * 20 > result.triangulation.kept * 7;
     st.largest_hole_left = bs.largest_hole_left;
+    for (size_t edges : flat.loops) {
+      st.largest_hole_left = std::max(st.largest_hole_left, edges);
+      bs.holes_left_edges.push_back(edges);
+      if (bs.open_loops.size() < 1000) bs.open_loops.push_back({edges, INFINITY});  // width not measured
+    }
+    std::sort(bs.holes_left_edges.begin(), bs.holes_left_edges.end());
     st.components_flipped = bs.components_flipped;
     st.unused_points = bs.unused_points + flat.points;
     st.components_removed = bs.pieces.removed;

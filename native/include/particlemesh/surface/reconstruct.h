@@ -146,10 +146,12 @@ struct SurfaceStats {
   /// gaps are loops of a few edges, its real openings and outlines long ones).
   std::vector<size_t> holes_left_edges;
   size_t components_flipped = 0;  ///< closed components turned outward
-  /// Closed pieces that enclosed no volume, removed: a patch and a reversed copy of it, which
-  /// particles exactly in one plane (quantized coordinates: a float32 UTM northing, a LAS
-  /// file's integer steps) can close into; their particles are then unused.
-  size_t flat_pieces_removed = 0;
+  /// Closed pieces that enclosed no volume, opened: a patch and a reversed copy of it, which
+  /// particles exactly in one plane (quantized coordinates: a float32 UTM northing, a CAD
+  /// model's faces) can close into. The side facing as the particles' normals is kept, an open
+  /// piece (its outline counted among the loops left open); where that side is not a surface
+  /// with simple outlines the piece is removed and its particles are unused.
+  size_t flat_pieces_opened = 0;
   size_t unused_points = 0;       ///< distinct particles in no triangle
   size_t components_removed = 0;  ///< pieces removed for min_component_triangles
   size_t component_triangles_removed = 0;  ///< their triangles

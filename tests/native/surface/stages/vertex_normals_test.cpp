@@ -51,11 +51,11 @@ TEST(OrientOutward, ClosedComponentsTurnOutwardOpenOnesStay) {
   for (size_t v = 4; v < P.size(); ++v) EXPECT_EQ(normals[v].z, 1);
 }
 
-TEST(OrientOutward, FlatClosedPiecesAreRemoved) {
+TEST(OrientOutward, FlatClosedPiecesAreOpened) {
   // Two patches closed onto their reversed copies (pillows of no volume): one in a plane of
   // coordinates (its volume exactly 0), one in a tilted plane (0 within rounding). Beside
   // them a tetrahedron 1e-3 as high as it is wide (flat-looking, but a solid) and an open
-  // triangle: those stay, and the tetrahedron is turned outward as without the removal.
+  // triangle: those stay, and the tetrahedron is turned outward as without the pillows.
   std::vector<Vec3> P = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};  // a square in z = 0
   const Vec3 u = normalized(Vec3{1, 0.3, 0.7}), w = normalized(cross(u, Vec3{0.2, 1, 0.1}));
   for (const Vec3& q : {Vec3{0, 0, 0}, Vec3{1, 0, 0}, Vec3{1, 1, 0}, Vec3{0, 1, 0}})
@@ -65,30 +65,43 @@ TEST(OrientOutward, FlatClosedPiecesAreRemoved) {
   for (const Vec3& q : {Vec3{20, 0, 0}, Vec3{21, 0, 0}, Vec3{20, 1, 0}}) P.push_back(q);
   std::vector<Triangle> tris;
   for (uint32_t b : {0u, 4u}) {
-    const std::vector<Triangle> top = {{b, b + 1, b + 2}, {b, b + 2, b + 3}};
-    for (const Triangle& t : top) tris.push_back(t);
-    tris.push_back({b, b + 2, b + 1});  // the copy reversed, split along the other diagonal
-    tris.push_back({b, b + 3, b + 2});
+    tris.push_back({b, b + 1, b + 2});  // facing +z (+u x w)
+    tris.push_back({b, b + 2, b + 3});
+    tris.push_back({b, b + 3, b + 1});  // the copy reversed, split along the other diagonal
+    tris.push_back({b + 1, b + 3, b + 2});
   }
   const std::vector<Triangle> thin_inward = {{8, 9, 10}, {8, 11, 9}, {8, 10, 11}, {9, 11, 10}};
   for (const Triangle& t : thin_inward) tris.push_back(t);
   tris.push_back({12, 13, 14});
   const std::vector<uint64_t> boundary = {(uint64_t(12) << 32) | 13, (uint64_t(13) << 32) | 14, (uint64_t(14) << 32) | 12};
+  std::vector<Triangle> alone(tris.begin() + 8, tris.end());
+  EXPECT_EQ(orient_closed_components_outward(P, alone, boundary), 1u);
+  EXPECT_NE(alone[0], thin_inward[0]);
+
+  // The particles' normals say which side: +z for the first square, -(u x w) for the second.
+  std::vector<Vec3> sides(P.size(), Vec3{0, 0, 1});
+  for (uint32_t v = 4; v < 8; ++v) sides[v] = Vec3{} - cross(u, w);
   FlatPieces flat;
+  flat.sides = &sides;
   std::vector<Triangle> kept = tris;
   EXPECT_EQ(orient_closed_components_outward(P, kept, boundary, nullptr, true, &flat), 1u);
   EXPECT_EQ(flat.pieces, 2u);
-  EXPECT_EQ(flat.triangles, 8u);
-  EXPECT_EQ(flat.points, 8u);
-  ASSERT_EQ(kept.size(), 5u);
-  std::vector<Triangle> alone(tris.begin() + 8, tris.end());
-  EXPECT_EQ(orient_closed_components_outward(P, alone, boundary), 1u);
-  EXPECT_EQ(kept, alone);  // the rest as without the pillows, in order
-  EXPECT_NE(kept[0], thin_inward[0]);
-  // Without turning: the pillows go all the same, nothing is turned.
-  FlatPieces flat2;
+  EXPECT_EQ(flat.removed, 0u);
+  EXPECT_EQ(flat.triangles, 4u);
+  EXPECT_EQ(flat.points, 0u);
+  EXPECT_EQ(flat.loops, (std::vector<size_t>{4, 4}));
+  std::vector<Triangle> want = {tris[0], tris[1], tris[6], tris[7]};
+  want.insert(want.end(), alone.begin(), alone.end());
+  EXPECT_EQ(kept, want);  // the rest as without the pillows, in order
+
+  // Without the particles' normals, or turning off: the pillows go whole; nothing is turned.
+  FlatPieces blind;
   std::vector<Triangle> unturned = tris;
-  EXPECT_EQ(orient_closed_components_outward(P, unturned, boundary, nullptr, false, &flat2), 0u);
-  EXPECT_EQ(flat2.pieces, 2u);
+  EXPECT_EQ(orient_closed_components_outward(P, unturned, boundary, nullptr, false, &blind), 0u);
+  EXPECT_EQ(blind.pieces, 2u);
+  EXPECT_EQ(blind.removed, 2u);
+  EXPECT_EQ(blind.triangles, 8u);
+  EXPECT_EQ(blind.points, 8u);
+  EXPECT_TRUE(blind.loops.empty());
   EXPECT_EQ(std::vector<Triangle>(unturned.begin(), unturned.begin() + 4), thin_inward);
 }
