@@ -42,16 +42,28 @@ Crowd dense_patch_in_sparse_field() {
   return c;
 }
 
+/// The crowd in a grid: every point its own representative, the radii in sorted order.
+struct CrowdGrid {
+  Crowd c = dense_patch_in_sparse_field();
+  NeighborGrid grid{c.points.data(), c.points.size(), 0.05};
+  std::vector<uint32_t> rep;
+  std::vector<double> radius;
+  CrowdGrid() {
+    for (uint32_t s = 0; s < c.points.size(); ++s) {
+      rep.push_back(s);
+      radius.push_back(c.radius[grid.original_index(s)]);
+    }
+  }
+};
+
 }  // namespace
 
 TEST(NeighborLists, ShortenedRadiiHoldEveryPairWithinEither) {
-  const Crowd c = dense_patch_in_sparse_field();
-  const size_t n = c.points.size();
-  const NeighborGrid grid(c.points.data(), n, 0.05);
-  std::vector<uint32_t> rep(n);
-  for (uint32_t s = 0; s < n; ++s) rep[s] = s;
-  std::vector<double> radius(n);
-  for (uint32_t s = 0; s < n; ++s) radius[s] = c.radius[grid.original_index(s)];
+  const CrowdGrid g;
+  const NeighborGrid& grid = g.grid;
+  const std::vector<uint32_t>& rep = g.rep;
+  const std::vector<double>& radius = g.radius;
+  const size_t n = rep.size();
   const ProgressCallback none;  // the tracker keeps a reference: a temporary would dangle
   detail::ProgressTracker tracker(none);
 
@@ -104,18 +116,17 @@ TEST(NeighborLists, ShortenedRadiiHoldEveryPairWithinEither) {
 }
 
 TEST(NeighborLists, NothingCrowdedNothingShortened) {
-  const Crowd c = dense_patch_in_sparse_field();
-  const size_t n = c.points.size();
-  const NeighborGrid grid(c.points.data(), n, 0.05);
-  std::vector<uint32_t> rep(n);
-  for (uint32_t s = 0; s < n; ++s) rep[s] = s;
-  std::vector<double> radius(n);
-  for (uint32_t s = 0; s < n; ++s) radius[s] = c.radius[grid.original_index(s)];
+  const CrowdGrid g;
+  const NeighborGrid& grid = g.grid;
+  const std::vector<uint32_t>& rep = g.rep;
+  const std::vector<double>& radius = g.radius;
+  const size_t n = rep.size();
   const ProgressCallback none;  // the tracker keeps a reference: a temporary would dangle
   detail::ProgressTracker tracker(none);
   std::vector<double> kept = radius;
   const detail::NeighborLists shortening = detail::build_neighbor_lists(grid, rep, kept, 100000, true, tracker);
-  const detail::NeighborLists plain = detail::build_neighbor_lists(grid, rep, radius, 100000, false, tracker);
+  std::vector<double> same = radius;
+  const detail::NeighborLists plain = detail::build_neighbor_lists(grid, rep, same, 100000, false, tracker);
   EXPECT_EQ(kept, radius);
   EXPECT_EQ(shortening.shortened, 0u);
   EXPECT_EQ(shortening.offset, plain.offset);
