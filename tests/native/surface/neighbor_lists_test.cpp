@@ -58,14 +58,18 @@ struct CrowdGrid {
 
 }  // namespace
 
-TEST(NeighborLists, ShortenedRadiiHoldEveryPairWithinEither) {
+class NeighborLists : public ::testing::Test {
+ protected:
   const CrowdGrid g;
   const NeighborGrid& grid = g.grid;
   const std::vector<uint32_t>& rep = g.rep;
   const std::vector<double>& radius = g.radius;
-  const size_t n = rep.size();
+  const size_t n = g.rep.size();
   const ProgressCallback none;  // the tracker keeps a reference: a temporary would dangle
-  detail::ProgressTracker tracker(none);
+  detail::ProgressTracker tracker{none};
+};
+
+TEST_F(NeighborLists, ShortenedRadiiHoldEveryPairWithinEither) {
 
   // Without shortening the limit fails, naming the most any point holds.
   std::vector<double> unchanged = radius;
@@ -115,14 +119,7 @@ TEST(NeighborLists, ShortenedRadiiHoldEveryPairWithinEither) {
   EXPECT_LE(pairs, 2 * 64 * n);
 }
 
-TEST(NeighborLists, NothingCrowdedNothingShortened) {
-  const CrowdGrid g;
-  const NeighborGrid& grid = g.grid;
-  const std::vector<uint32_t>& rep = g.rep;
-  const std::vector<double>& radius = g.radius;
-  const size_t n = rep.size();
-  const ProgressCallback none;  // the tracker keeps a reference: a temporary would dangle
-  detail::ProgressTracker tracker(none);
+TEST_F(NeighborLists, NothingCrowdedNothingShortened) {
   std::vector<double> kept = radius;
   const detail::NeighborLists shortening = detail::build_neighbor_lists(grid, rep, kept, 100000, true, tracker);
   std::vector<double> same = radius;
