@@ -141,6 +141,25 @@ def test_a_tunnel_at_a_rim_thinner_than_the_spacing_is_taken_out(pm):
     assert mesh.stats["unused_points"] == 0
 
 
+def test_near_copies_and_crowded_points_show_in_the_stats(pm):
+    """The stats appended last reach Python intact (the ctypes struct matches the C ABI's):
+    every particle of a sphere with a copy 0.02 spacings away is one particle, the copies set
+    aside; with a neighbour limit of 8, the crowded particles' edge limits are shortened and
+    counted; the last field, flat_pieces_opened, reads 0 on both."""
+    p = fibonacci_sphere(2000)
+    r0 = pm.estimate_spacing(p)
+    d = np.random.default_rng(4).normal(size=p.shape)
+    copies = p + 0.02 * r0 * d / np.linalg.norm(d, axis=1)[:, None]
+    twinned = pm.triangulate(np.r_[p, copies])
+    alone = pm.triangulate(p)
+    assert twinned.stats["near_duplicates"] == 2000 and twinned.stats["duplicate_points"] == 0
+    assert (twinned.triangles == alone.triangles).all()
+    assert twinned.stats["shortened_limits"] == 0 and twinned.stats["flat_pieces_opened"] == 0
+    crowded = pm.triangulate(p, max_neighbors=8)
+    assert 1000 < crowded.stats["shortened_limits"] <= 2000
+    assert crowded.stats["near_duplicates"] == 0 and crowded.stats["flat_pieces_opened"] == 0
+
+
 def test_small_pieces_removed_on_request(pm):
     p = fibonacci_sphere(3000)
     r0 = np.sqrt(4 * np.pi / 3000)
