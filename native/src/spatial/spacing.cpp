@@ -8,6 +8,7 @@
 #include <string>
 #include <utility>
 
+#include "core/disjoint_sets.h"
 #include "core/length_limits.h"
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
@@ -233,18 +234,9 @@ void find_twins(const NeighborGrid& grid, const std::vector<uint32_t>& rep, cons
 /// Each group of points joined by twins' links (and exact copies) as its lowest input index:
 /// twin[i] becomes that index.
 void merge_twins(std::vector<uint32_t>& twin) {
-  const size_t n = twin.size();
-  std::vector<uint32_t> root(n);
-  std::iota(root.begin(), root.end(), 0u);
-  const auto find = [&](uint32_t i) {
-    while (root[i] != i) i = root[i] = root[root[i]];
-    return i;
-  };
-  for (uint32_t i = 0; i < n; ++i) {
-    const uint32_t a = find(i), b = find(twin[i]);
-    if (a != b) root[std::max(a, b)] = std::min(a, b);  // the lower index is the root
-  }
-  for (uint32_t i = 0; i < n; ++i) twin[i] = find(i);
+  DisjointSets groups(twin.size());
+  for (uint32_t i = 0; i < twin.size(); ++i) groups.unite(i, twin[i]);
+  for (uint32_t i = 0; i < twin.size(); ++i) twin[i] = groups.find(i);
 }
 
 }  // namespace

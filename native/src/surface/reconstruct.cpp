@@ -248,35 +248,27 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     std::vector<uint32_t> twin_of;
     SpacingEstimate est = detail::estimate_spacing_impl(cloud.positions.data(), n, tracker, 0.0, 0.15, 1, &twin_of);
     if (twin_of.empty()) return reconstruct(cloud, options, tracker, &est);
-    // kept: the input index of each particle meshed; first: per input index, the input index
+    // kept: the input index of each particle meshed; at: per input index, the place in `kept`
     // of the particle that stands for it. Copies of copies (a second offset, ten times the
     // first) are merged round by round, as long as the rest is twinned.
-    std::vector<uint32_t> kept(n), first(n);
+    std::vector<uint32_t> kept(n), at(n);
     std::iota(kept.begin(), kept.end(), 0u);
-    std::iota(first.begin(), first.end(), 0u);
+    std::iota(at.begin(), at.end(), 0u);
     size_t exact = 0;
     PointCloud reduced;
     for (int round = 0; round < 8 && !twin_of.empty(); ++round) {
       exact += est.duplicate_points;
-      // twin_of[k] (an index into this round's cloud, whose particles ascend in input index)
-      // is the lowest of k's group: the group's lowest input index stands for it.
-      std::vector<uint32_t> next_kept;
+      // twin_of[k] (a place in this round's cloud) is the lowest of k's group, which stands
+      // for it; `moved`: each standing particle's place in the next round's cloud.
+      std::vector<uint32_t> next_kept, moved(twin_of.size());
       for (size_t k = 0; k < twin_of.size(); ++k)
-        if (twin_of[k] == k) next_kept.push_back(kept[k]);
-      for (uint32_t i = 0; i < n; ++i) {
-        // first[i] is in `kept`; its position there, k, has twin_of[k] standing for it.
-        const size_t k = size_t(std::lower_bound(kept.begin(), kept.end(), first[i]) - kept.begin());
-        first[i] = kept[twin_of[k]];
-      }
+        if (twin_of[k] == k) {
+          moved[k] = uint32_t(next_kept.size());
+          next_kept.push_back(kept[k]);
+        }
+      for (uint32_t& k : at) k = moved[twin_of[k]];
       kept = std::move(next_kept);
-      PointCloud smaller;
-      smaller.positions.resize(kept.size());
-      if (cloud.has_normals()) smaller.normals.resize(kept.size());
-      for (size_t k = 0; k < kept.size(); ++k) {
-        smaller.positions[k] = cloud.positions[kept[k]];
-        if (cloud.has_normals()) smaller.normals[k] = cloud.normals[kept[k]];
-      }
-      reduced = std::move(smaller);
+      reduced = select_points(cloud, kept);
       if (reduced.size() < 3) break;
       est = detail::estimate_spacing_impl(reduced.positions.data(), reduced.size(), tracker, 0.0, 0.15, 1, &twin_of);
     }
@@ -284,8 +276,7 @@ SurfaceResult reconstruct_surface(const PointCloud& cloud, const SurfaceOptions&
     for (Triangle& t : r.mesh.triangles)
       for (uint32_t& v : t) v = kept[v];
     std::vector<Vec3> normals(n);
-    for (uint32_t i = 0; i < n; ++i)
-      normals[i] = r.mesh.normals[size_t(std::lower_bound(kept.begin(), kept.end(), first[i]) - kept.begin())];
+    for (uint32_t i = 0; i < n; ++i) normals[i] = r.mesh.normals[at[i]];
     r.mesh.normals = std::move(normals);
     r.mesh.positions = cloud.positions;
     r.mesh.attributes = cloud.attributes;
