@@ -2,7 +2,10 @@
 // ModifiedButterflyT. The scheme is linear in the vertex data and its stencils depend on the
 // connectivity only, so attributes are interpolated by running the same subdivider on copies
 // of the connectivity whose "points" hold three attribute channels each; the copies refine
-// identically (checked) and run in parallel with the positions.
+// identically (checked) and run in parallel with the positions. The triangles come out in
+// the order and layout Loop's do (children of control triangle f at 4f..4f+3, corners as in
+// smooth/subdivide.h), rebuilt level by level from the faces OpenMesh splits in place.
+#include <atomic>
 #include <chrono>
 #include <string>
 
@@ -40,6 +43,63 @@ std::vector<Triangle> triangles_of(const ButterflyMesh& m) {
     t[f] = {uint32_t(a), uint32_t(b), uint32_t(c)};  // h, next(h), next(next(h)): the face's winding
   }
   return t;
+}
+
+/// The children of each canonical triangle of the level before, in Loop's order and layout
+/// (see SmoothResult::mesh in subdivide.h): a (a, ab, ca), b (ab, b, bc), c (ca, bc, c) and
+/// the middle (bc, ca, ab). OpenMesh splits a face in place: it keeps face f as the middle
+/// child and appends the three corner children as faces n + 3f .. n + 3f + 2, and original
+/// vertices keep their indices; both are checked, as is every child's winding.
+/// parent_face[i]: OpenMesh's face of parents[i]; child_face gets the same for the children.
+std::vector<Triangle> canonical_children(const std::vector<Triangle>& parents, const std::vector<uint32_t>& parent_face,
+                                         const std::vector<Triangle>& faces, std::vector<uint32_t>& child_face) {
+  const size_t n = parents.size();
+  if (faces.size() != 4 * n) throw Error(Status::Internal, "butterfly: a level did not split every face in four");
+  std::vector<Triangle> out(4 * n);
+  child_face.assign(4 * n, 0);
+  std::atomic<bool> bad{false};
+  // The rotation of `t` that has vertex v at position `at`; bad when v is not a corner.
+  auto rotated = [&](const Triangle& t, uint32_t v, int at) {
+    for (int r = 0; r < 3; ++r)
+      if (t[size_t(r)] == v) return Triangle{t[size_t((r - at + 3) % 3)], t[size_t((r - at + 4) % 3)], t[size_t((r - at + 5) % 3)]};
+    bad = true;
+    return t;
+  };
+  auto same_cycle = [](const Triangle& a, const Triangle& b) {
+    for (int r = 0; r < 3; ++r)
+      if (a[0] == b[size_t(r)] && a[1] == b[size_t((r + 1) % 3)] && a[2] == b[size_t((r + 2) % 3)]) return true;
+    return false;
+  };
+  parallel_blocks(n, 4096, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) {
+      const Triangle& p = parents[i];
+      const size_t f = parent_face[i];
+      const Triangle* corner[3] = {nullptr, nullptr, nullptr};
+      for (size_t k = 0; k < 3; ++k) {
+        const Triangle& c = faces[n + 3 * f + k];
+        for (size_t j = 0; j < 3; ++j)
+          if (c[0] == p[j] || c[1] == p[j] || c[2] == p[j]) {
+            corner[j] = &c;
+            child_face[4 * i + j] = uint32_t(n + 3 * f + k);
+          }
+      }
+      if (!corner[0] || !corner[1] || !corner[2]) {
+        bad = true;
+        continue;
+      }
+      const Triangle a = rotated(*corner[0], p[0], 0), b = rotated(*corner[1], p[1], 1), c = rotated(*corner[2], p[2], 2);
+      const uint32_t ab = a[1], ca = a[2], bc = b[2];
+      const Triangle middle{bc, ca, ab};
+      if (b[0] != ab || c[0] != ca || c[1] != bc || !same_cycle(middle, faces[f])) bad = true;
+      out[4 * i] = a;
+      out[4 * i + 1] = b;
+      out[4 * i + 2] = c;
+      out[4 * i + 3] = middle;
+      child_face[4 * i + 3] = uint32_t(f);
+    }
+  });
+  if (bad) throw Error(Status::Internal, "butterfly: OpenMesh split a face other than the way its children are ordered");
+  return out;
 }
 
 }  // namespace
@@ -97,12 +157,17 @@ void butterfly_subdivide(const ControlMesh& control, const SmoothOptions& option
   for (size_t m = 0; m < meshes.size(); ++m) subdividers[m].attach(meshes[m]);
   double total = 0, done = 0;
   for (int l = 1; l <= options.levels; ++l) total += double(nf) * double(uint64_t(1) << (2 * l));
+  std::vector<Triangle> canonical = control.triangles;
+  std::vector<uint32_t> face_of(nf), child_face;  // OpenMesh's face of each canonical triangle
+  for (size_t f = 0; f < nf; ++f) face_of[f] = uint32_t(f);
   for (int l = 1; l <= options.levels; ++l) {
     const double w = double(nf) * double(uint64_t(1) << (2 * l));
     progress.stage("butterfly level " + std::to_string(l) + " of " + std::to_string(options.levels),
                    0.2 + 0.65 * done / total, 0.2 + 0.65 * (done + w) / total);
     done += w;
     tbb::parallel_for(size_t(0), meshes.size(), [&](size_t m) { subdividers[m](1); });
+    canonical = canonical_children(canonical, face_of, triangles_of(meshes[0]), child_face);
+    face_of.swap(child_face);
     progress.check();
   }
   for (auto& sub : subdividers) sub.detach();
@@ -117,11 +182,12 @@ void butterfly_subdivide(const ControlMesh& control, const SmoothOptions& option
     const auto& p = pm.point(ButterflyMesh::VertexHandle(int(i)));
     out.mesh.positions[i] = {p[0], p[1], p[2]};
   }
-  out.mesh.triangles = triangles_of(pm);
+  const std::vector<Triangle> faces = triangles_of(pm);
+  out.mesh.triangles = std::move(canonical);
   std::vector<double> flat(n_out * size_t(channels));
   for (int m = 0; m < extra; ++m) {
     const ButterflyMesh& am = meshes[size_t(1 + m)];
-    if (am.n_vertices() != n_out || triangles_of(am) != out.mesh.triangles)
+    if (am.n_vertices() != n_out || triangles_of(am) != faces)
       throw Error(Status::Internal, "the butterfly attribute mesh refined differently from the positions");
     for (size_t i = 0; i < n_out; ++i) {
       const auto& p = am.point(ButterflyMesh::VertexHandle(int(i)));

@@ -779,6 +779,60 @@ TEST(SmoothInput, InconsistentOrientationIsRepairedOutward) {
   EXPECT_TRUE(topology_report(p.mesh).consistently_oriented);
 }
 
+// The layout smooth/subdivide.h promises for both schemes: the children of input triangle f
+// are output triangles f * 4^levels onward, each level's four children of (a, b, c) being
+// (a, ab, ca), (ab, b, bc), (ca, bc, c), (bc, ca, ab). Checked by each output corner's
+// weights over its input triangle's corners (times 2^levels, so integers): one output vertex
+// per point of the input triangle, and the input's own corners where the weights are a unit.
+TEST(SmoothLayout, ChildrenOfEachInputTriangleFollowOneLayout) {
+  TriMesh sphere = irregular_sphere(1, 6, 0.05, 5);
+  const std::set<size_t> flipped{3, 10, 17};  // the repair turns these back: corners (a, c, b)
+  for (size_t f : flipped) std::swap(sphere.triangles[f][1], sphere.triangles[f][2]);
+  using Weights = std::array<int, 3>;
+  using Corners = std::array<Weights, 3>;
+  for (const bool closed : {true, false}) {
+    const TriMesh m = closed ? sphere : flat_patch(5, 4);
+    for (const SmoothOptions& o : {loop(1), loop(2, true), loop(3), butterfly(1), butterfly(2), butterfly(3)}) {
+      SCOPED_TRACE(std::string(closed ? "sphere" : "patch") + (o.scheme == SmoothScheme::Loop ? " loop " : " butterfly ") +
+                   std::to_string(o.levels));
+      const SmoothResult r = smooth_mesh(m, o);
+      EXPECT_EQ(r.stats.reoriented_triangles, closed ? flipped.size() : 0u);
+      const size_t k = size_t(1) << (2 * o.levels);
+      ASSERT_EQ(r.mesh.triangles.size(), m.triangles.size() * k);
+      std::vector<Corners> layout{{Weights{1, 0, 0}, Weights{0, 1, 0}, Weights{0, 0, 1}}};
+      for (int l = 0; l < o.levels; ++l) {
+        std::vector<Corners> next;
+        for (const Corners& t : layout) {
+          auto sum = [&](int i, int j) { return Weights{t[i][0] + t[j][0], t[i][1] + t[j][1], t[i][2] + t[j][2]}; };
+          const Weights a = sum(0, 0), b = sum(1, 1), c = sum(2, 2), ab = sum(0, 1), bc = sum(1, 2), ca = sum(2, 0);
+          next.insert(next.end(), {Corners{a, ab, ca}, Corners{ab, b, bc}, Corners{ca, bc, c}, Corners{bc, ca, ab}});
+        }
+        layout.swap(next);
+      }
+      const int unit = 1 << o.levels;
+      size_t mismatches = 0;
+      for (size_t f = 0; f < m.triangles.size(); ++f) {
+        Triangle corners = m.triangles[f];
+        if (closed && flipped.count(f)) std::swap(corners[1], corners[2]);
+        std::map<Weights, uint32_t> vertex_at;
+        std::set<uint32_t> vertices;
+        for (size_t c = 0; c < k; ++c)
+          for (int j = 0; j < 3; ++j) {
+            const Weights& w = layout[c][size_t(j)];
+            const uint32_t v = r.mesh.triangles[f * k + c][size_t(j)];
+            const auto [it, fresh] = vertex_at.emplace(w, v);
+            if (fresh) vertices.insert(v);
+            mismatches += it->second != v;
+            for (int i = 0; i < 3; ++i)
+              if (w[size_t(i)] == unit) mismatches += r.original_vertex.at(v) != corners[size_t(i)];
+          }
+        mismatches += vertices.size() != vertex_at.size();  // one vertex per point
+      }
+      EXPECT_EQ(mismatches, 0u);
+    }
+  }
+}
+
 TEST(SmoothInput, BadMeshesGiveClearErrors) {
   const TriMesh tet = [] {
     TriMesh m;

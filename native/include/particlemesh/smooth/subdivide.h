@@ -153,6 +153,13 @@ struct SmoothResult {
   /// otherwise area-weighted averages of the adjacent triangles' normals), triangles wound
   /// like the (repaired) input, and every input attribute carried through with the same
   /// scheme as the positions (evaluated at the limit when the positions are).
+  ///
+  /// Both schemes order the triangles alike, so what belongs to an input triangle (a
+  /// material, texture coordinates) follows it: the children of input triangle f are
+  /// triangles f * 4^levels to (f + 1) * 4^levels - 1, and each level's four children of a
+  /// triangle (a, b, c), with ab, bc and ca its edges' new vertices, are (a, ab, ca),
+  /// (ab, b, bc), (ca, bc, c) and (bc, ca, ab) in that order. (a, b, c) are the input
+  /// triangle's corners, or (a, c, b) for a triangle the orientation repair turned.
   TriMesh mesh;
   /// Output vertex i < original_vertex.size() is the image of input vertex
   /// original_vertex[i] (the identity when no vertex was dropped); later vertices are new.
