@@ -250,21 +250,34 @@ def positions(mesh):
 def triangles(mesh):
     """The mesh's triangles (F, 3) int32: its own faces when all are triangles, else Blender's
     tessellation (loop_triangles) of its polygons."""
+    return triangle_corners(mesh)[0]
+
+
+def triangle_corners(mesh):
+    """(triangles (F, 3) int32, loops (F, 3) int64, polygon (F,) int64): triangles() with
+    each corner's loop and each triangle's polygon (what belongs to a face or a corner)."""
     polys = len(mesh.polygons)
     if polys == 0:
-        return np.zeros((0, 3), dtype=np.int32)
+        return np.zeros((0, 3), dtype=np.int32), np.zeros((0, 3), dtype=np.int64), np.zeros(0, dtype=np.int64)
     sizes = np.empty(polys, dtype=INDEX)
     mesh.polygons.foreach_get("loop_total", sizes)
     if np.all(sizes == 3):
-        loops = np.empty(len(mesh.loops), dtype=INDEX)
-        mesh.loops.foreach_get("vertex_index", loops)
+        corners = np.empty(len(mesh.loops), dtype=INDEX)
+        mesh.loops.foreach_get("vertex_index", corners)
         starts = np.empty(polys, dtype=INDEX)
         mesh.polygons.foreach_get("loop_start", starts)
-        return loops[starts[:, None] + np.arange(3)].astype(np.int32)
+        loops = starts.astype(np.int64)[:, None] + np.arange(3)
+        return corners[loops].astype(np.int32), loops, np.arange(polys, dtype=np.int64)
     mesh.calc_loop_triangles()
-    out = np.empty(len(mesh.loop_triangles) * 3, dtype=INDEX)
+    n = len(mesh.loop_triangles)
+    out = np.empty(n * 3, dtype=INDEX)
     mesh.loop_triangles.foreach_get("vertices", out)
-    return out.reshape(-1, 3).astype(np.int32)
+    loops = np.empty(n * 3, dtype=INDEX)
+    mesh.loop_triangles.foreach_get("loops", loops)
+    polygon = np.empty(n, dtype=np.int32)
+    mesh.loop_triangles.foreach_get("polygon_index", polygon)
+    return (out.reshape(-1, 3).astype(np.int32), loops.reshape(-1, 3).astype(np.int64),
+            polygon.astype(np.int64))
 
 
 def vertex_normals(mesh):

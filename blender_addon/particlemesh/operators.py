@@ -15,7 +15,7 @@ import bpy
 from bpy.props import BoolProperty, CollectionProperty, EnumProperty, IntProperty, StringProperty
 from bpy_extras.io_utils import ImportHelper
 
-from . import bake, blender_mesh, generate, jobs, live, properties, sources
+from . import bake, blender_mesh, generate, jobs, live, properties, smooth_carry, sources
 from . import particlemesh as pm
 from .properties import CommonProps, PolygonizeProps, SmoothProps, SourceProps, TriangulateProps
 
@@ -286,11 +286,12 @@ class PARTICLEMESH_OT_smooth(_ModalJob, bpy.types.Operator):
         obj = context.active_object
         sources.check_object(obj)
         mesh = obj.data
-        triangles = blender_mesh.triangles(mesh)
+        # Shape keys, vertex groups, materials, UV maps and corner colours go along
+        # (smooth_carry.py); edge data cannot, and is named.
+        triangles, attributes, self._carried = smooth_carry.prepare(obj, mesh)
         if len(triangles) == 0:
             raise sources.SourceError(f"'{obj.name}' has no faces to smooth")
-        source = pm.Mesh(blender_mesh.positions(mesh), triangles,
-                         attributes=blender_mesh.float_point_attributes(mesh))
+        source = pm.Mesh(blender_mesh.positions(mesh), triangles, attributes=attributes)
         self._target = obj.name
         return pm.smooth, (source,), dict(scheme=self.scheme, levels=self.levels)
 
@@ -298,8 +299,15 @@ class PARTICLEMESH_OT_smooth(_ModalJob, bpy.types.Operator):
         obj = bpy.data.objects.get(self._target)
         if obj is None:
             raise sources.SourceError(f"'{self._target}' was deleted meanwhile")
+        carried = self._carried
+        channels = smooth_carry.take_channels(data, carried)
+        smooth_carry.before_write(obj)
         blender_mesh.write(obj.data, data, custom_normals=self.custom_normals)
+        smooth_carry.restore(obj, obj.data, carried, data, channels, self.levels)
         self.report({"INFO"}, f"{obj.name}: {data.triangle_count} triangles")
+        if carried.not_carried:
+            self.report({"WARNING"}, f"{obj.name}: not carried through the subdivision: "
+                                     + "; ".join(carried.not_carried))
 
 
 class PARTICLEMESH_OT_import_cloud(bpy.types.Operator, ImportHelper):

@@ -681,6 +681,99 @@ def test_smooth_loop_multiplies_faces_by_four(pm):
         assert len(obj.data.polygons) == faces
 
 
+def grid_with_everything(cells=7):
+    """A flat grid of cells x cells quads (-1..1) holding what a modelled mesh holds: a UV map
+    (u, v) = ((x + 1) / 2, (y + 1) / 2), moved by 2 in u on odd faces (a seam around each), a
+    material per face parity, shape keys (one moving every vertex up, one a shear of the
+    basis), vertex groups (constant weights) and a seam on one edge."""
+    bpy.ops.mesh.primitive_grid_add(x_subdivisions=cells, y_subdivisions=cells, size=2)
+    obj = bpy.context.active_object
+    mesh = obj.data
+    co = np.array([v.co[:] for v in mesh.vertices])
+    uv = mesh.uv_layers.active.data
+    for face in mesh.polygons:
+        face.material_index = face.index % 2
+        for loop in face.loop_indices:
+            x, y = co[mesh.loops[loop].vertex_index, :2]
+            uv[loop].uv = ((x + 1) / 2 + 2 * (face.index % 2), (y + 1) / 2)
+    for name in ("Even", "Odd"):
+        mesh.materials.append(bpy.data.materials.new(name))
+    whole = obj.vertex_groups.new(name="whole")
+    whole.add(list(range(len(co))), 1.0, "REPLACE")
+    half = obj.vertex_groups.new(name="half")
+    half.add(list(range(len(co))), 0.5, "REPLACE")
+    half.lock_weight = True
+    obj.shape_key_add(name="Basis")
+    up = obj.shape_key_add(name="Up")
+    tilt = obj.shape_key_add(name="Tilt")
+    for i, (x, y, z) in enumerate(co):
+        up.data[i].co = (x, y, z + 0.5)
+        tilt.data[i].co = (x, y, z + 0.1 * x)
+    tilt.relative_key = up
+    tilt.value = 0.3
+    mesh.edges[0].use_seam = True
+    return obj
+
+
+@pytest.mark.parametrize("turned", [False, True])
+def test_smooth_carries_uvs_materials_shape_keys_and_vertex_groups(pm, turned):
+    """What a modelled mesh holds goes through the subdivision: each output face keeps the
+    material and UV island of the input face it lies in; UVs are linear over each input
+    triangle (on a flat regular grid, where neither scheme moves vertices off their place
+    away from the border, exactly (x, y)); shape keys are subdivided as the positions (a
+    shifted or sheared basis stays shifted or sheared); constant weights stay. Seams (edge
+    data) are named as not carried. With one face turned against the rest, the library's
+    orientation repair turns it back, and its corners' UVs follow it."""
+    cells = 7
+    obj = grid_with_everything(cells)
+    if turned:
+        obj.data.polygons[10].flip()
+    carried = pm.smooth_carry.prepare(obj, obj.data)[2]
+    assert carried.not_carried == ["seams (edge data: the subdivided mesh has new edges)"]
+    for scheme, levels in (("LOOP", 1), ("LOOP", 2), ("BUTTERFLY", 1), ("BUTTERFLY", 2)):
+        bpy.ops.ed.undo_push(message="before smooth")
+        assert bpy.ops.particlemesh.smooth("EXEC_DEFAULT", True, scheme=scheme, levels=levels) == {"FINISHED"}
+        obj = bpy.context.active_object
+        mesh = obj.data
+        assert not mesh.validate(verbose=False)
+        co, tris = mesh_arrays(mesh)
+        assert len(tris) == 2 * cells * cells * 4 ** levels
+        # The material and UV island of the input face each output face lies in.
+        centre = co[tris].mean(1)
+        cell = np.floor((centre[:, :2] + 1) / 2 * cells).astype(int)
+        parity = (cell[:, 1] * cells + cell[:, 0]) % 2
+        material = np.empty(len(tris), dtype=np.int32)
+        mesh.polygons.foreach_get("material_index", material)
+        np.testing.assert_array_equal(material, parity)
+        assert [layer.name for layer in mesh.uv_layers] == ["UVMap"] and mesh.uv_layers.active.name == "UVMap"
+        uv = np.empty(2 * len(mesh.loops), dtype=np.float32)
+        mesh.uv_layers.active.data.foreach_get("uv", uv)
+        uv = uv.reshape(-1, 3, 2)
+        np.testing.assert_array_equal(np.floor(uv[:, :, 0] / 2).astype(int), parity[:, None] * np.ones(3, int))
+        at = co[tris][:, :, :2]
+        inside = (np.abs(at) < 1 - 2 / cells - 1e-6).all(2)
+        assert inside.mean() > 0.4
+        np.testing.assert_allclose((uv[..., 0] % 2)[inside], ((at[..., 0] + 1) / 2)[inside], atol=2e-6)
+        np.testing.assert_allclose(uv[..., 1][inside], ((at[..., 1] + 1) / 2)[inside], atol=2e-6)
+        # Shape keys: the same keys, settings and relations, one point per vertex.
+        keys = mesh.shape_keys.key_blocks
+        assert [k.name for k in keys] == ["Basis", "Up", "Tilt"]
+        assert keys["Tilt"].relative_key.name == "Up" and keys["Tilt"].value == pytest.approx(0.3)
+        def key(name):
+            out = np.empty(3 * len(co), dtype=np.float32)
+            keys[name].data.foreach_get("co", out)
+            return out.reshape(-1, 3)
+        np.testing.assert_allclose(key("Basis"), co, atol=1e-6)
+        np.testing.assert_allclose(key("Up"), co + [0, 0, 0.5], atol=1e-6)
+        np.testing.assert_allclose(key("Tilt")[:, 2], co[:, 2] + 0.1 * co[:, 0], atol=1e-6)
+        # Vertex groups: names, lock and constant weights on every vertex.
+        assert [(g.name, g.lock_weight) for g in obj.vertex_groups] == [("whole", False), ("half", True)]
+        weights = {(v.index, g.group): g.weight for v in mesh.vertices for g in v.groups}
+        assert len(weights) == 2 * len(co)
+        assert all(abs(w - (1.0 if group == 0 else 0.5)) < 1e-6 for (_, group), w in weights.items())
+        undo()
+
+
 def lattice(n, spacing=0.1):
     g = np.arange(n, dtype=np.float32) * spacing
     return np.stack(np.meshgrid(g, g, g, indexing="ij"), -1).reshape(-1, 3)

@@ -1,0 +1,230 @@
+"""What a Blender mesh holds beyond its positions, carried through the Smooth operator's
+subdivision, and what cannot be, named.
+
+The library subdivides positions and per-vertex float channels. Everything else is carried
+here, from the order both schemes give the triangles (smooth/subdivide.h): the children of
+input triangle f are output triangles f * 4^levels onward, each level's four children of
+(a, b, c) being (a, ab, ca), (ab, b, bc), (ca, bc, c), (bc, ca, ab).
+
+- Shape keys and vertex-group weights are per-vertex values: subdivided by the same scheme
+  as the positions (both schemes are affine, so a key that moves every vertex by d still does),
+  as extra channels of the library call.
+- Face data (material indices, FACE attributes) is each child's parent's.
+- Corner data (UV maps, float CORNER attributes such as colour) is interpolated linearly over
+  each input triangle, as Blender's Subdivision Surface does with UV Smooth set to None: a
+  seam stays where it was, and every child corner gets the weights of its place in the
+  parent triangle.
+- Edge data (seams, sharp edges, creases, EDGE attributes) and integer or boolean vertex and
+  corner attributes have no subdivision rule here: named in the operator's report."""
+import numpy as np
+
+from . import blender_mesh
+
+_KEY = ".pm_shape_key_{}"
+_GROUP = ".pm_vertex_group_{}"
+# Blender's attribute types this module interpolates, and their foreach field and width.
+_FLOAT_TYPES = {"FLOAT": ("value", 1), "FLOAT2": ("vector", 2), "FLOAT_VECTOR": ("vector", 3),
+                "FLOAT_COLOR": ("color", 4), "BYTE_COLOR": ("color", 4)}
+_FACE_TYPES = dict(_FLOAT_TYPES, INT=("value", 1), BOOLEAN=("value", 1), INT8=("value", 1))
+_DTYPES = {"INT": np.int32, "BOOLEAN": bool, "INT8": np.int32}
+
+
+def child_weights(levels):
+    """(4^levels, 3, 3): each child's corners as weights of its input triangle's corners."""
+    half = 0.5
+    layout = np.array([[[1, 0, 0], [half, half, 0], [half, 0, half]],
+                       [[half, half, 0], [0, 1, 0], [0, half, half]],
+                       [[half, 0, half], [0, half, half], [0, 0, 1]],
+                       [[0, half, half], [half, 0, half], [half, half, 0]]])
+    weights = np.eye(3)[None]
+    for _ in range(levels):
+        weights = np.einsum("cij,tjk->tcik", layout, weights).reshape(-1, 3, 3)
+    return weights
+
+
+def _read(collection, field, count, width, dtype=np.float32):
+    out = np.empty(count * width, dtype=dtype)
+    collection.foreach_get(field, out)
+    return out.reshape(count, width) if width > 1 else out.reshape(count, 1)
+
+
+class Carried:
+    """Gathered before the library call (gather()); put back after the write (restore())."""
+
+    def __init__(self):
+        self.channels = {}       # extra per-vertex channels for the library: {name: (V, C)}
+        self.shape_keys = []     # (name, settings) in order; values in channels
+        self.key_settings = None
+        self.groups = []         # (name, lock_weight); values in channels
+        self.active_group = -1
+        self.faces = []          # (name or None for material_index, type, (F, C) per input triangle)
+        self.corners = []        # (name, type, (F, 3, C) per input corner, is_uv, active, render)
+        self.not_carried = []    # what no rule here carries, named
+
+
+def gather(obj, mesh, loops, polygon):
+    """What `mesh` (obj's data) holds beyond positions and float POINT attributes."""
+    c = Carried()
+    nv = len(mesh.vertices)
+    keys = mesh.shape_keys
+    if keys is not None and len(keys.key_blocks):
+        c.key_settings = {"use_relative": keys.use_relative,
+                          "action": keys.animation_data.action if keys.animation_data else None}
+        for i, block in enumerate(keys.key_blocks):
+            c.channels[_KEY.format(i)] = _read(block.data, "co", nv, 3)
+            c.shape_keys.append((block.name, {
+                "relative_key": block.relative_key.name, "value": block.value,
+                "slider_min": block.slider_min, "slider_max": block.slider_max, "mute": block.mute,
+                "vertex_group": block.vertex_group, "interpolation": block.interpolation}))
+    if len(obj.vertex_groups):
+        weights = np.zeros((nv, len(obj.vertex_groups)), dtype=np.float32)
+        for v in mesh.vertices:  # no bulk access to weights in Blender's API
+            for g in v.groups:
+                if g.group < weights.shape[1]:
+                    weights[v.index, g.group] = g.weight
+        for i, group in enumerate(obj.vertex_groups):
+            c.channels[_GROUP.format(i)] = weights[:, i:i + 1].copy()
+            c.groups.append((group.name, group.lock_weight))
+        c.active_group = obj.vertex_groups.active_index
+    if len(mesh.polygons):
+        material = _read(mesh.polygons, "material_index", len(mesh.polygons), 1, np.int32)
+        if material.any():
+            c.faces.append((None, "INT", material[polygon]))
+    uv_names = set()
+    for layer in mesh.uv_layers:
+        uv_names.add(layer.name)
+        uv = _read(layer.data, "uv", len(mesh.loops), 2)
+        c.corners.append((layer.name, "FLOAT2", uv[loops], True, layer.active, layer.active_render))
+    skipped = {"int or boolean vertex attributes": [], "edge attributes": [], "corner attributes": []}
+    for attribute in mesh.attributes:
+        name, kind, domain = attribute.name, attribute.data_type, attribute.domain
+        # (sharp_face: the shading, which the operator sets smooth)
+        if name.startswith(".") or name in uv_names or name in ("position", "material_index", "sharp_face"):
+            continue
+        if domain == "FACE" and kind in _FACE_TYPES:
+            field, width = _FACE_TYPES[kind]
+            values = _read(attribute.data, field, len(mesh.polygons), width, _DTYPES.get(kind, np.float32))
+            c.faces.append((name, kind, values[polygon]))
+        elif domain == "CORNER" and kind in _FLOAT_TYPES:
+            field, width = _FLOAT_TYPES[kind]
+            values = _read(attribute.data, field, len(mesh.loops), width)
+            c.corners.append((name, kind, values[loops], False, False, False))
+        elif domain == "POINT" and kind not in _FLOAT_TYPES:
+            skipped["int or boolean vertex attributes"].append(name)
+        elif domain == "EDGE":
+            skipped["edge attributes"].append(name)
+        elif domain == "CORNER":
+            skipped["corner attributes"].append(name)
+    for what, names in skipped.items():
+        if names:
+            c.not_carried.append(f"{what} ({', '.join(sorted(names))})")
+    if len(mesh.edges):
+        flags = []
+        for field, what in (("use_seam", "seams"), ("use_edge_sharp", "sharp edges")):
+            values = np.empty(len(mesh.edges), dtype=bool)
+            mesh.edges.foreach_get(field, values)
+            if values.any():
+                flags.append(what)
+        if hasattr(mesh.edges[0], "crease"):  # Blender 3.x; 4.x keeps creases as an EDGE attribute
+            crease = np.empty(len(mesh.edges), dtype=np.float32)
+            mesh.edges.foreach_get("crease", crease)
+            if crease.any():
+                flags.append("edge creases")
+        if flags:
+            c.not_carried.append(" and ".join(flags) + " (edge data: the subdivided mesh has new edges)")
+    return c
+
+
+def before_write(obj):
+    """Shape keys go before the geometry is replaced: a key must hold one point per vertex."""
+    if obj.data.shape_keys is not None:
+        obj.shape_key_clear()
+
+
+def take_channels(result, c):
+    """The extra channels of the subdivided `result`, taken out of its attributes before it
+    is written (they are shape keys and weights, not attributes)."""
+    return {name: result.attributes.pop(name) for name in list(result.attributes) if name in c.channels}
+
+
+def restore(obj, mesh, c, result, channels, levels):
+    """Put back what gather() found on the subdivided `result`, already written into `mesh`;
+    `channels` from take_channels()."""
+    k = 4 ** levels
+    nt = result.triangle_count
+    parent = np.arange(nt) // k
+    for name, kind, per_triangle in c.faces:
+        values = per_triangle[parent]
+        if name is None:
+            mesh.polygons.foreach_set("material_index", values.ravel().astype(np.int32))
+            continue
+        field, _ = _FACE_TYPES[kind]
+        attribute = mesh.attributes.new(name, kind, "FACE")
+        if attribute is not None:
+            attribute.data.foreach_set(field, values.ravel())
+    if c.corners:
+        weights = child_weights(levels)[np.arange(nt) % k]  # (T, 3 corners, 3 parent corners)
+        flip = _flipped(result, levels, c.referenced, c.triangles)
+        for name, kind, per_corner, is_uv, active, render in c.corners:
+            source = per_corner.astype(np.float64)
+            source[flip] = source[flip][:, [0, 2, 1]]  # the repair's (a, c, b)
+            values = np.einsum("tji,tic->tjc", weights, source[parent]).astype(np.float32)
+            if is_uv:
+                layer = mesh.uv_layers.new(name=name)
+                if layer is None:
+                    continue
+                layer.data.foreach_set("uv", values.ravel())
+                if active:
+                    mesh.uv_layers.active = layer
+                if render:
+                    layer.active_render = True
+            else:
+                attribute = mesh.attributes.new(name, kind, "CORNER")
+                if attribute is not None:
+                    attribute.data.foreach_set(_FLOAT_TYPES[kind][0], values.ravel())
+    for i, (name, lock) in enumerate(c.groups):
+        group = obj.vertex_groups.new(name=name)
+        group.lock_weight = lock
+        weights = np.clip(channels[_GROUP.format(i)][:, 0], 0.0, 1.0)
+        for value in np.unique(weights[weights > 0]):  # one call per distinct weight
+            group.add(np.flatnonzero(weights == value).tolist(), float(value), "REPLACE")
+    if c.groups:
+        obj.vertex_groups.active_index = c.active_group
+    if c.shape_keys:
+        blocks = []
+        for i, (name, _) in enumerate(c.shape_keys):
+            block = obj.shape_key_add(name=name, from_mix=False)
+            block.data.foreach_set("co", channels[_KEY.format(i)].astype(np.float32).ravel())
+            blocks.append(block)
+        keys = mesh.shape_keys
+        keys.use_relative = c.key_settings["use_relative"]
+        for block, (_, settings) in zip(blocks, c.shape_keys):
+            block.relative_key = keys.key_blocks.get(settings["relative_key"], blocks[0])
+            for field in ("slider_min", "slider_max", "value", "mute", "vertex_group", "interpolation"):
+                setattr(block, field, settings[field])
+        if c.key_settings["action"] is not None:
+            keys.animation_data_create().action = c.key_settings["action"]
+    mesh.update()
+
+
+def _flipped(result, levels, referenced, triangles):
+    """Which input triangles the library's orientation repair turned, (F,) bool: the corner
+    at b's place in the output (the second child at every level holds it as its second
+    corner) is the image of the input's third corner. Output vertex i < len(referenced) is
+    the image of input vertex referenced[i] (unreferenced vertices are dropped)."""
+    k = 4 ** levels
+    out = np.asarray(result.triangles)
+    b_child = np.arange(len(triangles)) * k + (k - 1) // 3
+    image_of_b = np.searchsorted(referenced, triangles[:, 1])
+    return out[b_child, 1] != image_of_b
+
+
+def prepare(obj, mesh):
+    """(triangles, extra channels, Carried) for the library call."""
+    triangles, loops, polygon = blender_mesh.triangle_corners(mesh)
+    c = gather(obj, mesh, loops, polygon)
+    c.triangles = triangles
+    c.referenced = np.unique(triangles)
+    attributes = blender_mesh.float_point_attributes(mesh)
+    attributes.update(c.channels)
+    return triangles, attributes, c
