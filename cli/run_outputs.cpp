@@ -119,12 +119,24 @@ std::vector<std::string> RunOutputs::channels_not_written(const std::string& opt
     // OBJ's "v x y z r g b" holds a colour; PCL's PLY writer knows rgb and intensity.
     const bool obj = o.kind == OutputKind::Mesh && mesh_output_format(o.path, o.format) == MeshFormat::Obj;
     const bool pcl = o.kind == OutputKind::PlyOnly;
-    if (!obj && !pcl) continue;
+    // Values per triangle corner: OBJ's vt holds texture coordinates ("uv"), no other output
+    // any.
+    bool corners = false;
+    for (const VertexAttribute& a : mesh.corner_attributes)
+      if (!(obj && a.name == "uv" && a.components == 2)) {
+        out.push_back(a.name + " (per corner)");
+        corners = true;
+      }
+    if (!obj && !pcl) {
+      if (why && corners) *why = "only .obj holds texture coordinates (uv), as vt";
+      continue;
+    }
     for (const VertexAttribute& a : mesh.attributes)
       if (!(a.name == "color" && a.components == 3) && !(pcl && a.name == "intensity" && a.components == 1))
         out.push_back(a.name);
     if (why)
-      *why = obj ? "OBJ holds a colour per vertex only; .ply, .vtk, .vtu and .vtp hold every channel"
+      *why = obj ? "OBJ holds a colour per vertex and texture coordinates only; .ply, .vtk, .vtu and .vtp hold every "
+                   "per-vertex channel"
                  : "PCL's PLY writer holds rgb and intensity only; -o with .ply holds every channel";
   }
   return out;

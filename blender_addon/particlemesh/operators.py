@@ -288,10 +288,11 @@ class PARTICLEMESH_OT_smooth(_ModalJob, bpy.types.Operator):
         mesh = obj.data
         # Shape keys, vertex groups, materials, UV maps and corner colours go along
         # (smooth_carry.py); edge data cannot, and is named.
-        triangles, attributes, self._carried = smooth_carry.prepare(obj, mesh)
+        triangles, attributes, corners, self._carried = smooth_carry.prepare(obj, mesh)
         if len(triangles) == 0:
             raise sources.SourceError(f"'{obj.name}' has no faces to smooth")
-        source = pm.Mesh(blender_mesh.positions(mesh), triangles, attributes=attributes)
+        source = pm.Mesh(blender_mesh.positions(mesh), triangles, attributes=attributes,
+                         corner_attributes=corners)
         self._target = obj.name
         return pm.smooth, (source,), dict(scheme=self.scheme, levels=self.levels)
 

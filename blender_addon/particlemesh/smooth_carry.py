@@ -1,19 +1,17 @@
 """What a Blender mesh holds beyond its positions, carried through the Smooth operator's
 subdivision, and what cannot be, named.
 
-The library subdivides positions and per-vertex float channels. Everything else is carried
-here, from the order both schemes give the triangles (smooth/subdivide.h): the children of
-input triangle f are output triangles f * 4^levels onward, each level's four children of
-(a, b, c) being (a, ab, ca), (ab, b, bc), (ca, bc, c), (bc, ca, ab).
+The library subdivides positions, per-vertex channels and per-corner values; the rest follows
+the order both schemes give the triangles (smooth/subdivide.h): the children of input
+triangle f are output triangles f * 4^levels onward.
 
 - Shape keys and vertex-group weights are per-vertex values: subdivided by the same scheme
   as the positions (both schemes are affine, so a key that moves every vertex by d still does),
   as extra channels of the library call.
 - Face data (material indices, FACE attributes) is each child's parent's.
-- Corner data (UV maps, float CORNER attributes such as colour) is interpolated linearly over
-  each input triangle, as Blender's Subdivision Surface does with UV Smooth set to None: a
-  seam stays where it was, and every child corner gets the weights of its place in the
-  parent triangle.
+- Corner data (UV maps, float CORNER attributes such as colour) goes as the library's corner
+  attributes, linear over each input triangle (Blender's Subdivision Surface with UV Smooth
+  None): a seam stays where it was.
 - Edge data (seams, sharp edges, creases, EDGE attributes) and integer or boolean vertex and
   corner attributes have no subdivision rule here: named in the operator's report."""
 import numpy as np
@@ -22,24 +20,12 @@ from . import blender_mesh
 
 _KEY = ".pm_shape_key_{}"
 _GROUP = ".pm_vertex_group_{}"
+_CORNER = ".pm_corner_{}"
 # Blender's attribute types this module interpolates, and their foreach field and width.
 _FLOAT_TYPES = {"FLOAT": ("value", 1), "FLOAT2": ("vector", 2), "FLOAT_VECTOR": ("vector", 3),
                 "FLOAT_COLOR": ("color", 4), "BYTE_COLOR": ("color", 4)}
 _FACE_TYPES = dict(_FLOAT_TYPES, INT=("value", 1), BOOLEAN=("value", 1), INT8=("value", 1))
 _DTYPES = {"INT": np.int32, "BOOLEAN": bool, "INT8": np.int32}
-
-
-def child_weights(levels):
-    """(4^levels, 3, 3): each child's corners as weights of its input triangle's corners."""
-    half = 0.5
-    layout = np.array([[[1, 0, 0], [half, half, 0], [half, 0, half]],
-                       [[half, half, 0], [0, 1, 0], [0, half, half]],
-                       [[half, 0, half], [0, half, half], [0, 0, 1]],
-                       [[0, half, half], [half, 0, half], [half, half, 0]]])
-    weights = np.eye(3)[None]
-    for _ in range(levels):
-        weights = np.einsum("cij,tjk->tcik", layout, weights).reshape(-1, 3, 3)
-    return weights
 
 
 def _read(collection, field, count, width, dtype=np.float32):
@@ -162,26 +148,21 @@ def restore(obj, mesh, c, result, channels, levels):
         attribute = mesh.attributes.new(name, kind, "FACE")
         if attribute is not None:
             attribute.data.foreach_set(field, values.ravel())
-    if c.corners:
-        weights = child_weights(levels)[np.arange(nt) % k]  # (T, 3 corners, 3 parent corners)
-        flip = _flipped(result, levels, c.referenced, c.triangles)
-        for name, kind, per_corner, is_uv, active, render in c.corners:
-            source = per_corner.astype(np.float64)
-            source[flip] = source[flip][:, [0, 2, 1]]  # the repair's (a, c, b)
-            values = np.einsum("tji,tic->tjc", weights, source[parent]).astype(np.float32)
-            if is_uv:
-                layer = mesh.uv_layers.new(name=name)
-                if layer is None:
-                    continue
-                layer.data.foreach_set("uv", values.ravel())
-                if active:
-                    mesh.uv_layers.active = layer
-                if render:
-                    layer.active_render = True
-            else:
-                attribute = mesh.attributes.new(name, kind, "CORNER")
-                if attribute is not None:
-                    attribute.data.foreach_set(_FLOAT_TYPES[kind][0], values.ravel())
+    for i, (name, kind, _, is_uv, active, render) in enumerate(c.corners):
+        values = result.corner_attributes[_CORNER.format(i)]
+        if is_uv:
+            layer = mesh.uv_layers.new(name=name)
+            if layer is None:
+                continue
+            layer.data.foreach_set("uv", values.ravel())
+            if active:
+                mesh.uv_layers.active = layer
+            if render:
+                layer.active_render = True
+        else:
+            attribute = mesh.attributes.new(name, kind, "CORNER")
+            if attribute is not None:
+                attribute.data.foreach_set(_FLOAT_TYPES[kind][0], values.ravel())
     for i, (name, lock) in enumerate(c.groups):
         group = obj.vertex_groups.new(name=name)
         group.lock_weight = lock
@@ -207,24 +188,11 @@ def restore(obj, mesh, c, result, channels, levels):
     mesh.update()
 
 
-def _flipped(result, levels, referenced, triangles):
-    """Which input triangles the library's orientation repair turned, (F,) bool: the corner
-    at b's place in the output (the second child at every level holds it as its second
-    corner) is the image of the input's third corner. Output vertex i < len(referenced) is
-    the image of input vertex referenced[i] (unreferenced vertices are dropped)."""
-    k = 4 ** levels
-    out = np.asarray(result.triangles)
-    b_child = np.arange(len(triangles)) * k + (k - 1) // 3
-    image_of_b = np.searchsorted(referenced, triangles[:, 1])
-    return out[b_child, 1] != image_of_b
-
-
 def prepare(obj, mesh):
-    """(triangles, extra channels, Carried) for the library call."""
+    """(triangles, per-vertex channels, per-corner values, Carried) for the library call."""
     triangles, loops, polygon = blender_mesh.triangle_corners(mesh)
     c = gather(obj, mesh, loops, polygon)
-    c.triangles = triangles
-    c.referenced = np.unique(triangles)
     attributes = blender_mesh.float_point_attributes(mesh)
     attributes.update(c.channels)
-    return triangles, attributes, c
+    corners = {_CORNER.format(i): entry[2] for i, entry in enumerate(c.corners)}
+    return triangles, attributes, corners, c

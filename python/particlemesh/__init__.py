@@ -254,20 +254,27 @@ def read_mesh(path):
 def write_mesh(mesh, path):
     """Write a Mesh as .ply (binary, float32 unless far from the origin), .obj, .vtk, .vtu or
     .vtp, with its normals and attributes, atomically: under a temporary name, renamed when
-    complete. An .obj holds a colour per vertex ("color", 3 components) and no other channel:
-    a NotWrittenWarning names those it leaves out."""
+    complete. An .obj holds a colour per vertex ("color", 3 components) and texture
+    coordinates (the corner attribute "uv", 2 components) and no other channel; the other
+    formats hold no corner attribute: a NotWrittenWarning names those it leaves out."""
     lib = _library.load()
     handle = new_mesh(lib, mesh)
     try:
         lib.check(lib.pm_mesh_write(handle, path_bytes(path)))
     finally:
         lib.pm_mesh_destroy(handle)
-    if os.fspath(path).lower().endswith(".obj"):
+    obj = os.fspath(path).lower().endswith(".obj")
+    if obj:
         left = [name for name, values in mesh.attributes.items()
                 if not (name == "color" and np.shape(values)[-1:] == (3,))]
         if left:
             warnings.warn(f"{os.fspath(path)}: not written: {', '.join(left)} (OBJ holds a colour per vertex "
                           "only; .ply, .vtk, .vtu and .vtp hold every channel)", NotWrittenWarning, stacklevel=2)
+    corners = [f"{name} (per corner)" for name, values in getattr(mesh, "corner_attributes", {}).items()
+               if not (obj and name == "uv" and np.shape(values)[-1:] == (2,))]
+    if corners:
+        warnings.warn(f"{os.fspath(path)}: not written: {', '.join(corners)} (only .obj holds texture "
+                      "coordinates (uv), as vt)", NotWrittenWarning, stacklevel=2)
 
 
 # ---- meshing --------------------------------------------------------------------------------

@@ -321,6 +321,11 @@ FUNCTIONS = {
     "pm_mesh_lend_attribute": (pm_status, [pm_mesh_p, c_char_p, POINTER(_f32p)]),
     "pm_mesh_get_attribute_count": (pm_status, [pm_mesh_p, _sizep]),
     "pm_mesh_get_attribute_name": (pm_status, [pm_mesh_p, c_size_t, POINTER(c_char_p)]),
+    "pm_mesh_set_corner_attribute": (pm_status, [pm_mesh_p, c_char_p, c_int32, _f32p, c_size_t]),
+    "pm_mesh_get_corner_attribute_count": (pm_status, [pm_mesh_p, _sizep]),
+    "pm_mesh_get_corner_attribute_name": (pm_status, [pm_mesh_p, c_size_t, POINTER(c_char_p)]),
+    "pm_mesh_get_corner_attribute_components": (pm_status, [pm_mesh_p, c_char_p, _i32p]),
+    "pm_mesh_copy_corner_attribute": (pm_status, [pm_mesh_p, c_char_p, _f32p, c_size_t]),
     "pm_cloud_set_attribute": (pm_status, [pm_cloud_p, c_char_p, c_int32, _f32p, c_size_t]),
     # smoothing
     "pm_smooth_options_init": (None, [POINTER(pm_smooth_options)]),

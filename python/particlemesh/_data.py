@@ -52,6 +52,20 @@ def channels(values, name, count):
     return np.ascontiguousarray(a)
 
 
+def corner_values(values, name, triangles):
+    """A corner attribute as C-contiguous (T, 3, C) float32 from (T, 3, C), (T, 3) (one
+    component) or (3T, C)."""
+    a = np.asarray(values, dtype=np.float32)
+    if a.ndim == 2 and a.shape == (triangles, 3):
+        a = a.reshape(triangles, 3, 1)
+    elif a.ndim == 2 and a.shape[0] == 3 * triangles:
+        a = a.reshape(triangles, 3, -1)
+    if a.ndim != 3 or a.shape[:2] != (triangles, 3):
+        raise _invalid(f"corner attribute '{name}' has shape {a.shape}; it needs ({triangles}, 3, C): "
+                       "one row of C values per triangle corner")
+    return np.ascontiguousarray(a)
+
+
 def vertex_indices(array, name, columns, dtype=np.int32, rows="T", item=("triangle", "corner")):
     """A C-contiguous (N, columns) array of `dtype` vertex indices: `rows` names N in messages,
     `item` what a row and a column are (a triangle and its corners, an edge and its ends).
@@ -106,16 +120,20 @@ class Mesh:
     (counter-clockwise seen from outside where the mesh is oriented), `normals` (V, 3) float64
     or None, `attributes` {name: (V, C) float32} per-vertex channels, `stats` (dict: what the
     call that made it measured; empty for a mesh made here, and for one read_mesh read but for
-    "not_read", the lines naming what the file held that the mesh does not carry)."""
+    "not_read", the lines naming what the file held that the mesh does not carry), and
+    `corner_attributes` {name: (T, 3, C) float32} values per triangle corner (face-varying:
+    "uv", texture coordinates, from an OBJ's vt; smooth() carries them, linear over each
+    input triangle, and write_mesh writes "uv" to .obj)."""
 
-    __slots__ = ("vertices", "triangles", "normals", "attributes", "stats")
+    __slots__ = ("vertices", "triangles", "normals", "attributes", "stats", "corner_attributes")
 
-    def __init__(self, vertices, triangles, normals=None, attributes=None, stats=None):
+    def __init__(self, vertices, triangles, normals=None, attributes=None, stats=None, corner_attributes=None):
         self.vertices = vertices
         self.triangles = triangles
         self.normals = normals
         self.attributes = attributes if attributes is not None else {}
         self.stats = stats if stats is not None else {}
+        self.corner_attributes = corner_attributes if corner_attributes is not None else {}
 
     @property
     def vertex_count(self):
@@ -128,13 +146,16 @@ class Mesh:
     @property
     def nbytes(self):
         """Bytes held by the arrays."""
-        arrays = [self.vertices, self.triangles, self.normals, *self.attributes.values()]
+        arrays = [self.vertices, self.triangles, self.normals, *self.attributes.values(),
+                  *self.corner_attributes.values()]
         return sum(np.asarray(a).nbytes for a in arrays if a is not None)
 
     def __repr__(self):
         extra = ", normals" if self.normals is not None else ""
         if self.attributes:
             extra += ", attributes " + ", ".join(self.attributes)
+        if self.corner_attributes:
+            extra += ", corner attributes " + ", ".join(self.corner_attributes)
         return (f"<particlemesh.Mesh {self.vertex_count} vertices, {self.triangle_count} "
                 f"triangles{extra}>")
 
@@ -193,6 +214,11 @@ def new_mesh(lib, mesh, with_attributes=True):
             a = channels(values, name, len(v))
             lib.check(lib.pm_mesh_set_attribute(handle, name.encode(), a.shape[1],
                                                 ptr(a, c_float), len(v)))
+        corners = getattr(mesh, "corner_attributes", None) if with_attributes else None
+        for name, values in (corners or {}).items():
+            a = corner_values(values, name, len(t))
+            lib.check(lib.pm_mesh_set_corner_attribute(handle, name.encode(), a.shape[2],
+                                                       ptr(a, c_float), len(t)))
     except BaseException:
         lib.pm_mesh_destroy(handle)
         raise
@@ -290,7 +316,25 @@ def read_mesh_handle(lib, handle, stats=None):
         return _lent(owner, _address(values), (nv, components), np.float32)
 
     attributes = _attributes(lib, owner._handle, nv, "mesh", read=lend_attribute)
-    return Mesh(vertices, triangles, normals, attributes, stats)
+    return Mesh(vertices, triangles, normals, attributes, stats, _corner_attributes(lib, owner._handle, nt))
+
+
+def _corner_attributes(lib, handle, triangles):
+    """Every corner attribute of a pm_mesh handle: {name: (T, 3, C) float32}, copied."""
+    n = c_size_t(0)
+    lib.check(lib.pm_mesh_get_corner_attribute_count(handle, ctypes.byref(n)))
+    out = {}
+    for i in range(n.value):
+        name = c_char_p()
+        lib.check(lib.pm_mesh_get_corner_attribute_name(handle, i, ctypes.byref(name)))
+        key = name.value
+        components = c_int32(0)
+        lib.check(lib.pm_mesh_get_corner_attribute_components(handle, key, ctypes.byref(components)))
+        values = np.empty((triangles, 3, components.value), dtype=np.float32)
+        if triangles:
+            lib.check(lib.pm_mesh_copy_corner_attribute(handle, key, ptr(values, c_float), triangles))
+        out[key.decode(errors="replace")] = values
+    return out
 
 
 def read_cloud_handle(lib, handle, info=None):

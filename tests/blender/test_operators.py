@@ -728,7 +728,7 @@ def test_smooth_carries_uvs_materials_shape_keys_and_vertex_groups(pm, turned):
     obj = grid_with_everything(cells)
     if turned:
         obj.data.polygons[10].flip()
-    carried = pm.smooth_carry.prepare(obj, obj.data)[2]
+    carried = pm.smooth_carry.prepare(obj, obj.data)[3]
     assert carried.not_carried == ["seams (edge data: the subdivided mesh has new edges)"]
     for scheme, levels in (("LOOP", 1), ("LOOP", 2), ("BUTTERFLY", 1), ("BUTTERFLY", 2)):
         bpy.ops.ed.undo_push(message="before smooth")

@@ -115,6 +115,55 @@ TEST(CApiSmooth, SmoothMatchesTheCppApiAndCarriesAttributes) {
   EXPECT_EQ(nt, 4 * m.triangles.size());
 }
 
+// Values per triangle corner cross the ABI both ways and go through pm_smooth as through
+// smooth_mesh; misuse names what is wrong and changes nothing.
+TEST(CApiSmooth, CornerAttributesCrossTheAbiAndAreSmoothed) {
+  const TriMesh m = torus_mesh(1, 0.4, 12, 8);
+  MeshGuard in{make_mesh(m)};
+  const size_t nt = m.triangles.size();
+  std::vector<float> uv(6 * nt);
+  for (size_t i = 0; i < uv.size(); ++i) uv[i] = float(i % 7) * 0.125f + float(i / 6);
+  ASSERT_EQ(pm_mesh_set_corner_attribute(in.m, "uv", 2, uv.data(), nt), PM_OK) << last();
+  size_t count = 9;
+  ASSERT_EQ(pm_mesh_get_corner_attribute_count(in.m, &count), PM_OK);
+  EXPECT_EQ(count, 1u);
+  const char* name = nullptr;
+  ASSERT_EQ(pm_mesh_get_corner_attribute_name(in.m, 0, &name), PM_OK);
+  EXPECT_STREQ(name, "uv");
+  pm_smooth_options o;
+  pm_smooth_options_init(&o);
+  o.levels = 2;
+  MeshGuard out;
+  ASSERT_EQ(pm_smooth(in.m, &o, &out.m), PM_OK) << last();
+  TriMesh cm = m;
+  cm.corner_attributes = {{"uv", 2, uv}};
+  SmoothOptions co;
+  co.levels = 2;
+  const SmoothResult ref = smooth_mesh(cm, co);
+  int32_t comps = 0;
+  ASSERT_EQ(pm_mesh_get_corner_attribute_components(out.m, "uv", &comps), PM_OK) << last();
+  EXPECT_EQ(comps, 2);
+  std::vector<float> got(6 * 16 * nt);
+  ASSERT_EQ(pm_mesh_copy_corner_attribute(out.m, "uv", got.data(), 16 * nt), PM_OK) << last();
+  EXPECT_EQ(got, ref.mesh.corner_attributes.at(0).values);
+  // Misuse: the message names it, the mesh keeps what it had.
+  EXPECT_EQ(pm_mesh_set_corner_attribute(in.m, "uv", 2, uv.data(), nt - 1), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(last()).find("triangle_count is " + std::to_string(nt - 1)), std::string::npos);
+  std::vector<float> bad = uv;
+  bad[13] = NAN;
+  EXPECT_EQ(pm_mesh_set_corner_attribute(in.m, "uv", 2, bad.data(), nt), PM_STATUS_INVALID_INPUT);
+  EXPECT_NE(std::string(last()).find("values[13] (triangle 2, corner 0, component 1) of corner attribute 'uv'"),
+            std::string::npos);
+  EXPECT_EQ(pm_mesh_set_corner_attribute(in.m, "uv", 65, uv.data(), nt), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(pm_mesh_get_corner_attribute_components(in.m, "st", &comps), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(last()).find("no corner attribute 'st'"), std::string::npos);
+  EXPECT_EQ(pm_mesh_copy_corner_attribute(out.m, "uv", got.data(), nt), PM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(pm_mesh_get_corner_attribute_name(in.m, 1, &name), PM_STATUS_INVALID_ARGUMENT);
+  std::vector<float> kept(6 * nt);
+  ASSERT_EQ(pm_mesh_copy_corner_attribute(in.m, "uv", kept.data(), nt), PM_OK);
+  EXPECT_EQ(kept, uv);
+}
+
 TEST(CApiSmooth, CloudAttributesReachTheTriangulationAndTheSmoothMesh) {
   // A flat hexagonal lattice: its raw triangulation is a manifold disk.
   const PointCloud c = hex_lattice(8, 7, 1.0);

@@ -507,7 +507,7 @@ TEST(CApi, ComponentsOfAMeshAndTheirVolumes) {
 // What pm_mesh_read does not carry is named line by line; a mesh made here names nothing.
 TEST(CApi, WhatAMeshFileHoldsButIsNotReadIsNamed) {
   const std::string path = (particlemesh::test::scratch_dir("capi_mesh_not_read") / "uv.obj").string();
-  std::ofstream(path) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\n";
+  std::ofstream(path) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3\n";
   pm_mesh* mesh = nullptr;
   ASSERT_EQ(pm_mesh_read(path.c_str(), &mesh), PM_OK) << last();
   size_t n = 9;
@@ -515,7 +515,7 @@ TEST(CApi, WhatAMeshFileHoldsButIsNotReadIsNamed) {
   ASSERT_EQ(n, 1u);
   const char* text = nullptr;
   ASSERT_EQ(pm_mesh_get_not_read(mesh, 0, &text), PM_OK) << last();
-  EXPECT_STREQ(text, "texture coordinates (1 vt)");
+  EXPECT_STREQ(text, "texture coordinates (1 vt; 1 face corner names none)");
   const char* untouched = "x";
   text = untouched;
   EXPECT_EQ(pm_mesh_get_not_read(mesh, 1, &text), PM_STATUS_INVALID_ARGUMENT);

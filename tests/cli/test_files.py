@@ -428,9 +428,10 @@ def test_smooth_keeps_vertex_colours(cli, tmp_path):
 
 
 def test_channels_an_obj_cannot_hold_are_said(cli, tmp_path):
-    """An OBJ output holds a colour per vertex and no other channel: the summary's "not
-    written" line and the report's not_written name the channels left out (triangulate,
-    polygonize, smooth); a PLY output, --attributes none, and a colour alone name nothing."""
+    """An OBJ output holds a colour per vertex and texture coordinates and no other
+    channel: the summary's "not written" line and the report's not_written name the
+    channels left out (triangulate, polygonize, smooth); a PLY output, --attributes none,
+    and a colour alone name nothing."""
     import sys
     from pathlib import Path
     sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -438,7 +439,7 @@ def test_channels_an_obj_cannot_hold_are_said(cli, tmp_path):
     p, attrs = particles(n=6)
     src = tmp_path / "p.ply"
     write_ply(src, p, attrs)
-    line = "  not written   velocity, density (OBJ holds a colour per vertex only"
+    line = "  not written   velocity, density (OBJ holds a colour per vertex and texture coordinates only"
     for command in ("triangulate", "polygonize"):
         out = cli(command, src, "-o", tmp_path / "m.obj", "--report", tmp_path / "m.json").stdout
         assert line in out, command

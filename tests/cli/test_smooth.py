@@ -248,19 +248,73 @@ def test_sigint_cancels_without_output(cli, tmp_path):
 
 
 def test_what_the_input_mesh_holds_but_is_not_smoothed_is_named(cli, tmp_path):
-    """An OBJ's texture coordinates and materials are not carried through the smoothing: the
-    summary, the report and inspect name them; a plain mesh names nothing."""
+    """An OBJ's materials, and texture coordinates its faces do not use, are not carried
+    through the smoothing: the summary, the report and inspect name them; a plain mesh names
+    nothing."""
     obj = tmp_path / "uv.obj"
     _octahedron(tmp_path / "octa.obj")
     text = (tmp_path / "octa.obj").read_text()
     obj.write_text("mtllib m.mtl\nusemtl skin\nvt 0 0\nvt 1 1\n" + text)
-    line = "  not read      texture coordinates (2 vt); materials (1 usemtl)"
+    uv = "texture coordinates (2 vt; 24 face corners name none)"
+    line = f"  not read      {uv}; materials (1 usemtl)"
     out = cli("smooth", obj, "-o", tmp_path / "s.ply", "--report", tmp_path / "s.json").stdout
     assert line in out
-    assert json.loads((tmp_path / "s.json").read_text())["not_read"] == ["texture coordinates (2 vt)",
-                                                                         "materials (1 usemtl)"]
+    assert json.loads((tmp_path / "s.json").read_text())["not_read"] == [uv, "materials (1 usemtl)"]
     assert line in cli("inspect", obj).stdout
-    assert json.loads(cli("inspect", obj, "--json").stdout)["not_read"][0] == "texture coordinates (2 vt)"
+    assert json.loads(cli("inspect", obj, "--json").stdout)["not_read"][0] == uv
     out = cli("smooth", tmp_path / "octa.obj", "-o", tmp_path / "t.ply", "--report", tmp_path / "t.json").stdout
     assert "not read" not in out and "not_read" not in json.loads((tmp_path / "t.json").read_text())
     assert "not_read" not in json.loads(cli("inspect", tmp_path / "octa.obj", "--json").stdout)
+
+
+def _obj_corners(path):
+    """(positions, [(vertex, (u, v)) per corner of each face]) of an OBJ with v/vt corners."""
+    v, vt, faces = [], [], []
+    for line in path.read_text().splitlines():
+        w = line.split()
+        if not w:
+            continue
+        if w[0] == "v":
+            v.append(tuple(map(float, w[1:4])))
+        elif w[0] == "vt":
+            vt.append(tuple(map(float, w[1:3])))
+        elif w[0] == "f":
+            faces.append([(int(c.split("/")[0]) - 1, vt[int(c.split("/")[1]) - 1]) for c in w[1:]])
+    return v, faces
+
+
+def test_texture_coordinates_go_through_the_smoothing(cli, tmp_path):
+    """An OBJ's texture coordinates (u = x + 3 on the lower faces, v = y + z: a seam around
+    the equator) come out as vt: linear over each input face, so every output corner's
+    (u, v) is a mean of its face's input corners', and the seam stays where it was. An
+    output that cannot hold them says so."""
+    verts, faces = _octahedron(tmp_path / "octa.obj")
+    lines = ["v %g %g %g" % p for p in verts]
+    corners = []
+    for n, face in enumerate(faces):
+        for i in face:
+            x, y, z = verts[i]
+            lines.append("vt %g %g" % (x + (3 if n >= 4 else 0), y + z))
+            corners.append("%d/%d" % (i + 1, len(lines) - len(verts)))
+    lines += ["f " + " ".join(corners[3 * n:3 * n + 3]) for n in range(len(faces))]
+    src = tmp_path / "uv.obj"
+    src.write_text("\n".join(lines) + "\n")
+    out = cli("smooth", src, "-o", tmp_path / "s.obj", "--levels", "2").stdout
+    assert "not read" not in out and "not written" not in out
+    _, smooth_faces = _obj_corners(tmp_path / "s.obj")
+    assert len(smooth_faces) == 16 * len(faces)
+    for n, face in enumerate(smooth_faces):
+        parent = faces[n // 16]
+        lower = n // 16 >= 4
+        for vertex, (u, v) in face:
+            # A mean of the parent's corners' (u, v): inside their triangle, on the right side of the seam.
+            assert (u > 1.5) == lower, (n, u)
+            pu = [verts[i][0] + (3 if lower else 0) for i in parent]
+            assert min(pu) - 1e-6 <= u <= max(pu) + 1e-6
+            if vertex < len(verts):  # a corner of the input: its own coordinates
+                assert vertex in parent
+                x, y, z = verts[vertex]
+                assert (u, v) == (x + (3 if lower else 0), y + z)
+    out = cli("smooth", src, "-o", tmp_path / "s.ply", "--report", tmp_path / "s.json").stdout
+    assert "  not written   uv (per corner) (only .obj holds texture coordinates (uv), as vt)" in out
+    assert json.loads((tmp_path / "s.json").read_text())["not_written"] == ["uv (per corner)"]

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cmath>
+#include <vector>
 
 #include "fuzz_support.h"
 #include "particlemesh/core/error.h"
@@ -23,6 +24,10 @@ inline void check_mesh(const TriMesh& m) {
   for (const Vec3& p : m.positions) PM_FUZZ_CHECK(is_finite(p));
   for (const Triangle& t : m.triangles)
     for (uint32_t v : t) PM_FUZZ_CHECK(v < m.positions.size());
+  for (const VertexAttribute& a : m.corner_attributes) {
+    PM_FUZZ_CHECK(a.values.size() == 3 * m.triangles.size() * size_t(a.components));
+    for (float x : a.values) PM_FUZZ_CHECK(std::isfinite(x));
+  }
 }
 
 /// read_point_cloud and/or read_mesh on the bytes (as a file named *extension), then the
@@ -81,6 +86,18 @@ inline void read_both(const uint8_t* data, size_t size, const char* extension, b
       pm_topology_report r{};
       r.struct_size = sizeof(r);
       check_status(pm_mesh_report(mesh, &r));
+      // Values per corner (an OBJ's texture coordinates) copied out in full.
+      size_t corners = 0, nv = 0, nt = 0;
+      check_status(pm_mesh_get_corner_attribute_count(mesh, &corners));
+      check_status(pm_mesh_get_counts(mesh, &nv, &nt));
+      for (size_t i = 0; i < corners; ++i) {
+        const char* name = nullptr;
+        int32_t k = 0;
+        check_status(pm_mesh_get_corner_attribute_name(mesh, i, &name));
+        check_status(pm_mesh_get_corner_attribute_components(mesh, name, &k));
+        std::vector<float> values(3 * nt * size_t(k));
+        check_status(pm_mesh_copy_corner_attribute(mesh, name, values.data(), nt));
+      }
       pm_mesh_destroy(mesh);
     } else {
       PM_FUZZ_CHECK(mesh == reinterpret_cast<pm_mesh*>(0x1));

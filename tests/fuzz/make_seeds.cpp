@@ -357,6 +357,9 @@ void file_seeds() {
   put("read_xyz", "pandas_csv.xyz", ",x,y,z,vx,vy,vz,Pos.x,Pos.y,Pos.z,n_0,n_1,n_2\n0,0,0,0,1,1,1,0,0,0,0,0,1\n");
   put("read_xyz", "rgb_intensity.xyz", "0 0 0 255 0 0 9\n1 0 0 0 255 0 8\n0 1 0 0 0 255 7\n");
   put("read_xyz", "colour_normal.xyz", "0 0 0 255 0 0 0 0 1\n1 0 0 0 255 0 0 1 0\n");
+  put("read_obj", "uv_seam.obj",
+      "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1 0\nvt 0 1\nvn 0 0 1\n"
+      "f 1/1/1 2/2/1 3/-2/1 4/4/1\nf 2/4 1/3 3\n");
   put("read_obj", "colours.obj", "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nvn 0 0 1\nf 1//1 2//1 3//1\n");
   put("read_obj", "stl_two_solids.bin",
       "\xFE" "solid\nfacet normal 0 0 1\n outer loop\n vertex 0 0 0\n vertex 1 0 0\n vertex 0 1 0\n endloop\nendfacet\n"

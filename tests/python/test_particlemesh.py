@@ -571,20 +571,61 @@ def test_write_mesh_writes_the_attributes_and_says_what_obj_leaves_out(pm, tmp_p
 
 
 def test_read_mesh_names_what_the_mesh_does_not_carry(pm, tmp_path):
-    """An OBJ's texture coordinates: in stats["not_read"] and a NotReadWarning; a plain
-    mesh file warns of nothing and has no such entry."""
+    """An OBJ's texture coordinates that a face corner lacks: in stats["not_read"] and a
+    NotReadWarning; a plain mesh file warns of nothing and has no such entry."""
     import warnings
     path = tmp_path / "uv.obj"
-    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 1\nf 1/1 2/2 3/1\n")
-    with pytest.warns(pm.NotReadWarning, match=r"uv\.obj: not read: texture coordinates \(2 vt\)"):
+    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 1\nf 1/1 2/2 3\n")
+    line = "texture coordinates (2 vt; 1 face corner names none)"
+    with pytest.warns(pm.NotReadWarning, match=r"uv\.obj: not read: texture coordinates \(2 vt; 1 face"):
         mesh = pm.read_mesh(path)
-    assert mesh.stats == {"not_read": ["texture coordinates (2 vt)"]}
+    assert mesh.stats == {"not_read": [line]} and mesh.corner_attributes == {}
     np.testing.assert_array_equal(mesh.triangles, [[0, 1, 2]])
     p, t = tetrahedron()
     pm.write_mesh(pm.Mesh(p, t), tmp_path / "tet.ply")
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert pm.read_mesh(tmp_path / "tet.ply").stats == {}
+
+
+def test_texture_coordinates_are_corner_attributes_through_smooth_and_obj(pm, tmp_path):
+    """An OBJ's vt become corner_attributes["uv"] (T, 3, 2); smooth() carries them (the
+    children of triangle f are triangles 16f.. at two levels, their corners means of f's);
+    write_mesh writes them back to .obj and warns where a format cannot hold them; they
+    survive pickling; bad shapes and values are named."""
+    import pickle
+    import warnings
+    path = tmp_path / "quad.obj"
+    path.write_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        mesh = pm.read_mesh(path)
+    uv = mesh.corner_attributes["uv"]
+    assert uv.shape == (2, 3, 2) and uv.dtype == np.float32
+    np.testing.assert_array_equal(uv, mesh.vertices[mesh.triangles][:, :, :2])
+    smooth = pm.smooth(mesh, "butterfly", 2)
+    suv = smooth.corner_attributes["uv"]
+    assert suv.shape == (32, 3, 2)
+    for f in range(2):
+        # The input's corners where the layout puts them: a of the first child, b of the
+        # sixth (the second child's second), c of the eleventh (the third's third).
+        assert (suv[16 * f, 0] == uv[f, 0]).all() and (suv[16 * f + 5, 1] == uv[f, 1]).all()
+        assert (suv[16 * f + 10, 2] == uv[f, 2]).all()
+        lo, hi = uv[f].min(0), uv[f].max(0)
+        assert (suv[16 * f:16 * f + 16] >= lo - 1e-6).all() and (suv[16 * f:16 * f + 16] <= hi + 1e-6).all()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        pm.write_mesh(smooth, tmp_path / "s.obj")
+    back = pm.read_mesh(tmp_path / "s.obj")
+    np.testing.assert_array_equal(back.corner_attributes["uv"], suv)
+    with pytest.warns(pm.NotWrittenWarning, match=r"not written: uv \(per corner\)"):
+        pm.write_mesh(smooth, tmp_path / "s.ply")
+    assert "corner attributes uv" in repr(smooth)
+    np.testing.assert_array_equal(pickle.loads(pickle.dumps(smooth)).corner_attributes["uv"], suv)
+    with pytest.raises(pm.Error, match=r"corner attribute 'uv' has shape \(2, 2\)"):
+        pm.smooth(pm.Mesh(mesh.vertices, mesh.triangles, corner_attributes={"uv": np.zeros((2, 2))}))
+    with pytest.raises(pm.Error, match=r"corner attribute 'uv' is not finite"):
+        pm.smooth(pm.Mesh(mesh.vertices, mesh.triangles, corner_attributes={"uv": np.full((2, 3, 2), np.nan)}))
 
 
 def test_components_number_the_pieces_with_their_volumes(pm):

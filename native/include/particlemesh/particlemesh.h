@@ -350,6 +350,27 @@ PM_EXPORT pm_status pm_mesh_lend_attribute(pm_mesh* mesh, const char* name, floa
  *  stays valid until the mesh is changed or destroyed). */
 PM_EXPORT pm_status pm_mesh_get_attribute_count(const pm_mesh* mesh, size_t* out_count);
 PM_EXPORT pm_status pm_mesh_get_attribute_name(const pm_mesh* mesh, size_t index, const char** out_name);
+
+/* ---- per-corner attributes ---------------------------------------------------------- */
+
+/* Named float values per triangle corner, face-varying (a vertex on a texture seam has one
+ * per side): `components` floats per corner, values[(3 * t + c) * components + k] for corner
+ * c of triangle t. "uv" (2 components) holds texture coordinates: pm_mesh_read takes them from
+ * an OBJ's vt, pm_mesh_write writes them to .obj. pm_smooth carries every one, linearly over
+ * each input triangle. */
+
+/** Set (or replace) corner attribute `name`: triangle_count must equal the mesh's, components
+ *  is 1..64, every value finite. */
+PM_EXPORT pm_status pm_mesh_set_corner_attribute(pm_mesh* mesh, const char* name, int32_t components,
+                                                 const float* values, size_t triangle_count);
+PM_EXPORT pm_status pm_mesh_get_corner_attribute_count(const pm_mesh* mesh, size_t* out_count);
+PM_EXPORT pm_status pm_mesh_get_corner_attribute_name(const pm_mesh* mesh, size_t index, const char** out_name);
+/** Components of corner attribute `name`; PM_STATUS_INVALID_ARGUMENT naming it when the mesh has none. */
+PM_EXPORT pm_status pm_mesh_get_corner_attribute_components(const pm_mesh* mesh, const char* name,
+                                                            int32_t* out_components);
+/** Copy corner attribute `name` into `out` (capacity_triangles * 3 * components floats). */
+PM_EXPORT pm_status pm_mesh_copy_corner_attribute(const pm_mesh* mesh, const char* name, float* out,
+                                                  size_t capacity_triangles);
 /** Set (or replace) attribute `name` on a cloud (vertex_count = the cloud's point count). */
 PM_EXPORT pm_status pm_cloud_set_attribute(pm_cloud* cloud, const char* name, int32_t components,
                                            const float* values, size_t vertex_count);

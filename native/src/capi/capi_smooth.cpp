@@ -53,6 +53,41 @@ void set_attribute(Vertices& v, const char* owner, const char* name, int32_t com
   v.attributes.push_back(std::move(a));
 }
 
+/// The corner attribute `name` of a pm_mesh, checked: a count of triangles and components as
+/// the C header says, finite values. Added, or replacing one of the same name.
+void set_corner_attribute(TriMesh& mesh, const char* name, int32_t components, const float* values,
+                          size_t triangle_count) {
+  require(name, "name");
+  if (name[0] == '\0') throw Error(Status::InvalidArgument, "name is empty");
+  if (components < 1 || components > 64)
+    throw Error(Status::InvalidArgument, "components must be in [1, 64], got " + std::to_string(components));
+  if (triangle_count != mesh.triangles.size())
+    throw Error(Status::InvalidArgument, "triangle_count is " + std::to_string(triangle_count) + " but the mesh has " +
+                                             std::to_string(mesh.triangles.size()));
+  const size_t k = size_t(components), n = 3 * triangle_count * k;
+  if (n > 0) require(values, "values");
+  VertexAttribute a{name, components, std::vector<float>(values, values + n)};
+  for (size_t i = 0; i < n; ++i)
+    if (!std::isfinite(a.values[i]))
+      throw Error(Status::InvalidInput, "values[" + std::to_string(i) + "] (triangle " + std::to_string(i / k / 3) +
+                                            ", corner " + std::to_string(i / k % 3) + ", component " +
+                                            std::to_string(i % k) + ") of corner attribute '" + name + "' is not finite");
+  for (auto& x : mesh.corner_attributes)
+    if (x.name == a.name) {
+      x = std::move(a);
+      return;
+    }
+  mesh.corner_attributes.push_back(std::move(a));
+}
+
+const VertexAttribute& find_corner(const pm_mesh* mesh, const char* name) {
+  require(mesh, "mesh");
+  require(name, "name");
+  for (const auto& a : mesh->mesh.corner_attributes)
+    if (a.name == name) return a;
+  throw Error(Status::InvalidArgument, std::string("the mesh has no corner attribute '") + name + "'");
+}
+
 const VertexAttribute& find(const pm_mesh* mesh, const char* name) {
   require(mesh, "mesh");
   require(name, "name");
@@ -156,6 +191,51 @@ pm_status pm_mesh_get_attribute_name(const pm_mesh* mesh, size_t index, const ch
       throw Error(Status::InvalidArgument, "index " + std::to_string(index) + " is out of range: the mesh has " +
                                                std::to_string(attrs.size()) + " attributes");
     *out_name = attrs[index].name.c_str();
+  });
+}
+
+pm_status pm_mesh_set_corner_attribute(pm_mesh* mesh, const char* name, int32_t components, const float* values,
+                                       size_t triangle_count) {
+  return guarded([&] { set_corner_attribute(capi::deref(mesh, "mesh").mesh, name, components, values, triangle_count); });
+}
+
+pm_status pm_mesh_get_corner_attribute_count(const pm_mesh* mesh, size_t* out_count) {
+  return guarded([&] {
+    require(mesh, "mesh");
+    require(out_count, "out_count");
+    *out_count = mesh->mesh.corner_attributes.size();
+  });
+}
+
+pm_status pm_mesh_get_corner_attribute_name(const pm_mesh* mesh, size_t index, const char** out_name) {
+  return guarded([&] {
+    require(mesh, "mesh");
+    require(out_name, "out_name");
+    const auto& attrs = mesh->mesh.corner_attributes;
+    if (index >= attrs.size())
+      throw Error(Status::InvalidArgument, "index " + std::to_string(index) + " is out of range: the mesh has " +
+                                               std::to_string(attrs.size()) + " corner attributes");
+    *out_name = attrs[index].name.c_str();
+  });
+}
+
+pm_status pm_mesh_get_corner_attribute_components(const pm_mesh* mesh, const char* name, int32_t* out_components) {
+  return guarded([&] {
+    const VertexAttribute& a = find_corner(mesh, name);
+    require(out_components, "out_components");
+    *out_components = a.components;
+  });
+}
+
+pm_status pm_mesh_copy_corner_attribute(const pm_mesh* mesh, const char* name, float* out, size_t capacity_triangles) {
+  return guarded([&] {
+    const VertexAttribute& a = find_corner(mesh, name);
+    require(out, "out");
+    const size_t nt = mesh->mesh.triangles.size();
+    if (capacity_triangles < nt)
+      throw Error(Status::InvalidArgument, "capacity_triangles " + std::to_string(capacity_triangles) +
+                                               " is less than the " + std::to_string(nt) + " triangles");
+    std::copy(a.values.begin(), a.values.end(), out);
   });
 }
 

@@ -34,6 +34,8 @@ struct FileContents {
   /// Per-position channels: "color" (3 floats in [0, 1]) from a file's red/green/blue, and
   /// whatever named per-point values a format carries (values[point * components + c]).
   std::vector<VertexAttribute> attributes;
+  /// Per triangle corner (TriMesh::corner_attributes): "uv" from OBJ's vt.
+  std::vector<VertexAttribute> corner_attributes;
   /// The number of faces the file declares (before fanning): a mesh file that declares faces
   /// but yields no triangle is an error, never an empty mesh.
   uint64_t faces = 0;

@@ -56,6 +56,7 @@ TriMesh read_mesh(const std::string& path) {
   detail::FileContents c = read_file(path, detail::ReadPurpose::Mesh);
   TriMesh mesh = take_vertices<TriMesh>(c);
   mesh.triangles = std::move(c.triangles);
+  mesh.corner_attributes = std::move(c.corner_attributes);
   mesh.not_read = detail::not_read_lines(c);
   // Normals that are not finite are no normals (they are only carried, never trusted).
   for (const Vec3& n : mesh.normals)

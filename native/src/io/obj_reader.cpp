@@ -1,8 +1,9 @@
-// Wavefront OBJ meshes: v (x y z, optional w, or x y z r g b), vn, and f with v, v/vt, v//vn
-// or v/vt/vn corners (1-based, or negative: relative to the vertices so far); polygons are
-// fanned; a line ending in a backslash continues on the next. Other statements (vt, o, g, s,
-// usemtl, mtllib, l, p, ...) are skipped; texture coordinates, materials and l / p elements
-// of a mesh are named in not_read.
+// Wavefront OBJ meshes: v (x y z, optional w, or x y z r g b), vn, vt, and f with v, v/vt,
+// v//vn or v/vt/vn corners (1-based, or negative: relative to the vertices so far); polygons
+// are fanned; a line ending in a backslash continues on the next. Texture coordinates become
+// the corner attribute "uv" when every face corner names a vt that exists (else they are
+// named in not_read, as are materials and l / p elements); other statements (o, g, s,
+// usemtl, mtllib, l, p, ...) are skipped.
 //
 // Also particles (ReadPurpose::Points): the point clouds MeshLab, Blender and CloudCompare
 // export are v lines (often v x y z r g b), sometimes one vn per v in the same order, and no
@@ -18,7 +19,10 @@
 // a value it cannot read becomes 0 without a word ("v nan abc 1" reads as 0 0 1, "1.5xyz" as
 // 1.5); and a face corner beyond the vertices is only a warning, the face kept with the bad
 // index. OpenMesh's OBJ reader kept float32 and asserted on corners without a vertex index.
+#include <array>
+#include <cfloat>
 #include <cmath>
+#include <utility>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -56,7 +60,7 @@ class ObjReader {
       else if (w[0] == "f") {
         if (purpose_ == ReadPurpose::Mesh) face(w);
         else ++faces_;  // skipped for points; counted (a file with faces has no per-v normals)
-      } else if (w[0] == "vt") ++texture_coordinates_;
+      } else if (w[0] == "vt") texture_coordinate(w);
       else if (w[0] == "usemtl") ++materials_;
       else if (w[0] == "l" || w[0] == "p") ++lines_and_points_;
     };
@@ -99,8 +103,16 @@ class ObjReader {
       note_not_read(out, "vertex colours (" + std::to_string(colored_) + " of the " + std::to_string(out.positions.size()) +
                              " vertices have one: a channel needs every vertex's)");
     if (purpose_ == ReadPurpose::Mesh) {
-      if (texture_coordinates_ > 0 && faces_ > 0)
-        note_not_read(out, "texture coordinates (" + std::to_string(texture_coordinates_) + " vt)");
+      const uint64_t vt = texture_coordinates_;
+      if (vt > 0 && faces_ > 0 && corners_without_uv_ == 0 && uv_out_of_range_.empty()) {
+        out.corner_attributes.push_back({"uv", 2, std::move(corner_uvs_)});
+      } else if (vt > 0 && faces_ > 0) {
+        const std::string why = !uv_out_of_range_.empty()
+                                    ? "a face names " + uv_out_of_range_
+                                    : corners_without_uv_ == 1 ? std::string("1 face corner names none")
+                                                               : std::to_string(corners_without_uv_) + " face corners name none";
+        note_not_read(out, "texture coordinates (" + std::to_string(vt) + " vt; " + why + ")");
+      }
       if (materials_ > 0) note_not_read(out, "materials (" + std::to_string(materials_) + " usemtl)");
       if (lines_and_points_ > 0)
         note_not_read(out, "line and point elements (" + std::to_string(lines_and_points_) + " l / p)");
@@ -141,6 +153,18 @@ class ObjReader {
     }
   }
 
+  void texture_coordinate(const std::vector<std::string_view>& w) {
+    ++texture_coordinates_;
+    if (purpose_ != ReadPurpose::Mesh) return;
+    // vt u, vt u v or vt u v w; 3D texture coordinates keep u and v.
+    if (w.size() < 2 || w.size() > 4) fail("'vt' with " + std::to_string(w.size() - 1) + " values (expected u, u v or u v w)");
+    const double u = number(w[1], "texture u"), v = w.size() > 2 ? number(w[2], "texture v") : 0.0;
+    for (const auto& [x, text] : {std::pair{u, w[1]}, std::pair{v, w.size() > 2 ? w[2] : w[1]}})
+      if (std::abs(x) > double(FLT_MAX))
+        fail("texture coordinate '" + shown(text) + "' is beyond the range of float (3.4e38)");
+    uvs_.push_back({u, v});
+  }
+
   void normal(const std::vector<std::string_view>& w) {
     if (w.size() != 4) fail("'vn' with " + std::to_string(w.size() - 1) + " values (expected 3)");
     normals_.push_back({number(w[1], "normal x"), number(w[2], "normal y"), number(w[3], "normal z")});
@@ -174,16 +198,28 @@ class ObjReader {
     const size_t n = w.size() - 1;
     if (n < 3) fail("a face with " + std::to_string(n) + " corner" + (n == 1 ? "" : "s") + " (at least 3)");
     corners_.clear();
+    corner_uv_.clear();
     for (size_t i = 1; i < w.size(); ++i) {
       const std::string_view c = w[i];
       const size_t a = c.find('/');
-      uint32_t v = 0, vn = 0;
+      uint32_t v = 0, vn = 0, vt = kNoUv;
       bool ok = index(c.substr(0, a), positions_.size(), v, nullptr), has_vn = false;
       if (ok && a != std::string_view::npos) {
         const std::string_view rest = c.substr(a + 1);
         const size_t b = rest.find('/');
-        // The texture coordinate is not used (-1: the last 'vt').
-        ok = unused_index(rest.substr(0, b));
+        // The texture coordinate (-1: the last 'vt'). One that names no vt is not an
+        // error (the coordinates are then not read, and said so); in a file without vt
+        // lines it is a placeholder.
+        const std::string_view vt_text = rest.substr(0, b);
+        ok = unused_index(vt_text);
+        bool no_vt = vt_text.empty();
+        if (ok && !no_vt && !uvs_.empty()) {
+          if (!index(vt_text, uvs_.size(), vt, nullptr) || vt >= uvs_.size()) {
+            if (uv_out_of_range_.empty())
+              uv_out_of_range_ = "vt " + std::string(vt_text) + " of " + std::to_string(uvs_.size());
+            vt = kNoUv;
+          }
+        }
         if (ok && b != std::string_view::npos) {
           bool no_vn = false;
           const std::string_view vn_text = rest.substr(b + 1);
@@ -213,8 +249,15 @@ class ObjReader {
         any_vertex_normal_ = true;
       }
       corners_.push_back(v);
+      corner_uv_.push_back(vt);
+      if (vt == kNoUv) ++corners_without_uv_;
     }
-    for (size_t k = 1; k + 1 < corners_.size(); ++k) triangles_.push_back({corners_[0], corners_[k], corners_[k + 1]});
+    for (size_t k = 1; k + 1 < corners_.size(); ++k) {
+      triangles_.push_back({corners_[0], corners_[k], corners_[k + 1]});
+      if (corners_without_uv_ == 0 && uv_out_of_range_.empty())
+        for (const size_t j : {size_t(0), k, k + 1})
+          for (int d = 0; d < 2; ++d) corner_uvs_.push_back(float(uvs_[corner_uv_[j]][size_t(d)]));
+    }
   }
 
   FileReader in_;
@@ -225,7 +268,12 @@ class ObjReader {
   uint64_t texture_coordinates_ = 0, materials_ = 0, lines_and_points_ = 0;
   bool any_vertex_normal_ = false;
   std::vector<Triangle> triangles_;
-  std::vector<uint32_t> corners_;
+  std::vector<uint32_t> corners_, corner_uv_;  // a face's vertices and vt indices
+  static constexpr uint32_t kNoUv = UINT32_MAX;
+  std::vector<std::array<double, 2>> uvs_;     // the vt lines' u v
+  std::vector<float> corner_uvs_;              // 6 per triangle while every corner has a vt
+  uint64_t corners_without_uv_ = 0;
+  std::string uv_out_of_range_;                // the first vt index beyond the vt lines
   uint64_t faces_ = 0;
 };
 

@@ -8,8 +8,9 @@
 // float32; red green blue uchar from a "color" attribute; every other attribute as float
 // properties, "name" or "name_0".."name_k"), one face element (uchar count, int indices).
 // OBJ: "# V vertices, F faces", then v (with r g b from a "color" attribute) and vn lines
-// in turn (float64 positions: every v line, then every vn line), then f a//a b//b c//c (or
-// f a b c). Text values have 9 significant digits
+// in turn (float64 positions: every v line, then every vn line), then, with a "uv" corner
+// attribute, one vt line per distinct (u, v) in the order first met, then f a//a b//b c//c
+// (or f a b c; a/t/a or a/t with texture coordinates). Text values have 9 significant digits
 // (what gives a float32 back), 17 for float64 positions.
 #include "io/writers.h"
 
@@ -20,6 +21,7 @@
 #include <cstring>
 #include <memory>
 #include <string>
+#include <unordered_map>
 
 #include "particlemesh/core/error.h"
 
@@ -94,6 +96,13 @@ std::string ply_name(const std::string& name) {
   for (char& c : s)
     if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_')) c = '_';
   return s;
+}
+
+/// The "uv" corner attribute when it is one (u, v) per triangle corner, else nullptr.
+const VertexAttribute* corner_uv_of(const TriMesh& mesh) {
+  for (const VertexAttribute& a : mesh.corner_attributes)
+    if (a.name == "uv" && a.components == 2 && a.values.size() == 6 * mesh.triangles.size()) return &a;
+  return nullptr;
 }
 
 const VertexAttribute* color_of(const TriMesh& mesh) {
@@ -339,13 +348,38 @@ void write_obj(const TriMesh& mesh, OutputFile& out, bool normals, const std::st
       if (normals) vn_line(i);
     }
   }
-  for (const Triangle& tri : mesh.triangles) {
+  // Texture coordinates: one vt per distinct (u, v) pair (by its bits), numbered as first met.
+  const VertexAttribute* uv = corner_uv_of(mesh);
+  std::vector<uint32_t> corner_vt;
+  if (uv) {
+    std::unordered_map<uint64_t, uint32_t> number;
+    corner_vt.resize(3 * mesh.triangles.size());
+    for (size_t c = 0; c < corner_vt.size(); ++c) {
+      uint32_t bits[2];
+      std::memcpy(bits, &uv->values[2 * c], sizeof bits);
+      const auto [it, fresh] = number.emplace(uint64_t(bits[0]) << 32 | bits[1], uint32_t(number.size()));
+      corner_vt[c] = it->second;
+      if (fresh) {
+        t.put("vt ");
+        t.number(double(uv->values[2 * c]), 9);
+        t.put(' ');
+        t.number(double(uv->values[2 * c + 1]), 9);
+        t.put('\n');
+      }
+    }
+  }
+  for (size_t f = 0; f < mesh.triangles.size(); ++f) {
     t.put('f');
-    for (uint32_t v : tri) {
+    for (size_t c = 0; c < 3; ++c) {
+      const uint32_t v = mesh.triangles[f][c];
       t.put(' ');
       t.integer(uint64_t(v) + 1);
+      if (uv) {
+        t.put('/');
+        t.integer(uint64_t(corner_vt[3 * f + c]) + 1);
+      }
       if (normals) {
-        t.put("//");
+        t.put(uv ? "/" : "//");
         t.integer(uint64_t(v) + 1);
       }
     }

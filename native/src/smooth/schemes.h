@@ -17,6 +17,14 @@ void check_smooth_options(const SmoothOptions& options, size_t triangles);
 void resolve_creases(const ControlMesh& control, const SmoothOptions& options,
                      std::vector<std::pair<uint32_t, uint32_t>>* pairs, std::vector<float>* sharpness);
 
+/// Every corner attribute of `mesh` one value per component and triangle corner, finite and
+/// within kMaxSmoothAttribute; else Error(InvalidInput) naming it (and the triangle).
+void check_corner_attributes(const TriMesh& mesh);
+
+/// `mesh`'s corner attributes through `levels` splits (see TriMesh::corner_attributes),
+/// following the control mesh's orientation repair.
+std::vector<VertexAttribute> subdivide_corner_attributes(const TriMesh& mesh, const ControlMesh& control, int levels);
+
 /// The last step of smooth_mesh: area-weighted normals where the mesh has none, or where a
 /// limit normal vanished (degenerate geometry).
 void finish_smooth_normals(TriMesh& mesh);

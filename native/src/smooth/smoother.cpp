@@ -70,6 +70,7 @@ struct Smoother::Impl {
   SmoothOptions options;
   size_t input_vertices = 0;
   std::vector<Triangle> input_triangles;
+  std::vector<VertexAttribute> input_corner_attributes, corner_attributes;  // given, subdivided
   detail::ControlMesh control;  // its positions and attributes are dropped after construction
   SmoothStats stats;            // of the construction (checks, refinement)
   // Loop:
@@ -94,7 +95,10 @@ Smoother::Smoother(const TriMesh& mesh, const SmoothOptions& options) : impl_(st
   detail::with_threads(options.threads, [&] {
     const auto t0 = Clock::now();
     tracker.stage("checking the mesh", 0.0, 0.1);
+    detail::check_corner_attributes(mesh);
     m.control = detail::prepare_control_mesh(mesh, options.scheme == SmoothScheme::Loop);
+    m.input_corner_attributes = mesh.corner_attributes;
+    m.corner_attributes = detail::subdivide_corner_attributes(mesh, m.control, options.levels);
     SmoothStats& st = m.stats;
     st.input_vertices = mesh.positions.size();
     st.dropped_vertices = m.control.dropped_vertices;
@@ -187,12 +191,15 @@ SmoothResult Smoother::evaluate(const std::vector<Vec3>& positions, const std::v
       mesh.positions = positions;
       mesh.triangles = m.input_triangles;
       mesh.attributes = attributes;
+      mesh.corner_attributes = m.input_corner_attributes;
       return smooth_mesh(mesh, m.options);
     }
     std::vector<Vec3> pos;
     std::vector<VertexAttribute> attr;
     detail::compact_vertex_values(positions, attributes, m.control.original_vertex, &pos, &attr);
-    return m.evaluate_loop(std::move(pos), attr);
+    SmoothResult out = m.evaluate_loop(std::move(pos), attr);
+    out.mesh.corner_attributes = m.corner_attributes;
+    return out;
   });
 }
 

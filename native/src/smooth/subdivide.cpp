@@ -61,6 +61,68 @@ void check_size(size_t triangles, const SmoothOptions& o) {
 
 namespace detail {
 
+void check_corner_attributes(const TriMesh& mesh) {
+  const size_t corners = 3 * mesh.triangles.size();
+  for (const VertexAttribute& a : mesh.corner_attributes) {
+    const std::string name = "corner attribute '" + a.name + "'";
+    if (a.components < 1 || a.components > 64)
+      throw Error(Status::InvalidInput, name + " has " + std::to_string(a.components) + " components (1 to 64)");
+    if (a.values.size() != corners * size_t(a.components))
+      throw Error(Status::InvalidInput, name + " has " + std::to_string(a.values.size()) + " values, not " +
+                                            std::to_string(a.components) + " for each of the 3 x " +
+                                            std::to_string(mesh.triangles.size()) + " triangle corners");
+    for (size_t i = 0; i < a.values.size(); ++i)
+      if (!(std::abs(a.values[i]) <= kMaxSmoothAttribute))
+        throw Error(Status::InvalidInput, name + " of triangle " + std::to_string(i / size_t(a.components) / 3) +
+                                              " is " + std::to_string(a.values[i]) + " (finite, at most 1e30)");
+  }
+}
+
+/// The corner attributes through `levels` splits, linear over each input triangle: in the
+/// layout both schemes share (subdivide.h), a child corner at a parent's corner takes its
+/// value, one at an edge's new vertex the mean of the edge's two corners. (Both schemes alike:
+/// OpenSubdiv's face-varying channels would cover Loop only.) A triangle the orientation
+/// repair turned is (a, c, b) in the control mesh, and so are its corners' values.
+std::vector<VertexAttribute> subdivide_corner_attributes(const TriMesh& mesh, const ControlMesh& cm, int levels) {
+  std::vector<VertexAttribute> out;
+  const size_t nf = mesh.triangles.size();
+  std::vector<uint8_t> turned(nf);
+  for (size_t f = 0; f < nf; ++f) turned[f] = cm.triangles[f][1] != cm.control_index[mesh.triangles[f][1]];
+  for (const VertexAttribute& a : mesh.corner_attributes) {
+    const size_t k = size_t(a.components);
+    std::vector<float> level(a.values.size());
+    for (size_t f = 0; f < nf; ++f)
+      for (size_t c = 0; c < 3; ++c) {
+        const size_t from = turned[f] && c > 0 ? 3 - c : c;
+        std::copy_n(&a.values[(3 * f + from) * k], k, &level[(3 * f + c) * k]);
+      }
+    for (int l = 0; l < levels; ++l) {
+      const size_t n = level.size() / (3 * k);
+      std::vector<float> next(4 * level.size());
+      parallel_blocks(n, 4096, [&](size_t begin, size_t end) {
+        for (size_t t = begin; t < end; ++t) {
+          const float* p = &level[3 * t * k];
+          float* q = &next[12 * t * k];
+          // Corners a, b, c, then the edges' points ab, bc, ca: slots 0..5.
+          auto value = [&](int slot, size_t j) -> float {
+            if (slot < 3) return p[size_t(slot) * k + j];
+            const size_t u = size_t(slot - 3), v = (u + 1) % 3;
+            return float(0.5 * (double(p[u * k + j]) + double(p[v * k + j])));
+          };
+          static constexpr int kChildren[4][3] = {{0, 3, 5}, {3, 1, 4}, {5, 4, 2}, {4, 5, 3}};
+          for (int child = 0; child < 4; ++child)
+            for (int c = 0; c < 3; ++c)
+              for (size_t j = 0; j < k; ++j) *q++ = value(kChildren[child][c], j);
+        }
+      });
+      level.swap(next);
+    }
+    out.push_back({a.name, a.components, std::move(level)});
+  }
+  return out;
+}
+
+
 void check_smooth_options(const SmoothOptions& options, size_t triangles) {
   check_options(options);
   if (triangles > size_t(INT32_MAX)) throw Error(Status::LimitExceeded, "more than 2^31 - 1 triangles");
@@ -106,6 +168,7 @@ SmoothResult smooth_mesh(const TriMesh& mesh, const SmoothOptions& options) {
   detail::with_threads(options.threads, [&] {
     auto t0 = Clock::now();
     tracker.stage("checking the mesh", 0.0, 0.05);
+    detail::check_corner_attributes(mesh);
     detail::ControlMesh cm = detail::prepare_control_mesh(mesh, options.scheme == SmoothScheme::Loop);
     st.input_vertices = mesh.positions.size();
     st.dropped_vertices = cm.dropped_vertices;
@@ -129,6 +192,7 @@ SmoothResult smooth_mesh(const TriMesh& mesh, const SmoothOptions& options) {
       detail::loop_subdivide(cm, options, crease_pairs, crease_sharpness, tracker, result);
     else
       detail::butterfly_subdivide(cm, options, tracker, result);
+    result.mesh.corner_attributes = detail::subdivide_corner_attributes(mesh, cm, options.levels);
 
     // Normals: Loop's limit normals where they exist, area-weighted ones elsewhere.
     auto t1 = Clock::now();

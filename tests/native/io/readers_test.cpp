@@ -515,11 +515,11 @@ TEST(PlyReader, VectorSpellingsAndNormalFieldNames) {
 TEST(MeshReaders, WhatATriangleMeshDoesNotCarryIsNamed) {
   const auto dir = test::scratch_dir("mesh_not_read");
   const std::string obj = write(dir / "a.obj", "mtllib a.mtl\nv 0 0 0 1 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\n"
-                                               "usemtl skin\nf 1/1 2/2 3/1\nl 1 2\n");
+                                               "usemtl skin\nf 1/1 2/2 3\nl 1 2\n");
   const TriMesh a = read_mesh(obj);
   EXPECT_EQ(a.triangles.size(), 1u);
   EXPECT_EQ(a.not_read, (std::vector<std::string>{"vertex colours (1 of the 3 vertices have one: a channel needs every vertex's)",
-                                                  "texture coordinates (2 vt)", "materials (1 usemtl)",
+                                                  "texture coordinates (2 vt; 1 face corner names none)", "materials (1 usemtl)",
                                                   "line and point elements (1 l / p)"}));
   EXPECT_EQ(read_point_cloud(obj).not_read,
             std::vector<std::string>{"vertex colours (1 of the 3 vertices have one: a channel needs every vertex's)"});
@@ -539,6 +539,44 @@ TEST(MeshReaders, WhatATriangleMeshDoesNotCarryIsNamed) {
                                                "LOOKUP_TABLE default\n7\n");
   EXPECT_EQ(read_mesh(vtk).not_read, std::vector<std::string>{"CELL_DATA SCALARS 'pressure'"});
   EXPECT_TRUE(read_point_cloud(vtk).not_read.empty());
+}
+
+// Texture coordinates are values per triangle corner ("uv"), fanned with the polygons; a
+// corner without one, or one naming a vt that does not exist, leaves them all unread and
+// said (never an error: such files read before). Written back as vt lines, they read the same.
+TEST(ObjReader, TextureCoordinatesAreCornerValues) {
+  const auto dir = test::scratch_dir("obj_uv");
+  const TriMesh quad = read_mesh(write(dir / "quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 0.5 0\n"
+                                                        "vt 0.5 0.25 7\nvt 0 0.25\nvn 0 0 1\nf 1/1/1 2/2/1 3/-2/1 4/4/1\n"));
+  ASSERT_EQ(quad.triangles, (std::vector<Triangle>{{0, 1, 2}, {0, 2, 3}}));
+  ASSERT_EQ(quad.corner_attributes.size(), 1u);
+  EXPECT_EQ(quad.corner_attributes[0].name, "uv");
+  EXPECT_EQ(quad.corner_attributes[0].components, 2);
+  EXPECT_EQ(quad.corner_attributes[0].values, (std::vector<float>{0, 0, 0.5f, 0, 0.5f, 0.25f, 0, 0, 0.5f, 0.25f, 0, 0.25f}));
+  EXPECT_TRUE(quad.not_read.empty());
+  // A seam: vertex 2 (index 1) has two texture coordinates, one per face.
+  const TriMesh seam = read_mesh(write(dir / "seam.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\n"
+                                                        "vt 0 1\nvt 0.9 0.1\nvt 1 1\nvt 0.2 0.8\nf 1/1 2/2 3/3\nf 2/4 4/5 3/6\n"));
+  ASSERT_EQ(seam.corner_attributes.size(), 1u);
+  EXPECT_EQ(seam.corner_attributes[0].values[2], 1.0f);
+  EXPECT_EQ(seam.corner_attributes[0].values[6], 0.9f);
+  const std::string written = (dir / "seam_out.obj").string();
+  write_mesh(seam, written);
+  const TriMesh back = read_mesh(written);
+  EXPECT_EQ(back.triangles, seam.triangles);
+  ASSERT_EQ(back.corner_attributes.size(), 1u);
+  EXPECT_EQ(back.corner_attributes[0].values, seam.corner_attributes[0].values);
+  const TriMesh out_of_range = read_mesh(write(dir / "far.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/5 3/1\n"));
+  EXPECT_EQ(out_of_range.triangles.size(), 1u);
+  EXPECT_TRUE(out_of_range.corner_attributes.empty());
+  EXPECT_EQ(out_of_range.not_read, std::vector<std::string>{"texture coordinates (1 vt; a face names vt 5 of 1)"});
+  EXPECT_TRUE(read_mesh(write(dir / "novt.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1 2/2 3/3\n")).corner_attributes.empty());
+  EXPECT_REFUSED(read_mesh(write(dir / "badvt.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 x\nf 1/1 2/1 3/1\n")),
+                 Status::FormatError, "line 4: texture v 'x' is not a number");
+  EXPECT_REFUSED(read_mesh(write(dir / "hugevt.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 -1e39\nf 1/1 2/1 3/1\n")),
+                 Status::FormatError, "line 4: texture coordinate '-1e39' is beyond the range of float");
+  // Read for points, texture coordinates are neither read nor named.
+  EXPECT_TRUE(read_point_cloud((dir / "quad.obj").string()).not_read.empty());
 }
 
 TEST(ObjReader, ValuesAndCornersNamedWithTheirLine) {

@@ -15,6 +15,7 @@
 //  - attributes: constant stays constant, linear stays linear on a flat patch;
 //  - bad input, repairs (dropped vertices, orientation), creases, threads, cancellation.
 #include "particlemesh/smooth/subdivide.h"
+#include "particlemesh/smooth/smoother.h"
 
 #include <gtest/gtest.h>
 
@@ -831,6 +832,66 @@ TEST(SmoothLayout, ChildrenOfEachInputTriangleFollowOneLayout) {
       EXPECT_EQ(mismatches, 0u);
     }
   }
+}
+
+// Values per triangle corner (texture coordinates) are linear over each input triangle. On a
+// flat regular patch neither scheme moves a vertex off its place away from the border, so
+// u = x, v = y there; a seam (every odd triangle's u moved by 10) stays on the input
+// triangles' edges; a triangle the orientation repair turns back gives what it would have
+// unturned; the Smoother carries them as smooth_mesh does; bad values are named.
+TEST(SmoothCornerAttributes, LinearOverEachInputTriangleAndSeamsStay) {
+  TriMesh m = flat_patch(8, 7);
+  std::vector<float> uv, extra;
+  for (size_t f = 0; f < m.triangles.size(); ++f)
+    for (uint32_t v : m.triangles[f]) {
+      uv.insert(uv.end(), {float(m.positions[v].x + 10 * double(f % 2)), float(m.positions[v].y)});
+      extra.push_back(float(f));
+    }
+  m.corner_attributes = {{"uv", 2, uv}, {"face", 1, extra}};
+  TriMesh turned = m;  // one triangle (and its corners' values) the other way round
+  const size_t t = 11;
+  std::swap(turned.triangles[t][1], turned.triangles[t][2]);
+  for (auto& a : turned.corner_attributes)
+    for (int j = 0; j < a.components; ++j)
+      std::swap(a.values[size_t((3 * t + 1) * size_t(a.components) + size_t(j))],
+                a.values[size_t((3 * t + 2) * size_t(a.components) + size_t(j))]);
+  for (const SmoothOptions& o : {loop(2, true), butterfly(2)}) {
+    const SmoothResult r = smooth_mesh(m, o);
+    ASSERT_EQ(r.mesh.corner_attributes.size(), 2u);
+    const VertexAttribute& u = r.mesh.corner_attributes[0];
+    ASSERT_EQ(u.name, "uv");
+    ASSERT_EQ(u.values.size(), 6 * r.mesh.triangles.size());
+    const size_t k = 16;
+    size_t checked = 0;
+    for (size_t f = 0; f < r.mesh.triangles.size(); ++f)
+      for (size_t c = 0; c < 3; ++c) {
+        const Vec3& p = r.mesh.positions[r.mesh.triangles[f][c]];
+        const float su = u.values[6 * f + 2 * c], sv = u.values[6 * f + 2 * c + 1];
+        EXPECT_EQ(std::floor(su / 10), double((f / k) % 2));  // the seam: the parent's island
+        EXPECT_EQ(r.mesh.corner_attributes[1].values[3 * f + c], float(f / k));
+        if (p.x > 2.1 && p.x < 5.4 && p.y > 1.8 && p.y < 3.4) {
+          EXPECT_NEAR(su - 10 * double((f / k) % 2), p.x, 1e-5);
+          EXPECT_NEAR(sv, p.y, 1e-5);
+          ++checked;
+        }
+      }
+    EXPECT_GT(checked, r.mesh.triangles.size() / 5);
+    const SmoothResult back = smooth_mesh(turned, o);
+    EXPECT_EQ(back.stats.reoriented_triangles, 1u);
+    EXPECT_EQ(back.mesh.triangles, r.mesh.triangles);
+    EXPECT_EQ(back.mesh.corner_attributes[0].values, u.values);
+    EXPECT_EQ(back.mesh.corner_attributes[1].values, r.mesh.corner_attributes[1].values);
+    const Smoother smoother(m, o);
+    EXPECT_EQ(smoother.evaluate(m.positions, {}).mesh.corner_attributes[0].values, u.values);
+  }
+  TriMesh bad = m;
+  bad.corner_attributes[0].values.pop_back();
+  EXPECT_NE(message_of([&] { smooth_mesh(bad, loop(1)); }).find("corner attribute 'uv' has 503 values, not 2 for each of the 3 x 84 triangle corners"),
+            std::string::npos);
+  bad = m;
+  bad.corner_attributes[1].values[7] = std::nanf("");
+  EXPECT_NE(message_of([&] { smooth_mesh(bad, butterfly(1)); }).find("corner attribute 'face' of triangle 2 is nan"),
+            std::string::npos);
 }
 
 TEST(SmoothInput, BadMeshesGiveClearErrors) {

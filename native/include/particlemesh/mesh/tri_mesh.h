@@ -24,6 +24,11 @@ struct TriMesh {
   std::vector<Vec3> normals;  ///< empty or one per vertex
   std::vector<Triangle> triangles;
   std::vector<VertexAttribute> attributes;
+  /// Optional values per triangle corner (face-varying: a vertex on a texture seam has one
+  /// per side): as VertexAttribute, with values[(3 * t + c) * components + k] for corner c of
+  /// triangle t. "uv" (2 components) holds texture coordinates: OBJ's vt, read and written.
+  /// smooth_mesh carries every one, linearly over each input triangle.
+  std::vector<VertexAttribute> corner_attributes;
   /// What read_mesh found in the file but does not carry, one line each naming it (as
   /// PointCloud::not_read): "texture coordinates (120 vt)", "face property 'red'", "element
   /// 'edge' (12)", "CELL_DATA SCALARS 'pressure'". Empty for a mesh not read from a file.
