@@ -255,12 +255,20 @@ void add_inspect(CLI::App& root, std::vector<Command>& commands) {
                           // vertex-only PLY, a VTK particle file); an empty mesh stays a mesh.
                           if (mesh && (!mesh->triangles.empty() || mesh->positions.empty())) {
                             const TopologyReport r = topology_report(*mesh);
+                            // Values per triangle corner (an OBJ's texture coordinates), by name.
+                            std::vector<std::string> corners;
+                            for (const VertexAttribute& a : mesh->corner_attributes)
+                              corners.push_back(a.name + " (" + std::to_string(a.components) + " per corner)");
                             if (args->json) {
                               nlohmann::json j = to_json(r);
+                              if (!corners.empty()) j["corner_attributes"] = corners;
                               if (!mesh->not_read.empty()) j["not_read"] = mesh->not_read;
                               std::printf("%s\n", j.dump(2).c_str());
                             } else {
-                              std::printf("%s\n%s%s", args->input.c_str(), describe(r).c_str(),
+                              std::string list;
+                              for (const std::string& c : corners) list += (list.empty() ? "" : ", ") + c;
+                              std::printf("%s\n%s%s%s", args->input.c_str(), describe(r).c_str(),
+                                          list.empty() ? "" : ("  per corner    " + list + "\n").c_str(),
                                           not_read_line(mesh->not_read).c_str());
                             }
                             return 0;

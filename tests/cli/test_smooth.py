@@ -299,6 +299,8 @@ def test_texture_coordinates_go_through_the_smoothing(cli, tmp_path):
     lines += ["f " + " ".join(corners[3 * n:3 * n + 3]) for n in range(len(faces))]
     src = tmp_path / "uv.obj"
     src.write_text("\n".join(lines) + "\n")
+    assert "  per corner    uv (2 per corner)" in cli("inspect", src).stdout
+    assert json.loads(cli("inspect", src, "--json").stdout)["corner_attributes"] == ["uv (2 per corner)"]
     out = cli("smooth", src, "-o", tmp_path / "s.obj", "--levels", "2").stdout
     assert "not read" not in out and "not written" not in out
     _, smooth_faces = _obj_corners(tmp_path / "s.obj")

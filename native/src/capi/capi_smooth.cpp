@@ -80,20 +80,30 @@ void set_corner_attribute(TriMesh& mesh, const char* name, int32_t components, c
   mesh.corner_attributes.push_back(std::move(a));
 }
 
-const VertexAttribute& find_corner(const pm_mesh* mesh, const char* name) {
+/// A mesh's attribute (`corner`: its corner attribute) named `name`, else InvalidArgument.
+const VertexAttribute& find(const pm_mesh* mesh, const char* name, bool corner = false) {
   require(mesh, "mesh");
   require(name, "name");
-  for (const auto& a : mesh->mesh.corner_attributes)
+  for (const auto& a : corner ? mesh->mesh.corner_attributes : mesh->mesh.attributes)
     if (a.name == name) return a;
-  throw Error(Status::InvalidArgument, std::string("the mesh has no corner attribute '") + name + "'");
+  throw Error(Status::InvalidArgument, std::string("the mesh has no ") + (corner ? "corner " : "") + "attribute '" +
+                                           name + "'");
 }
 
-const VertexAttribute& find(const pm_mesh* mesh, const char* name) {
+/// The count (out_count) or the index-th name (out_name) of a mesh's attributes or corner
+/// attributes.
+void list_attributes(const pm_mesh* mesh, bool corner, size_t* out_count, size_t index, const char** out_name) {
   require(mesh, "mesh");
-  require(name, "name");
-  for (const auto& a : mesh->mesh.attributes)
-    if (a.name == name) return a;
-  throw Error(Status::InvalidArgument, std::string("the mesh has no attribute '") + name + "'");
+  const auto& attrs = corner ? mesh->mesh.corner_attributes : mesh->mesh.attributes;
+  if (out_name == nullptr) {
+    require(out_count, "out_count");
+    *out_count = attrs.size();
+    return;
+  }
+  if (index >= attrs.size())
+    throw Error(Status::InvalidArgument, "index " + std::to_string(index) + " is out of range: the mesh has " +
+                                             std::to_string(attrs.size()) + (corner ? " corner" : "") + " attributes");
+  *out_name = attrs[index].name.c_str();
 }
 
 /// The C++ options of a pm_smooth_options (NULL: the defaults), creases checked against `mesh`.
@@ -175,22 +185,14 @@ pm_status pm_mesh_lend_attribute(pm_mesh* mesh, const char* name, float** out_va
 }
 
 pm_status pm_mesh_get_attribute_count(const pm_mesh* mesh, size_t* out_count) {
-  return guarded([&] {
-    require(mesh, "mesh");
-    require(out_count, "out_count");
-    *out_count = mesh->mesh.attributes.size();
-  });
+  return guarded([&] { list_attributes(mesh, false, out_count, 0, nullptr); });
 }
 
 pm_status pm_mesh_get_attribute_name(const pm_mesh* mesh, size_t index, const char** out_name) {
   return guarded([&] {
     require(mesh, "mesh");
     require(out_name, "out_name");
-    const auto& attrs = mesh->mesh.attributes;
-    if (index >= attrs.size())
-      throw Error(Status::InvalidArgument, "index " + std::to_string(index) + " is out of range: the mesh has " +
-                                               std::to_string(attrs.size()) + " attributes");
-    *out_name = attrs[index].name.c_str();
+    list_attributes(mesh, false, nullptr, index, out_name);
   });
 }
 
@@ -200,28 +202,20 @@ pm_status pm_mesh_set_corner_attribute(pm_mesh* mesh, const char* name, int32_t 
 }
 
 pm_status pm_mesh_get_corner_attribute_count(const pm_mesh* mesh, size_t* out_count) {
-  return guarded([&] {
-    require(mesh, "mesh");
-    require(out_count, "out_count");
-    *out_count = mesh->mesh.corner_attributes.size();
-  });
+  return guarded([&] { list_attributes(mesh, true, out_count, 0, nullptr); });
 }
 
 pm_status pm_mesh_get_corner_attribute_name(const pm_mesh* mesh, size_t index, const char** out_name) {
   return guarded([&] {
     require(mesh, "mesh");
     require(out_name, "out_name");
-    const auto& attrs = mesh->mesh.corner_attributes;
-    if (index >= attrs.size())
-      throw Error(Status::InvalidArgument, "index " + std::to_string(index) + " is out of range: the mesh has " +
-                                               std::to_string(attrs.size()) + " corner attributes");
-    *out_name = attrs[index].name.c_str();
+    list_attributes(mesh, true, nullptr, index, out_name);
   });
 }
 
 pm_status pm_mesh_get_corner_attribute_components(const pm_mesh* mesh, const char* name, int32_t* out_components) {
   return guarded([&] {
-    const VertexAttribute& a = find_corner(mesh, name);
+    const VertexAttribute& a = find(mesh, name, true);
     require(out_components, "out_components");
     *out_components = a.components;
   });
@@ -229,7 +223,7 @@ pm_status pm_mesh_get_corner_attribute_components(const pm_mesh* mesh, const cha
 
 pm_status pm_mesh_copy_corner_attribute(const pm_mesh* mesh, const char* name, float* out, size_t capacity_triangles) {
   return guarded([&] {
-    const VertexAttribute& a = find_corner(mesh, name);
+    const VertexAttribute& a = find(mesh, name, true);
     require(out, "out");
     const size_t nt = mesh->mesh.triangles.size();
     if (capacity_triangles < nt)
