@@ -1,5 +1,6 @@
 #include "particlemesh/mesh/components.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -90,10 +91,19 @@ size_t remove_small_components(TriMesh& mesh, double min_volume) {
   }
   detail::compact_vertices(mesh, remap, next, kUnused);
   size_t w = 0;
-  for (const Triangle& t : mesh.triangles) {
+  for (size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const Triangle t = mesh.triangles[f];
     if (drop[c.vertex_component[t[0]]]) continue;
+    // The kept triangles' values per corner move with them.
+    for (VertexAttribute& a : mesh.corner_attributes) {
+      const size_t k = 3 * size_t(a.components);
+      if (a.values.size() == k * mesh.triangles.size())
+        std::copy_n(a.values.begin() + ptrdiff_t(k * f), k, a.values.begin() + ptrdiff_t(k * w));
+    }
     mesh.triangles[w++] = {remap[t[0]], remap[t[1]], remap[t[2]]};
   }
+  for (VertexAttribute& a : mesh.corner_attributes)
+    if (a.values.size() == 3 * size_t(a.components) * mesh.triangles.size()) a.values.resize(3 * size_t(a.components) * w);
   mesh.triangles.resize(w);
   return dropped;
 }

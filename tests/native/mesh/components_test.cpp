@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "particlemesh/core/error.h"
 #include "particlemesh/mesh/topology_report.h"
@@ -56,6 +58,10 @@ TEST(MeshComponents, CountsAreasAndVolumesFarFromTheOrigin) {
 TEST(MeshComponents, DropsTheSmallPiecesAndKeepsEverythingElse) {
   TriMesh m = two_boxes();
   const size_t nbig = box_mesh({1, 1, 1}).positions.size();
+  // A value per triangle corner (its triangle's index): it follows its triangle.
+  std::vector<float> corner;
+  for (size_t f = 0; f < m.triangles.size(); ++f) corner.insert(corner.end(), {float(f), float(f), float(f)});
+  m.corner_attributes = {{"face", 1, corner}};
   TriMesh keep = m;
   EXPECT_EQ(remove_small_components(keep, 0.0), 0u);
   EXPECT_EQ(remove_small_components(keep, 0.005), 0u);
@@ -66,6 +72,8 @@ TEST(MeshComponents, DropsTheSmallPiecesAndKeepsEverythingElse) {
   ASSERT_EQ(m.attributes[0].values.size(), nbig + 1);
   EXPECT_EQ(m.attributes[0].values[nbig], float(nbig));  // the channel follows its vertex
   EXPECT_EQ(m.triangles, box_mesh({1, 1, 1}).triangles);
+  ASSERT_EQ(m.corner_attributes[0].values.size(), 3 * m.triangles.size());
+  EXPECT_TRUE(std::equal(m.corner_attributes[0].values.begin(), m.corner_attributes[0].values.end(), corner.begin()));
   const TopologyReport r = topology_report(m);
   EXPECT_TRUE(r.closed);
   EXPECT_EQ(r.components, 1u);

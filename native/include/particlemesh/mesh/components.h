@@ -32,8 +32,9 @@ PM_EXPORT MeshComponents mesh_components(const TriMesh& mesh);
 
 /// Drop every piece whose enclosed volume is below `min_volume` (its absolute value, so an
 /// inward-facing cavity counts by its size): its triangles, and the vertices (with their
-/// normals and attributes) that only it used. Vertices keep their order. Returns the number
-/// of pieces dropped. min_volume <= 0 drops nothing.
+/// normals and attributes) that only it used; the kept triangles keep their values per
+/// corner. Vertices and triangles keep their order. Returns the number of pieces dropped.
+/// min_volume <= 0 drops nothing.
 /// @throws Error(InvalidArgument) a triangle index >= the vertex count, or a NaN min_volume.
 PM_EXPORT size_t remove_small_components(TriMesh& mesh, double min_volume);
 
