@@ -119,16 +119,18 @@ std::vector<std::string> RunOutputs::channels_not_written(const std::string& opt
     // OBJ's "v x y z r g b" holds a colour; PCL's PLY writer knows rgb and intensity.
     const bool obj = o.kind == OutputKind::Mesh && mesh_output_format(o.path, o.format) == MeshFormat::Obj;
     const bool pcl = o.kind == OutputKind::PlyOnly;
-    // Values per triangle corner: OBJ's vt holds texture coordinates ("uv"), no other output
-    // any.
+    // Values per triangle corner: OBJ's vt and PLY's texcoord lists hold texture coordinates
+    // ("uv"), no output any other.
+    const bool ply = o.kind == OutputKind::Mesh && (mesh_output_format(o.path, o.format) == MeshFormat::PlyBinary ||
+                                                    mesh_output_format(o.path, o.format) == MeshFormat::PlyAscii);
     bool corners = false;
     for (const VertexAttribute& a : mesh.corner_attributes)
-      if (!(obj && a.name == "uv" && a.components == 2)) {
+      if (!((obj || ply) && a.name == "uv" && a.components == 2)) {
         out.push_back(a.name + " (per corner)");
         corners = true;
       }
     if (!obj && !pcl) {
-      if (why && corners) *why = "only .obj holds texture coordinates (uv), as vt";
+      if (why && corners) *why = "only .obj and .ply hold texture coordinates (uv), and no other value per corner";
       continue;
     }
     for (const VertexAttribute& a : mesh.attributes)

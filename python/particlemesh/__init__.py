@@ -255,8 +255,9 @@ def write_mesh(mesh, path):
     """Write a Mesh as .ply (binary, float32 unless far from the origin), .obj, .vtk, .vtu or
     .vtp, with its normals and attributes, atomically: under a temporary name, renamed when
     complete. An .obj holds a colour per vertex ("color", 3 components) and texture
-    coordinates (the corner attribute "uv", 2 components) and no other channel; the other
-    formats hold no corner attribute: a NotWrittenWarning names those it leaves out."""
+    coordinates (the corner attribute "uv", 2 components) and no other channel; .ply holds
+    texture coordinates too, .vtk, .vtu and .vtp no corner attribute: a NotWrittenWarning
+    names what a format leaves out."""
     lib = _library.load()
     handle = new_mesh(lib, mesh)
     try:
@@ -270,11 +271,12 @@ def write_mesh(mesh, path):
         if left:
             warnings.warn(f"{os.fspath(path)}: not written: {', '.join(left)} (OBJ holds a colour per vertex "
                           "only; .ply, .vtk, .vtu and .vtp hold every channel)", NotWrittenWarning, stacklevel=2)
+    ply = os.fspath(path).lower().endswith(".ply")
     corners = [f"{name} (per corner)" for name, values in getattr(mesh, "corner_attributes", {}).items()
-               if not (obj and name == "uv" and np.shape(values)[-1:] == (2,))]
+               if not ((obj or ply) and name == "uv" and np.shape(values)[-1:] == (2,))]
     if corners:
-        warnings.warn(f"{os.fspath(path)}: not written: {', '.join(corners)} (only .obj holds texture "
-                      "coordinates (uv), as vt)", NotWrittenWarning, stacklevel=2)
+        warnings.warn(f"{os.fspath(path)}: not written: {', '.join(corners)} (only .obj and .ply hold "
+                      "texture coordinates (uv), and no other value per corner)", NotWrittenWarning, stacklevel=2)
 
 
 # ---- meshing --------------------------------------------------------------------------------

@@ -122,8 +122,8 @@ class Mesh:
     call that made it measured; empty for a mesh made here, and for one read_mesh read but for
     "not_read", the lines naming what the file held that the mesh does not carry), and
     `corner_attributes` {name: (T, 3, C) float32} values per triangle corner (face-varying:
-    "uv", texture coordinates, from an OBJ's vt; smooth() carries them, linear over each
-    input triangle, and write_mesh writes "uv" to .obj)."""
+    "uv", texture coordinates, from an OBJ's vt or a PLY's texcoord lists; smooth() carries
+    them, linear over each input triangle, and write_mesh writes "uv" to .obj and .ply)."""
 
     __slots__ = ("vertices", "triangles", "normals", "attributes", "stats", "corner_attributes")
 

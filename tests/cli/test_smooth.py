@@ -286,8 +286,8 @@ def _obj_corners(path):
 def test_texture_coordinates_go_through_the_smoothing(cli, tmp_path):
     """An OBJ's texture coordinates (u = x + 3 on the lower faces, v = y + z: a seam around
     the equator) come out as vt: linear over each input face, so every output corner's
-    (u, v) is a mean of its face's input corners', and the seam stays where it was. An
-    output that cannot hold them says so."""
+    (u, v) is a mean of its face's input corners', and the seam stays where it was; a .ply
+    output holds them too. An output that cannot hold them says so."""
     verts, faces = _octahedron(tmp_path / "octa.obj")
     lines = ["v %g %g %g" % p for p in verts]
     corners = []
@@ -317,6 +317,11 @@ def test_texture_coordinates_go_through_the_smoothing(cli, tmp_path):
                 assert vertex in parent
                 x, y, z = verts[vertex]
                 assert (u, v) == (x + (3 if lower else 0), y + z)
-    out = cli("smooth", src, "-o", tmp_path / "s.ply", "--report", tmp_path / "s.json").stdout
-    assert "  not written   uv (per corner) (only .obj holds texture coordinates (uv), as vt)" in out
+    # PLY holds them as MeshLab's texcoord lists: inspect finds them there too.
+    out = cli("smooth", src, "-o", tmp_path / "s.ply", "--levels", "2").stdout
+    assert "not written" not in out
+    assert "  per corner    uv (2 per corner)" in cli("inspect", tmp_path / "s.ply").stdout
+    out = cli("smooth", src, "-o", tmp_path / "s.vtk", "--report", tmp_path / "s.json").stdout
+    assert ("  not written   uv (per corner) (only .obj and .ply hold texture coordinates (uv), "
+            "and no other value per corner)") in out
     assert json.loads((tmp_path / "s.json").read_text())["not_written"] == ["uv (per corner)"]

@@ -197,6 +197,11 @@ void file_seeds() {
   put("read_ply", "sphere_normals_binary.ply", via_cloud_writer(sphere, ".ply"));
   put("read_ply", "ico_binary.ply", via_mesh_writer(ico, ".ply"));
   put("read_ply", "torus_ascii.ply", via_mesh_writer(torus, ".ply", MeshFormat::PlyAscii));
+  TriMesh textured = ico;  // MeshLab's texcoord face lists
+  textured.corner_attributes = {{"uv", 2, {}}};
+  for (size_t i = 0; i < 6 * ico.triangles.size(); ++i) textured.corner_attributes[0].values.push_back(float(i % 7) / 7);
+  put("read_ply", "ico_texcoord_binary.ply", via_mesh_writer(textured, ".ply"));
+  put("read_ply", "ico_texcoord_ascii.ply", via_mesh_writer(textured, ".ply", MeshFormat::PlyAscii));
   put("read_ply", "points_ascii_double.ply",
       "ply\nformat ascii 1.0\ncomment made by hand\nelement vertex 4\nproperty double x\nproperty double y\n"
       "property double z\nproperty uchar red\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n"

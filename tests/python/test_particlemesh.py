@@ -591,7 +591,7 @@ def test_read_mesh_names_what_the_mesh_does_not_carry(pm, tmp_path):
 def test_texture_coordinates_are_corner_attributes_through_smooth_and_obj(pm, tmp_path):
     """An OBJ's vt become corner_attributes["uv"] (T, 3, 2); smooth() carries them (the
     children of triangle f are triangles 16f.. at two levels, their corners means of f's);
-    write_mesh writes them back to .obj and warns where a format cannot hold them; they
+    write_mesh writes them back to .obj and .ply and warns where a format cannot hold them; they
     survive pickling; bad shapes and values are named."""
     import pickle
     import warnings
@@ -618,8 +618,12 @@ def test_texture_coordinates_are_corner_attributes_through_smooth_and_obj(pm, tm
         pm.write_mesh(smooth, tmp_path / "s.obj")
     back = pm.read_mesh(tmp_path / "s.obj")
     np.testing.assert_array_equal(back.corner_attributes["uv"], suv)
-    with pytest.warns(pm.NotWrittenWarning, match=r"not written: uv \(per corner\)"):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
         pm.write_mesh(smooth, tmp_path / "s.ply")
+    np.testing.assert_array_equal(pm.read_mesh(tmp_path / "s.ply").corner_attributes["uv"], suv)
+    with pytest.warns(pm.NotWrittenWarning, match=r"not written: uv \(per corner\)"):
+        pm.write_mesh(smooth, tmp_path / "s.vtk")
     assert "corner attributes uv" in repr(smooth)
     np.testing.assert_array_equal(pickle.loads(pickle.dumps(smooth)).corner_attributes["uv"], suv)
     with pytest.raises(pm.Error, match=r"corner attribute 'uv' has shape \(2, 2\)"):

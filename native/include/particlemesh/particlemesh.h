@@ -356,8 +356,8 @@ PM_EXPORT pm_status pm_mesh_get_attribute_name(const pm_mesh* mesh, size_t index
 /* Named float values per triangle corner, face-varying (a vertex on a texture seam has one
  * per side): `components` floats per corner, values[(3 * t + c) * components + k] for corner
  * c of triangle t. "uv" (2 components) holds texture coordinates: pm_mesh_read takes them from
- * an OBJ's vt, pm_mesh_write writes them to .obj. pm_smooth carries every one, linearly over
- * each input triangle. */
+ * an OBJ's vt or a PLY's texcoord face lists, pm_mesh_write writes them to .obj and .ply.
+ * pm_smooth carries every one, linearly over each input triangle. */
 
 /** Set (or replace) corner attribute `name`: triangle_count must equal the mesh's, components
  *  is 1..64, every value finite. */

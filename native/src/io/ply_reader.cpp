@@ -18,11 +18,13 @@
 // name_y name_z, as vector_component reads them) are one (k + 1)-component attribute "name";
 // and the "face" element's vertex_indices (or vertex_index) lists, fanned into triangles (or,
 // in a file without faces, the "tristrips" element's lists: triangle strips, -1 restarting a
-// strip, as the Stanford repository's older models hold them). List
+// strip, as the Stanford repository's older models hold them), with MeshLab's "texcoord" face
+// list (u v per corner, fanned with the face) as the corner attribute "uv". List
 // properties anywhere (a vertex element with a list, an "edge" or "material" element) are
 // walked and skipped (a vertex list is named in not_read). After the last element the file must end
 // (whitespace aside): data beyond what the header declares means a count is wrong.
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -54,7 +56,7 @@ Type type_of(std::string_view t) {
 }
 
 // What a property is read into.
-enum Role : int { kSkip = -1, kX = 0, kY, kZ, kNX, kNY, kNZ, kRed, kGreen, kBlue, kIndices, kAttribute };
+enum Role : int { kSkip = -1, kX = 0, kY, kZ, kNX, kNY, kNZ, kRed, kGreen, kBlue, kIndices, kAttribute, kTexcoord };
 
 struct Property {
   std::string name;
@@ -104,6 +106,13 @@ class PlyReader {
            " the header declares (at byte " + std::to_string(in_.offset() - 1) +
            "): a count in the header is too small, or the file is not one PLY file");
     merge_component_runs();
+    if (face_ && texcoord_) {
+      if (uv_mismatch_ == 0)
+        out_.corner_attributes.push_back({"uv", 2, std::move(corner_uvs_)});
+      else
+        note_not_read(out_, face_->name + " property 'texcoord' (" + std::to_string(uv_mismatch_) +
+                                " faces' lists do not hold a u and a v for each corner)");
+    }
     if (!colors_.empty()) {
       VertexAttribute color{"color", 3, std::move(colors_)};
       out_.attributes.insert(out_.attributes.begin(), std::move(color));
@@ -325,6 +334,13 @@ class PlyReader {
           face_ = face;
           break;
         }
+      // MeshLab's texture coordinates per face corner (a triangle strip has none).
+      if (face_ && purpose_ == ReadPurpose::Mesh && !strips_)
+        for (Property& p : face->properties)
+          if (p.list && p.name == "texcoord" && !is_integer(p.type) && !texcoord_) {
+            p.role = kTexcoord;
+            texcoord_ = true;
+          }
       if (!face_ && purpose_ == ReadPurpose::Mesh && face->count > 0)
         fail("the '" + face->name + "' element has no vertex_indices list");
     }
@@ -333,7 +349,7 @@ class PlyReader {
       // texture's corners), and other elements (edges, materials, ...).
       if (face_)
         for (const Property& p : face_->properties)
-          if (p.role != kIndices)
+          if (p.role != kIndices && p.role != kTexcoord)
             note_not_read(out_, face_->name + " property '" + shown(p.name) + "'" + (p.list ? " (a list)" : ""));
       for (const Element& e : elements_)
         if (&e != vertex_ && &e != face && e.count > 0)
@@ -450,6 +466,9 @@ class PlyReader {
       if (has_normals_) out_.normals.emplace_back();
       if (has_colors_) colors_.insert(colors_.end(), 3, 0.0f);
     }
+    const bool face_uvs = texcoord_ && &e == face_ && purpose_ == ReadPurpose::Mesh;
+    if (face_uvs) face_uv_.clear();
+    const size_t first_triangle = out_.triangles.size();
     for (const Property& p : e.properties) {
       if (!p.list) {
         const double v = scalar(e, i, p);
@@ -479,12 +498,31 @@ class PlyReader {
         }
         for (size_t k = 1; k + 1 < corners_.size(); ++k)
           out_.triangles.push_back({corners_[0], corners_[k], corners_[k + 1]});
+      } else if (p.role == kTexcoord) {
+        for (uint64_t k = 0; k < n; ++k) face_uv_.push_back(scalar(e, i, p));
       } else if (binary) {
         if (!in_.skip(mul_add(n, uint64_t(scalar_size(p.type)), 0))) truncated(e, i);
       } else {
         for (uint64_t k = 0; k < n; ++k) scalar(e, i, p);
       }
     }
+    if (face_uvs) fan_texcoords(first_triangle);
+  }
+
+  // The record's texture coordinates (face_uv_, u v per corner of corners_) for the triangles
+  // it was fanned into from first_triangle on; a list of another length, or values beyond
+  // float, counted in uv_mismatch_ (the coordinates are then not read).
+  void fan_texcoords(size_t first_triangle) {
+    bool fits = face_uv_.size() == 2 * corners_.size();
+    for (double x : face_uv_) fits = fits && std::isfinite(x) && std::abs(x) <= double(FLT_MAX);
+    if (!fits) ++uv_mismatch_;
+    if (uv_mismatch_ > 0) {
+      corner_uvs_.clear();
+      return;
+    }
+    for (size_t t = first_triangle, k = 1; t < out_.triangles.size(); ++t, ++k)
+      for (const size_t j : {size_t(0), k, k + 1})
+        corner_uvs_.insert(corner_uvs_.end(), {float(face_uv_[2 * j]), float(face_uv_[2 * j + 1])});
   }
 
   void read_vertex_records(const Element& e) {
@@ -646,6 +684,10 @@ class PlyReader {
   const Element* vertex_ = nullptr;
   const Element* face_ = nullptr;
   bool strips_ = false;  // face_ is a "tristrips" element
+  bool texcoord_ = false;          // face_ has a "texcoord" list (kTexcoord)
+  std::vector<double> face_uv_;    // the record's texcoord values
+  std::vector<float> corner_uvs_;  // u v per triangle corner, while every face's list fits
+  uint64_t uv_mismatch_ = 0;       // faces whose texcoord list does not fit their corners
   bool has_normals_ = false, has_colors_ = false;
   FileContents out_;
   std::vector<float> colors_;

@@ -6,7 +6,8 @@
 //
 // PLY: an optional comment line (WriteMeshOptions::comment), one vertex element (x y z float32, or float64 when needs_double_positions; nx ny nz
 // float32; red green blue uchar from a "color" attribute; every other attribute as float
-// properties, "name" or "name_0".."name_k"), one face element (uchar count, int indices).
+// properties, "name" or "name_0".."name_k"), one face element (uchar count, int indices; with
+// a "uv" corner attribute also MeshLab's uchar count, float texcoord list: u v per corner).
 // OBJ: "# V vertices, F faces", then v (with r g b from a "color" attribute) and vn lines
 // in turn (float64 positions: every v line, then every vn line), then, with a "uv" corner
 // attribute, one vt line per distinct (u, v) in the order first met, then f a//a b//b c//c
@@ -193,9 +194,12 @@ void write_ply(const TriMesh& mesh, OutputFile& out, bool binary, bool normals, 
       t.put('\n');
     }
   }
+  const VertexAttribute* uv = corner_uv_of(mesh);
   t.put("element face ");
   t.integer(mesh.triangles.size());
-  t.put("\nproperty list uchar int vertex_indices\nend_header\n");
+  t.put("\nproperty list uchar int vertex_indices\n");
+  if (uv) t.put("property list uchar float texcoord\n");
+  t.put("end_header\n");
   // Binary: little-endian, as the header says (x86-64 and aarch64 hosts are).
   if (binary) {
     // One fixed-size record per vertex (position, normal, color), then the extra attributes;
@@ -249,16 +253,21 @@ void write_ply(const TriMesh& mesh, OutputFile& out, bool binary, bool normals, 
       ++i;
     }
     const auto& T = mesh.triangles;
+    const size_t face = uv ? 13 + 25 : 13;  // with texture coordinates: a count and 6 floats more
     for (size_t i = 0; i < T.size();) {
-      const size_t fit = std::min(T.size() - i, t.space() / 13);
+      const size_t fit = std::min(T.size() - i, t.space() / face);
       if (fit == 0) {
         t.flush();
         continue;
       }
-      char* r = t.span(fit * 13);
-      for (size_t j = 0; j < fit; ++j, r += 13) {
+      char* r = t.span(fit * face);
+      for (size_t j = 0; j < fit; ++j, r += face) {
         r[0] = 3;
         std::memcpy(r + 1, T[i + j].data(), 12);
+        if (uv) {
+          r[13] = 6;
+          std::memcpy(r + 14, &uv->values[6 * (i + j)], 24);
+        }
       }
       i += fit;
     }
@@ -289,13 +298,21 @@ void write_ply(const TriMesh& mesh, OutputFile& out, bool binary, bool normals, 
       }
     t.put('\n');
   }
-  for (const Triangle& tri : mesh.triangles) {
+  for (size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const Triangle& tri = mesh.triangles[f];
     t.put("3 ");
     t.integer(tri[0]);
     t.put(' ');
     t.integer(tri[1]);
     t.put(' ');
     t.integer(tri[2]);
+    if (uv) {
+      t.put(" 6");
+      for (int c = 0; c < 6; ++c) {
+        t.put(' ');
+        t.number(double(uv->values[6 * f + size_t(c)]), 9);
+      }
+    }
     t.put('\n');
   }
   t.flush();

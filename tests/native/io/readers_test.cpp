@@ -579,6 +579,36 @@ TEST(ObjReader, TextureCoordinatesAreCornerValues) {
   EXPECT_TRUE(read_point_cloud((dir / "quad.obj").string()).not_read.empty());
 }
 
+// MeshLab's texcoord face lists (u v per corner) are the same corner attribute "uv": fanned
+// with the face, written back by both PLY encodings, named when a list does not fit.
+TEST(PlyReader, TexcoordListsAreCornerValues) {
+  const auto dir = test::scratch_dir("ply_uv");
+  const std::string header = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                             "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                             "property list uchar float texcoord\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n";
+  const TriMesh quad = read_mesh(write(dir / "quad.ply", header + "4 0 1 2 3 8 0 0 0.5 0 0.5 0.25 0 0.25\n"));
+  ASSERT_EQ(quad.triangles, (std::vector<Triangle>{{0, 1, 2}, {0, 2, 3}}));
+  ASSERT_EQ(quad.corner_attributes.size(), 1u);
+  EXPECT_EQ(quad.corner_attributes[0].values, (std::vector<float>{0, 0, 0.5f, 0, 0.5f, 0.25f, 0, 0, 0.5f, 0.25f, 0, 0.25f}));
+  EXPECT_TRUE(quad.not_read.empty());
+  for (const MeshFormat format : {MeshFormat::PlyBinary, MeshFormat::PlyAscii}) {
+    const std::string out = (dir / "back.ply").string();
+    WriteMeshOptions o;
+    o.format = format;
+    write_mesh(quad, out, o);
+    const TriMesh back = read_mesh(out);
+    EXPECT_EQ(back.triangles, quad.triangles);
+    ASSERT_EQ(back.corner_attributes.size(), 1u);
+    EXPECT_EQ(back.corner_attributes[0].values, quad.corner_attributes[0].values);
+  }
+  const TriMesh short_list = read_mesh(write(dir / "short.ply", header + "4 0 1 2 3 6 0 0 0.5 0 0.5 0.25\n"));
+  EXPECT_EQ(short_list.triangles.size(), 2u);
+  EXPECT_TRUE(short_list.corner_attributes.empty());
+  EXPECT_EQ(short_list.not_read,
+            std::vector<std::string>{"face property 'texcoord' (1 faces' lists do not hold a u and a v for each corner)"});
+  EXPECT_TRUE(read_point_cloud(write(dir / "points.ply", header + "4 0 1 2 3 8 0 0 0.5 0 0.5 0.25 0 0.25\n")).not_read.empty());
+}
+
 TEST(ObjReader, ValuesAndCornersNamedWithTheirLine) {
   const auto dir = test::scratch_dir("obj");
   EXPECT_REFUSED(read_mesh(write(dir / "nan.obj", "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n")), Status::FormatError,

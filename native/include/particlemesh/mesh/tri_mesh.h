@@ -26,7 +26,8 @@ struct TriMesh {
   std::vector<VertexAttribute> attributes;
   /// Optional values per triangle corner (face-varying: a vertex on a texture seam has one
   /// per side): as VertexAttribute, with values[(3 * t + c) * components + k] for corner c of
-  /// triangle t. "uv" (2 components) holds texture coordinates: OBJ's vt, read and written.
+  /// triangle t. "uv" (2 components) holds texture coordinates: OBJ's vt and PLY's texcoord
+  /// face lists (MeshLab's), read and written.
   /// smooth_mesh carries every one, linearly over each input triangle.
   std::vector<VertexAttribute> corner_attributes;
   /// What read_mesh found in the file but does not carry, one line each naming it (as
