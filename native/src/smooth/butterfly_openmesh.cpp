@@ -31,18 +31,15 @@ using Butterfly = OpenMesh::Subdivider::Uniform::ModifiedButterflyT<ButterflyMes
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-std::vector<Triangle> triangles_of(const ButterflyMesh& m) {
-  std::vector<Triangle> t(m.n_faces());
-  for (size_t f = 0; f < t.size(); ++f) {
-    auto h = m.halfedge_handle(ButterflyMesh::FaceHandle(int(f)));
-    const int a = m.to_vertex_handle(h).idx();
-    h = m.next_halfedge_handle(h);
-    const int b = m.to_vertex_handle(h).idx();
-    h = m.next_halfedge_handle(h);
-    const int c = m.to_vertex_handle(h).idx();
-    t[f] = {uint32_t(a), uint32_t(b), uint32_t(c)};  // h, next(h), next(next(h)): the face's winding
-  }
-  return t;
+/// Face f of an OpenMesh triangle mesh as its corners h, next(h), next(next(h)): its winding.
+Triangle face_corners(const ButterflyMesh& m, size_t f) {
+  auto h = m.halfedge_handle(ButterflyMesh::FaceHandle(int(f)));
+  const int a = m.to_vertex_handle(h).idx();
+  h = m.next_halfedge_handle(h);
+  const int b = m.to_vertex_handle(h).idx();
+  h = m.next_halfedge_handle(h);
+  const int c = m.to_vertex_handle(h).idx();
+  return {uint32_t(a), uint32_t(b), uint32_t(c)};
 }
 
 /// The children of each canonical triangle of the level before, in Loop's order and layout
@@ -50,13 +47,14 @@ std::vector<Triangle> triangles_of(const ButterflyMesh& m) {
 /// the middle (bc, ca, ab). OpenMesh splits a face in place: it keeps face f as the middle
 /// child and appends the three corner children as faces n + 3f .. n + 3f + 2, and original
 /// vertices keep their indices; both are checked, as is every child's winding.
-/// parent_face[i]: OpenMesh's face of parents[i]; child_face gets the same for the children.
+/// parent_face[i]: OpenMesh's face of parents[i]; child_face, when given, gets the same for
+/// the children (the next level's parent_face).
 std::vector<Triangle> canonical_children(const std::vector<Triangle>& parents, const std::vector<uint32_t>& parent_face,
-                                         const std::vector<Triangle>& faces, std::vector<uint32_t>& child_face) {
+                                         const ButterflyMesh& mesh, std::vector<uint32_t>* child_face) {
   const size_t n = parents.size();
-  if (faces.size() != 4 * n) throw Error(Status::Internal, "butterfly: a level did not split every face in four");
+  if (mesh.n_faces() != 4 * n) throw Error(Status::Internal, "butterfly: a level did not split every face in four");
   std::vector<Triangle> out(4 * n);
-  child_face.assign(4 * n, 0);
+  if (child_face) child_face->assign(4 * n, 0);
   std::atomic<bool> bad{false};
   // The rotation of `t` that has vertex v at position `at`; bad when v is not a corner.
   auto rotated = [&](const Triangle& t, uint32_t v, int at) {
@@ -75,12 +73,13 @@ std::vector<Triangle> canonical_children(const std::vector<Triangle>& parents, c
       const Triangle& p = parents[i];
       const size_t f = parent_face[i];
       const Triangle* corner[3] = {nullptr, nullptr, nullptr};
+      Triangle children[3];
       for (size_t k = 0; k < 3; ++k) {
-        const Triangle& c = faces[n + 3 * f + k];
+        const Triangle& c = children[k] = face_corners(mesh, n + 3 * f + k);
         for (size_t j = 0; j < 3; ++j)
           if (c[0] == p[j] || c[1] == p[j] || c[2] == p[j]) {
             corner[j] = &c;
-            child_face[4 * i + j] = uint32_t(n + 3 * f + k);
+            if (child_face) (*child_face)[4 * i + j] = uint32_t(n + 3 * f + k);
           }
       }
       if (!corner[0] || !corner[1] || !corner[2]) {
@@ -90,12 +89,12 @@ std::vector<Triangle> canonical_children(const std::vector<Triangle>& parents, c
       const Triangle a = rotated(*corner[0], p[0], 0), b = rotated(*corner[1], p[1], 1), c = rotated(*corner[2], p[2], 2);
       const uint32_t ab = a[1], ca = a[2], bc = b[2];
       const Triangle middle{bc, ca, ab};
-      if (b[0] != ab || c[0] != ca || c[1] != bc || !same_cycle(middle, faces[f])) bad = true;
+      if (b[0] != ab || c[0] != ca || c[1] != bc || !same_cycle(middle, face_corners(mesh, f))) bad = true;
       out[4 * i] = a;
       out[4 * i + 1] = b;
       out[4 * i + 2] = c;
       out[4 * i + 3] = middle;
-      child_face[4 * i + 3] = uint32_t(f);
+      if (child_face) (*child_face)[4 * i + 3] = uint32_t(f);
     }
   });
   if (bad) throw Error(Status::Internal, "butterfly: OpenMesh split a face other than the way its children are ordered");
@@ -166,11 +165,15 @@ void butterfly_subdivide(const ControlMesh& control, const SmoothOptions& option
                    0.2 + 0.65 * done / total, 0.2 + 0.65 * (done + w) / total);
     done += w;
     tbb::parallel_for(size_t(0), meshes.size(), [&](size_t m) { subdividers[m](1); });
-    canonical = canonical_children(canonical, face_of, triangles_of(meshes[0]), child_face);
-    face_of.swap(child_face);
+    if (l < options.levels) {
+      canonical = canonical_children(canonical, face_of, meshes[0], &child_face);
+      face_of.swap(child_face);
+    }
     progress.check();
   }
+  // The last level's order once the subdividers have let go of their per-edge points.
   for (auto& sub : subdividers) sub.detach();
+  if (options.levels > 0) canonical = canonical_children(canonical, face_of, meshes[0], nullptr);
   out.stats.seconds_refine = seconds_since(t0);
 
   auto t1 = Clock::now();
@@ -182,13 +185,14 @@ void butterfly_subdivide(const ControlMesh& control, const SmoothOptions& option
     const auto& p = pm.point(ButterflyMesh::VertexHandle(int(i)));
     out.mesh.positions[i] = {p[0], p[1], p[2]};
   }
-  const std::vector<Triangle> faces = triangles_of(pm);
+  std::vector<uint32_t>().swap(face_of);
   out.mesh.triangles = std::move(canonical);
   std::vector<double> flat(n_out * size_t(channels));
   for (int m = 0; m < extra; ++m) {
     const ButterflyMesh& am = meshes[size_t(1 + m)];
-    if (am.n_vertices() != n_out || triangles_of(am) != faces)
-      throw Error(Status::Internal, "the butterfly attribute mesh refined differently from the positions");
+    bool same = am.n_vertices() == n_out && am.n_faces() == pm.n_faces();
+    for (size_t f = 0; same && f < pm.n_faces(); ++f) same = face_corners(am, f) == face_corners(pm, f);
+    if (!same) throw Error(Status::Internal, "the butterfly attribute mesh refined differently from the positions");
     for (size_t i = 0; i < n_out; ++i) {
       const auto& p = am.point(ButterflyMesh::VertexHandle(int(i)));
       for (int j = 0; j < 3 && 3 * m + j < channels; ++j) flat[i * size_t(channels) + size_t(3 * m + j)] = p[j];
