@@ -294,7 +294,14 @@ class PARTICLEMESH_OT_smooth(_ModalJob, bpy.types.Operator):
         source = pm.Mesh(blender_mesh.positions(mesh), triangles, attributes=attributes,
                          corner_attributes=corners)
         self._target = obj.name
-        return pm.smooth, (source,), dict(scheme=self.scheme, levels=self.levels)
+        options = dict(scheme=self.scheme, levels=self.levels)
+        carried = self._carried
+        if carried.crease_edges is not None and len(carried.crease_edges):
+            if self.scheme == "LOOP":  # Blender's edge creases, as its Subdivision Surface takes them
+                options.update(crease_edges=carried.crease_edges, crease_sharpness=carried.crease_sharpness)
+            else:
+                carried.not_carried.append("edge creases (the butterfly has none: Loop keeps them)")
+        return pm.smooth, (source,), options
 
     def job_finished(self, context, data):
         obj = bpy.data.objects.get(self._target)

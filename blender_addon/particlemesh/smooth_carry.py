@@ -12,8 +12,12 @@ triangle f are output triangles f * 4^levels onward.
 - Corner data (UV maps, float CORNER attributes such as colour) goes as the library's corner
   attributes, linear over each input triangle (Blender's Subdivision Surface with UV Smooth
   None): a seam stays where it was.
-- Edge data (seams, sharp edges, creases, EDGE attributes) and integer or boolean vertex and
-  corner attributes have no subdivision rule here: named in the operator's report."""
+- Edge creases are Loop's creases (OpenSubdiv's sharpness 10 c^2, as Blender's Subdivision
+  Surface converts them); seams and sharp edges mark the output edges that lie on them (from
+  the layout: an output edge whose two ends have no weight on an input corner lies on the
+  input edge across from it).
+- Other EDGE attributes, bevel weights, and integer or boolean vertex and corner attributes
+  have no subdivision rule here: named in the operator's report."""
 import numpy as np
 
 from . import blender_mesh
@@ -46,6 +50,11 @@ class Carried:
         self.faces = []          # (name or None for material_index, type, (F, C) per input triangle)
         self.corners = []        # (name, type, (F, 3, C) per input corner, is_uv, active, render)
         self.not_carried = []    # what no rule here carries, named
+        self.crease_edges = None     # (K, 2) vertex pairs and their sharpness, for Loop
+        self.crease_sharpness = None
+        self.edge_flags = {}     # {"use_seam" / "use_edge_sharp": (F, 3) bool per input triangle edge}
+        self.triangles = None    # the input triangles, and the vertices they use (sorted)
+        self.referenced = None
 
 
 def gather(obj, mesh, loops, polygon):
@@ -97,7 +106,7 @@ def gather(obj, mesh, loops, polygon):
             c.corners.append((name, kind, values[loops], False, False, False))
         elif domain == "POINT" and kind not in _FLOAT_TYPES:
             skipped["int or boolean vertex attributes"].append(name)
-        elif domain == "EDGE":
+        elif domain == "EDGE" and name not in ("crease_edge", "sharp_edge"):  # (4.x: read below)
             skipped["edge attributes"].append(name)
         elif domain == "CORNER":
             skipped["corner attributes"].append(name)
@@ -105,20 +114,42 @@ def gather(obj, mesh, loops, polygon):
         if names:
             c.not_carried.append(f"{what} ({', '.join(sorted(names))})")
     if len(mesh.edges):
-        flags = []
-        for field, what in (("use_seam", "seams"), ("use_edge_sharp", "sharp edges")):
-            values = np.empty(len(mesh.edges), dtype=bool)
-            mesh.edges.foreach_get(field, values)
-            if values.any():
-                flags.append(what)
-        if hasattr(mesh.edges[0], "crease"):  # Blender 3.x; 4.x keeps creases as an EDGE attribute
-            crease = np.empty(len(mesh.edges), dtype=np.float32)
-            mesh.edges.foreach_get("crease", crease)
-            if crease.any():
-                flags.append("edge creases")
-        if flags:
-            c.not_carried.append(" and ".join(flags) + " (edge data: the subdivided mesh has new edges)")
+        _gather_edges(mesh, loops, c)
     return c
+
+
+def _gather_edges(mesh, loops, c):
+    """Edge creases (for Loop), and seams and sharp edges per input triangle edge."""
+    ne = len(mesh.edges)
+    ends = _read(mesh.edges, "vertices", ne, 2, np.int64)
+    loop_edge = _read(mesh.loops, "edge_index", len(mesh.loops), 1, np.int64)[:, 0]
+    loop_vertex = _read(mesh.loops, "vertex_index", len(mesh.loops), 1, np.int64)[:, 0]
+    # Triangle edge e (corner e to e + 1) is a mesh edge when loop e's edge joins the two
+    # corners (not a diagonal a tessellated polygon added).
+    edge = loop_edge[loops]
+    a, b = loop_vertex[loops], loop_vertex[np.roll(loops, -1, axis=1)]
+    real = ((ends[edge, 0] == a) & (ends[edge, 1] == b)) | ((ends[edge, 0] == b) & (ends[edge, 1] == a))
+    for field in ("use_seam", "use_edge_sharp"):
+        values = _read(mesh.edges, field, ne, 1, bool)[:, 0]
+        if values.any():
+            c.edge_flags[field] = values[edge] & real
+    crease = None
+    if hasattr(mesh.edges[0], "crease"):  # Blender 3.x; 4.x keeps them as the EDGE attribute crease_edge
+        crease = _read(mesh.edges, "crease", ne, 1)[:, 0]
+    elif mesh.attributes.get("crease_edge") is not None:
+        crease = _read(mesh.attributes["crease_edge"].data, "value", ne, 1)[:, 0]
+    if crease is not None and crease.any():
+        # (an edge of no face, a loose one, is no edge of the library's mesh)
+        in_faces = np.zeros(ne, dtype=bool)
+        in_faces[edge[real]] = True
+        keep = np.flatnonzero((crease > 0) & in_faces)
+        c.crease_edges = ends[keep].astype(np.int32)
+        c.crease_sharpness = np.minimum(10.0 * crease[keep].astype(np.float64) ** 2, 10.0)
+    bevel = None
+    if hasattr(mesh.edges[0], "bevel_weight"):
+        bevel = _read(mesh.edges, "bevel_weight", ne, 1)[:, 0]
+    if bevel is not None and bevel.any():
+        c.not_carried.append("edge bevel weights")
 
 
 def before_write(obj):
@@ -148,6 +179,8 @@ def restore(obj, mesh, c, result, channels, levels):
         attribute = mesh.attributes.new(name, kind, "FACE")
         if attribute is not None:
             attribute.data.foreach_set(field, values.ravel())
+    if c.edge_flags:
+        _restore_edge_flags(mesh, c, result, levels)
     for i, (name, kind, _, is_uv, active, render) in enumerate(c.corners):
         values = result.corner_attributes[_CORNER.format(i)]
         if is_uv:
@@ -188,10 +221,57 @@ def restore(obj, mesh, c, result, channels, levels):
     mesh.update()
 
 
+def child_weights(levels):
+    """(4^levels, 3, 3): each child's corners as weights of its input triangle's corners, in
+    the layout of smooth/subdivide.h."""
+    half = 0.5
+    layout = np.array([[[1, 0, 0], [half, half, 0], [half, 0, half]],
+                       [[half, half, 0], [0, 1, 0], [0, half, half]],
+                       [[half, 0, half], [0, half, half], [0, 0, 1]],
+                       [[0, half, half], [half, 0, half], [half, half, 0]]])
+    weights = np.eye(3)[None]
+    for _ in range(levels):
+        weights = np.einsum("cij,tjk->tcik", layout, weights).reshape(-1, 3, 3)
+    return weights
+
+
+def _restore_edge_flags(mesh, c, result, levels):
+    """Seams and sharp edges on the output edges that lie on flagged input edges."""
+    k = 4 ** levels
+    w = child_weights(levels)
+    # Per child and child edge j (corner j to j + 1): the input triangle edge it lies on
+    # (e: corner e to e + 1), or -1. Its ends both have no weight on the corner across, e + 2.
+    on = np.full((k, 3), -1)
+    for j in range(3):
+        zero = (w[:, j] == 0) & (w[:, (j + 1) % 3] == 0)
+        for across in range(3):
+            on[zero[:, across], j] = (across + 1) % 3
+    # The library turns a triangle (a, b, c) it repairs into (a, c, b): its edges 0, 1, 2
+    # are then the input's 2, 1, 0. The vertex at b's place (the second corner of the
+    # second child at every level) says which (output vertex i < len(referenced) is the
+    # image of input vertex referenced[i]).
+    out = np.asarray(result.triangles)
+    nf = len(c.triangles)
+    turned = out[np.arange(nf) * k + (k - 1) // 3, 1] != np.searchsorted(c.referenced, c.triangles[:, 1])
+    parent = np.arange(len(out)) // k
+    child_on = on[np.arange(len(out)) % k]                      # (T, 3)
+    lies = child_on >= 0
+    e = np.where(lies, child_on, 0)
+    e = np.where(turned[parent][:, None], (2 - e) % 3, e)      # (a, c, b): 0 -> 2, 1 -> 1, 2 -> 0
+    out_edge = _read(mesh.loops, "edge_index", len(mesh.loops), 1, np.int64)[:, 0].reshape(-1, 3)
+    for field, per_triangle in c.edge_flags.items():
+        flag = lies & per_triangle[parent[:, None], e]
+        values = np.zeros(len(mesh.edges), dtype=bool)
+        values[out_edge[flag]] = True
+        mesh.edges.foreach_set(field, values)
+
+
 def prepare(obj, mesh):
     """(triangles, per-vertex channels, per-corner values, Carried) for the library call."""
     triangles, loops, polygon = blender_mesh.triangle_corners(mesh)
     c = gather(obj, mesh, loops, polygon)
+    c.triangles = triangles.astype(np.int64)
+    c.referenced = np.unique(c.triangles)
     attributes = blender_mesh.float_point_attributes(mesh)
     attributes.update(c.channels)
     corners = {_CORNER.format(i): entry[2] for i, entry in enumerate(c.corners)}

@@ -711,7 +711,17 @@ def grid_with_everything(cells=7):
         tilt.data[i].co = (x, y, z + 0.1 * x)
     tilt.relative_key = up
     tilt.value = 0.3
-    mesh.edges[0].use_seam = True
+    # A seam and a sharp edge on the border, away from the grid's corners (which Loop's
+    # boundary curve rounds off).
+    def border_edge(axis, side):
+        for e in mesh.edges:
+            a, b = co[list(e.vertices)]
+            if a[axis] == b[axis] == side and abs(a[1 - axis]) < 0.3 and abs(b[1 - axis]) < 0.3:
+                return e
+        raise AssertionError("no such edge")
+    border_edge(1, -1).use_seam = True
+    border_edge(0, 1).use_edge_sharp = True
+    mesh.edges[0].bevel_weight = 0.5
     return obj
 
 
@@ -721,15 +731,21 @@ def test_smooth_carries_uvs_materials_shape_keys_and_vertex_groups(pm, turned):
     material and UV island of the input face it lies in; UVs are linear over each input
     triangle (on a flat regular grid, where neither scheme moves vertices off their place
     away from the border, exactly (x, y)); shape keys are subdivided as the positions (a
-    shifted or sheared basis stays shifted or sheared); constant weights stay. Seams (edge
-    data) are named as not carried. With one face turned against the rest, the library's
-    orientation repair turns it back, and its corners' UVs follow it."""
+    shifted or sheared basis stays shifted or sheared); constant weights stay; a seam and a
+    sharp edge (on the grid's border, where both schemes keep the vertices on the line) mark
+    the output edges along them; bevel weights are named as not carried. With one face
+    turned against the rest, the library's orientation repair turns it back, and its
+    corners' UVs and edges follow it."""
     cells = 7
     obj = grid_with_everything(cells)
-    if turned:
-        obj.data.polygons[10].flip()
+    if turned:  # the face along the seam
+        seam = next(e.key for e in obj.data.edges if e.use_seam)
+        next(f for f in obj.data.polygons if seam in f.edge_keys).flip()
     carried = pm.smooth_carry.prepare(obj, obj.data)[3]
-    assert carried.not_carried == ["seams (edge data: the subdivided mesh has new edges)"]
+    assert carried.not_carried == ["edge bevel weights"]
+    co0 = np.array([v.co[:] for v in obj.data.vertices])
+    flagged = {field: co0[[list(e.vertices) for e in obj.data.edges if getattr(e, field)][0]]
+               for field in ("use_seam", "use_edge_sharp")}
     for scheme, levels in (("LOOP", 1), ("LOOP", 2), ("BUTTERFLY", 1), ("BUTTERFLY", 2)):
         bpy.ops.ed.undo_push(message="before smooth")
         assert bpy.ops.particlemesh.smooth("EXEC_DEFAULT", True, scheme=scheme, levels=levels) == {"FINISHED"}
@@ -771,7 +787,40 @@ def test_smooth_carries_uvs_materials_shape_keys_and_vertex_groups(pm, turned):
         weights = {(v.index, g.group): g.weight for v in mesh.vertices for g in v.groups}
         assert len(weights) == 2 * len(co)
         assert all(abs(w - (1.0 if group == 0 else 0.5)) < 1e-6 for (_, group), w in weights.items())
+        # Seams and sharp edges: the 2^levels output edges along the input edge, no other.
+        for field, (a, b) in flagged.items():
+            marked = np.empty(len(mesh.edges), dtype=bool)
+            mesh.edges.foreach_get(field, marked)
+            ends = np.array([list(e.vertices) for e in mesh.edges])[marked]
+            assert len(ends) == 2 ** levels, (field, len(ends))
+            for p in co[ends].reshape(-1, 3):
+                t = np.dot(p - a, b - a) / np.dot(b - a, b - a)
+                assert -1e-6 <= t <= 1 + 1e-6 and np.linalg.norm(a + t * (b - a) - p) < 1e-5, (field, p)
         undo()
+
+
+def test_smooth_takes_edge_creases_as_loop_does(pm):
+    """A cube with every edge creased (1.0: infinitely sharp, OpenSubdiv's sharpness 10 as
+    Blender's Subdivision Surface converts c^2 x 10) keeps its faces flat under Loop; without
+    creases Loop rounds it."""
+    for creased in (True, False):
+        bpy.ops.mesh.primitive_cube_add(size=2)
+        obj = bpy.context.active_object
+        if creased:
+            if hasattr(obj.data.edges[0], "crease"):
+                obj.data.edges.foreach_set("crease", np.ones(len(obj.data.edges), dtype=np.float32))
+            else:
+                obj.data.attributes.new("crease_edge", "FLOAT", "EDGE").data.foreach_set(
+                    "value", np.ones(len(obj.data.edges), dtype=np.float32))
+        assert bpy.ops.particlemesh.smooth("EXEC_DEFAULT", True, scheme="LOOP", levels=2) == {"FINISHED"}
+        co, _ = mesh_arrays(obj.data)
+        on_a_face = (np.abs(np.abs(co) - 1) < 1e-6).any(axis=1)
+        assert on_a_face.all() if creased else not on_a_face.any(), creased
+    bpy.ops.mesh.primitive_cube_add(size=2)
+    obj = bpy.context.active_object
+    obj.data.edges.foreach_set("crease", np.ones(len(obj.data.edges), dtype=np.float32))
+    carried = pm.smooth_carry.prepare(obj, obj.data)[3]
+    assert len(carried.crease_edges) == 12 and (carried.crease_sharpness == 10).all()
 
 
 def lattice(n, spacing=0.1):
