@@ -500,8 +500,10 @@ def smooth(mesh, scheme=None, levels=None, *, crease_edges=None, crease_sharpnes
     """Subdivide a triangle mesh into a smooth one: scheme "loop" (approximating, through
     OpenSubdiv; with limit=True, the default, every vertex at its exact limit position with
     the exact limit normal) or "butterfly" (interpolating, through OpenMesh: the original
-    vertices stay). Each of `levels` splits every triangle into four. Normals and every
-    attribute are carried through.
+    vertices stay). Each of `levels` splits every triangle into four (input triangle f's
+    children are triangles f x 4^levels onward). Normals and every attribute are carried
+    through, and every corner attribute (texture coordinates) linearly over each input
+    triangle.
 
     crease_edges: (K, 2) vertex pairs that stay sharp (Loop), crease_sharpness: K values
     (None = infinitely sharp). Other options (pm_smooth_options): limit, boundary
