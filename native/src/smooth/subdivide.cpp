@@ -122,7 +122,6 @@ std::vector<VertexAttribute> subdivide_corner_attributes(const TriMesh& mesh, co
   return out;
 }
 
-
 void check_smooth_options(const SmoothOptions& options, size_t triangles) {
   check_options(options);
   if (triangles > size_t(INT32_MAX)) throw Error(Status::LimitExceeded, "more than 2^31 - 1 triangles");

@@ -117,7 +117,8 @@ struct SmoothOptions {
   /// Refuse (Error LimitExceeded) before allocating anything when F * 4^levels exceeds this
   /// many triangles. Loop needs about 270 bytes per output triangle at its peak with `limit`
   /// (OpenSubdiv's full last-level topology), about 150 without; the default, 2^25 (about
-  /// 33.5 million triangles), so stays under about 9 GB. At most 2^30.
+  /// 33.5 million triangles), so stays under about 9 GB. Corner attributes add 12 bytes per
+  /// component per output triangle (15 while the last level is made). At most 2^30.
   uint64_t max_triangles = uint64_t(1) << 25;
   /// Worker threads, 0 = all cores. The output does not depend on it.
   int threads = 0;
