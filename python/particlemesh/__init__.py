@@ -538,8 +538,9 @@ class Smoother:
     The constructor takes smooth()'s arguments (scheme, levels, crease_edges,
     crease_sharpness, progress for its own work, and the pm_smooth_options keywords) and
     refuses what smooth() refuses. evaluate(mesh) gives exactly what smooth(mesh, ...) would
-    with the same arguments, from the mesh's vertices and attributes: with Loop, several
-    times faster (OpenSubdiv's refinement and its weights are kept: about 60 bytes per output
+    with the same arguments, from the mesh's vertices and attributes (the corner attributes,
+    texture coordinates, are the constructor's mesh's: they belong to the triangles): with
+    Loop, several times faster (OpenSubdiv's refinement and its weights are kept: about 60 bytes per output
     triangle while the Smoother lives); with butterfly, the whole subdivision again. A mesh
     with other triangles raises Error (status STATUS_INVALID_ARGUMENT). close() (or a with
     block) frees it at once."""
@@ -550,7 +551,8 @@ class Smoother:
         self._handle = None
         opt, _keep = _smooth_options(self._lib, mesh, scheme, levels, crease_edges,
                                      crease_sharpness, options)
-        source = new_mesh(self._lib, mesh, with_attributes=False)
+        # (the corner attributes belong to the triangles: evaluate() gives these)
+        source = new_mesh(self._lib, mesh, with_attributes=False, with_corner_attributes=True)
         handle = _abi.pm_smoother_p()
         try:
             with Hook(progress) as hook:
@@ -589,7 +591,7 @@ class Smoother:
         """The smooth mesh of `mesh` (this smoother's triangles, new vertices and attributes):
         what smooth() gives for it. Returns Mesh."""
         handle = self._live()
-        source = new_mesh(self._lib, mesh)
+        source = new_mesh(self._lib, mesh, with_corner_attributes=False)
         out = _abi.pm_mesh_p()
         try:
             self._lib.check(self._lib.pm_smoother_evaluate(handle, source, ctypes.byref(out)))

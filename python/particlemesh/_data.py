@@ -197,8 +197,10 @@ def mesh_parts(mesh):
     return vertices, triangles, getattr(mesh, "normals", None), getattr(mesh, "attributes", None)
 
 
-def new_mesh(lib, mesh, with_attributes=True):
-    """A pm_mesh handle from a Mesh. The caller destroys it."""
+def new_mesh(lib, mesh, with_attributes=True, with_corner_attributes=None):
+    """A pm_mesh handle from a Mesh (its attributes and corner attributes with
+    with_attributes, or the corner attributes as with_corner_attributes says). The caller
+    destroys it."""
     vertices, triangles, normals, attributes = mesh_parts(mesh)
     v = vec3(vertices, "vertices")
     t = np.asarray(triangles)
@@ -214,7 +216,8 @@ def new_mesh(lib, mesh, with_attributes=True):
             a = channels(values, name, len(v))
             lib.check(lib.pm_mesh_set_attribute(handle, name.encode(), a.shape[1],
                                                 ptr(a, c_float), len(v)))
-        corners = getattr(mesh, "corner_attributes", None) if with_attributes else None
+        corners = with_attributes if with_corner_attributes is None else with_corner_attributes
+        corners = getattr(mesh, "corner_attributes", None) if corners else None
         for name, values in (corners or {}).items():
             a = corner_values(values, name, len(t))
             lib.check(lib.pm_mesh_set_corner_attribute(handle, name.encode(), a.shape[2],

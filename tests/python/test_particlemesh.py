@@ -606,6 +606,11 @@ def test_texture_coordinates_are_corner_attributes_through_smooth_and_obj(pm, tm
     smooth = pm.smooth(mesh, "butterfly", 2)
     suv = smooth.corner_attributes["uv"]
     assert suv.shape == (32, 3, 2)
+    for scheme in ("loop", "butterfly"):  # the Smoother: the constructor's mesh's, subdivided
+        with pm.Smoother(mesh, scheme, 2) as smoother:
+            moved = pm.Mesh(mesh.vertices * 2, mesh.triangles)
+            np.testing.assert_array_equal(smoother.evaluate(moved).corner_attributes["uv"],
+                                          pm.smooth(mesh, scheme, 2).corner_attributes["uv"])
     for f in range(2):
         # The input's corners where the layout puts them: a of the first child, b of the
         # sixth (the second child's second), c of the eleventh (the third's third).

@@ -434,7 +434,8 @@ PM_EXPORT pm_status pm_smoother_create(const pm_mesh* mesh, const pm_smooth_opti
  *  else 0. */
 PM_EXPORT pm_status pm_smoother_matches(const pm_smoother* smoother, const pm_mesh* mesh, int32_t* out_matches);
 /** The smooth mesh of `mesh`'s positions and attributes through the smoother (normals and
- *  attributes as pm_smooth gives them). PM_STATUS_INVALID_ARGUMENT when `mesh` does not
+ *  attributes as pm_smooth gives them; corner attributes from the mesh the smoother was made
+ *  from, which they belong to with its triangles). PM_STATUS_INVALID_ARGUMENT when `mesh` does not
  *  match (pm_smoother_matches); PM_STATUS_INVALID_INPUT for a non-finite or too large
  *  coordinate or attribute value (naming the vertex). Safe to call from several threads. */
 PM_EXPORT pm_status pm_smoother_evaluate(const pm_smoother* smoother, const pm_mesh* mesh, pm_mesh** out_mesh);

@@ -41,7 +41,9 @@ class PM_EXPORT Smoother {
   /// positions (one per vertex of the mesh it was made from) and attributes (any names, each
   /// vertex count x components values): the same result, byte for byte. When moved vertices
   /// turn a repaired component inside out (its orientation came from its volume), the whole
-  /// smooth_mesh() runs instead, so the result still agrees. Thread-safe (const).
+  /// smooth_mesh() runs instead, so the result still agrees. Values per triangle corner
+  /// (texture coordinates) belong to the triangles: the mesh the smoother was made from gives
+  /// them, subdivided once. Thread-safe (const).
   /// @throws Error(InvalidInput) a position count other than the vertex count, a non-finite
   ///         or too large coordinate or attribute value (the message names the vertex).
   SmoothResult evaluate(const std::vector<Vec3>& positions,
