@@ -16,6 +16,7 @@
 #include "io/writers.h"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cfloat>
 #include <cmath>
@@ -183,11 +184,22 @@ void write_ply(const TriMesh& mesh, OutputFile& out, bool binary, bool normals, 
   if (color) t.put("property uchar red\nproperty uchar green\nproperty uchar blue\n");
   // Property names are unique in a PLY element: an attribute whose name is taken (x, red, a
   // second "v", ...) gets a suffix.
-  std::vector<std::string> used{"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue"};
+  // The reader takes these names in any case as positions, normals and colours (normal_x ..
+  // as PCL names normals), so no attribute is written under one of them: "RED" or "normal!y"
+  // (written normal_y) would come back as something else.
+  std::vector<std::string> used{"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue", "normal_x", "normal_y", "normal_z"};
+  auto taken = [&](const std::string& name) {
+    for (const std::string& u : used)
+      if (u.size() == name.size() && std::equal(u.begin(), u.end(), name.begin(), [](char a, char b) {
+            return std::tolower(static_cast<unsigned char>(a)) == std::tolower(static_cast<unsigned char>(b));
+          }))
+        return true;
+    return false;
+  };
   for (const VertexAttribute* a : extra) {
     for (int c = 0; c < a->components; ++c) {
       std::string name = ply_name(a->name) + (a->components > 1 ? "_" + std::to_string(c) : std::string());
-      while (std::find(used.begin(), used.end(), name) != used.end()) name += "_";
+      while (taken(name)) name += "_";
       used.push_back(name);
       t.put("property float ");
       t.put(name);

@@ -30,6 +30,29 @@ void write_text(const fs::path& p, const std::string& s) { std::ofstream(p, std:
 
 }  // namespace
 
+// An attribute whose PLY name the reader would take for positions, normals or colours (in
+// any case, or PCL's normal_x ..; "normal!y" is written normal_y) is written under another
+// name: it comes back an attribute, and no normals or colours appear (found by fuzzing).
+TEST(MeshIO, AttributesNamedLikeNormalsOrColoursComeBackAttributes) {
+  TriMesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  m.triangles = {{0, 1, 2}};
+  for (const char* name : {"normal_x", "normal!y", "normal_z", "RED", "Green", "NX", "Y"})
+    m.attributes.push_back({name, 1, {1, 2, 3}});
+  const auto dir = test::scratch_dir("mesh_io_names");
+  for (const MeshFormat format : {MeshFormat::PlyBinary, MeshFormat::PlyAscii}) {
+    WriteMeshOptions o;
+    o.format = format;
+    const std::string path = (dir / "names.ply").string();
+    write_mesh(m, path, o);
+    const TriMesh back = read_mesh(path);
+    EXPECT_TRUE(back.normals.empty());
+    EXPECT_EQ(back.positions, m.positions);
+    ASSERT_EQ(back.attributes.size(), m.attributes.size());
+    for (const VertexAttribute& a : back.attributes) EXPECT_EQ(a.values, (std::vector<float>{1, 2, 3})) << a.name;
+  }
+}
+
 TEST(MeshIO, NonManifoldRawTrianglesRoundTripInEveryFormat) {
   const auto dir = test::scratch_dir("io");
   const TriangulateResult raw = triangulate_raw(poisson_disk_sample(icosphere_mesh(4), 0.1, 4));
