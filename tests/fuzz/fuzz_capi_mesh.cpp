@@ -2,7 +2,9 @@
 // pm_mesh_create (indices out of range, NaN positions or normals, degenerate, repeated and
 // non-manifold triangles), pm_mesh_report, pm_mesh_ray_crossings (points anywhere, also on
 // the vertices; the counts of two halves of the triangles add up), the copy functions with any capacity, attributes
-// (pm_mesh_set_attribute / _get_attribute_* / _copy_attribute) and pm_smooth with every option
+// (pm_mesh_set_attribute / _get_attribute_* / _copy_attribute), corner attributes (the same
+// calls' corner forms; carried by pm_smooth: finite, 3 x components per output triangle) and
+// pm_smooth with every option
 // field fuzzed (scheme, levels, boundary, creases with any indices and sharpness, struct_size,
 // a progress callback that may cancel). Checks: statuses and messages, outputs untouched on
 // failure, a smoothed mesh has F x 4^levels triangles indexing its own finite vertices.
@@ -150,6 +152,33 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
   }
 
+  // Corner attributes (texture coordinates): any count, any components, any values.
+  int32_t corner_components = 0;
+  if (mode & 32) {
+    const int32_t comps = int32_t(in.range(0, 4)) - 1;  // -1..3
+    const size_t claimed = nt + size_t(in.range(0, 2)) - (nt ? 1 : 0);
+    std::vector<float> values(3 * claimed * size_t(std::max(comps, 0)));
+    for (float& v : values) v = in.flag() ? float(in.number(1.0)) : float(in.range(0, 4));
+    const pm_status a = pm_mesh_set_corner_attribute(mesh, "uv", comps, values.data(), claimed);
+    check_status(a);
+    size_t count = 9;
+    check_status(pm_mesh_get_corner_attribute_count(mesh, &count));
+    PM_FUZZ_CHECK(count == (a == PM_OK ? 1u : 0u));
+    int32_t c = 0;
+    const pm_status gc = pm_mesh_get_corner_attribute_components(mesh, "uv", &c);
+    check_status(gc);
+    PM_FUZZ_CHECK((gc == PM_OK) == (a == PM_OK));
+    if (gc == PM_OK) {
+      PM_FUZZ_CHECK(c == comps);
+      corner_components = c;
+      const size_t cap = size_t(in.range(0, nt + 1));
+      std::vector<float> out(3 * cap * size_t(c) + 1, -7.0f);
+      const pm_status cp = pm_mesh_copy_corner_attribute(mesh, "uv", out.data(), cap);
+      check_status(cp);
+      if (cp != PM_OK) PM_FUZZ_CHECK(out[0] == -7.0f);
+    }
+  }
+
   // Smoothing with fuzzed options.
   if (mode & 8) {
     pm_smooth_options opt;
@@ -194,6 +223,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       int32_t has = 0;
       check_status(pm_mesh_has_normals(smooth, &has));
       PM_FUZZ_CHECK(has == 1);
+      if (corner_components > 0) {  // carried: finite, one set per output corner
+        int32_t c = 0;
+        check_status(pm_mesh_get_corner_attribute_components(smooth, "uv", &c));
+        PM_FUZZ_CHECK(c == corner_components);
+        std::vector<float> out(3 * snt * size_t(c) + 1);
+        check_status(pm_mesh_copy_corner_attribute(smooth, "uv", out.data(), snt));
+        for (size_t i = 0; i + 1 < out.size(); ++i) PM_FUZZ_CHECK(std::isfinite(out[i]));
+      }
       pm_mesh_destroy(smooth);
     } else {
       PM_FUZZ_CHECK(smooth == reinterpret_cast<pm_mesh*>(0x3));
