@@ -13,9 +13,10 @@ triangle f are output triangles f * 4^levels onward.
   attributes, linear over each input triangle (Blender's Subdivision Surface with UV Smooth
   None): a seam stays where it was.
 - Edge creases are Loop's creases (OpenSubdiv's sharpness 10 c^2, as Blender's Subdivision
-  Surface converts them); seams and sharp edges mark the output edges that lie on them (from
-  the layout: an output edge whose two ends have no weight on an input corner lies on the
-  input edge across from it).
+  Surface converts them); seams and sharp edges mark the output edges that lie on them. They
+  go as corner values too, one per triangle edge: 1 at the flagged edge's two corners, 0 at
+  the third. Interpolated linearly, a value is 1 exactly where the third corner has no
+  weight, so an output edge lies on a flagged input edge where both its ends hold 1.
 - Other EDGE attributes, bevel weights, and integer or boolean vertex and corner attributes
   have no subdivision rule here: named in the operator's report."""
 import numpy as np
@@ -25,6 +26,9 @@ from . import blender_mesh
 _KEY = ".pm_shape_key_{}"
 _GROUP = ".pm_vertex_group_{}"
 _CORNER = ".pm_corner_{}"
+_EDGE = ".pm_edge_{}"
+# _ENDS[c, e]: corner c is an end of triangle edge e (corner e to e + 1).
+_ENDS = np.eye(3, dtype=bool) | np.roll(np.eye(3, dtype=bool), 1, axis=0)
 # Blender's attribute types this module interpolates, and their foreach field and width.
 _FLOAT_TYPES = {"FLOAT": ("value", 1), "FLOAT2": ("vector", 2), "FLOAT_VECTOR": ("vector", 3),
                 "FLOAT_COLOR": ("color", 4), "BYTE_COLOR": ("color", 4)}
@@ -52,9 +56,8 @@ class Carried:
         self.not_carried = []    # what no rule here carries, named
         self.crease_edges = None     # (K, 2) vertex pairs and their sharpness, for Loop
         self.crease_sharpness = None
-        self.edge_flags = {}     # {"use_seam" / "use_edge_sharp": (F, 3) bool per input triangle edge}
-        self.triangles = None    # the input triangles, and the vertices they use (sorted)
-        self.referenced = None
+        # {"use_seam" / "use_edge_sharp": (F, 3 corners, 3 edges) corner values, see above}
+        self.edge_flags = {}
 
 
 def gather(obj, mesh, loops, polygon):
@@ -132,7 +135,8 @@ def _gather_edges(mesh, loops, c):
     for field in ("use_seam", "use_edge_sharp"):
         values = _read(mesh.edges, field, ne, 1, bool)[:, 0]
         if values.any():
-            c.edge_flags[field] = values[edge] & real
+            flagged = values[edge] & real                       # (F, 3): triangle edge e
+            c.edge_flags[field] = (flagged[:, None, :] & _ENDS[None]).astype(np.float32)
     crease = None
     if hasattr(mesh.edges[0], "crease"):  # Blender 3.x; 4.x keeps them as the EDGE attribute crease_edge
         crease = _read(mesh.edges, "crease", ne, 1)[:, 0]
@@ -180,7 +184,7 @@ def restore(obj, mesh, c, result, channels, levels):
         if attribute is not None:
             attribute.data.foreach_set(field, values.ravel())
     if c.edge_flags:
-        _restore_edge_flags(mesh, c, result, levels)
+        _restore_edge_flags(mesh, result)
     for i, (name, kind, _, is_uv, active, render) in enumerate(c.corners):
         values = result.corner_attributes[_CORNER.format(i)]
         if is_uv:
@@ -221,58 +225,27 @@ def restore(obj, mesh, c, result, channels, levels):
     mesh.update()
 
 
-def child_weights(levels):
-    """(4^levels, 3, 3): each child's corners as weights of its input triangle's corners, in
-    the layout of smooth/subdivide.h."""
-    half = 0.5
-    layout = np.array([[[1, 0, 0], [half, half, 0], [half, 0, half]],
-                       [[half, half, 0], [0, 1, 0], [0, half, half]],
-                       [[half, 0, half], [0, half, half], [0, 0, 1]],
-                       [[0, half, half], [half, 0, half], [half, half, 0]]])
-    weights = np.eye(3)[None]
-    for _ in range(levels):
-        weights = np.einsum("cij,tjk->tcik", layout, weights).reshape(-1, 3, 3)
-    return weights
-
-
-def _restore_edge_flags(mesh, c, result, levels):
-    """Seams and sharp edges on the output edges that lie on flagged input edges."""
-    k = 4 ** levels
-    w = child_weights(levels)
-    # Per child and child edge j (corner j to j + 1): the input triangle edge it lies on
-    # (e: corner e to e + 1), or -1. Its ends both have no weight on the corner across, e + 2.
-    on = np.full((k, 3), -1)
-    for j in range(3):
-        zero = (w[:, j] == 0) & (w[:, (j + 1) % 3] == 0)
-        for across in range(3):
-            on[zero[:, across], j] = (across + 1) % 3
-    # The library turns a triangle (a, b, c) it repairs into (a, c, b): its edges 0, 1, 2
-    # are then the input's 2, 1, 0. The vertex at b's place (the second corner of the
-    # second child at every level) says which (output vertex i < len(referenced) is the
-    # image of input vertex referenced[i]).
-    out = np.asarray(result.triangles)
-    nf = len(c.triangles)
-    turned = out[np.arange(nf) * k + (k - 1) // 3, 1] != np.searchsorted(c.referenced, c.triangles[:, 1])
-    parent = np.arange(len(out)) // k
-    child_on = on[np.arange(len(out)) % k]                      # (T, 3)
-    lies = child_on >= 0
-    e = np.where(lies, child_on, 0)
-    e = np.where(turned[parent][:, None], (2 - e) % 3, e)      # (a, c, b): 0 -> 2, 1 -> 1, 2 -> 0
+def _restore_edge_flags(mesh, result):
+    """Seams and sharp edges on the output edges whose ends both hold 1 for a flagged input
+    triangle edge."""
     out_edge = _read(mesh.loops, "edge_index", len(mesh.loops), 1, np.int64)[:, 0].reshape(-1, 3)
-    for field, per_triangle in c.edge_flags.items():
-        flag = lies & per_triangle[parent[:, None], e]
-        values = np.zeros(len(mesh.edges), dtype=bool)
-        values[out_edge[flag]] = True
-        mesh.edges.foreach_set(field, values)
+    for field in ("use_seam", "use_edge_sharp"):
+        values = result.corner_attributes.get(_EDGE.format(field))
+        if values is None:
+            continue
+        on = values == 1                                           # (T, 3 corners, 3 input edges)
+        flag = (on & np.roll(on, -1, axis=1)).any(axis=2)          # output edge j: corners j, j + 1
+        marked = np.zeros(len(mesh.edges), dtype=bool)
+        marked[out_edge[flag]] = True
+        mesh.edges.foreach_set(field, marked)
 
 
 def prepare(obj, mesh):
     """(triangles, per-vertex channels, per-corner values, Carried) for the library call."""
     triangles, loops, polygon = blender_mesh.triangle_corners(mesh)
     c = gather(obj, mesh, loops, polygon)
-    c.triangles = triangles.astype(np.int64)
-    c.referenced = np.unique(c.triangles)
     attributes = blender_mesh.float_point_attributes(mesh)
     attributes.update(c.channels)
     corners = {_CORNER.format(i): entry[2] for i, entry in enumerate(c.corners)}
+    corners.update({_EDGE.format(field): values for field, values in c.edge_flags.items()})
     return triangles, attributes, corners, c
