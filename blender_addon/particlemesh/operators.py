@@ -309,6 +309,7 @@ class PARTICLEMESH_OT_smooth(_ModalJob, bpy.types.Operator):
             raise sources.SourceError(f"'{self._target}' was deleted meanwhile")
         carried = self._carried
         channels = smooth_carry.take_channels(data, carried)
+        smooth_carry.append_loose(data, channels, carried)
         smooth_carry.before_write(obj)
         blender_mesh.write(obj.data, data, custom_normals=self.custom_normals)
         smooth_carry.restore(obj, obj.data, carried, data, channels, self.levels)

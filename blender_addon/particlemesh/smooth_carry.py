@@ -17,6 +17,10 @@ triangle f are output triangles f * 4^levels onward.
   go as corner values too, one per triangle edge: 1 at the flagged edge's two corners, 0 at
   the third. Interpolated linearly, a value is 1 exactly where the third corner has no
   weight, so an output edge lies on a flagged input edge where both its ends hold 1.
+- Loose vertices and loose edges (in no face), which the library's meshes do not hold, are
+  put back as they were, as Blender's Subdivision Surface keeps them: a loose vertex keeps its
+  position, shape keys, weights and attributes; a loose edge is not subdivided, and an end it
+  shares with a face follows that vertex to its new place.
 - Other EDGE attributes, bevel weights, and integer or boolean vertex and corner attributes
   have no subdivision rule here: named in the operator's report."""
 import numpy as np
@@ -58,6 +62,15 @@ class Carried:
         self.crease_sharpness = None
         # {"use_seam" / "use_edge_sharp": (F, 3 corners, 3 edges) corner values, see above}
         self.edge_flags = {}
+        # Loose geometry: the face vertices in input order (output vertex i is the image of
+        # face_vertices[i]), the loose vertices, their positions and per-vertex values
+        # {name: (K, C)}, the loose edges' input ends (M, 2) and their seam and sharp flags.
+        self.face_vertices = None
+        self.loose_vertices = np.zeros(0, dtype=np.int64)
+        self.loose_positions = np.zeros((0, 3), dtype=np.float32)
+        self.loose_values = {}
+        self.loose_edges = np.zeros((0, 2), dtype=np.int64)
+        self.loose_edge_flags = {}
 
 
 def gather(obj, mesh, loops, polygon):
@@ -119,6 +132,66 @@ def gather(obj, mesh, loops, polygon):
     if len(mesh.edges):
         _gather_edges(mesh, loops, c)
     return c
+
+
+def _gather_loose(mesh, triangles, positions, values, c):
+    """The vertices and edges of no face, with what a vertex holds (`values`: every
+    per-vertex channel of the library call)."""
+    nv = len(mesh.vertices)
+    in_faces = np.zeros(nv, dtype=bool)
+    in_faces[triangles.ravel()] = True
+    c.face_vertices = np.flatnonzero(in_faces)
+    c.loose_vertices = np.flatnonzero(~in_faces)
+    c.loose_positions = positions[c.loose_vertices]
+    c.loose_values = {name: v[c.loose_vertices] for name, v in values.items()}
+    ne = len(mesh.edges)
+    if ne == 0:
+        return
+    edge_in_face = np.zeros(ne, dtype=bool)
+    if len(mesh.loops):
+        edge_in_face[_read(mesh.loops, "edge_index", len(mesh.loops), 1, np.int64)[:, 0]] = True
+    loose = np.flatnonzero(~edge_in_face)
+    if len(loose):
+        c.loose_edges = _read(mesh.edges, "vertices", ne, 2, np.int64)[loose]
+        for field in ("use_seam", "use_edge_sharp"):
+            c.loose_edge_flags[field] = _read(mesh.edges, field, ne, 1, bool)[loose, 0]
+
+
+def append_loose(result, channels, c):
+    """The loose vertices appended to the subdivided `result` (positions, normals, attributes)
+    and to `channels` (take_channels()), before the write."""
+    k = len(c.loose_vertices)
+    if k == 0:
+        return
+    result.vertices = np.concatenate([np.asarray(result.vertices), c.loose_positions.astype(np.float64)])
+    if result.normals is not None:
+        result.normals = np.concatenate([np.asarray(result.normals), np.zeros((k, 3))])
+    for values in (result.attributes, channels):
+        for name in list(values):
+            values[name] = np.concatenate([values[name], c.loose_values[name].astype(values[name].dtype)])
+
+
+def _restore_loose_edges(mesh, c):
+    """The loose edges, their ends renumbered: a face vertex to its image, a loose vertex to
+    its place after the subdivided vertices."""
+    if len(c.loose_edges) == 0:
+        return
+    image = np.empty(len(c.face_vertices) + len(c.loose_vertices), dtype=np.int64)  # (every input vertex)
+    image[c.face_vertices] = np.arange(len(c.face_vertices))
+    first_loose = len(mesh.vertices) - len(c.loose_vertices)
+    image[c.loose_vertices] = first_loose + np.arange(len(c.loose_vertices))
+    start = len(mesh.edges)
+    mesh.edges.add(len(c.loose_edges))
+    ends = np.empty(2 * len(mesh.edges), dtype=blender_mesh.INDEX)
+    mesh.edges.foreach_get("vertices", ends)
+    ends[2 * start:] = image[c.loose_edges].ravel()
+    mesh.edges.foreach_set("vertices", ends)
+    for field, flags in c.loose_edge_flags.items():
+        if flags.any():
+            values = np.empty(len(mesh.edges), dtype=bool)
+            mesh.edges.foreach_get(field, values)
+            values[start:] = flags
+            mesh.edges.foreach_set(field, values)
 
 
 def _gather_edges(mesh, loops, c):
@@ -185,6 +258,7 @@ def restore(obj, mesh, c, result, channels, levels):
             attribute.data.foreach_set(field, values.ravel())
     if c.edge_flags:
         _restore_edge_flags(mesh, result)
+    _restore_loose_edges(mesh, c)
     for i, (name, kind, _, is_uv, active, render) in enumerate(c.corners):
         values = result.corner_attributes[_CORNER.format(i)]
         if is_uv:
@@ -246,6 +320,7 @@ def prepare(obj, mesh):
     c = gather(obj, mesh, loops, polygon)
     attributes = blender_mesh.float_point_attributes(mesh)
     attributes.update(c.channels)
+    _gather_loose(mesh, triangles, blender_mesh.positions(mesh), attributes, c)
     corners = {_CORNER.format(i): entry[2] for i, entry in enumerate(c.corners)}
     corners.update({_EDGE.format(field): values for field, values in c.edge_flags.items()})
     return triangles, attributes, corners, c

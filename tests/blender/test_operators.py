@@ -799,6 +799,60 @@ def test_smooth_carries_uvs_materials_shape_keys_and_vertex_groups(pm, turned):
         undo()
 
 
+def test_smooth_keeps_loose_vertices_and_edges(pm):
+    """Vertices and edges of no face stay, as Blender's Subdivision Surface keeps them: a
+    loose vertex with its position, shape key, weight and attribute; a loose edge between two
+    loose vertices, and one from a loose vertex to a face vertex, which follows that vertex's
+    image (output vertex i is the image of the i-th face vertex), with its seam flag."""
+    mesh = bpy.data.meshes.new("patch with loose parts")
+    # A 3 x 3 vertex patch (vertex 4 in the middle) and, before and after it in the vertex
+    # order, loose vertices 0 and 10.
+    grid = [(x, y, 0.0) for y in (-1.0, 0.0, 1.0) for x in (-1.0, 0.0, 1.0)]
+    verts = [(3.0, 0.0, 0.5)] + grid + [(3.0, 1.0, 0.5)]
+    quads = [(1 + a, 1 + a + 1, 1 + a + 4, 1 + a + 3) for a in (0, 1, 3, 4)]
+    mesh.from_pydata(verts, [(0, 10), (0, 6)], quads)
+    mesh.update()
+    obj = bpy.data.objects.new("patch with loose parts", mesh)
+    bpy.context.collection.objects.link(obj)
+    bpy.context.view_layer.objects.active = obj
+    for e in mesh.edges:
+        e.use_seam = sorted(e.vertices) == [0, 10]
+    group = obj.vertex_groups.new(name="loose")
+    group.add([0], 0.75, "REPLACE")
+    group.add([10], 0.25, "REPLACE")
+    temperature = mesh.attributes.new("temperature", "FLOAT", "POINT")
+    temperature.data.foreach_set("value", np.arange(len(verts), dtype=np.float32))
+    obj.shape_key_add(name="Basis")
+    up = obj.shape_key_add(name="Up")
+    for i, (x, y, z) in enumerate(verts):
+        up.data[i].co = (x, y, z + 0.5)
+    for scheme, levels in (("LOOP", 1), ("BUTTERFLY", 2)):
+        bpy.ops.ed.undo_push(message="before smooth")
+        assert bpy.ops.particlemesh.smooth("EXEC_DEFAULT", True, scheme=scheme, levels=levels) == {"FINISHED"}
+        obj = bpy.context.active_object
+        mesh = obj.data
+        assert not mesh.validate(verbose=False)
+        co, tris = mesh_arrays(mesh)
+        assert len(tris) == 8 * 4 ** levels
+        surface = len(co) - 2
+        assert tris.max() == surface - 1  # the loose vertices come after the surface's
+        np.testing.assert_array_equal(co[surface:], [verts[0], verts[10]])
+        ends = {tuple(sorted(e.vertices)): e for e in mesh.edges}
+        # Vertex 6, (1, 0, 0) on the patch's border, is face vertex 5: output vertex 5.
+        assert (surface, surface + 1) in ends and (5, surface) in ends
+        assert ends[surface, surface + 1].use_seam and not ends[5, surface].use_seam
+        np.testing.assert_allclose(co[5], [1.0, 0.0, 0.0], atol=1e-6)  # on the border curve
+        key = np.empty(3 * len(co), dtype=np.float32)
+        mesh.shape_keys.key_blocks["Up"].data.foreach_get("co", key)
+        np.testing.assert_allclose(key.reshape(-1, 3)[surface:], np.array([verts[0], verts[10]]) + [0, 0, 0.5])
+        weights = {v.index: g.weight for v in mesh.vertices for g in v.groups}
+        assert weights[surface] == pytest.approx(0.75) and weights[surface + 1] == pytest.approx(0.25)
+        values = np.empty(len(co), dtype=np.float32)
+        mesh.attributes["temperature"].data.foreach_get("value", values)
+        np.testing.assert_array_equal(values[surface:], [0.0, 10.0])
+        undo()
+
+
 def test_smooth_takes_edge_creases_as_loop_does(pm):
     """A cube with every edge creased (1.0: infinitely sharp, OpenSubdiv's sharpness 10 as
     Blender's Subdivision Surface converts c^2 x 10) keeps its faces flat under Loop; without
