@@ -109,6 +109,7 @@ class pm_triangulate_stats(Structure):
         ("shortened_limits", c_uint64),
         ("near_duplicates", c_uint64),
         ("flat_pieces_opened", c_uint64),
+        ("nearly_closed_turned", c_uint64),
     ]
 
 

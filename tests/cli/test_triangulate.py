@@ -324,6 +324,45 @@ def test_a_small_handle_taken_out_is_in_the_summary_and_report(cli, tmp_path):
     assert r["topology"]["closed"] and r["topology"]["euler_characteristic"] == 2
 
 
+def test_a_surface_closed_but_for_small_holes_is_turned_outward(cli, tmp_path):
+    """A teardrop's particles (a half ball, a cone up to a sharp tip) with three holes in its
+    side: the normals' spanning tree faced it inward from its tip; judged with its holes
+    capped it faces outward, and the summary and the report say it was turned."""
+    h, height, rows = 0.04, 3.0, []
+    n = int(2 * math.pi / h ** 2)
+    for i in range(n):
+        phi, th = math.acos(1 - 2 * (i + 0.5) / n), math.pi * (1 + 5 ** 0.5) * (i + 0.5)
+        if math.cos(phi) < 0:
+            rows.append((math.cos(th) * math.sin(phi), math.sin(th) * math.sin(phi), math.cos(phi)))
+    for k in range(int(height / h)):
+        z = h / 2 + k * h
+        r = 1 - z / height
+        m = max(int(2 * math.pi * r / h), 3)
+        rows += [(r * math.cos(2 * math.pi * j / m + 7 * z), r * math.sin(2 * math.pi * j / m + 7 * z), z)
+                 for j in range(m)]
+    rows.append((0.0, 0.0, height))
+    for c in ((1, 0, -0.3), (0, -1, -0.5), (-0.7, 0.7, 0.2)):
+        c = [x / math.hypot(*c) for x in c]
+        rows = [p for p in rows if math.dist(p, [x * math.hypot(*p) for x in c]) > 0.25]
+    pts, rep, out = tmp_path / "t.xyz", tmp_path / "r.json", tmp_path / "m.obj"
+    pts.write_text("".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in rows))
+    proc = cli("triangulate", pts, "-o", out, "--report", rep)
+    assert "1 part closed but for small openings turned outward" in proc.stdout, proc.stdout
+    assert json.loads(rep.read_text())["surface"]["nearly_closed_turned"] == 1
+    v, volume = [], 0.0
+    for line in out.read_text().splitlines():
+        f = line.split()
+        if f and f[0] == "v":
+            v.append([float(x) for x in f[1:4]])
+        elif f and f[0] == "f":
+            a, b, c = (v[int(x.split("/")[0]) - 1] for x in f[1:4])
+            volume += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+                       + a[2] * (b[0] * c[1] - b[1] * c[0])) / 6
+    assert 4.7 < volume < 5.24, volume  # pi (2 + 3) / 3, less the holes' and the chords' share
+    proc = cli("triangulate", pts, "-o", out, "--no-orient")
+    assert "turned outward" not in proc.stdout
+
+
 def test_stray_pieces_are_named_and_removed_on_request(cli, inspect, tmp_path):
     """Lone triangles apart from a surface (a scanner's strays) are kept by default, and a hint
     names the --min-component-triangles that removes just them; with it they are gone (their

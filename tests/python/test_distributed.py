@@ -403,6 +403,20 @@ def test_triangulate_tiled_keeps_an_open_surface_open_and_facing_as_one_machine(
     assert np.median(np.einsum("ij,ij->i", tiled.normals, one.normals)) > 0.99
 
 
+def test_triangulate_tiled_turns_a_surface_closed_but_for_small_holes_outward_as_one_machine(pm, pmd, client):
+    """A teardrop with three holes (test_particlemesh.teardrop): one machine judges it with
+    its holes capped, the stitched surface by the normal at its highest particle (its sharp
+    tip); both face outward."""
+    from test_particlemesh import signed_volume, teardrop
+    p = teardrop()
+    one = pm.triangulate(p)
+    assert one.stats["nearly_closed_turned"] == 1
+    for tiles in ((2, 2, 1), (1, 2, 2)):
+        tiled = pmd.triangulate_tiled(client, p, tiles=tiles)
+        assert signed_volume(tiled) == pytest.approx(signed_volume(one), rel=1e-3), tiles
+        assert np.median(np.einsum("ij,ij->i", tiled.normals, one.normals)) > 0.99
+
+
 def test_triangulate_tiled_removes_small_pieces_of_the_stitched_surface(pm, pmd, client):
     """min_component_triangles applies to the stitched surface, as one machine removes them:
     the sphere's pieces in each tile (cut by the seams, some of them small) all stay, the lone

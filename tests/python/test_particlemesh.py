@@ -145,7 +145,7 @@ def test_near_copies_and_crowded_points_show_in_the_stats(pm):
     """The stats appended last reach Python intact (the ctypes struct matches the C ABI's):
     every particle of a sphere with a copy 0.02 spacings away is one particle, the copies set
     aside; with a neighbour limit of 8, the crowded particles' edge limits are shortened and
-    counted; the last field, flat_pieces_opened, reads 0 on both."""
+    counted; the last fields, flat_pieces_opened and nearly_closed_turned, read 0 on both."""
     p = fibonacci_sphere(2000)
     r0 = pm.estimate_spacing(p)
     d = np.random.default_rng(4).normal(size=p.shape)
@@ -158,6 +158,52 @@ def test_near_copies_and_crowded_points_show_in_the_stats(pm):
     crowded = pm.triangulate(p, max_neighbors=8)
     assert 1000 < crowded.stats["shortened_limits"] <= 2000
     assert crowded.stats["near_duplicates"] == 0 and crowded.stats["flat_pieces_opened"] == 0
+    assert twinned.stats["nearly_closed_turned"] == 0 == crowded.stats["nearly_closed_turned"]
+
+
+def teardrop(h=0.04, height=3.0):
+    """A closed teardrop (a unit half ball below z = 0, a cone up to a sharp tip at z =
+    height) sampled about h apart, with three round holes (0.25 across) in its side."""
+    n = int(2 * np.pi / h ** 2)
+    i = np.arange(n) + 0.5
+    phi, th = np.arccos(1 - 2 * i / n), np.pi * (1 + 5 ** 0.5) * i
+    ball = np.c_[np.cos(th) * np.sin(phi), np.sin(th) * np.sin(phi), np.cos(phi)]
+    rings = [ball[ball[:, 2] < 0]]
+    for z in np.arange(h / 2, height, h):
+        r = 1 - z / height
+        m = max(int(2 * np.pi * r / h), 3)
+        a = np.arange(m) * 2 * np.pi / m + 7 * z
+        rings.append(np.c_[r * np.cos(a), r * np.sin(a), np.full(m, z)])
+    p = np.concatenate(rings + [[[0, 0, height]]])
+    for c in ([1, 0, -0.3], [0, -1, -0.5], [-0.7, 0.7, 0.2]):
+        c = np.array(c) / np.linalg.norm(c)
+        p = p[np.linalg.norm(p - c * np.linalg.norm(p, axis=1)[:, None], axis=1) > 0.25]
+    return p
+
+
+def signed_volume(mesh):
+    v, t = mesh.vertices, mesh.triangles
+    return np.einsum("ij,ij->i", v[t[:, 0]], np.cross(v[t[:, 1]], v[t[:, 2]])).sum() / 6
+
+
+def test_a_surface_closed_but_for_small_holes_faces_outward(pm):
+    """A model's vertices whose surface keeps a few holes open: without input normals the
+    spanning tree alone says which way the surface faces, from its highest particle, here a
+    sharp tip whose plane fit has no up: it chose inward. Judged with its holes capped, as a
+    closed surface is, it faces outward (the same for any thread count); orient=False keeps
+    the tree's choice, and input normals theirs (a scanner's, inside a room, face inward
+    rightly)."""
+    p = teardrop()
+    mesh = pm.triangulate(p)
+    assert mesh.stats["holes_left"] == 3 and pm.topology(mesh)["components"] == 1
+    assert mesh.stats["nearly_closed_turned"] == 1
+    assert 4.7 < signed_volume(mesh) < 5.24  # the solid's pi (2 + 3) / 3, less the holes' and chords'
+    assert (pm.triangulate(p, threads=1).triangles == mesh.triangles).all()
+    tree = pm.triangulate(p, orient=False)
+    assert tree.stats["nearly_closed_turned"] == 0 and signed_volume(tree) < 0
+    for sign in (-1, 1):
+        given = pm.triangulate(p, sign * mesh.normals)
+        assert given.stats["nearly_closed_turned"] == 0 and np.sign(signed_volume(given)) == sign
 
 
 def test_small_pieces_removed_on_request(pm):

@@ -238,6 +238,10 @@ typedef struct pm_triangulate_stats {
   uint64_t flat_pieces_opened; /**< closed pieces that enclosed no volume (a patch and its
                                     reversed copy, on particles exactly in one plane), opened:
                                     the side facing as the particles' normals kept */
+  /* -- appended -- */
+  uint64_t nearly_closed_turned; /**< open components closed but for small openings turned to
+                                      face outward as closed ones are (normals estimated and
+                                      oriented by the spanning tree alone, no viewpoint) */
 } pm_triangulate_stats;
 
 PM_EXPORT void pm_triangulate_options_init(pm_triangulate_options* options);

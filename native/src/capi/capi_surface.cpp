@@ -118,6 +118,7 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
       s.shortened_limits = r.triangulation.shortened_limits;
       s.near_duplicates = r.triangulation.near_duplicates;
       s.flat_pieces_opened = r.surface.flat_pieces_opened;
+      s.nearly_closed_turned = r.surface.nearly_closed_turned;
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();

@@ -95,11 +95,69 @@ void open_flat_pieces(const std::vector<Vec3>& P, std::vector<Triangle>& T, cons
     if (gone[v]) open[v] = 1;
 }
 
+/// NearlyClosed (orient_outward.h): the open pieces closed but for small openings, found from
+/// the boundary half-edges (a << 32 | b), each loop capped by the fan from its centroid (cap
+/// triangles (b, a, centroid)); each such piece's cap volume (six times, about the piece's
+/// root) added to vol[r] and the piece marked closed. Returns those pieces' roots, ascending.
+std::vector<uint32_t> close_nearly_closed_pieces(const std::vector<Vec3>& P, const std::vector<uint64_t>& boundary,
+                                                 const std::vector<uint32_t>& root, const std::vector<double>& area,
+                                                 std::vector<double>& vol, std::vector<uint8_t>& open) {
+  // The loops: boundary half-edges sorted by their start; from each unwalked one, on to an
+  // unwalked one starting where it ends, until none is left there (back at the loop's start:
+  // every corner starts as many boundary half-edges as end at it). Serial and in sorted
+  // order: the same loops and sums whatever the threads.
+  std::vector<uint64_t> he(boundary);
+  std::sort(he.begin(), he.end());
+  std::vector<uint8_t> walked(he.size(), 0);
+  std::vector<std::pair<uint32_t, std::pair<double, double>>> cap;  // per loop: (root, (area, volume6))
+  std::vector<uint64_t> loop;
+  for (size_t k = 0; k < he.size(); ++k) {
+    if (walked[k]) continue;
+    loop.clear();
+    Vec3 centroid{};
+    for (size_t at = k;;) {
+      walked[at] = 1;
+      loop.push_back(he[at]);
+      centroid = centroid + P[uint32_t(he[at] >> 32)];
+      const uint64_t to = he[at] & 0xffffffffu;
+      auto next = std::lower_bound(he.begin(), he.end(), to << 32);
+      while (next != he.end() && (*next >> 32) == to && walked[size_t(next - he.begin())]) ++next;
+      if (next == he.end() || (*next >> 32) != to) break;
+      at = size_t(next - he.begin());
+    }
+    centroid = centroid / double(loop.size());
+    const uint32_t r = root[uint32_t(he[k] >> 32)];
+    double a = 0, v = 0;
+    for (const uint64_t e : loop) {
+      const Vec3& pa = P[uint32_t(e >> 32)];
+      const Vec3& pb = P[uint32_t(e & 0xffffffffu)];
+      a += 0.5 * norm(cross(pa - centroid, pb - centroid));
+      v += signed_volume6(P[r], pb, pa, centroid);
+    }
+    cap.push_back({r, {a, v}});
+  }
+  std::stable_sort(cap.begin(), cap.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+  std::vector<uint32_t> closed;
+  for (size_t i = 0; i < cap.size();) {
+    const uint32_t r = cap[i].first;
+    double a = 0, v = 0;
+    for (; i < cap.size() && cap[i].first == r; ++i) a += cap[i].second.first, v += cap[i].second.second;
+    const double closed6 = vol[r] + v;
+    if (!open[r] || !(area[r] > 0) || a > kMaxCapShare * area[r] ||
+        std::abs(closed6) < 6 * kMinCappedVolume * area[r] * std::sqrt(area[r]))
+      continue;
+    vol[r] = closed6;
+    open[r] = 0;
+    closed.push_back(r);
+  }
+  return closed;
+}
+
 }  // namespace
 
 size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<Triangle>& T,
                                         const std::vector<uint64_t>& boundary, std::vector<Vec3>* vertex_normals,
-                                        bool turn, FlatPieces* flat) {
+                                        bool turn, FlatPieces* flat, NearlyClosed* nearly) {
   // Components by shared vertices (the same as by shared edges on a manifold without
   // pinches); a component is open if it holds a boundary half-edge. Joined concurrently (a
   // serial pass is a visible cost at millions of triangles): each component's root is its
@@ -125,6 +183,8 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
     uint32_t root;
     double volume6, area;
   };
+  const bool capping = nearly && nearly->enabled && turn && !boundary.empty();
+  const bool areas = flat || capping;
   const size_t chunk = 16384, chunks = (T.size() + chunk - 1) / chunk;
   std::vector<std::vector<Sums>> part(chunks);
   parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
@@ -134,7 +194,7 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
         const uint32_t r = root[t[0]];
         const Vec3 o = P[r];
         const double v = signed_volume6(o, P[t[0]], P[t[1]], P[t[2]]);
-        const double a = flat ? 0.5 * norm(cross(P[t[1]] - P[t[0]], P[t[2]] - P[t[0]])) : 0.0;
+        const double a = areas ? 0.5 * norm(cross(P[t[1]] - P[t[0]], P[t[2]] - P[t[0]])) : 0.0;
         auto& pt = part[h];
         auto it = std::find_if(pt.rbegin(), pt.rend(), [r](const Sums& x) { return x.root == r; });
         if (it != pt.rend()) {
@@ -145,14 +205,19 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
         }
       }
   });
-  std::vector<double> vol(n, 0.0), area(flat ? n : 0, 0.0);
+  std::vector<double> vol(n, 0.0), area(areas ? n : 0, 0.0);
   for (const auto& pt : part)
     for (const Sums& x : pt) {
       vol[x.root] += x.volume6;
-      if (flat) area[x.root] += x.area;
+      if (areas) area[x.root] += x.area;
     }
   if (flat) open_flat_pieces(P, T, root, vol, area, open, *flat);
   if (!turn) return 0;
+  std::vector<uint32_t> capped;
+  if (capping) {
+    capped = close_nearly_closed_pieces(P, boundary, root, area, vol, open);
+    nearly->pieces = capped.size();
+  }
   // A closed component inside another faces into the cavity it bounds, one inside that
   // outward again (nesting.h): its depth decides. Pieces (the roots of triangles) numbered in
   // root order.
@@ -163,13 +228,16 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
   for (size_t v = 0; v < n; ++v)
     if (has_triangle[v]) {
       piece[v] = uint32_t(closed.size());
-      closed.push_back(!open[v]);
+      closed.push_back(!open[v] && !std::binary_search(capped.begin(), capped.end(), uint32_t(v)));
     }
   const size_t pieces = closed.size();
   std::vector<uint32_t> piece_of(T.size());
   parallel_blocks(T.size(), 8192, [&](size_t b, size_t e) {
     for (size_t i = b; i < e; ++i) piece_of[i] = piece[root[T[i][0]]];
   });
+  // Pieces judged with their openings capped are neither nested nor nesting: they face away
+  // from the solid they nearly close (depth 0). Capped, a model's head would hold the small
+  // closed pieces on its surface (a thin lip's two sides) and turn them into a cavity.
   const std::vector<uint32_t> depth = nesting_depths(P, T, piece_of.data(), pieces, closed);
   // Closed, enclosing some volume, and facing into its solid: turned (0 volume: left as it is).
   auto turned = [&](uint32_t r) {
@@ -193,6 +261,7 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
     }
     flipped.fetch_add(count, std::memory_order_relaxed);
   });
+  for (const uint32_t r : capped) nearly->turned += turned(r);
   return flipped.load();
 }
 

@@ -100,6 +100,7 @@ SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options
       }
     });
     std::vector<Vec3> normals;
+    bool tree_chose = false;  // which way the normals face was the spanning tree's choice alone
     if (options.normals == Source::Input) {
       for (size_t i = 0; i < n; ++i)
         if (!usable_normal(cloud.normals[i]))
@@ -138,6 +139,7 @@ SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options
           !detail::orient_normals_by_reference(grid, raw.rep, raw.neighbors, raw.max_edge, normals, reference, tracker))
         detail::orient_normals_mst(grid, raw.rep, raw.neighbors, raw.max_edge, normals, reference, tracker);
       st.normals_estimated = true;
+      tree_chose = reference.empty();
     }
     st.seconds_normals = seconds_since(t0);
     raw.grid.reset();
@@ -172,9 +174,14 @@ SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options
     // Flat closed pieces (a patch and its reversed copy) opened, whichever way the rest faces.
     detail::FlatPieces flat;
     flat.sides = &normals;
-    bs.components_flipped =
-        detail::orient_closed_components_outward(P, tris, bs.boundary, &vertex_normals, options.orient, &flat);
+    // Open parts closed but for small openings too, where nothing but the tree said which way
+    // they face (a scanner's viewpoint or normals say which way rightly, inside a room too).
+    detail::NearlyClosed nearly;
+    nearly.enabled = tree_chose && !st.viewpoint_used;
+    bs.components_flipped = detail::orient_closed_components_outward(P, tris, bs.boundary, &vertex_normals,
+                                                                      options.orient, &flat, &nearly);
     st.flat_pieces_opened = flat.pieces;
+    st.nearly_closed_turned = nearly.turned;
     st.seconds_orient = seconds_since(t0);
     tracker.check();
     st.candidates = bs.candidates;

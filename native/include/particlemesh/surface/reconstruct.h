@@ -25,7 +25,9 @@
 //     fill_edge_factor x L.
 //  6. Orientation: every closed component is turned to face outward: to enclose positive
 //     volume, or negative for one inside another (a hollow object's inner wall faces into
-//     its cavity; mesh/nesting.h).
+//     its cavity; mesh/nesting.h). Where the normals' spanning tree alone chose which way
+//     the surface faces (no input normals, no viewpoint), an open component closed but for
+//     small openings is judged as a closed one, its loops capped (surface/orient_outward.h).
 #pragma once
 
 #include "particlemesh/core/config.h"
@@ -74,7 +76,9 @@ struct SurfaceOptions : TriangulateOptions {
   size_t min_component_triangles = 0;
   /// Turn each closed component to face outward: away from the solid it bounds (positive
   /// signed volume), or into the cavity for a closed component inside another (a hollow
-  /// object's inner wall; by how many enclose it, as topology_report's outward judges).
+  /// object's inner wall; by how many enclose it, as topology_report's outward judges); and,
+  /// where the normals were estimated without input normals or a viewpoint, each open one
+  /// closed but for small openings, judged with its loops capped (SurfaceStats::nearly_closed_turned).
   bool orient = true;
   /// Each particle's edge limit follows the sampling around it (real scans are sampled
   /// unevenly): L_i = max_edge_factor x h_i, h_i its local spacing (estimate_local_spacing;
@@ -152,6 +156,11 @@ struct SurfaceStats {
   /// piece (its outline counted among the loops left open); where that side is not a surface
   /// with simple outlines the piece is removed and its particles are unused.
   size_t flat_pieces_opened = 0;
+  /// Open components closed but for small openings (capped, they add at most 40 % to its area
+  /// and enclose a clear volume), turned to face outward as closed ones are, where the
+  /// normals' spanning tree alone chose which way they faced (no input normals, no
+  /// viewpoint): a model's vertices whose surface keeps a few holes.
+  size_t nearly_closed_turned = 0;
   size_t unused_points = 0;       ///< distinct particles in no triangle
   size_t components_removed = 0;  ///< pieces removed for min_component_triangles
   size_t component_triangles_removed = 0;  ///< their triangles

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 
 #include "stage_support.h"
@@ -102,4 +103,95 @@ TEST(OrientOutward, FlatClosedPiecesAreOpened) {
   EXPECT_EQ(counts(blind), (std::array<size_t, 4>{2, 2, 8, 8}));
   EXPECT_TRUE(blind.loops.empty());
   EXPECT_EQ(std::vector<Triangle>(unturned.begin(), unturned.begin() + 4), thin_inward);
+}
+
+namespace {
+
+// The unit cube's 12 triangles, wound outward, face by face (two triangles a face).
+std::vector<Triangle> cube_outward() {
+  // Vertex i = (i & 1, i >> 1 & 1, i >> 2 & 1).
+  const std::array<std::array<uint32_t, 4>, 6> faces = {{
+      {0, 2, 3, 1}, {4, 5, 7, 6},   // z = 0 (down), z = 1 (up)
+      {0, 1, 5, 4}, {2, 6, 7, 3},   // y = 0, y = 1
+      {0, 4, 6, 2}, {1, 3, 7, 5}}};  // x = 0, x = 1
+  std::vector<Triangle> t;
+  for (const auto& f : faces) {
+    t.push_back({f[0], f[1], f[2]});
+    t.push_back({f[0], f[2], f[3]});
+  }
+  return t;
+}
+
+std::vector<Vec3> cube_points(Vec3 at, double size) {
+  std::vector<Vec3> P;
+  for (uint32_t i = 0; i < 8; ++i) P.push_back(at + Vec3{double(i & 1), double(i >> 1 & 1), double(i >> 2 & 1)} * size);
+  return P;
+}
+
+// The half-edges (a << 32 | b) whose reverse no triangle holds.
+std::vector<uint64_t> boundary_of(const std::vector<Triangle>& tris) {
+  std::vector<uint64_t> he;
+  for (const Triangle& t : tris)
+    for (int k = 0; k < 3; ++k) he.push_back(uint64_t(t[k]) << 32 | t[(k + 1) % 3]);
+  std::sort(he.begin(), he.end());
+  std::vector<uint64_t> out;
+  for (uint64_t e : he)
+    if (!std::binary_search(he.begin(), he.end(), (e & 0xffffffffu) << 32 | e >> 32)) out.push_back(e);
+  return out;
+}
+
+Triangle reversed(const Triangle& t) { return {t[0], t[2], t[1]}; }
+
+}  // namespace
+
+TEST(OrientOutward, NearlyClosedPiecesTurnAsClosedOnesWhereEnabled) {
+  // A cube wound inward with openings: one triangle gone (its cap 1/11 of the rest), one face
+  // gone (1/5), three faces gone (a bent strip, its cap about as large as it: left as it is);
+  // beside them a closed small
+  // cube wound inward inside the first (a capped piece nests nothing: the small one faces
+  // outward, as it would alone).
+  const std::vector<Triangle> cube = cube_outward();
+  std::vector<Vec3> P;
+  std::vector<Triangle> tris;
+  auto add = [&](Vec3 at, double size, size_t drop) {
+    const auto base = uint32_t(P.size());
+    for (const Vec3& p : cube_points(at, size)) P.push_back(p);
+    for (size_t i = drop; i < cube.size(); ++i)
+      tris.push_back(reversed({cube[i][0] + base, cube[i][1] + base, cube[i][2] + base}));
+  };
+  add({0, 0, 0}, 1, 1);     // tris 0..10
+  add({3, 0, 0}, 1, 2);     // 11..20
+  add({6, 0, 0}, 1, 6);     // 21..26
+  add({0.4, 0.4, 0.4}, 0.2, 0);  // 27..38, inside the first
+  const std::vector<Triangle> before = tris;
+  const std::vector<uint64_t> boundary = boundary_of(tris);
+  std::vector<Vec3> normals(P.size(), Vec3{0, 0, 1});
+
+  NearlyClosed nearly;
+  nearly.enabled = true;
+  std::vector<Triangle> turned = tris;
+  EXPECT_EQ(orient_closed_components_outward(P, turned, boundary, &normals, true, nullptr, &nearly), 3u);
+  EXPECT_EQ(nearly.pieces, 2u);
+  EXPECT_EQ(nearly.turned, 2u);
+  for (size_t i = 0; i < before.size(); ++i) {
+    const bool open_box = i >= 21 && i < 27;
+    EXPECT_EQ(turned[i], open_box ? before[i] : reversed(before[i])) << i;
+  }
+  for (uint32_t v = 0; v < P.size(); ++v) EXPECT_EQ(normals[v].z, v >= 16 && v < 24 ? 1 : -1) << v;
+
+  // Not enabled (input normals, a viewpoint): only the closed cube turns.
+  NearlyClosed off;
+  std::vector<Triangle> kept = tris;
+  EXPECT_EQ(orient_closed_components_outward(P, kept, boundary, nullptr, true, nullptr, &off), 1u);
+  EXPECT_EQ(off.pieces, 0u);
+  for (size_t i = 0; i < before.size(); ++i) EXPECT_EQ(kept[i], i >= 27 ? reversed(before[i]) : before[i]) << i;
+
+  // Wound outward already: nothing turns, both counted as judged.
+  std::vector<Triangle> outward = turned;
+  NearlyClosed again;
+  again.enabled = true;
+  EXPECT_EQ(orient_closed_components_outward(P, outward, boundary_of(outward), nullptr, true, nullptr, &again), 0u);
+  EXPECT_EQ(again.pieces, 2u);
+  EXPECT_EQ(again.turned, 0u);
+  EXPECT_EQ(outward, turned);
 }
