@@ -2,16 +2,15 @@
 // shared by triangulate's hints and inspect's particle report.
 #pragma once
 
+#include "particlemesh/spatial/local_spacing.h"
+
 namespace particlemesh::cli {
 
-/// A sampling thicker than this scatters across its surface: clean surfaces measured under
-/// 0.2 (a coarse model's vertices, from its curvature, up to 0.19), depth-camera scans
-/// 0.24-0.30, points moved off a sphere by noise of half their spacing 0.37 (bench/RESULTS.md,
-/// "Exact copies of particles, and noise across the surface").
-constexpr double kNoisyThickness = 0.22;
-/// ... up to this: thicker, the particles fill a volume (a block of SPH particles measured
-/// 0.86; the noisiest sphere, moved off by noise of a whole spacing, 0.59).
-constexpr double kVolumeThickness = 0.75;
+/// A sampling thicker than this scatters across its surface (the library's threshold:
+/// bench/RESULTS.md, "Exact copies of particles, and noise across the surface").
+constexpr double kNoisyThickness = kNoisySamplingThickness;
+/// ... up to this: thicker, the particles fill a volume.
+constexpr double kVolumeThickness = kVolumeSamplingThickness;
 
 /// What a thickness says, in a few words for the summaries (`mls`: whether this build has
 /// --mls to name).

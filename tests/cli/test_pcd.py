@@ -167,18 +167,19 @@ def test_estimated_normals_face_the_viewpoint(pcl_cli, tmp_path):
 
 
 def test_moving_least_squares_closes_a_noisy_scan(pcl_cli, tmp_path):
-    # A sphere of 20 000 points, each moved along its radius by noise of half the spacing:
-    # as it is, the surface falls apart; smoothed with --mls over 2.4 spacings, one closed sphere
-    # whose vertices lie closer to it.
+    # A sphere of 20 000 points, each moved along its radius by noise of 0.6 spacings: as it
+    # is, the surface keeps holes (noise of half a spacing closes since the normals' tree
+    # keeps within a sheet in noisy samplings); smoothed with --mls over 2.4 spacings, one
+    # closed sphere whose vertices lie closer to it.
     n = 20000
     spacing = math.sqrt(4 * math.pi / n)
-    p = fibonacci_sphere(n) * (1 + np.random.default_rng(0).normal(0, 0.5 * spacing, n))[:, None]
+    p = fibonacci_sphere(n) * (1 + np.random.default_rng(0).normal(0, 0.6 * spacing, n))[:, None]
     src = tmp_path / "noisy.ply"
     write_ply(src, p, {})
     proc, raw = _report(pcl_cli, tmp_path, src)
-    assert raw["topology"]["components"] > 5
+    assert not raw["topology"]["closed"] and raw["topology"]["boundary_loops"] >= 2
     # The summary says the particles scatter across their surface, and what smoothing to try.
-    assert 0.3 < raw["triangulation"]["sampling_thickness"] < 0.45
+    assert 0.35 < raw["triangulation"]["sampling_thickness"] < 0.5
     hint = next(line for line in proc.stdout.splitlines() if "scatter across their surface" in line)
     suggested = float(hint.split("--mls ")[1].split()[0])
     assert 2.5 * spacing < suggested < 3.5 * spacing, hint
@@ -188,8 +189,8 @@ def test_moving_least_squares_closes_a_noisy_scan(pcl_cli, tmp_path):
     proc, r = _report(pcl_cli, tmp_path, src, "--mls", radius)
     pre = r["input_cloud"]["preprocessing"]
     assert pre["mls_radius"] == radius and pre["mls_order"] == 2
-    # A point or two flung far by the noise have fewer than 3 neighbours within the radius.
-    assert pre["smoothed"] + pre["smoothing_skipped"] == n and pre["smoothing_skipped"] <= 5
+    # A few points flung far by the noise have fewer than 3 neighbours within the radius.
+    assert pre["smoothed"] + pre["smoothing_skipped"] == n and pre["smoothing_skipped"] <= 10
     assert (f"moving least squares (radius {radius:.6g}, order 2): {pre['smoothed']} points moved"
             in proc.stdout)
     assert 0 < pre["smoothing_mean_shift"] < pre["smoothing_max_shift"] < radius

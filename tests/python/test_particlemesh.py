@@ -206,6 +206,37 @@ def test_a_surface_closed_but_for_small_holes_faces_outward(pm):
         assert given.stats["nearly_closed_turned"] == 0 and np.sign(signed_volume(given)) == sign
 
 
+def depth_frame(sigma, n=160, seed=3):
+    """A depth camera's frame (n x n rays from the origin along +z): a wall 2 away with a ball
+    in front of it, depth noise of `sigma` and depth quantized in steps of 0.002, as a
+    Kinect's."""
+    rng = np.random.default_rng(seed)
+    u, v = np.meshgrid(np.linspace(-0.5, 0.5, n), np.linspace(-0.4, 0.4, n))
+    z = np.full(u.shape, 2.0)
+    r2 = (u - 0.1) ** 2 + v ** 2
+    ball = r2 < 0.2 ** 2
+    z[ball] = 1.6 - 2 * np.sqrt(0.2 ** 2 - r2[ball])
+    d = np.round((z + rng.normal(0, sigma, z.shape)) / 0.002) * 0.002
+    return np.c_[u.ravel() * d.ravel(), v.ravel() * d.ravel(), d.ravel()]
+
+
+def test_a_noisy_depth_frame_is_oriented_within_its_sheets(pm):
+    """Depth noise puts neighbouring samples of one sheet a noise's depth apart, which looks
+    like an edge between two sheets; in a sampling that scatters across its surface the
+    normals' spanning tree takes such edges last. The frame's wall and ball come out whole
+    (before: 69 pieces and 79 loops, 29 609 candidates dropped for facing against their
+    neighbours' normals)."""
+    p = depth_frame(0.006)
+    mesh = pm.triangulate(p)
+    assert mesh.stats["sampling_thickness"] > 0.22  # noisy
+    top = pm.topology(mesh)
+    assert top["components"] <= 6 and top["boundary_loops"] <= 10, top
+    assert mesh.stats["rejected_conormal"] < 0.2 * mesh.stats["kept"]  # 14 % (before: 36 %)
+    # A cleaner frame of the same scene: the wall (its hole's rim and outline) and the ball.
+    clean = pm.topology(pm.triangulate(depth_frame(0.002)))
+    assert clean["components"] == 2 and clean["boundary_loops"] == 3
+
+
 def test_small_pieces_removed_on_request(pm):
     p = fibonacci_sphere(3000)
     r0 = np.sqrt(4 * np.pi / 3000)

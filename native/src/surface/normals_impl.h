@@ -36,9 +36,14 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
 /// costs 1 - |n_i . n_j| plus how far it is from being clearly one or the other, so the tree
 /// follows the clearest evidence first. Each tree faces as `reference` normals (sorted index,
 /// may be empty) say on the majority of its points, else its highest point faces +z.
+/// `noisy` (a sampling that scatters across its surface, kNoisySamplingThickness, but fills
+/// no volume, kVolumeSamplingThickness): an edge
+/// along the normals is as likely two samples of one sheet a noise's depth apart as two
+/// sheets, so edges between sheets cost 1 more: the tree takes one only where no edge within
+/// a sheet joins.
 void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
                         const NeighborLists& lists, const std::vector<double>& radius, std::vector<Vec3>& normals,
-                        const std::vector<Vec3>& reference, ProgressTracker& tracker);
+                        const std::vector<Vec3>& reference, ProgressTracker& tracker, bool noisy = false);
 
 /// Orient unit normals (sorted index) by reference normals (sorted index): where a reference
 /// clearly says which way a point faces (|cos| >= 0.3) it decides; the rest take the side the

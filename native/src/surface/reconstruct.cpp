@@ -13,6 +13,7 @@
 #include "core/parallel.h"
 #include "core/progress_tracker.h"
 #include "particlemesh/core/error.h"
+#include "particlemesh/spatial/local_spacing.h"
 #include "spatial/spacing_impl.h"
 #include "surface/normals_impl.h"
 #include "surface/raw_triangulation.h"
@@ -137,7 +138,9 @@ SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options
       // them) the spanning tree orients, and they only vote which way each piece faces.
       if (reference.empty() ||
           !detail::orient_normals_by_reference(grid, raw.rep, raw.neighbors, raw.max_edge, normals, reference, tracker))
-        detail::orient_normals_mst(grid, raw.rep, raw.neighbors, raw.max_edge, normals, reference, tracker);
+        detail::orient_normals_mst(grid, raw.rep, raw.neighbors, raw.max_edge, normals, reference, tracker,
+                                   raw.stats.sampling_thickness > kNoisySamplingThickness &&
+                                       raw.stats.sampling_thickness < kVolumeSamplingThickness);
       st.normals_estimated = true;
       tree_chose = reference.empty();
     }

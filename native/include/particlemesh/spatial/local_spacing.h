@@ -40,6 +40,16 @@ struct LocalSpacing {
   double thickness = 0;
 };
 
+/// A sampling thicker than this (LocalSpacing::thickness) scatters across its surface: clean
+/// surfaces measured under 0.2 (a coarse model's vertices, from its curvature, up to 0.19),
+/// depth-camera scans 0.24-0.30, points moved off a sphere by noise of half their spacing
+/// 0.37. Triangulation's normal orientation trusts edges between two sheets less there, and
+/// the command-line tool's hints offer smoothing.
+constexpr double kNoisySamplingThickness = 0.22;
+/// ... up to this: thicker, the particles fill a volume (a block of SPH particles measured
+/// 0.86; the noisiest sphere, moved off by noise of a whole spacing, 0.59): polygonize's.
+constexpr double kVolumeSamplingThickness = 0.75;
+
 /// The local spacing of every point, from its 16 nearest neighbours (up to the first one more
 /// than twice as far as the one before: a stray cluster is a neighbourhood of its own). The
 /// larger of
