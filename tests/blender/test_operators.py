@@ -725,6 +725,17 @@ def grid_with_everything(cells=7):
     return obj
 
 
+def smooth_active(scheme, levels):
+    """The Smooth operator on the active object, after an undo step (undo() goes back):
+    (object, mesh, positions, triangles) of the valid mesh it leaves."""
+    bpy.ops.ed.undo_push(message="before smooth")
+    assert bpy.ops.particlemesh.smooth("EXEC_DEFAULT", True, scheme=scheme, levels=levels) == {"FINISHED"}
+    obj = bpy.context.active_object
+    assert not obj.data.validate(verbose=False)
+    co, tris = mesh_arrays(obj.data)
+    return obj, obj.data, co, tris
+
+
 @pytest.mark.parametrize("turned", [False, True])
 def test_smooth_carries_uvs_materials_shape_keys_and_vertex_groups(pm, turned):
     """What a modelled mesh holds goes through the subdivision: each output face keeps the
@@ -747,12 +758,7 @@ def test_smooth_carries_uvs_materials_shape_keys_and_vertex_groups(pm, turned):
     flagged = {field: co0[[list(e.vertices) for e in obj.data.edges if getattr(e, field)][0]]
                for field in ("use_seam", "use_edge_sharp")}
     for scheme, levels in (("LOOP", 1), ("LOOP", 2), ("BUTTERFLY", 1), ("BUTTERFLY", 2)):
-        bpy.ops.ed.undo_push(message="before smooth")
-        assert bpy.ops.particlemesh.smooth("EXEC_DEFAULT", True, scheme=scheme, levels=levels) == {"FINISHED"}
-        obj = bpy.context.active_object
-        mesh = obj.data
-        assert not mesh.validate(verbose=False)
-        co, tris = mesh_arrays(mesh)
+        obj, mesh, co, tris = smooth_active(scheme, levels)
         assert len(tris) == 2 * cells * cells * 4 ** levels
         # The material and UV island of the input face each output face lies in.
         centre = co[tris].mean(1)
@@ -827,12 +833,7 @@ def test_smooth_keeps_loose_vertices_and_edges(pm):
     for i, (x, y, z) in enumerate(verts):
         up.data[i].co = (x, y, z + 0.5)
     for scheme, levels in (("LOOP", 1), ("BUTTERFLY", 2)):
-        bpy.ops.ed.undo_push(message="before smooth")
-        assert bpy.ops.particlemesh.smooth("EXEC_DEFAULT", True, scheme=scheme, levels=levels) == {"FINISHED"}
-        obj = bpy.context.active_object
-        mesh = obj.data
-        assert not mesh.validate(verbose=False)
-        co, tris = mesh_arrays(mesh)
+        obj, mesh, co, tris = smooth_active(scheme, levels)
         assert len(tris) == 8 * 4 ** levels
         surface = len(co) - 2
         assert tris.max() == surface - 1  # the loose vertices come after the surface's
