@@ -427,7 +427,13 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
       bool directions = false;
       for (const Vec3& n : cloud.normals)
         directions = directions || std::max({std::abs(n.x), std::abs(n.y), std::abs(n.z)}) >= double(FLT_MIN);
-      std::printf("  normals       %s\n", f.normals_estimated ? (directions && a.normals == "auto" ? "plane fits, facing as the input's normals" : "plane fits, oriented by a spanning tree") : "the input's");
+      // (A noisy sampling's tree joins sheets only where nothing within one does: normals_impl.h.)
+      const double thick = result.triangulation.sampling_thickness;
+      const bool noisy = thick > kNoisyThickness && thick < kVolumeThickness;
+      std::printf("  normals       %s\n", !f.normals_estimated                  ? "the input's"
+                                         : directions && a.normals == "auto" ? "plane fits, facing as the input's normals"
+                                         : noisy ? "plane fits, oriented by a spanning tree (a noisy sampling: within each sheet first)"
+                                                 : "plane fits, oriented by a spanning tree");
       std::printf("  surface       %zu co-normal candidates (%zu dropped), %zu grown from %zu seeds\n", f.candidates,
                   f.rejected_conormal, f.grown, f.seeds);
       const size_t small = size_t(std::count_if(f.holes_left_edges.begin(), f.holes_left_edges.end(),

@@ -180,6 +180,7 @@ def test_moving_least_squares_closes_a_noisy_scan(pcl_cli, tmp_path):
     assert not raw["topology"]["closed"] and raw["topology"]["boundary_loops"] >= 2
     # The summary says the particles scatter across their surface, and what smoothing to try.
     assert 0.35 < raw["triangulation"]["sampling_thickness"] < 0.5
+    assert "oriented by a spanning tree (a noisy sampling: within each sheet first)" in proc.stdout
     hint = next(line for line in proc.stdout.splitlines() if "scatter across their surface" in line)
     suggested = float(hint.split("--mls ")[1].split()[0])
     assert 2.5 * spacing < suggested < 3.5 * spacing, hint
