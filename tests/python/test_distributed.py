@@ -255,6 +255,23 @@ def test_nesting_pairs_are_every_pair_of_nested_boxes(pmd):
             assert np.array_equal(q, query[np.flatnonzero((st.root == ci) & np.isfinite(query[:, 0]))[0]])
 
 
+def test_unpinch_keeps_the_largest_fan_at_each_pinched_vertex(pmd):
+    """A vertex whose triangles meet only through it keeps its largest fan; a closed surface
+    and a disk lose nothing."""
+    from particlemesh.distributed._seams import unpinch
+    octahedron = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4],
+                           [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]])
+    keep, touched = unpinch(octahedron)
+    assert keep.all() and len(touched) == 0
+    # Vertex 0: a fan of three triangles (0 1 2, 0 2 3, 0 3 4) and a lone one (0 5 6) beside.
+    bowtie = np.array([[0, 5, 6], [0, 1, 2], [0, 2, 3], [0, 3, 4]])
+    keep, touched = unpinch(bowtie)
+    assert keep.tolist() == [False, True, True, True] and touched.tolist() == [0, 5, 6]
+    # Two fans of one triangle each: the one listed first stays.
+    keep, _ = unpinch(np.array([[0, 1, 2], [0, 3, 4]]))
+    assert keep.tolist() == [True, False]
+
+
 def assert_identical(tiled, one):
     assert tiled.vertex_count == one.vertex_count > 0
     assert same_arrays(tiled.vertices, one.vertices)
@@ -415,6 +432,24 @@ def test_triangulate_tiled_turns_a_surface_closed_but_for_small_holes_outward_as
         tiled = pmd.triangulate_tiled(client, p, tiles=tiles)
         assert signed_volume(tiled) == pytest.approx(signed_volume(one), rel=1e-3), tiles
         assert np.median(np.einsum("ij,ij->i", tiled.normals, one.normals)) > 0.99
+
+
+def test_triangulate_tiled_leaves_no_pinched_vertex_at_the_seams(pm, pmd, client):
+    """A depth frame (test_particlemesh.depth_frame: a wall and a ball in front of it) cut in
+    four: where seam triangles of two tiles met at a corner only, the stitched surface had a
+    pinched vertex (two on this frame). The largest fan stays there, as one machine's repair
+    leaves it: a manifold, with the one-machine result's pieces."""
+    from test_particlemesh import depth_frame
+    p = depth_frame(0.002)
+    one = pm.topology(pm.triangulate(p))
+    tiled = pmd.triangulate_tiled(client, p, tiles=(2, 2, 1))
+    top = pm.topology(tiled)
+    assert top["manifold"] and top["nonmanifold_vertices"] == 0, top
+    assert top["consistently_oriented"] and one["manifold"]
+    assert 1 <= tiled.stats["pinch_triangles_removed"] <= 4
+    assert abs(top["components"] - one["components"]) <= 1
+    n = np.linalg.norm(tiled.normals[np.unique(tiled.triangles)], axis=1)
+    assert np.allclose(n, 1)
 
 
 def test_triangulate_tiled_removes_small_pieces_of_the_stitched_surface(pm, pmd, client):

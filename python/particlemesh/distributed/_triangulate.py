@@ -31,7 +31,7 @@ from .. import defaults as library_defaults
 from .._errors import Error
 from ._dask import check_client, distributed, gather_in_order
 from ._merge import canonical_triangles
-from ._seams import Stitch
+from ._seams import Stitch, angle_weighted_normals, unpinch
 from ._tiles import Cuts, Source, invalid, load, nbytes, tile_indices, tile_shape
 
 #: Halo width in units of L (the longest edge): the raw test needs L + 2L/sqrt(3) (2.2 L); the
@@ -278,7 +278,7 @@ def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attri
     particle used that the tiles use; near the seams some triangles differ from the
     one-machine choice. A closed component inside another (a cavity's wall) faces into its
     cavity, as on one machine. mesh.stats: spacing, max_edge, tiles, halo, seam triangles,
-    holes filled and left, pieces turned, nested components, unused particles, pieces and
+    holes filled and left, triangles removed at pinched seam vertices, pieces turned, nested components, unused particles, pieces and
     triangles removed for min_component_triangles, bytes moved, seconds."""
     distributed()
     check_client(client)
@@ -415,6 +415,17 @@ def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attri
     ids, nrm = seams.normals()
     vnormals[ids] = nrm
     triangles = np.concatenate([d["triangles"] for d in done] + [seams.triangles()])
+    # Where seam triangles of two tiles meet at a corner only, that vertex is pinched: the
+    # largest fan stays there, as the library's repair leaves it (the rest's normals anew).
+    kept, touched = unpinch(triangles)
+    pinches_triangles = int((~kept).sum())
+    if pinches_triangles:
+        triangles = triangles[kept]
+        around = triangles[np.isin(triangles, touched).any(axis=1)]
+        local, index = np.unique(around, return_inverse=True)
+        n_local = angle_weighted_normals(vertices[local], index.reshape(-1, 3), len(local))
+        at = np.isin(local, touched) & (np.linalg.norm(n_local, axis=1) > 0)
+        vnormals[local[at]] = n_local[at]
     pieces_removed = triangles_removed = 0
     if min_triangles > 1 and len(triangles):
         labels = _components(total, triangles)
@@ -436,7 +447,8 @@ def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attri
         "pieces_turned": int((sign < 0).sum()),
         "nested_components": int((depth > 0).sum()), "nesting_tests": sum(len(c) for c, _ in pairs.values()),
         "holes_filled": len(seams.loops) - len(seams.left), "fill_triangles": len(seams.fills),
-        "holes_left": len(seams.left), "unused_points": int((~used).sum()),
+        "holes_left": len(seams.left), "pinch_triangles_removed": pinches_triangles,
+        "unused_points": int((~used).sum()),
         "components_removed": pieces_removed, "component_triangles_removed": triangles_removed,
         "bytes_sent": sent, "bytes_received": received, "seconds_tiles": t_tiles,
         "seconds_seams": t_seams, "seconds": time.perf_counter() - t0,
