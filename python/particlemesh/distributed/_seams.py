@@ -192,29 +192,38 @@ def angle_weighted_normals(positions, triangles, count):
     return out
 
 
-def unpinch(triangles):
+def unpinch(triangles, at=None):
     """The library's last repair of pinches, on the stitched surface: a vertex whose triangles
     make several fans (joined only through it: seam triangles of two tiles meeting at a corner)
     keeps its largest fan (the most triangles, then the one with the first triangle), and the
-    other fans' triangles at it are removed, until no vertex has two. Returns the mask of the
-    triangles kept and the vertices whose triangles changed."""
+    other fans' triangles at it are removed, until no vertex has two. Only the vertices in `at`
+    (ids; None: all) and those of removed triangles are looked at: the tiles' own surfaces have
+    no pinch. Returns the mask of the triangles kept and the vertices whose triangles changed."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
     t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     keep = np.ones(len(t), dtype=bool)
+    if len(t) == 0:
+        return keep, np.zeros(0, dtype=np.int64)
+    n = int(t.max()) + 1
+    look = np.ones(n, dtype=bool) if at is None else np.zeros(n, dtype=bool)
+    if at is not None:
+        ids = np.asarray(at, dtype=np.int64)
+        look[ids[(ids >= 0) & (ids < n)]] = True
     touched = []
     while True:
-        live = np.flatnonzero(keep)
+        # The live triangles at a vertex looked at: all of its triangles, so its fans are whole.
+        live = np.flatnonzero(keep & look[t].any(axis=1))
         if len(live) == 0:
             break
-        # Corner c = 3 i + k of live triangle i: vertex v = t[i, k], the others a, b. Two
-        # corners at v are in one fan when their triangles share an edge (v, x).
-        v = t[live].ravel()
-        a = t[live][:, [1, 2, 0]].ravel()
-        b = t[live][:, [2, 0, 1]].ravel()
+        # Corner c = 3 i + k of those: vertex v = t[i, k], the others a, b. Two corners at v
+        # are in one fan when their triangles share an edge (v, x).
+        sub = t[live]
+        v = sub.ravel()
+        a = sub[:, [1, 2, 0]].ravel()
+        b = sub[:, [2, 0, 1]].ravel()
         corner = np.arange(len(v))
-        n = int(t.max()) + 1
         keys = np.concatenate([v * n + a, v * n + b])
         owner = np.concatenate([corner, corner])
         order = np.argsort(keys, kind="stable")
@@ -222,25 +231,27 @@ def unpinch(triangles):
         rows, cols = owner[order][1:][same], owner[order][:-1][same]
         graph = coo_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)), shape=(len(v), len(v)))
         fan = connected_components(graph, directed=False)[1]
-        # Per vertex, its fans; a vertex with more than one keeps the largest.
         size = np.bincount(fan)
         first = np.full(len(size), len(v))
         np.minimum.at(first, fan, corner)
         pairs = np.unique(np.stack([v, fan], axis=1), axis=0)
+        pairs = pairs[look[pairs[:, 0]]]
         counts = np.bincount(pairs[:, 0], minlength=n)
-        pinched = counts[v] > 1
-        if not pinched.any():
-            break
         # Fans of pinched vertices, best first per vertex: most corners, then earliest.
         cand = pairs[counts[pairs[:, 0]] > 1]
+        if len(cand) == 0:
+            break
         rank = np.lexsort((first[cand[:, 1]], -size[cand[:, 1]], cand[:, 0]))
         cand = cand[rank]
         best = np.r_[True, cand[1:, 0] != cand[:-1, 0]]
         losing = np.zeros(len(size), dtype=bool)
         losing[cand[~best, 1]] = True
-        drop = live[corner[losing[fan]] // 3]
+        drop = live[np.unique(corner[losing[fan]] // 3)]
         keep[drop] = False
-        touched.append(np.unique(t[drop]))
+        changed = np.unique(t[drop])
+        touched.append(changed)
+        look[:] = False
+        look[changed] = True
     return keep, (np.unique(np.concatenate(touched)) if touched else np.zeros(0, dtype=np.int64))
 
 

@@ -414,10 +414,11 @@ def triangulate_tiled(client, particles, tiles=(2, 2, 1), *, normals=None, attri
         vnormals[d["ids"]] = d["normals"]
     ids, nrm = seams.normals()
     vnormals[ids] = nrm
-    triangles = np.concatenate([d["triangles"] for d in done] + [seams.triangles()])
+    extra = seams.triangles()
+    triangles = np.concatenate([d["triangles"] for d in done] + [extra])
     # Where seam triangles of two tiles meet at a corner only, that vertex is pinched: the
     # largest fan stays there, as the library's repair leaves it (the rest's normals anew).
-    kept, touched = unpinch(triangles)
+    kept, touched = unpinch(triangles, np.unique(extra))
     pinches_triangles = int((~kept).sum())
     if pinches_triangles:
         triangles = triangles[kept]
