@@ -198,9 +198,10 @@ typedef struct pm_triangulate_stats {
   int32_t viewpoint_used;   /**< the viewpoint was given and taken (the cloud looks scanned from it) */
   uint64_t rejected_shadow; /**< raw triangles dropped for bridging a depth jump */
   /* -- appended -- */
-  int32_t looks_like_volume; /**< 1: co-normality dropped over 35 % of the raw triangles and
-                                  loops were left open: the particles probably fill a volume
-                                  (pm_polygonize meshes those) rather than sample a surface */
+  int32_t looks_like_volume; /**< 1: loops were left open, and co-normality dropped over 35 % of
+                                  the raw triangles or the sampling thickness is at least 0.45:
+                                  the particles probably fill a volume (pm_polygonize meshes
+                                  those) rather than sample a surface */
   /* -- appended -- */
   uint64_t narrow_loops;    /**< loops left open at most 3 L across that the fill did not try
                                  (wider than fill_edge_factor or longer than fill_holes): gaps

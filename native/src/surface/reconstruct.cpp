@@ -198,7 +198,10 @@ SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options
     st.hole_triangles = bs.hole_triangles;
     // A flat piece's kept side is open: its outlines are loops left open too.
     st.holes_left = bs.holes_left + flat.loops.size();
-    st.looks_like_volume = st.holes_left > 0 && st.rejected_conormal * 20 > result.triangulation.kept * 7;
+    // Most raw triangles dropped for facing opposite ways (normals that no orientation makes
+    // agree: particles all through a volume), or samples as thick as a thin layer of them.
+    st.looks_like_volume = st.holes_left > 0 && (st.rejected_conormal * 20 > result.triangulation.kept * 7 ||
+                                                 result.triangulation.sampling_thickness >= kThinLayerSamplingThickness);
     st.largest_hole_left = bs.largest_hole_left;
     for (size_t edges : flat.loops) {
       st.largest_hole_left = std::max(st.largest_hole_left, edges);

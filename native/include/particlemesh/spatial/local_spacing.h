@@ -49,6 +49,11 @@ constexpr double kNoisySamplingThickness = 0.22;
 /// ... up to this: thicker, the particles fill a volume (a block of SPH particles measured
 /// 0.86; the noisiest sphere, moved off by noise of a whole spacing, 0.59): polygonize's.
 constexpr double kVolumeSamplingThickness = 0.75;
+/// From this on a noisy surface's samples are as thick as a thin layer of volume particles (a
+/// sphere moved off by noise of 0.7 spacings measured 0.47, a fluid's SPH frame 0.54): where
+/// triangulation leaves loops open, it says they may be volume particles (SurfaceStats::
+/// looks_like_volume), which polygonize meshes.
+constexpr double kThinLayerSamplingThickness = 0.45;
 
 /// The local spacing of every point, from its 16 nearest neighbours (up to the first one more
 /// than twice as far as the one before: a stray cluster is a neighbourhood of its own). The

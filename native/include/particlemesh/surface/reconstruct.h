@@ -181,10 +181,12 @@ struct SurfaceStats {
   bool viewpoint_used = false;    ///< SurfaceOptions::viewpoint was given and taken
   size_t rejected_shadow = 0;     ///< raw triangles dropped for bridging a depth jump
   /// The particles probably fill a volume (a fluid simulation's frame) rather than sample a
-  /// surface: co-normality dropped over 35 % of the raw triangles (triangles across particles
-  /// facing opposite ways) and loops were left open. Surface samples drop at most ~15 % (noisy
-  /// scans; 0-3 % on clean samples), SPH frames 48-76 %; parts 1-1.5 spacings thick drop ~60 %
-  /// too, but they close. polygonize meshes volume particles.
+  /// surface: loops were left open, and co-normality dropped over 35 % of the raw triangles
+  /// (triangles across particles facing opposite ways) or the sampling is as thick as a thin
+  /// layer of them (TriangulateStats::sampling_thickness at least kThinLayerSamplingThickness).
+  /// Surface samples drop at most ~15 % (noisy scans; 0-3 % on clean samples), SPH frames
+  /// 22-76 % (the thinner ones since noisy samplings are oriented within their sheets); parts
+  /// 1-1.5 spacings thick drop ~60 % too, but they close. polygonize meshes volume particles.
   bool looks_like_volume = false;
   double seconds_normals = 0;
   double seconds_extraction = 0;
