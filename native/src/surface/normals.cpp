@@ -404,12 +404,9 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
                         const NeighborLists& lists, const std::vector<double>& radius, std::vector<Vec3>& normals,
                         const std::vector<Vec3>& reference, ProgressTracker& tracker, bool noisy) {
   const size_t n = grid.point_count();
-  // Noisy samplings: a cost for taking an edge between two sheets (see normals_impl.h).
-  // Measured (bench/RESULTS.md, "Normals of noisy scans oriented within their sheets"): the
-  // shared Kinect frame's 486 pieces became 192, and the trees of noisy models' vertices
-  // (depth 0.22 and more: suzanne, ogre, teapot) stopped turning whole parts inward; on clean
-  // samplings, whose sheets apart are sheets, the plain cost stays (thin parts 1.5-2 spacings
-  // thick came out with 4-9 % of their triangles reversed with it).
+  // Noisy samplings: a cost for taking an edge between two sheets (see normals_impl.h). On
+  // clean samplings two sheets apart are two sheets (a thin part's sides), and the plain cost
+  // stays. Measured in bench/RESULTS.md, "Which way the surface faces".
   const double between_sheets = noisy ? 1.0 : 0.0;
   // Edges s < t of the neighbour graph, keyed by (cost as float bits, edge index): the keys
   // order the edges by cost, ties broken by position in the list, and are all distinct.
