@@ -107,12 +107,12 @@ std::string volume_particles_hint(const SurfaceResult& r) {
 }
 
 /// When loops are left open and the particles scatter across their surface (a scan's noise,
-/// TriangulateStats::sampling_thickness between kNoisyThickness and kVolumeThickness),
+/// TriangulateStats::sampling_thickness: noisy_sampling),
 /// say that smoothing them first may hold the surface together (--mls, with the PCL
 /// preprocessing). Empty otherwise.
 std::string noisy_surface_hint(const SurfaceResult& r, const TriangulateArgs& a) {
   const double t = r.triangulation.sampling_thickness;
-  if (!has_pcl_preprocessing() || r.surface.holes_left == 0 || !(t > kNoisyThickness && t < kVolumeThickness))
+  if (!has_pcl_preprocessing() || r.surface.holes_left == 0 || !noisy_sampling(t))
     return {};
   // Smoothing over about 3 local spacings held the noisy spheres and scans measured together.
   const double radius = 3.0 * r.surface.local_spacing.median * r.triangulation.spacing;
@@ -428,8 +428,7 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
       for (const Vec3& n : cloud.normals)
         directions = directions || std::max({std::abs(n.x), std::abs(n.y), std::abs(n.z)}) >= double(FLT_MIN);
       // (A noisy sampling's tree joins sheets only where nothing within one does: normals_impl.h.)
-      const double thick = result.triangulation.sampling_thickness;
-      const bool noisy = thick > kNoisyThickness && thick < kVolumeThickness;
+      const bool noisy = noisy_sampling(result.triangulation.sampling_thickness);
       std::printf("  normals       %s\n", !f.normals_estimated                  ? "the input's"
                                          : directions && a.normals == "auto" ? "plane fits, facing as the input's normals"
                                          : noisy ? "plane fits, oriented by a spanning tree (a noisy sampling: within each sheet first)"

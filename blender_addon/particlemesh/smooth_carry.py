@@ -134,27 +134,15 @@ def gather(obj, mesh, loops, polygon):
     return c
 
 
-def _gather_loose(mesh, triangles, positions, values, c):
-    """The vertices and edges of no face, with what a vertex holds (`values`: every
-    per-vertex channel of the library call)."""
-    nv = len(mesh.vertices)
-    in_faces = np.zeros(nv, dtype=bool)
+def _gather_loose_vertices(mesh, triangles, positions, values, c):
+    """The vertices of no face, with what a vertex holds (`values`: every per-vertex channel
+    of the library call). (The loose edges: _gather_edges.)"""
+    in_faces = np.zeros(len(mesh.vertices), dtype=bool)
     in_faces[triangles.ravel()] = True
     c.face_vertices = np.flatnonzero(in_faces)
     c.loose_vertices = np.flatnonzero(~in_faces)
     c.loose_positions = positions[c.loose_vertices]
     c.loose_values = {name: v[c.loose_vertices] for name, v in values.items()}
-    ne = len(mesh.edges)
-    if ne == 0:
-        return
-    edge_in_face = np.zeros(ne, dtype=bool)
-    if len(mesh.loops):
-        edge_in_face[_read(mesh.loops, "edge_index", len(mesh.loops), 1, np.int64)[:, 0]] = True
-    loose = np.flatnonzero(~edge_in_face)
-    if len(loose):
-        c.loose_edges = _read(mesh.edges, "vertices", ne, 2, np.int64)[loose]
-        for field in ("use_seam", "use_edge_sharp"):
-            c.loose_edge_flags[field] = _read(mesh.edges, field, ne, 1, bool)[loose, 0]
 
 
 def append_loose(result, channels, c):
@@ -195,11 +183,17 @@ def _restore_loose_edges(mesh, c):
 
 
 def _gather_edges(mesh, loops, c):
-    """Edge creases (for Loop), and seams and sharp edges per input triangle edge."""
+    """Edge creases (for Loop), seams and sharp edges per input triangle edge, and the loose
+    edges (in no face) with their seam and sharp flags."""
     ne = len(mesh.edges)
     ends = _read(mesh.edges, "vertices", ne, 2, np.int64)
     loop_edge = _read(mesh.loops, "edge_index", len(mesh.loops), 1, np.int64)[:, 0]
     loop_vertex = _read(mesh.loops, "vertex_index", len(mesh.loops), 1, np.int64)[:, 0]
+    in_faces = np.zeros(ne, dtype=bool)
+    in_faces[loop_edge] = True
+    loose = np.flatnonzero(~in_faces)
+    if len(loose):
+        c.loose_edges = ends[loose]
     # Triangle edge e (corner e to e + 1) is a mesh edge when loop e's edge joins the two
     # corners (not a diagonal a tessellated polygon added).
     edge = loop_edge[loops]
@@ -207,6 +201,8 @@ def _gather_edges(mesh, loops, c):
     real = ((ends[edge, 0] == a) & (ends[edge, 1] == b)) | ((ends[edge, 0] == b) & (ends[edge, 1] == a))
     for field in ("use_seam", "use_edge_sharp"):
         values = _read(mesh.edges, field, ne, 1, bool)[:, 0]
+        if len(loose):
+            c.loose_edge_flags[field] = values[loose]
         if values.any():
             flagged = values[edge] & real                       # (F, 3): triangle edge e
             c.edge_flags[field] = (flagged[:, None, :] & _ENDS[None]).astype(np.float32)
@@ -217,8 +213,6 @@ def _gather_edges(mesh, loops, c):
         crease = _read(mesh.attributes["crease_edge"].data, "value", ne, 1)[:, 0]
     if crease is not None and crease.any():
         # (an edge of no face, a loose one, is no edge of the library's mesh)
-        in_faces = np.zeros(ne, dtype=bool)
-        in_faces[edge[real]] = True
         keep = np.flatnonzero((crease > 0) & in_faces)
         c.crease_edges = ends[keep].astype(np.int32)
         c.crease_sharpness = np.minimum(10.0 * crease[keep].astype(np.float64) ** 2, 10.0)
@@ -320,7 +314,7 @@ def prepare(obj, mesh):
     c = gather(obj, mesh, loops, polygon)
     attributes = blender_mesh.float_point_attributes(mesh)
     attributes.update(c.channels)
-    _gather_loose(mesh, triangles, blender_mesh.positions(mesh), attributes, c)
+    _gather_loose_vertices(mesh, triangles, blender_mesh.positions(mesh), attributes, c)
     corners = {_CORNER.format(i): entry[2] for i, entry in enumerate(c.corners)}
     corners.update({_EDGE.format(field): values for field, values in c.edge_flags.items()})
     return triangles, attributes, corners, c

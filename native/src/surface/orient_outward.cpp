@@ -95,42 +95,26 @@ void open_flat_pieces(const std::vector<Vec3>& P, std::vector<Triangle>& T, cons
     if (gone[v]) open[v] = 1;
 }
 
-/// NearlyClosed (orient_outward.h): the open pieces closed but for small openings, found from
-/// the boundary half-edges (a << 32 | b), each loop capped by the fan from its centroid (cap
-/// triangles (b, a, centroid)); each such piece's cap volume (six times, about the piece's
-/// root) added to vol[r] and the piece marked closed. Returns those pieces' roots, ascending.
-std::vector<uint32_t> close_nearly_closed_pieces(const std::vector<Vec3>& P, const std::vector<uint64_t>& boundary,
+/// NearlyClosed (orient_outward.h): the open pieces closed but for small openings, each of
+/// their loops (v_i -> v_{i+1} boundary half-edges) capped by the fan from its centroid (cap
+/// triangles (v_{i+1}, v_i, centroid)); each such piece's cap volume (six times, about the
+/// piece's root) added to vol[r] and the piece marked closed. Returns those pieces' roots,
+/// ascending.
+std::vector<uint32_t> close_nearly_closed_pieces(const std::vector<Vec3>& P,
+                                                 const std::vector<std::vector<uint32_t>>& loops,
                                                  const std::vector<uint32_t>& root, const std::vector<double>& area,
                                                  std::vector<double>& vol, std::vector<uint8_t>& open) {
-  // The loops: boundary half-edges sorted by their start; from each unwalked one, on to an
-  // unwalked one starting where it ends, until none is left there (back at the loop's start:
-  // every corner starts as many boundary half-edges as end at it). Serial and in sorted
-  // order: the same loops and sums whatever the threads.
-  std::vector<uint64_t> he(boundary);
-  std::sort(he.begin(), he.end());
-  std::vector<uint8_t> walked(he.size(), 0);
   std::vector<std::pair<uint32_t, std::pair<double, double>>> cap;  // per loop: (root, (area, volume6))
-  std::vector<uint64_t> loop;
-  for (size_t k = 0; k < he.size(); ++k) {
-    if (walked[k]) continue;
-    loop.clear();
+  for (const std::vector<uint32_t>& loop : loops) {
+    if (loop.empty()) continue;
     Vec3 centroid{};
-    for (size_t at = k;;) {
-      walked[at] = 1;
-      loop.push_back(he[at]);
-      centroid = centroid + P[uint32_t(he[at] >> 32)];
-      const uint64_t to = he[at] & 0xffffffffu;
-      auto next = std::lower_bound(he.begin(), he.end(), to << 32);
-      while (next != he.end() && (*next >> 32) == to && walked[size_t(next - he.begin())]) ++next;
-      if (next == he.end() || (*next >> 32) != to) break;
-      at = size_t(next - he.begin());
-    }
+    for (const uint32_t v : loop) centroid = centroid + P[v];
     centroid = centroid / double(loop.size());
-    const uint32_t r = root[uint32_t(he[k] >> 32)];
+    const uint32_t r = root[loop[0]];
     double a = 0, v = 0;
-    for (const uint64_t e : loop) {
-      const Vec3& pa = P[uint32_t(e >> 32)];
-      const Vec3& pb = P[uint32_t(e & 0xffffffffu)];
+    for (size_t i = 0; i < loop.size(); ++i) {
+      const Vec3& pa = P[loop[i]];
+      const Vec3& pb = P[loop[(i + 1) % loop.size()]];
       a += 0.5 * norm(cross(pa - centroid, pb - centroid));
       v += signed_volume6(P[r], pb, pa, centroid);
     }
@@ -183,7 +167,7 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
     uint32_t root;
     double volume6, area;
   };
-  const bool capping = nearly && nearly->enabled && turn && !boundary.empty();
+  const bool capping = nearly && nearly->loops && !nearly->loops->empty() && turn;
   const bool areas = flat || capping;
   const size_t chunk = 16384, chunks = (T.size() + chunk - 1) / chunk;
   std::vector<std::vector<Sums>> part(chunks);
@@ -215,7 +199,7 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
   if (!turn) return 0;
   std::vector<uint32_t> capped;
   if (capping) {
-    capped = close_nearly_closed_pieces(P, boundary, root, area, vol, open);
+    capped = close_nearly_closed_pieces(P, *nearly->loops, root, area, vol, open);
     nearly->pieces = capped.size();
   }
   // A closed component inside another faces into the cavity it bounds, one inside that

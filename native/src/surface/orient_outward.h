@@ -33,18 +33,20 @@ struct FlatPieces {
   size_t points = 0;                         ///< particles left in no triangle
   std::vector<size_t> loops;                 ///< the edges of each outline the kept sides have
 };
-/// With `nearly` given and enabled, an open component closed but for openings small beside it
+/// With `nearly` given and its loops, an open component closed but for openings small beside it
 /// is turned as a closed one is, judged with each opening capped: the fans from each of its
 /// loops' centroid (caps used only for the judging, not kept) add at most kMaxCapShare of its
 /// area, and it then encloses a clear volume (|V| at least kMinCappedVolume of area^1.5; a
 /// sphere's is 0.094). A model's vertices whose surface keeps a few holes open would
 /// otherwise face whichever way the normals' spanning tree chose, inward as often as not.
-/// The caller enables it only where that tree's choice was all there was (no input normals,
+/// The caller gives loops only where that tree's choice was all there was (no input normals,
 /// no viewpoint): a scanner's normals inside a room face into it rightly.
 constexpr double kMaxCapShare = 0.4;
 constexpr double kMinCappedVolume = 0.01;
 struct NearlyClosed {
-  bool enabled = false;  ///< in
+  /// in: the loops left open, each a vertex sequence along the boundary half-edges v_i ->
+  /// v_{i+1} (EditableSurface::trace_loops); none, nothing is judged so.
+  const std::vector<std::vector<uint32_t>>* loops = nullptr;
   size_t pieces = 0;     ///< out: open components judged as closed
   size_t turned = 0;     ///< out: of those, turned
 };

@@ -139,8 +139,7 @@ SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options
       if (reference.empty() ||
           !detail::orient_normals_by_reference(grid, raw.rep, raw.neighbors, raw.max_edge, normals, reference, tracker))
         detail::orient_normals_mst(grid, raw.rep, raw.neighbors, raw.max_edge, normals, reference, tracker,
-                                   raw.stats.sampling_thickness > kNoisySamplingThickness &&
-                                       raw.stats.sampling_thickness < kVolumeSamplingThickness);
+                                   noisy_sampling(raw.stats.sampling_thickness));
       st.normals_estimated = true;
       tree_chose = reference.empty();
     }
@@ -166,6 +165,10 @@ SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options
     bo.small_hole = std::min<size_t>(6, options.fill_holes);
     bo.fill_edge_factor = options.fill_edge_factor;
     bo.min_component_triangles = options.min_component_triangles;
+    // Open parts closed but for small openings are turned as closed ones are, judged by their
+    // loops, where nothing but the tree said which way they face (a scanner's viewpoint or
+    // normals say which way rightly, inside a room too).
+    bo.trace_loops = options.orient && tree_chose && !st.viewpoint_used;
     detail::BuilderStats bs;
     std::vector<Vec3> vertex_normals;
     tris = detail::build_surface(P, normals, active, candidates, bo, options.repair, bs, tracker, vertex_normals);
@@ -177,10 +180,8 @@ SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options
     // Flat closed pieces (a patch and its reversed copy) opened, whichever way the rest faces.
     detail::FlatPieces flat;
     flat.sides = &normals;
-    // Open parts closed but for small openings too, where nothing but the tree said which way
-    // they face (a scanner's viewpoint or normals say which way rightly, inside a room too).
     detail::NearlyClosed nearly;
-    nearly.enabled = tree_chose && !st.viewpoint_used;
+    nearly.loops = &bs.loops;
     bs.components_flipped = detail::orient_closed_components_outward(P, tris, bs.boundary, &vertex_normals,
                                                                       options.orient, &flat, &nearly);
     st.flat_pieces_opened = flat.pieces;

@@ -56,6 +56,7 @@ std::vector<Triangle> build_surface(const std::vector<Vec3>& positions, const st
   }
   stats.seconds_repair = since(t0);
   stats.boundary = surface.boundary();
+  if (options.trace_loops && !stats.boundary.empty()) stats.loops = surface.trace_loops();
   tracker.check();
   vertex_normals = surface_vertex_normals(surface, active, normals, stats.unused_points);
   return surface.take();

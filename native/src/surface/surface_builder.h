@@ -32,6 +32,7 @@ struct BuilderOptions {
   double fill_edge_factor = 1.5;  ///< fill triangles' edges at most this x L
   size_t min_component_triangles = 0;  ///< pieces of fewer triangles are removed (0 = none)
   ViewRays view;                  ///< a scan's sensor: no triangle bridges a depth jump
+  bool trace_loops = false;       ///< give the loops left open as vertex sequences (BuilderStats::loops)
 };
 
 struct BuilderStats {
@@ -51,6 +52,8 @@ struct BuilderStats {
   PieceStats pieces;  ///< removed for min_component_triangles, and the strays left
   double seconds_candidates = 0, seconds_growth = 0, seconds_repair = 0;
   std::vector<uint64_t> boundary;  ///< boundary half-edges (a << 32 | b), sorted
+  /// With BuilderOptions::trace_loops: the loops left open (EditableSurface::trace_loops).
+  std::vector<std::vector<uint32_t>> loops;
   std::vector<std::pair<size_t, double>> open_loops;  ///< (edges, width / L) of loops left open
   std::vector<size_t> holes_left_edges;  ///< the edges of every loop left open, ascending
 };

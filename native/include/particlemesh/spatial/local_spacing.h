@@ -54,6 +54,10 @@ constexpr double kVolumeSamplingThickness = 0.75;
 /// triangulation leaves loops open, it says they may be volume particles (SurfaceStats::
 /// looks_like_volume), which polygonize meshes.
 constexpr double kThinLayerSamplingThickness = 0.45;
+/// Whether a sampling of this thickness scatters across a surface without filling a volume.
+constexpr bool noisy_sampling(double thickness) {
+  return thickness > kNoisySamplingThickness && thickness < kVolumeSamplingThickness;
+}
 
 /// The local spacing of every point, from its 16 nearest neighbours (up to the first one more
 /// than twice as far as the one before: a stray cluster is a neighbourhood of its own). The

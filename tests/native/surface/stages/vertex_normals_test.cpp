@@ -142,6 +142,11 @@ std::vector<uint64_t> boundary_of(const std::vector<Triangle>& tris) {
 
 Triangle reversed(const Triangle& t) { return {t[0], t[2], t[1]}; }
 
+// The loops left open, as the surface builder traces them.
+std::vector<std::vector<uint32_t>> loops_of(const std::vector<Vec3>& P, const std::vector<Triangle>& tris) {
+  return EditableSurface(P, tangent_frames(std::vector<Vec3>(P.size(), Vec3{0, 0, 1})), tris).trace_loops();
+}
+
 }  // namespace
 
 TEST(OrientOutward, NearlyClosedPiecesTurnAsClosedOnesWhereEnabled) {
@@ -167,8 +172,9 @@ TEST(OrientOutward, NearlyClosedPiecesTurnAsClosedOnesWhereEnabled) {
   const std::vector<uint64_t> boundary = boundary_of(tris);
   std::vector<Vec3> normals(P.size(), Vec3{0, 0, 1});
 
+  const std::vector<std::vector<uint32_t>> loops = loops_of(P, tris);
   NearlyClosed nearly;
-  nearly.enabled = true;
+  nearly.loops = &loops;
   std::vector<Triangle> turned = tris;
   EXPECT_EQ(orient_closed_components_outward(P, turned, boundary, &normals, true, nullptr, &nearly), 3u);
   EXPECT_EQ(nearly.pieces, 2u);
@@ -188,8 +194,9 @@ TEST(OrientOutward, NearlyClosedPiecesTurnAsClosedOnesWhereEnabled) {
 
   // Wound outward already: nothing turns, both counted as judged.
   std::vector<Triangle> outward = turned;
+  const std::vector<std::vector<uint32_t>> outward_loops = loops_of(P, outward);
   NearlyClosed again;
-  again.enabled = true;
+  again.loops = &outward_loops;
   EXPECT_EQ(orient_closed_components_outward(P, outward, boundary_of(outward), nullptr, true, nullptr, &again), 0u);
   EXPECT_EQ(again.pieces, 2u);
   EXPECT_EQ(again.turned, 0u);
