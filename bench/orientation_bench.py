@@ -12,6 +12,8 @@ Each MODEL is any mesh particlemesh reads (.obj, .off, .ply, .stl) whose triangl
 outward; its vertices are the particles (exact copies merged first), its triangles only the
 reference. --noise F moves each vertex along the model's normal by Gaussian noise of F times
 the vertices' spacing (a fixed seed): a scan's depth noise on a model whose normals are known.
+--with-normals gives the model's normals with the particles (the surface then faces as they
+say, where they are a consistent orientation).
 """
 import argparse
 import os
@@ -47,6 +49,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("models", nargs="+")
     parser.add_argument("--noise", type=float, default=0.0)
+    parser.add_argument("--with-normals", action="store_true")
     args = parser.parse_args()
     print("| model | vertices | triangles | reversed | loops | pieces | turned (nearly closed) | thickness |")
     print("|---|---|---|---|---|---|---|---|")
@@ -63,7 +66,7 @@ def main():
             spacing = pm.estimate_spacing(points)
             rng = np.random.default_rng(0)
             points = points + normals * rng.normal(0, args.noise * spacing, len(points))[:, None]
-        mesh = pm.triangulate(points)
+        mesh = pm.triangulate(points, normals if args.with_normals else None)
         top = pm.topology(mesh)
         bad = reversed_share(mesh, normals)
         total += mesh.triangle_count

@@ -48,8 +48,11 @@ void orient_normals_mst(const NeighborGrid& grid, const std::vector<uint32_t>& r
 /// Orient unit normals (sorted index) by reference normals (sorted index): where a reference
 /// clearly says which way a point faces (|cos| >= 0.3) it decides; the rest take the side the
 /// decided neighbours of their sheet vote for. O(N); used when the cloud brings normals.
-/// Returns false when the references are not a consistent orientation (more than 1 % of
-/// same-sheet neighbour pairs face opposite ways); the normals are then to be re-oriented.
+/// Returns false when the references are not a consistent orientation: more than 1.5 % of
+/// clearly decided neighbour pairs in one plane face opposite ways (a thin part's two sides
+/// aside), or those that do make one chain longer than 2.5 sqrt(points), as normals turned
+/// toward a sensor do along the silhouette of a closed object seen from outside. The normals
+/// are then to be re-oriented.
 bool orient_normals_by_reference(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
                                  const NeighborLists& lists, const std::vector<double>& radius,
                                  std::vector<Vec3>& normals, const std::vector<Vec3>& reference,
