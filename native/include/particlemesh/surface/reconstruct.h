@@ -51,7 +51,10 @@ struct SurfaceOptions : TriangulateOptions {
   ///  - Auto (default): local plane fits (PCA over the particles within L) give the tangent
   ///    planes, which vary smoothly at the sampling scale even where the input's normals are
   ///    faceted or noisy; the input's normals, when the cloud has them, decide which way each
-  ///    piece faces (majority vote per piece of the orientation tree); without them each
+  ///    particle faces where they are a consistent orientation (a thin part's two sides may
+  ///    face opposite ways; normals flipped along a line, as those turned toward a sensor on a
+  ///    closed object are, are not), else which way each piece of the orientation tree faces
+  ///    (majority vote); without them each
   ///    piece faces the way its minimum spanning tree propagates from its highest point (+z).
   ///  - Input: the cloud's normals as they are (the cloud must have them).
   ///  - Estimate: local plane fits and the spanning tree only, ignoring any input normals.
