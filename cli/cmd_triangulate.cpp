@@ -446,6 +446,8 @@ int run_triangulate(const TriangulateArgs& a, FrameContext* frame = nullptr) {
       if (f.nearly_closed_turned)
         handles += std::to_string(f.nearly_closed_turned) + " part" + (f.nearly_closed_turned == 1 ? "" : "s") +
                    " closed but for small openings turned outward, ";
+      if (f.folded_triangles)
+        handles += std::to_string(f.folded_triangles) + " triangles facing into the solid (a fold) built again, ";
       std::printf("  repair        %zu holes filled (%zu triangles), %zu pinches resolved, %s%zu loops left open%s\n",
                   f.holes_filled, f.hole_triangles, f.pinches_resolved, handles.c_str(), f.holes_left,
                   f.holes_left ? (" (largest " + std::to_string(f.largest_hole_left) + " edges, " +
@@ -534,7 +536,7 @@ void add_triangulate(CLI::App& root, std::vector<Command>& commands) {
                   "among its rows or at its fringe); their particles are then in no triangle. 0 = keep every piece")
       ->check(in_range(size_t(0), size_t(UINT32_MAX)))
       ->capture_default_str();
-  app->add_flag("--no-orient", args->no_orient, "Do not turn closed components to face outward (away from the solid each bounds: a hollow object's inner wall into its cavity), nor open ones closed but for small openings (turned where the normals were estimated without input normals or viewpoint)");
+  app->add_flag("--no-orient", args->no_orient, "Do not turn closed components to face outward (away from the solid each bounds: a hollow object's inner wall into its cavity), nor open ones closed but for small openings, nor build again a part found folded over to face into its solid (both where the normals were estimated without input normals or viewpoint)");
   app->add_option("--threads", args->threads, "Worker threads, 0 = all cores (the output does not depend on it)")
       ->check(non_negative_number())
       ->capture_default_str();

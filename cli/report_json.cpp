@@ -87,6 +87,7 @@ nlohmann::json to_json(const SurfaceStats& s) {
           {"components_flipped", s.components_flipped},
           {"flat_pieces_opened", s.flat_pieces_opened},
           {"nearly_closed_turned", s.nearly_closed_turned},
+          {"folded_triangles", s.folded_triangles},
           {"unused_points", s.unused_points},
           {"components_removed", s.components_removed},
           {"component_triangles_removed", s.component_triangles_removed},

@@ -110,6 +110,7 @@ class pm_triangulate_stats(Structure):
         ("near_duplicates", c_uint64),
         ("flat_pieces_opened", c_uint64),
         ("nearly_closed_turned", c_uint64),
+        ("folded_triangles", c_uint64),
     ]
 
 

@@ -363,6 +363,42 @@ def test_a_surface_closed_but_for_small_holes_is_turned_outward(cli, tmp_path):
     assert "turned outward" not in proc.stdout
 
 
+def test_a_folded_surface_built_again_is_named(cli, tmp_path):
+    """A ball with two thin ears (flat ellipsoids 2 spacings thick), without normals: the
+    normals' spanning tree crosses between an ear's sides and the surface folds over; it is
+    built again with the normals turned, and the summary and the report say so. The result
+    encloses the ball's volume (4.19) and the ears' outside it (about 0.04 each); folded, the
+    ears faced inward and took theirs away (4.19 in all)."""
+    h, c, rows = 0.04, 0.04, []
+    parts = [((1.0, 1.0, 1.0), (0.0, 0.0, 0.0)), ((0.6, c, 0.45), (0.0, 0.0, 1.35)), ((0.6, c, 0.45), (1.3, 0.0, 0.6))]
+    for k, (a, centre) in enumerate(parts):
+        area = 4 * math.pi * (((a[0] * a[1]) ** 1.6 + (a[0] * a[2]) ** 1.6 + (a[1] * a[2]) ** 1.6) / 3) ** (1 / 1.6)
+        n = int(area / (h * h * 0.866))
+        for i in range(n):
+            phi, th = math.acos(1 - 2 * (i + 0.5) / n), math.pi * (1 + 5 ** 0.5) * (i + 0.5)
+            u = (math.cos(th) * math.sin(phi), math.sin(th) * math.sin(phi), math.cos(phi))
+            p = tuple(u[d] * a[d] + centre[d] for d in range(3))
+            if all(j == k or sum(((p[d] - o[d]) / b[d]) ** 2 for d in range(3)) >= 1 for j, (b, o) in enumerate(parts)):
+                rows.append(p)
+    pts, rep, out = tmp_path / "ears.xyz", tmp_path / "r.json", tmp_path / "m.obj"
+    pts.write_text("".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in rows))
+    proc = cli("triangulate", pts, "-o", out, "--report", rep)
+    assert re.search(r"\d+ triangles facing into the solid \(a fold\) built again", proc.stdout), proc.stdout
+    assert json.loads(rep.read_text())["surface"]["folded_triangles"] > 1000
+    v, volume = [], 0.0
+    for line in out.read_text().splitlines():
+        f = line.split()
+        if f and f[0] == "v":
+            v.append([float(x) for x in f[1:4]])
+        elif f and f[0] == "f":
+            a, b, c = (v[int(x.split("/")[0]) - 1] for x in f[1:4])
+            volume += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+                       + a[2] * (b[0] * c[1] - b[1] * c[0])) / 6
+    assert 4.24 < volume < 4.30, volume
+    proc = cli("triangulate", pts, "-o", out, "--no-orient")
+    assert "a fold" not in proc.stdout
+
+
 def test_stray_pieces_are_named_and_removed_on_request(cli, inspect, tmp_path):
     """Lone triangles apart from a surface (a scanner's strays) are kept by default, and a hint
     names the --min-component-triangles that removes just them; with it they are gone (their

@@ -145,7 +145,8 @@ def test_near_copies_and_crowded_points_show_in_the_stats(pm):
     """The stats appended last reach Python intact (the ctypes struct matches the C ABI's):
     every particle of a sphere with a copy 0.02 spacings away is one particle, the copies set
     aside; with a neighbour limit of 8, the crowded particles' edge limits are shortened and
-    counted; the last fields, flat_pieces_opened and nearly_closed_turned, read 0 on both."""
+    counted; the last fields, flat_pieces_opened, nearly_closed_turned and folded_triangles,
+    read 0 on both."""
     p = fibonacci_sphere(2000)
     r0 = pm.estimate_spacing(p)
     d = np.random.default_rng(4).normal(size=p.shape)
@@ -159,6 +160,7 @@ def test_near_copies_and_crowded_points_show_in_the_stats(pm):
     assert 1000 < crowded.stats["shortened_limits"] <= 2000
     assert crowded.stats["near_duplicates"] == 0 and crowded.stats["flat_pieces_opened"] == 0
     assert twinned.stats["nearly_closed_turned"] == 0 == crowded.stats["nearly_closed_turned"]
+    assert twinned.stats["folded_triangles"] == 0 == crowded.stats["folded_triangles"]
 
 
 def teardrop(h=0.04, height=3.0):
@@ -204,6 +206,52 @@ def test_a_surface_closed_but_for_small_holes_faces_outward(pm):
     for sign in (-1, 1):
         given = pm.triangulate(p, sign * mesh.normals)
         assert given.stats["nearly_closed_turned"] == 0 and np.sign(signed_volume(given)) == sign
+
+
+def ball_with_ears(h=0.04, thickness=2.0):
+    """A unit ball with two thin ears (flat ellipsoids `thickness` spacings thick, one on top,
+    one at its side), sampled about h apart: (points, their outward normals)."""
+    c = thickness * h / 2
+    parts = [((1.0, 1.0, 1.0), (0.0, 0.0, 0.0)), ((0.6, c, 0.45), (0.0, 0.0, 1.35)), ((0.6, c, 0.45), (1.3, 0.0, 0.6))]
+    points, normals = [], []
+    for k, (a, centre) in enumerate(parts):
+        a, centre = np.array(a), np.array(centre)
+        area = 4 * np.pi * (((a[0] * a[1]) ** 1.6 + (a[0] * a[2]) ** 1.6 + (a[1] * a[2]) ** 1.6) / 3) ** (1 / 1.6)
+        n = int(area / (h * h * 0.866))
+        i = np.arange(n) + 0.5
+        phi, th = np.arccos(1 - 2 * i / n), np.pi * (1 + 5 ** 0.5) * i
+        u = np.c_[np.cos(th) * np.sin(phi), np.sin(th) * np.sin(phi), np.cos(phi)]
+        p, normal = u * a + centre, u / a
+        keep = np.ones(len(p), bool)
+        for j, (b, other) in enumerate(parts):
+            if j != k:
+                keep &= (((p - np.array(other)) / np.array(b)) ** 2).sum(axis=1) >= 1
+        points.append(p[keep])
+        normals.append(normal[keep] / np.linalg.norm(normal[keep], axis=1)[:, None])
+    return np.concatenate(points), np.concatenate(normals)
+
+
+def test_a_folded_surface_is_built_again_facing_outward(pm):
+    """A ball's thin ears, without input normals: the spanning tree crosses between an ear's
+    two sides and the surface folds over, a tenth of it facing into the solid. Found by ray
+    parity (stats folded_triangles), the normals are turned and the surface built again:
+    it faces outward, the same for any thread count, its progress never going back;
+    orient=False leaves the tree's surface."""
+    p, outward = ball_with_ears()
+    seen = []
+    mesh = pm.triangulate(p, progress=lambda stage, f: seen.append(f))
+    assert seen == sorted(seen) and seen[-1] == 1.0  # built twice, the progress never goes back
+    t = pm.topology(mesh)
+    assert t["components"] == 1 and t["consistently_oriented"] and t["nonmanifold_edges"] == 0
+    assert mesh.stats["folded_triangles"] > 0.05 * mesh.triangle_count
+    v, tri = mesh.vertices, mesh.triangles
+    face = np.cross(v[tri[:, 1]] - v[tri[:, 0]], v[tri[:, 2]] - v[tri[:, 0]])
+    inward = (np.einsum("tj,tcj->tc", face, outward[tri]) < 0).all(axis=1)
+    assert inward.mean() < 0.002
+    assert (pm.triangulate(p, threads=1).triangles == tri).all()
+    tree = pm.triangulate(p, orient=False)
+    assert tree.stats["folded_triangles"] == 0
+    assert pm.triangulate(p, outward).stats["folded_triangles"] == 0
 
 
 def depth_frame(sigma, n=160, seed=3):

@@ -243,6 +243,10 @@ typedef struct pm_triangulate_stats {
   uint64_t nearly_closed_turned; /**< open components closed but for small openings turned to
                                       face outward as closed ones are (normals estimated and
                                       oriented by the spanning tree alone, no viewpoint) */
+  uint64_t folded_triangles; /**< triangles of the surface first built that faced into the
+                                  solid their closed (or nearly closed) part bounds, the surface
+                                  then built again over normals turned to match (the tree
+                                  crossed between a thin part's sides); 0: not built again */
 } pm_triangulate_stats;
 
 PM_EXPORT void pm_triangulate_options_init(pm_triangulate_options* options);

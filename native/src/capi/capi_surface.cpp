@@ -119,6 +119,7 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
       s.near_duplicates = r.triangulation.near_duplicates;
       s.flat_pieces_opened = r.surface.flat_pieces_opened;
       s.nearly_closed_turned = r.surface.nearly_closed_turned;
+      s.folded_triangles = r.surface.folded_triangles;
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();

@@ -7,6 +7,7 @@
 
 #include "particlemesh/core/config.h"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -70,6 +71,9 @@ class ProgressTracker {
     const auto now = Clock::now();
     if (!force && now - last_ < std::chrono::milliseconds(50)) return;
     last_ = now;
+    // Never back: a stage run again (the surface built a second time) holds the bar.
+    fraction = std::max(fraction, reported_);
+    reported_ = fraction;
     bool keep_going = true;
     try {
       keep_going = callback_(name_, fraction);
@@ -84,6 +88,7 @@ class ProgressTracker {
   Clock::time_point last_;
   std::string name_;
   double begin_ = 0, end_ = 1;
+  double reported_ = 0;  // the largest fraction reported
   uint64_t total_ = 1;
   std::atomic<uint64_t> done_{0};
   std::atomic<bool> cancelled_{false};

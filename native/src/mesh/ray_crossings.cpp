@@ -89,31 +89,22 @@ RayCrossings::RayCrossings(const std::vector<Vec3>& P, const std::vector<Triangl
   }
 }
 
-size_t RayCrossings::count(const Vec3& q) const {
-  if (!(q.x >= lo_[0] && q.x <= hi_[0] && q.y >= lo_[1] && q.y <= hi_[1])) return 0;
-  const size_t c = cell(q.y, 1) * side_ + cell(q.x, 0);
-  size_t crossings = 0;
-  for (size_t i = start_[c]; i < start_[c + 1]; ++i) {
-    const Triangle& t = T_[cells_[i]];
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;  // a segment or a point: no area
-    double e[3];
-    int sign = 0;
-    bool covered = true;
-    for (int k = 0; k < 3 && covered; ++k) {
-      const uint32_t u = t[(k + 1) % 3], v = t[(k + 2) % 3];  // the edge opposite corner k
-      e[k] = u < v ? side(P_[u], P_[v], q) : -side(P_[v], P_[u], q);
-      const int s = e[k] > 0 ? 1 : -1;
-      if (sign == 0) sign = s;
-      covered = s == sign;
-    }
-    if (!covered) continue;
-    // The triangle's height above q's xy, from the edge values (barycentric weights).
-    const double sum = e[0] + e[1] + e[2];
-    if (sum == 0) continue;  // seen edge-on: no crossing (its neighbours count it)
-    const double z = (e[0] * P_[t[0]].z + e[1] * P_[t[1]].z + e[2] * P_[t[2]].z) / sum;
-    crossings += z > q.z;
+bool ray_crosses(const std::vector<Vec3>& P, const Triangle& t, const Vec3& q) {
+  if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) return false;  // a segment or a point: no area
+  double e[3];
+  int sign = 0;
+  for (int k = 0; k < 3; ++k) {
+    const uint32_t u = t[(k + 1) % 3], v = t[(k + 2) % 3];  // the edge opposite corner k
+    e[k] = u < v ? side(P[u], P[v], q) : -side(P[v], P[u], q);
+    const int s = e[k] > 0 ? 1 : -1;
+    if (sign == 0) sign = s;
+    if (s != sign) return false;
   }
-  return crossings;
+  // The triangle's height above q's xy, from the edge values (barycentric weights).
+  const double sum = e[0] + e[1] + e[2];
+  if (sum == 0) return false;  // seen edge-on: no crossing (its neighbours count it)
+  const double z = (e[0] * P[t[0]].z + e[1] * P[t[1]].z + e[2] * P[t[2]].z) / sum;
+  return z > q.z;
 }
 
 size_t RayCrossings::cell(double v, int a) const {

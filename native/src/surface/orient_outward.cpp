@@ -1,6 +1,7 @@
 #include "surface/orient_outward.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <numeric>
@@ -10,6 +11,7 @@
 #include "core/parallel.h"
 #include "mesh/nesting.h"
 #include "mesh/orientation.h"
+#include "mesh/ray_crossings_impl.h"
 
 namespace PM_NAMESPACE::detail {
 
@@ -137,11 +139,149 @@ std::vector<uint32_t> close_nearly_closed_pieces(const std::vector<Vec3>& P,
   return closed;
 }
 
+
+/// Folds (orient_outward.h): which triangles face into the solid their piece bounds, for the
+/// pieces `judge[r]` marks (by root). Each piece's own triangles and its loops' caps are the
+/// closed surface its rays cross: other pieces (one inside another, or side by side) do not
+/// count.
+void judge_folds(const std::vector<Vec3>& P, const std::vector<Triangle>& T, const std::vector<uint32_t>& root,
+                 const std::vector<uint8_t>& judge, const std::vector<std::vector<uint32_t>>& loops, Folds& folds) {
+  // The caps: each loop's fan from its centroid, over the loop's points and the centroid.
+  std::vector<Vec3> cap_points;
+  std::vector<Triangle> fans;
+  std::vector<uint32_t> fan_root;
+  for (const std::vector<uint32_t>& loop : loops) {
+    if (loop.size() < 3 || !judge[root[loop[0]]]) continue;
+    Vec3 centroid{};
+    for (const uint32_t v : loop) centroid = centroid + P[v];
+    centroid = centroid / double(loop.size());
+    const auto first = uint32_t(cap_points.size()), m = uint32_t(loop.size());
+    for (const uint32_t v : loop) cap_points.push_back(P[v]);
+    cap_points.push_back(centroid);
+    for (uint32_t i = 0; i < m; ++i) {
+      fans.push_back({first + (i + 1) % m, first + i, first + m});
+      fan_root.push_back(root[loop[0]]);
+    }
+  }
+  // The point just off a triangle's centre along its normal, by a thousandth of its longest
+  // edge: nearer than any other sheet but a fold's (false: no area); its area.
+  auto probe = [&](size_t i, Vec3& q, double& area) {
+    const Triangle& t = T[i];
+    const Vec3 a = P[t[0]], u = P[t[1]] - a, v = P[t[2]] - a;
+    const Vec3 normal = cross(u, v);
+    const double length = norm(normal);
+    area = 0.5 * length;
+    if (!(length > 0)) return false;
+    const double reach = 1e-3 * std::sqrt(std::max({squared_norm(u), squared_norm(v), squared_norm(v - u)}));
+    q = a + (u + v) / 3.0 + normal * (reach / length);
+    return true;
+  };
+  if (folds.samples > 0) {
+    // Every k-th triangle of the pieces judged first. Their few rays are crossed against
+    // every triangle in one pass, each triangle meeting those in the cells of a grid over the
+    // rays that its xy box covers: cheaper than bucketing every triangle for them.
+    const size_t stride = std::max<size_t>(1, T.size() / folds.samples);
+    std::vector<uint32_t> picked;
+    std::vector<Vec3> q;
+    std::vector<double> area;
+    for (size_t i = 0; i < T.size(); i += stride) {
+      Vec3 point;
+      double a;
+      if (!judge[root[T[i][0]]] || !probe(i, point, a)) continue;
+      picked.push_back(uint32_t(i));
+      q.push_back(point);
+      area.push_back(a);
+    }
+    // The rays bucketed in a grid over their xy box, about one per cell.
+    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+    for (const Vec3& point : q)
+      for (int a = 0; a < 2; ++a) lo[a] = std::min(lo[a], point[a]), hi[a] = std::max(hi[a], point[a]);
+    const size_t side = std::max<size_t>(1, size_t(std::sqrt(double(q.size()))));
+    double scale[2];
+    for (int a = 0; a < 2; ++a) scale[a] = hi[a] > lo[a] ? double(side) / (hi[a] - lo[a]) : 0.0;
+    auto cell = [&](double v, int a) {
+      const double c = (v - lo[a]) * scale[a];
+      return c > 0 ? size_t(std::min(c, double(side - 1))) : size_t(0);
+    };
+    std::vector<uint32_t> start(side * side + 1, 0), rays(q.size());
+    for (const Vec3& point : q) ++start[cell(point.y, 1) * side + cell(point.x, 0) + 1];
+    for (size_t c = 0; c < side * side; ++c) start[c + 1] += start[c];
+    {
+      std::vector<uint32_t> at(start.begin(), start.end() - 1);
+      for (size_t k = 0; k < q.size(); ++k) rays[at[cell(q[k].y, 1) * side + cell(q[k].x, 0)]++] = uint32_t(k);
+    }
+    // Crossings' parities per block of triangles, combined by exclusive or: any thread count.
+    auto cross_all = [&](const std::vector<Vec3>& points, const std::vector<Triangle>& tris,
+                         auto&& root_of, std::vector<uint8_t>& parity, size_t b, size_t e) {
+      if (q.empty()) return;
+      for (size_t i = b; i < e; ++i) {
+        const Triangle& t = tris[i];
+        const double x0 = std::min({points[t[0]].x, points[t[1]].x, points[t[2]].x});
+        const double x1 = std::max({points[t[0]].x, points[t[1]].x, points[t[2]].x});
+        const double y0 = std::min({points[t[0]].y, points[t[1]].y, points[t[2]].y});
+        const double y1 = std::max({points[t[0]].y, points[t[1]].y, points[t[2]].y});
+        if (x1 < lo[0] || x0 > hi[0] || y1 < lo[1] || y0 > hi[1]) continue;
+        const uint32_t r = root_of(i);
+        for (size_t cy = cell(y0, 1), cy1 = cell(y1, 1); cy <= cy1; ++cy)
+          for (size_t c = cy * side + cell(x0, 0), c1 = cy * side + cell(x1, 0); c <= c1; ++c)
+            for (uint32_t j = start[c]; j < start[c + 1]; ++j) {
+              const uint32_t k = rays[j];
+              if (q[k].x < x0 || q[k].x > x1 || q[k].y < y0 || q[k].y > y1 || root[T[picked[k]][0]] != r) continue;
+              parity[k] ^= uint8_t(ray_crosses(points, t, q[k]));
+            }
+      }
+    };
+    constexpr size_t kBlock = 16384;
+    const size_t blocks = (T.size() + kBlock - 1) / kBlock;
+    std::vector<std::vector<uint8_t>> parities(blocks);
+    parallel_blocks(blocks, 1, [&](size_t hb, size_t he) {
+      for (size_t h = hb; h < he; ++h) {
+        parities[h].assign(picked.size(), 0);
+        cross_all(P, T, [&](size_t i) { return root[T[i][0]]; }, parities[h], h * kBlock,
+                  std::min(T.size(), (h + 1) * kBlock));
+      }
+    });
+    std::vector<uint8_t> parity(picked.size(), 0);
+    cross_all(cap_points, fans, [&](size_t i) { return fan_root[i]; }, parity, 0, fans.size());
+    for (const auto& p : parities)
+      for (size_t k = 0; k < p.size(); ++k) parity[k] ^= p[k];
+    for (size_t k = 0; k < picked.size(); ++k) {
+      folds.sampled_area += area[k];
+      if (parity[k]) folds.sampled_inward_area += area[k];
+    }
+    if (!(folds.sampled_inward_area > folds.share * folds.sampled_area)) return;
+  }
+  // Every triangle judged: the triangles bucketed for their rays (RayCrossings).
+  std::vector<uint32_t> all(T.size()), all_fans(fans.size());
+  std::iota(all.begin(), all.end(), uint32_t(0));
+  std::iota(all_fans.begin(), all_fans.end(), uint32_t(0));
+  const RayCrossings crossings(P, T, all.data(), all.size());
+  const RayCrossings cap_crossings(cap_points, fans, all_fans.data(), all_fans.size());
+  folds.inward.assign(T.size(), 0);
+  // In fixed chunks, the areas summed in chunk order: the same for any thread count.
+  const size_t chunk = 4096, chunks = (T.size() + chunk - 1) / chunk;
+  std::vector<std::array<double, 2>> sums(chunks, {0.0, 0.0});
+  parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
+    for (size_t h = hb; h < he; ++h)
+      for (size_t i = h * chunk; i < std::min(T.size(), (h + 1) * chunk); ++i) {
+        const uint32_t r = root[T[i][0]];
+        Vec3 point;
+        double area;
+        if (!judge[r] || !probe(i, point, area)) continue;
+        const size_t count = crossings.count_if(point, [&](uint32_t k) { return root[T[k][0]] == r; }) +
+                             cap_crossings.count_if(point, [&](uint32_t k) { return fan_root[k] == r; });
+        folds.inward[i] = uint8_t(count & 1);
+        sums[h][0] += area;
+        sums[h][1] += folds.inward[i] ? area : 0.0;
+      }
+  });
+  for (const auto& sum : sums) folds.judged_area += sum[0], folds.inward_area += sum[1];
+}
 }  // namespace
 
 size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<Triangle>& T,
                                         const std::vector<uint64_t>& boundary, std::vector<Vec3>* vertex_normals,
-                                        bool turn, FlatPieces* flat, NearlyClosed* nearly) {
+                                        bool turn, FlatPieces* flat, NearlyClosed* nearly, Folds* folds) {
   // Components by shared vertices (the same as by shared edges on a manifold without
   // pinches); a component is open if it holds a boundary half-edge. Joined concurrently (a
   // serial pass is a visible cost at millions of triangles): each component's root is its
@@ -168,7 +308,7 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
     double volume6, area;
   };
   const bool capping = nearly && nearly->loops && !nearly->loops->empty() && turn;
-  const bool areas = flat || capping;
+  const bool areas = flat || capping || folds;
   const size_t chunk = 16384, chunks = (T.size() + chunk - 1) / chunk;
   std::vector<std::vector<Sums>> part(chunks);
   parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
@@ -197,6 +337,27 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
     }
   if (flat) open_flat_pieces(P, T, root, vol, area, open, *flat);
   if (!turn) return 0;
+  // The pieces to look for folds in: closed, or closed but for small openings (by their caps'
+  // area alone), found before the nearly closed ones are marked closed. Not where flat pieces
+  // were opened (their outlines are in no loop).
+  std::vector<uint8_t> judge;
+  if (folds && (!flat || flat->pieces == 0)) {
+    judge.assign(n, 0);
+    std::vector<double> cap_area(n, 0.0);
+    if (nearly && nearly->loops)
+      for (const std::vector<uint32_t>& loop : *nearly->loops) {
+        if (loop.size() < 3) continue;
+        Vec3 centroid{};
+        for (const uint32_t v : loop) centroid = centroid + P[v];
+        centroid = centroid / double(loop.size());
+        for (size_t i = 0; i < loop.size(); ++i)
+          cap_area[root[loop[0]]] += 0.5 * norm(cross(P[loop[i]] - centroid, P[loop[(i + 1) % loop.size()]] - centroid));
+      }
+    parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+      for (size_t v = b; v < e; ++v)
+        judge[v] = root[v] == v && area[v] > 0 && (!open[v] || cap_area[v] <= kMaxCapShare * area[v]);
+    });
+  }
   std::vector<uint32_t> capped;
   if (capping) {
     capped = close_nearly_closed_pieces(P, *nearly->loops, root, area, vol, open);
@@ -246,6 +407,15 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
     flipped.fetch_add(count, std::memory_order_relaxed);
   });
   for (const uint32_t r : capped) nearly->turned += turned(r);
+  if (!judge.empty()) {
+    // A closed part inside another faces into its cavity, rightly: only those at depth 0.
+    parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+      for (size_t v = b; v < e; ++v)
+        if (judge[v] && piece[v] != UINT32_MAX && depth[piece[v]] > 0) judge[v] = 0;
+    });
+    judge_folds(P, T, root, judge, nearly && nearly->loops ? *nearly->loops : std::vector<std::vector<uint32_t>>{},
+                *folds);
+  }
   return flipped.load();
 }
 

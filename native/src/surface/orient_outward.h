@@ -50,9 +50,30 @@ struct NearlyClosed {
   size_t pieces = 0;     ///< out: open components judged as closed
   size_t turned = 0;     ///< out: of those, turned
 };
+/// With `folds` given (and turning on), after turning: which triangles face into the solid
+/// their piece bounds, for the pieces closed (not inside another) or closed but for small
+/// openings (their loops' caps, as NearlyClosed caps them, add at most kMaxCapShare of their
+/// area; `nearly`'s loops): the ray from just off a triangle's centre along its normal,
+/// straight up, crosses the piece and its caps an odd number of times (exact for a closed
+/// surface, whatever the ray). A consistently wound piece can still face inward over part of
+/// itself: where the normals' spanning tree crossed between the two sides of a thin part,
+/// the surface folds over from one side's winding to the other's. Every k-th triangle is
+/// judged first (about `samples` of them; 0: none); only where more than `share` of their
+/// area faces inward is every triangle judged.
+struct Folds {
+  size_t samples = 2048;           ///< in: triangles judged first
+  double share = 0.02;             ///< in: above this share of their area inward, all judged
+  double sampled_area = 0;         ///< out: the area of the first triangles judged
+  double sampled_inward_area = 0;  ///< out: of that, facing inward
+  std::vector<uint8_t> inward;     ///< out, once all are judged: per triangle, 1 = facing inward
+  double judged_area = 0;          ///< out, the same: the area of every triangle judged
+  double inward_area = 0;          ///< out, the same: of that, facing inward
+};
+
 size_t orient_closed_components_outward(const std::vector<Vec3>& positions, std::vector<Triangle>& triangles,
                                         const std::vector<uint64_t>& boundary,
                                         std::vector<Vec3>* vertex_normals = nullptr, bool turn = true,
-                                        FlatPieces* flat = nullptr, NearlyClosed* nearly = nullptr);
+                                        FlatPieces* flat = nullptr, NearlyClosed* nearly = nullptr,
+                                        Folds* folds = nullptr);
 
 }  // namespace particlemesh::detail

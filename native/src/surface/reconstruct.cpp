@@ -169,25 +169,69 @@ SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options
     // loops, where nothing but the tree said which way they face (a scanner's viewpoint or
     // normals say which way rightly, inside a room too).
     bo.trace_loops = options.orient && tree_chose && !st.viewpoint_used;
-    detail::BuilderStats bs;
-    std::vector<Vec3> vertex_normals;
-    tris = detail::build_surface(P, normals, active, candidates, bo, options.repair, bs, tracker, vertex_normals);
+    // The surface built over the normals N and its closed parts turned outward (and, where
+    // the tree alone chose which way the normals face, its parts looked at for folds).
+    struct Built {
+      std::vector<Triangle> tris;
+      detail::BuilderStats bs;
+      std::vector<Vec3> vertex_normals;
+      detail::FlatPieces flat;
+      detail::NearlyClosed nearly;
+      detail::Folds folds;
+      double seconds_orient = 0;
+    };
+    auto build = [&](const std::vector<Vec3>& N, Built& b) {
+      b.tris = detail::build_surface(P, N, active, candidates, bo, options.repair, b.bs, tracker, b.vertex_normals);
+      tracker.check();  // the steps below take up to a second at 1M points: let a cancel request in
+      const auto t = Clock::now();
+      // Flat closed pieces (a patch and its reversed copy) opened, whichever way the rest faces.
+      b.flat.sides = &N;
+      b.nearly.loops = &b.bs.loops;
+      b.bs.components_flipped = detail::orient_closed_components_outward(
+          P, b.tris, b.bs.boundary, &b.vertex_normals, options.orient, &b.flat, &b.nearly,
+          bo.trace_loops ? &b.folds : nullptr);
+      b.seconds_orient = seconds_since(t);
+      tracker.check();
+    };
+    Built first, second;
+    build(normals, first);
+    Built* kept = &first;
+    if (!first.folds.inward.empty()) {
+      // Folded parts: the normals turned to agree with the sides their faces were found to
+      // face (summed over a particle's triangles, by area, those facing inward negated), and
+      // the surface built again over them; kept if less of it faces inward.
+      std::vector<Vec3> vote(n, Vec3{});
+      for (size_t i = 0; i < first.tris.size(); ++i) {
+        const Triangle& t = first.tris[i];
+        const Vec3 face = cross(P[t[1]] - P[t[0]], P[t[2]] - P[t[0]]);
+        for (uint32_t v : t) vote[v] = vote[v] + (first.folds.inward[i] ? Vec3{} - face : face);
+      }
+      std::vector<Vec3> turned = normals;
+      detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+        for (size_t s = b; s < e; ++s)
+          if (dot(turned[raw.rep[s]], vote[raw.rep[s]]) < 0) turned[s] = Vec3{} - turned[s];
+      });
+      second.folds.samples = 0;  // every triangle judged
+      build(turned, second);
+      if (second.flat.pieces == 0 && second.folds.judged_area > 0 &&
+          second.folds.inward_area / second.folds.judged_area < first.folds.inward_area / first.folds.judged_area) {
+        kept = &second;
+        st.folded_triangles = size_t(std::count(first.folds.inward.begin(), first.folds.inward.end(), uint8_t(1)));
+        normals = std::move(turned);
+      }
+    }
     std::vector<Triangle>().swap(candidates);
-    tracker.check();  // the steps below take up to a second at 1M points: let a cancel request in
-    st.seconds_extraction = bs.seconds_candidates + bs.seconds_growth;
-    st.seconds_repair = bs.seconds_repair;
-    t0 = Clock::now();
-    // Flat closed pieces (a patch and its reversed copy) opened, whichever way the rest faces.
-    detail::FlatPieces flat;
-    flat.sides = &normals;
-    detail::NearlyClosed nearly;
-    nearly.loops = &bs.loops;
-    bs.components_flipped = detail::orient_closed_components_outward(P, tris, bs.boundary, &vertex_normals,
-                                                                      options.orient, &flat, &nearly);
+    tris = std::move(kept->tris);
+    detail::BuilderStats& bs = kept->bs;
+    std::vector<Vec3>& vertex_normals = kept->vertex_normals;
+    detail::FlatPieces& flat = kept->flat;
+    detail::NearlyClosed& nearly = kept->nearly;
+    st.seconds_extraction = first.bs.seconds_candidates + first.bs.seconds_growth + second.bs.seconds_candidates +
+                            second.bs.seconds_growth;  // (a second build's zero when there was none)
+    st.seconds_repair = first.bs.seconds_repair + second.bs.seconds_repair;
     st.flat_pieces_opened = flat.pieces;
     st.nearly_closed_turned = nearly.turned;
-    st.seconds_orient = seconds_since(t0);
-    tracker.check();
+    st.seconds_orient = first.seconds_orient + second.seconds_orient;
     st.candidates = bs.candidates;
     st.rejected_conormal = bs.rejected_conormal;
     st.rejected_shadow = bs.rejected_shadow;

@@ -164,6 +164,14 @@ struct SurfaceStats {
   /// normals' spanning tree alone chose which way they faced (no input normals, no
   /// viewpoint): a model's vertices whose surface keeps a few holes.
   size_t nearly_closed_turned = 0;
+  /// Triangles of the surface first built that faced into the solid their part bounds, where
+  /// the surface was then built again: part of a closed component (or one closed but for
+  /// small openings) came out folded over, as where the normals' spanning tree crossed between
+  /// the two sides of a thin part. The normals were turned to the sides the faces were found
+  /// to face and the surface built again, kept where less of it faced inward (0: not built
+  /// again). Looked for where the tree alone chose which way the normals face (no input
+  /// normals, no viewpoint), as nearly_closed_turned.
+  size_t folded_triangles = 0;
   size_t unused_points = 0;       ///< distinct particles in no triangle
   size_t components_removed = 0;  ///< pieces removed for min_component_triangles
   size_t component_triangles_removed = 0;  ///< their triangles
