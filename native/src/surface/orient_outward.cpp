@@ -407,6 +407,7 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
     flipped.fetch_add(count, std::memory_order_relaxed);
   });
   for (const uint32_t r : capped) nearly->turned += turned(r);
+  if (folds) folds->pieces = pieces;
   if (!judge.empty()) {
     // A closed part inside another faces into its cavity, rightly: only those at depth 0.
     parallel_blocks(n, 8192, [&](size_t b, size_t e) {

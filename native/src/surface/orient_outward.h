@@ -68,6 +68,7 @@ struct Folds {
   std::vector<uint8_t> inward;     ///< out, once all are judged: per triangle, 1 = facing inward
   double judged_area = 0;          ///< out, the same: the area of every triangle judged
   double inward_area = 0;          ///< out, the same: of that, facing inward
+  size_t pieces = 0;               ///< out: the surface's pieces (components by shared vertices)
 };
 
 size_t orient_closed_components_outward(const std::vector<Vec3>& positions, std::vector<Triangle>& triangles,

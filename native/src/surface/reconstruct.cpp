@@ -199,7 +199,7 @@ SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options
     if (!first.folds.inward.empty()) {
       // Folded parts: the normals turned to agree with the sides their faces were found to
       // face (summed over a particle's triangles, by area, those facing inward negated), and
-      // the surface built again over them; kept if less of it faces inward.
+      // the surface built again over them.
       std::vector<Vec3> vote(n, Vec3{});
       for (size_t i = 0; i < first.tris.size(); ++i) {
         const Triangle& t = first.tris[i];
@@ -209,12 +209,18 @@ SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options
       std::vector<Vec3> turned = normals;
       detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
         for (size_t s = b; s < e; ++s)
-          if (dot(turned[raw.rep[s]], vote[raw.rep[s]]) < 0) turned[s] = Vec3{} - turned[s];
+          if (dot(normals[raw.rep[s]], vote[raw.rep[s]]) < 0) turned[s] = Vec3{} - normals[s];
       });
       second.folds.samples = 0;  // every triangle judged
       build(turned, second);
+      // Kept where at most half as much of it faces inward and it is hardly more broken: at
+      // most a few more pieces, loops left open or particles left out (2, or a tenth more).
+      const auto few_more = [](size_t second, size_t first) { return second <= first + std::max<size_t>(2, first / 10); };
       if (second.flat.pieces == 0 && second.folds.judged_area > 0 &&
-          second.folds.inward_area / second.folds.judged_area < first.folds.inward_area / first.folds.judged_area) {
+          second.folds.inward_area / second.folds.judged_area <=
+              0.5 * first.folds.inward_area / first.folds.judged_area &&
+          few_more(second.folds.pieces, first.folds.pieces) && few_more(second.bs.holes_left, first.bs.holes_left) &&
+          few_more(second.bs.unused_points, first.bs.unused_points)) {
         kept = &second;
         st.folded_triangles = size_t(std::count(first.folds.inward.begin(), first.folds.inward.end(), uint8_t(1)));
         normals = std::move(turned);
