@@ -168,8 +168,8 @@ struct SurfaceStats {
   /// the surface was then built again: part of a closed component (or one closed but for
   /// small openings) came out folded over, as where the normals' spanning tree crossed between
   /// the two sides of a thin part. The normals were turned to the sides the faces were found
-  /// to face and the surface built again, kept where less of it faced inward (0: not built
-  /// again). Looked for where the tree alone chose which way the normals face (no input
+  /// to face and the surface built again, kept where at most half as much of it faced inward
+  /// and it was hardly more broken (0: not built again, or not kept). Looked for where the tree alone chose which way the normals face (no input
   /// normals, no viewpoint), as nearly_closed_turned.
   size_t folded_triangles = 0;
   size_t unused_points = 0;       ///< distinct particles in no triangle
