@@ -419,6 +419,31 @@ TEST(ReconstructSurface, SpheresCloserThanLStayTwoClosedSurfaces) {
   }
 }
 
+// Coarser spheres (300 Fibonacci points each) 0.05 apart, a third far away, without normals:
+// the spanning tree crossed the narrow gap between sides facing each other, and the two near
+// spheres came out as one closed piece, a third of its triangles facing into it. Found
+// folded, built again: three closed spheres facing outward.
+TEST(ReconstructSurface, CoarseSpheresAlmostTouchingFaceOutwardWithoutNormals) {
+  const PointCloud unit = fibonacci_sphere(300);
+  PointCloud c;
+  std::vector<Vec3> centre;
+  for (const Vec3 shift : {Vec3{0, 0, 0}, Vec3{2.05, 0, 0}, Vec3{1e3, 0, 0}})
+    for (const Vec3& p : unit.positions) {
+      c.positions.push_back(p + shift);
+      centre.push_back(shift);
+    }
+  const SurfaceResult r = reconstruct_surface(c);
+  EXPECT_GT(r.surface.folded_triangles, 0u);
+  expect_closed_surfaces(c, r, 3, 0, "three spheres");
+  size_t inward = 0;
+  for (const auto& t : r.mesh.triangles) {
+    const Vec3 a = r.mesh.positions[t[0]], b = r.mesh.positions[t[1]], d = r.mesh.positions[t[2]];
+    inward += dot(cross(b - a, d - a), (a + b + d) / 3.0 - centre[t[0]]) < 0;
+  }
+  // A few slivers where the spheres nearly touch lean past their centre's direction.
+  EXPECT_LT(double(inward), 0.01 * double(r.mesh.triangles.size())) << inward << " of " << r.mesh.triangles.size();
+}
+
 // A hollow ball sampled on both walls (with a marble inside): the cavity's wall faces into
 // the cavity, the marble out of itself again, with normals that say so, without normals, and
 // with normals all pointing away from the centre (the input's facing is overruled by the
