@@ -139,19 +139,19 @@ std::vector<uint32_t> close_nearly_closed_pieces(const std::vector<Vec3>& P,
   return closed;
 }
 
-
 /// Folds (orient_outward.h): which triangles face into the solid their piece bounds, for the
-/// pieces `judge[r]` marks (by root). Each piece's own triangles and its loops' caps are the
-/// closed surface its rays cross: other pieces (one inside another, or side by side) do not
-/// count.
+/// pieces `judge` marks (numbered: piece[root[v]] for a vertex v, piece_of[i] for triangle i).
+/// Each piece's own triangles and its loops' caps are the closed surface its rays cross:
+/// other pieces (one inside another, or side by side) do not count.
 void judge_folds(const std::vector<Vec3>& P, const std::vector<Triangle>& T, const std::vector<uint32_t>& root,
+                 const std::vector<uint32_t>& piece, const std::vector<uint32_t>& piece_of,
                  const std::vector<uint8_t>& judge, const std::vector<std::vector<uint32_t>>& loops, Folds& folds) {
   // The caps: each loop's fan from its centroid, over the loop's points and the centroid.
   std::vector<Vec3> cap_points;
   std::vector<Triangle> fans;
-  std::vector<uint32_t> fan_root;
+  std::vector<uint32_t> fan_piece;
   for (const std::vector<uint32_t>& loop : loops) {
-    if (loop.size() < 3 || !judge[root[loop[0]]]) continue;
+    if (loop.size() < 3 || !judge[piece[root[loop[0]]]]) continue;
     Vec3 centroid{};
     for (const uint32_t v : loop) centroid = centroid + P[v];
     centroid = centroid / double(loop.size());
@@ -160,7 +160,7 @@ void judge_folds(const std::vector<Vec3>& P, const std::vector<Triangle>& T, con
     cap_points.push_back(centroid);
     for (uint32_t i = 0; i < m; ++i) {
       fans.push_back({first + (i + 1) % m, first + i, first + m});
-      fan_root.push_back(root[loop[0]]);
+      fan_piece.push_back(piece[root[loop[0]]]);
     }
   }
   // The point just off a triangle's centre along its normal, by a thousandth of its longest
@@ -187,7 +187,7 @@ void judge_folds(const std::vector<Vec3>& P, const std::vector<Triangle>& T, con
     for (size_t i = 0; i < T.size(); i += stride) {
       Vec3 point;
       double a;
-      if (!judge[root[T[i][0]]] || !probe(i, point, a)) continue;
+      if (!judge[piece_of[i]] || !probe(i, point, a)) continue;
       picked.push_back(uint32_t(i));
       q.push_back(point);
       area.push_back(a);
@@ -212,7 +212,7 @@ void judge_folds(const std::vector<Vec3>& P, const std::vector<Triangle>& T, con
     }
     // Crossings' parities per block of triangles, combined by exclusive or: any thread count.
     auto cross_all = [&](const std::vector<Vec3>& points, const std::vector<Triangle>& tris,
-                         auto&& root_of, std::vector<uint8_t>& parity, size_t b, size_t e) {
+                         auto&& piece_of_triangle, std::vector<uint8_t>& parity, size_t b, size_t e) {
       if (q.empty()) return;
       for (size_t i = b; i < e; ++i) {
         const Triangle& t = tris[i];
@@ -221,12 +221,12 @@ void judge_folds(const std::vector<Vec3>& P, const std::vector<Triangle>& T, con
         const double y0 = std::min({points[t[0]].y, points[t[1]].y, points[t[2]].y});
         const double y1 = std::max({points[t[0]].y, points[t[1]].y, points[t[2]].y});
         if (x1 < lo[0] || x0 > hi[0] || y1 < lo[1] || y0 > hi[1]) continue;
-        const uint32_t r = root_of(i);
+        const uint32_t r = piece_of_triangle(i);
         for (size_t cy = cell(y0, 1), cy1 = cell(y1, 1); cy <= cy1; ++cy)
           for (size_t c = cy * side + cell(x0, 0), c1 = cy * side + cell(x1, 0); c <= c1; ++c)
             for (uint32_t j = start[c]; j < start[c + 1]; ++j) {
               const uint32_t k = rays[j];
-              if (q[k].x < x0 || q[k].x > x1 || q[k].y < y0 || q[k].y > y1 || root[T[picked[k]][0]] != r) continue;
+              if (q[k].x < x0 || q[k].x > x1 || q[k].y < y0 || q[k].y > y1 || piece_of[picked[k]] != r) continue;
               parity[k] ^= uint8_t(ray_crosses(points, t, q[k]));
             }
       }
@@ -237,12 +237,12 @@ void judge_folds(const std::vector<Vec3>& P, const std::vector<Triangle>& T, con
     parallel_blocks(blocks, 1, [&](size_t hb, size_t he) {
       for (size_t h = hb; h < he; ++h) {
         parities[h].assign(picked.size(), 0);
-        cross_all(P, T, [&](size_t i) { return root[T[i][0]]; }, parities[h], h * kBlock,
+        cross_all(P, T, [&](size_t i) { return piece_of[i]; }, parities[h], h * kBlock,
                   std::min(T.size(), (h + 1) * kBlock));
       }
     });
     std::vector<uint8_t> parity(picked.size(), 0);
-    cross_all(cap_points, fans, [&](size_t i) { return fan_root[i]; }, parity, 0, fans.size());
+    cross_all(cap_points, fans, [&](size_t i) { return fan_piece[i]; }, parity, 0, fans.size());
     for (const auto& p : parities)
       for (size_t k = 0; k < p.size(); ++k) parity[k] ^= p[k];
     for (size_t k = 0; k < picked.size(); ++k) {
@@ -264,12 +264,12 @@ void judge_folds(const std::vector<Vec3>& P, const std::vector<Triangle>& T, con
   parallel_blocks(chunks, 1, [&](size_t hb, size_t he) {
     for (size_t h = hb; h < he; ++h)
       for (size_t i = h * chunk; i < std::min(T.size(), (h + 1) * chunk); ++i) {
-        const uint32_t r = root[T[i][0]];
+        const uint32_t r = piece_of[i];
         Vec3 point;
         double area;
         if (!judge[r] || !probe(i, point, area)) continue;
-        const size_t count = crossings.count_if(point, [&](uint32_t k) { return root[T[k][0]] == r; }) +
-                             cap_crossings.count_if(point, [&](uint32_t k) { return fan_root[k] == r; });
+        const size_t count = crossings.count_if(point, [&](uint32_t k) { return piece_of[k] == r; }) +
+                             cap_crossings.count_if(point, [&](uint32_t k) { return fan_piece[k] == r; });
         folds.inward[i] = uint8_t(count & 1);
         sums[h][0] += area;
         sums[h][1] += folds.inward[i] ? area : 0.0;
@@ -337,27 +337,6 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
     }
   if (flat) open_flat_pieces(P, T, root, vol, area, open, *flat);
   if (!turn) return 0;
-  // The pieces to look for folds in: closed, or closed but for small openings (by their caps'
-  // area alone), found before the nearly closed ones are marked closed. Not where flat pieces
-  // were opened (their outlines are in no loop).
-  std::vector<uint8_t> judge;
-  if (folds && (!flat || flat->pieces == 0)) {
-    judge.assign(n, 0);
-    std::vector<double> cap_area(n, 0.0);
-    if (nearly && nearly->loops)
-      for (const std::vector<uint32_t>& loop : *nearly->loops) {
-        if (loop.size() < 3) continue;
-        Vec3 centroid{};
-        for (const uint32_t v : loop) centroid = centroid + P[v];
-        centroid = centroid / double(loop.size());
-        for (size_t i = 0; i < loop.size(); ++i)
-          cap_area[root[loop[0]]] += 0.5 * norm(cross(P[loop[i]] - centroid, P[loop[(i + 1) % loop.size()]] - centroid));
-      }
-    parallel_blocks(n, 8192, [&](size_t b, size_t e) {
-      for (size_t v = b; v < e; ++v)
-        judge[v] = root[v] == v && area[v] > 0 && (!open[v] || cap_area[v] <= kMaxCapShare * area[v]);
-    });
-  }
   std::vector<uint32_t> capped;
   if (capping) {
     capped = close_nearly_closed_pieces(P, *nearly->loops, root, area, vol, open);
@@ -407,15 +386,32 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
     flipped.fetch_add(count, std::memory_order_relaxed);
   });
   for (const uint32_t r : capped) nearly->turned += turned(r);
-  if (folds) folds->pieces = pieces;
-  if (!judge.empty()) {
-    // A closed part inside another faces into its cavity, rightly: only those at depth 0.
-    parallel_blocks(n, 8192, [&](size_t b, size_t e) {
-      for (size_t v = b; v < e; ++v)
-        if (judge[v] && piece[v] != UINT32_MAX && depth[piece[v]] > 0) judge[v] = 0;
-    });
-    judge_folds(P, T, root, judge, nearly && nearly->loops ? *nearly->loops : std::vector<std::vector<uint32_t>>{},
-                *folds);
+  if (folds) {
+    folds->pieces = pieces;
+    // The pieces to look for folds in: closed and inside no other (one inside another faces
+    // into its cavity, rightly), or closed but for small openings (by their caps' area alone).
+    // Not where flat pieces were opened (their outlines are in no loop).
+    if (!flat || flat->pieces == 0) {
+      const std::vector<std::vector<uint32_t>> none;
+      const auto& loops = nearly && nearly->loops ? *nearly->loops : none;
+      std::vector<double> cap_area(pieces, 0.0);
+      for (const std::vector<uint32_t>& loop : loops) {
+        if (loop.size() < 3) continue;
+        Vec3 centroid{};
+        for (const uint32_t v : loop) centroid = centroid + P[v];
+        centroid = centroid / double(loop.size());
+        for (size_t i = 0; i < loop.size(); ++i)
+          cap_area[piece[root[loop[0]]]] +=
+              0.5 * norm(cross(P[loop[i]] - centroid, P[loop[(i + 1) % loop.size()]] - centroid));
+      }
+      std::vector<uint8_t> judge(pieces, 0);
+      for (size_t v = 0; v < n; ++v) {
+        const uint32_t k = piece[v];
+        if (k != UINT32_MAX)
+          judge[k] = area[v] > 0 && depth[k] == 0 && (!open[v] || cap_area[k] <= kMaxCapShare * area[v]);
+      }
+      judge_folds(P, T, root, piece, piece_of, judge, loops, *folds);
+    }
   }
   return flipped.load();
 }
