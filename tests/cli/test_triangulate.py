@@ -324,6 +324,20 @@ def test_a_small_handle_taken_out_is_in_the_summary_and_report(cli, tmp_path):
     assert r["topology"]["closed"] and r["topology"]["euler_characteristic"] == 2
 
 
+def obj_volume(path):
+    """The signed volume an OBJ's triangles enclose (positive facing outward)."""
+    v, volume = [], 0.0
+    for line in path.read_text().splitlines():
+        f = line.split()
+        if f and f[0] == "v":
+            v.append([float(x) for x in f[1:4]])
+        elif f and f[0] == "f":
+            a, b, c = (v[int(x.split("/")[0]) - 1] for x in f[1:4])
+            volume += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+                       + a[2] * (b[0] * c[1] - b[1] * c[0])) / 6
+    return volume
+
+
 def test_a_surface_closed_but_for_small_holes_is_turned_outward(cli, tmp_path):
     """A teardrop's particles (a half ball, a cone up to a sharp tip) with three holes in its
     side: the normals' spanning tree faced it inward from its tip; judged with its holes
@@ -349,15 +363,7 @@ def test_a_surface_closed_but_for_small_holes_is_turned_outward(cli, tmp_path):
     proc = cli("triangulate", pts, "-o", out, "--report", rep)
     assert "1 part closed but for small openings turned outward" in proc.stdout, proc.stdout
     assert json.loads(rep.read_text())["surface"]["nearly_closed_turned"] == 1
-    v, volume = [], 0.0
-    for line in out.read_text().splitlines():
-        f = line.split()
-        if f and f[0] == "v":
-            v.append([float(x) for x in f[1:4]])
-        elif f and f[0] == "f":
-            a, b, c = (v[int(x.split("/")[0]) - 1] for x in f[1:4])
-            volume += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-                       + a[2] * (b[0] * c[1] - b[1] * c[0])) / 6
+    volume = obj_volume(out)
     assert 4.7 < volume < 5.24, volume  # pi (2 + 3) / 3, less the holes' and the chords' share
     proc = cli("triangulate", pts, "-o", out, "--no-orient")
     assert "turned outward" not in proc.stdout
@@ -385,15 +391,7 @@ def test_a_folded_surface_built_again_is_named(cli, tmp_path):
     proc = cli("triangulate", pts, "-o", out, "--report", rep)
     assert re.search(r"\d+ triangles facing into the solid \(a fold\) built again", proc.stdout), proc.stdout
     assert json.loads(rep.read_text())["surface"]["folded_triangles"] > 1000
-    v, volume = [], 0.0
-    for line in out.read_text().splitlines():
-        f = line.split()
-        if f and f[0] == "v":
-            v.append([float(x) for x in f[1:4]])
-        elif f and f[0] == "f":
-            a, b, c = (v[int(x.split("/")[0]) - 1] for x in f[1:4])
-            volume += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-                       + a[2] * (b[0] * c[1] - b[1] * c[0])) / 6
+    volume = obj_volume(out)
     assert 4.24 < volume < 4.30, volume
     proc = cli("triangulate", pts, "-o", out, "--no-orient")
     assert "a fold" not in proc.stdout
