@@ -403,6 +403,31 @@ TEST(ParticleTriangulation, SmallComponentsRemovedOnRequest) {
     for (const auto v : t.vertices) EXPECT_LT(v, 3000u);
 }
 
+// PCL's normals, estimated and turned toward a sensor outside a closed object, face inward on
+// its far side: found inconsistent (they flip along the silhouette) at any size, they only
+// vote which way the surface faces, and the 80k-point sphere comes out closed and outward.
+TEST(ParticleTriangulation, NormalsTurnedTowardTheSensorStillGiveAnOutwardSphere) {
+  pcl::PointCloud<pcl::PointXYZ>::Ptr c(new pcl::PointCloud<pcl::PointXYZ>);
+  for (const Vec3& p : fibonacci_sphere(80000).positions) c->push_back({float(p.x), float(p.y), float(p.z)});
+  c->sensor_origin_ = Eigen::Vector4f(0.3f, 0.2f, 10.0f, 0.0f);
+  ParticleTriangulation<pcl::PointXYZ> pt;
+  pt.setInputCloud(c);
+  pt.setEstimateNormals(true);
+  pcl::PolygonMesh mesh;
+  pt.reconstruct(mesh);
+  ASSERT_TRUE(pt.getReport().ok) << pt.getReport().error;
+  TriMesh m;
+  particlemesh_pcl::fromPolygonMesh(mesh, m);
+  const TopologyReport topo = topology_report(m);
+  EXPECT_EQ(topo.components, 1u);
+  EXPECT_TRUE(topo.closed && topo.manifold && topo.consistently_oriented && topo.outward);
+  size_t inward = 0;
+  for (const Triangle& t : m.triangles)
+    inward += dot(cross(m.positions[t[1]] - m.positions[t[0]], m.positions[t[2]] - m.positions[t[0]]),
+                  m.positions[t[0]] + m.positions[t[1]] + m.positions[t[2]]) < 0;
+  EXPECT_EQ(inward, 0u);
+}
+
 TEST(ParticleTriangulation, PreprocessingSwitchesKeepInputIndices) {
   // A sphere with a stray point floating next to it, as scanners produce.
   pcl::PointCloud<pcl::PointXYZ>::Ptr c(new pcl::PointCloud<pcl::PointXYZ>);

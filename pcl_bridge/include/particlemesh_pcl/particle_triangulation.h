@@ -96,10 +96,11 @@ namespace particlemesh_pcl
     * voxel-grid downsampling to a target spacing, normal estimation toward a viewpoint.
     *
     * \note Normals: the point type's normals (or those of setEstimateNormals) decide which way
-    * each piece of the surface faces; its tangent planes come from its own plane fits.
-    * Normals flipped toward a viewpoint are consistent for a single view (a depth frame), not
-    * around a closed object: there give bare points (PointXYZ), which get normals oriented by
-    * a spanning tree (bench/RESULTS.md measures the difference).
+    * the surface faces; its tangent planes come from its own plane fits. Normals flipped
+    * toward a viewpoint are consistent for a single view (a depth frame), not around a closed
+    * object seen from outside (they face inward on its far side): such normals are found
+    * inconsistent by their flip along the silhouette, whatever the cloud's size, and then only
+    * vote which way each piece of a spanning tree's orientation faces.
     *
     * Failure follows PCL: a PCL_ERROR message "[pcl::ParticleTriangulation::...] ..." and an
     * empty output; getReport () says what happened.
