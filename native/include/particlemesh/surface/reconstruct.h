@@ -81,7 +81,9 @@ struct SurfaceOptions : TriangulateOptions {
   /// signed volume), or into the cavity for a closed component inside another (a hollow
   /// object's inner wall; by how many enclose it, as topology_report's outward judges); and,
   /// where the normals were estimated without input normals or a viewpoint, each open one
-  /// closed but for small openings, judged with its loops capped (SurfaceStats::nearly_closed_turned).
+  /// closed but for small openings, judged with its loops capped (SurfaceStats::nearly_closed_turned),
+  /// and a part found folded over to face into its solid built again with its normals turned
+  /// (SurfaceStats::folded_triangles).
   bool orient = true;
   /// Each particle's edge limit follows the sampling around it (real scans are sampled
   /// unevenly): L_i = max_edge_factor x h_i, h_i its local spacing (estimate_local_spacing;
