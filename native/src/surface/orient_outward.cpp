@@ -97,30 +97,43 @@ void open_flat_pieces(const std::vector<Vec3>& P, std::vector<Triangle>& T, cons
     if (gone[v]) open[v] = 1;
 }
 
-/// NearlyClosed (orient_outward.h): the open pieces closed but for small openings, each of
-/// their loops (v_i -> v_{i+1} boundary half-edges) capped by the fan from its centroid (cap
-/// triangles (v_{i+1}, v_i, centroid)); each such piece's cap volume (six times, about the
-/// piece's root) added to vol[r] and the piece marked closed. Returns those pieces' roots,
-/// ascending.
-std::vector<uint32_t> close_nearly_closed_pieces(const std::vector<Vec3>& P,
-                                                 const std::vector<std::vector<uint32_t>>& loops,
-                                                 const std::vector<uint32_t>& root, const std::vector<double>& area,
-                                                 std::vector<double>& vol, std::vector<uint8_t>& open) {
-  std::vector<std::pair<uint32_t, std::pair<double, double>>> cap;  // per loop: (root, (area, volume6))
-  for (const std::vector<uint32_t>& loop : loops) {
-    if (loop.empty()) continue;
+/// A loop's cap (v_i -> v_{i+1} boundary half-edges): the fan from its centroid, triangles
+/// (v_{i+1}, v_i, centroid), and its area. A loop of fewer than three points caps nothing.
+struct Cap {
+  Vec3 centroid;
+  double area = 0;
+};
+std::vector<Cap> caps_of(const std::vector<Vec3>& P, const std::vector<std::vector<uint32_t>>& loops) {
+  std::vector<Cap> caps(loops.size());
+  for (size_t k = 0; k < loops.size(); ++k) {
+    const std::vector<uint32_t>& loop = loops[k];
+    if (loop.size() < 3) continue;
     Vec3 centroid{};
     for (const uint32_t v : loop) centroid = centroid + P[v];
-    centroid = centroid / double(loop.size());
+    caps[k].centroid = centroid / double(loop.size());
+    for (size_t i = 0; i < loop.size(); ++i)
+      caps[k].area += 0.5 * norm(cross(P[loop[i]] - caps[k].centroid, P[loop[(i + 1) % loop.size()]] - caps[k].centroid));
+  }
+  return caps;
+}
+
+/// NearlyClosed (orient_outward.h): the open pieces closed but for small openings, each of
+/// their loops capped (`caps`); each such piece's cap volume (six times, about the piece's
+/// root) added to vol[r] and the piece marked closed. Returns those pieces' roots, ascending.
+std::vector<uint32_t> close_nearly_closed_pieces(const std::vector<Vec3>& P,
+                                                 const std::vector<std::vector<uint32_t>>& loops,
+                                                 const std::vector<Cap>& caps, const std::vector<uint32_t>& root,
+                                                 const std::vector<double>& area, std::vector<double>& vol,
+                                                 std::vector<uint8_t>& open) {
+  std::vector<std::pair<uint32_t, std::pair<double, double>>> cap;  // per loop: (root, (area, volume6))
+  for (size_t k = 0; k < loops.size(); ++k) {
+    const std::vector<uint32_t>& loop = loops[k];
+    if (loop.size() < 3) continue;
     const uint32_t r = root[loop[0]];
-    double a = 0, v = 0;
-    for (size_t i = 0; i < loop.size(); ++i) {
-      const Vec3& pa = P[loop[i]];
-      const Vec3& pb = P[loop[(i + 1) % loop.size()]];
-      a += 0.5 * norm(cross(pa - centroid, pb - centroid));
-      v += signed_volume6(P[r], pb, pa, centroid);
-    }
-    cap.push_back({r, {a, v}});
+    double v = 0;
+    for (size_t i = 0; i < loop.size(); ++i)
+      v += signed_volume6(P[r], P[loop[(i + 1) % loop.size()]], P[loop[i]], caps[k].centroid);
+    cap.push_back({r, {caps[k].area, v}});
   }
   std::stable_sort(cap.begin(), cap.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
   std::vector<uint32_t> closed;
@@ -145,19 +158,18 @@ std::vector<uint32_t> close_nearly_closed_pieces(const std::vector<Vec3>& P,
 /// other pieces (one inside another, or side by side) do not count.
 void judge_folds(const std::vector<Vec3>& P, const std::vector<Triangle>& T, const std::vector<uint32_t>& root,
                  const std::vector<uint32_t>& piece, const std::vector<uint32_t>& piece_of,
-                 const std::vector<uint8_t>& judge, const std::vector<std::vector<uint32_t>>& loops, Folds& folds) {
-  // The caps: each loop's fan from its centroid, over the loop's points and the centroid.
+                 const std::vector<uint8_t>& judge, const std::vector<std::vector<uint32_t>>& loops,
+                 const std::vector<Cap>& caps, Folds& folds) {
+  // The caps' fans as triangles over the loops' points and the centroids.
   std::vector<Vec3> cap_points;
   std::vector<Triangle> fans;
   std::vector<uint32_t> fan_piece;
-  for (const std::vector<uint32_t>& loop : loops) {
+  for (size_t k = 0; k < loops.size(); ++k) {
+    const std::vector<uint32_t>& loop = loops[k];
     if (loop.size() < 3 || !judge[piece[root[loop[0]]]]) continue;
-    Vec3 centroid{};
-    for (const uint32_t v : loop) centroid = centroid + P[v];
-    centroid = centroid / double(loop.size());
     const auto first = uint32_t(cap_points.size()), m = uint32_t(loop.size());
     for (const uint32_t v : loop) cap_points.push_back(P[v]);
-    cap_points.push_back(centroid);
+    cap_points.push_back(caps[k].centroid);
     for (uint32_t i = 0; i < m; ++i) {
       fans.push_back({first + (i + 1) % m, first + i, first + m});
       fan_piece.push_back(piece[root[loop[0]]]);
@@ -337,9 +349,12 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
     }
   if (flat) open_flat_pieces(P, T, root, vol, area, open, *flat);
   if (!turn) return 0;
+  const std::vector<std::vector<uint32_t>> none;
+  const auto& loops = nearly && nearly->loops ? *nearly->loops : none;
+  const std::vector<Cap> caps = caps_of(P, loops);
   std::vector<uint32_t> capped;
   if (capping) {
-    capped = close_nearly_closed_pieces(P, *nearly->loops, root, area, vol, open);
+    capped = close_nearly_closed_pieces(P, loops, caps, root, area, vol, open);
     nearly->pieces = capped.size();
   }
   // A closed component inside another faces into the cavity it bounds, one inside that
@@ -392,25 +407,16 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
     // into its cavity, rightly), or closed but for small openings (by their caps' area alone).
     // Not where flat pieces were opened (their outlines are in no loop).
     if (!flat || flat->pieces == 0) {
-      const std::vector<std::vector<uint32_t>> none;
-      const auto& loops = nearly && nearly->loops ? *nearly->loops : none;
       std::vector<double> cap_area(pieces, 0.0);
-      for (const std::vector<uint32_t>& loop : loops) {
-        if (loop.size() < 3) continue;
-        Vec3 centroid{};
-        for (const uint32_t v : loop) centroid = centroid + P[v];
-        centroid = centroid / double(loop.size());
-        for (size_t i = 0; i < loop.size(); ++i)
-          cap_area[piece[root[loop[0]]]] +=
-              0.5 * norm(cross(P[loop[i]] - centroid, P[loop[(i + 1) % loop.size()]] - centroid));
-      }
+      for (size_t k = 0; k < loops.size(); ++k)
+        if (!loops[k].empty()) cap_area[piece[root[loops[k][0]]]] += caps[k].area;
       std::vector<uint8_t> judge(pieces, 0);
       for (size_t v = 0; v < n; ++v) {
         const uint32_t k = piece[v];
         if (k != UINT32_MAX)
           judge[k] = area[v] > 0 && depth[k] == 0 && (!open[v] || cap_area[k] <= kMaxCapShare * area[v]);
       }
-      judge_folds(P, T, root, piece, piece_of, judge, loops, *folds);
+      judge_folds(P, T, root, piece, piece_of, judge, loops, caps, *folds);
     }
   }
   return flipped.load();

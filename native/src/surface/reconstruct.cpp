@@ -150,7 +150,6 @@ SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options
     std::vector<Triangle> candidates = std::move(raw.triangles);
 
     tracker.check();
-    t0 = Clock::now();
     detail::BuilderOptions bo;
     if (options.has_viewpoint) {
       if (!is_finite(options.viewpoint)) throw Error(Status::InvalidArgument, "the viewpoint is not finite");
@@ -276,7 +275,6 @@ SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options
     }
     st.holes_left_edges = std::move(bs.holes_left_edges);
     tracker.check();
-    t0 = Clock::now();
     // Back to the input's indices.
     result.mesh.normals.resize(n);
     detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
