@@ -39,9 +39,7 @@ size_t number_edges(const uint32_t* triangles, size_t m, size_t n, int threads, 
   if (m >= (size_t(1) << 30)) throw Error(Status::LimitExceeded, "more than 2^30 triangles");
   size_t count = 0;
   with_threads(threads, [&] {
-    // Per lower vertex v, its corners' slots [start[v], start[v + 1]); counted, checking
-    // every triangle on the way (the first bad one is named).
-    std::vector<uint32_t> start(n + 1, 0);
+    // Every triangle checked first (the first bad one is named).
     std::atomic<size_t> first_bad{std::numeric_limits<size_t>::max()};
     parallel_blocks(m, 8192, [&](size_t b, size_t e) {
       for (size_t t = b; t < e; ++t) {
@@ -52,23 +50,41 @@ size_t number_edges(const uint32_t* triangles, size_t m, size_t n, int threads, 
           }
           return;  // the rest of the block can only be later
         }
-        for (int k = 0; k < 3; ++k)
-          std::atomic_ref<uint32_t>(start[std::min(T[k], T[(k + 1) % 3]) + 1]).fetch_add(1, std::memory_order_relaxed);
       }
     });
     if (const size_t t = first_bad.load(); t < m) bad_triangle(triangles + 3 * t, t, n);
+    // Per lower vertex v, its corners' slots [start[v], start[v + 1]). The vertices are cut
+    // into one range per thread, and each range's task reads every triangle but counts and
+    // places only the corners whose edge's lower vertex is its own: no two tasks write the
+    // same slot, so no atomic increments (a locked add per corner, twice, was most of the
+    // time; reading the triangles again per range is cheap beside it).
+    const size_t ranges = std::clamp<size_t>(size_t(tbb::this_task_arena::max_concurrency()), 1, 64);
+    const auto range_start = [&](size_t r) { return uint32_t(n * r / ranges); };
+    const auto each_corner_of = [&](size_t r, auto&& fn) {
+      const uint32_t lo = range_start(r), hi = range_start(r + 1);
+      for (size_t t = 0; t < m; ++t) {
+        const uint32_t* T = triangles + 3 * t;
+        for (size_t k = 0; k < 3; ++k) {
+          const uint32_t x = T[k], y = T[k == 2 ? 0 : k + 1];
+          const uint32_t lower = std::min(x, y);
+          if (lower >= lo && lower < hi) fn(lower, std::max(x, y), 3 * t + k);
+        }
+      }
+    };
+    std::vector<uint32_t> start(n + 1, 0);
+    parallel_blocks(ranges, 1, [&](size_t rb, size_t re) {
+      for (size_t r = rb; r < re; ++r) each_corner_of(r, [&](uint32_t lower, uint32_t, size_t) { ++start[lower + 1]; });
+    });
     for (size_t v = 0; v < n; ++v) start[v + 1] += start[v];
     // (higher vertex << 32 | corner) per slot; 3 m < 2^32.
     std::vector<uint64_t> pairs(3 * m);
     {
       std::vector<uint32_t> cursor(start.begin(), start.end() - 1);
-      parallel_blocks(m, 8192, [&](size_t b, size_t e) {
-        for (size_t t = b; t < e; ++t)
-          for (int k = 0; k < 3; ++k) {
-            const uint32_t x = triangles[3 * t + size_t(k)], y = triangles[3 * t + size_t((k + 1) % 3)];
-            const uint32_t slot = std::atomic_ref<uint32_t>(cursor[std::min(x, y)]).fetch_add(1, std::memory_order_relaxed);
-            pairs[slot] = (uint64_t(std::max(x, y)) << 32) | uint64_t(3 * t + size_t(k));
-          }
+      parallel_blocks(ranges, 1, [&](size_t rb, size_t re) {
+        for (size_t r = rb; r < re; ++r)
+          each_corner_of(r, [&](uint32_t lower, uint32_t higher, size_t c) {
+            pairs[cursor[lower]++] = (uint64_t(higher) << 32) | uint64_t(c);
+          });
       });
     }
     // Fixed blocks of vertices: each sorts its vertices' pairs and counts its edges, then,

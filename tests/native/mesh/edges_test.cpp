@@ -48,9 +48,17 @@ TEST(MeshEdges, NonManifoldTrianglesAndAnyThreadCount) {
   const TriangulateResult raw = triangulate_raw(fibonacci_sphere(3000));
   const MeshEdges one = mesh_edges(raw.mesh.triangles, raw.mesh.positions.size(), 1);
   expect_edges_of(raw.mesh.triangles, one);
-  const MeshEdges all = mesh_edges(raw.mesh.triangles, raw.mesh.positions.size(), 0);
-  EXPECT_EQ(all.edges, one.edges);
-  EXPECT_EQ(all.corner_edges, one.corner_edges);
+  // The vertices are cut into one range per thread, each range's corners placed by its own
+  // task: every count gives the brute-force edges, the same numbers as one thread.
+  for (int threads : {0, 2, 3}) {
+    const MeshEdges some = mesh_edges(raw.mesh.triangles, raw.mesh.positions.size(), threads);
+    expect_edges_of(raw.mesh.triangles, some);
+    EXPECT_EQ(some.edges, one.edges);
+    EXPECT_EQ(some.corner_edges, one.corner_edges);
+  }
+  // Fewer vertices than threads: some ranges hold none.
+  const std::vector<Triangle> one_triangle{{2, 0, 1}};
+  expect_edges_of(one_triangle, mesh_edges(one_triangle, 3, 0));
   EXPECT_TRUE(mesh_edges({}, 5).edges.empty());
 }
 
