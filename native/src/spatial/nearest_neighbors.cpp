@@ -83,21 +83,6 @@ void gather_column(const NeighborGrid& grid, const Columns& cols, uint32_t col, 
   }
 }
 
-/// Appends the points of the cells whose coordinates differ from `cc` by at most `ring` along
-/// every axis and by more than `inner` along some (inner = -1: all of them): those within
-/// `near` of `cc` (Chebyshev) to `first`, the others to `rest`. Columns in increasing (x, y).
-void gather(const NeighborGrid& grid, const Columns& cols, const NeighborGrid::CellCoord& cc, int32_t ring,
-            int32_t inner, int32_t near, Ranges& first, Ranges& rest) {
-  constexpr int32_t kTop = NeighborGrid::kMaxCellsPerAxis + 3;
-  for (int32_t x = std::max(cc[0] - ring, 0); x <= std::min(cc[0] + ring, kTop); ++x)
-    for (int32_t y = std::max(cc[1] - ring, 0); y <= std::min(cc[1] + ring, kTop); ++y) {
-      const uint32_t col = find_key(cols.table, cols.mask, cols.keys, column_key(x, y));
-      if (col == kNoKey) continue;
-      const int32_t dxy = std::max(std::abs(x - cc[0]), std::abs(y - cc[1]));
-      gather_column(grid, cols, col, dxy, cc, ring, inner, near, first, rest);
-    }
-}
-
 /// The first gather (ring 2, every cell) for the cells of one block taken in increasing
 /// order: the same columns, in the same order, as gather, found without a hash look-up. The
 /// cells' columns never decrease, so for each x offset a cursor into the sorted column keys
@@ -133,6 +118,83 @@ class RingTwoColumns {
   bool started_ = false;
 };
 
+/// The rings beyond the second around one cell, a shell at a time, without a hash look-up per
+/// column: the columns found so far (each with its distance from the cell in x, y) and, per
+/// row x of the square, the run of the sorted column keys its columns span, which each ring
+/// widens by at most one key at each end. Where a point's neighbours are far in cells (the
+/// sparse far field of a lidar sweep, a cloud whose density varies by orders of magnitude)
+/// the search goes out to kMaxNeighborRing, and looking up all (2 r + 1)^2 columns of every
+/// ring was most of its time.
+class Shells {
+ public:
+  Shells(const NeighborGrid& grid, const Columns& cols) : grid_(grid), cols_(cols) {}
+
+  /// Starts the walk around cell coordinates cc, whose rings 0 to 2 were gathered.
+  void start(const NeighborGrid::CellCoord& cc) {
+    cc_ = cc;
+    ring_ = 2;
+    known_.clear();
+    rows_.clear();
+    first_x_ = cc[0] - ring_;
+    for (int32_t x = first_x_; x <= cc[0] + ring_; ++x) rows_.push_back(row(x, ring_));
+    for (size_t i = 0; i < rows_.size(); ++i)
+      for (uint32_t col = rows_[i].first; col < rows_[i].second; ++col) known_.push_back({col, dxy(col)});
+  }
+
+  /// Appends the points of the cells at Chebyshev distance ring_ + 1 from the cell (the next
+  /// shell) to `out`, and returns that ring.
+  int32_t next(Ranges& out) {
+    const int32_t r = ++ring_;
+    constexpr int32_t kTop = NeighborGrid::kMaxCellsPerAxis + 3;
+    // The columns known so far: their cells r away along z.
+    for (const auto& [col, d] : known_) gather_column(grid_, cols_, col, d, cc_, r, r - 1, r, out, out);
+    const size_t old_known = known_.size();
+    // The rows so far: one column more at each end where the keys there are (x, y -/+ r).
+    const auto& keys = cols_.keys;
+    for (size_t i = 0; i < rows_.size(); ++i) {
+      const int32_t x = first_x_ + int32_t(i);
+      if (x < 0 || x > kTop) continue;
+      auto& [lo, hi] = rows_[i];
+      if (cc_[1] - r >= 0 && lo > 0 && keys[lo - 1] == column_key(x, cc_[1] - r)) known_.push_back({--lo, r});
+      if (cc_[1] + r <= kTop && hi < keys.size() && keys[hi] == column_key(x, cc_[1] + r)) known_.push_back({hi++, r});
+    }
+    // Two new rows, x -/+ r.
+    rows_.insert(rows_.begin(), row(cc_[0] - r, r));
+    rows_.push_back(row(cc_[0] + r, r));
+    first_x_ = cc_[0] - r;
+    for (const auto& [lo, hi] : {rows_.front(), rows_.back()})
+      for (uint32_t col = lo; col < hi; ++col) known_.push_back({col, r});
+    // The new columns: every cell of theirs within r along z.
+    for (size_t i = old_known; i < known_.size(); ++i)
+      gather_column(grid_, cols_, known_[i].first, r, cc_, r, r - 1, r, out, out);
+    return r;
+  }
+
+ private:
+  /// The run of column keys (x, y) with |y - cc.y| <= r (none for x outside the grid's range).
+  std::pair<uint32_t, uint32_t> row(int32_t x, int32_t r) const {
+    constexpr int32_t kTop = NeighborGrid::kMaxCellsPerAxis + 3;
+    const auto& keys = cols_.keys;
+    if (x < 0 || x > kTop) return {0, 0};
+    const auto lo = std::lower_bound(keys.begin(), keys.end(), column_key(x, std::max(cc_[1] - r, 0)));
+    const auto hi = std::upper_bound(lo, keys.end(), column_key(x, std::min(cc_[1] + r, kTop)));
+    return {uint32_t(lo - keys.begin()), uint32_t(hi - keys.begin())};
+  }
+  int32_t dxy(uint32_t col) const {
+    const uint64_t key = cols_.keys[col];
+    const auto x = int32_t(key >> 21), y = int32_t(key & 0x1fffff);
+    return std::max(std::abs(x - cc_[0]), std::abs(y - cc_[1]));
+  }
+
+  const NeighborGrid& grid_;
+  const Columns& cols_;
+  NeighborGrid::CellCoord cc_{};
+  int32_t ring_ = 2;
+  int32_t first_x_ = 0;                                 // the row of rows_[0]
+  std::vector<std::pair<uint32_t, uint32_t>> rows_;     // per row, its run of column keys
+  std::vector<std::pair<uint32_t, int32_t>> known_;     // columns found, with their distance in x, y
+};
+
 }  // namespace
 
 std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, int k, ProgressTracker& tracker) {
@@ -150,6 +212,7 @@ std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, int k, Progres
     uint32_t best_t[64];
     double guess = 0;  // the last point's k-th nearest squared distance (0: none yet)
     RingTwoColumns ring_two(cols);
+    Shells shells(grid, cols);
     const Vec3* P = grid.sorted_points().data();
     for (size_t c = cb; c < ce; ++c) {
       const auto cc = grid.cell_coord(uint32_t(c));
@@ -161,8 +224,13 @@ std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, int k, Progres
       // settle early and the farther points are mostly turned away by one comparison).
       ring_two.gather(grid, cc, 1, block, rest);
       block.insert(block.end(), rest.begin(), rest.end());
+      bool walking = false;
       for (int32_t ring = 2; !open.empty(); ++ring) {
-        if (ring > 2) gather(grid, cols, cc, ring, ring - 1, ring, block, block);
+        if (ring > 2) {
+          if (!walking) shells.start(cc);
+          walking = true;
+          shells.next(block);
+        }
         // After ring r the block holds every point within r h of any of the cell's points.
         const double reach2 = double(ring) * h * double(ring) * h;
         size_t still = 0;

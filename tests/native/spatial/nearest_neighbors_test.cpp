@@ -94,6 +94,26 @@ TEST(NearestNeighbors, SkipDuplicatesAndKeepWhatFarPointsReach) {
   expect_reference({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, 0, 1}}, 0.5, 16);
 }
 
+TEST(NearestNeighbors, MatchTheReferenceWhereTheDensityVariesByOrdersOfMagnitude) {
+  // A spinning lidar's ground: rings of points dense along each ring, rings farther apart
+  // the farther out, so that far points find their neighbours many cells away (the search
+  // walks shells of cells out to the last ring); and a few posts standing on it (columns of
+  // cells found first at one ring and reached along z at later ones).
+  std::vector<Vec3> points;
+  for (int ring = 0; ring < 14; ++ring) {
+    const double radius = 1.0 + 0.08 * double(ring * ring);
+    const int count = 160;
+    for (int i = 0; i < count; ++i) {
+      const double a = 2 * M_PI * double(i) / count + 0.01 * ring;
+      points.push_back({radius * std::cos(a), radius * std::sin(a), 0.002 * double(i % 3)});
+    }
+  }
+  for (int post = 0; post < 6; ++post)
+    for (int i = 0; i < 25; ++i) points.push_back({-2.0 + 0.8 * post, 0.3 * post, 0.05 * i});
+  expect_reference(points, 0.06, 16);
+  expect_reference(points, 0.15, 8);
+}
+
 TEST(NearestNeighbors, RejectABadCount) {
   const std::vector<Vec3> points{{0, 0, 0}, {1, 0, 0}};
   const NeighborGrid grid(points.data(), points.size(), 1.0);

@@ -99,6 +99,47 @@ TEST(NeighborGrid, BoxesOfEveryShapeMatchALookUpPerCell) {
   }
 }
 
+TEST(NeighborGrid, BoxesWiderThanTheOccupiedCellsMatchAScanOfAllCells) {
+  // Boxes with more cells than the grid has occupied (a ball as wide as a sparse cloud's
+  // neighbourhoods) skip what lies outside them through the sorted keys: on a cloud of
+  // clusters far apart (x ranges with no cell, rows and columns beyond the box) and one flat
+  // as a scan of the ground, against every occupied cell filtered by its coordinates.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Vec3> clusters, ground;
+  for (int i = 0; i < 3000; ++i) {
+    const double cx = double(i % 4) * 7.0, cy = double((i / 4) % 3) * 5.0;
+    clusters.push_back({cx + u(rng), cy + u(rng), u(rng) * 3.0});
+    ground.push_back({40 * u(rng), 40 * u(rng), 0.01 * u(rng)});
+  }
+  for (const auto* points : {&clusters, &ground}) {
+    const NeighborGrid grid(points->data(), points->size(), 0.2);
+    size_t differ = 0, cells = 0, wide = 0;
+    for (int q = 0; q < 400; ++q) {
+      const auto cc = grid.cell_coord(uint32_t(rng() % grid.cell_count()));
+      NeighborGrid::CellCoord lo, hi;
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = cc[a] - int32_t(rng() % 120);
+        hi[a] = cc[a] + int32_t(rng() % 120);
+      }
+      const double box = double(hi[0] - lo[0] + 1) * double(hi[1] - lo[1] + 1) * double(hi[2] - lo[2] + 1);
+      wide += box > double(grid.cell_count());
+      std::vector<uint32_t> want, got;
+      for (uint32_t c = 0; c < grid.cell_count(); ++c) {
+        const auto k = grid.cell_coord(c);
+        if (k[0] >= lo[0] && k[0] <= hi[0] && k[1] >= lo[1] && k[1] <= hi[1] && k[2] >= lo[2] && k[2] <= hi[2])
+          want.push_back(c);
+      }
+      grid.for_each_cell_in(lo, hi, [&](uint32_t b) { got.push_back(b); });
+      differ += got != want;
+      cells += want.size();
+    }
+    EXPECT_EQ(differ, 0u);
+    EXPECT_GT(wide, 300u);     // most boxes are wider than the occupied cells
+    EXPECT_GT(cells, 20000u);  // and hold some
+  }
+}
+
 TEST(NeighborGrid, SortedLayoutIsAPermutationGroupedByCell) {
   const PointCloud c = test::random_cloud(500, 3);
   NeighborGrid grid(c.positions.data(), c.size(), 0.1);

@@ -95,8 +95,8 @@ class PM_EXPORT NeighborGrid {
   int neighbor_cells(uint32_t c, uint32_t out[27]) const;
 
   /// Call f(c) for every occupied cell c whose coordinate lies in the box [lo, hi], in
-  /// increasing cell order (= lexicographic coordinate order). Cost: the box's cells or the
-  /// occupied cells, whichever are fewer. (A box much larger than the cells, as a
+  /// increasing cell order (= lexicographic coordinate order). Cost: about the box's cells or
+  /// the occupied cells in it, whichever are fewer. (A box much larger than the cells, as a
   /// polygonization block of cell size h >> the particles' radius, looked up every empty cell
   /// of it: 3.8e8 lookups per block, found by fuzzing.)
   template <class F>
@@ -107,33 +107,10 @@ class PM_EXPORT NeighborGrid {
       if (lo[a] > hi[a]) return;
     }
     const double box = double(hi[0] - lo[0] + 1) * double(hi[1] - lo[1] + 1) * double(hi[2] - lo[2] + 1);
-    const auto begin = cell_keys_.begin();
-    if (box <= double(cell_keys_.size()) && hi[2] - lo[2] >= 3) {
-      // A tall box (a point's surroundings to a few cells: on a surface most of its cells
-      // are empty): each column (x, y) of it is a run of the sorted keys, found from the last
-      // one by a galloping search, where looking every cell up missed on most of them.
-      auto it = begin;
-      for (int32_t x = lo[0]; x <= hi[0]; ++x) {
-        it = gallop(it, pack({x, lo[1], lo[2]}));
-        const uint64_t last = pack({x, hi[1], hi[2]});
-        while (it != cell_keys_.end() && *it <= last) {
-          const CellCoord cc = unpack(*it);
-          if (cc[2] < lo[2]) {
-            it = gallop(it, pack({x, cc[1], lo[2]}));
-          } else if (cc[2] > hi[2]) {
-            if (cc[1] == hi[1]) break;
-            it = gallop(it, pack({x, cc[1] + 1, lo[2]}));
-          } else {
-            f(uint32_t(it - begin));
-            ++it;
-          }
-        }
-      }
-      return;
-    }
-    if (box <= double(cell_keys_.size())) {
-      // Along z a run of occupied cells is a run of the sorted keys: one look-up per run (and
-      // the cell after a run is empty).
+    const auto begin = cell_keys_.begin(), end = cell_keys_.end();
+    if (box <= double(cell_keys_.size()) && hi[2] - lo[2] < 3) {
+      // A short box (a point's cell and its neighbours): along z a run of occupied cells is a
+      // run of the sorted keys, so one look-up per run (and the cell after a run is empty).
       for (int32_t x = lo[0]; x <= hi[0]; ++x)
         for (int32_t y = lo[1]; y <= hi[1]; ++y)
           for (int32_t z = lo[2]; z <= hi[2]; ++z) {
@@ -145,11 +122,31 @@ class PM_EXPORT NeighborGrid {
           }
       return;
     }
-    // Keys are sorted: the cells with x in [lo.x, hi.x] are one run of them.
-    for (auto it = std::lower_bound(begin, cell_keys_.end(), pack({lo[0], 0, 0}));
-         it != cell_keys_.end() && int32_t(*it >> 42) <= hi[0]; ++it) {
+    // Any other box (a point's surroundings to a few cells, where on a surface most of its
+    // cells are empty; a ball as wide as the cloud's sparse parts need): the keys are walked
+    // in order from the box's first, each stretch outside it (a column's cells below or above
+    // it, a row beyond it, an x with no cells) skipped by a galloping search to the next key
+    // that can be inside. Looking every cell up missed on most of them, and a scan of all the
+    // keys with x in range read the cells far outside the box in y.
+    auto it = gallop(begin, pack(lo));
+    while (it != end) {
       const CellCoord cc = unpack(*it);
-      if (cc[1] >= lo[1] && cc[1] <= hi[1] && cc[2] >= lo[2] && cc[2] <= hi[2]) f(uint32_t(it - begin));
+      if (cc[0] > hi[0]) return;
+      if (cc[1] < lo[1]) {
+        it = gallop(it, pack({cc[0], lo[1], lo[2]}));
+      } else if (cc[1] > hi[1]) {
+        if (cc[0] == hi[0]) return;
+        it = gallop(it, pack({cc[0] + 1, lo[1], lo[2]}));
+      } else if (cc[2] < lo[2]) {
+        it = gallop(it, pack({cc[0], cc[1], lo[2]}));
+      } else if (cc[2] > hi[2]) {
+        if (cc[1] < hi[1]) it = gallop(it, pack({cc[0], cc[1] + 1, lo[2]}));
+        else if (cc[0] < hi[0]) it = gallop(it, pack({cc[0] + 1, lo[1], lo[2]}));
+        else return;
+      } else {
+        f(uint32_t(it - begin));
+        ++it;
+      }
     }
   }
 
