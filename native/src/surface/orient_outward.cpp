@@ -405,16 +405,20 @@ size_t orient_closed_components_outward(const std::vector<Vec3>& P, std::vector<
     folds->pieces = pieces;
     // The pieces to look for folds in: closed and inside no other (one inside another faces
     // into its cavity, rightly), or closed but for small openings (by their caps' area alone).
-    // Not where flat pieces were opened (their outlines are in no loop).
+    // Not where flat pieces were opened (their outlines are in no loop), nor in pieces of
+    // fewer than kMinFoldTriangles triangles.
     if (!flat || flat->pieces == 0) {
       std::vector<double> cap_area(pieces, 0.0);
       for (size_t k = 0; k < loops.size(); ++k)
         if (!loops[k].empty()) cap_area[piece[root[loops[k][0]]]] += caps[k].area;
+      std::vector<uint32_t> triangles(pieces, 0);
+      for (const uint32_t k : piece_of) ++triangles[k];
       std::vector<uint8_t> judge(pieces, 0);
       for (size_t v = 0; v < n; ++v) {
         const uint32_t k = piece[v];
         if (k != UINT32_MAX)
-          judge[k] = area[v] > 0 && depth[k] == 0 && (!open[v] || cap_area[k] <= kMaxCapShare * area[v]);
+          judge[k] = area[v] > 0 && depth[k] == 0 && triangles[k] >= kMinFoldTriangles &&
+                     (!open[v] || cap_area[k] <= kMaxCapShare * area[v]);
       }
       judge_folds(P, T, root, piece, piece_of, judge, loops, caps, *folds);
     }

@@ -51,15 +51,19 @@ struct NearlyClosed {
   size_t turned = 0;     ///< out: of those, turned
 };
 /// With `folds` given (and turning on), after turning: which triangles face into the solid
-/// their piece bounds, for the pieces closed (not inside another) or closed but for small
-/// openings (their loops' caps, as NearlyClosed caps them, add at most kMaxCapShare of their
+/// their piece bounds, for the pieces of at least kMinFoldTriangles triangles closed (not
+/// inside another) or closed but for small openings (their loops' caps, as NearlyClosed caps them, add at most kMaxCapShare of their
 /// area; `nearly`'s loops): the ray from just off a triangle's centre along its normal,
 /// straight up, crosses the piece and its caps an odd number of times (exact for a closed
 /// surface, whatever the ray). A consistently wound piece can still face inward over part of
 /// itself: where the normals' spanning tree crossed between the two sides of a thin part,
 /// the surface folds over from one side's winding to the other's. Every k-th triangle is
 /// judged first (about `samples` of them; 0: none); only where more than `share` of their
-/// area faces inward is every triangle judged.
+/// area faces inward is every triangle judged. Smaller pieces are not judged: the closed
+/// pieces of a few triangles that a noisy scan leaves (hundreds on a lidar sweep's near field,
+/// bench/RESULTS.md) bound no solid worth the name, and judging them started a second build
+/// of the whole surface that was never kept.
+constexpr uint32_t kMinFoldTriangles = 64;
 struct Folds {
   size_t samples = 2048;           ///< in: triangles judged first
   double share = 0.02;             ///< in: above this share of their area inward, all judged
