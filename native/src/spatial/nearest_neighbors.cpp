@@ -7,7 +7,6 @@
 #include <utility>
 #include <vector>
 
-#include "core/hashing.h"
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
 
@@ -16,8 +15,9 @@ namespace PM_NAMESPACE::detail {
 // Written over the library's own grid rather than with a k-d tree (nanoflann, PCL's FLANN): the
 // grid is the neighbour structure of every other stage, its sorted order breaks ties, and on
 // surface samplings the 5^3 cells around a point's cell hold its nearest, gathered once for all
-// the cell's points. The cells are found by column (x, y): one hash look-up per column and a
-// run of its cells, where a look-up per cell cost 125 random reads per cell.
+// the cell's points. The cells are found by column (x, y), each a run of the grid's cells, and
+// the columns through their sorted keys, walked forward (a look-up per cell cost 125 random
+// reads per cell; one per column, every column of every ring, was most of a far point's search).
 
 namespace {
 
@@ -28,8 +28,6 @@ constexpr uint64_t column_key(int32_t x, int32_t y) { return (uint64_t(uint32_t(
 struct Columns {
   std::vector<uint64_t> keys;    // column_key per column, increasing
   std::vector<uint32_t> start;   // first cell of each column; start.back() = cell count
-  std::vector<uint32_t> table;   // keys' hash table (build_key_table)
-  uint64_t mask = 0;
 
   explicit Columns(const NeighborGrid& grid) {
     const auto cells = uint32_t(grid.cell_count());
@@ -42,7 +40,6 @@ struct Columns {
       }
     }
     start.push_back(cells);
-    mask = build_key_table(keys, table);
   }
 };
 
@@ -83,8 +80,8 @@ void gather_column(const NeighborGrid& grid, const Columns& cols, uint32_t col, 
   }
 }
 
-/// The first gather (ring 2, every cell) for the cells of one block taken in increasing
-/// order: the same columns, in the same order, as gather, found without a hash look-up. The
+/// The first gather (rings 0 to 2, every cell: the columns within 2 in x and y, in increasing
+/// order) for the cells of one block taken in increasing order, found without a hash look-up. The
 /// cells' columns never decrease, so for each x offset a cursor into the sorted column keys
 /// only moves forward, and the columns (x + dx, y - 2 .. y + 2) are the keys it passes over.
 class RingTwoColumns {
