@@ -31,7 +31,7 @@ namespace {
 // get edges, and Blender's own edge pass was most of the time of writing a mesh into it
 // (bench/RESULTS.md). Each edge belongs to its lower vertex: the corners are bucketed by
 // their edge's lower vertex as (higher vertex, corner) pairs, each vertex's few pairs are
-// sorted (so the order of the parallel fill is gone), and one walk over the sorted pairs
+// sorted (its corners on one edge next to each other), and one walk over the sorted pairs
 // numbers the edges and gives every corner its edge.
 size_t number_edges(const uint32_t* triangles, size_t m, size_t n, int threads, uint32_t* corner_edges,
                     const std::function<uint32_t*(size_t)>& edges_at) {
