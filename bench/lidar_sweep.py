@@ -8,8 +8,8 @@ farther apart the farther out), for timing the surface pipeline on it beside the
 
 The sensor stands 2 m above the ground; its beams are spaced evenly from 25 to 1 degrees
 below the horizon, fired every --step degrees of azimuth; returns beyond 120 m are dropped
-and each coordinate gets Gaussian noise of --noise metres (a fixed seed). Written by the
-library's own writer (.ply, .xyz, or any point format it writes).
+and each coordinate gets Gaussian noise of --noise metres (a fixed seed). Written as text
+for .xyz, else by the library's mesh writer (.ply, .obj, .vtk, .vtu, .vtp), points only.
 """
 import argparse
 import os
@@ -43,7 +43,10 @@ def main():
     if args.beams < 2 or not args.step > 0 or not args.noise >= 0:
         parser.error("--beams must be at least 2, --step above 0 and --noise at least 0")
     points = sweep(args.beams, args.step, args.noise)
-    pm.write_mesh(pm.Mesh(np.ascontiguousarray(points), np.zeros((0, 3), dtype=np.int32)), args.output)
+    if args.output.lower().endswith(".xyz"):
+        np.savetxt(args.output, points, fmt="%.9g")
+    else:
+        pm.write_mesh(pm.Mesh(np.ascontiguousarray(points), np.zeros((0, 3), dtype=np.int32)), args.output)
     print(f"{len(points)} points -> {args.output}")
 
 
