@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -190,6 +191,124 @@ std::vector<Part> far_apart_parts(const Vec3* points, size_t n, ProgressTracker&
   return parts;
 }
 
+/// Points asked about in a cell above which its neighbourhood is searched on a finer grid of
+/// its own.
+constexpr size_t kCrowdedCell = 64;
+/// Finer grids within finer grids at most (a cluster within a cluster within a cloud).
+constexpr int kMaxFinerGrids = 3;
+/// Rings of cells searched at most around a point (beyond, its distance is taken as infinite).
+constexpr int kMaxRing = 3;
+
+/// nn2[s], for each point s of `grid` that query[s] marks: the squared distance to its
+/// nearest other point (at a distance > 0), +inf when that lies farther than kMaxRing cells
+/// (such points are above the median unless the cells are far too small, which the caller
+/// detects). A cell holding more than kCrowdedCell points (a cluster far denser than the
+/// cells: a close-up scan merged into a wide one, a lidar's near field) would have each of its
+/// points measure every point of the 27 cells, n^2 over the cluster: the points of those cells'
+/// neighbourhoods are gridded again, finer (the occupancy grid of their own), and searched
+/// there, recursively; a distance found there within the cell size is the one the 27 cells
+/// give (every point within it lies in them, and they are all in the finer grid), else the
+/// point is searched here as the others.
+void nearest_squared(const NeighborGrid& grid, const std::vector<uint8_t>& query, std::vector<double>& nn2,
+                     ProgressTracker& tracker, int depth = 0) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  const double h = grid.cell_size();
+  const auto cells = uint32_t(grid.cell_count());
+  std::vector<uint8_t> found(grid.point_count(), 0);
+  if (depth < kMaxFinerGrids) {
+    // The crowded cells, and every cell around one (its neighbourhood's points).
+    std::vector<uint8_t> take(cells, 0);
+    bool any = false;
+    {
+      uint32_t around[27];
+      NeighborCellWalk walk(grid);
+      for (uint32_t c = 0; c < cells; ++c) {
+        if (grid.cell_end(c) - grid.cell_begin(c) <= kCrowdedCell) continue;
+        // Crowded by the points asked about (copies of one point are asked once).
+        size_t asked = 0;
+        for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) asked += query[s] != 0;
+        if (asked <= kCrowdedCell) continue;
+        any = true;
+        take[c] = 2;
+        const int na = walk.around(c, around);
+        for (int a = 0; a < na; ++a) take[around[a]] = std::max<uint8_t>(take[around[a]], 1);
+      }
+    }
+    if (any) {
+      std::vector<Vec3> points;
+      std::vector<uint32_t> from;  // per point of the finer grid's input, its sorted index here
+      std::vector<uint8_t> asked;  // and whether it is a query of a crowded cell, in the finer grid's order
+      for (uint32_t c = 0; c < cells; ++c)
+        if (take[c])
+          for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) {
+            points.push_back(grid.sorted_point(s));
+            from.push_back(s);
+            asked.push_back(take[c] == 2 && query[s]);
+          }
+      // (Copies of one point crowd a cell at any size: no finer grid holds them apart.)
+      bool crowded = false;
+      const std::optional<NeighborGrid> finer =
+          largest_side(points) > 0 ? std::optional<NeighborGrid>(occupancy_grid(points.data(), points.size(), tracker, crowded))
+                                   : std::nullopt;
+      if (finer && finer->cell_size() < h) {
+        const auto here = [&](uint32_t t) { return from[finer->original_index(t)]; };
+        std::vector<double> fine(finer->point_count(), kInf);
+        std::vector<uint8_t> asked_there(finer->point_count());
+        for (uint32_t t = 0; t < finer->point_count(); ++t) asked_there[t] = asked[finer->original_index(t)];
+        nearest_squared(*finer, asked_there, fine, tracker, depth + 1);
+        for (uint32_t t = 0; t < finer->point_count(); ++t)
+          if (asked_there[t] && fine[t] <= h * h) {
+            nn2[here(t)] = fine[t];
+            found[here(t)] = 1;
+          }
+      }
+    }
+  }
+  parallel_blocks(cells, 512, [&](size_t cb, size_t ce) {
+    if (tracker.cancelled()) return;
+    uint32_t around[27];
+    NeighborCellWalk walk(grid);
+    for (size_t c = cb; c < ce; ++c) {
+      bool any = false;
+      for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)) && !any; ++s)
+        any = query[s] && !found[s];
+      if (!any) {
+        if (depth == 0) tracker.tick(1);
+        continue;
+      }
+      const int na = walk.around(uint32_t(c), around);
+      for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) {
+        if (!query[s] || found[s]) continue;
+        const Vec3 p = grid.sorted_point(s);
+        double best = kInf;
+        for (int a = 0; a < na; ++a)
+          for (uint32_t t = grid.cell_begin(around[a]); t < grid.cell_end(around[a]); ++t) {
+            const double d2 = squared_distance(grid.sorted_point(t), p);
+            if (d2 > 0 && d2 < best) best = d2;
+          }
+        // Every point within h of p is in the 27 cells; beyond that, widen ring by ring.
+        const auto cc = grid.cell_coord(uint32_t(c));
+        for (int r = 2; best > double(r - 1) * h * double(r - 1) * h && r <= kMaxRing; ++r) {
+          for (int dx = -r; dx <= r; ++dx)
+            for (int dy = -r; dy <= r; ++dy)
+              for (int dz = -r; dz <= r; ++dz) {
+                if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != r) continue;
+                const uint32_t nc = grid.find_cell({cc[0] + dx, cc[1] + dy, cc[2] + dz});
+                if (nc == NeighborGrid::kNoCell) continue;
+                for (uint32_t t = grid.cell_begin(nc); t < grid.cell_end(nc); ++t) {
+                  const double d2 = squared_distance(grid.sorted_point(t), p);
+                  if (d2 > 0 && d2 < best) best = d2;
+                }
+              }
+        }
+        if (best > double(kMaxRing) * h * double(kMaxRing) * h) best = kInf;
+        nn2[s] = best;
+      }
+      if (depth == 0) tracker.tick(1);
+    }
+  });
+}
+
 }  // namespace
 
 namespace {
@@ -265,7 +384,6 @@ SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTrac
   }
 
   constexpr double kInf = std::numeric_limits<double>::infinity();
-  constexpr int kMaxRing = 3;
   for (int attempt = 0; attempt < 8; ++attempt) {
     tracker.check();
     if (attempt > 0)
@@ -295,58 +413,19 @@ SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTrac
     for (size_t g = 0; g < grids.size(); ++g) {
       const NeighborGrid& grid = grids[g];
       const std::vector<uint32_t>& rep = reps[g];
-      const double h = grid.cell_size();
       // The points whose distance counts: each distinct point once, or the sample.
       const auto counted = [&](uint32_t s) {
         const uint32_t i = grid.original_index(s);
         return stride == 1 ? rep[s] == s : (parts.empty() ? i : parts[g].original[i]) % stride == 0;
       };
       // nn2[s] = squared distance from sorted point s to its nearest distinct point, +inf when
-      // that is farther than kMaxRing cells (such points are above the median unless h is far
-      // too small, which the retry below detects).
-      std::vector<double> nn2(grid.point_count(), kInf);
-      parallel_blocks(grid.cell_count(), 512, [&](size_t cb, size_t ce) {
-        if (tracker.cancelled()) return;
-        uint32_t around[27];
-        NeighborCellWalk walk(grid);
-        for (size_t c = cb; c < ce; ++c) {
-          bool any = false;
-          for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)) && !any; ++s) any = counted(s);
-          if (!any) {
-            tracker.tick(1);
-            continue;
-          }
-          const int na = walk.around(uint32_t(c), around);
-          for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) {
-            if (!counted(s)) continue;
-            const Vec3 p = grid.sorted_point(s);
-            double best = kInf;
-            for (int a = 0; a < na; ++a)
-              for (uint32_t t = grid.cell_begin(around[a]); t < grid.cell_end(around[a]); ++t) {
-                const double d2 = squared_distance(grid.sorted_point(t), p);
-                if (d2 > 0 && d2 < best) best = d2;
-              }
-            // Every point within h of p is in the 27 cells; beyond that, widen ring by ring.
-            const auto cc = grid.cell_coord(uint32_t(c));
-            for (int r = 2; best > double(r - 1) * h * double(r - 1) * h && r <= kMaxRing; ++r) {
-              for (int dx = -r; dx <= r; ++dx)
-                for (int dy = -r; dy <= r; ++dy)
-                  for (int dz = -r; dz <= r; ++dz) {
-                    if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != r) continue;
-                    const uint32_t nc = grid.find_cell({cc[0] + dx, cc[1] + dy, cc[2] + dz});
-                    if (nc == NeighborGrid::kNoCell) continue;
-                    for (uint32_t t = grid.cell_begin(nc); t < grid.cell_end(nc); ++t) {
-                      const double d2 = squared_distance(grid.sorted_point(t), p);
-                      if (d2 > 0 && d2 < best) best = d2;
-                    }
-                  }
-            }
-            if (best > double(kMaxRing) * h * double(kMaxRing) * h) best = kInf;
-            nn2[s] = best;
-          }
-          tracker.tick(1);
-        }
+      // that is farther than kMaxRing cells (nearest_squared).
+      std::vector<uint8_t> query(grid.point_count());
+      parallel_blocks(grid.point_count(), 65536, [&](size_t b, size_t e) {
+        for (size_t s = b; s < e; ++s) query[s] = counted(uint32_t(s));
       });
+      std::vector<double> nn2(grid.point_count(), kInf);
+      nearest_squared(grid, query, nn2, tracker);
       tracker.check();
       for (size_t s = 0; s < nn2.size(); ++s)
         if (counted(uint32_t(s))) values.push_back(nn2[s]);

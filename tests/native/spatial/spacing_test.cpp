@@ -109,6 +109,39 @@ TEST(EstimateSpacing, ExactForClustersFarApart) {
   }
 }
 
+// Clusters far denser than the rest of the cloud (a close-up scan merged into a wide one, a
+// lidar's near field, a cluster within a cluster): their cells crowd, and their points are
+// searched on finer grids of their own, recursively. The median stays the brute-force one, with
+// exact copies and near copies (twins) among the crowded points, at any thread count.
+TEST(EstimateSpacing, ExactWhereClustersAreFarDenserThanTheRest) {
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  auto cube = [&](size_t n, Vec3 centre, double side, std::vector<Vec3>& out) {
+    for (size_t i = 0; i < n; ++i)
+      out.push_back(centre + Vec3{u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5} * side);
+  };
+  std::vector<Vec3> nested, ball, twinned;
+  cube(2500, {0.5, 0.5, 0.5}, 1.0, nested);
+  cube(3000, {0.3, 0.6, 0.2}, 1e-2, nested);   // 10^6 times as dense
+  cube(1500, {0.3, 0.6, 0.2}, 1e-5, nested);   // and 10^9 times within it
+  for (int i = 0; i < 200; ++i) nested.push_back(nested[size_t(2600 + i)]);  // exact copies
+  for (const Vec3& p : fibonacci_sphere(2500).positions) ball.push_back(p);
+  for (const Vec3& p : fibonacci_sphere(4000, 0.004, {0, 0, 1}).positions) ball.push_back(p);
+  cube(2000, {0, 0, 0}, 1.0, twinned);
+  for (size_t i = 0; i < 2500; ++i) {           // a dense cluster of near copies
+    const Vec3 p = Vec3{2, 2, 2} + Vec3{u(rng), u(rng), u(rng)} * 1e-3;
+    twinned.push_back(p);
+    twinned.push_back(p + Vec3{1e-9, 0, 0});
+  }
+  for (const auto* cloud : {&nested, &ball, &twinned}) {
+    const double expected = brute_force_median_nn(*cloud);
+    for (int threads : {1, 3}) {
+      const SpacingEstimate e = estimate_spacing(cloud->data(), cloud->size(), threads);
+      EXPECT_DOUBLE_EQ(e.spacing, expected) << cloud->size() << " points, " << threads << " threads";
+    }
+  }
+}
+
 TEST(EstimateSpacing, SurfaceSampleIsCloseToThePoissonRadius) {
   const PointCloud c = poisson_disk_sample(icosphere_mesh(5), 0.05, 3);
   const SpacingEstimate e = estimate_spacing(c.positions.data(), c.size());
