@@ -237,7 +237,7 @@ void nearest_squared(const NeighborGrid& grid, const std::vector<uint8_t>& query
     if (any) {
       std::vector<Vec3> points;
       std::vector<uint32_t> from;  // per point of the finer grid's input, its sorted index here
-      std::vector<uint8_t> asked;  // and whether it is a query of a crowded cell, in the finer grid's order
+      std::vector<uint8_t> asked;  // and whether it is asked about here and in a crowded cell
       for (uint32_t c = 0; c < cells; ++c)
         if (take[c])
           for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) {
