@@ -199,8 +199,8 @@ constexpr int kMaxFinerGrids = 3;
 /// Rings of cells searched at most around a point (beyond, its distance is taken as infinite).
 constexpr int kMaxRing = 3;
 
-/// nn2[s], for each point s of `grid` that query[s] marks: the squared distance to its
-/// nearest other point (at a distance > 0), +inf when that lies farther than kMaxRing cells
+/// nn2[s] (+inf on entry), for each point s of `grid` that query[s] marks: the squared distance
+/// to its nearest other point (at a distance > 0), +inf when that lies farther than kMaxRing cells
 /// (such points are above the median unless the cells are far too small, which the caller
 /// detects). A cell holding more than kCrowdedCell points (a cluster far denser than the
 /// cells: a close-up scan merged into a wide one, a lidar's near field) would have each of its
@@ -214,7 +214,8 @@ void nearest_squared(const NeighborGrid& grid, const std::vector<uint8_t>& query
   constexpr double kInf = std::numeric_limits<double>::infinity();
   const double h = grid.cell_size();
   const auto cells = uint32_t(grid.cell_count());
-  std::vector<uint8_t> found(grid.point_count(), 0);
+  // A point whose distance the finer grid found (within h: finite) is not searched here again.
+  const auto found = [&](uint32_t s) { return nn2[s] <= h * h; };
   if (depth < kMaxFinerGrids) {
     // The crowded cells, and every cell around one (its neighbourhood's points).
     std::vector<uint8_t> take(cells, 0);
@@ -257,10 +258,7 @@ void nearest_squared(const NeighborGrid& grid, const std::vector<uint8_t>& query
         for (uint32_t t = 0; t < finer->point_count(); ++t) asked_there[t] = asked[finer->original_index(t)];
         nearest_squared(*finer, asked_there, fine, tracker, depth + 1);
         for (uint32_t t = 0; t < finer->point_count(); ++t)
-          if (asked_there[t] && fine[t] <= h * h) {
-            nn2[here(t)] = fine[t];
-            found[here(t)] = 1;
-          }
+          if (asked_there[t] && fine[t] <= h * h) nn2[here(t)] = fine[t];
       }
     }
   }
@@ -271,14 +269,14 @@ void nearest_squared(const NeighborGrid& grid, const std::vector<uint8_t>& query
     for (size_t c = cb; c < ce; ++c) {
       bool any = false;
       for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)) && !any; ++s)
-        any = query[s] && !found[s];
+        any = query[s] && !found(s);
       if (!any) {
         if (depth == 0) tracker.tick(1);
         continue;
       }
       const int na = walk.around(uint32_t(c), around);
       for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) {
-        if (!query[s] || found[s]) continue;
+        if (!query[s] || found(s)) continue;
         const Vec3 p = grid.sorted_point(s);
         double best = kInf;
         for (int a = 0; a < na; ++a)
@@ -428,7 +426,7 @@ SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTrac
       nearest_squared(grid, query, nn2, tracker);
       tracker.check();
       for (size_t s = 0; s < nn2.size(); ++s)
-        if (counted(uint32_t(s))) values.push_back(nn2[s]);
+        if (query[s]) values.push_back(nn2[s]);
       if (stride == 1) find_twins(grid, rep, nn2, parts.empty() ? nullptr : &parts[g].original, twins);
     }
     values.insert(values.end(), outside, kInf);
