@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdlib>
 #include <utility>
@@ -20,6 +21,9 @@ namespace PM_NAMESPACE::detail {
 // reads per cell; one per column, every column of every ring, was most of a far point's search).
 
 namespace {
+
+/// A neighbour as (squared distance's bits << 32) | sorted index: ordered as (distance, index).
+__extension__ typedef unsigned __int128 Key;
 
 constexpr uint64_t column_key(int32_t x, int32_t y) { return (uint64_t(uint32_t(x)) << 21) | uint64_t(uint32_t(y)); }
 
@@ -205,7 +209,12 @@ std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, int k, Progres
     if (tracker.cancelled()) return;
     Ranges block, rest;  // the points of the cells within `ring` of the cell
     std::vector<uint32_t> open;  // the cell's points whose k nearest are not all found yet
-    double best_e2[64];
+    // The block's points by coordinate (and their sorted indices), and one point's squared
+    // distances to them: every point of the cell measures the whole block, in a loop the
+    // compiler turns into vector instructions, and then looks only at the few near enough.
+    std::vector<double> bx, by, bz, be;
+    std::vector<uint32_t> bt, near;
+    Key best[64];
     uint32_t best_t[64];
     double guess = 0;  // the last point's k-th nearest squared distance (0: none yet)
     RingTwoColumns ring_two(cols);
@@ -228,44 +237,63 @@ std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, int k, Progres
           walking = true;
           shells.next(block);
         }
+        size_t m = 0;
+        for (const auto& [tb, te] : block) m += te - tb;
+        bx.resize(m), by.resize(m), bz.resize(m), be.resize(m), bt.resize(m), near.resize(m);
+        m = 0;
+        for (const auto& [tb, te] : block)
+          for (uint32_t t = tb; t < te; ++t, ++m) bx[m] = P[t].x, by[m] = P[t].y, bz[m] = P[t].z, bt[m] = t;
         // After ring r the block holds every point within r h of any of the cell's points.
         const double reach2 = double(ring) * h * double(ring) * h;
         size_t still = 0;
         for (uint32_t s : open) {
           const Vec3 p = P[s];
-          // The k smallest (distance, index) among the block's points at a distance > 0, kept
-          // sorted; and how many lie within the rings' reach. When k do, the k smallest are
-          // all within it, and every point within it is in the block: they are the k nearest.
-          // Kept first only among the points within a little over the last point's k-th
-          // nearest (neighbours are spaced alike), so that most of the block is turned away by
-          // one comparison; when fewer than k lie that near, again with no bound.
-          size_t count = 0, within = 0;
-          for (double bound = guess > 0 ? 1.3 * guess : INFINITY;; bound = INFINITY) {
-            count = within = 0;
-            for (const auto& [tb, te] : block)
-              for (uint32_t t = tb; t < te; ++t) {
-                const double e = squared_distance(P[t], p);
-                if (!(e > 0)) continue;
-                within += e <= reach2;
-                if (e > bound) continue;
-                size_t pos;
-                if (count < K) {
-                  pos = count++;
-                } else {
-                  if (e > best_e2[K - 1] || (e == best_e2[K - 1] && t > best_t[K - 1])) continue;
-                  pos = K - 1;
-                }
-                while (pos > 0 && (e < best_e2[pos - 1] || (e == best_e2[pos - 1] && t < best_t[pos - 1]))) {
-                  best_e2[pos] = best_e2[pos - 1];
-                  best_t[pos] = best_t[pos - 1];
-                  --pos;
-                }
-                best_e2[pos] = e;
-                best_t[pos] = t;
+          // Each distance as squared_distance() takes it, and how many lie within the rings'
+          // reach (at a distance > 0: not the point itself, nor a copy of it). When k do, the
+          // k smallest (distance, index) are all within it, and every point within it is in
+          // the block: they are the k nearest.
+          // (Counted in a double, which the compiler keeps in vector lanes; exact below 2^53.)
+          double within_lanes = 0;
+          {
+            const double *x = bx.data(), *y = by.data(), *z = bz.data();
+            double* __restrict e = be.data();
+            for (size_t i = 0; i < m; ++i) {
+              const double dx = x[i] - p.x, dy = y[i] - p.y, dz = z[i] - p.z;
+              const double d2 = dx * dx + dy * dy + dz * dz;
+              e[i] = d2;
+              within_lanes += (d2 > 0 && d2 <= reach2) ? 1.0 : 0.0;
+            }
+          }
+          const auto within = size_t(within_lanes);
+          // The k smallest kept sorted, first only among the points within a little over the
+          // last point's k-th nearest (neighbours are spaced alike: 1.15 x its square), so that
+          // few are sorted in; when fewer than k lie that near, again within 1.6 x, then with no
+          // bound. Each as one integer key, (distance, index) in order: a distance > 0 orders
+          // as its bits do.
+          size_t count = 0;
+          for (double bound = guess > 0 ? 1.15 * guess : INFINITY;; bound = bound < 1.5 * guess ? 1.6 * guess : INFINITY) {
+            size_t candidates = 0;
+            for (size_t i = 0; i < m; ++i) {
+              near[candidates] = uint32_t(i);
+              candidates += size_t(be[i] > 0) & size_t(be[i] <= bound);
+            }
+            count = 0;
+            for (size_t j = 0; j < candidates; ++j) {
+              const Key key = (Key(std::bit_cast<uint64_t>(be[near[j]])) << 32) | bt[near[j]];
+              size_t pos;
+              if (count < K) {
+                pos = count++;
+              } else {
+                if (key > best[K - 1]) continue;
+                pos = K - 1;
               }
+              for (; pos > 0 && key < best[pos - 1]; --pos) best[pos] = best[pos - 1];
+              best[pos] = key;
+            }
             if (count == K || bound == INFINITY || (within < K && ring < kMaxNeighborRing)) break;
           }
-          if (count == K) guess = best_e2[K - 1];
+          for (size_t j = 0; j < count; ++j) best_t[j] = uint32_t(best[j]);
+          if (count == K) guess = std::bit_cast<double>(uint64_t(best[K - 1] >> 32));
           // At the last ring whatever the block holds.
           if (within >= K || ring == kMaxNeighborRing) {
             std::copy(best_t, best_t + count, out.begin() + ptrdiff_t(size_t(s) * K));
