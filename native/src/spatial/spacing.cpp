@@ -311,37 +311,136 @@ void nearest_squared(const NeighborGrid& grid, const std::vector<uint8_t>& query
 
 namespace {
 
+/// Of the points in cells cells[0..count) that `distinct` accepts, other than s: counts in
+/// `within` those closer to p than sqrt(far2), up to 2, the last one counted in `partner`.
+template <typename Distinct>
+void count_near(const NeighborGrid& grid, const uint32_t* cells, int count, uint32_t s, const Vec3& p, double far2,
+                const Distinct& distinct, uint32_t& within, uint32_t& partner) {
+  for (int a = 0; a < count && within < 2; ++a)
+    for (uint32_t t = grid.cell_begin(cells[a]); t < grid.cell_end(cells[a]); ++t) {
+      if (t == s || !distinct(t)) continue;
+      if (squared_distance(grid.sorted_point(t), p) < far2) {
+        partner = t;
+        if (++within == 2) return;
+      }
+    }
+}
+
 /// For each distinct point of `grid` whose nearest distinct neighbour (nn2: squared distance)
 /// lies within kTwinRatio of the cell size, and every other distinct point beyond
 /// 1 / kTwinRatio times that: twin[its input index] = its neighbour's. Both are within the 27
 /// cells around the point, which hold every point within one cell size of it, so the test is
 /// exact. On an even sampling nearly no point has so near a neighbour (a cell holds a few
-/// points), and the pass costs a look at nn2. An exact copy's twin is the first copy.
+/// points), and the pass costs a look at nn2. An exact copy's twin is the first copy. The
+/// point's own cell is searched first: most points find a second one that near there and
+/// stop. A cell holding more than kCrowdedCell such points (a cluster far denser than the
+/// cells) would have each of them scan the cluster, which lies in the 27 cells: their search
+/// runs on a finer grid of the distinct points of those cells' neighbourhoods instead, ring
+/// by ring out to the one that holds every point within the far distance (kMaxRing rings at
+/// most: a point not decided by then is searched here). The result does not depend on the
+/// order of the search.
 void find_twins(const NeighborGrid& grid, const std::vector<uint32_t>& rep, const std::vector<double>& nn2,
                 const std::vector<uint32_t>* original, std::vector<uint32_t>& twin) {
   const double h = grid.cell_size(), near2 = kTwinRatio * kTwinRatio * h * h;
   const auto input = [&](uint32_t s) { return original ? (*original)[grid.original_index(s)] : grid.original_index(s); };
-  parallel_blocks(grid.cell_count(), 512, [&](size_t cb, size_t ce) {
+  const auto asked = [&](uint32_t s) { return rep[s] == s && nn2[s] <= near2; };
+  const auto cells = uint32_t(grid.cell_count());
+  // The crowded cells (2) and the cells around them (1).
+  std::vector<uint8_t> take(cells, 0);
+  bool any_crowded = false;
+  {
     uint32_t around[27];
     NeighborCellWalk walk(grid);
+    for (uint32_t c = 0; c < cells; ++c) {
+      if (grid.cell_end(c) - grid.cell_begin(c) <= kCrowdedCell) continue;
+      size_t count = 0;
+      for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) count += asked(s);
+      if (count <= kCrowdedCell) continue;
+      any_crowded = true;
+      take[c] = 2;
+      const int na = walk.around(c, around);
+      for (int a = 0; a < na; ++a) take[around[a]] = std::max<uint8_t>(take[around[a]], 1);
+    }
+  }
+  // Per point: 1 in a crowded cell, 2 once its search is done.
+  std::vector<uint8_t> done(any_crowded ? grid.point_count() : 0);
+  if (any_crowded) {
+    for (uint32_t c = 0; c < cells; ++c)
+      if (take[c] == 2) std::fill(done.begin() + grid.cell_begin(c), done.begin() + grid.cell_end(c), 1);
+    std::vector<Vec3> points;
+    std::vector<uint32_t> from;  // per point of the finer grid's input, its sorted index here
+    for (uint32_t c = 0; c < cells; ++c)
+      if (take[c])
+        for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s)
+          if (rep[s] == s) {
+            points.push_back(grid.sorted_point(s));
+            from.push_back(s);
+          }
+    bool crowded = false;
+    const ProgressCallback none;
+    ProgressTracker quiet(none);
+    const NeighborGrid finer = occupancy_grid(points.data(), points.size(), quiet, crowded);
+    const double hf = finer.cell_size();
+    if (hf < h)
+      parallel_blocks(finer.cell_count(), 512, [&](size_t cb, size_t ce) {
+        // The occupied cells at ring r around the cell (shells[r - 1]), found once per cell.
+        std::array<std::vector<uint32_t>, kMaxRing> shells;
+        int found = 0;
+        const auto all = [](uint32_t) { return true; };
+        for (size_t c = cb; c < ce; ++c) {
+          const auto cc = finer.cell_coord(uint32_t(c));
+          found = 0;
+          for (uint32_t t = finer.cell_begin(uint32_t(c)); t < finer.cell_end(uint32_t(c)); ++t) {
+            const uint32_t s = from[finer.original_index(t)];
+            if (done[s] != 1 || !asked(s)) continue;
+            const double far2 = nn2[s] / (kTwinRatio * kTwinRatio);
+            // Every point within the far distance lies within `rings` rings; out to kMaxRing at
+            // most here (a second one found ends it either way), the rest on this grid below.
+            const double rings = std::ceil(std::sqrt(far2) / hf);
+            const Vec3 p = finer.sorted_point(t);
+            uint32_t within = 0, partner = t;
+            const uint32_t own = uint32_t(c);
+            count_near(finer, &own, 1, t, p, far2, all, within, partner);
+            for (int r = 1; r <= kMaxRing && r <= rings && within < 2; ++r) {
+              auto& shell = shells[size_t(r - 1)];
+              if (found < r) {
+                shell.clear();
+                for (int dx = -r; dx <= r; ++dx)
+                  for (int dy = -r; dy <= r; ++dy)
+                    for (int dz = -r; dz <= r; ++dz) {
+                      if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != r) continue;
+                      const uint32_t nc = finer.find_cell({cc[0] + dx, cc[1] + dy, cc[2] + dz});
+                      if (nc != NeighborGrid::kNoCell) shell.push_back(nc);
+                    }
+                found = r;
+              }
+              count_near(finer, shell.data(), int(shell.size()), t, p, far2, all, within, partner);
+            }
+            if (within < 2 && rings > double(kMaxRing)) continue;
+            if (within == 1) twin[input(s)] = input(from[finer.original_index(partner)]);
+            done[s] = 2;
+          }
+        }
+      });
+  }
+  parallel_blocks(cells, 512, [&](size_t cb, size_t ce) {
+    uint32_t around[27];
+    NeighborCellWalk walk(grid);
+    const auto distinct = [&](uint32_t t) { return rep[t] == t; };
     for (size_t c = cb; c < ce; ++c) {
       int na = -1;
       for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) {
         if (rep[s] != s) twin[input(s)] = input(rep[s]);  // an exact copy goes with its first
-        if (rep[s] != s || !(nn2[s] <= near2)) continue;
-        if (na < 0) na = walk.around(uint32_t(c), around);
+        if (!asked(s) || (any_crowded && done[s] == 2)) continue;
+        if (na < 0) {
+          // Its own cell first, then the others.
+          na = walk.around(uint32_t(c), around);
+          std::stable_partition(around, around + na, [&](uint32_t x) { return x == uint32_t(c); });
+        }
         const Vec3 p = grid.sorted_point(s);
         const double far2 = nn2[s] / (kTwinRatio * kTwinRatio);
-        uint32_t partner = s, within = 0;
-        for (int a = 0; a < na && within < 2; ++a)
-          for (uint32_t t = grid.cell_begin(around[a]); t < grid.cell_end(around[a]); ++t) {
-            if (t == s || rep[t] != t) continue;
-            const double d2 = squared_distance(grid.sorted_point(t), p);
-            if (d2 < far2) {
-              partner = t;
-              if (++within == 2) break;
-            }
-          }
+        uint32_t within = 0, partner = s;
+        count_near(grid, around, na, s, p, far2, distinct, within, partner);
         if (within == 1) twin[input(s)] = input(partner);
       }
     }

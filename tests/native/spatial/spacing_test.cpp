@@ -4,10 +4,16 @@
 
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <random>
+#include <tuple>
 
+#include "core/disjoint_sets.h"
+#include "core/parallel.h"
+#include "core/progress_tracker.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/sample/shapes.h"
+#include "spatial/spacing_impl.h"
 #include "support/test_support.h"
 
 using namespace particlemesh;
@@ -139,6 +145,87 @@ TEST(EstimateSpacing, ExactWhereClustersAreFarDenserThanTheRest) {
       const SpacingEstimate e = estimate_spacing(cloud->data(), cloud->size(), threads);
       EXPECT_DOUBLE_EQ(e.spacing, expected) << cloud->size() << " points, " << threads << " threads";
     }
+  }
+}
+
+// Near copies (twins: a point whose nearest distinct neighbour is at most a tenth as far as
+// every other one) inside a cluster far denser than the rest, which crowds a few of the
+// estimate's cells: pairs, triples that are not twins (the third a little too near), points of
+// the cluster's lattice, exact copies, against the brute-force groups at 1 and 3 threads.
+TEST(EstimateSpacing, TwinsInACrowdedClusterAreTheBruteForceOnes) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const auto direction = [&] {
+    for (;;) {
+      const Vec3 d{u(rng), u(rng), u(rng)};
+      if (squared_norm(d) > 0.01 && squared_norm(d) <= 1) return normalized(d);
+    }
+  };
+  std::vector<Vec3> p;
+  // The rest: a jittered lattice of spacing 1/14 (no point of it is a twin).
+  for (int i = 0; i < 14; ++i)
+    for (int j = 0; j < 14; ++j)
+      for (int k = 0; k < 14; ++k)
+        p.push_back(Vec3{i + 0.5 + 0.1 * u(rng), j + 0.5 + 0.1 * u(rng), k + 0.5 + 0.1 * u(rng)} * (1.0 / 14));
+  // The cluster: a jittered lattice of spacing a, 700 times denser; every second point with a
+  // partner 0.05 a away (a twin pair), every fifth of the others with a partner and a third
+  // point 0.4 a away (no twins: the second nearest is within ten times the nearest).
+  const double a = 1e-4;
+  const Vec3 corner{0.31, 0.52, 0.47};
+  for (int i = 0; i < 16; ++i)
+    for (int j = 0; j < 16; ++j)
+      for (int k = 0; k < 16; ++k) {
+        const Vec3 q = corner + Vec3{i + 0.1 * u(rng), j + 0.1 * u(rng), k + 0.1 * u(rng)} * a;
+        p.push_back(q);
+        const int n = (i * 16 + j) * 16 + k;
+        if (n % 2 == 0) p.push_back(q + direction() * (0.05 * a));
+        else if (n % 5 == 0) {
+          p.push_back(q + direction() * (0.05 * a));
+          p.push_back(q + direction() * (0.4 * a));
+        }
+      }
+  for (int i = 0; i < 300; ++i) p.push_back(p[size_t(3000 + 7 * i)]);  // exact copies
+  // Brute force: groups of twins and exact copies, as the lowest input index of each.
+  const size_t n = p.size();
+  std::vector<uint32_t> first(n);  // the first input index of each place
+  {
+    std::vector<uint32_t> order(n);
+    std::iota(order.begin(), order.end(), 0u);
+    const auto key = [&](uint32_t i) { return std::tuple(p[i].x, p[i].y, p[i].z, i); };
+    std::sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) { return key(x) < key(y); });
+    for (size_t k = 0; k < n; ++k)
+      first[order[k]] = k > 0 && p[order[k]] == p[order[k - 1]] ? first[order[k - 1]] : order[k];
+  }
+  detail::DisjointSets groups(n);
+  for (size_t i = 0; i < n; ++i) {
+    if (first[i] != i) {
+      groups.unite(uint32_t(i), first[i]);
+      continue;
+    }
+    double d1 = INFINITY, d2 = INFINITY;
+    size_t nearest = i;
+    for (size_t j = 0; j < n; ++j) {
+      const double e = squared_distance(p[i], p[j]);
+      if (!(e > 0) || first[j] != j) continue;
+      if (e < d1) d2 = d1, d1 = e, nearest = j;
+      else if (e < d2) d2 = e;
+    }
+    // (Every pair's offset is far below a tenth of the estimate's cells, 1/14 wide or more.)
+    if (d2 >= d1 / (detail::kTwinRatio * detail::kTwinRatio)) groups.unite(uint32_t(i), uint32_t(nearest));
+  }
+  std::vector<uint32_t> expected(n);
+  size_t twinned = 0;
+  for (size_t i = 0; i < n; ++i) twinned += (expected[i] = groups.find(uint32_t(i))) != i;
+  ASSERT_GT(twinned, 2000u);  // most pairs, and the copies
+  for (int threads : {1, 3}) {
+    const ProgressCallback none;
+    detail::ProgressTracker tracker(none);
+    std::vector<uint32_t> twin_of;
+    detail::with_threads(threads, [&] { detail::estimate_spacing_impl(p.data(), n, tracker, 0.0, 1.0, 1, &twin_of); });
+    ASSERT_EQ(twin_of.size(), n) << "the cloud should count as twinned";
+    size_t wrong = 0;
+    for (size_t i = 0; i < n; ++i) wrong += twin_of[i] != expected[i];
+    EXPECT_EQ(wrong, 0u) << threads << " threads";
   }
 }
 
