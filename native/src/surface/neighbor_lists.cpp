@@ -53,29 +53,41 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
       out.reserve((grid.cell_begin(uint32_t(std::min(ce, cells - 1))) - grid.cell_begin(uint32_t(cb)) + 1) * 16);
       uint32_t around[27];
       NeighborCellWalk walk(grid);
-      std::pair<uint32_t, uint32_t> runs[27];  // the cells' points: runs of sorted indices
+      // The 27 cells' points (representatives only) by coordinate, and one point's squared
+      // distances to them: every point of the cell measures them all in a loop the compiler
+      // turns into vector instructions, then keeps those within the radius, in order.
+      std::vector<double> bx, by, bz, bd;
+      std::vector<uint32_t> bt, kept_t;
       for (size_t c = cb; c < ce; ++c) {
         const int na = walk.around(uint32_t(c), around);
-        // Cells next to each other in the grid's order (along z) are one run of points.
-        int nr = 0;
-        for (int a = 0; a < na; ++a) {
-          const uint32_t b = grid.cell_begin(around[a]), e = grid.cell_end(around[a]);
-          if (nr > 0 && runs[nr - 1].second == b)
-            runs[nr - 1].second = e;
-          else
-            runs[nr++] = {b, e};
-        }
+        bx.clear(), by.clear(), bz.clear(), bt.clear();
+        for (int a = 0; a < na; ++a)
+          for (uint32_t t = grid.cell_begin(around[a]); t < grid.cell_end(around[a]); ++t) {
+            if (kDuplicates && rep[t] != t) continue;
+            const Vec3& q = grid.sorted_point(t);
+            bx.push_back(q.x), by.push_back(q.y), bz.push_back(q.z), bt.push_back(t);
+          }
+        const size_t m = bt.size();
+        bd.resize(m), kept_t.resize(m);
         for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) {
           if (kDuplicates && rep[s] != s) continue;
           const Vec3 p = grid.sorted_point(s);
-          const size_t before = out.size();
-          for (int r = 0; r < nr; ++r) {
-            for (uint32_t t = runs[r].first; t < runs[r].second; ++t) {
-              if (t == s || (kDuplicates && rep[t] != t)) continue;
-              if (squared_distance(grid.sorted_point(t), p) <= r2) out.push_back(t);
+          {
+            const double *x = bx.data(), *y = by.data(), *z = bz.data();
+            double* __restrict d = bd.data();
+            for (size_t i = 0; i < m; ++i) {
+              // As squared_distance(q, p) takes it.
+              const double dx = x[i] - p.x, dy = y[i] - p.y, dz = z[i] - p.z;
+              d[i] = dx * dx + dy * dy + dz * dz;
             }
           }
-          count[s] = uint32_t(out.size() - before);
+          size_t kept = 0;
+          for (size_t i = 0; i < m; ++i) {
+            kept_t[kept] = bt[i];
+            kept += size_t(bd[i] <= r2) & size_t(bt[i] != s);
+          }
+          out.insert(out.end(), kept_t.begin(), kept_t.begin() + ptrdiff_t(kept));
+          count[s] = uint32_t(kept);
           if (count[s] > max_neighbors) chunk_over[k] = std::min(chunk_over[k], grid.original_index(s));
         }
         tracker.tick(grid.cell_end(uint32_t(c)) - grid.cell_begin(uint32_t(c)));
