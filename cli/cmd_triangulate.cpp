@@ -193,22 +193,14 @@ std::string short_edges_hint(const SurfaceResult& r, const TriangulateArgs& a) {
 /// When loops are left open and most particles' edge limits stop at the local spacing's cap
 /// (3 r0, kMaxLocalSpacing): the sampling is far sparser across than along (a scanner's rows,
 /// a mesh's rings of vertices along its curves), and the spacing across, which the surface
-/// needs to join the rows, lies past the cap. Measures the uncapped local spacing (once more,
-/// only then) and says the --max-edge-factor whose edges reach across. Empty otherwise.
-std::string capped_spacing_hint(const SurfaceResult& r, const TriangulateArgs& a, const PointCloud& cloud) {
+/// needs to join the rows, lies past the cap (TriangulateStats::uncapped_spacing_p90). Says
+/// the --max-edge-factor whose edges reach across. Empty otherwise.
+std::string capped_spacing_hint(const SurfaceResult& r, const TriangulateArgs& a) {
   constexpr double kCap = 3.0;  // the library's kMaxLocalSpacing, in r0
   const SurfaceStats::Spread& h = r.surface.local_spacing;
   if (a.global_spacing || r.surface.holes_left == 0 || !(h.p90 >= 0.999 * kCap * r.triangulation.reach_factor))
     return {};
-  double across = 0;
-  try {
-    const LocalSpacing ls = estimate_local_spacing(cloud.positions.data(), cloud.size(), a.threads);
-    std::vector<double> v = ls.spacing;
-    std::nth_element(v.begin(), v.begin() + ptrdiff_t(v.size() * 9 / 10), v.end());
-    across = v[v.size() * 9 / 10] / ls.median_nn;
-  } catch (const Error&) {
-    return {};
-  }
+  const double across = r.triangulation.uncapped_spacing_p90;
   if (!(across > 1.05 * kCap)) return {};
   const double factor = std::ceil(a.max_edge_factor * across / kCap * 1.05 * 10.0) / 10.0;
   // The factor lengthens every particle's limit, the dense ones' too, where the smallest-sphere
@@ -251,7 +243,7 @@ std::vector<std::string> surface_hints(const SurfaceResult& r, const Triangulate
   const bool spacing_named = !given.empty();
   const std::string short_edges = short_edges_hint(r, a);
   for (std::string h : {volume_particles_hint(r), noisy_surface_hint(r, a), std::move(given),
-                        spacing_named ? std::string() : capped_spacing_hint(r, a, cloud),
+                        spacing_named ? std::string() : capped_spacing_hint(r, a),
                         spacing_named ? std::string() : uneven_spacing_hint(r, a.thin, a.global_spacing), short_edges,
                         short_edges.empty() ? narrow_loops_hint(r, a) : std::string(), stray_pieces_hint(r, a)})
     if (!h.empty()) out.push_back(std::move(h));

@@ -107,6 +107,15 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
     // the cap too, lengthened by the same factor (1 on every even sampling).
     st.reach_factor = irregular_reach(st.sampling_irregularity);
     const double scale = st.spacing / measured, cap = kMaxLocalSpacing * st.spacing;
+    // The 90th percentile before the cap, where it lies past it (the count first: a selection
+    // over a copy only then).
+    const size_t p90 = n * 9 / 10;
+    const auto over = size_t(std::count_if(local_spacing.begin(), local_spacing.end(), [&](double h) { return h * scale > cap; }));
+    if (over >= n - p90) {
+      std::vector<double> v(local_spacing);
+      std::nth_element(v.begin(), v.begin() + ptrdiff_t(p90), v.end());
+      st.uncapped_spacing_p90 = v[p90] / measured;
+    }
     for (double& h : local_spacing) h = std::min(r0_with_band(h * scale, st.spacing, kSpacingBand), cap) * st.reach_factor;
     raw.edge_cap = options.max_edge_factor * cap * st.reach_factor;
   }

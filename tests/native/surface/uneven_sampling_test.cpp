@@ -9,6 +9,7 @@
 #include "particlemesh/io/mesh_io.h"
 #include "particlemesh/mesh/topology_report.h"
 #include "particlemesh/sample/shapes.h"
+#include "particlemesh/spatial/local_spacing.h"
 #include "particlemesh/spatial/spacing.h"
 #include "particlemesh/surface/reconstruct.h"
 #include "particlemesh/surface/triangulate.h"
@@ -373,4 +374,27 @@ TEST(UnevenSampling, EvenModelsKeepTheirShapeAndShortEdges) {
     EXPECT_EQ(t.vertices_used, c.size()) << path;
     EXPECT_EQ(t.boundary_loops, path == bunny ? 5u : 0u) << path;
   }
+}
+
+// A sphere sampled in rings, six times closer along a ring than across: most local spacings
+// lie past the 3 r0 cap, and the stats say where the cap cut them (the 90th percentile of the
+// local spacings as estimate_local_spacing gives them, in units of r0); an even sampling's
+// stay under it (0).
+TEST(UnevenSampling, RowsFarApartReportTheSpacingBeforeTheCap) {
+  PointCloud rings;
+  for (int k = 0; k < 25; ++k) {
+    const double t = (k + 0.5) / 25 * M_PI;
+    const int m = std::max(6, int(std::lround(300 * std::sin(t))));
+    for (int j = 0; j < m; ++j)
+      rings.positions.push_back(
+          {std::sin(t) * std::cos(2 * M_PI * j / m), std::sin(t) * std::sin(2 * M_PI * j / m), std::cos(t)});
+  }
+  const SurfaceResult r = reconstruct_surface(rings);
+  const LocalSpacing ls = estimate_local_spacing(rings.positions.data(), rings.size());
+  std::vector<double> v = ls.spacing;
+  std::nth_element(v.begin(), v.begin() + ptrdiff_t(v.size() * 9 / 10), v.end());
+  const double expected = v[v.size() * 9 / 10] / ls.median_nn;
+  ASSERT_GT(expected, 3.5);
+  EXPECT_DOUBLE_EQ(r.triangulation.uncapped_spacing_p90, expected);
+  EXPECT_EQ(reconstruct_surface(fibonacci_sphere(5000)).triangulation.uncapped_spacing_p90, 0.0);
 }

@@ -90,6 +90,11 @@ struct TriangulateStats {
   /// With a local spacing: how far the particles scatter across the surface
   /// (LocalSpacing::thickness; noisy scans ~0.3 and more, a volume ~0.85), 0 otherwise.
   double sampling_thickness = 0;
+  /// With a local spacing, where at least a tenth of the particles' local spacings were held
+  /// to the cap of 3 r0 (a scanner's rows far apart for their spacing along them): the 90th
+  /// percentile of the local spacings before the cap, in units of the cloud's median
+  /// nearest-neighbour distance (how far the rows lie apart). 0 otherwise.
+  double uncapped_spacing_p90 = 0;
   /// With a local spacing: particles whose edge limit was shortened so that their reach
   /// holds at most max_neighbors others (see TriangulateOptions::max_neighbors).
   size_t shortened_limits = 0;
