@@ -680,13 +680,16 @@ def test_rows_far_apart_get_the_edge_factor_that_crosses_them(cli, inspect, tmp_
     rings = tmp_path / "rings.xyz"
     rings.write_text("\n".join(lines) + "\n")
     out = tmp_path / "rings.ply"
-    proc = cli("triangulate", rings, "-o", out)
+    report = tmp_path / "rings.json"
+    proc = cli("triangulate", rings, "-o", out, "--report", report)
     assert inspect(out)["boundary_loops"] > 100, proc.stdout
-    hint = re.search(r"closer along lines than across them .* --max-edge-factor ([0-9.]+) may let the edges cross",
-                     proc.stdout)
+    hint = re.search(r"closer along lines than across them .*: 10% of them are ([0-9.]+) x r0 or more .* "
+                     r"--max-edge-factor ([0-9.]+) may let the edges cross", proc.stdout)
     assert hint, proc.stdout
+    across = json.loads(report.read_text())["triangulation"]["uncapped_spacing_p90"]
+    assert across > 3 and float(hint.group(1)) == round(across, 1), (across, hint.group(0))
     assert "expect the run to take" not in proc.stdout  # a factor of a few: no warning
-    cli("triangulate", rings, "-o", out, "--max-edge-factor", hint.group(1), "-q")
+    cli("triangulate", rings, "-o", out, "--max-edge-factor", hint.group(2), "-q")
     mesh = inspect(out)
     assert mesh["closed"] and mesh["components"] == 1 and mesh["manifold"], mesh
     # An even sampling of the same sphere gets no such hint.
