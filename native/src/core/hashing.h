@@ -1,5 +1,6 @@
 // Internal: the hash and the open-addressing table every grid of integer cells uses (the
-// neighbour grid, the thinning's kept cells, the sample shapes' cells).
+// neighbour grid, the thinning's kept cells, the sample shapes' cells), and a set of integer
+// keys that grows and shrinks (the surface's boundary half-edges).
 //
 // Written here rather than taken from a library: the tables map keys the caller already
 // holds in a sorted array to their index there, so a slot is one uint32_t (a quarter of what
@@ -9,6 +10,7 @@
 #include "particlemesh/core/config.h"
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -60,5 +62,93 @@ inline uint32_t find_key(const std::vector<uint32_t>& table, uint64_t mask, cons
     if (i == kNoKey || keys[i] == key) return i;
   }
 }
+
+/// A set of uint64_t keys that grows and shrinks: linear probing on mix64 in a power-of-two
+/// array of slots, at most half full, with deletion by backward shift (Knuth, TAOCP vol. 3,
+/// 6.4, Algorithm R: the keys after the freed slot whose probe passed it move back, so no
+/// tombstone is left and probes stay short however many keys come and go). Walked in slot
+/// order, which is no order: callers sort what they take.
+///
+/// Written here rather than with std::unordered_set: the surface's boundary half-edges are
+/// toggled on every triangle added or removed and walked in full by every pass of the repair;
+/// a node per key made each walk a chase through memory (most of the loops' tracing on a
+/// scan with tens of thousands of them), and the slots here are one array.
+class KeySet {
+ public:
+  /// The one value that cannot be a key.
+  static constexpr uint64_t kEmpty = ~uint64_t(0);
+
+  KeySet() : slots_(16, kEmpty), mask_(15) {}
+
+  size_t size() const { return count_; }
+  bool empty() const { return count_ == 0; }
+
+  /// Adds `key`; false if it was there.
+  bool insert(uint64_t key) {
+    if (2 * (count_ + 1) > slots_.size()) grow();
+    uint64_t h = mix64(key) & mask_;
+    for (; slots_[h] != kEmpty; h = (h + 1) & mask_)
+      if (slots_[h] == key) return false;
+    slots_[h] = key;
+    ++count_;
+    return true;
+  }
+
+  /// Removes `key`; false if it was not there.
+  bool erase(uint64_t key) {
+    uint64_t i = mix64(key) & mask_;
+    for (; slots_[i] != key; i = (i + 1) & mask_)
+      if (slots_[i] == kEmpty) return false;
+    // Algorithm R: each key after the gap whose home lies cyclically at or before the gap
+    // (its probe passed through it) moves into it, and its own slot becomes the gap.
+    for (uint64_t j = (i + 1) & mask_; slots_[j] != kEmpty; j = (j + 1) & mask_) {
+      const uint64_t home = mix64(slots_[j]) & mask_;
+      const bool passes = i <= j ? (home <= i || home > j) : (home <= i && home > j);
+      if (passes) {
+        slots_[i] = slots_[j];
+        i = j;
+      }
+    }
+    slots_[i] = kEmpty;
+    --count_;
+    return true;
+  }
+
+  /// The keys, in slot order.
+  class const_iterator {
+   public:
+    const_iterator(const uint64_t* at, const uint64_t* end) : at_(at), end_(end) { skip(); }
+    uint64_t operator*() const { return *at_; }
+    const_iterator& operator++() {
+      ++at_;
+      skip();
+      return *this;
+    }
+    bool operator!=(const const_iterator& o) const { return at_ != o.at_; }
+
+   private:
+    void skip() {
+      while (at_ != end_ && *at_ == kEmpty) ++at_;
+    }
+    const uint64_t* at_;
+    const uint64_t* end_;
+  };
+  const_iterator begin() const { return {slots_.data(), slots_.data() + slots_.size()}; }
+  const_iterator end() const { return {slots_.data() + slots_.size(), slots_.data() + slots_.size()}; }
+
+ private:
+  void grow() {
+    std::vector<uint64_t> old(slots_.size() * 2, kEmpty);
+    old.swap(slots_);
+    mask_ = slots_.size() - 1;
+    count_ = 0;
+    for (const uint64_t key : old)
+      if (key != kEmpty) insert(key);
+  }
+
+  std::vector<uint64_t> slots_;
+  uint64_t mask_;
+  size_t count_ = 0;
+};
 
 }  // namespace particlemesh::detail

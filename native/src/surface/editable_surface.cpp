@@ -50,7 +50,8 @@ EditableSurface::EditableSurface(const std::vector<Vec3>& P, const std::vector<F
     }
   });
   tracker.check();
-  for (const auto& f : found) boundary_.insert(f.begin(), f.end());
+  for (const auto& f : found)
+    for (const uint64_t e : f) boundary_.insert(e);
   // Growth is over: free its structures.
   decltype(g.corners)().swap(g.corners);
   std::vector<uint32_t>().swap(g.corner_offset);
@@ -240,8 +241,6 @@ std::vector<Triangle> EditableSurface::take() const {
 }
 
 std::vector<uint64_t> EditableSurface::boundary() const {
-  // One walk of the set's nodes (a vector built from its iterators walks them twice, to count
-  // them first: on a scan with loops of tens of thousands of edges, most of trace_loops' time).
   std::vector<uint64_t> b;
   b.reserve(boundary_.size());
   for (const uint64_t e : boundary_) b.push_back(e);

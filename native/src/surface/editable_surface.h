@@ -9,9 +9,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <unordered_map>
-#include <unordered_set>
 #include <vector>
 
+#include "core/hashing.h"
 #include "core/progress_tracker.h"
 #include "particlemesh/core/vec3.h"
 #include "particlemesh/mesh/tri_mesh.h"
@@ -71,7 +71,7 @@ class EditableSurface {
 
   static uint64_t half_key(uint32_t a, uint32_t b) { return (uint64_t(a) << 32) | b; }
   /// Boundary half-edges (a << 32 | b), unordered.
-  const std::unordered_set<uint64_t>& boundary_set() const { return boundary_; }
+  const KeySet& boundary_set() const { return boundary_; }
   bool closed() const { return boundary_.empty(); }
   /// The vertices with triangles added since indexing (not held to the growth's wedge rule).
   std::vector<uint32_t> vertices_with_added_triangles() const;
@@ -111,7 +111,7 @@ class EditableSurface {
   std::vector<uint32_t> vt_off_, vt_;
   std::unordered_map<uint32_t, std::vector<uint32_t>> extra_;
   std::vector<uint8_t> has_extra_;  ///< per vertex: holds a list in extra_
-  std::unordered_set<uint64_t> boundary_;
+  KeySet boundary_;
 };
 
 }  // namespace particlemesh::detail
