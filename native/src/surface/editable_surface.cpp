@@ -17,7 +17,7 @@ EditableSurface::EditableSurface(const std::vector<Vec3>& P, const std::vector<F
   const auto& vc_off = g.corner_offset;
   const auto& acc_count = g.accepted_count;
   alive_.assign(tris_.size(), 1);
-  has_extra_.assign(n, 0);
+  extra_of_.assign(n, kNoList);
   vt_off_.assign(n + 1, 0);
   parallel_blocks(n, 8192, [&](size_t b, size_t e) {
     for (size_t v = b; v < e; ++v) vt_off_[v + 1] = acc_count[v];
@@ -62,7 +62,7 @@ EditableSurface::EditableSurface(const std::vector<Vec3>& P, const std::vector<F
     : P_(P), frame_(frames), tris_(triangles) {
   const size_t n = P_.size();
   alive_.assign(tris_.size(), 1);
-  has_extra_.assign(n, 0);
+  extra_of_.assign(n, kNoList);
   vt_off_.assign(n + 1, 0);
   for (const Triangle& t : tris_)
     for (uint32_t v : t) ++vt_off_[v + 1];
@@ -112,8 +112,12 @@ void EditableSurface::add_triangle(const Triangle& T) {
   tris_.push_back(T);
   alive_.push_back(1);
   for (uint32_t v : T) {
-    extra_[v].push_back(id);
-    has_extra_[v] = 1;
+    if (extra_of_[v] == kNoList) {
+      extra_of_[v] = uint32_t(extra_.size());
+      extra_.emplace_back();
+      extra_vertex_.push_back(v);
+    }
+    extra_[extra_of_[v]].push_back(id);
   }
   toggle_boundary(T, true);
 }
@@ -136,11 +140,6 @@ void EditableSurface::toggle_boundary(const Triangle& T, bool entering) {
   }
 }
 
-std::vector<uint32_t> EditableSurface::vertices_with_added_triangles() const {
-  std::vector<uint32_t> out;
-  for (const auto& [v, list] : extra_) out.push_back(v);
-  return out;
-}
 
 std::vector<std::vector<uint32_t>> EditableSurface::trace_loops() const {
   const std::vector<uint64_t> bnd = boundary();

@@ -8,7 +8,6 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <unordered_map>
 #include <vector>
 
 #include "core/hashing.h"
@@ -40,12 +39,9 @@ class EditableSurface {
   void for_each_tri(uint32_t v, F&& f) const {
     for (uint32_t i = vt_off_[v]; i < vt_off_[v + 1]; ++i)
       if (alive_[vt_[i]]) f(vt_[i]);
-    if (has_extra_[v]) {
-      auto it = extra_.find(v);
-      if (it != extra_.end())
-        for (uint32_t t : it->second)
-          if (alive_[t]) f(t);
-    }
+    if (const uint32_t x = extra_of_[v]; x != kNoList)
+      for (uint32_t t : extra_[x])
+        if (alive_[t]) f(t);
   }
 
   /// Triangle ids: [0, triangle_slots()); killed ones stay, not alive.
@@ -73,8 +69,9 @@ class EditableSurface {
   /// Boundary half-edges (a << 32 | b), unordered.
   const KeySet& boundary_set() const { return boundary_; }
   bool closed() const { return boundary_.empty(); }
-  /// The vertices with triangles added since indexing (not held to the growth's wedge rule).
-  std::vector<uint32_t> vertices_with_added_triangles() const;
+  /// The vertices with triangles added since indexing (not held to the growth's wedge rule),
+  /// in the order they got their first.
+  const std::vector<uint32_t>& vertices_with_added_triangles() const { return extra_vertex_; }
 
   /// Boundary loops, each a vertex sequence following the boundary edges v_i -> v_{i+1};
   /// loops through a vertex twice are split there. Sorted, each starting at its smallest
@@ -109,8 +106,12 @@ class EditableSurface {
   std::vector<Triangle> tris_;
   std::vector<uint8_t> alive_;
   std::vector<uint32_t> vt_off_, vt_;
-  std::unordered_map<uint32_t, std::vector<uint32_t>> extra_;
-  std::vector<uint8_t> has_extra_;  ///< per vertex: holds a list in extra_
+  /// The triangles added at a vertex, a list per vertex that has any (in the order the
+  /// vertices got their first), and per vertex the index of its list, or kNoList.
+  static constexpr uint32_t kNoList = 0xffffffffu;
+  std::vector<std::vector<uint32_t>> extra_;
+  std::vector<uint32_t> extra_vertex_;  ///< per list: its vertex
+  std::vector<uint32_t> extra_of_;
   KeySet boundary_;
 };
 
