@@ -5,10 +5,12 @@
 #include <bit>
 #include <cmath>
 #include <cstdlib>
+#include <optional>
 #include <utility>
 #include <vector>
 
 #include "core/parallel.h"
+#include "spatial/spacing_impl.h"
 #include "particlemesh/core/error.h"
 
 namespace PM_NAMESPACE::detail {
@@ -196,14 +198,114 @@ class Shells {
   std::vector<std::pair<uint32_t, int32_t>> known_;     // columns found, with their distance in x, y
 };
 
-}  // namespace
+/// What one search over a grid is asked (the whole grid's, or a finer grid's over a crowded
+/// part of it; see Crowded below).
+struct Search {
+  /// Per sorted point: the index its ties are broken by and the lists give (null: its own).
+  const uint32_t* key_of = nullptr;
+  /// Per sorted point: whether to search it (null: every point).
+  const uint8_t* asked = nullptr;
+  /// Out, per sorted point searched: 1 where its k nearest lay within the rings' reach (exact),
+  /// and the k-th nearest's squared distance (+inf with fewer).
+  uint8_t* exact = nullptr;
+  double* kth2 = nullptr;
+  /// Whether to report progress (the whole grid's search only).
+  bool ticks = true;
+  int depth = 0;
+};
 
-std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, int k, ProgressTracker& tracker) {
-  if (k < 1 || k > 64) throw Error(Status::InvalidArgument, "the neighbour count must be 1 to 64");
-  const size_t n = grid.point_count();
+/// A cell holding more points than this (a cluster far denser than the cloud's median
+/// spacing: a close-up scan merged into a wide one, a small object scanned finely beside a
+/// large one) would have each of them measure every point of its 125 cells, quadratic in
+/// the cluster: those cells' neighbourhoods are searched on a finer grid of their own.
+constexpr size_t kCrowdedCell = 128;
+/// Finer grids within finer grids at most.
+constexpr int kMaxFinerGrids = 3;
+
+void search(const NeighborGrid& grid, size_t K, const Search& q, std::vector<uint32_t>& out, ProgressTracker& tracker);
+
+/// The points of `grid`'s crowded cells (kCrowdedCell) that q asks about, searched on a finer
+/// grid over the points of the cells within two rings of a crowded cell (every point within
+/// 2 h of them: all that the search here could take), with cells of twice their median
+/// spacing. A point's result there is its result here when it is exact there and its k-th
+/// nearest lies within 2 h (nearer than anything outside that set); ties break by the same
+/// keys. Those points are marked in `resolved` (sized to the grid's points where any cell is
+/// crowded, left empty otherwise); the others are left to the search here.
+void search_crowded(const NeighborGrid& grid, size_t K, const Search& q, std::vector<uint32_t>& out,
+                    std::vector<uint8_t>& resolved, ProgressTracker& tracker) {
   const double h = grid.cell_size();
-  const auto K = size_t(k);
-  std::vector<uint32_t> out(n * K, kNoNeighbor);
+  const auto cells = uint32_t(grid.cell_count());
+  std::vector<uint8_t> take(cells, 0);  // 2: crowded, 1: within two rings of one
+  bool any = false;
+  for (uint32_t c = 0; c < cells; ++c) {
+    if (grid.cell_end(c) - grid.cell_begin(c) <= kCrowdedCell) continue;
+    size_t asked = 0;
+    for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) asked += !q.asked || q.asked[s];
+    if (asked <= kCrowdedCell) continue;
+    any = true;
+    take[c] = 2;
+    const auto cc = grid.cell_coord(c);
+    grid.for_each_cell_in({cc[0] - 2, cc[1] - 2, cc[2] - 2}, {cc[0] + 2, cc[1] + 2, cc[2] + 2},
+                          [&](uint32_t b) { take[b] = std::max<uint8_t>(take[b], 1); });
+  }
+  if (!any) return;
+  resolved.assign(grid.point_count(), 0);
+  std::vector<Vec3> points;
+  std::vector<uint32_t> from;       // per point of the finer grid's input: its sorted index here
+  std::vector<uint8_t> in_crowded;  // and whether it lies in a crowded cell
+  for (uint32_t c = 0; c < cells; ++c)
+    if (take[c])
+      for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) {
+        points.push_back(grid.sorted_point(s));
+        from.push_back(s);
+        in_crowded.push_back(take[c] == 2);
+      }
+  std::optional<NeighborGrid> finer;
+  try {
+    const ProgressCallback none;
+    ProgressTracker quiet(none);
+    const double r0 = estimate_spacing_impl(points.data(), points.size(), quiet, 0.0, 1.0).spacing;
+    if (!(2 * r0 < h)) return;
+    finer.emplace(points.data(), points.size(), 2 * r0);
+  } catch (const Error&) {
+    return;  // (copies of a few points, or a grid too fine for the key: searched here)
+  }
+  const size_t m = finer->point_count();
+  std::vector<uint32_t> key_of(m), fine_out(m * K, kNoNeighbor);
+  std::vector<uint8_t> asked(m), exact(m, 0);
+  std::vector<double> kth2(m, INFINITY);
+  for (uint32_t t = 0; t < m; ++t) {
+    const uint32_t i = finer->original_index(t), s = from[i];
+    key_of[t] = q.key_of ? q.key_of[s] : s;
+    asked[t] = in_crowded[i] && (!q.asked || q.asked[s]);
+  }
+  Search fq;
+  fq.key_of = key_of.data();
+  fq.asked = asked.data();
+  fq.exact = exact.data();
+  fq.kth2 = kth2.data();
+  fq.ticks = false;
+  fq.depth = q.depth + 1;
+  search(*finer, K, fq, fine_out, tracker);
+  for (uint32_t t = 0; t < m; ++t) {
+    if (!asked[t] || !exact[t] || !(kth2[t] <= 4 * h * h)) continue;
+    const uint32_t s = from[finer->original_index(t)];
+    std::copy(fine_out.begin() + ptrdiff_t(size_t(t) * K), fine_out.begin() + ptrdiff_t(size_t(t + 1) * K),
+              out.begin() + ptrdiff_t(size_t(s) * K));
+    if (q.exact) q.exact[s] = 1;
+    if (q.kth2) q.kth2[s] = kth2[t];
+    resolved[s] = 1;
+  }
+}
+
+void search(const NeighborGrid& grid, size_t K, const Search& q, std::vector<uint32_t>& out, ProgressTracker& tracker) {
+  const double h = grid.cell_size();
+  std::vector<uint8_t> resolved;  // (empty: no point was)
+  if (q.depth < kMaxFinerGrids) {
+    search_crowded(grid, K, q, out, resolved, tracker);
+    tracker.check();
+  }
+  const auto wanted = [&](uint32_t s) { return (!q.asked || q.asked[s]) && (resolved.empty() || !resolved[s]); };
   const Columns cols(grid);
   parallel_blocks(grid.cell_count(), 256, [&](size_t cb, size_t ce) {
     if (tracker.cancelled()) return;
@@ -225,7 +327,12 @@ std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, int k, Progres
       block.clear();
       rest.clear();
       open.clear();
-      for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) open.push_back(s);
+      for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s)
+        if (wanted(s)) open.push_back(s);
+      if (open.empty()) {
+        if (q.ticks) tracker.tick(grid.cell_end(uint32_t(c)) - grid.cell_begin(uint32_t(c)));
+        continue;
+      }
       // The first two rings at once, the nearer cells first (the running k nearest then
       // settle early and the farther points are mostly turned away by one comparison).
       ring_two.gather(grid, cc, 1, block, rest);
@@ -242,7 +349,8 @@ std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, int k, Progres
         bx.resize(m), by.resize(m), bz.resize(m), be.resize(m), bt.resize(m), near.resize(m);
         m = 0;
         for (const auto& [tb, te] : block)
-          for (uint32_t t = tb; t < te; ++t, ++m) bx[m] = P[t].x, by[m] = P[t].y, bz[m] = P[t].z, bt[m] = t;
+          for (uint32_t t = tb; t < te; ++t, ++m)
+            bx[m] = P[t].x, by[m] = P[t].y, bz[m] = P[t].z, bt[m] = q.key_of ? q.key_of[t] : t;
         // After ring r the block holds every point within r h of any of the cell's points.
         const double reach2 = double(ring) * h * double(ring) * h;
         size_t still = 0;
@@ -297,15 +405,26 @@ std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, int k, Progres
           // At the last ring whatever the block holds.
           if (within >= K || ring == kMaxNeighborRing) {
             std::copy(best_t, best_t + count, out.begin() + ptrdiff_t(size_t(s) * K));
+            if (q.exact) q.exact[s] = within >= K;
+            if (q.kth2) q.kth2[s] = count == K ? std::bit_cast<double>(uint64_t(best[K - 1] >> 32)) : INFINITY;
           } else {
             open[still++] = s;
           }
         }
         open.resize(still);
       }
-      tracker.tick(grid.cell_end(uint32_t(c)) - grid.cell_begin(uint32_t(c)));
+      if (q.ticks) tracker.tick(grid.cell_end(uint32_t(c)) - grid.cell_begin(uint32_t(c)));
     }
   });
+}
+
+}  // namespace
+
+std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, int k, ProgressTracker& tracker) {
+  if (k < 1 || k > 64) throw Error(Status::InvalidArgument, "the neighbour count must be 1 to 64");
+  const auto K = size_t(k);
+  std::vector<uint32_t> out(grid.point_count() * K, kNoNeighbor);
+  search(grid, K, Search{}, out, tracker);
   tracker.check();
   return out;
 }

@@ -122,3 +122,22 @@ TEST(NearestNeighbors, RejectABadCount) {
   EXPECT_ANY_THROW(detail::nearest_neighbors(grid, 0, tracker));
   EXPECT_ANY_THROW(detail::nearest_neighbors(grid, 65, tracker));
 }
+
+TEST(NearestNeighbors, MatchTheReferenceInCrowdedCells) {
+  // Clusters far denser than the cells (a close-up scan merged into a wide one): a small
+  // sphere of 3000 points and, inside it, a smaller one of 1500 within one cell of a sphere of
+  // 3000 (searched on a finer grid, and a finer one within it), with exact copies among them,
+  // a lattice's ties, and a cluster of copies of a few points (no finer grid holds them apart).
+  std::vector<Vec3> points;
+  for (const Vec3& p : fibonacci_sphere(3000).positions) points.push_back(p);
+  const Vec3 at{0.31, -0.52, 0.74};
+  for (const Vec3& p : fibonacci_sphere(3000, 0.01, at).positions) points.push_back(p);
+  for (const Vec3& p : fibonacci_sphere(1500, 0.0004, at + Vec3{0.002, 0.001, 0}).positions) points.push_back(p);
+  for (int i = 0; i < 200; ++i) points.push_back(points[size_t(3100 + 13 * i)]);
+  for (int x = 0; x < 8; ++x)
+    for (int y = 0; y < 8; ++y)
+      for (int z = 0; z < 4; ++z) points.push_back(Vec3{-0.6, 0.2, 0.7} + Vec3{double(x), double(y), double(z)} * 1e-3);
+  for (int i = 0; i < 300; ++i) points.push_back(Vec3{0.5, 0.5, -0.6} + Vec3{double(i % 3), 0, 0} * 1e-4);
+  expect_reference(points, 0.1, 16);
+  expect_reference(points, 0.07, 8);
+}
