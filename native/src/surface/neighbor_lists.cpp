@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -154,6 +155,73 @@ double crowded_radius(const NeighborGrid& grid, const std::vector<uint32_t>& rep
 
 }  // namespace
 
+namespace {
+
+/// A cell holding more representatives than this is crowded: a cluster far denser than the
+/// median radius the cells are sized by (a small object scanned finely beside a large one),
+/// whose points would each scan all of it.
+constexpr size_t kCrowdedCell = 128;
+
+/// The representatives of the crowded cells and of the cells around them (every point within
+/// one cell of a crowded cell's points) on a finer grid, of cells as wide as the median radius
+/// of the crowded cells' points: a crowded point whose radius is at most a cell here finds
+/// there every point it would find here. `finer` is empty where no cell is crowded, or a finer
+/// grid would not be finer.
+struct CrowdedCells {
+  std::optional<NeighborGrid> finer;
+  std::vector<uint32_t> to_here;  ///< per sorted point of `finer`: its sorted index in the grid
+  std::vector<uint8_t> crowded;   ///< per sorted point of the grid: 1 in a crowded cell
+};
+
+CrowdedCells crowded_cells(const NeighborGrid& grid, const std::vector<uint32_t>& rep, const std::vector<double>& radius) {
+  CrowdedCells out;
+  const auto cells = uint32_t(grid.cell_count());
+  std::vector<uint8_t> take(cells, 0);  // 2: crowded, 1: next to one
+  std::vector<double> radii;
+  {
+    uint32_t around[27];
+    NeighborCellWalk walk(grid);
+    for (uint32_t c = 0; c < cells; ++c) {
+      if (grid.cell_end(c) - grid.cell_begin(c) <= kCrowdedCell) continue;
+      size_t count = 0;
+      for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) count += rep[s] == s;
+      if (count <= kCrowdedCell) continue;
+      take[c] = 2;
+      for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s)
+        if (rep[s] == s) radii.push_back(radius[s]);
+      const int na = walk.around(c, around);
+      for (int a = 0; a < na; ++a) take[around[a]] = std::max<uint8_t>(take[around[a]], 1);
+    }
+  }
+  if (radii.empty()) return out;
+  std::nth_element(radii.begin(), radii.begin() + ptrdiff_t(radii.size() / 2), radii.end());
+  const double cell = radii[radii.size() / 2];
+  if (!(cell > 0 && cell < 0.5 * grid.cell_size())) return out;
+  std::vector<Vec3> points;
+  std::vector<uint32_t> from;
+  out.crowded.assign(grid.point_count(), 0);
+  for (uint32_t c = 0; c < cells; ++c) {
+    if (!take[c]) continue;
+    for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) {
+      out.crowded[s] = take[c] == 2;
+      if (rep[s] != s) continue;
+      points.push_back(grid.sorted_point(s));
+      from.push_back(s);
+    }
+  }
+  try {
+    out.finer.emplace(points.data(), points.size(), cell);
+  } catch (const Error&) {
+    out.crowded.clear();  // a grid too fine for its key: searched on the grid
+    return out;
+  }
+  out.to_here.resize(points.size());
+  for (uint32_t t = 0; t < points.size(); ++t) out.to_here[t] = from[out.finer->original_index(t)];
+  return out;
+}
+
+}  // namespace
+
 NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
                                    std::vector<double>& radius, size_t max_neighbors, bool shorten,
                                    ProgressTracker& tracker) {
@@ -164,18 +232,30 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
   std::vector<std::vector<uint32_t>> own(chunks);
   std::vector<std::vector<uint64_t>> back(chunks);
   std::vector<uint32_t> own_count(n, 0);
+  const CrowdedCells crowded = crowded_cells(grid, rep, radius);
   parallel_blocks(chunks, 1, [&](size_t kb, size_t ke) {
+    std::vector<std::pair<uint32_t, double>> found;  // a crowded point's, from the finer grid
     for (size_t k = kb; k < ke; ++k) {
       if (tracker.cancelled()) return;
       for (size_t s = k * chunk; s < std::min(n, (k + 1) * chunk); ++s) {
         if (rep[s] != s) continue;
         const size_t before = own[k].size();
         const double rs = radius[s];
-        grid.for_each_within(grid.sorted_point(uint32_t(s)), rs, [&](uint32_t t, double d2) {
+        const auto take = [&](uint32_t t, double d2) {
           if (t == s || rep[t] != t) return;
           own[k].push_back(t);
           if (d2 > radius[t] * radius[t]) back[k].push_back((uint64_t(t) << 32) | s);
-        });
+        };
+        if (crowded.finer && crowded.crowded[s] && rs <= grid.cell_size()) {
+          // The same points and distances, in the grid's order.
+          found.clear();
+          crowded.finer->for_each_within(grid.sorted_point(uint32_t(s)), rs,
+                                         [&](uint32_t t, double d2) { found.push_back({crowded.to_here[t], d2}); });
+          std::sort(found.begin(), found.end());
+          for (const auto& [t, d2] : found) take(t, d2);
+        } else {
+          grid.for_each_within(grid.sorted_point(uint32_t(s)), rs, take);
+        }
         own_count[s] = uint32_t(own[k].size() - before);
       }
       tracker.tick(std::min(n, (k + 1) * chunk) - k * chunk);

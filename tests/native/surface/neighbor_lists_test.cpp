@@ -19,7 +19,8 @@ namespace {
 
 // Points on a plane, a dense patch (spacing 0.002) inside a sparse field (spacing 0.03),
 // each with the radius of its own spacing x 4: the sparse points beside the patch reach
-// hundreds of its points.
+// hundreds of its points, and the patch crowds the grid's cells (its points are searched on a
+// finer grid).
 struct Crowd {
   std::vector<Vec3> points;
   std::vector<double> radius;
