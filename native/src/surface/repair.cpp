@@ -138,6 +138,7 @@ size_t insert_unused(EditableSurface& s, const std::vector<uint8_t>& active, con
   for (size_t v = 0; v < P.size(); ++v)
     if (active[v]) surface_scale = std::max(surface_scale, Lp[v]);
   size_t inserted = 0;
+  std::vector<uint32_t> near_nb;  // of nb, those within p's reach
   for (size_t u = 0; u < unused.size(); ++u) {
     const uint32_t p = unused[u];
     // How far p may reach: a repair edge may be as long as the fill limit (at the larger
@@ -174,10 +175,14 @@ size_t insert_unused(EditableSurface& s, const std::vector<uint8_t>& active, con
       });
       std::sort(nb.begin(), nb.end());
     }
-    // 1. Over a triangle: split it in three.
+    // 1. Over a triangle: split it in three. (Only a triangle whose corners are all within
+    // reach is taken: it is met through those of nb that are, in the same order.)
     double best = INFINITY;
     int64_t best_t = -1;
+    near_nb.clear();
     for (uint32_t w : nb)
+      if (short_enough(p, w)) near_nb.push_back(w);
+    for (uint32_t w : near_nb)
       s.for_each_tri(w, [&](uint32_t t) {
         const Triangle& T = s.triangle(t);
         const Vec3 a = P[T[0]], b = P[T[1]], c = P[T[2]];
@@ -218,7 +223,9 @@ size_t insert_unused(EditableSurface& s, const std::vector<uint8_t>& active, con
           const Vec3 ab = P[b] - P[a];
           const double along = std::clamp(dot(P[p] - P[a], ab) / squared_norm(ab), 0.0, 1.0);
           const double d = squared_distance(P[p], P[a] + ab * along);
-          if (d <= max_edge * max_edge) edges.push_back({d, {std::min(a, b), std::max(a, b)}});
+          // (An edge with an end out of reach is passed over below: not sorted in.)
+          if (d <= max_edge * max_edge && short_enough(p, a) && short_enough(p, b))
+            edges.push_back({d, {std::min(a, b), std::max(a, b)}});
         }
       });
     std::sort(edges.begin(), edges.end());
