@@ -190,11 +190,17 @@ std::string short_edges_hint(const SurfaceResult& r, const TriangulateArgs& a) {
   return s;
 }
 
-/// When loops are left open and most particles' edge limits stop at the local spacing's cap
-/// (3 r0, kMaxLocalSpacing): the sampling is far sparser across than along (a scanner's rows,
-/// a mesh's rings of vertices along its curves), and the spacing across, which the surface
-/// needs to join the rows, lies past the cap (TriangulateStats::uncapped_spacing_p90). Says
-/// the --max-edge-factor whose edges reach across. Empty otherwise.
+/// When loops are left open and at least a tenth of the particles' edge limits stop at the
+/// local spacing's cap (3 r0, kMaxLocalSpacing), past which their spacing lies
+/// (TriangulateStats::uncapped_spacing_p90). Either the sampling is far sparser across than
+/// along (a scanner's rows, a mesh's rings of vertices along its curves: the spacing there is
+/// several times the nearest neighbours' distance, TriangulateStats::capped_spacing_over_nn 2
+/// and more), and the surface needs the spacing across to join the rows; or parts of the
+/// cloud are sampled sparser all round (a scan merged with a much finer one, a model's coarse
+/// body beside fine details). Names the --max-edge-factor whose edges reach them; where that is
+/// several times the one given and the parts are sparse all round, the ways that do not
+/// lengthen the dense particles' limits: meshing the parts apart, or thinning the denser parts
+/// to about half the sparse parts' spacing first. Empty otherwise.
 std::string capped_spacing_hint(const SurfaceResult& r, const TriangulateArgs& a) {
   constexpr double kCap = 3.0;  // the library's kMaxLocalSpacing, in r0
   const SurfaceStats::Spread& h = r.surface.local_spacing;
@@ -207,13 +213,31 @@ std::string capped_spacing_hint(const SurfaceResult& r, const TriangulateArgs& a
   // test then meets many more triplets: a lidar sweep's 115k points took 32 s at 20.6 x, 1.1 s
   // at the default (bench/RESULTS.md). Said when the factor is several times the one given.
   const bool slow = factor > 3.0 * a.max_edge_factor;
-  char s[600];
-  std::snprintf(s, sizeof s,
-                "the particles lie far closer along lines than across them (a scanner's rows, a mesh's rings of "
-                "vertices): 10%% of them are %.1f x r0 or more from the next line, past the %g r0 their edge limits "
-                "stop at; --max-edge-factor %g may let the edges cross%s",
-                across, kCap, factor,
-                slow ? " (it lengthens the dense particles' limits too: expect the run to take many times longer)" : "");
+  const char* longer = " (it lengthens the dense particles' limits too: expect the run to take many times longer)";
+  char s[800];
+  if (r.triangulation.capped_spacing_over_nn >= 2.0) {
+    std::snprintf(s, sizeof s,
+                  "the particles lie far closer along lines than across them (a scanner's rows, a mesh's rings of "
+                  "vertices): 10%% of them are %.1f x r0 or more from the next line, past the %g r0 their edge "
+                  "limits stop at; --max-edge-factor %g may let the edges cross%s",
+                  across, kCap, factor, slow ? longer : "");
+  } else if (!slow) {
+    std::snprintf(s, sizeof s,
+                  "parts of the cloud are sampled sparser all round than its median spacing r0: 10%% of the "
+                  "particles are %.1f x r0 or more from their neighbours, past the %g r0 their edge limits stop "
+                  "at; --max-edge-factor %g may reach them",
+                  across, kCap, factor);
+  } else {
+    // Thinned to half the sparse parts' spacing, the denser parts no longer set r0.
+    const double thin = std::floor(across * 0.5 * 10.0) / 10.0;
+    std::snprintf(s, sizeof s,
+                  "parts of the cloud are sampled far sparser all round than its median spacing r0 (a scan merged "
+                  "with a much finer one?): 10%% of the particles are %.1f x r0 or more from their neighbours, past "
+                  "the %g r0 their edge limits stop at, and stay out of the mesh; mesh the parts apart (--crop), or "
+                  "all of it at the sparser spacing with --thin %g --global-spacing (the denser parts thinned to "
+                  "it); --max-edge-factor %g would reach them too%s",
+                  across, kCap, thin, factor, longer);
+  }
   return s;
 }
 
@@ -242,9 +266,13 @@ std::vector<std::string> surface_hints(const SurfaceResult& r, const Triangulate
   std::string given = given_spacing_hint(r, cloud, a.thin > 1 ? 0.0 : a.spacing, a.threads);  // (thinning: its own)
   const bool spacing_named = !given.empty();
   const std::string short_edges = short_edges_hint(r, a);
-  for (std::string h : {volume_particles_hint(r), noisy_surface_hint(r, a), std::move(given),
-                        spacing_named ? std::string() : capped_spacing_hint(r, a),
-                        spacing_named ? std::string() : uneven_spacing_hint(r, a.thin, a.global_spacing), short_edges,
+  // (Where the capped spacing says why particles stay out, and what reaches them, the general
+  // advice for unused particles is left out.)
+  std::string capped = spacing_named ? std::string() : capped_spacing_hint(r, a);
+  const bool explained = !capped.empty();
+  for (std::string h : {volume_particles_hint(r), noisy_surface_hint(r, a), std::move(given), std::move(capped),
+                        spacing_named || explained ? std::string() : uneven_spacing_hint(r, a.thin, a.global_spacing),
+                        short_edges,
                         short_edges.empty() ? narrow_loops_hint(r, a) : std::string(), stray_pieces_hint(r, a)})
     if (!h.empty()) out.push_back(std::move(h));
   return out;

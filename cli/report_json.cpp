@@ -63,6 +63,7 @@ nlohmann::json to_json(const TriangulateStats& s) {
           {"reach_factor", s.reach_factor},
           {"sampling_thickness", s.sampling_thickness},
           {"uncapped_spacing_p90", s.uncapped_spacing_p90},
+          {"capped_spacing_over_nn", s.capped_spacing_over_nn},
           {"shortened_limits", s.shortened_limits},
           {"seconds", {{"spacing", s.seconds_spacing}, {"neighbors", s.seconds_neighbors}, {"test", s.seconds_test}}}};
 }

@@ -721,3 +721,34 @@ def test_a_lidar_sweeps_rows_get_the_factor_with_what_it_costs(cli, tmp_path):
     hint = re.search(r"--max-edge-factor ([0-9.]+) may let the edges cross \(it lengthens the dense particles' "
                      r"limits too: expect the run to take many times longer\)", proc.stdout)
     assert hint and float(hint.group(1)) > 6, proc.stdout
+
+
+def test_parts_sparser_all_round_get_thinning_not_rows(cli, inspect, tmp_path):
+    """A floor scanned coarsely (20k points 7 cm apart) with a close-up of a patch of it on top
+    (20k points 1.4 mm apart): the median spacing is the patch's, the floor lies 50 times
+    sparser all round, past the 3 r0 the edge limits stop at, and is left out. The hint says so
+    (not "rows": the floor's own neighbours are as far apart as its spacing) and names the
+    thinning that meshes all of it, which does."""
+    rng = random.Random(3)
+    lines = []
+    for side, count, at, z in ((10.0, 141, 0.0, 0.0), (0.2, 141, 5.0, 0.0005)):
+        step = side / count
+        for i in range(count):
+            for j in range(count):
+                lines.append("%.7f %.7f %.7f" % (at + (i + rng.uniform(-0.3, 0.3)) * step,
+                                                 at + (j + rng.uniform(-0.3, 0.3)) * step, z))
+    cloud = tmp_path / "floor.xyz"
+    cloud.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "floor.ply"
+    report = tmp_path / "floor.json"
+    proc = cli("triangulate", cloud, "-o", out, "--report", report)
+    assert inspect(out)["vertices_used"] < 0.6 * len(lines), proc.stdout
+    assert json.loads(report.read_text())["triangulation"]["capped_spacing_over_nn"] < 2
+    assert "along lines" not in proc.stdout and "try --thin 2" not in proc.stdout, proc.stdout
+    hint = re.search(r"sampled far sparser all round .* --thin ([0-9.]+) --global-spacing", proc.stdout)
+    assert hint, proc.stdout
+    cli("triangulate", cloud, "-o", out, "--thin", hint.group(1), "--global-spacing", "-q")
+    mesh = inspect(out)
+    assert mesh["components"] == 1 and mesh["manifold"], mesh
+    # The thinning keeps the floor: nearly all of its particles, each in a triangle.
+    assert mesh["vertices_used"] >= 0.95 * 141 * 141, mesh

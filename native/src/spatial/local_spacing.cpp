@@ -226,6 +226,12 @@ std::vector<double> local_spacing_of_distinct(const NeighborGrid& grid, double r
     // plane fitted).
     shape->irregularity = median_of_finite(variation);
     shape->thickness = median_of_finite(thickness);
+    // Past the cap: rows far apart for their spacing along them (several times the nearest
+    // distance), or a part sampled sparser all round (about once).
+    std::vector<double> over;
+    for (size_t s = 0; s < n; ++s)
+      if (out_sorted[s] > kMaxLocalSpacing * r0 && raw[s] > 0) over.push_back(out_sorted[s] / raw[s]);
+    shape->capped_spacing_over_nn = median_of_finite(over);
   }
   std::vector<double> out(n);
   for (uint32_t s = 0; s < n; ++s) {

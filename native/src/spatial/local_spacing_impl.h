@@ -65,10 +65,14 @@ constexpr double kElongated = 0.05;
 constexpr double kFlatAngle = 150.0;
 
 /// What the local spacing measures of the sampling as a whole (LocalSpacing::irregularity and
-/// ::thickness; 0 when no point has the neighbours for it).
+/// ::thickness; 0 when no point has the neighbours for it); and, over the points whose local
+/// spacing lies past kMaxLocalSpacing x r0, the median of their local spacing over the median
+/// nearest-neighbour distance around them (TriangulateStats::capped_spacing_over_nn; 0 when
+/// no point's does).
 struct SamplingShape {
   double irregularity = 0;
   double thickness = 0;
+  double capped_spacing_over_nn = 0;
 };
 
 /// Per input point (see estimate_local_spacing); r0 = the cloud's median nearest-neighbour

@@ -101,6 +101,7 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
     local_spacing = local_spacing_impl(cloud.positions.data(), n, measured, tracker, at(0.15), at(0.3), &shape);
     st.sampling_irregularity = shape.irregularity;
     st.sampling_thickness = shape.thickness;
+    st.capped_spacing_over_nn = shape.capped_spacing_over_nn;
     // At most kMaxLocalSpacing r0: sparser than that, samples are too far apart to be one
     // surface at the cloud's scale (stray clusters, a scan's far fringe). On an irregular
     // (random) sampling the covering triangles reach farther than the spacing: every limit,

@@ -95,6 +95,12 @@ struct TriangulateStats {
   /// percentile of the local spacings before the cap, in units of the cloud's median
   /// nearest-neighbour distance (how far the rows lie apart). 0 otherwise.
   double uncapped_spacing_p90 = 0;
+  /// With a local spacing: over the particles whose local spacing lies past the cap of 3 r0,
+  /// the median of it over the median nearest-neighbour distance around them: several where
+  /// rows lie far apart for their spacing along them (the spacing across sets it), about 1
+  /// where a part is sampled sparser all round (a scan merged with a much finer one). 0 where
+  /// no particle's lies past the cap.
+  double capped_spacing_over_nn = 0;
   /// With a local spacing: particles whose edge limit was shortened so that their reach
   /// holds at most max_neighbors others (see TriangulateOptions::max_neighbors).
   size_t shortened_limits = 0;
