@@ -24,7 +24,8 @@ namespace PM_NAMESPACE::detail {
 
 namespace {
 
-/// A neighbour as (squared distance's bits << 32) | sorted index: ordered as (distance, index).
+/// A neighbour as (squared distance's bits << 32) | index (its sorted index, or on a finer grid
+/// the one it has on the grid searched first): ordered as (distance, index).
 __extension__ typedef unsigned __int128 Key;
 
 constexpr uint64_t column_key(int32_t x, int32_t y) { return (uint64_t(uint32_t(x)) << 21) | uint64_t(uint32_t(y)); }
@@ -199,7 +200,7 @@ class Shells {
 };
 
 /// What one search over a grid is asked (the whole grid's, or a finer grid's over a crowded
-/// part of it; see Crowded below).
+/// part of it: search_crowded).
 struct Search {
   /// Per sorted point: the index its ties are broken by and the lists give (null: its own).
   const uint32_t* key_of = nullptr;
