@@ -122,15 +122,24 @@ void split_at_gaps(Part part, std::vector<Part>& out) {
 /// middle half along every axis, if that leaves out at most a tenth of them (else the part
 /// whole: many copies of a few points crowd the middle half, not strays). Those left out count
 /// as infinitely far; as strays their nearest neighbours are farther than the median anyway.
+/// The quartiles are those of the distinct places: copies of one point (a scanner's invalid
+/// returns written as 0 0 0, ten times as many as the rest) would otherwise be the middle half
+/// and leave every other point out.
 Part middle_of(const Part& part) {
   const size_t m = part.points.size();
-  std::vector<double> along(m);
+  std::vector<Vec3> places = part.points;
+  std::sort(places.begin(), places.end(), [](const Vec3& p, const Vec3& q) {
+    return p.x != q.x ? p.x < q.x : p.y != q.y ? p.y < q.y : p.z < q.z;
+  });
+  places.erase(std::unique(places.begin(), places.end()), places.end());
+  const size_t d = places.size();
+  std::vector<double> along(d);
   std::array<double, 3> lo{}, hi{};
   double widest = 0;
   for (int a = 0; a < 3; ++a) {
-    for (size_t i = 0; i < m; ++i) along[i] = part.points[i][a];
+    for (size_t i = 0; i < d; ++i) along[i] = places[i][a];
     const auto quantile = [&](double f) {
-      const auto k = ptrdiff_t(f * double(m - 1));
+      const auto k = ptrdiff_t(f * double(d - 1));
       std::nth_element(along.begin(), along.begin() + k, along.end());
       return along[size_t(k)];
     };

@@ -229,6 +229,24 @@ TEST(EstimateSpacing, TwinsInACrowdedClusterAreTheBruteForceOnes) {
   }
 }
 
+// Copies of one point ten and a hundred times as many as the rest (a scanner's invalid returns
+// written as 0 0 0): the spacing is the rest's, as the brute-force median over the distinct
+// points gives it, not an error.
+TEST(EstimateSpacing, ManyCopiesOfOnePointLeaveTheRestMeasured) {
+  std::mt19937_64 rng(2);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Vec3> random_cube(10000, Vec3{0, 0, 0});
+  for (int i = 0; i < 100; ++i) random_cube.push_back({u(rng), u(rng), u(rng)});
+  std::vector<Vec3> sphere_far(100000, Vec3{0, 0, 0});
+  for (const Vec3& p : fibonacci_sphere(1000).positions) sphere_far.push_back(p * 2.0 + Vec3{3, 3, 3});
+  for (const auto* cloud : {&random_cube, &sphere_far}) {
+    const double expected = brute_force_median_nn(*cloud);
+    const SpacingEstimate e = estimate_spacing(cloud->data(), cloud->size());
+    EXPECT_DOUBLE_EQ(e.spacing, expected) << cloud->size() << " points";
+    EXPECT_EQ(e.duplicate_points, cloud == &random_cube ? 9999u : 99999u);
+  }
+}
+
 TEST(EstimateSpacing, SurfaceSampleIsCloseToThePoissonRadius) {
   const PointCloud c = poisson_disk_sample(icosphere_mesh(5), 0.05, 3);
   const SpacingEstimate e = estimate_spacing(c.positions.data(), c.size());
