@@ -572,6 +572,23 @@ SpacingEstimate estimate_spacing_impl(const Vec3* points, size_t n, ProgressTrac
     result.duplicate_points = duplicates;
     return result;
   }
+  // Copies of two points only (each alone on its side of the gap between them counts as
+  // infinitely far): their distance.
+  const Vec3 first = points[0];
+  const Vec3* other = nullptr;
+  bool two = true;
+  for (size_t i = 1; i < n && two; ++i) {
+    if (points[i] == first) continue;
+    if (!other) other = &points[i];
+    two = points[i] == *other;
+  }
+  if (two && other) {
+    SpacingEstimate result;
+    result.spacing = distance(first, *other);
+    result.distinct_points = 2;
+    result.duplicate_points = n - 2;
+    return result;
+  }
   throw Error(Status::InvalidInput,
               "could not estimate the spacing: the points are too sparse for their extent "
               "(give the spacing explicitly)");

@@ -231,7 +231,7 @@ TEST(EstimateSpacing, TwinsInACrowdedClusterAreTheBruteForceOnes) {
 
 // Copies of one point ten and a hundred times as many as the rest (a scanner's invalid returns
 // written as 0 0 0): the spacing is the rest's, as the brute-force median over the distinct
-// points gives it, not an error.
+// points gives it, not an error; and with a single other point, the distance between the two.
 TEST(EstimateSpacing, ManyCopiesOfOnePointLeaveTheRestMeasured) {
   std::mt19937_64 rng(2);
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -245,6 +245,14 @@ TEST(EstimateSpacing, ManyCopiesOfOnePointLeaveTheRestMeasured) {
     EXPECT_DOUBLE_EQ(e.spacing, expected) << cloud->size() << " points";
     EXPECT_EQ(e.duplicate_points, cloud == &random_cube ? 9999u : 99999u);
   }
+  // Copies of two points: their distance (each alone on its side of the gap between them).
+  std::vector<Vec3> two(10000, Vec3{0, 0, 0});
+  two.push_back({0.3, -0.4, 1.2});
+  two.push_back({0.3, -0.4, 1.2});
+  const SpacingEstimate e = estimate_spacing(two.data(), two.size());
+  EXPECT_DOUBLE_EQ(e.spacing, 1.3);
+  EXPECT_EQ(e.distinct_points, 2u);
+  EXPECT_EQ(e.duplicate_points, 10000u);
 }
 
 TEST(EstimateSpacing, SurfaceSampleIsCloseToThePoissonRadius) {
