@@ -111,6 +111,8 @@ class pm_triangulate_stats(Structure):
         ("flat_pieces_opened", c_uint64),
         ("nearly_closed_turned", c_uint64),
         ("folded_triangles", c_uint64),
+        ("uncapped_spacing_p90", c_double),
+        ("capped_spacing_over_nn", c_double),
     ]
 
 

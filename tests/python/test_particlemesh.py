@@ -1371,3 +1371,21 @@ def test_simulator_files_carry_their_channels(pm, tmp_path):
                                    atol=1e-5)
         d = mesh.attributes["density"]
         assert d.min() >= a["density"].min() - 1e-3 and d.max() <= a["density"].max() + 1e-3
+
+
+def test_rows_far_apart_show_their_spacing_before_the_cap(pm):
+    """The last stats fields reach Python intact: a sphere sampled in 25 rings of up to 300
+    points (six times closer along a ring than across) has its local spacings held to the
+    3 r0 cap, and the stats give their 90th percentile before it (over 3 r0) and the rows'
+    spacing over the nearest distance (2 and more); an even sampling gives 0 for both."""
+    rings = []
+    for k in range(25):
+        t = (k + 0.5) / 25 * np.pi
+        m = max(6, round(300 * np.sin(t)))
+        a = 2 * np.pi * np.arange(m) / m
+        rings.append(np.c_[np.sin(t) * np.cos(a), np.sin(t) * np.sin(a), np.full(m, np.cos(t))])
+    mesh = pm.triangulate(np.concatenate(rings))
+    assert 3.5 < mesh.stats["uncapped_spacing_p90"] < 6, mesh.stats
+    assert 2 <= mesh.stats["capped_spacing_over_nn"] < 10, mesh.stats
+    even = pm.triangulate(fibonacci_sphere(5000))
+    assert even.stats["uncapped_spacing_p90"] == 0 == even.stats["capped_spacing_over_nn"]

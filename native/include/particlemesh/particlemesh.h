@@ -247,6 +247,15 @@ typedef struct pm_triangulate_stats {
                                   solid their closed (or nearly closed) part bounds, the surface
                                   then built again over normals turned to match (the tree
                                   crossed between a thin part's sides); 0: not built again */
+  /* -- appended -- */
+  double uncapped_spacing_p90; /**< with local spacing, where at least a tenth of the local
+                                    spacings were held to the cap of 3 r0: their 90th
+                                    percentile before the cap, in r0; 0 otherwise */
+  double capped_spacing_over_nn; /**< with local spacing: over the particles whose local spacing
+                                      lies past the cap, the median of it over the nearest-
+                                      neighbour distance around them (2 and more: rows far apart
+                                      for their spacing along them; about 1: parts sampled
+                                      sparser all round); 0 where none does */
 } pm_triangulate_stats;
 
 PM_EXPORT void pm_triangulate_options_init(pm_triangulate_options* options);

@@ -120,6 +120,8 @@ pm_status pm_triangulate(const pm_cloud* cloud, const pm_triangulate_options* op
       s.flat_pieces_opened = r.surface.flat_pieces_opened;
       s.nearly_closed_turned = r.surface.nearly_closed_turned;
       s.folded_triangles = r.surface.folded_triangles;
+      s.uncapped_spacing_p90 = r.triangulation.uncapped_spacing_p90;
+      s.capped_spacing_over_nn = r.triangulation.capped_spacing_over_nn;
       capi::write_versioned(out_stats, s, "out_stats");
     }
     *out_mesh = handle.release();
