@@ -208,7 +208,12 @@ std::string capped_spacing_hint(const SurfaceResult& r, const TriangulateArgs& a
     return {};
   const double across = r.triangulation.uncapped_spacing_p90;
   if (!(across > 1.05 * kCap)) return {};
-  const double factor = std::ceil(a.max_edge_factor * across / kCap * 1.05 * 10.0) / 10.0;
+  // The factor whose capped limits reach as far as the one given (at most the default) would
+  // over the uncapped spacing, a little farther; none when the one given already does (a
+  // factor named here and taken, whose surface still has loops open: an open sheet's rim).
+  const double base = std::min(a.max_edge_factor, TriangulateOptions{}.max_edge_factor);
+  const double factor = std::ceil(base * across / kCap * 1.05 * 10.0) / 10.0;
+  if (a.max_edge_factor >= factor) return {};
   // The factor lengthens every particle's limit, the dense ones' too, where the smallest-sphere
   // test then meets many more triplets: a lidar sweep's 115k points took 32 s at 20.6 x, 1.1 s
   // at the default (bench/RESULTS.md). Said when the factor is several times the one given.

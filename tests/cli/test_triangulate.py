@@ -752,3 +752,30 @@ def test_parts_sparser_all_round_get_thinning_not_rows(cli, inspect, tmp_path):
     assert mesh["components"] == 1 and mesh["manifold"], mesh
     # The thinning keeps the floor: nearly all of its particles, each in a triangle.
     assert mesh["vertices_used"] >= 0.95 * 141 * 141, mesh
+
+
+def test_a_part_a_few_times_sparser_gets_the_factor_that_reaches_it(cli, inspect, tmp_path):
+    """A sheet whose right part is sampled five times sparser all round (14 % of the
+    particles): its local spacing lies past the 3 r0 cap and it is left in pieces. The hint
+    says the part is sparser all round (not rows) and names a factor a few times the default,
+    without the warning; with it every particle is in one piece, and the hint is not given
+    again (the sheet's rim leaves a loop open)."""
+    rng = random.Random(5)
+    lines = []
+    for x0, step, nx, ny in ((0.0, 0.01, 70, 70), (0.7, 0.05, 56, 14)):
+        for i in range(nx):
+            for j in range(ny):
+                lines.append("%.7f %.7f 0" % (x0 + (i + 0.5 + rng.uniform(-0.3, 0.3)) * step,
+                                              (j + 0.5 + rng.uniform(-0.3, 0.3)) * step))
+    cloud = tmp_path / "sheet.xyz"
+    cloud.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "sheet.ply"
+    proc = cli("triangulate", cloud, "-o", out)
+    assert inspect(out)["vertices_used"] < len(lines) - 300, proc.stdout
+    hint = re.search(r"sampled sparser all round .* --max-edge-factor ([0-9.]+) may reach them$", proc.stdout, re.M)
+    assert hint and 3 < float(hint.group(1)) < 6, proc.stdout
+    assert "expect the run" not in proc.stdout and "along lines" not in proc.stdout
+    proc = cli("triangulate", cloud, "-o", out, "--max-edge-factor", hint.group(1))
+    mesh = inspect(out)
+    assert mesh["vertices_used"] == len(lines) and mesh["components"] == 1 and mesh["manifold"], mesh
+    assert "sparser all round" not in proc.stdout, proc.stdout
