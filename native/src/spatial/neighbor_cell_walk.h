@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <vector>
 
 #include "particlemesh/spatial/neighbor_grid.h"
 
@@ -66,5 +67,28 @@ class NeighborCellWalk {
   std::array<uint32_t, 9> at_;
   uint32_t last_ = kUnset;
 };
+
+/// Per cell of `grid`: 2 where more than `most` of its points are ones `counts` accepts (a
+/// crowded cell: a cluster far denser than the cells, whose points are searched on a finer
+/// grid instead), 1 where a crowded cell is among its 27 (every point within one cell of a
+/// crowded cell's points lies in those), else 0. Empty when no cell is crowded.
+template <class Counts>
+std::vector<uint8_t> crowded_cells(const NeighborGrid& grid, size_t most, Counts&& counts) {
+  const auto cells = uint32_t(grid.cell_count());
+  std::vector<uint8_t> take;
+  uint32_t around[27];
+  NeighborCellWalk walk(grid);
+  for (uint32_t c = 0; c < cells; ++c) {
+    if (grid.cell_end(c) - grid.cell_begin(c) <= most) continue;
+    size_t count = 0;
+    for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) count += counts(s) ? 1 : 0;
+    if (count <= most) continue;
+    if (take.empty()) take.assign(cells, 0);
+    take[c] = 2;
+    const int na = walk.around(c, around);
+    for (int a = 0; a < na; ++a) take[around[a]] = std::max<uint8_t>(take[around[a]], 1);
+  }
+  return take;
+}
 
 }  // namespace particlemesh::detail

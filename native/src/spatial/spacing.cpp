@@ -226,25 +226,10 @@ void nearest_squared(const NeighborGrid& grid, const std::vector<uint8_t>& query
   // A point whose distance the finer grid found (within h: finite) is not searched here again.
   const auto found = [&](uint32_t s) { return nn2[s] <= h * h; };
   if (depth < kMaxFinerGrids) {
-    // The crowded cells, and every cell around one (its neighbourhood's points).
-    std::vector<uint8_t> take(cells, 0);
-    bool any = false;
-    {
-      uint32_t around[27];
-      NeighborCellWalk walk(grid);
-      for (uint32_t c = 0; c < cells; ++c) {
-        if (grid.cell_end(c) - grid.cell_begin(c) <= kCrowdedCell) continue;
-        // Crowded by the points asked about (copies of one point are asked once).
-        size_t asked = 0;
-        for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) asked += query[s] != 0;
-        if (asked <= kCrowdedCell) continue;
-        any = true;
-        take[c] = 2;
-        const int na = walk.around(c, around);
-        for (int a = 0; a < na; ++a) take[around[a]] = std::max<uint8_t>(take[around[a]], 1);
-      }
-    }
-    if (any) {
+    // The crowded cells, and every cell around one (its neighbourhood's points): crowded by
+    // the points asked about (copies of one point are asked once).
+    const std::vector<uint8_t> take = crowded_cells(grid, kCrowdedCell, [&](uint32_t s) { return query[s] != 0; });
+    if (!take.empty()) {
       std::vector<Vec3> points;
       std::vector<uint32_t> from;  // per point of the finer grid's input, its sorted index here
       std::vector<uint8_t> asked;  // and whether it is asked about here and in a crowded cell
@@ -369,22 +354,8 @@ void find_twins(const NeighborGrid& grid, const std::vector<uint32_t>& rep, cons
   const auto asked = [&](uint32_t s) { return rep[s] == s && nn2[s] <= near2; };
   const auto cells = uint32_t(grid.cell_count());
   // The crowded cells (2) and the cells around them (1).
-  std::vector<uint8_t> take(cells, 0);
-  bool any_crowded = false;
-  {
-    uint32_t around[27];
-    NeighborCellWalk walk(grid);
-    for (uint32_t c = 0; c < cells; ++c) {
-      if (grid.cell_end(c) - grid.cell_begin(c) <= kCrowdedCell) continue;
-      size_t count = 0;
-      for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) count += asked(s);
-      if (count <= kCrowdedCell) continue;
-      any_crowded = true;
-      take[c] = 2;
-      const int na = walk.around(c, around);
-      for (int a = 0; a < na; ++a) take[around[a]] = std::max<uint8_t>(take[around[a]], 1);
-    }
-  }
+  const std::vector<uint8_t> take = crowded_cells(grid, kCrowdedCell, asked);
+  const bool any_crowded = !take.empty();
   // Per point: 1 in a crowded cell, 2 once its search is done.
   std::vector<uint8_t> done(any_crowded ? grid.point_count() : 0);
   if (any_crowded) {

@@ -173,27 +173,17 @@ struct CrowdedCells {
   std::vector<uint8_t> crowded;   ///< per sorted point of the grid: 1 in a crowded cell
 };
 
-CrowdedCells crowded_cells(const NeighborGrid& grid, const std::vector<uint32_t>& rep, const std::vector<double>& radius) {
+CrowdedCells crowded_part(const NeighborGrid& grid, const std::vector<uint32_t>& rep, const std::vector<double>& radius) {
   CrowdedCells out;
   const auto cells = uint32_t(grid.cell_count());
-  std::vector<uint8_t> take(cells, 0);  // 2: crowded, 1: next to one
+  const std::vector<uint8_t> take =  // 2: crowded, 1: next to one
+      crowded_cells(grid, kCrowdedCell, [&](uint32_t s) { return rep[s] == s; });
+  if (take.empty()) return out;
   std::vector<double> radii;
-  {
-    uint32_t around[27];
-    NeighborCellWalk walk(grid);
-    for (uint32_t c = 0; c < cells; ++c) {
-      if (grid.cell_end(c) - grid.cell_begin(c) <= kCrowdedCell) continue;
-      size_t count = 0;
-      for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s) count += rep[s] == s;
-      if (count <= kCrowdedCell) continue;
-      take[c] = 2;
+  for (uint32_t c = 0; c < cells; ++c)
+    if (take[c] == 2)
       for (uint32_t s = grid.cell_begin(c); s < grid.cell_end(c); ++s)
         if (rep[s] == s) radii.push_back(radius[s]);
-      const int na = walk.around(c, around);
-      for (int a = 0; a < na; ++a) take[around[a]] = std::max<uint8_t>(take[around[a]], 1);
-    }
-  }
-  if (radii.empty()) return out;
   std::nth_element(radii.begin(), radii.begin() + ptrdiff_t(radii.size() / 2), radii.end());
   const double cell = radii[radii.size() / 2];
   if (!(cell > 0 && cell < 0.5 * grid.cell_size())) return out;
@@ -232,7 +222,7 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
   std::vector<std::vector<uint32_t>> own(chunks);
   std::vector<std::vector<uint64_t>> back(chunks);
   std::vector<uint32_t> own_count(n, 0);
-  const CrowdedCells crowded = crowded_cells(grid, rep, radius);
+  const CrowdedCells crowded = crowded_part(grid, rep, radius);
   parallel_blocks(chunks, 1, [&](size_t kb, size_t ke) {
     std::vector<std::pair<uint32_t, double>> found;  // a crowded point's, from the finer grid
     for (size_t k = kb; k < ke; ++k) {
