@@ -147,8 +147,9 @@ bool block_proofs_apply(const ParticleField& field) {
   return true;
 }
 
-BlockProof prove_block(const ParticleField& field, const Vec3& first_node, double h) {
+BlockProof prove_block(const ParticleField& field, const Vec3& first_node, double h, bool try_inside) {
   if (outside(field, first_node, h)) return BlockProof::Outside;
+  if (!try_inside) return BlockProof::None;
   bool in = false;
   switch (field.kernel()) {
     case Kernel::Wyvill: in = inside<Kernel::Wyvill>(field, first_node, h); break;

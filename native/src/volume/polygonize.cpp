@@ -580,11 +580,28 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   g.memory_order = particle_memory_order(g.sampled_keys);
   if (detail::block_proofs_apply(field)) {
     tracker.stage("proving blocks", begin + 0.1 * (1 - begin), begin + 0.25 * (1 - begin), ns);
+    // A block beside one that no support reaches (F = 0 at all of its nodes, one cell from
+    // this block's) is on the surface or outside it, not wholly inside: only the outside
+    // proof is tried there. Most blocks of a thin layer of particles (a sampled surface) are
+    // such blocks; inside a fluid, all of a block's neighbours are reached.
+    const BlockMap reached(g.sampled_keys);
+    auto surrounded = [&](uint64_t key) {
+      int64_t b[3];
+      unpack(key, b);
+      for (int a = 0; a < 3; ++a)
+        for (const int64_t d : {int64_t(-1), int64_t(1)}) {
+          int64_t n[3] = {b[0], b[1], b[2]};
+          n[a] += d;
+          if (n[a] < 0 || n[a] > kMaxBlocksPerAxis || reached.find(pack(n[0], n[1], n[2])) == kNone) return false;
+        }
+      return true;
+    };
     detail::parallel_blocks(ns, 4, [&](size_t bb, size_t be) {
       if (tracker.cancelled()) return;
       for (size_t k = bb; k < be; ++k) {
         const uint32_t i = g.memory_order[k];
-        g.proof[i] = detail::prove_block(field, block_first_node(g, g.sampled_keys[i]), h);
+        const uint64_t key = g.sampled_keys[i];
+        g.proof[i] = detail::prove_block(field, block_first_node(g, key), h, surrounded(key));
       }
       tracker.tick(be - bb);
     });

@@ -188,6 +188,9 @@ TEST(PolygonizeProofs, EveryProofHoldsAtEveryNode) {
           for (double x = lo.x - 0.13 * h; x < hi.x; x += 7 * h) {
             const Vec3 first{x, y, z};
             const BlockProof proof = prove_block(f, first, h);
+            // Without the inside proof (polygonize's blocks beside one no support reaches):
+            // the same outside proofs, no inside one.
+            ASSERT_EQ(prove_block(f, first, h, false), proof == BlockProof::Inside ? BlockProof::None : proof);
             if (proof == BlockProof::None) continue;
             sample_block_spherical(f, first, h, samples.data());
             ++checked;

@@ -615,7 +615,9 @@ TEST(Polygonize, VerticesOnTheFieldAndAttributesAsItsWeights) {
 // (attributes asked for, or crossings taking several evaluations) and through the field's own
 // queries elsewhere: the two give the same mesh bit for bit. A jittered lattice (about 1.25
 // evaluations a crossing: the field's queries without attributes) and a thin shell (more: the
-// gathered particles both ways), each with and without an attribute.
+// gathered particles both ways), each with and without an attribute; the lattice also with
+// the other polynomial kernels (the gathered sum takes two particles at a time, the odd one
+// out padded).
 TEST(Polygonize, GatheredAndDirectEvaluationsGiveTheSameMesh) {
   PointCloud lattice;
   for (int z = 0; z < 14; ++z)
@@ -643,6 +645,16 @@ TEST(Polygonize, GatheredAndDirectEvaluationsGiveTheSameMesh) {
       EXPECT_TRUE(plain.mesh.triangles == attributed.mesh.triangles) << threads << " threads";
       EXPECT_EQ(plain.stats.field_evaluations, attributed.stats.field_evaluations);
     }
+  }
+  PointCloud with = lattice;
+  with.attributes = {VertexAttribute{"heat", 1, std::vector<float>(lattice.size(), 1.0f)}};
+  for (Kernel k : {Kernel::Poly4, Kernel::Poly6}) {
+    PolygonizeOptions o;
+    o.kernel = k;
+    const PolygonizeResult plain = polygonize(lattice, o), attributed = polygonize(with, o);
+    ASSERT_GT(plain.mesh.positions.size(), 1000u);
+    EXPECT_TRUE(plain.mesh.positions == attributed.mesh.positions) << int(k);
+    EXPECT_TRUE(plain.mesh.normals == attributed.mesh.normals) << int(k);
   }
 }
 
