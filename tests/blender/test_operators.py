@@ -642,6 +642,49 @@ def test_shade_smooth_sets_every_face_and_nothing_else(pm, monkeypatch):
         bpy.data.meshes.remove(mesh)
 
 
+def test_bulk_index_fields_write_what_foreach_set_writes(pm, monkeypatch):
+    """Before Blender 3.6 write() fills the corners', faces' and edges' index fields through a
+    numpy view of their structs (where the layout checks out): the same mesh, field for field,
+    as foreach_set writes; a layout that differs from the one checked is refused."""
+    p = np.random.default_rng(2).random((3000, 3)).astype(np.float32)
+    data = pm.particlemesh.triangulate(p)
+    bulk = pm.blender_mesh.write(bpy.data.meshes.new("bulk fields"), data)
+    if bpy.app.version < (3, 6, 0):
+        fields = pm.blender_mesh._index_fields
+        assert fields(bulk.loops, len(bulk.loops), 8, pm.blender_mesh._probe_loop) is not None
+        assert fields(bulk.polygons, len(bulk.polygons), 12, pm.blender_mesh._probe_face) is not None
+        assert fields(bulk.edges, len(bulk.edges), 12, pm.blender_mesh._probe_edge) is not None
+        # A struct size other than the items' spacing, or fields other than those probed.
+        assert fields(bulk.loops, len(bulk.loops), 12, pm.blender_mesh._probe_loop) is None
+        assert fields(bulk.edges, len(bulk.edges), 12, lambda edge, k: (7, 7)) is None
+        bpy.data.meshes.remove(bulk)
+        bulk = pm.blender_mesh.write(bpy.data.meshes.new("bulk fields"), data)
+    monkeypatch.setattr(pm.blender_mesh, "_index_fields", lambda *args: None)
+    plain = pm.blender_mesh.write(bpy.data.meshes.new("foreach_set fields"), data)
+    for name, items, props in (("loops", "loops", ("vertex_index", "edge_index")),
+                               ("faces", "polygons", ("loop_start", "loop_total", "material_index")),
+                               ("edges", "edges", ("vertices",))):
+        for prop in props:
+            got = []
+            for mesh in (bulk, plain):
+                collection = getattr(mesh, items)
+                a = np.empty(len(collection) * (2 if prop == "vertices" else 1), np.int32)
+                collection.foreach_get(prop, a)
+                got.append(a)
+            np.testing.assert_array_equal(got[0], got[1], err_msg=f"{name}.{prop}")
+    for items, props in (("polygons", ("use_smooth", "select", "hide")),
+                         ("edges", ("use_seam", "use_edge_sharp", "select", "hide"))):
+        for prop in props:
+            a, b = (np.empty(len(getattr(bulk, items)), bool) for _ in range(2))
+            getattr(bulk, items).foreach_get(prop, a)
+            getattr(plain, items).foreach_get(prop, b)
+            np.testing.assert_array_equal(a, b, err_msg=f"{items}.{prop}")
+    assert not bulk.validate(verbose=False) and not plain.validate(verbose=False)
+    np.testing.assert_array_equal(pm.blender_mesh.triangles(bulk), data.triangles)
+    for mesh in (bulk, plain):
+        bpy.data.meshes.remove(mesh)
+
+
 def test_write_raises_what_the_edge_numbering_refuses(pm):
     """The edges are numbered in a thread of their own while Blender takes the rest: an index
     beyond the vertices still reaches the caller as the library's error, naming it."""
