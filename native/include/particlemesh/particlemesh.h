@@ -318,7 +318,9 @@ PM_EXPORT pm_status pm_mesh_report(const pm_mesh* mesh, pm_topology_report* out_
  *  a < b, ordered by a then b, into out_edges (room for 2 x edge_capacity indices; 3 x
  *  triangle_count edges always suffice), and per triangle corner the edge from that corner
  *  to the next into out_corner_edges (3 x triangle_count). *out_edge_count receives the edge
- *  count; with too small an edge_capacity it is the count needed and the call fails. */
+ *  count; with too small an edge_capacity it is the count needed and the call fails. Keeps up
+ *  to 64 MiB of working memory (8 bytes a corner) for the next call, which a host numbering
+ *  every frame's edges reuses instead of faulting in fresh pages. */
 PM_EXPORT pm_status pm_triangle_edges(const uint32_t* triangles, size_t triangle_count, size_t vertex_count,
                                       int32_t threads, uint32_t* out_edges, size_t edge_capacity,
                                       uint32_t* out_corner_edges, size_t* out_edge_count);

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <set>
+#include <thread>
 #include <utility>
 
 #include "particlemesh/core/error.h"
@@ -97,4 +98,29 @@ TEST(MeshEdges, VerticesWithManyCornersAndRepeatedTriangles) {
   for (uint32_t i = 1; i <= 60; ++i) tris.push_back({0, i % 60 + 1, i});
   for (uint32_t i = 61; i < 200; ++i) tris.push_back({i, i + 1, i + 2});
   for (int threads : {1, 2, 3}) expect_edges_of(tris, mesh_edges(tris, 202, threads));
+}
+
+TEST(MeshEdges, CallsAtOnceAndOfEverySizeReuseTheKeptSlots) {
+  // The numbering's working memory is kept from one call to the next: a smaller mesh after a
+  // larger one (the kept block reused), a larger one after (a block of its own), calls from
+  // several threads at once (one of them gets the kept block), and an empty one between.
+  const TriMesh big = icosphere_mesh(5), small = icosphere_mesh(2);
+  const MeshEdges big_alone = mesh_edges(big.triangles, big.positions.size());
+  const MeshEdges small_alone = mesh_edges(small.triangles, small.positions.size());
+  expect_edges_of(big.triangles, big_alone);
+  expect_edges_of(small.triangles, small_alone);
+  EXPECT_TRUE(mesh_edges({}, 3).edges.empty());
+  std::vector<MeshEdges> got(8);
+  std::vector<std::thread> threads;
+  for (size_t i = 0; i < got.size(); ++i)
+    threads.emplace_back([&, i] {
+      const TriMesh& m = i % 2 ? big : small;
+      for (int round = 0; round < 3; ++round) got[i] = mesh_edges(m.triangles, m.positions.size(), 1);
+    });
+  for (std::thread& t : threads) t.join();
+  for (size_t i = 0; i < got.size(); ++i) {
+    const MeshEdges& want = i % 2 ? big_alone : small_alone;
+    EXPECT_EQ(got[i].edges, want.edges) << i;
+    EXPECT_EQ(got[i].corner_edges, want.corner_edges) << i;
+  }
 }
