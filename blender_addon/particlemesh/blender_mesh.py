@@ -50,7 +50,7 @@ def write(mesh, data, *, custom_normals=True, attributes=True):
         # The library numbers the edges in a thread of its own (ctypes lets go of the GIL)
         # while Blender takes the vertices, corners and faces. Blender's own edge pass, which
         # update(calc_edges=True) runs, was most of the time of writing a mesh.
-        edges = _InThread(pm.triangle_edges, corners, nv) if nt else None
+        edges = _InThread(pm.triangle_edges, corners, nv, 0, _edge_buffers(nt)) if nt else None
         loops = None  # the corners' (vertex, edge) fields, where written in bulk
         try:
             mesh.clear_geometry()
@@ -95,6 +95,35 @@ def write(mesh, data, *, custom_normals=True, attributes=True):
         for name, values in data.attributes.items():
             set_point_attribute(mesh, name, values)
     return mesh
+
+
+#: The edge numbering's output arrays, kept from one write to the next (see _edge_buffers).
+_edge_room = {}
+
+
+def _edge_buffers(nt):
+    """(edges, corners) arrays for pm.triangle_edges(out=) with room for nt triangles: the
+    ones of the last write, grown when too small. Live mode writes a new frame after frame,
+    and fresh arrays of tens of MB came with fresh pages to fault in each time (a third of the
+    edge numbering's time inside Blender). Only the arrays of meshes up to 8M triangles are
+    kept (under 300 MB); release_buffers() lets them go."""
+    have = _edge_room.get("triangles", -1)
+    if have < nt:
+        _edge_room.clear()
+        if nt > _KEPT_TRIANGLES:
+            return None
+        _edge_room.update(triangles=nt, edges=np.empty((3 * nt, 2), dtype=INDEX),
+                          corners=np.empty(3 * nt, dtype=INDEX))
+    return _edge_room["edges"], _edge_room["corners"]
+
+
+_KEPT_TRIANGLES = 8_000_000
+
+
+def release_buffers():
+    """Let go of the arrays write() keeps from one mesh to the next (live mode calls it when
+    its cache is cleared)."""
+    _edge_room.clear()
 
 
 def shade_smooth(mesh):

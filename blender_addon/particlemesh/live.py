@@ -210,6 +210,7 @@ def clear_cache(obj=None, remove_meshes=True):
             cache.clear()
     if obj is None:
         _caches.clear()
+        blender_mesh.release_buffers()
     else:
         _caches.pop(obj.name_full, None)
 

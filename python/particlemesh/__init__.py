@@ -700,10 +700,12 @@ def thin(positions, min_distance):
         lib.pm_cloud_destroy(cloud)
 
 
-def triangle_edges(triangles, vertex_count, threads=0):
+def triangle_edges(triangles, vertex_count, threads=0, out=None):
     """The edges of a triangle list: (E, 2) uint32, each edge once as (a, b) with a < b,
     ordered; and (3 T,) uint32, per triangle corner the edge to the next corner (what hosts
-    that store edges, such as Blender, need)."""
+    that store edges, such as Blender, need). `out`: (edges, corners), C-contiguous uint32
+    arrays of at least (3 T, 2) and (3 T,) to write into (the results are views of them): a
+    caller numbering frame after frame keeps its pages instead of faulting in fresh ones."""
     lib = _library.load()
     # Unsigned like the C ABI (and Blender's corner arrays), checked here so that a negative
     # index is named as passed, not as its 32-bit wrap.
@@ -712,8 +714,19 @@ def triangle_edges(triangles, vertex_count, threads=0):
         raise Error(f"vertex_count must not be negative, got {int(vertex_count)}",
                     _abi.PM_STATUS_INVALID_ARGUMENT)
     nt = len(tris)
-    edges = np.empty((3 * nt, 2), dtype=np.uint32)
-    corners = np.empty(3 * nt, dtype=np.uint32)
+    if out is None:
+        edges = np.empty((3 * nt, 2), dtype=np.uint32)
+        corners = np.empty(3 * nt, dtype=np.uint32)
+    else:
+        edges, corners = out
+        for name, a, shape in (("edges", edges, (3 * nt, 2)), ("corners", corners, (3 * nt,))):
+            if (not isinstance(a, np.ndarray) or a.dtype != np.uint32 or not a.flags.c_contiguous
+                    or not a.flags.writeable or a.ndim != len(shape) or a.shape[0] < shape[0]
+                    or a.shape[1:] != shape[1:]):
+                raise Error(f"out's {name} must be a writable C-contiguous uint32 array of at least "
+                            f"shape {shape}, got {getattr(a, 'dtype', type(a).__name__)} "
+                            f"{getattr(a, 'shape', '')}", _abi.PM_STATUS_INVALID_ARGUMENT)
+        edges, corners = edges[:3 * nt], corners[:3 * nt]
     count = c_size_t(0)
     lib.check(lib.pm_triangle_edges(ptr(tris, c_uint32), nt, int(vertex_count), int(threads),
                                     ptr(edges, c_uint32), len(edges), ptr(corners, c_uint32),

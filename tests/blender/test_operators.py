@@ -685,6 +685,39 @@ def test_bulk_index_fields_write_what_foreach_set_writes(pm, monkeypatch):
         bpy.data.meshes.remove(mesh)
 
 
+def test_writes_one_after_another_reuse_the_edge_arrays(pm):
+    """write() keeps the edge numbering's arrays for the next mesh: a smaller mesh after a
+    larger one, then the larger again, each with its own edges (a valid mesh, every corner on
+    its edge); the arrays are let go of with the live cache."""
+    big = pm.particlemesh.triangulate(fibonacci_sphere(3000))
+    small = pm.particlemesh.triangulate(fibonacci_sphere(500))
+    meshes = []
+    for data in (big, small, big):
+        mesh = pm.blender_mesh.write(bpy.data.meshes.new("reuse"), data)
+        meshes.append(mesh)
+        assert not mesh.validate(verbose=False)
+        ev = np.empty(2 * len(mesh.edges), dtype=np.uint32)
+        mesh.edges.foreach_get("vertices", ev)
+        loop_edge = np.empty(len(mesh.loops), dtype=np.uint32)
+        mesh.loops.foreach_get("edge_index", loop_edge)
+        t = data.triangles
+        a, b = t.ravel(), np.roll(t, -1, axis=1).ravel()
+        assert len(mesh.edges) == 3 * len(t) // 2
+        np.testing.assert_array_equal(np.sort(ev.reshape(-1, 2)[loop_edge], axis=1),
+                                      np.stack([np.minimum(a, b), np.maximum(a, b)], 1))
+    # The first mesh still has its own edges after the arrays were written again.
+    ev = np.empty(2 * len(meshes[0].edges), dtype=np.uint32)
+    meshes[0].edges.foreach_get("vertices", ev)
+    ev2 = np.empty(2 * len(meshes[2].edges), dtype=np.uint32)
+    meshes[2].edges.foreach_get("vertices", ev2)
+    np.testing.assert_array_equal(ev, ev2)
+    assert pm.blender_mesh._edge_room.get("triangles") == big.triangle_count
+    pm.live.clear_cache()
+    assert not pm.blender_mesh._edge_room
+    for mesh in meshes:
+        bpy.data.meshes.remove(mesh)
+
+
 def test_write_raises_what_the_edge_numbering_refuses(pm):
     """The edges are numbered in a thread of their own while Blender takes the rest: an index
     beyond the vertices still reaches the caller as the library's error, naming it."""

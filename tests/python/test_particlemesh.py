@@ -876,6 +876,21 @@ def test_triangle_edges_number_every_corner(pm):
     np.testing.assert_array_equal(edges[corners], np.stack([np.minimum(a, b), np.maximum(a, b)], 1))
     with pytest.raises(pm.Error, match="vertex index 2000"):
         pm.triangle_edges(np.array([[0, 1, 2000]]), 2000)
+    # Into the caller's arrays (larger than needed; used again for a smaller mesh): the same
+    # numbers, as views of them.
+    out = (np.full((3 * len(tris) + 7, 2), 9, np.uint32), np.full(3 * len(tris) + 5, 9, np.uint32))
+    got_edges, got_corners = pm.triangle_edges(tris, mesh.vertex_count, out=out)
+    np.testing.assert_array_equal(got_edges, edges)
+    np.testing.assert_array_equal(got_corners, corners)
+    assert np.shares_memory(got_edges, out[0]) and np.shares_memory(got_corners, out[1])
+    small = pm.triangulate(fibonacci_sphere(300))
+    want = pm.triangle_edges(small.triangles, small.vertex_count)
+    for got, expected in zip(pm.triangle_edges(small.triangles, small.vertex_count, out=out), want):
+        np.testing.assert_array_equal(got, expected)
+    for bad, what in (((out[0][:10], out[1]), "edges"), ((out[0], out[1].astype(np.int64)), "corners"),
+                      ((out[0][:, :1], out[1]), "edges"), ((out[0], out[1][::2]), "corners")):
+        with pytest.raises(pm.Error, match=f"out's {what} must be"):
+            pm.triangle_edges(tris, mesh.vertex_count, out=bad)
 
 
 def test_ray_crossings_are_odd_inside_a_closed_surface_whatever_its_winding(pm):
