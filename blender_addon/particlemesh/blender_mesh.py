@@ -36,7 +36,7 @@ def write(mesh, data, *, custom_normals=True, attributes=True):
     channels (velocity, colour...) become POINT attributes named as in data.attributes. When
     the mesh already has exactly these triangles (live mode on a stable topology), only the
     vertices move."""
-    positions = np.ascontiguousarray(data.vertices, dtype=np.float32)
+    positions = _float32_positions(data.vertices)
     triangles = np.ascontiguousarray(data.triangles, dtype=np.int32)
     nv, nt = len(positions), len(triangles)
     rebuild = not _same_triangles(mesh, nv, triangles)
@@ -97,33 +97,53 @@ def write(mesh, data, *, custom_normals=True, attributes=True):
     return mesh
 
 
-#: The edge numbering's output arrays, kept from one write to the next (see _edge_buffers).
-_edge_room = {}
+#: Arrays write() keeps from one mesh to the next, by name (see _kept).
+_kept_arrays = {}
+
+#: The most memory _kept holds: the arrays of a mesh of about 8M triangles.
+_KEPT_BYTES = 300 << 20
+
+
+def _kept(name, shape, dtype):
+    """An uninitialised array of `shape` and `dtype`: a view of the one kept under `name` by
+    the last write(), grown when too small. Live mode writes a new frame after frame, and
+    fresh arrays of tens of MB come with fresh pages to fault in each time (the edge
+    numbering's output arrays: a third of its time inside Blender). None (the caller
+    allocates its own) where the kept arrays would pass _KEPT_BYTES; release_buffers() lets
+    them go."""
+    size = int(np.prod(shape))
+    have = _kept_arrays.get(name)
+    if have is None or have.dtype != dtype or have.size < size:
+        _kept_arrays.pop(name, None)
+        # An eighth more room: a live frame's counts grow a little from one frame to the next.
+        room = size + size // 8
+        used = sum(a.nbytes for a in _kept_arrays.values())
+        if used + room * np.dtype(dtype).itemsize > _KEPT_BYTES:
+            return None
+        have = _kept_arrays[name] = np.empty(room, dtype=dtype)
+    return have[:size].reshape(shape)
 
 
 def _edge_buffers(nt):
-    """(edges, corners) arrays for pm.triangle_edges(out=) with room for nt triangles: the
-    ones of the last write, grown when too small. Live mode writes a new frame after frame,
-    and fresh arrays of tens of MB came with fresh pages to fault in each time (a third of the
-    edge numbering's time inside Blender). Only the arrays of meshes up to 8M triangles are
-    kept (under 300 MB); release_buffers() lets them go."""
-    have = _edge_room.get("triangles", -1)
-    if have < nt:
-        _edge_room.clear()
-        if nt > _KEPT_TRIANGLES:
-            return None
-        _edge_room.update(triangles=nt, edges=np.empty((3 * nt, 2), dtype=INDEX),
-                          corners=np.empty(3 * nt, dtype=INDEX))
-    return _edge_room["edges"], _edge_room["corners"]
+    """pm.triangle_edges' out= arrays for nt triangles (or None)."""
+    edges, corners = _kept("edges", (3 * nt, 2), INDEX), _kept("corners", (3 * nt,), INDEX)
+    return None if edges is None or corners is None else (edges, corners)
 
 
-_KEPT_TRIANGLES = 8_000_000
+def _float32_positions(vertices):
+    """The vertices as Blender takes them (float32), in a kept array where one fits."""
+    vertices = np.asarray(vertices)
+    out = _kept("positions", vertices.shape, np.float32) if vertices.ndim == 2 else None
+    if out is None:
+        return np.ascontiguousarray(vertices, dtype=np.float32)
+    np.copyto(out, vertices, casting="unsafe")
+    return out
 
 
 def release_buffers():
     """Let go of the arrays write() keeps from one mesh to the next (live mode calls it when
     its cache is cleared)."""
-    _edge_room.clear()
+    _kept_arrays.clear()
 
 
 def shade_smooth(mesh):
