@@ -141,8 +141,8 @@ def _float32_positions(vertices):
 
 
 def release_buffers():
-    """Let go of the arrays write() keeps from one mesh to the next (live mode calls it when
-    its cache is cleared)."""
+    """Let go of the arrays write() keeps from one mesh to the next (live mode calls it once
+    no object's cache is left)."""
     _kept_arrays.clear()
 
 

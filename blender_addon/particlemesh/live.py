@@ -210,9 +210,10 @@ def clear_cache(obj=None, remove_meshes=True):
             cache.clear()
     if obj is None:
         _caches.clear()
-        blender_mesh.release_buffers()
     else:
         _caches.pop(obj.name_full, None)
+    if not _caches:  # no live object left: nor the arrays kept for writing its next frame
+        blender_mesh.release_buffers()
 
 
 def cache_info(obj):
