@@ -27,7 +27,7 @@ _ATTRIBUTE_TYPES = {1: ("FLOAT", "value"), 2: ("FLOAT2", "vector"), 3: ("FLOAT_V
                     4: ("FLOAT_COLOR", "color")}
 
 
-def write(mesh, data, *, custom_normals=True, attributes=True):
+def write(mesh, data, *, custom_normals=True, attributes=True, keep_arrays=False):
     """Replace the geometry of `mesh` with the particlemesh.Mesh `data`, in place.
 
     Materials stay (clear_geometry keeps them), faces are smooth shaded, the library's
@@ -35,8 +35,9 @@ def write(mesh, data, *, custom_normals=True, attributes=True):
     Blender computes itself: data.stats["normals_are_face_weighted"]), and per-vertex
     channels (velocity, colour...) become POINT attributes named as in data.attributes. When
     the mesh already has exactly these triangles (live mode on a stable topology), only the
-    vertices move."""
-    positions = _float32_positions(data.vertices)
+    vertices move. `keep_arrays`: the working arrays are kept for the next such write (live
+    mode's frame after frame; see _kept)."""
+    positions = _float32_positions(data.vertices, keep_arrays)
     triangles = np.ascontiguousarray(data.triangles, dtype=np.int32)
     nv, nt = len(positions), len(triangles)
     rebuild = not _same_triangles(mesh, nv, triangles)
@@ -50,7 +51,8 @@ def write(mesh, data, *, custom_normals=True, attributes=True):
         # The library numbers the edges in a thread of its own (ctypes lets go of the GIL)
         # while Blender takes the vertices, corners and faces. Blender's own edge pass, which
         # update(calc_edges=True) runs, was most of the time of writing a mesh.
-        edges = _InThread(pm.triangle_edges, corners, nv, 0, _edge_buffers(nt)) if nt else None
+        out = _edge_buffers(nt) if keep_arrays else None
+        edges = _InThread(pm.triangle_edges, corners, nv, 0, out) if nt else None
         loops = None  # the corners' (vertex, edge) fields, where written in bulk
         try:
             mesh.clear_geometry()
@@ -106,7 +108,7 @@ _KEPT_BYTES = 300 << 20
 
 def _kept(name, shape, dtype):
     """An uninitialised array of `shape` and `dtype`: a view of the one kept under `name` by
-    the last write(), grown when too small. Live mode writes a new frame after frame, and
+    the last write(keep_arrays=True), grown when too small. Live mode writes a new frame after frame, and
     fresh arrays of tens of MB come with fresh pages to fault in each time (the edge
     numbering's output arrays: a third of its time inside Blender). None (the caller
     allocates its own) where the kept arrays would pass _KEPT_BYTES; release_buffers() lets
@@ -130,10 +132,10 @@ def _edge_buffers(nt):
     return None if edges is None or corners is None else (edges, corners)
 
 
-def _float32_positions(vertices):
-    """The vertices as Blender takes them (float32), in a kept array where one fits."""
+def _float32_positions(vertices, keep):
+    """The vertices as Blender takes them (float32), in a kept array where one fits (`keep`)."""
     vertices = np.asarray(vertices)
-    out = _kept("positions", vertices.shape, np.float32) if vertices.ndim == 2 else None
+    out = _kept("positions", vertices.shape, np.float32) if keep and vertices.ndim == 2 else None
     if out is None:
         return np.ascontiguousarray(vertices, dtype=np.float32)
     np.copyto(out, vertices, casting="unsafe")

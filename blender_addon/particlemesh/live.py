@@ -310,7 +310,7 @@ def _write(obj, mesh, data, settings, defer):
         generate.finish_attributes(data)
         waiting = ()
     later = defer and (blender_mesh.has_custom_normals(data, custom) or bool(waiting))
-    blender_mesh.write(mesh, data, custom_normals=custom and not later)
+    blender_mesh.write(mesh, data, custom_normals=custom and not later, keep_arrays=True)
     for name in waiting:  # an earlier frame's values (a mesh rewritten in place)
         attribute = mesh.attributes.get(name)
         if attribute is not None:

@@ -44,6 +44,11 @@ def test_live_mesh_follows_the_particles(pm, clean_scene):
     assert pm.live.last_update[obj.name]["cached"] is True
     entries, size = pm.live.cache_info(obj)
     assert entries >= 4 and size > 0
+    # Its writes kept their working arrays for the next frame (blender_mesh._kept); clearing
+    # the last cache lets them go.
+    assert len(pm.blender_mesh._kept_arrays["corners"]) >= len(tris) * 3
+    pm.live.clear_cache(obj)
+    assert not pm.blender_mesh._kept_arrays
 
 
 def test_cached_frames_swap_in_their_kept_mesh(pm, clean_scene):

@@ -686,14 +686,18 @@ def test_bulk_index_fields_write_what_foreach_set_writes(pm, monkeypatch):
 
 
 def test_writes_one_after_another_reuse_the_edge_arrays(pm):
-    """write() keeps the edge numbering's arrays for the next mesh: a smaller mesh after a
-    larger one, then the larger again, each with its own edges (a valid mesh, every corner on
-    its edge); the arrays are let go of with the live cache."""
+    """write(keep_arrays=True) (live mode's) keeps the edge numbering's arrays and the float32
+    vertices for the next mesh: a smaller mesh after a larger one, then the larger again, each
+    with its own edges (a valid mesh, every corner on its edge); the arrays are let go of with
+    the live cache. Other writes keep nothing."""
     big = pm.particlemesh.triangulate(fibonacci_sphere(3000))
     small = pm.particlemesh.triangulate(fibonacci_sphere(500))
     meshes = []
+    pm.blender_mesh.release_buffers()
+    bpy.data.meshes.remove(pm.blender_mesh.write(bpy.data.meshes.new("not kept"), small))
+    assert not pm.blender_mesh._kept_arrays  # only live mode's writes keep them
     for data in (big, small, big):
-        mesh = pm.blender_mesh.write(bpy.data.meshes.new("reuse"), data)
+        mesh = pm.blender_mesh.write(bpy.data.meshes.new("reuse"), data, keep_arrays=True)
         meshes.append(mesh)
         assert not mesh.validate(verbose=False)
         ev = np.empty(2 * len(mesh.edges), dtype=np.uint32)
