@@ -573,6 +573,19 @@ def test_point_cloud_mesh_keeps_normals_and_colours(pm):
     bpy.data.meshes.remove(mesh)
 
 
+def expect_edges_of_triangles(mesh, triangles):
+    """A closed mesh's edges as written: each edge once, every loop on its edge, valid."""
+    assert len(mesh.edges) == 3 * len(triangles) // 2
+    ev = np.empty(2 * len(mesh.edges), dtype=np.uint32)
+    mesh.edges.foreach_get("vertices", ev)
+    loop_edge = np.empty(len(mesh.loops), dtype=np.uint32)
+    mesh.loops.foreach_get("edge_index", loop_edge)
+    a, b = triangles.ravel(), np.roll(triangles, -1, axis=1).ravel()
+    np.testing.assert_array_equal(np.sort(ev.reshape(-1, 2)[loop_edge], axis=1),
+                                  np.stack([np.minimum(a, b), np.maximum(a, b)], 1))
+    assert not mesh.validate(verbose=False)
+
+
 def test_index_buffers_have_the_format_blender_copies_in_bulk(pm):
     """blender_mesh.INDEX (uint32) is the format of Blender's unsigned index properties, so
     foreach_get / foreach_set copy them in bulk (any other format goes item by item, ~10x
@@ -592,15 +605,7 @@ def test_index_buffers_have_the_format_blender_copies_in_bulk(pm):
     np.testing.assert_array_equal(got, data.triangles)
     # The edges come from the library (pm_triangle_edges), not Blender's edge pass: a valid
     # mesh (validate() finds nothing to fix), each edge once, every loop on its edge.
-    assert len(mesh.edges) == 3 * len(data.triangles) // 2
-    ev = np.empty(2 * len(mesh.edges), dtype=np.uint32)
-    mesh.edges.foreach_get("vertices", ev)
-    loop_edge = np.empty(len(mesh.loops), dtype=np.uint32)
-    mesh.loops.foreach_get("edge_index", loop_edge)
-    t = data.triangles
-    a, b = t.ravel(), np.roll(t, -1, axis=1).ravel()
-    np.testing.assert_array_equal(np.sort(ev.reshape(-1, 2)[loop_edge], axis=1),
-                                  np.stack([np.minimum(a, b), np.maximum(a, b)], 1))
+    expect_edges_of_triangles(mesh, data.triangles)
     assert mesh.validate(verbose=False) is False
     bpy.data.meshes.remove(mesh)
 
@@ -699,16 +704,7 @@ def test_writes_one_after_another_reuse_the_edge_arrays(pm):
     for data in (big, small, big):
         mesh = pm.blender_mesh.write(bpy.data.meshes.new("reuse"), data, keep_arrays=True)
         meshes.append(mesh)
-        assert not mesh.validate(verbose=False)
-        ev = np.empty(2 * len(mesh.edges), dtype=np.uint32)
-        mesh.edges.foreach_get("vertices", ev)
-        loop_edge = np.empty(len(mesh.loops), dtype=np.uint32)
-        mesh.loops.foreach_get("edge_index", loop_edge)
-        t = data.triangles
-        a, b = t.ravel(), np.roll(t, -1, axis=1).ravel()
-        assert len(mesh.edges) == 3 * len(t) // 2
-        np.testing.assert_array_equal(np.sort(ev.reshape(-1, 2)[loop_edge], axis=1),
-                                      np.stack([np.minimum(a, b), np.maximum(a, b)], 1))
+        expect_edges_of_triangles(mesh, data.triangles)
     # The first mesh still has its own edges after the arrays were written again.
     ev = np.empty(2 * len(meshes[0].edges), dtype=np.uint32)
     meshes[0].edges.foreach_get("vertices", ev)
