@@ -726,6 +726,9 @@ def triangle_edges(triangles, vertex_count, threads=0, out=None):
                 raise Error(f"out's {name} must be a writable C-contiguous uint32 array of at least "
                             f"shape {shape}, got {getattr(a, 'dtype', type(a).__name__)} "
                             f"{getattr(a, 'shape', '')}", _abi.PM_STATUS_INVALID_ARGUMENT)
+        if np.may_share_memory(edges, corners) or any(np.may_share_memory(a, tris) for a in (edges, corners)):
+            raise Error("out's edges and corners must not overlap each other or the triangles",
+                        _abi.PM_STATUS_INVALID_ARGUMENT)
         edges, corners = edges[:3 * nt], corners[:3 * nt]
     count = c_size_t(0)
     lib.check(lib.pm_triangle_edges(ptr(tris, c_uint32), nt, int(vertex_count), int(threads),
