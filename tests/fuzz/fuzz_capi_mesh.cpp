@@ -4,12 +4,13 @@
 // the vertices; the counts of two halves of the triangles add up), the copy functions with any capacity, attributes
 // (pm_mesh_set_attribute / _get_attribute_* / _copy_attribute), corner attributes (the same
 // calls' corner forms; carried by pm_smooth: finite, 3 x components per output triangle) and
-// pm_smooth with every option
+// pm_triangle_edges on the raw triangles (any capacity), and pm_smooth with every option
 // field fuzzed (scheme, levels, boundary, creases with any indices and sharpness, struct_size,
 // a progress callback that may cancel). Checks: statuses and messages, outputs untouched on
 // failure, a smoothed mesh has F x 4^levels triangles indexing its own finite vertices.
 //
 // Inputs stay small (at most 32 vertices, 48 triangles, results capped at 2^14 triangles).
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <string>
@@ -71,6 +72,39 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   for (int32_t& t : tris)
     t = (mode & 2) && in.take<uint8_t>() == 0xFF ? in.take<int32_t>()  // sometimes any index
                                                   : int32_t(nv ? in.range(0, nv - 1) : 0);
+
+  // The edges of the raw triangle list (any index, repeated vertices), with an edge capacity
+  // that may be too small: a good call numbers every corner's edge (a, b), a < b; a refused
+  // one says why (a bad triangle, or the count needed). The numbering keeps its working
+  // block from call to call (any size after any other).
+  if (mode & 128) {
+    std::vector<uint32_t> utris(tris.begin(), tris.end());
+    const size_t cap = in.flag() ? 3 * nt : size_t(in.range(0, 3 * nt));
+    std::vector<uint32_t> edges(2 * cap + 2, 77), corners(3 * nt + 1, 77);
+    size_t count = 0;
+    const pm_status e = pm_triangle_edges(nt ? utris.data() : nullptr, nt, nv, int32_t(in.range(0, 3)), edges.data(),
+                                          cap, corners.data(), &count);
+    check_status(e);
+    bool valid = true;
+    for (size_t t = 0; t < nt; ++t) {
+      const uint32_t* T = utris.data() + 3 * t;
+      valid = valid && T[0] < nv && T[1] < nv && T[2] < nv && T[0] != T[1] && T[1] != T[2] && T[0] != T[2];
+    }
+    if (e == PM_OK) {
+      PM_FUZZ_CHECK(valid && count <= cap);
+      for (size_t c = 0; c < 3 * nt; ++c) {
+        const uint32_t a = utris[c], b = utris[c % 3 == 2 ? c - 2 : c + 1];
+        PM_FUZZ_CHECK(corners[c] < count);
+        PM_FUZZ_CHECK(edges[2 * corners[c]] == std::min(a, b) && edges[2 * corners[c] + 1] == std::max(a, b));
+      }
+      for (size_t i = 0; i + 1 < count; ++i)
+        PM_FUZZ_CHECK(edges[2 * i] < edges[2 * i + 1] &&
+                      (edges[2 * i] < edges[2 * i + 2] || (edges[2 * i] == edges[2 * i + 2] && edges[2 * i + 1] < edges[2 * i + 3])));
+      PM_FUZZ_CHECK(corners[3 * nt] == 77);
+    } else {
+      PM_FUZZ_CHECK(!valid || count > cap);
+    }
+  }
 
   pm_mesh* mesh = reinterpret_cast<pm_mesh*>(0x1);
   pm_status s = pm_mesh_create(nv ? pos.data() : nullptr, nv, nt ? tris.data() : nullptr, nt,
