@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdlib>
 #include <limits>
 #include <memory>
 #include <mutex>
-#include <cstdlib>
 #include <string>
 
 #include "core/parallel.h"

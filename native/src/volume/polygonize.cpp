@@ -581,9 +581,10 @@ PolygonizeResult polygonize_field(const ParticleField& field, const PolygonizeOp
   if (detail::block_proofs_apply(field)) {
     tracker.stage("proving blocks", begin + 0.1 * (1 - begin), begin + 0.25 * (1 - begin), ns);
     // A block beside one that no support reaches (F = 0 at all of its nodes, one cell from
-    // this block's) is on the surface or outside it, not wholly inside: only the outside
-    // proof is tried there. Most blocks of a thin layer of particles (a sampled surface) are
-    // such blocks; inside a fluid, all of a block's neighbours are reached.
+    // this block's) is as good as never wholly inside (F would have to rise from 0 to T
+    // within a cell), so only the outside proof is tried there; a block not proven is just
+    // sampled. Most blocks of a thin layer of particles (a sampled surface) are such blocks;
+    // inside a fluid, all of a block's neighbours are reached.
     const BlockMap reached(g.sampled_keys);
     auto surrounded = [&](uint64_t key) {
       int64_t b[3];
