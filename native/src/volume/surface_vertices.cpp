@@ -79,19 +79,22 @@ void EdgeNeighbours::gather_along(const ParticleField& field, const Vec3& a, dou
     }
   }
   count_ = n;
-  // The kept particles by coordinate, for sum_by_coordinate: read back from the grid (in
-  // cache), a pair at a time; an odd count gets a pad whose cell (NaN) fails every test.
-  stride_ = (n + 1) & ~size_t(1);
-  if (columns_.size() < 4 * stride_) columns_.resize(4 * stride_);
-  double* const cx = columns_.data();
-  double* const cy = cx + stride_;
-  double* const cz = cy + stride_;
-  double* const cc = cz + stride_;
-  for (size_t k = 0; k < n; ++k) {
-    const Vec3& p = points[out[k].sorted];
-    cx[k] = p.x, cy[k] = p.y, cz[k] = p.z, cc[k] = double(out[k].cell);
+  // The kept particles by coordinate, where sum_by_coordinate will read them: read back from
+  // the grid (in cache), a pair at a time; an odd count gets a pad whose cell (NaN) fails
+  // every test.
+  if (one_radius_unit_strengths(field) && field.kernel() != Kernel::Blinn) {
+    stride_ = (n + 1) & ~size_t(1);
+    if (columns_.size() < 4 * stride_) columns_.resize(4 * stride_);
+    double* const cx = columns_.data();
+    double* const cy = cx + stride_;
+    double* const cz = cy + stride_;
+    double* const cc = cz + stride_;
+    for (size_t k = 0; k < n; ++k) {
+      const Vec3& p = points[out[k].sorted];
+      cx[k] = p.x, cy[k] = p.y, cz[k] = p.z, cc[k] = double(out[k].cell);
+    }
+    if (n != stride_) cx[n] = cy[n] = cz[n] = 0.0, cc[n] = std::numeric_limits<double>::quiet_NaN();
   }
-  if (n != stride_) cx[n] = cy[n] = cz[n] = 0.0, cc[n] = std::numeric_limits<double>::quiet_NaN();
   // The particles kept apart from the cells (radii far above the rest), by their own radius.
   apart_.clear();
   const std::vector<double>& inv_r2s = field.sorted_inverse_squared_radii();
@@ -237,7 +240,7 @@ double EdgeNeighbours::sum(const Vec3& x, Vec3* gradient, int32_t lo, int32_t hi
 }
 
 double EdgeNeighbours::value_and_gradient(const Vec3& x, Vec3* gradient) const {
-  const bool general = !field_->uniform_radius() || !field_->sorted_strengths().empty() || gradient == nullptr;
+  const bool general = !one_radius_unit_strengths(*field_) || gradient == nullptr;
   const double r = field_->cell_reach();
   const NeighborGrid& grid = field_->grid();
   // The cells along the edge's axis that the field's query at x visits.

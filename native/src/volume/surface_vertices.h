@@ -74,18 +74,25 @@ class EdgeNeighbours {
   template <int A>
   static double get(const Vec3& v) { return A == 0 ? v.x : A == 1 ? v.y : v.z; }
 
-  // The gathered particles' centres and cells by coordinate (x, y, z, cell as a double, each
-  // count_ rounded up to even long; the pad's cell NaN), for the vectorized sum.
+  // sum<K, false, *> two particles at a time, from columns_ (polynomial kernels).
   template <Kernel K>
   double sum_by_coordinate(const Vec3& x, Vec3* gradient, int32_t lo, int32_t hi) const;
+  // One radius and unit strengths: the evaluations with a gradient need no per-particle
+  // option (sum()'s General false), and polynomial kernels take sum_by_coordinate.
+  static bool one_radius_unit_strengths(const ParticleField& f) {
+    return f.uniform_radius() && f.sorted_strengths().empty();
+  }
 
   const ParticleField* field_ = nullptr;
   int axis_ = 0;
   double inv_r2_ = 0;
   std::vector<Near> near_;  // the first count_ are the edge's
   size_t count_ = 0;
-  std::vector<double> columns_;  // count_ (even) x, then y, z and cells; see sum_by_coordinate
-  size_t stride_ = 0;            // count_ rounded up to even
+  // The gathered particles' centres and cells by coordinate for sum_by_coordinate: stride_
+  // x, then y, z and cells (as doubles), stride_ = count_ rounded up to even (the pad's cell
+  // NaN). Filled only where sum_by_coordinate is taken.
+  std::vector<double> columns_;
+  size_t stride_ = 0;
   std::vector<uint32_t> apart_;  // the particles kept apart from the cells whose support meets the edge
   int32_t box_lo_ = 0, box_hi_ = 0;  // the gathered box's cells along the edge's axis
   struct Run {
