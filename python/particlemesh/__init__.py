@@ -718,6 +718,9 @@ def triangle_edges(triangles, vertex_count, threads=0, out=None):
         edges = np.empty((3 * nt, 2), dtype=np.uint32)
         corners = np.empty(3 * nt, dtype=np.uint32)
     else:
+        if not isinstance(out, (tuple, list)) or len(out) != 2:
+            raise Error(f"out must be a pair (edges, corners) of arrays, got {type(out).__name__}",
+                        _abi.PM_STATUS_INVALID_ARGUMENT)
         edges, corners = out
         for name, a, shape in (("edges", edges, (3 * nt, 2)), ("corners", corners, (3 * nt,))):
             if (not isinstance(a, np.ndarray) or a.dtype != np.uint32 or not a.flags.c_contiguous

@@ -891,6 +891,9 @@ def test_triangle_edges_number_every_corner(pm):
                       ((out[0][:, :1], out[1]), "edges"), ((out[0], out[1][::2]), "corners")):
         with pytest.raises(pm.Error, match=f"out's {what} must be"):
             pm.triangle_edges(tris, mesh.vertex_count, out=bad)
+    for bad in (5, (out[0],), [out[0], out[1], out[1]]):
+        with pytest.raises(pm.Error, match="out must be a pair"):
+            pm.triangle_edges(tris, mesh.vertex_count, out=bad)
     shared = np.empty(9 * len(tris), np.uint32)
     tris32 = np.ascontiguousarray(tris, dtype=np.uint32)
     for bad in ((shared[:6 * len(tris)].reshape(-1, 2), shared[3 * len(tris):6 * len(tris)]),
