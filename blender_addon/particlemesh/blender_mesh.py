@@ -189,19 +189,28 @@ def _index_fields(collection, count, size, probe):
     (k = 0) and last (k = 1) item and returns them, read back as the first fields."""
     if bpy.app.version >= (3, 6, 0) or count == 0:
         return None
-    first, last = collection[0], collection[count - 1]
-    base = first.as_pointer()
-    if base == 0 or last.as_pointer() != base + size * (count - 1):
+    raw = _struct_rows(collection, count, size)
+    if raw is None:
         return None
-    if count > 1 and collection[1].as_pointer() != base + size:
-        return None
-    raw = np.ctypeslib.as_array((ctypes.c_uint8 * (size * count)).from_address(base))
-    fields = raw.view(np.uint32).reshape(count, size // 4)
-    for k, item in ((0, first), (1, last)):
+    fields = raw.view(np.uint32)
+    for k, item in ((0, collection[0]), (1, collection[count - 1])):
         expected = probe(item, k)
         if tuple(int(x) for x in fields[0 if k == 0 else count - 1, :len(expected)]) != expected:
             return None
     return fields
+
+
+def _struct_rows(collection, count, size):
+    """The first `count` (> 0) items of `collection` as a (count, size) uint8 numpy view of
+    their structs, or None where their addresses say they are not one array of `size`-byte
+    structs (the first, second and last item checked)."""
+    base = collection[0].as_pointer()
+    if base == 0 or collection[count - 1].as_pointer() != base + size * (count - 1):
+        return None
+    if count > 1 and collection[1].as_pointer() != base + size:
+        return None
+    raw = np.ctypeslib.as_array((ctypes.c_uint8 * (size * count)).from_address(base))
+    return raw.reshape(count, size)
 
 
 def _probe_loop(loop, k):
@@ -223,15 +232,10 @@ def _mpoly_flags(mesh, nt):
     """A numpy view of the flag bytes of the mesh's MPoly array, or None where the faces are
     not laid out as MPoly structs in one array (checked on the first and last faces)."""
     polygons = mesh.polygons
-    first, last = polygons[0], polygons[nt - 1]
-    base = first.as_pointer()
-    if base == 0 or last.as_pointer() != base + _MPOLY_SIZE * (nt - 1):
+    raw = _struct_rows(polygons, nt, _MPOLY_SIZE)
+    if raw is None:
         return None
-    if nt > 1 and polygons[1].as_pointer() != base + _MPOLY_SIZE:
-        return None
-    raw = np.ctypeslib.as_array((ctypes.c_uint8 * (_MPOLY_SIZE * nt)).from_address(base))
-    raw = raw.reshape(nt, _MPOLY_SIZE)
-    for index, face in ((0, first), (nt - 1, last)):
+    for index, face in ((0, polygons[0]), (nt - 1, polygons[nt - 1])):
         start, total = raw[index, :8].view(np.int32)
         if (start, total) != (face.loop_start, face.loop_total):
             return None
