@@ -122,11 +122,11 @@ inline Double2 load2(const double* p) {
 inline Double2 masked(Double2 v, Long2 keep) { return (Double2)((Long2)v & keep); }
 
 /// EdgeNeighbours::sum_by_coordinate's loop over the columns from cx (x, then y, z and cells,
-/// `stride` apart), inlined into one function per kernel below, each compiled per x86-64 level
-/// (PM_CPU_CLONES: with AVX-512 the loop takes a third less time).
+/// `stride` apart), compiled per x86-64 level (PM_CPU_CLONES: with AVX-512 the loop takes a
+/// third less time).
 template <Kernel K>
-[[gnu::always_inline]] inline double sum_columns(const double* cx, size_t stride, const Vec3& x, double r,
-                                                 double inv_r2, int32_t lo, int32_t hi, Vec3* gradient) {
+PM_CPU_CLONES double sum_columns(const double* cx, size_t stride, const Vec3& x, double r, double inv_r2, int32_t lo,
+                                 int32_t hi, Vec3* gradient) {
   // sum<K, false, AllCells>'s arithmetic, term for term, for two particles at once: the
   // difference, its square, the kernel and its derivative with their products in the same
   // order, the tests as masks. Each term is then added to the running sums one particle after
@@ -171,30 +171,11 @@ template <Kernel K>
   return v;
 }
 
-PM_CPU_CLONES double sum_columns_wyvill(const double* cx, size_t stride, const Vec3& x, double r, double inv_r2,
-                                        int32_t lo, int32_t hi, Vec3* gradient) {
-  return sum_columns<Kernel::Wyvill>(cx, stride, x, r, inv_r2, lo, hi, gradient);
-}
-PM_CPU_CLONES double sum_columns_poly4(const double* cx, size_t stride, const Vec3& x, double r, double inv_r2,
-                                        int32_t lo, int32_t hi, Vec3* gradient) {
-  return sum_columns<Kernel::Poly4>(cx, stride, x, r, inv_r2, lo, hi, gradient);
-}
-PM_CPU_CLONES double sum_columns_poly6(const double* cx, size_t stride, const Vec3& x, double r, double inv_r2,
-                                        int32_t lo, int32_t hi, Vec3* gradient) {
-  return sum_columns<Kernel::Poly6>(cx, stride, x, r, inv_r2, lo, hi, gradient);
-}
-
 }  // namespace
 
 template <Kernel K>
 double EdgeNeighbours::sum_by_coordinate(const Vec3& x, Vec3* gradient, int32_t lo, int32_t hi) const {
-  const double r = field_->cell_reach();
-  if constexpr (K == Kernel::Wyvill)
-    return sum_columns_wyvill(columns_.data(), stride_, x, r, inv_r2_, lo, hi, gradient);
-  else if constexpr (K == Kernel::Poly4)
-    return sum_columns_poly4(columns_.data(), stride_, x, r, inv_r2_, lo, hi, gradient);
-  else
-    return sum_columns_poly6(columns_.data(), stride_, x, r, inv_r2_, lo, hi, gradient);
+  return sum_columns<K>(columns_.data(), stride_, x, field_->cell_reach(), inv_r2_, lo, hi, gradient);
 }
 
 template <Kernel K, bool General, bool AllCells>
