@@ -65,17 +65,18 @@ inline SmallestSphere smallest_sphere(Vec3 a, Vec3 b, Vec3 c) {
     s.degenerate = true;
     return s;
   }
-  // Obtuse corner: the dot product of its two edges is clearly negative.
+  // Obtuse corner: the dot product of its two edges is clearly negative. (Only a negative one
+  // can be: the square root, the bound's only cost, is taken for those alone.)
   const double da = dot(u, v);             // at a
   const double db = dot(a - b, c - b);     // at b
   const double dc = dot(a - c, b - c);     // at c
   bool obtuse = false;
   int e0 = 0, e1 = 0;
-  if (da < -kRightAngleTolerance * std::sqrt(luu * lvv)) {
+  if (da < 0 && da < -kRightAngleTolerance * std::sqrt(luu * lvv)) {
     obtuse = true; e0 = 1; e1 = 2;
-  } else if (db < -kRightAngleTolerance * std::sqrt(luu * lww)) {
+  } else if (db < 0 && db < -kRightAngleTolerance * std::sqrt(luu * lww)) {
     obtuse = true; e0 = 0; e1 = 2;
-  } else if (dc < -kRightAngleTolerance * std::sqrt(lvv * lww)) {
+  } else if (dc < 0 && dc < -kRightAngleTolerance * std::sqrt(lvv * lww)) {
     obtuse = true; e0 = 0; e1 = 1;
   }
   Vec3 center_rel;

@@ -8,6 +8,7 @@
 
 #include <tbb/parallel_sort.h>
 
+#include "core/cpu_clones.h"
 #include "core/format_number.h"
 #include "core/length_limits.h"
 #include "core/parallel.h"
@@ -45,6 +46,20 @@ void check_options(const TriangulateOptions& o) {
 struct TestCounters {
   size_t candidates = 0, degenerate = 0, ties = 0;
 };
+
+/// For each of the n points (by coordinate), where it lies against the sphere `s`: its squared
+/// distance from the centre less r^2, as sphere_contains() computes it (the same operations in
+/// the same order, so the same bits), into d. Compiled per x86-64 level (PM_CPU_CLONES): the
+/// triangle test measures every neighbour of a point against each of its ~14 triplets' spheres.
+PM_CPU_CLONES void sphere_gaps(const double* x, const double* y, const double* z, size_t n,
+                               const detail::SmallestSphere& s, double* __restrict d) {
+  const double ax = s.a.x, ay = s.a.y, az = s.a.z;
+  const double cx = s.center_rel.x, cy = s.center_rel.y, cz = s.center_rel.z, r2 = s.r2;
+  for (size_t i = 0; i < n; ++i) {
+    const double ux = (x[i] - ax) - cx, uy = (y[i] - ay) - cy, uz = (z[i] - az) - cz;
+    d[i] = (ux * ux + uy * uy + uz * uz) - r2;
+  }
+}
 
 }  // namespace
 
@@ -258,6 +273,11 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
   std::vector<TestCounters> counters(blocks);
   parallel_blocks(blocks, 1, [&](size_t bb, size_t be) {
     std::vector<uint32_t> near;  // i's higher neighbours within L
+    std::vector<uint32_t> near_at;  // their places in i's list
+    // i's list by coordinate, and a sphere's gaps to them (sphere_gaps): where i has the
+    // largest L of a triplet (every triplet, on an even sampling), its blockers are measured
+    // all at once.
+    std::vector<double> lx, ly, lz, gap;
     for (size_t b = bb; b < be; ++b) {
       if (tracker.cancelled()) return;
       auto& tris = out[b];
@@ -268,8 +288,14 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
         const uint32_t* ne = nbr.end(i);
         const Vec3 pi = P[i];
         near.clear();
+        near_at.clear();
         for (const uint32_t* q = std::upper_bound(ni, ne, i); q != ne; ++q)
-          if (squared_distance(P[*q], pi) <= limit2(i, *q)) near.push_back(*q);
+          if (squared_distance(P[*q], pi) <= limit2(i, *q)) near.push_back(*q), near_at.push_back(uint32_t(q - ni));
+        const size_t len = size_t(ne - ni);
+        if (near.size() >= 2) {
+          lx.resize(len), ly.resize(len), lz.resize(len), gap.resize(len);
+          for (size_t at = 0; at < len; ++at) lx[at] = P[ni[at]].x, ly[at] = P[ni[at]].y, lz[at] = P[ni[at]].z;
+        }
         // With the limits lifted one point can have ~1e9 triplets, each tested against up to
         // 1e5 neighbours: the cancel flag is checked inside the point's work too (every 256
         // pairs; a check costs a relaxed load, and on the calling thread a clock read).
@@ -295,11 +321,31 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
             if (Lp[j] > Lp[widest]) widest = j;
             if (Lp[k] > Lp[widest]) widest = k;
             bool blocked = false, tie = false;
-            for (const uint32_t *q = nbr.begin(widest), *qe = nbr.end(widest); q != qe; ++q) {
-              if (*q == i || *q == j || *q == k) continue;
-              if (sphere_contains(s, P[*q], &tie)) {
-                blocked = true;
-                break;
+            if (widest == i) {
+              // The same verdict as the loop below, in the same order: the first neighbour
+              // strictly inside, or in the tie zone and inside by the symbolic tie-break;
+              // `tie` for any in the tie zone up to it. (i's own list does not hold i.)
+              sphere_gaps(lx.data(), ly.data(), lz.data(), len, s, gap.data());
+              gap[near_at[a]] = gap[near_at[c]] = INFINITY;  // j and k, the corners
+              const double tol = kTieTolerance * s.r2;
+              for (size_t at = 0; at < len; ++at) {
+                if (gap[at] > tol) continue;
+                if (gap[at] < -tol) {
+                  blocked = true;
+                  break;
+                }
+                if (sphere_contains(s, P[ni[at]], &tie)) {
+                  blocked = true;
+                  break;
+                }
+              }
+            } else {
+              for (const uint32_t *q = nbr.begin(widest), *qe = nbr.end(widest); q != qe; ++q) {
+                if (*q == i || *q == j || *q == k) continue;
+                if (sphere_contains(s, P[*q], &tie)) {
+                  blocked = true;
+                  break;
+                }
               }
             }
             if (tie) ++cnt.ties;
