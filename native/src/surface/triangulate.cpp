@@ -287,6 +287,7 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
         const uint32_t* ni = nbr.begin(i);
         const uint32_t* ne = nbr.end(i);
         const Vec3 pi = P[i];
+        uint32_t last_blocker = UINT32_MAX;  // the last point found inside one of i's spheres
         near.clear();
         near_at.clear();
         for (const uint32_t* q = std::upper_bound(ni, ne, i); q != ne; ++q)
@@ -321,30 +322,35 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
             if (Lp[j] > Lp[widest]) widest = j;
             if (Lp[k] > Lp[widest]) widest = k;
             bool blocked = false, tie = false;
-            if (widest == i) {
-              // The same verdict as the loop below, in the same order: the first neighbour
-              // strictly inside, or in the tie zone and inside by the symbolic tie-break;
-              // `tie` for any in the tie zone up to it. (i's own list does not hold i.)
+            // The point that blocked the last triplet first: the spheres of one point's
+            // triplets overlap (on an irregular sampling the first blocker in list order comes
+            // ~15 points in, and 96 % of candidates have one). Whether a point inside exists
+            // does not depend on the order the points are looked at in (every point inside is
+            // in the list: see above), so neither does the verdict; only which tie, if any,
+            // is met before it (`ties` counts candidates that met one).
+            if (last_blocker != UINT32_MAX && last_blocker != j && last_blocker != k &&
+                sphere_contains(s, P[last_blocker], &tie)) {
+              blocked = true;
+            } else if (widest == i) {
+              // The verdict of the loop below, in the same order: the first neighbour strictly
+              // inside, or in the tie zone and inside by the symbolic tie-break; `tie` for any
+              // in the tie zone up to it. (i's own list does not hold i.)
               sphere_gaps(lx.data(), ly.data(), lz.data(), len, s, gap.data());
               gap[near_at[a]] = gap[near_at[c]] = INFINITY;  // j and k, the corners
               const double tol = kTieTolerance * s.r2;
-              for (size_t at = 0; at < len; ++at) {
+              for (size_t at = 0; at < len && !blocked; ++at) {
                 if (gap[at] > tol) continue;
-                if (gap[at] < -tol) {
+                if (gap[at] < -tol || sphere_contains(s, P[ni[at]], &tie)) {
                   blocked = true;
-                  break;
-                }
-                if (sphere_contains(s, P[ni[at]], &tie)) {
-                  blocked = true;
-                  break;
+                  last_blocker = ni[at];
                 }
               }
             } else {
-              for (const uint32_t *q = nbr.begin(widest), *qe = nbr.end(widest); q != qe; ++q) {
+              for (const uint32_t *q = nbr.begin(widest), *qe = nbr.end(widest); q != qe && !blocked; ++q) {
                 if (*q == i || *q == j || *q == k) continue;
                 if (sphere_contains(s, P[*q], &tie)) {
                   blocked = true;
-                  break;
+                  last_blocker = *q;
                 }
               }
             }

@@ -80,7 +80,9 @@ struct TriangulateStats {
   size_t triplets = 0;           ///< pairs of higher neighbours within L, over all points (see max_triplets_per_point)
   size_t candidates = 0;         ///< non-degenerate triplets with all edges <= L
   size_t degenerate = 0;         ///< triplets with edges <= L skipped as collinear
-  size_t ties = 0;               ///< sphere tests decided by the symbolic tie-break
+  /// candidates whose test met a point in the tie zone (judged by the symbolic tie-break)
+  /// before one inside their sphere, if any
+  size_t ties = 0;
   size_t kept = 0;               ///< triangles kept
   /// With a local spacing: how irregular the sampling is (LocalSpacing::irregularity), and the
   /// factor every edge limit was lengthened by for it (1 on an even sampling; up to 1.75 where
