@@ -462,12 +462,102 @@ void search(const NeighborGrid& grid, size_t K, const Search& q, std::vector<uin
 
 }  // namespace
 
+double nearest_neighbors_cell(const NeighborGrid& grid, size_t K) {
+  constexpr size_t kSamples = 512;
+  constexpr double kRingTwo = 1.6;
+  const size_t n = grid.point_count();
+  const double h = grid.cell_size();
+  if (n < 8 * kSamples) return 0;  // (a small cloud: a second grid costs more than it saves)
+  // Each sample's k-th nearest within 3 cells (+inf beyond), from the 7^3 cells around it; one
+  // among more points than kBudget (a crowded cluster: its own grid serves it) counts as near.
+  constexpr size_t kBudget = 4096;
+  const double r2 = 9 * h * h;
+  std::vector<double> kth, d2;
+  kth.reserve(kSamples);
+  for (size_t i = 0; i < kSamples; ++i) {
+    const auto s = uint32_t(i * (n / kSamples));
+    const Vec3 p = grid.sorted_point(s);
+    const auto cc = grid.coord_of(p);
+    d2.clear();
+    size_t seen = 0;
+    grid.for_each_cell_in({cc[0] - 3, cc[1] - 3, cc[2] - 3}, {cc[0] + 3, cc[1] + 3, cc[2] + 3}, [&](uint32_t c) {
+      seen += grid.cell_end(c) - grid.cell_begin(c);
+      if (seen > kBudget) return;
+      for (uint32_t t = grid.cell_begin(c); t < grid.cell_end(c); ++t) {
+        const double e2 = squared_distance(grid.sorted_point(t), p);
+        if (e2 > 0 && e2 <= r2) d2.push_back(e2);
+      }
+    });
+    if (seen > kBudget) {
+      kth.push_back(0);
+    } else if (d2.size() < K) {
+      kth.push_back(INFINITY);
+    } else {
+      std::nth_element(d2.begin(), d2.begin() + ptrdiff_t(K - 1), d2.end());
+      kth.push_back(d2[K - 1]);
+    }
+  }
+  std::nth_element(kth.begin(), kth.begin() + kSamples / 2, kth.end());
+  const double median = std::sqrt(kth[kSamples / 2]);
+  if (!(median > kRingTwo * h)) return 0;
+  return std::min(median / kRingTwo, 2 * h);
+}
+
 std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, int k, ProgressTracker& tracker) {
   if (k < 1 || k > 64) throw Error(Status::InvalidArgument, "the neighbour count must be 1 to 64");
   const auto K = size_t(k);
-  std::vector<uint32_t> out(grid.point_count() * K, kNoNeighbor);
-  search(grid, K, Search{}, out, tracker);
+  const size_t n = grid.point_count();
+  std::vector<uint32_t> out(n * K, kNoNeighbor);
+  const double cell = nearest_neighbors_cell(grid, K);
+  std::optional<NeighborGrid> coarse;
+  if (cell > 0) {
+    try {
+      coarse.emplace(grid.sorted_points().data(), n, cell);
+    } catch (const Error&) {
+      // (the coarser grid too: searched on this one)
+    }
+  }
+  if (!coarse) {
+    search(grid, K, Search{}, out, tracker);
+    tracker.check();
+    return out;
+  }
+  // Searched on the coarser grid, ties broken and neighbours named by this grid's indices (its
+  // input is this grid's sorted points): the same k nearest wherever they are exact here, that
+  // is wherever this grid's search would find its k within its rings (the k-th within
+  // kMaxNeighborRing cells); the other points (their k-th farther, or fewer than k in reach)
+  // are searched on this grid as before, so every list is the one this grid gives.
+  std::vector<uint32_t> key_of(n), rows(n * K, kNoNeighbor);
+  for (uint32_t t = 0; t < n; ++t) key_of[t] = coarse->original_index(t);
+  std::vector<uint8_t> exact(n, 0);
+  std::vector<double> kth2(n, INFINITY);
+  Search q;
+  q.key_of = key_of.data();
+  q.exact = exact.data();
+  q.kth2 = kth2.data();
+  search(*coarse, K, q, rows, tracker);
   tracker.check();
+  const double h = grid.cell_size();
+  const double reach2 = double(kMaxNeighborRing) * h * double(kMaxNeighborRing) * h;  // as search() takes it
+  std::vector<uint8_t> again(n, 0);
+  bool any = false;
+  for (uint32_t t = 0; t < n; ++t) {
+    const uint32_t s = key_of[t];
+    if (exact[t] && kth2[t] <= reach2) {
+      std::copy(rows.begin() + ptrdiff_t(size_t(t) * K), rows.begin() + ptrdiff_t(size_t(t + 1) * K),
+                out.begin() + ptrdiff_t(size_t(s) * K));
+    } else {
+      again[s] = 1;
+      any = true;
+    }
+  }
+  if (any) {
+    Search rest;
+    rest.asked = again.data();
+    rest.ticks = false;
+    search(grid, K, rest, out, tracker);
+    tracker.check();
+  }
   return out;
 }
 

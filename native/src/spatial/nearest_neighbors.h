@@ -26,4 +26,14 @@ inline constexpr int32_t kMaxNeighborRing = 24;
 /// of about twice their spacing (k = 16 then lie within ring 2). The same for any thread count.
 std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, int k, ProgressTracker& tracker);
 
+/// The cell nearest_neighbors searches `grid`'s points in: the grid's own (0 returned), unless
+/// a sample of 512 of its points has its k-th nearest farther than 1.6 of its cells (points
+/// dropped at random on a surface: the median nearest distance, which sets the grid, is short
+/// against the 16th, at about 2.4 cells, and 90 % of such a search went on to ring 3, its
+/// costliest part); then one that brings the sample's median k-th nearest to 1.6 cells (at
+/// most twice the grid's), so that ring 2 holds it for most points. The lists are the grid's
+/// own either way: ties are broken by the grid's indices, and the points whose k nearest the
+/// grid's own rings would not reach are searched on it. Clouds under 4096 points keep it.
+double nearest_neighbors_cell(const NeighborGrid& grid, size_t k);
+
 }  // namespace particlemesh::detail

@@ -141,3 +141,33 @@ TEST(NearestNeighbors, MatchTheReferenceInCrowdedCells) {
   expect_reference(points, 0.1, 16);
   expect_reference(points, 0.07, 8);
 }
+
+TEST(NearestNeighbors, MatchTheReferenceOnARandomSamplingSearchedOnACoarserGrid) {
+  // Points dropped at random on a sphere, gridded as the local spacing grids them (cells of
+  // twice the median nearest distance): their 16th nearest lies about 2.4 cells away, so the
+  // search goes on a coarser grid (nearest_neighbors_cell) and must still give this grid's
+  // lists entry for entry: ties broken by this grid's indices (points on a small lattice, exact
+  // copies), and points whose 16 nearest this grid's rings would not reach (strays 25 to 35
+  // cells out, two of them together) searched on this grid, whatever its last ring holds.
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::vector<Vec3> points;
+  for (int i = 0; i < 6000; ++i) {
+    const Vec3 v{g(rng), g(rng), g(rng)};
+    points.push_back(v / norm(v));
+  }
+  for (int x = 0; x < 6; ++x)
+    for (int y = 0; y < 6; ++y) points.push_back(Vec3{0.0, 0.0, 1.0} + Vec3{double(x), double(y), 0.0} * 0.02);
+  for (int i = 0; i < 40; ++i) points.push_back(points[size_t(97 * i)]);
+  const double cell = 0.043;  // twice the median nearest distance of 6000 random points on it
+  for (int i = 0; i < 6; ++i) points.push_back(Vec3{1.0 + (25.0 + 2.0 * i) * cell, 0.1 * i, -0.2});
+  points.push_back({-2.6, 0.0, 0.0});
+  points.push_back({-2.6, 0.01, 0.0});
+  const NeighborGrid grid(points.data(), points.size(), cell);
+  ASSERT_GT(detail::nearest_neighbors_cell(grid, 16), cell);
+  expect_reference(points, cell, 16);
+  // An even sampling's grid serves as it is.
+  const PointCloud even = fibonacci_sphere(6000);
+  const NeighborGrid even_grid(even.positions.data(), even.size(), 2 * std::sqrt(4 * M_PI / 6000.0));
+  EXPECT_EQ(detail::nearest_neighbors_cell(even_grid, 16), 0.0);
+}
