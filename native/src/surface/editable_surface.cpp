@@ -18,6 +18,7 @@ EditableSurface::EditableSurface(const std::vector<Vec3>& P, const std::vector<F
   const auto& acc_count = g.accepted_count;
   alive_.assign(tris_.size(), 1);
   extra_of_.assign(n, kNoList);
+  changed_.assign(n, 0);
   vt_off_.assign(n + 1, 0);
   parallel_blocks(n, 8192, [&](size_t b, size_t e) {
     for (size_t v = b; v < e; ++v) vt_off_[v + 1] = acc_count[v];
@@ -63,6 +64,7 @@ EditableSurface::EditableSurface(const std::vector<Vec3>& P, const std::vector<F
   const size_t n = P_.size();
   alive_.assign(tris_.size(), 1);
   extra_of_.assign(n, kNoList);
+  changed_.assign(n, 0);
   vt_off_.assign(n + 1, 0);
   for (const Triangle& t : tris_)
     for (uint32_t v : t) ++vt_off_[v + 1];
@@ -115,21 +117,38 @@ void EditableSurface::add_triangle(const Triangle& T) {
     if (extra_of_[v] == kNoList) {
       extra_of_[v] = uint32_t(extra_.size());
       extra_.emplace_back();
-      extra_vertex_.push_back(v);
     }
     extra_[extra_of_[v]].push_back(id);
   }
+  mark_changed(T);
   toggle_boundary(T, true);
 }
 
 void EditableSurface::kill_triangle(uint32_t t) {
   alive_[t] = 0;
+  mark_changed(tris_[t]);
   toggle_boundary(tris_[t], false);
 }
 
 void EditableSurface::revive_triangle(uint32_t t) {
   alive_[t] = 1;
+  mark_changed(tris_[t]);
   toggle_boundary(tris_[t], true);
+}
+
+void EditableSurface::mark_changed(const Triangle& T) {
+  for (uint32_t v : T)
+    if (!changed_[v]) {
+      changed_[v] = 1;
+      changed_list_.push_back(v);
+    }
+}
+
+std::vector<uint32_t> EditableSurface::take_changed_vertices() {
+  for (uint32_t v : changed_list_) changed_[v] = 0;
+  std::vector<uint32_t> out;
+  out.swap(changed_list_);
+  return out;
 }
 
 void EditableSurface::toggle_boundary(const Triangle& T, bool entering) {

@@ -69,9 +69,13 @@ class EditableSurface {
   /// Boundary half-edges (a << 32 | b), unordered.
   const KeySet& boundary_set() const { return boundary_; }
   bool closed() const { return boundary_.empty(); }
-  /// The vertices with triangles added since indexing (not held to the growth's wedge rule),
-  /// in the order they got their first.
-  const std::vector<uint32_t>& vertices_with_added_triangles() const { return extra_vertex_; }
+  /// Whether v has triangles added since indexing (not held to the growth's wedge rule).
+  bool has_added_triangles(uint32_t v) const { return extra_of_[v] != kNoList; }
+  /// The vertices whose triangles changed (one added, killed or revived there) since the last
+  /// call (since indexing, the first time), each once, in the order they first changed; the
+  /// record then starts afresh. unpinch's: a vertex whose triangles did not change since it
+  /// last looked is as it found it.
+  std::vector<uint32_t> take_changed_vertices();
 
   /// Boundary loops, each a vertex sequence following the boundary edges v_i -> v_{i+1};
   /// loops through a vertex twice are split there. Sorted, each starting at its smallest
@@ -100,6 +104,7 @@ class EditableSurface {
   /// The boundary half-edges as T enters the surface (its edges' twins stop being boundary,
   /// its other edges become boundary) or, with entering false, leaves it.
   void toggle_boundary(const Triangle& T, bool entering);
+  void mark_changed(const Triangle& T);
 
   const std::vector<Vec3>& P_;
   const std::vector<Frame>& frame_;
@@ -110,9 +115,10 @@ class EditableSurface {
   /// vertices got their first), and per vertex the index of its list, or kNoList.
   static constexpr uint32_t kNoList = 0xffffffffu;
   std::vector<std::vector<uint32_t>> extra_;
-  std::vector<uint32_t> extra_vertex_;  ///< per list: its vertex
   std::vector<uint32_t> extra_of_;
   KeySet boundary_;
+  std::vector<uint8_t> changed_;          ///< per vertex: in changed_list_
+  std::vector<uint32_t> changed_list_;    ///< since take_changed_vertices
 };
 
 }  // namespace particlemesh::detail

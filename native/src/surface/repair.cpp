@@ -19,8 +19,12 @@ size_t unpinch(EditableSurface& s) {
   std::vector<uint32_t> suspects;
   for (size_t i = 1; i < starts.size(); ++i)
     if (starts[i] == starts[i - 1]) suspects.push_back(starts[i]);
-  // Fills and insertions are not held to the wedge rule: check their corners too.
-  for (uint32_t v : s.vertices_with_added_triangles()) suspects.push_back(v);
+  // Fills and insertions are not held to the wedge rule: check their corners too, those whose
+  // triangles changed since the last unpinch (any other was looked at then, and is as it was:
+  // its fans then, fixed or one, are its fans now). On a random sampling the fills touch 40 %
+  // of the vertices, and every pass looked at all of them again.
+  for (uint32_t v : s.take_changed_vertices())
+    if (s.has_added_triangles(v)) suspects.push_back(v);
   std::sort(suspects.begin(), suspects.end());
   suspects.erase(std::unique(suspects.begin(), suspects.end()), suspects.end());
   size_t removed_fans = 0;

@@ -73,7 +73,8 @@ constexpr size_t kMaxWidthLoop = 128;
 
 /// At vertices whose triangles form more than one fan, keep the largest fan. Such a vertex
 /// has a gap between its fans, so it starts two or more boundary edges: only those, and the
-/// corners of triangles added since indexing, are checked. Returns the fans removed.
+/// corners of triangles added since indexing whose triangles changed since the last call
+/// (EditableSurface::take_changed_vertices), are checked. Returns the fans removed.
 size_t unpinch(EditableSurface& s);
 
 /// A particle the surface passed by (active, in no triangle) is inserted into the surface

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "stage_support.h"
 
 using namespace particlemesh;
@@ -34,7 +36,31 @@ TEST(EditableSurface, BoundaryFollowsAddedAndKilledTriangles) {
   EXPECT_EQ(e.trace_loops().size(), 1u);
   EXPECT_FALSE(e.starts_boundary(s.id(1, 1)));
   EXPECT_EQ(e.take().size(), 18u);
-  EXPECT_EQ(e.vertices_with_added_triangles().size(), 4u);
+  size_t added = 0;
+  for (uint32_t v = 0; v < e.point_count(); ++v) added += e.has_added_triangles(v);
+  EXPECT_EQ(added, 4u);
+  EXPECT_TRUE(e.has_added_triangles(s.id(2, 2)));
+}
+
+TEST(EditableSurface, ChangedVerticesAreTheCornersOfTrianglesAddedKilledOrRevived) {
+  const test::Sheet s(4, 4);
+  EditableSurface e(s.P, s.frames, s.tris);
+  EXPECT_TRUE(e.take_changed_vertices().empty());  // indexing changes nothing
+  e.kill_triangle(0);
+  const Triangle T = e.triangle(0);
+  std::vector<uint32_t> got = e.take_changed_vertices();
+  std::sort(got.begin(), got.end());
+  std::vector<uint32_t> want(T.begin(), T.end());
+  std::sort(want.begin(), want.end());
+  EXPECT_EQ(got, want);
+  EXPECT_TRUE(e.take_changed_vertices().empty());  // the record starts afresh
+  e.revive_triangle(0);
+  e.add_triangle({s.id(3, 3), s.id(2, 3), s.id(3, 2)});  // (a copy's corners: each listed once)
+  e.kill_triangle(0);
+  got = e.take_changed_vertices();
+  EXPECT_EQ(got.size(), 6u);
+  std::sort(got.begin(), got.end());
+  EXPECT_TRUE(std::unique(got.begin(), got.end()) == got.end());
 }
 
 TEST(EditableSurface, LoopsThroughAVertexTwiceAreSplitThere) {

@@ -21,6 +21,31 @@ TEST(Repair, UnpinchKeepsTheLargestFan) {
   EXPECT_EQ(unpinch(e), 0u);
 }
 
+TEST(Repair, UnpinchLooksAgainWhereTrianglesChanged) {
+  // Two closed fans at vertex 5 that share no edge (two sheets touching at a point): 5 starts
+  // no boundary edge, so only its added triangles make it a suspect. The first fan is indexed,
+  // the second added after an unpinch that found nothing: the next one must look at 5 again;
+  // after it, a triangle of the removed fan brought back pinches 5 once more.
+  const test::Sheet s(4, 4);
+  const std::vector<Triangle> first = {{5, 0, 1}, {5, 1, 2}, {5, 2, 3}, {5, 3, 0}};
+  EditableSurface e(s.P, s.frames, first);
+  EXPECT_EQ(unpinch(e), 0u);
+  for (const Triangle& t : std::vector<Triangle>{{5, 8, 9}, {5, 9, 10}, {5, 10, 11}, {5, 11, 8}}) e.add_triangle(t);
+  EXPECT_EQ(unpinch(e), 1u);
+  size_t live = 0;
+  uint32_t killed = EditableSurface::kNoTriangle;
+  for (uint32_t t = 0; t < e.triangle_slots(); ++t) {
+    if (e.alive(t)) ++live;
+    else killed = t;
+  }
+  EXPECT_EQ(live, 4u);
+  ASSERT_NE(killed, EditableSurface::kNoTriangle);
+  EXPECT_EQ(unpinch(e), 0u);
+  e.revive_triangle(killed);
+  EXPECT_EQ(unpinch(e), 1u);
+  EXPECT_EQ(unpinch(e), 0u);
+}
+
 TEST(Repair, UnusedParticlesAreInsertedIntoTheTriangleOrEdgeUnderThem) {
   // A sheet with two extra particles: one over the middle of a triangle (0.1 above it) and
   // one on an outline edge. Both end up vertices of the surface; the windings stay.
