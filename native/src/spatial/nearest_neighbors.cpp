@@ -227,8 +227,7 @@ PM_CPU_CLONES size_t block_distances(const double* x, const double* y, const dou
                                      double reach2, double* __restrict e) {
   double within = 0;
   for (size_t i = 0; i < m; ++i) {
-    const double dx = x[i] - p.x, dy = y[i] - p.y, dz = z[i] - p.z;
-    const double d2 = dx * dx + dy * dy + dz * dz;
+    const double d2 = squared_distance(Vec3{x[i], y[i], z[i]}, p);
     e[i] = d2;
     within += (d2 > 0 && d2 <= reach2) ? 1.0 : 0.0;
   }

@@ -93,10 +93,14 @@ inline SmallestSphere smallest_sphere(Vec3 a, Vec3 b, Vec3 c) {
   return SmallestSphere{false, obtuse, a, b, c, center_rel, r2, n, 1.0 / n2, e0, e1};
 }
 
+/// Where q lies against the sphere: its squared distance from the centre less r^2 (negative
+/// inside), as every test of the sphere takes it.
+inline double sphere_gap(const SmallestSphere& s, const Vec3& q) { return squared_norm((q - s.a) - s.center_rel) - s.r2; }
+
 /// Does q count as strictly inside the sphere? `tie` is set when the symbolic tie-break
 /// decided. q must not be one of the corners.
 inline bool sphere_contains(const SmallestSphere& s, const Vec3& q, bool* tie = nullptr) {
-  const double d = squared_norm((q - s.a) - s.center_rel) - s.r2;
+  const double d = sphere_gap(s, q);
   const double tol = kTieTolerance * s.r2;
   if (d < -tol) return true;
   if (d > tol) return false;

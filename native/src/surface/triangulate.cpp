@@ -47,18 +47,13 @@ struct TestCounters {
   size_t candidates = 0, degenerate = 0, ties = 0;
 };
 
-/// For each of the n points (by coordinate), where it lies against the sphere `s`: its squared
-/// distance from the centre less r^2, as sphere_contains() computes it (the same operations in
-/// the same order, so the same bits), into d. Compiled per x86-64 level (PM_CPU_CLONES): the
-/// triangle test measures every neighbour of a point against each of its ~14 triplets' spheres.
+/// detail::sphere_gap of each of the n points (by coordinate) against the sphere `s`, into d:
+/// the same arithmetic as sphere_contains(), so the same bits. Compiled per x86-64 level
+/// (PM_CPU_CLONES): the triangle test measures every neighbour of a point against each of its
+/// ~14 triplets' spheres.
 PM_CPU_CLONES void sphere_gaps(const double* x, const double* y, const double* z, size_t n,
                                const detail::SmallestSphere& s, double* __restrict d) {
-  const double ax = s.a.x, ay = s.a.y, az = s.a.z;
-  const double cx = s.center_rel.x, cy = s.center_rel.y, cz = s.center_rel.z, r2 = s.r2;
-  for (size_t i = 0; i < n; ++i) {
-    const double ux = (x[i] - ax) - cx, uy = (y[i] - ay) - cy, uz = (z[i] - az) - cz;
-    d[i] = (ux * ux + uy * uy + uz * uz) - r2;
-  }
+  for (size_t i = 0; i < n; ++i) d[i] = detail::sphere_gap(s, Vec3{x[i], y[i], z[i]});
 }
 
 }  // namespace
