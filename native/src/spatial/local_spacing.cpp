@@ -83,11 +83,13 @@ double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, i
   thickness = NAN;
   if (m < 6) return triangle_reach(grid, s, ids, m);
   const Vec3 p = grid.sorted_point(s);
-  d.clear();
+  // (Written by index: a push_back's possible reallocation, a call, kept the running largest
+  // in memory.)
+  d.resize(size_t(m));
   double farthest2 = 0;  // squared: the square root of the largest is the largest root
   for (int k = 0; k < m; ++k) {
-    d.push_back(grid.sorted_point(ids[k]) - p);
-    farthest2 = std::max(farthest2, squared_norm(d.back()));
+    d[size_t(k)] = grid.sorted_point(ids[k]) - p;
+    farthest2 = std::max(farthest2, squared_norm(d[size_t(k)]));
   }
   const double farthest = std::sqrt(farthest2);
   Eigen::Vector3d u, w;
@@ -117,8 +119,10 @@ double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, i
       if (e2 > 0) d.push_back(grid.sorted_point(t) - p);
     });
   }
-  std::array<double, 6> nearest;  // squared until the end (the root of the least is the least root)
-  nearest.fill(INFINITY);
+  // Each sector's least squared distance (the root of the least is the least root), kept in
+  // six running minima that every offset updates, its own sector's by a select: indexing an
+  // array by the sector made each update wait for the last one's store.
+  double n0 = INFINITY, n1 = INFINITY, n2 = INFINITY, n3 = INFINITY, n4 = INFINITY, n5 = INFINITY;
   constexpr double kHalfSqrt3 = 0.8660254037844386;
   for (const Vec3& x : d) {
     const double a = x.x * u.x() + x.y * u.y() + x.z * u.z();
@@ -130,8 +134,15 @@ double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, i
     for (int j = 1; j < 3; ++j)
       if (std::abs(c[j]) > std::abs(c[best])) best = j;
     const int sector = c[best] >= 0 ? best : best + 3;
-    nearest[size_t(sector)] = std::min(nearest[size_t(sector)], squared_norm(x));
+    const double e = squared_norm(x);
+    n0 = sector == 0 ? std::min(n0, e) : n0;
+    n1 = sector == 1 ? std::min(n1, e) : n1;
+    n2 = sector == 2 ? std::min(n2, e) : n2;
+    n3 = sector == 3 ? std::min(n3, e) : n3;
+    n4 = sector == 4 ? std::min(n4, e) : n4;
+    n5 = sector == 5 ? std::min(n5, e) : n5;
   }
+  const std::array<double, 6> nearest{n0, n1, n2, n3, n4, n5};
   std::array<double, 6> found;
   int f = 0;
   for (double x : nearest)
