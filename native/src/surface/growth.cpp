@@ -138,10 +138,13 @@ class Growth {
       }
       if (!heap.empty()) {
         const uint32_t c = heap.pop();
-        if (!heap.empty()) {  // likely the next one: load it while this one is checked
+        if (!heap.empty()) {  // likely the next one: load what it reads while this one is checked
           const uint32_t next = heap.top();
-          __builtin_prefetch(&r.cand[next]);
           __builtin_prefetch(&r.state[next]);
+          for (const uint32_t v : r.cand[next]) {
+            __builtin_prefetch(&acc_count_[v]);
+            __builtin_prefetch(&vc_[vc_off_[v]]);
+          }
         }
         const Check k = !flat_ok && c >= flat_from_ ? kInvalid : check(c, r);
         if (k == kOk) accept(c, heap, r);
