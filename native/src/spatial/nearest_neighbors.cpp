@@ -63,12 +63,11 @@ void append(Ranges& ranges, uint32_t begin, uint32_t end) {
     ranges.push_back({begin, end});
 }
 
-/// Appends the points of column `col`'s cells with z in [cc.z - ring, cc.z + ring] whose
-/// coordinates differ from `cc` by more than `inner` along some axis (dxy: the column's
-/// distance in x, y): those within `near` of `cc` (Chebyshev) to `first`, the others to `rest`.
+/// Appends to `out` the points of column `col`'s cells with z in [cc.z - ring, cc.z + ring]
+/// whose coordinates differ from `cc` by more than `inner` along some axis (dxy: the column's
+/// distance in x, y).
 void gather_column(const NeighborGrid& grid, const Columns& cols, uint32_t col, int32_t dxy,
-                   const NeighborGrid::CellCoord& cc, int32_t ring, int32_t inner, int32_t near, Ranges& first,
-                   Ranges& rest) {
+                   const NeighborGrid::CellCoord& cc, int32_t ring, int32_t inner, Ranges& out) {
   // z increases along the column's run of cells.
   uint32_t lo = cols.start[col], hi = cols.start[col + 1];
   const uint32_t end = hi;
@@ -84,7 +83,7 @@ void gather_column(const NeighborGrid& grid, const Columns& cols, uint32_t col, 
     if (dz > ring) break;
     const int32_t d = std::max(dxy, std::abs(dz));
     if (d <= inner) continue;
-    append(d <= near ? first : rest, grid.cell_begin(c), grid.cell_end(c));
+    append(out, grid.cell_begin(c), grid.cell_end(c));
   }
 }
 
@@ -92,12 +91,13 @@ void gather_column(const NeighborGrid& grid, const Columns& cols, uint32_t col, 
 /// order) for the cells of one block taken in increasing order, found without a hash look-up. The
 /// cells' columns never decrease, so for each x offset a cursor into the sorted column keys
 /// only moves forward, and the columns (x + dx, y - 2 .. y + 2) are the keys it passes over.
+/// Each column's cells within the ring along z are consecutive, so their points are one run:
+/// appended whole, not cell by cell (split by ring, the runs were a tenth of the search).
 class RingTwoColumns {
  public:
   explicit RingTwoColumns(const Columns& cols) : cols_(cols) {}
 
-  void gather(const NeighborGrid& grid, const NeighborGrid::CellCoord& cc, int32_t near, Ranges& first,
-              Ranges& rest) {
+  void gather(const NeighborGrid& grid, const NeighborGrid::CellCoord& cc, Ranges& block) {
     constexpr int32_t kRing = 2;
     const auto& keys = cols_.keys;
     for (int32_t dx = -kRing; dx <= kRing; ++dx) {
@@ -109,9 +109,17 @@ class RingTwoColumns {
       if (!started_) at = uint32_t(std::lower_bound(keys.begin(), keys.end(), from) - keys.begin());
       while (at < keys.size() && keys[at] < from) ++at;
       for (uint32_t col = at; col < keys.size() && keys[col] <= to; ++col) {
-        const auto y = int32_t(keys[col] & 0x1fffff);
-        const int32_t dxy = std::max(std::abs(dx), std::abs(y - cc[1]));
-        gather_column(grid, cols_, col, dxy, cc, kRing, -1, near, first, rest);
+        // The column's cells with z within the ring: consecutive cells, so one run of points.
+        uint32_t lo = cols_.start[col], hi = cols_.start[col + 1];
+        const uint32_t end = hi;
+        while (lo < hi) {  // the first cell with z >= cc.z - ring
+          const uint32_t mid = lo + (hi - lo) / 2;
+          if (grid.cell_coord(mid)[2] < cc[2] - kRing) lo = mid + 1;
+          else hi = mid;
+        }
+        uint32_t last = lo;
+        while (last < end && grid.cell_coord(last)[2] <= cc[2] + kRing) ++last;
+        if (last > lo) append(block, grid.cell_begin(lo), grid.cell_begin(last));
       }
     }
     started_ = true;
@@ -152,7 +160,7 @@ class Shells {
     const int32_t r = ++ring_;
     constexpr int32_t kTop = NeighborGrid::kMaxCellsPerAxis + 3;
     // The columns known so far: their cells r away along z.
-    for (const auto& [col, d] : known_) gather_column(grid_, cols_, col, d, cc_, r, r - 1, r, out, out);
+    for (const auto& [col, d] : known_) gather_column(grid_, cols_, col, d, cc_, r, r - 1, out);
     const size_t old_known = known_.size();
     // The rows so far: one column more at each end where the keys there are (x, y -/+ r).
     const auto& keys = cols_.keys;
@@ -171,7 +179,7 @@ class Shells {
       for (uint32_t col = lo; col < hi; ++col) known_.push_back({col, r});
     // The new columns: every cell of theirs within r along z.
     for (size_t i = old_known; i < known_.size(); ++i)
-      gather_column(grid_, cols_, known_[i].first, r, cc_, r, r - 1, r, out, out);
+      gather_column(grid_, cols_, known_[i].first, r, cc_, r, r - 1, out);
     return r;
   }
 
@@ -345,7 +353,7 @@ void search(const NeighborGrid& grid, size_t K, const Search& q, std::vector<uin
   const Columns cols(grid);
   parallel_blocks(grid.cell_count(), 256, [&](size_t cb, size_t ce) {
     if (tracker.cancelled()) return;
-    Ranges block, rest;  // the points of the cells within `ring` of the cell
+    Ranges block;  // the points of the cells within `ring` of the cell
     std::vector<uint32_t> open;  // the cell's points whose k nearest are not all found yet
     // The block's points by coordinate (and their sorted indices), and one point's squared
     // distances to them: every point of the cell measures the whole block, in a loop the
@@ -361,7 +369,6 @@ void search(const NeighborGrid& grid, size_t K, const Search& q, std::vector<uin
     for (size_t c = cb; c < ce; ++c) {
       const auto cc = grid.cell_coord(uint32_t(c));
       block.clear();
-      rest.clear();
       open.clear();
       for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s)
         if (wanted(s)) open.push_back(s);
@@ -369,10 +376,9 @@ void search(const NeighborGrid& grid, size_t K, const Search& q, std::vector<uin
         if (q.ticks) tracker.tick(grid.cell_end(uint32_t(c)) - grid.cell_begin(uint32_t(c)));
         continue;
       }
-      // The first two rings at once, the nearer cells first (the running k nearest then
-      // settle early and the farther points are mostly turned away by one comparison).
-      ring_two.gather(grid, cc, 1, block, rest);
-      block.insert(block.end(), rest.begin(), rest.end());
+      // The first two rings at once, a run of points per column (the order of the block's
+      // points changes no result: the k nearest are ranked by distance and index).
+      ring_two.gather(grid, cc, block);
       bool walking = false;
       for (int32_t ring = 2; !open.empty(); ++ring) {
         if (ring > 2) {
