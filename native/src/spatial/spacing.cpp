@@ -272,13 +272,17 @@ void nearest_squared(const NeighborGrid& grid, const std::vector<uint8_t>& query
         continue;
       }
       const int na = walk.around(uint32_t(c), around);
-      bx.clear(), by.clear(), bz.clear();
+      // (Written by index into room for all: push_back's possible reallocation kept the copy
+      // from running as a plain loop.)
+      size_t m = 0;
+      for (int a = 0; a < na; ++a) m += grid.cell_end(around[a]) - grid.cell_begin(around[a]);
+      if (bx.size() < m) bx.resize(m), by.resize(m), bz.resize(m);
+      m = 0;
       for (int a = 0; a < na; ++a)
-        for (uint32_t t = grid.cell_begin(around[a]); t < grid.cell_end(around[a]); ++t) {
+        for (uint32_t t = grid.cell_begin(around[a]); t < grid.cell_end(around[a]); ++t, ++m) {
           const Vec3& q = grid.sorted_point(t);
-          bx.push_back(q.x), by.push_back(q.y), bz.push_back(q.z);
+          bx[m] = q.x, by[m] = q.y, bz[m] = q.z;
         }
-      const size_t m = bx.size();
       for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) {
         if (!query[s] || found(s)) continue;
         const Vec3 p = grid.sorted_point(s);

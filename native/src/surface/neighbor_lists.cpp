@@ -61,15 +61,19 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
       std::vector<uint32_t> bt, kept_t;
       for (size_t c = cb; c < ce; ++c) {
         const int na = walk.around(uint32_t(c), around);
-        bx.clear(), by.clear(), bz.clear(), bt.clear();
+        // (Written by index into room for all: push_back's possible reallocation kept the
+        // copy from running as a plain loop.)
+        size_t m = 0;
+        for (int a = 0; a < na; ++a) m += grid.cell_end(around[a]) - grid.cell_begin(around[a]);
+        if (bt.size() < m) bx.resize(m), by.resize(m), bz.resize(m), bt.resize(m), bd.resize(m), kept_t.resize(m);
+        m = 0;
         for (int a = 0; a < na; ++a)
           for (uint32_t t = grid.cell_begin(around[a]); t < grid.cell_end(around[a]); ++t) {
             if (kDuplicates && rep[t] != t) continue;
             const Vec3& q = grid.sorted_point(t);
-            bx.push_back(q.x), by.push_back(q.y), bz.push_back(q.z), bt.push_back(t);
+            bx[m] = q.x, by[m] = q.y, bz[m] = q.z, bt[m] = t;
+            ++m;
           }
-        const size_t m = bt.size();
-        bd.resize(m), kept_t.resize(m);
         for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) {
           if (kDuplicates && rep[s] != s) continue;
           const Vec3 p = grid.sorted_point(s);
