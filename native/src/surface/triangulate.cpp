@@ -45,6 +45,7 @@ void check_options(const TriangulateOptions& o) {
 
 struct TestCounters {
   size_t candidates = 0, degenerate = 0, ties = 0;
+  uint64_t triplets = 0;
 };
 
 /// detail::sphere_gap of each of the n points (by coordinate) against the sphere `s`, into d:
@@ -214,10 +215,29 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
     return l * l;
   };
 
-  // The test's work, counted before it starts: the pairs (j, k) of each point's higher
-  // neighbours within L are the triplets it examines (max_triplets_per_point).
+  // The test's work, bounded before it starts: the pairs (j, k) of each point's higher
+  // neighbours within L are the triplets it examines (max_triplets_per_point). First by the
+  // pairs of its higher neighbours, within L or not (no distance taken); only where that bound
+  // is over the limit are the triplets counted exactly here (else the test counts them, the
+  // same sum, as it goes: the exact count was a pass over every list's distances).
   const auto& P = grid.sorted_points();
+  const uint64_t distinct = n - duplicates;
+  const uint64_t most_triplets = uint64_t(options.max_triplets_per_point) * distinct;
+  uint64_t triplet_bound = 0;
   {
+    std::atomic<uint64_t> bound{0};
+    parallel_blocks(n, 8192, [&](size_t b, size_t e) {
+      uint64_t sum = 0;
+      for (size_t i = b; i < e; ++i) {
+        const uint64_t higher = uint64_t(nbr.end(uint32_t(i)) - std::upper_bound(nbr.begin(uint32_t(i)), nbr.end(uint32_t(i)), uint32_t(i)));
+        sum += higher * (higher - (higher > 0)) / 2;
+      }
+      bound.fetch_add(sum, std::memory_order_relaxed);
+    });
+    triplet_bound = bound.load();
+  }
+  const bool counted = options.max_triplets_per_point > 0 && triplet_bound > most_triplets;
+  if (counted) {
     std::atomic<uint64_t> triplets{0};
     // Blocks of about a million list entries (4096 points on even samplings): with huge lists
     // smaller blocks, so that the calling thread, which alone may ask the callback, is never
@@ -243,8 +263,7 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
     });
     tracker.check();
     st.triplets = triplets.load();
-    const uint64_t distinct = n - duplicates;
-    if (options.max_triplets_per_point > 0 && st.triplets > uint64_t(options.max_triplets_per_point) * distinct)
+    if (st.triplets > most_triplets)
       throw Error(Status::LimitExceeded,
                   "the triangle test would examine " + std::to_string(st.triplets) + " candidate triplets (" +
                       std::to_string(st.triplets / distinct) + " per point, more than max_triplets_per_point = " +
@@ -261,7 +280,8 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
   // Blocks of 1024 points, or fewer when points have many triplets (the limits lifted: up to
   // ~1e6 per point), so that no block keeps the calling thread - the only one that calls the
   // progress callback - waiting for long. The triangles are joined in block order either way.
-  const uint64_t per_point = st.triplets / std::max<uint64_t>(1, n - duplicates);
+  // (Without the exact count, by its bound.)
+  const uint64_t per_point = (counted ? st.triplets : triplet_bound) / std::max<uint64_t>(1, distinct);
   const size_t block = std::clamp<size_t>(size_t(65536 / std::max<uint64_t>(1, per_point)), 1, 1024);
   const size_t blocks = (n + block - 1) / block;
   std::vector<std::vector<Triangle>> out(blocks);
@@ -287,6 +307,7 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
         near_at.clear();
         for (const uint32_t* q = std::upper_bound(ni, ne, i); q != ne; ++q)
           if (squared_distance(P[*q], pi) <= limit2(i, *q)) near.push_back(*q), near_at.push_back(uint32_t(q - ni));
+        cnt.triplets += uint64_t(near.size()) * (uint64_t(near.size()) - (near.size() > 0)) / 2;
         const size_t len = size_t(ne - ni);
         if (near.size() >= 2) {
           lx.resize(len), ly.resize(len), lz.resize(len), gap.resize(len);
@@ -374,6 +395,7 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
     st.candidates += counters[b].candidates;
     st.degenerate += counters[b].degenerate;
     st.ties += counters[b].ties;
+    if (!counted) st.triplets += counters[b].triplets;
   }
   tracker.stage("sorting", at(0.95), at(1.0));
   std::vector<Triangle>& tris = raw.triangles;
