@@ -85,6 +85,20 @@ struct Moments {
     yz += d.y * d.z;
     zz += d.z * d.z;
   }
+  /// add(d) where `in`, else +0.0 added to every sum: the same sums (see the caller).
+  void add_if(const Vec3& d, bool in) {
+    const Vec3 e = in ? d : Vec3{};
+    count += in;
+    x += e.x;
+    y += e.y;
+    z += e.z;
+    xx += e.x * e.x;
+    xy += e.x * e.y;
+    xz += e.x * e.z;
+    yy += e.y * e.y;
+    yz += e.y * e.z;
+    zz += e.z * e.z;
+  }
 };
 
 /// PCA of the offsets: the normal, and the ratio of the two smallest variances (small for
@@ -183,7 +197,11 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
       m.add(Vec3{});  // the point itself
       for (const uint32_t* q = lists.begin(uint32_t(s)); q != lists.end(uint32_t(s)); ++q) {
         const Vec3 d = grid.sorted_point(*q) - p;
-        if (squared_norm(d) <= r2) m.add(d);
+        // Without a branch (about a quarter of a list lies beyond the radius, in no pattern
+        // a branch predictor learns): a neighbour beyond adds +0.0 to every sum, which
+        // changes none of them (a sum that starts at +0.0 is never -0.0).
+        const bool in = squared_norm(d) <= r2;
+        m.add_if(d, in);
       }
       if (m.count < 3) continue;  // too few neighbours for a plane: unknown (0,0,0)
       double flatness = 0;
