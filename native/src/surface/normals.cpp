@@ -73,19 +73,8 @@ void gather_near(const NeighborGrid& grid, const NeighborLists& lists, uint32_t 
 struct Moments {
   int count = 0;
   double x = 0, y = 0, z = 0, xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
-  void add(const Vec3& d) {
-    ++count;
-    x += d.x;
-    y += d.y;
-    z += d.z;
-    xx += d.x * d.x;
-    xy += d.x * d.y;
-    xz += d.x * d.z;
-    yy += d.y * d.y;
-    yz += d.y * d.z;
-    zz += d.z * d.z;
-  }
-  /// add(d) where `in`, else +0.0 added to every sum: the same sums (see the caller).
+  void add(const Vec3& d) { add_if(d, true); }
+  /// add(d) where `in`, else +0.0 added to every sum: the same sums (see pca_normals_sorted).
   void add_if(const Vec3& d, bool in) {
     const Vec3 e = in ? d : Vec3{};
     count += in;
