@@ -20,28 +20,13 @@
 #include <vector>
 
 #include "core/progress_tracker.h"
+#include "core/uninit_allocator.h"
 #include "particlemesh/core/vec3.h"
 #include "particlemesh/mesh/tri_mesh.h"
 #include "surface/tangent_arcs.h"
 #include "surface/view_rays.h"
 
 namespace PM_NAMESPACE::detail {
-
-/// An allocator whose resize leaves trivial elements uninitialised: the corner lists (150 MB
-/// at 1M points) are then first touched by the parallel pass that fills them, not zeroed
-/// by a serial one before.
-template <class T>
-struct UninitAllocator : std::allocator<T> {
-  template <class U>
-  struct rebind {
-    using other = UninitAllocator<U>;
-  };
-  template <class U, class... Args>
-  void construct(U* p, Args&&... args) {
-    if constexpr (sizeof...(Args) == 0) ::new (static_cast<void*>(p)) U;
-    else ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
-  }
-};
 
 /// A candidate's corner at a vertex: the candidate, the vertices after and before the
 /// vertex in its winding, and its arc about the vertex normal. Kept per vertex, so that the
