@@ -235,8 +235,13 @@ std::vector<double> local_spacing_of_distinct(const NeighborGrid& grid, double r
   if (shape) {
     // Medians over the points that have one (NaN where a neighbour is at infinity, or with no
     // plane fitted).
-    shape->irregularity = median_of_finite(variation);
-    shape->thickness = median_of_finite(thickness);
+    // (Two selections over a million values each: side by side.)
+    parallel_blocks(2, 1, [&](size_t b, size_t e) {
+      for (size_t k = b; k < e; ++k) {
+        if (k == 0) shape->irregularity = median_of_finite(variation);
+        else shape->thickness = median_of_finite(thickness);
+      }
+    });
     // Past the cap: rows far apart for their spacing along them (several times the nearest
     // distance), or a part sampled sparser all round (about once).
     std::vector<double> over;
