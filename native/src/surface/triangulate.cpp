@@ -229,7 +229,8 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
     parallel_blocks(n, 8192, [&](size_t b, size_t e) {
       uint64_t sum = 0;
       for (size_t i = b; i < e; ++i) {
-        const uint64_t higher = uint64_t(nbr.end(uint32_t(i)) - std::upper_bound(nbr.begin(uint32_t(i)), nbr.end(uint32_t(i)), uint32_t(i)));
+        const uint32_t* end = nbr.end(uint32_t(i));
+        const uint64_t higher = uint64_t(end - std::upper_bound(nbr.begin(uint32_t(i)), end, uint32_t(i)));
         sum += higher * (higher - (higher > 0)) / 2;
       }
       bound.fetch_add(sum, std::memory_order_relaxed);
