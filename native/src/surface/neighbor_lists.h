@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/progress_tracker.h"
+#include "core/uninit_allocator.h"
 #include "particlemesh/spatial/neighbor_grid.h"
 
 namespace PM_NAMESPACE::detail {
@@ -16,7 +17,8 @@ namespace PM_NAMESPACE::detail {
 /// duplicates get empty lists.
 struct NeighborLists {
   std::vector<uint64_t> offset;
-  std::vector<uint32_t> index;
+  /// (Filled whole by a parallel pass: left uninitialised, not zeroed on one core first.)
+  std::vector<uint32_t, UninitAllocator<uint32_t>> index;
   size_t max_count = 0;
   uint32_t max_point = 0;  ///< sorted index of a point with max_count neighbours
   size_t shortened = 0;    ///< radii shortened to hold max_neighbors (the per-point build's `shorten`)
