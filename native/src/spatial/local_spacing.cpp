@@ -10,6 +10,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "core/parallel.h"
+#include "core/uninit_allocator.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/spatial/neighbor_grid.h"
 #include "spatial/grid_search.h"
@@ -153,7 +154,8 @@ double sector_reach(const NeighborGrid& grid, uint32_t s, const uint32_t* ids, i
 }
 
 /// The median of the finite values of v (reordered in place), 0 if none.
-double median_of_finite(std::vector<double>& v) {
+template <class Vector>
+double median_of_finite(Vector& v) {
   const auto known = std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); });
   const auto mid = v.begin() + (known - v.begin()) / 2;
   std::nth_element(v.begin(), mid, known);
@@ -172,8 +174,11 @@ std::vector<double> local_spacing_of_distinct(const NeighborGrid& grid, double r
   // Each point's neighbourhood: its nearest neighbours up to the first gap (a neighbour more
   // than kGap times as far as the one before): a small cluster of particles far from the rest
   // is a neighbourhood of its own, and the rest's spacing is not its.
-  std::vector<double> nn(n), raw(n), out_sorted(n);
-  std::vector<uint8_t> size(n);
+  // Per-point arrays that the parallel passes below fill whole: left uninitialised rather
+  // than zeroed on one core first.
+  using Doubles = std::vector<double, UninitAllocator<double>>;
+  Doubles nn(n), raw(n), out_sorted(n);
+  std::vector<uint8_t, UninitAllocator<uint8_t>> size(n);
   parallel_blocks(n, 4096, [&](size_t b, size_t e) {
     for (size_t s = b; s < e; ++s) {
       nn[s] = dist(uint32_t(s), 0);
@@ -192,7 +197,7 @@ std::vector<double> local_spacing_of_distinct(const NeighborGrid& grid, double r
   // Per point: the median nearest-neighbour distance around it, and the sector reach (in units
   // of an even sampling's spacing; 0 where it is not taken); and how much those distances
   // vary (their coefficient of variation, NaN with fewer than five).
-  std::vector<double> reach(n), variation(n), thickness(n);
+  Doubles reach(n), variation(n), thickness(n);
   parallel_blocks(n, 4096, [&](size_t b, size_t e) {
     std::array<double, kK + 1> v;
     std::vector<Vec3> work;
