@@ -41,13 +41,8 @@ SurfaceStats::Spread spacing_spread(const detail::RawTriangulation& raw) {
   auto rank = [&](double f) { return h.begin() + ptrdiff_t(f * double(h.size() - 1) + 0.5); };
   const auto p10 = rank(0.1), median = rank(0.5), p90 = rank(0.9);
   std::nth_element(h.begin(), median, h.end());
-  // The two halves' selections side by side (they share no element).
-  detail::parallel_blocks(2, 1, [&](size_t b, size_t e) {
-    for (size_t k = b; k < e; ++k) {
-      if (k == 0 && p10 < median) std::nth_element(h.begin(), p10, median);
-      if (k == 1 && p90 > median) std::nth_element(median + 1, p90, h.end());
-    }
-  });
+  if (p10 < median) std::nth_element(h.begin(), p10, median);
+  if (p90 > median) std::nth_element(median + 1, p90, h.end());
   out.min = *std::min_element(h.begin(), p10 + 1);
   out.p10 = *p10;
   out.median = *median;
