@@ -10,8 +10,8 @@
 #include "core/counting_sort.h"
 #include "core/format_number.h"
 #include "core/hashing.h"
-#include "core/uninit_allocator.h"
 #include "core/parallel.h"
+#include "core/uninit_allocator.h"
 #include "particlemesh/core/error.h"
 
 namespace PM_NAMESPACE {
