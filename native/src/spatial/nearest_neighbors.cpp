@@ -91,8 +91,8 @@ void gather_column(const NeighborGrid& grid, const Columns& cols, uint32_t col, 
 /// order) for the cells of one block taken in increasing order, found without a hash look-up. The
 /// cells' columns never decrease, so for each x offset a cursor into the sorted column keys
 /// only moves forward, and the columns (x + dx, y - 2 .. y + 2) are the keys it passes over.
-/// Each column's cells within the ring along z are consecutive, so their points are one run:
-/// appended whole, not cell by cell (split by ring, the runs were a tenth of the search).
+/// Each column's cells within the ring along z are consecutive, so their points join one run
+/// (`append` merges them; split by ring into two lists, the runs were a tenth of the search).
 class RingTwoColumns {
  public:
   explicit RingTwoColumns(const Columns& cols) : cols_(cols) {}
@@ -108,19 +108,9 @@ class RingTwoColumns {
       uint32_t& at = cursor_[size_t(dx + kRing)];
       if (!started_) at = uint32_t(std::lower_bound(keys.begin(), keys.end(), from) - keys.begin());
       while (at < keys.size() && keys[at] < from) ++at;
-      for (uint32_t col = at; col < keys.size() && keys[col] <= to; ++col) {
-        // The column's cells with z within the ring: consecutive cells, so one run of points.
-        uint32_t lo = cols_.start[col], hi = cols_.start[col + 1];
-        const uint32_t end = hi;
-        while (lo < hi) {  // the first cell with z >= cc.z - ring
-          const uint32_t mid = lo + (hi - lo) / 2;
-          if (grid.cell_coord(mid)[2] < cc[2] - kRing) lo = mid + 1;
-          else hi = mid;
-        }
-        uint32_t last = lo;
-        while (last < end && grid.cell_coord(last)[2] <= cc[2] + kRing) ++last;
-        if (last > lo) append(block, grid.cell_begin(lo), grid.cell_begin(last));
-      }
+      // Every cell within the ring (inner -1): a column's cells, consecutive, join one run.
+      for (uint32_t col = at; col < keys.size() && keys[col] <= to; ++col)
+        gather_column(grid, cols_, col, 0, cc, kRing, -1, block);
     }
     started_ = true;
   }
@@ -532,8 +522,8 @@ std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, int k, Progres
   // is wherever this grid's search would find its k within its rings (the k-th within
   // kMaxNeighborRing cells); the other points (their k-th farther, or fewer than k in reach)
   // are searched on this grid as before, so every list is the one this grid gives.
-  std::vector<uint32_t> key_of(n), rows(n * K, kNoNeighbor);
-  for (uint32_t t = 0; t < n; ++t) key_of[t] = coarse->original_index(t);
+  const std::vector<uint32_t>& key_of = coarse->original_indices();
+  std::vector<uint32_t> rows(n * K, kNoNeighbor);
   std::vector<uint8_t> exact(n, 0);
   std::vector<double> kth2(n, INFINITY);
   Search q;

@@ -43,6 +43,9 @@ void check_options(const TriangulateOptions& o) {
   if (o.max_neighbors < 2) throw Error(Status::InvalidArgument, "max_neighbors must be at least 2");
 }
 
+/// The pairs among h items: the triplets a point with h higher neighbours within L examines.
+constexpr uint64_t pairs_of(uint64_t h) { return h * (h - (h > 0)) / 2; }
+
 struct TestCounters {
   size_t candidates = 0, degenerate = 0, ties = 0;
   uint64_t triplets = 0;
@@ -231,7 +234,7 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
       for (size_t i = b; i < e; ++i) {
         const uint32_t* end = nbr.end(uint32_t(i));
         const uint64_t higher = uint64_t(end - std::upper_bound(nbr.begin(uint32_t(i)), end, uint32_t(i)));
-        sum += higher * (higher - (higher > 0)) / 2;
+        sum += pairs_of(higher);
       }
       bound.fetch_add(sum, std::memory_order_relaxed);
     });
@@ -258,7 +261,7 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
         for (const uint32_t* q = std::upper_bound(nbr.begin(uint32_t(i)), nbr.end(uint32_t(i)), uint32_t(i));
              q != nbr.end(uint32_t(i)); ++q)
           higher += squared_distance(P[*q], P[i]) <= limit2(uint32_t(i), *q);
-        sum += higher * (higher - (higher > 0)) / 2;
+        sum += pairs_of(higher);
       }
       triplets.fetch_add(sum, std::memory_order_relaxed);
     });
@@ -308,7 +311,7 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
         near_at.clear();
         for (const uint32_t* q = std::upper_bound(ni, ne, i); q != ne; ++q)
           if (squared_distance(P[*q], pi) <= limit2(i, *q)) near.push_back(*q), near_at.push_back(uint32_t(q - ni));
-        cnt.triplets += uint64_t(near.size()) * (uint64_t(near.size()) - (near.size() > 0)) / 2;
+        cnt.triplets += pairs_of(near.size());
         const size_t len = size_t(ne - ni);
         if (near.size() >= 2) {
           lx.resize(len), ly.resize(len), lz.resize(len), gap.resize(len);
