@@ -9,10 +9,14 @@
 
 #include "particlemesh/core/config.h"
 
+#include <algorithm>
 #include <array>
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
+
+#include "core/parallel.h"
 
 namespace PM_NAMESPACE::detail {
 
@@ -39,17 +43,36 @@ inline constexpr uint32_t kNoKey = 0xffffffffu;
 
 /// Fills `table` with the indices of the distinct `keys` by linear probing on mix64(key):
 /// a power of two of at least 16 slots and twice the key count, so probes stay short.
-/// Returns the mask (the table's size - 1) that find_key takes.
+/// Returns the mask (the table's size - 1) that find_key takes. Many keys (a grid of a million
+/// points has a quarter million cells, each insert a cache miss) are inserted in parallel,
+/// each slot claimed by a compare-and-swap: where keys collide, which of them takes which
+/// slot depends on the threads' timing, but every look-up finds the same index (only its
+/// number of probes may differ), so no result does.
 inline uint64_t build_key_table(const std::vector<uint64_t>& keys, std::vector<uint32_t>& table) {
   uint64_t size = 16;
   while (size < 2 * uint64_t(keys.size())) size <<= 1;
-  table.assign(size, kNoKey);
   const uint64_t mask = size - 1;
-  for (uint32_t i = 0; i < keys.size(); ++i) {
-    uint64_t h = mix64(keys[i]) & mask;
-    while (table[h] != kNoKey) h = (h + 1) & mask;
-    table[h] = i;
+  constexpr size_t kParallel = size_t(1) << 16;
+  if (keys.size() < kParallel) {
+    table.assign(size, kNoKey);
+    for (uint32_t i = 0; i < keys.size(); ++i) {
+      uint64_t h = mix64(keys[i]) & mask;
+      while (table[h] != kNoKey) h = (h + 1) & mask;
+      table[h] = i;
+    }
+    return mask;
   }
+  table.resize(size);
+  parallel_blocks(size, 65536, [&](size_t b, size_t e) { std::fill(table.begin() + ptrdiff_t(b), table.begin() + ptrdiff_t(e), kNoKey); });
+  parallel_blocks(keys.size(), 4096, [&](size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i) {
+      for (uint64_t h = mix64(keys[i]) & mask;; h = (h + 1) & mask) {
+        uint32_t empty = kNoKey;
+        if (std::atomic_ref<uint32_t>(table[h]).compare_exchange_strong(empty, uint32_t(i), std::memory_order_relaxed))
+          break;
+      }
+    }
+  });
   return mask;
 }
 

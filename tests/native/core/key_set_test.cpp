@@ -73,3 +73,38 @@ TEST(KeySet, NearlyFullTablesKeepEveryKeyThroughChurn) {
     }
   }
 }
+
+// The key tables of the grids: every key found at its index, and keys not in the table not
+// found, for a few keys (filled one at a time) and for many (filled in parallel, where which
+// key takes which slot depends on the threads), with keys crowding a few neighbourhoods of
+// slots (the cells of one column: keys that differ in their low bits) and spread ones.
+TEST(KeyTable, EveryKeyFoundAtItsIndexFilledSeriallyOrInParallel) {
+  std::mt19937_64 rng(13);
+  for (const size_t count : {size_t(1000), size_t(300000)}) {
+    for (const bool crowded : {true, false}) {
+      std::vector<uint64_t> keys;
+      for (size_t i = 0; i < count; ++i) keys.push_back(crowded ? (uint64_t(i / 64) << 21) + i % 64 : rng() >> 1);
+      std::sort(keys.begin(), keys.end());
+      keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+      for (const int threads : {1, 2, 4}) {
+        std::vector<uint32_t> table;
+        const uint64_t mask = pm::detail::with_threads(threads, [&] { return pm::detail::build_key_table(keys, table); });
+        ASSERT_EQ(table.size(), mask + 1);
+        ASSERT_GE(table.size(), 2 * keys.size());
+        for (size_t i = 0; i < keys.size(); ++i)
+          ASSERT_EQ(pm::detail::find_key(table, mask, keys, keys[i]), uint32_t(i)) << count << " " << threads;
+        // Absent keys: between two present ones, and past the last.
+        for (size_t i = 0; i + 1 < keys.size(); i += 97)
+          if (keys[i] + 1 != keys[i + 1]) EXPECT_EQ(pm::detail::find_key(table, mask, keys, keys[i] + 1), pm::detail::kNoKey);
+        EXPECT_EQ(pm::detail::find_key(table, mask, keys, keys.back() + 1), pm::detail::kNoKey);
+        // Every slot holds a key's index or is empty, and each index is in one slot.
+        std::vector<uint8_t> seen(keys.size(), 0);
+        for (const uint32_t s : table)
+          if (s != pm::detail::kNoKey) {
+            ASSERT_LT(s, keys.size());
+            ASSERT_EQ(seen[s]++, 0);
+          }
+      }
+    }
+  }
+}
