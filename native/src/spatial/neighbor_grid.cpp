@@ -10,6 +10,7 @@
 #include "core/counting_sort.h"
 #include "core/format_number.h"
 #include "core/hashing.h"
+#include "core/first_touch.h"
 #include "core/parallel.h"
 #include "core/uninit_allocator.h"
 #include "particlemesh/core/error.h"
@@ -160,8 +161,9 @@ void NeighborGrid::build(const Vec3* points, size_t n, double cell_size, const V
   const size_t m = entries.size();
   sort_by_key(entries, n == 0 ? CellCoord{0, 0, 0} : coord_of(hi));
 
-  sorted_points_.resize(n);
-  original_index_.resize(n);
+  // (Their pages faulted in on all cores, not while resize() zeroes them on this one.)
+  detail::resize_touched(sorted_points_, n);
+  detail::resize_touched(original_index_, n);
   detail::parallel_blocks(m, 4096, [&](size_t b, size_t e) {
     for (size_t s = b; s < e; ++s) {
       original_index_[s] = entries[s].index;

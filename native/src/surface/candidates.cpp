@@ -6,19 +6,23 @@
 #include <numeric>
 
 #include "core/counting_sort.h"
+#include "core/first_touch.h"
 #include "core/parallel.h"
+#include "core/uninit_allocator.h"
 #include "surface/triangle_angles.h"
 
 namespace PM_NAMESPACE::detail {
 
 namespace {
 
+using Keys = std::vector<uint64_t, UninitAllocator<uint64_t>>;
+
 /// Sorts keys whose low words already ascend by their high words, stably: three counting
 /// passes of 11 bits (a pass where every key has the same digit is skipped). Linear, where a
 /// comparison sort of the candidates was the ranking's largest cost; TBB and the standard
 /// library have no radix sort.
-void sort_by_high_word(std::vector<uint64_t>& key) {
-  std::vector<uint64_t> tmp(key.size());
+void sort_by_high_word(Keys& key) {
+  Keys tmp(key.size());
   for (int shift = 32; shift < 64; shift += 11) {
     const std::vector<size_t> start = counting_place(
         key.size(), 2048, [&](size_t i) { return (key[i] >> shift) & 2047; },
@@ -39,7 +43,8 @@ uint32_t sortable_bits(float f) {
 }  // namespace
 
 std::vector<Frame> tangent_frames(const std::vector<Vec3>& normals) {
-  std::vector<Frame> frame(normals.size());
+  std::vector<Frame> frame;
+  resize_touched(frame, normals.size());  // (48 bytes a point: its pages faulted in on all cores)
   parallel_blocks(normals.size(), 4096, [&](size_t b, size_t e) {
     for (size_t i = b; i < e; ++i)
       if (squared_norm(normals[i]) > 0) frame[i] = tangent_frame(normals[i]);
@@ -58,7 +63,9 @@ CandidateSet rank_candidates(const std::vector<Vec3>& P, const std::vector<Vec3>
     float quality;
     uint8_t ok, turned;
   };
-  std::vector<Oriented> o(raw.size());
+  // The per-triangle arrays below are written before they are read (o's ok and turned for
+  // every triangle, the rest only where ok): left uninitialised, not zeroed on one core.
+  std::vector<Oriented, UninitAllocator<Oriented>> o(raw.size());
   auto oriented = [&](size_t i) {
     Triangle t = raw[i];
     if (o[i].turned) std::swap(t[1], t[2]);
@@ -104,7 +111,7 @@ CandidateSet rank_candidates(const std::vector<Vec3>& P, const std::vector<Vec3>
   out.rejected_shadow = shadow_sum.load();
   out.rejected_conormal = raw.size() - kept - out.rejected_shadow;
   // Sorted as (quality, index) keys: a float's bits, with the sign folded, order as the float.
-  std::vector<uint64_t> key(kept);
+  Keys key(kept);
   counting_place(o.size(), 2, [&](size_t i) { return o[i].ok ? 0 : 1; }, [&](size_t i, size_t pos) {
     if (o[i].ok) key[pos] = (uint64_t(sortable_bits(o[i].quality)) << 32) | i;
   });
@@ -114,7 +121,7 @@ CandidateSet rank_candidates(const std::vector<Vec3>& P, const std::vector<Vec3>
                              return uint32_t(k >> 32) <= sortable_bits(kFlatQuality);
                            }) - key.begin());
   tracker.check();
-  out.cand.resize(kept);
+  resize_touched(out.cand, kept);
   parallel_blocks(kept, 8192, [&](size_t b, size_t e) {
     for (size_t c = b; c < e; ++c) out.cand[c] = oriented(uint32_t(key[c]));
   });
@@ -126,11 +133,11 @@ CandidateSet rank_candidates(const std::vector<Vec3>& P, const std::vector<Vec3>
   // triangles are put in order explicitly. Placed in the raw order, not the candidate order:
   // raw triangles come vertex by vertex, so neighbouring writes land near each other (in
   // quality order they scatter over the whole list, and cache misses dominate).
-  std::vector<uint32_t> rank(o.size());
+  std::vector<uint32_t, UninitAllocator<uint32_t>> rank(o.size());
   parallel_blocks(kept, 8192, [&](size_t b, size_t e) {
     for (size_t c = b; c < e; ++c) rank[uint32_t(key[c])] = uint32_t(c);
   });
-  std::vector<uint64_t>().swap(key);
+  Keys().swap(key);
   std::partial_sum(vc_off.begin(), vc_off.end(), vc_off.begin());
   out.corners.resize(vc_off[n]);
   std::vector<uint32_t> fill(vc_off.begin(), vc_off.end() - 1);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numeric>
 
+#include "core/first_touch.h"
 #include "core/parallel.h"
 #include "surface/triangle_angles.h"
 
@@ -274,10 +275,25 @@ void EditableSurface::surface_pieces(std::vector<uint32_t>& piece, std::vector<u
 }
 
 std::vector<Triangle> EditableSurface::take() const {
+  // The live triangles in order: counted per fixed block, then each block's written at its
+  // offset, in parallel (two million triangles copied on one core were a visible serial step).
+  constexpr size_t kBlock = 65536;
+  const size_t m = tris_.size(), blocks = (m + kBlock - 1) / kBlock;
+  std::vector<size_t> at(blocks + 1, 0);
+  parallel_blocks(blocks, 1, [&](size_t bb, size_t be) {
+    for (size_t b = bb; b < be; ++b)
+      for (size_t t = b * kBlock; t < std::min(m, (b + 1) * kBlock); ++t) at[b + 1] += alive_[t] != 0;
+  });
+  std::partial_sum(at.begin(), at.end(), at.begin());
   std::vector<Triangle> out;
-  out.reserve(tris_.size());
-  for (uint32_t t = 0; t < tris_.size(); ++t)
-    if (alive_[t]) out.push_back(tris_[t]);
+  resize_touched(out, at[blocks]);
+  parallel_blocks(blocks, 1, [&](size_t bb, size_t be) {
+    for (size_t b = bb; b < be; ++b) {
+      size_t k = at[b];
+      for (size_t t = b * kBlock; t < std::min(m, (b + 1) * kBlock); ++t)
+        if (alive_[t]) out[k++] = tris_[t];
+    }
+  });
   return out;
 }
 

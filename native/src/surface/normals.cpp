@@ -11,6 +11,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "core/disjoint_sets.h"
+#include "core/first_touch.h"
 #include "core/parallel.h"
 #include "particlemesh/core/error.h"
 #include "spatial/grid_search.h"
@@ -171,7 +172,8 @@ std::vector<Vec3> pca_normals_sorted(const NeighborGrid& grid, const std::vector
                                      const NeighborLists& lists, const std::vector<double>& radius,
                                      ProgressTracker& tracker, const std::vector<Triangle>* triangles) {
   const size_t n = grid.point_count();
-  std::vector<Vec3> normals(n);
+  std::vector<Vec3> normals;
+  resize_touched(normals, n);  // (zero where no plane is found)
   // 1. Every point's plane. Points that already lie close to one plane keep it (noise and the
   //    steps of a depth scan or a lattice do not call for more); a thick neighbourhood may be
   //    two sheets, and is looked at again below.

@@ -10,6 +10,7 @@
 #include <string>
 
 
+#include "core/first_touch.h"
 #include "core/parallel.h"
 #include "core/progress_tracker.h"
 #include "particlemesh/core/error.h"
@@ -90,9 +91,14 @@ SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options
     // The finishing stages work on the points in the grid's cell order (sorted indices), as
     // the raw test does: points near in space are near in memory whatever order the input
     // lists them in (in input order, a shuffled cloud would be meshed much slower).
-    std::vector<Vec3> P(n);
-    std::vector<uint32_t> original(n);
-    std::vector<uint8_t> active(n);
+    // (Their pages, and those of the other large fresh arrays below, faulted in on all cores
+    // rather than while resize() zeroes them on this one: first_touch.h.)
+    std::vector<Vec3> P;
+    std::vector<uint32_t> original;
+    std::vector<uint8_t> active;
+    detail::resize_touched(P, n);
+    detail::resize_touched(original, n);
+    detail::resize_touched(active, n);
     detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
       for (size_t s = b; s < e; ++s) {
         P[s] = grid.sorted_point(uint32_t(s));
@@ -276,7 +282,7 @@ SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options
     st.holes_left_edges = std::move(bs.holes_left_edges);
     tracker.check();
     // Back to the input's indices.
-    result.mesh.normals.resize(n);
+    detail::resize_touched(result.mesh.normals, n);
     detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
       for (size_t s = b; s < e; ++s) result.mesh.normals[original[s]] = vertex_normals[s];
     });
