@@ -126,7 +126,7 @@ SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options
       if (options.normals == Source::Auto && cloud.has_normals()) {
         // A normal without a direction (zero, or subnormal) is a particle without a normal:
         // it does not vote, its neighbours decide. None with a direction: no reference at all.
-        reference.resize(n);
+        detail::resize_touched(reference, n);
         std::atomic<bool> usable{false};
         detail::parallel_blocks(n, 8192, [&](size_t b, size_t e) {
           bool any = false;
@@ -292,7 +292,12 @@ SurfaceResult reconstruct(const PointCloud& cloud, const SurfaceOptions& options
     });
   }
   tracker.check();
-  result.mesh.positions = cloud.positions;
+  // The cloud's positions copied in parallel into pages faulted in on all cores.
+  detail::resize_touched(result.mesh.positions, cloud.positions.size());
+  detail::parallel_blocks(cloud.positions.size(), 65536, [&](size_t b, size_t e) {
+    std::copy(cloud.positions.begin() + ptrdiff_t(b), cloud.positions.begin() + ptrdiff_t(e),
+              result.mesh.positions.begin() + ptrdiff_t(b));
+  });
   result.mesh.triangles = std::move(tris);
   result.mesh.attributes = cloud.attributes;
   return result;
