@@ -63,7 +63,9 @@ inline uint64_t build_key_table(const std::vector<uint64_t>& keys, std::vector<u
     return mask;
   }
   table.resize(size);
-  parallel_blocks(size, 65536, [&](size_t b, size_t e) { std::fill(table.begin() + ptrdiff_t(b), table.begin() + ptrdiff_t(e), kNoKey); });
+  parallel_blocks(size, 65536, [&](size_t b, size_t e) {
+    std::fill(table.begin() + ptrdiff_t(b), table.begin() + ptrdiff_t(e), kNoKey);
+  });
   parallel_blocks(keys.size(), 4096, [&](size_t b, size_t e) {
     for (size_t i = b; i < e; ++i) {
       for (uint64_t h = mix64(keys[i]) & mask;; h = (h + 1) & mask) {

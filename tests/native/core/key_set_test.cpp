@@ -88,14 +88,16 @@ TEST(KeyTable, EveryKeyFoundAtItsIndexFilledSeriallyOrInParallel) {
       keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
       for (const int threads : {1, 2, 4}) {
         std::vector<uint32_t> table;
-        const uint64_t mask = pm::detail::with_threads(threads, [&] { return pm::detail::build_key_table(keys, table); });
+        const uint64_t mask =
+            pm::detail::with_threads(threads, [&] { return pm::detail::build_key_table(keys, table); });
         ASSERT_EQ(table.size(), mask + 1);
         ASSERT_GE(table.size(), 2 * keys.size());
         for (size_t i = 0; i < keys.size(); ++i)
           ASSERT_EQ(pm::detail::find_key(table, mask, keys, keys[i]), uint32_t(i)) << count << " " << threads;
         // Absent keys: between two present ones, and past the last.
         for (size_t i = 0; i + 1 < keys.size(); i += 97)
-          if (keys[i] + 1 != keys[i + 1]) EXPECT_EQ(pm::detail::find_key(table, mask, keys, keys[i] + 1), pm::detail::kNoKey);
+          if (keys[i] + 1 != keys[i + 1])
+            EXPECT_EQ(pm::detail::find_key(table, mask, keys, keys[i] + 1), pm::detail::kNoKey);
         EXPECT_EQ(pm::detail::find_key(table, mask, keys, keys.back() + 1), pm::detail::kNoKey);
         // Every slot holds a key's index or is empty, and each index is in one slot.
         std::vector<uint8_t> seen(keys.size(), 0);
