@@ -9,12 +9,9 @@
 #include <utility>
 #include <vector>
 
-#if defined(__x86_64__)
-#include <immintrin.h>
-#endif
-
 #include "core/cpu_clones.h"
 #include "core/parallel.h"
+#include "core/select_within.h"
 #include "spatial/spacing_impl.h"
 #include "particlemesh/core/error.h"
 
@@ -404,7 +401,7 @@ void search(const NeighborGrid& grid, size_t K, const Search& q, std::vector<uin
           // as its bits do.
           size_t count = 0;
           for (double bound = guess > 0 ? 1.15 * guess : INFINITY;; bound = bound < 1.5 * guess ? 1.6 * guess : INFINITY) {
-            const size_t candidates = candidates_within(be.data(), m, bound, near.data());
+            const size_t candidates = select_within(be.data(), m, 0.0, bound, nullptr, 0, near.data());
             count = 0;
             if (candidates <= kRanked) {
               // Few candidates (the common case): each one's place among them counted (places),
@@ -456,58 +453,6 @@ void search(const NeighborGrid& grid, size_t K, const Search& q, std::vector<uin
 }
 
 }  // namespace
-
-size_t candidates_within_scalar(const double* d2, size_t m, double bound, uint32_t* out) {
-  // Each position written, and kept or not without a branch (about half are kept, in no
-  // pattern a branch predictor learns).
-  size_t count = 0;
-  for (size_t i = 0; i < m; ++i) {
-    out[count] = uint32_t(i);
-    count += size_t(d2[i] > 0) & size_t(d2[i] <= bound);
-  }
-  return count;
-}
-
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-namespace {
-
-/// candidates_within, sixteen at a time: two compares of eight distances each, the positions
-/// of those kept compressed to the front of one vector and stored whole (up to 15 past the
-/// count, in the room left for them). The same tests as the scalar loop (ordered compares: a
-/// NaN distance is in neither), so the same positions in the same order. Written with
-/// intrinsics because no compiler vectorises a filter whose store follows a running count
-/// (the scalar loop was a fifth of the search's own time).
-__attribute__((target("avx512f"))) size_t candidates_within_avx512(const double* d2, size_t m, double bound,
-                                                                   uint32_t* out) {
-  const __m512d zero = _mm512_setzero_pd(), limit = _mm512_set1_pd(bound);
-  const __m512i lanes = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  size_t count = 0;
-  for (size_t i = 0; i < m; i += 16) {
-    const size_t left = m - i;
-    const __mmask8 lo = __mmask8(left >= 8 ? 0xff : (1u << left) - 1);
-    const __mmask8 hi = __mmask8(left >= 16 ? 0xff : left > 8 ? (1u << (left - 8)) - 1 : 0);
-    const __m512d a = _mm512_maskz_loadu_pd(lo, d2 + i), b = _mm512_maskz_loadu_pd(hi, d2 + i + 8);
-    const __mmask8 ka = _mm512_mask_cmp_pd_mask(_mm512_mask_cmp_pd_mask(lo, a, zero, _CMP_GT_OQ), a, limit, _CMP_LE_OQ);
-    const __mmask8 kb = _mm512_mask_cmp_pd_mask(_mm512_mask_cmp_pd_mask(hi, b, zero, _CMP_GT_OQ), b, limit, _CMP_LE_OQ);
-    const __mmask16 keep = __mmask16(unsigned(ka) | (unsigned(kb) << 8));
-    const __m512i at = _mm512_add_epi32(_mm512_set1_epi32(int(i)), lanes);
-    _mm512_storeu_si512(out + count, _mm512_maskz_compress_epi32(keep, at));
-    count += size_t(__builtin_popcount(keep));
-  }
-  return count;
-}
-
-}  // namespace
-
-size_t candidates_within(const double* d2, size_t m, double bound, uint32_t* out) {
-  static const bool avx512 = __builtin_cpu_supports("avx512f");
-  return avx512 ? candidates_within_avx512(d2, m, bound, out) : candidates_within_scalar(d2, m, bound, out);
-}
-#else
-size_t candidates_within(const double* d2, size_t m, double bound, uint32_t* out) {
-  return candidates_within_scalar(d2, m, bound, out);
-}
-#endif
 
 double nearest_neighbors_cell(const NeighborGrid& grid, size_t K) {
   constexpr size_t kSamples = 512;

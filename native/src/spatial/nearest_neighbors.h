@@ -36,12 +36,4 @@ std::vector<uint32_t> nearest_neighbors(const NeighborGrid& grid, int k, Progres
 /// grid's own rings would not reach are searched on it. Clouds under 4096 points keep it.
 double nearest_neighbors_cell(const NeighborGrid& grid, size_t k);
 
-/// The search's candidates: writes to `out`, in increasing order, the positions i < m whose
-/// squared distance d2[i] lies in (0, bound], and returns how many. `out` has room for m + 16
-/// (the vector path stores 16 at a time). With AVX-512 (where the processor has it) sixteen
-/// distances at a time, their positions compressed into place; one at a time otherwise.
-size_t candidates_within(const double* d2, size_t m, double bound, uint32_t* out);
-/// The same, one at a time whatever the processor (the reference the tests compare with).
-size_t candidates_within_scalar(const double* d2, size_t m, double bound, uint32_t* out);
-
 }  // namespace particlemesh::detail

@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "core/parallel.h"
+#include "core/select_within.h"
 #include "spatial/neighbor_cell_walk.h"
 
 namespace PM_NAMESPACE::detail {
@@ -65,7 +66,8 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
         // copy from running as a plain loop.)
         size_t m = 0;
         for (int a = 0; a < na; ++a) m += grid.cell_end(around[a]) - grid.cell_begin(around[a]);
-        if (bt.size() < m) bx.resize(m), by.resize(m), bz.resize(m), bt.resize(m), bd.resize(m), kept_t.resize(m);
+        if (bt.size() < m)
+          bx.resize(m), by.resize(m), bz.resize(m), bt.resize(m), bd.resize(m), kept_t.resize(m + 16);
         m = 0;
         for (int a = 0; a < na; ++a)
           for (uint32_t t = grid.cell_begin(around[a]); t < grid.cell_end(around[a]); ++t) {
@@ -86,11 +88,7 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
               d[i] = dx * dx + dy * dy + dz * dz;
             }
           }
-          size_t kept = 0;
-          for (size_t i = 0; i < m; ++i) {
-            kept_t[kept] = bt[i];
-            kept += size_t(bd[i] <= r2) & size_t(bt[i] != s);
-          }
+          const size_t kept = select_within(bd.data(), m, -INFINITY, r2, bt.data(), s, kept_t.data());
           out.insert(out.end(), kept_t.begin(), kept_t.begin() + ptrdiff_t(kept));
           count[s] = uint32_t(kept);
           if (count[s] > max_neighbors) chunk_over[k] = std::min(chunk_over[k], grid.original_index(s));

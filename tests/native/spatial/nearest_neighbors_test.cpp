@@ -171,28 +171,3 @@ TEST(NearestNeighbors, MatchTheReferenceOnARandomSamplingSearchedOnACoarserGrid)
   const NeighborGrid even_grid(even.positions.data(), even.size(), 2 * std::sqrt(4 * M_PI / 6000.0));
   EXPECT_EQ(detail::nearest_neighbors_cell(even_grid, 16), 0.0);
 }
-
-// The search's candidate filter: the vector path (AVX-512, where the processor has it) keeps
-// the same positions in the same order as one at a time, for every length around the
-// vectors' 8 and 16 (the tails' masks), with distances at and around the bound, zero (the
-// point itself), negative zero, NaN and infinite ones, and an infinite bound.
-TEST(NearestNeighbors, CandidateFilterKeepsWhatTheScalarLoopKeeps) {
-  std::mt19937_64 rng(21);
-  const double specials[] = {0.0, -0.0, 1.0, std::nextafter(1.0, 2.0), std::nextafter(1.0, 0.0), NAN, INFINITY, -1.0};
-  for (size_t m = 0; m <= 70; ++m)
-    for (int trial = 0; trial < 20; ++trial) {
-      std::vector<double> d(m);
-      for (double& x : d)
-        x = rng() % 3 == 0 ? specials[rng() % 8] : std::uniform_real_distribution<double>(0.0, 2.0)(rng);
-      for (const double bound : {1.0, double(INFINITY), 0.0}) {
-        std::vector<uint32_t> a(m + 16, 7), b(m + 16, 7);
-        const size_t na = detail::candidates_within(d.data(), m, bound, a.data());
-        const size_t nb = detail::candidates_within_scalar(d.data(), m, bound, b.data());
-        ASSERT_EQ(na, nb) << m << " " << bound;
-        size_t expected = 0;
-        for (size_t i = 0; i < m; ++i) expected += d[i] > 0 && d[i] <= bound;
-        ASSERT_EQ(na, expected);
-        for (size_t i = 0; i < na; ++i) ASSERT_EQ(a[i], b[i]) << m << " " << i;
-      }
-    }
-}
