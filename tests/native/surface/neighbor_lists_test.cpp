@@ -9,8 +9,10 @@
 #include <cmath>
 #include <random>
 
+#include "core/parallel.h"
 #include "particlemesh/core/error.h"
 #include "particlemesh/sample/shapes.h"
+#include "spatial/grid_search.h"
 #include "support/test_support.h"
 
 using namespace particlemesh;
@@ -129,4 +131,50 @@ TEST_F(NeighborLists, NothingCrowdedNothingShortened) {
   EXPECT_EQ(shortening.shortened, 0u);
   EXPECT_EQ(shortening.offset, plain.offset);
   EXPECT_EQ(shortening.index, plain.index);
+}
+
+// Radii that vary from point to point (three sizes, and a few far larger), over cells of a
+// size between them (a point's query box spans 2 to 13 cells a side, and points of one cell
+// have different boxes), with exact copies (not representatives: in no list, and no list
+// holds them): each representative's list is, in order, every other representative within
+// the larger of the two radii, as brute force finds them; with one and several threads.
+TEST(NeighborListsPerPoint, MatchBruteForceWithVaryingRadiiAndCopies) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Vec3> points;
+  for (int i = 0; i < 3000; ++i) {
+    const double a = 6.283185307179586 * u(rng), b = u(rng);
+    points.push_back({std::cos(a) * (0.5 + 0.2 * b), std::sin(a) * (0.5 + 0.2 * b), 0.3 * u(rng)});
+  }
+  for (int i = 0; i < 300; ++i) points.push_back(points[size_t(rng() % 3000)]);  // exact copies
+  const NeighborGrid grid(points.data(), points.size(), 0.06);
+  const size_t n = grid.point_count();
+  const std::vector<uint32_t> rep = detail::find_duplicates(grid, nullptr);
+  std::vector<double> radius(n);
+  for (size_t s = 0; s < n; ++s) {
+    const double sizes[] = {0.05, 0.08, 0.13};
+    radius[s] = rng() % 100 == 0 ? 0.3 : sizes[rng() % 3];
+  }
+  for (size_t s = 0; s < n; ++s) radius[s] = radius[rep[s]];
+  for (const int threads : {1, 3}) {
+    const ProgressCallback none;
+    detail::ProgressTracker tracker(none);
+    std::vector<double> r = radius;
+    const detail::NeighborLists lists = detail::with_threads(
+        threads, [&] { return detail::build_neighbor_lists(grid, rep, r, 100000, false, tracker); });
+    size_t copies = 0;
+    for (uint32_t s = 0; s < n; ++s) {
+      std::vector<uint32_t> expected;
+      if (rep[s] == s)
+        for (uint32_t t = 0; t < n; ++t) {
+          if (t == s || rep[t] != t) continue;
+          const double d2 = squared_distance(grid.sorted_point(t), grid.sorted_point(s));
+          if (d2 <= radius[s] * radius[s] || d2 <= radius[t] * radius[t]) expected.push_back(t);
+        }
+      else
+        ++copies;
+      ASSERT_EQ(std::vector<uint32_t>(lists.begin(s), lists.end(s)), expected) << "point " << s << ", " << threads;
+    }
+    EXPECT_GE(copies, 250u);
+  }
 }
