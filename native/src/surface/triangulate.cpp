@@ -8,7 +8,10 @@
 
 #include <tbb/parallel_sort.h>
 
-#include "core/cpu_clones.h"
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
 #include "core/format_number.h"
 #include "core/length_limits.h"
 #include "core/parallel.h"
@@ -51,13 +54,68 @@ struct TestCounters {
   uint64_t triplets = 0;
 };
 
-/// detail::sphere_gap of each of the n points (by coordinate) against the sphere `s`, into d:
-/// the same arithmetic as sphere_contains(), so the same bits. Compiled per x86-64 level
-/// (PM_CPU_CLONES): the triangle test measures every neighbour of a point against each of its
-/// ~14 triplets' spheres.
-PM_CPU_CLONES void sphere_gaps(const double* x, const double* y, const double* z, size_t n,
-                               const detail::SmallestSphere& s, double* __restrict d) {
-  for (size_t i = 0; i < n; ++i) d[i] = detail::sphere_gap(s, Vec3{x[i], y[i], z[i]});
+/// The first i in [from, n), other than skip1 and skip2, whose detail::sphere_gap against the
+/// sphere `s` (the n points by coordinate) is not above tol; n when there is none. Its gap in
+/// *gap. The same arithmetic as sphere_contains(), so the same bits, and the same verdict on a
+/// NaN gap (not above tol). Eight points at a time where the processor has AVX-512 (checked
+/// once at run time), stopping at the first vector that holds one: the triangle test measures
+/// a point's neighbours against each of its triplets' spheres, and on an irregular sampling
+/// the first blocker comes ~15 points into a list of up to a hundred (all of them measured
+/// first, then scanned, was most of the test's own loop).
+size_t first_near_gap_scalar(const double* x, const double* y, const double* z, size_t n, size_t from,
+                             const detail::SmallestSphere& s, double tol, size_t skip1, size_t skip2, double* gap) {
+  for (size_t i = from; i < n; ++i) {
+    if (i == skip1 || i == skip2) continue;
+    const double g = detail::sphere_gap(s, Vec3{x[i], y[i], z[i]});
+    if (!(g > tol)) {
+      *gap = g;
+      return i;
+    }
+  }
+  return n;
+}
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+__attribute__((target("avx512f"))) size_t first_near_gap_avx512(const double* x, const double* y, const double* z,
+                                                                size_t n, size_t from, const detail::SmallestSphere& s,
+                                                                double tol, size_t skip1, size_t skip2, double* gap) {
+  const __m512d ax = _mm512_set1_pd(s.a.x), ay = _mm512_set1_pd(s.a.y), az = _mm512_set1_pd(s.a.z);
+  const __m512d cx = _mm512_set1_pd(s.center_rel.x), cy = _mm512_set1_pd(s.center_rel.y),
+                cz = _mm512_set1_pd(s.center_rel.z);
+  const __m512d r2 = _mm512_set1_pd(s.r2), limit = _mm512_set1_pd(tol);
+  const __m512i lanes = _mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m512i s1 = _mm512_set1_epi64(int64_t(skip1)), s2 = _mm512_set1_epi64(int64_t(skip2));
+  for (size_t i = from; i < n; i += 8) {
+    const size_t left = n - i;
+    const __mmask8 in = __mmask8(left >= 8 ? 0xff : (1u << left) - 1);
+    // (q - a) - centre, as Vec3 subtractions; its squared norm as dot() sums, x then y then z.
+    const __m512d ex = _mm512_sub_pd(_mm512_sub_pd(_mm512_maskz_loadu_pd(in, x + i), ax), cx);
+    const __m512d ey = _mm512_sub_pd(_mm512_sub_pd(_mm512_maskz_loadu_pd(in, y + i), ay), cy);
+    const __m512d ez = _mm512_sub_pd(_mm512_sub_pd(_mm512_maskz_loadu_pd(in, z + i), az), cz);
+    const __m512d g = _mm512_sub_pd(
+        _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(ex, ex), _mm512_mul_pd(ey, ey)), _mm512_mul_pd(ez, ez)), r2);
+    const __m512i at = _mm512_add_epi64(_mm512_set1_epi64(int64_t(i)), lanes);
+    const __mmask8 other = _mm512_mask_cmpneq_epi64_mask(_mm512_cmpneq_epi64_mask(at, s1), at, s2);
+    const __mmask8 near = _mm512_mask_cmp_pd_mask(__mmask8(in & other), g, limit, _CMP_NGT_UQ);
+    if (near) {
+      const int lane = __builtin_ctz(unsigned(near));
+      alignas(64) double gs[8];
+      _mm512_store_pd(gs, g);
+      *gap = gs[lane];
+      return i + size_t(lane);
+    }
+  }
+  return n;
+}
+#endif
+
+size_t first_near_gap(const double* x, const double* y, const double* z, size_t n, size_t from,
+                      const detail::SmallestSphere& s, double tol, size_t skip1, size_t skip2, double* gap) {
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+  static const bool avx512 = __builtin_cpu_supports("avx512f");
+  if (avx512) return first_near_gap_avx512(x, y, z, n, from, s, tol, skip1, skip2, gap);
+#endif
+  return first_near_gap_scalar(x, y, z, n, from, s, tol, skip1, skip2, gap);
 }
 
 }  // namespace
@@ -293,10 +351,9 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
   parallel_blocks(blocks, 1, [&](size_t bb, size_t be) {
     std::vector<uint32_t> near;  // i's higher neighbours within L
     std::vector<uint32_t> near_at;  // their places in i's list
-    // i's list by coordinate, and a sphere's gaps to them (sphere_gaps): where i has the
-    // largest L of a triplet (every triplet, on an even sampling), its blockers are measured
-    // all at once.
-    std::vector<double> lx, ly, lz, gap;
+    // i's list by coordinate, for the spheres' gaps (first_near_gap): where i has the largest
+    // L of a triplet (every triplet, on an even sampling), its blockers are measured there.
+    std::vector<double> lx, ly, lz;
     for (size_t b = bb; b < be; ++b) {
       if (tracker.cancelled()) return;
       auto& tris = out[b];
@@ -314,7 +371,7 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
         cnt.triplets += pairs_of(near.size());
         const size_t len = size_t(ne - ni);
         if (near.size() >= 2) {
-          lx.resize(len), ly.resize(len), lz.resize(len), gap.resize(len);
+          lx.resize(len), ly.resize(len), lz.resize(len);
           for (size_t at = 0; at < len; ++at) lx[at] = P[ni[at]].x, ly[at] = P[ni[at]].y, lz[at] = P[ni[at]].z;
         }
         // With the limits lifted one point can have ~1e9 triplets, each tested against up to
@@ -354,15 +411,18 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
             } else if (widest == i) {
               // The verdict of the loop below, in the same order: the first neighbour strictly
               // inside, or in the tie zone and inside by the symbolic tie-break; `tie` for any
-              // in the tie zone up to it. (i's own list does not hold i.)
-              sphere_gaps(lx.data(), ly.data(), lz.data(), len, s, gap.data());
-              gap[near_at[a]] = gap[near_at[c]] = INFINITY;  // j and k, the corners
+              // in the tie zone up to it. (i's own list does not hold i; j and k, the corners,
+              // are skipped.)
               const double tol = kTieTolerance * s.r2;
-              for (size_t at = 0; at < len && !blocked; ++at) {
-                if (gap[at] > tol) continue;
-                if (gap[at] < -tol || sphere_contains(s, P[ni[at]], &tie)) {
+              double g = 0;
+              const auto next_near = [&](size_t from) {
+                return first_near_gap(lx.data(), ly.data(), lz.data(), len, from, s, tol, near_at[a], near_at[c], &g);
+              };
+              for (size_t at = next_near(0); at < len; at = next_near(at + 1)) {
+                if (g < -tol || sphere_contains(s, P[ni[at]], &tie)) {
                   blocked = true;
                   last_blocker = ni[at];
+                  break;
                 }
               }
             } else {
