@@ -16,10 +16,30 @@
 // defined out of line, so the sanitizer and fuzzing builds (Clang) test the baseline code.
 #pragma once
 
+#include "particlemesh/core/config.h"
+
 #include <cstdint>  // (defines __GLIBC__ on glibc)
 
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__ELF__) && defined(__GLIBC__)
 #define PM_CPU_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #else
 #define PM_CPU_CLONES
+#endif
+
+// A few filters need what no compiler vectorises on its own (a store that follows a running
+// count, a loop that stops at the first hit): AVX-512's masks and compress, written with
+// intrinsics in a function marked PM_TARGET_AVX512 and called only where cpu_has_avx512() (GCC
+// and Clang on x86-64; elsewhere PM_HAVE_AVX512 is undefined and the scalar loop runs). Each
+// such function keeps the scalar loop's arithmetic and order, so the results are the same bits.
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include <immintrin.h>
+#define PM_HAVE_AVX512 1
+#define PM_TARGET_AVX512 __attribute__((target("avx512f")))
+namespace PM_NAMESPACE::detail {
+/// Whether the processor runs AVX-512 Foundation (asked once).
+inline bool cpu_has_avx512() {
+  static const bool has = __builtin_cpu_supports("avx512f");
+  return has;
+}
+}  // namespace PM_NAMESPACE::detail
 #endif

@@ -7,10 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#include <immintrin.h>
-#define PM_SELECT_WITHIN_AVX512 1
-#endif
+#include "core/cpu_clones.h"
 
 namespace PM_NAMESPACE::detail {
 
@@ -36,16 +33,15 @@ inline size_t select_within_scalar(const double* d2, size_t m, double low, doubl
   return count;
 }
 
-#ifdef PM_SELECT_WITHIN_AVX512
+#ifdef PM_HAVE_AVX512
 /// select_within_scalar sixteen at a time (AVX-512): two compares of eight distances each, the
 /// kept values compressed to the front of one vector and stored whole (up to 15 past the
 /// count, in the room left for them). The same tests, so the same values in the same order.
 /// Written with intrinsics because no compiler vectorises a filter whose store follows a
 /// running count (the scalar loop was a fifth of the k nearest's own time).
 template <bool kValues>
-__attribute__((target("avx512f"))) size_t select_within_avx512(const double* d2, size_t m, double low, double high,
-                                                               const uint32_t* values, uint32_t exclude,
-                                                               uint32_t* out) {
+PM_TARGET_AVX512 size_t select_within_avx512(const double* d2, size_t m, double low, double high,
+                                              const uint32_t* values, uint32_t exclude, uint32_t* out) {
   const __m512d lo_d = _mm512_set1_pd(low), hi_d = _mm512_set1_pd(high);
   const __m512i lanes = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
   const __m512i excluded = _mm512_set1_epi32(int(exclude));
@@ -76,9 +72,8 @@ __attribute__((target("avx512f"))) size_t select_within_avx512(const double* d2,
 /// select_within_scalar, sixteen at a time where the processor has AVX-512.
 inline size_t select_within(const double* d2, size_t m, double low, double high, const uint32_t* values,
                             uint32_t exclude, uint32_t* out) {
-#ifdef PM_SELECT_WITHIN_AVX512
-  static const bool avx512 = __builtin_cpu_supports("avx512f");
-  if (avx512)
+#ifdef PM_HAVE_AVX512
+  if (cpu_has_avx512())
     return values ? select_within_avx512<true>(d2, m, low, high, values, exclude, out)
                   : select_within_avx512<false>(d2, m, low, high, values, exclude, out);
 #endif

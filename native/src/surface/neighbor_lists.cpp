@@ -25,6 +25,16 @@ namespace {
                   std::to_string(most) + ", or give a smaller spacing / max edge factor)");
 }
 
+/// d[i] = squared_distance(q_i, p) for the m points q by coordinate, the same bits (a loop
+/// the compiler vectorises).
+void squared_distances(const double* x, const double* y, const double* z, size_t m, const Vec3& p,
+                       double* __restrict d) {
+  for (size_t i = 0; i < m; ++i) {
+    const double dx = x[i] - p.x, dy = y[i] - p.y, dz = z[i] - p.z;
+    d[i] = dx * dx + dy * dy + dz * dz;
+  }
+}
+
 }  // namespace
 
 NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<uint32_t>& rep,
@@ -79,15 +89,7 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
         for (uint32_t s = grid.cell_begin(uint32_t(c)); s < grid.cell_end(uint32_t(c)); ++s) {
           if (kDuplicates && rep[s] != s) continue;
           const Vec3 p = grid.sorted_point(s);
-          {
-            const double *x = bx.data(), *y = by.data(), *z = bz.data();
-            double* __restrict d = bd.data();
-            for (size_t i = 0; i < m; ++i) {
-              // As squared_distance(q, p) takes it.
-              const double dx = x[i] - p.x, dy = y[i] - p.y, dz = z[i] - p.z;
-              d[i] = dx * dx + dy * dy + dz * dz;
-            }
-          }
+          squared_distances(bx.data(), by.data(), bz.data(), m, p, bd.data());
           const size_t kept = select_within(bd.data(), m, -INFINITY, r2, bt.data(), s, kept_t.data());
           out.insert(out.end(), kept_t.begin(), kept_t.begin() + ptrdiff_t(kept));
           count[s] = uint32_t(kept);
@@ -276,14 +278,7 @@ NeighborLists build_neighbor_lists(const NeighborGrid& grid, const std::vector<u
             within.resize(bt.size() + 16);
           }
           const size_t m = bt.size();
-          {
-            const double *x = bx.data(), *y = by.data(), *z = bz.data();
-            double* __restrict d = bd.data();
-            for (size_t i = 0; i < m; ++i) {
-              const double dx = x[i] - p.x, dy = y[i] - p.y, dz = z[i] - p.z;
-              d[i] = dx * dx + dy * dy + dz * dz;
-            }
-          }
+          squared_distances(bx.data(), by.data(), bz.data(), m, p, bd.data());
           const size_t count = select_within(bd.data(), m, -INFINITY, rs * rs, nullptr, 0, within.data());
           for (size_t j = 0; j < count; ++j) take(bt[within[j]], bd[within[j]]);
         }

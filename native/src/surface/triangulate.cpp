@@ -8,10 +8,7 @@
 
 #include <tbb/parallel_sort.h>
 
-#if defined(__x86_64__)
-#include <immintrin.h>
-#endif
-
+#include "core/cpu_clones.h"
 #include "core/format_number.h"
 #include "core/length_limits.h"
 #include "core/parallel.h"
@@ -75,8 +72,8 @@ size_t first_near_gap_scalar(const double* x, const double* y, const double* z, 
   return n;
 }
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-__attribute__((target("avx512f"))) size_t first_near_gap_avx512(const double* x, const double* y, const double* z,
+#ifdef PM_HAVE_AVX512
+PM_TARGET_AVX512 size_t first_near_gap_avx512(const double* x, const double* y, const double* z,
                                                                 size_t n, size_t from, const detail::SmallestSphere& s,
                                                                 double tol, size_t skip1, size_t skip2, double* gap) {
   const __m512d ax = _mm512_set1_pd(s.a.x), ay = _mm512_set1_pd(s.a.y), az = _mm512_set1_pd(s.a.z);
@@ -111,9 +108,8 @@ __attribute__((target("avx512f"))) size_t first_near_gap_avx512(const double* x,
 
 size_t first_near_gap(const double* x, const double* y, const double* z, size_t n, size_t from,
                       const detail::SmallestSphere& s, double tol, size_t skip1, size_t skip2, double* gap) {
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-  static const bool avx512 = __builtin_cpu_supports("avx512f");
-  if (avx512) return first_near_gap_avx512(x, y, z, n, from, s, tol, skip1, skip2, gap);
+#ifdef PM_HAVE_AVX512
+  if (detail::cpu_has_avx512()) return first_near_gap_avx512(x, y, z, n, from, s, tol, skip1, skip2, gap);
 #endif
   return first_near_gap_scalar(x, y, z, n, from, s, tol, skip1, skip2, gap);
 }
