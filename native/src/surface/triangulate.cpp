@@ -374,6 +374,76 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
         // 1e5 neighbours: the cancel flag is checked inside the point's work too (every 256
         // pairs; a check costs a relaxed load, and on the calling thread a clock read).
         uint32_t since_check = 0;
+        // The triplets (j, k) within the limits, judged eight at a time: their smallest spheres
+        // computed side by side (smallest_spheres), then each judged in turn, in the order of
+        // the pairs, as one at a time.
+        size_t pending = 0;
+        uint32_t pend_a[8], pend_c[8], pend_j[8] = {}, pend_k[8] = {};
+        SmallestSphere spheres[8];
+        const auto judge = [&](size_t a, size_t c, const SmallestSphere& s) __attribute__((noinline)) {
+          const uint32_t j = near[a], k = near[c];
+          if (s.degenerate) {
+            ++cnt.degenerate;
+            return;
+          }
+          ++cnt.candidates;
+          // Every possible blocker is in the list of the corner with the largest L.
+          uint32_t widest = i;
+          if (Lp[j] > Lp[widest]) widest = j;
+          if (Lp[k] > Lp[widest]) widest = k;
+          bool blocked = false, tie = false;
+          // The point that blocked the last triplet first: the spheres of one point's
+          // triplets overlap (on an irregular sampling the first blocker in list order comes
+          // ~15 points in, and 96 % of candidates have one). Whether a point inside exists
+          // does not depend on the order the points are looked at in (every point inside is
+          // in the list: see above), so neither does the verdict; only which tie, if any,
+          // is met before it (`ties` counts candidates that met one).
+          if (last_blocker != UINT32_MAX && last_blocker != j && last_blocker != k &&
+              sphere_contains(s, P[last_blocker], &tie)) {
+            blocked = true;
+          } else if (widest == i) {
+            // The verdict of the loop below, in the same order: the first neighbour strictly
+            // inside, or in the tie zone and inside by the symbolic tie-break; `tie` for any
+            // in the tie zone up to it. (i's own list does not hold i; j and k, the corners,
+            // are skipped.)
+            const double tol = kTieTolerance * s.r2;
+            double g = 0;
+            const auto next_near = [&](size_t from) {
+              return first_near_gap(lx.data(), ly.data(), lz.data(), len, from, s, tol, near_at[a], near_at[c], &g);
+            };
+            for (size_t at = next_near(0); at < len; at = next_near(at + 1)) {
+              if (g < -tol || sphere_contains(s, P[ni[at]], &tie)) {
+                blocked = true;
+                last_blocker = ni[at];
+                break;
+              }
+            }
+          } else {
+            for (const uint32_t *q = nbr.begin(widest), *qe = nbr.end(widest); q != qe && !blocked; ++q) {
+              if (*q == i || *q == j || *q == k) continue;
+              if (sphere_contains(s, P[*q], &tie)) {
+                blocked = true;
+                last_blocker = *q;
+              }
+            }
+          }
+          if (tie) ++cnt.ties;
+          if (blocked) return;
+          if (indices == TriangleIndices::Sorted) {  // i < j < k already
+            tris.push_back({i, j, k});
+            return;
+          }
+          Triangle t{grid.original_index(i), grid.original_index(j), grid.original_index(k)};
+          if (t[0] > t[1]) std::swap(t[0], t[1]);
+          if (t[1] > t[2]) std::swap(t[1], t[2]);
+          if (t[0] > t[1]) std::swap(t[0], t[1]);
+          tris.push_back(t);
+        };
+        const auto judge_pending = [&] {
+          smallest_spheres(pi, P.data(), pend_j, pend_k, int(pending), spheres);
+          for (size_t p = 0; p < pending; ++p) judge(pend_a[p], pend_c[p], spheres[p]);
+          pending = 0;
+        };
         for (size_t a = 0; a < near.size(); ++a) {
           const uint32_t j = near[a];
           for (size_t c = a + 1; c < near.size(); ++c) {
@@ -384,65 +454,12 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
             }
             const uint32_t k = near[c];
             if (squared_distance(P[j], P[k]) > limit2(j, k)) continue;
-            const SmallestSphere s = smallest_sphere(pi, P[j], P[k]);
-            if (s.degenerate) {
-              ++cnt.degenerate;
-              continue;
-            }
-            ++cnt.candidates;
-            // Every possible blocker is in the list of the corner with the largest L.
-            uint32_t widest = i;
-            if (Lp[j] > Lp[widest]) widest = j;
-            if (Lp[k] > Lp[widest]) widest = k;
-            bool blocked = false, tie = false;
-            // The point that blocked the last triplet first: the spheres of one point's
-            // triplets overlap (on an irregular sampling the first blocker in list order comes
-            // ~15 points in, and 96 % of candidates have one). Whether a point inside exists
-            // does not depend on the order the points are looked at in (every point inside is
-            // in the list: see above), so neither does the verdict; only which tie, if any,
-            // is met before it (`ties` counts candidates that met one).
-            if (last_blocker != UINT32_MAX && last_blocker != j && last_blocker != k &&
-                sphere_contains(s, P[last_blocker], &tie)) {
-              blocked = true;
-            } else if (widest == i) {
-              // The verdict of the loop below, in the same order: the first neighbour strictly
-              // inside, or in the tie zone and inside by the symbolic tie-break; `tie` for any
-              // in the tie zone up to it. (i's own list does not hold i; j and k, the corners,
-              // are skipped.)
-              const double tol = kTieTolerance * s.r2;
-              double g = 0;
-              const auto next_near = [&](size_t from) {
-                return first_near_gap(lx.data(), ly.data(), lz.data(), len, from, s, tol, near_at[a], near_at[c], &g);
-              };
-              for (size_t at = next_near(0); at < len; at = next_near(at + 1)) {
-                if (g < -tol || sphere_contains(s, P[ni[at]], &tie)) {
-                  blocked = true;
-                  last_blocker = ni[at];
-                  break;
-                }
-              }
-            } else {
-              for (const uint32_t *q = nbr.begin(widest), *qe = nbr.end(widest); q != qe && !blocked; ++q) {
-                if (*q == i || *q == j || *q == k) continue;
-                if (sphere_contains(s, P[*q], &tie)) {
-                  blocked = true;
-                  last_blocker = *q;
-                }
-              }
-            }
-            if (tie) ++cnt.ties;
-            if (blocked) continue;
-            if (indices == TriangleIndices::Sorted) {  // i < j < k already
-              tris.push_back({i, j, k});
-              continue;
-            }
-            Triangle t{grid.original_index(i), grid.original_index(j), grid.original_index(k)};
-            if (t[0] > t[1]) std::swap(t[0], t[1]);
-            if (t[1] > t[2]) std::swap(t[1], t[2]);
-            if (t[0] > t[1]) std::swap(t[0], t[1]);
-            tris.push_back(t);
+            pend_a[pending] = uint32_t(a), pend_c[pending] = uint32_t(c);
+            pend_j[pending] = j, pend_k[pending] = k;
+            if (++pending == 8) judge_pending();
           }
         }
+        judge_pending();
       }
       tracker.tick(se - sb);
     }

@@ -7,6 +7,10 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
+#include <cstdint>
+#include <random>
+#include <vector>
 
 using namespace particlemesh;
 using detail::smallest_sphere;
@@ -101,4 +105,72 @@ TEST(SmallestSphere, CollinearOrCoincidentCornersAreDegenerate) {
   ASSERT_TRUE(s.degenerate);
   expect_vec_eq(s.a, {1, 0, 0});  // the corners still in rank order
   expect_vec_eq(s.c, {3, 0, 0});
+}
+
+namespace {
+
+bool same_bits(double x, double y) { return std::bit_cast<uint64_t>(x) == std::bit_cast<uint64_t>(y); }
+bool same_bits(const Vec3& p, const Vec3& q) { return same_bits(p.x, q.x) && same_bits(p.y, q.y) && same_bits(p.z, q.z); }
+
+}  // namespace
+
+// The triangle test computes its triplets' spheres eight at a time (AVX-512, where the
+// processor has it): every field, bit for bit, as one at a time, for every count of 1 to 8 and
+// every kind of triplet: acute, obtuse at each rank, right-angled within the tolerance and
+// just beyond it, collinear, coincident corners, corners that tie in x or in x and y (the rank
+// order's later tests), -0 against +0, and lengths whose squares overflow.
+TEST(SmallestSphere, EightAtATimeGiveTheBitsOfOneAtATime) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<Vec3> points;
+  const auto add = [&](const Vec3& p) { points.push_back(p); };
+  const Vec3 a{0.25, -0.5, 0.125};
+  // Random triangles around a, at three scales.
+  for (int i = 0; i < 300; ++i) {
+    const double s = i % 3 == 0 ? 1e-6 : i % 3 == 1 ? 1.0 : 1e6;
+    add(a + Vec3{u(rng), u(rng), u(rng)} * s);
+  }
+  // Right angles at a within and beyond the tolerance, obtuse and acute near 90 degrees.
+  for (const double e : {0.0, 1e-12, -1e-12, 1e-9, -1e-9, 1e-8, -1e-8, 0.1, -0.1}) {
+    add(a + Vec3{1, 0, 0});
+    add(a + Vec3{e, 1, 0});
+  }
+  // Collinear and coincident corners; ties in x, in x and y; signed zeros.
+  add(a), add(a), add(a + Vec3{1, 1, 1}), add(a + Vec3{2, 2, 2}), add(a + Vec3{-3, -3, -3});
+  add({a.x, a.y + 1, a.z}), add({a.x, a.y - 1, a.z + 1}), add({a.x, a.y, a.z + 2}), add({a.x, a.y, a.z - 2});
+  add({0.0, 0.0, 0.0}), add({-0.0, 1.0, 0.0}), add({0.0, -0.0, 1.0}), add({-0.0, -0.0, -0.0});
+  // Squares that overflow to infinity.
+  add({1e200, 0, 0}), add({0, 1e200, 0}), add({-1e200, 1e200, 1e200});
+  const size_t m = points.size();
+  std::vector<uint32_t> js, ks;
+  for (uint32_t j = 0; j < m; ++j)
+    for (uint32_t k = j + 1; k < m; k += 1 + uint32_t(rng() % 7)) js.push_back(j), ks.push_back(k);
+  for (const Vec3& corner : {a, Vec3{-0.0, 0.0, 0.0}, Vec3{1e200, 1e200, 0}}) {
+    size_t checked = 0;
+    for (size_t first = 0; first < js.size();) {
+      const int count = 1 + int(rng() % 8);
+      uint32_t j[8] = {}, k[8] = {};
+      for (int l = 0; l < count; ++l) j[l] = js[(first + l) % js.size()], k[l] = ks[(first + l) % js.size()];
+      // Lanes past count: any index, even one past the points (never read).
+      for (int l = count; l < 8; ++l) j[l] = k[l] = uint32_t(1u << 31);
+      SmallestSphere batch[8];
+      detail::smallest_spheres(corner, points.data(), j, k, count, batch);
+      for (int l = 0; l < count; ++l) {
+        const SmallestSphere one = smallest_sphere(corner, points[j[l]], points[k[l]]);
+        const SmallestSphere& s = batch[l];
+        ASSERT_EQ(s.degenerate, one.degenerate) << j[l] << " " << k[l];
+        ASSERT_EQ(s.obtuse, one.obtuse) << j[l] << " " << k[l];
+        EXPECT_TRUE(same_bits(s.a, one.a) && same_bits(s.b, one.b) && same_bits(s.c, one.c)) << j[l] << " " << k[l];
+        EXPECT_TRUE(same_bits(s.center_rel, one.center_rel)) << j[l] << " " << k[l];
+        EXPECT_TRUE(same_bits(s.r2, one.r2)) << j[l] << " " << k[l];
+        EXPECT_TRUE(same_bits(s.normal, one.normal)) << j[l] << " " << k[l];
+        EXPECT_TRUE(same_bits(s.inv_normal2, one.inv_normal2)) << j[l] << " " << k[l];
+        EXPECT_EQ(s.e0, one.e0);
+        EXPECT_EQ(s.e1, one.e1);
+        ++checked;
+      }
+      first += size_t(count);
+    }
+    EXPECT_GE(checked, js.size());
+  }
 }
