@@ -298,4 +298,14 @@ inline bool sphere_contains(const SmallestSphere& s, const Vec3& q, bool* tie = 
   return false;  // unreachable: q's own coefficient is -1
 }
 
+/// sphere_contains(), with the clear cases (a point clearly inside or outside: nearly all)
+/// decided inline and only the tie zone's symbolic tie-break called.
+inline bool sphere_contains_inline(const SmallestSphere& s, const Vec3& q, bool* tie) {
+  const double d = sphere_gap(s, q);
+  const double tol = kTieTolerance * s.r2;
+  if (d < -tol) return true;
+  if (d > tol) return false;
+  return sphere_contains(s, q, tie);
+}
+
 }  // namespace particlemesh::detail

@@ -72,7 +72,62 @@ size_t first_near_gap_scalar(const double* x, const double* y, const double* z, 
   return n;
 }
 
+/// first_near_gap() over the points list[from, n) (indices into points), skipping the triplet's
+/// corners i, j, k by index: the test of a triplet whose widest corner is not the point at
+/// hand, over that corner's list (a fifth of the candidates on an irregular sampling).
+size_t first_near_gap_indexed_scalar(const Vec3* points, const uint32_t* list, size_t n, size_t from,
+                                     const detail::SmallestSphere& s, double tol, uint32_t i, uint32_t j, uint32_t k,
+                                     double* gap) {
+  for (size_t at = from; at < n; ++at) {
+    const uint32_t q = list[at];
+    if (q == i || q == j || q == k) continue;
+    const double g = detail::sphere_gap(s, points[q]);
+    if (!(g > tol)) {
+      *gap = g;
+      return at;
+    }
+  }
+  return n;
+}
+
+/// The places c in [from, n) of a point's higher neighbours within L (coordinates x, y, z, edge
+/// limits l) that pair with the one at p (limit lp): squared_distance(p, q_c) not above
+/// pair_limit(lp, l_c)^2 (so NaN pairs, as in the test's loop), in order, into out; their count.
+/// Sixteen at a time where the processor has AVX-512: the triangle test's pairs (j, k), ~100
+/// a point on an irregular sampling, a third of them too long.
+size_t pairs_within_scalar(const double* x, const double* y, const double* z, const double* l, size_t from, size_t n,
+                           const Vec3& p, double lp, uint32_t* out) {
+  size_t kept = 0;
+  for (size_t c = from; c < n; ++c) {
+    const double limit = detail::pair_limit(lp, l[c]);
+    if (!(squared_distance(p, Vec3{x[c], y[c], z[c]}) > limit * limit)) out[kept++] = uint32_t(c);
+  }
+  return kept;
+}
+
 #ifdef PM_HAVE_AVX512
+PM_TARGET_AVX512 size_t pairs_within_avx512(const double* x, const double* y, const double* z, const double* l,
+                                            size_t from, size_t n, const Vec3& p, double lp, uint32_t* out) {
+  const __m512d px = _mm512_set1_pd(p.x), py = _mm512_set1_pd(p.y), pz = _mm512_set1_pd(p.z);
+  const __m512d lpv = _mm512_set1_pd(lp), half = _mm512_set1_pd(0.5);
+  const __m512i lanes = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  size_t kept = 0;
+  for (size_t c = from; c < n; c += 8) {
+    const size_t left = n - c;
+    const __mmask8 in = __mmask8(left >= 8 ? 0xff : (1u << left) - 1);
+    // squared_distance(p, q) = squared_norm(p - q), x then y then z; pair_limit(lp, l) squared.
+    const __m512d dx = _mm512_sub_pd(px, _mm512_maskz_loadu_pd(in, x + c));
+    const __m512d dy = _mm512_sub_pd(py, _mm512_maskz_loadu_pd(in, y + c));
+    const __m512d dz = _mm512_sub_pd(pz, _mm512_maskz_loadu_pd(in, z + c));
+    const __m512d d2 = _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz));
+    const __m512d limit = _mm512_mul_pd(half, _mm512_add_pd(lpv, _mm512_maskz_loadu_pd(in, l + c)));
+    const __mmask8 keep = _mm512_mask_cmp_pd_mask(in, d2, _mm512_mul_pd(limit, limit), _CMP_NGT_UQ);
+    _mm512_mask_compressstoreu_epi32(out + kept, __mmask16(keep), _mm512_add_epi32(_mm512_set1_epi32(int(c)), lanes));
+    kept += size_t(__builtin_popcount(keep));
+  }
+  return kept;
+}
+
 PM_TARGET_AVX512 size_t first_near_gap_avx512(const double* x, const double* y, const double* z,
                                                                 size_t n, size_t from, const detail::SmallestSphere& s,
                                                                 double tol, size_t skip1, size_t skip2, double* gap) {
@@ -104,6 +159,46 @@ PM_TARGET_AVX512 size_t first_near_gap_avx512(const double* x, const double* y, 
   }
   return n;
 }
+
+PM_TARGET_AVX512 size_t first_near_gap_indexed_avx512(const Vec3* points, const uint32_t* list, size_t n,
+                                                      size_t from, const detail::SmallestSphere& s, double tol,
+                                                      uint32_t i, uint32_t j, uint32_t k, double* gap) {
+  static_assert(sizeof(Vec3) == 3 * sizeof(double));
+  const double* base = &points[0].x;
+  const __m512d ax = _mm512_set1_pd(s.a.x), ay = _mm512_set1_pd(s.a.y), az = _mm512_set1_pd(s.a.z);
+  const __m512d cx = _mm512_set1_pd(s.center_rel.x), cy = _mm512_set1_pd(s.center_rel.y),
+                cz = _mm512_set1_pd(s.center_rel.z);
+  const __m512d r2 = _mm512_set1_pd(s.r2), limit = _mm512_set1_pd(tol), zero = _mm512_setzero_pd();
+  const __m512i vi = _mm512_set1_epi64(i), vj = _mm512_set1_epi64(j), vk = _mm512_set1_epi64(k);
+  const __m256i lane_numbers = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  for (size_t at = from; at < n; at += 8) {
+    const size_t left = n - at;
+    const __mmask8 in = __mmask8(left >= 8 ? 0xff : (1u << left) - 1);
+    // The indices (the tail's by an AVX2 masked load, which reads only its lanes).
+    const __m256i ids = left >= 8 ? _mm256_loadu_si256(reinterpret_cast<const __m256i*>(list + at))
+                                  : _mm256_maskload_epi32(reinterpret_cast<const int*>(list + at),
+                                                          _mm256_cmpgt_epi32(_mm256_set1_epi32(int(left)), lane_numbers));
+    const __m512i q = _mm512_maskz_cvtepu32_epi64(in, ids);
+    const __m512i q3 = _mm512_add_epi64(q, _mm512_add_epi64(q, q));
+    const __mmask8 other = _mm512_mask_cmpneq_epi64_mask(
+        _mm512_mask_cmpneq_epi64_mask(_mm512_mask_cmpneq_epi64_mask(in, q, vi), q, vj), q, vk);
+    // sphere_gap(): (q - a) - centre, its squared norm x then y then z, less r^2.
+    const __m512d ex = _mm512_sub_pd(_mm512_sub_pd(_mm512_mask_i64gather_pd(zero, other, q3, base, 8), ax), cx);
+    const __m512d ey = _mm512_sub_pd(_mm512_sub_pd(_mm512_mask_i64gather_pd(zero, other, q3, base + 1, 8), ay), cy);
+    const __m512d ez = _mm512_sub_pd(_mm512_sub_pd(_mm512_mask_i64gather_pd(zero, other, q3, base + 2, 8), az), cz);
+    const __m512d g = _mm512_sub_pd(
+        _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(ex, ex), _mm512_mul_pd(ey, ey)), _mm512_mul_pd(ez, ez)), r2);
+    const __mmask8 near = _mm512_mask_cmp_pd_mask(other, g, limit, _CMP_NGT_UQ);
+    if (near) {
+      const int lane = __builtin_ctz(unsigned(near));
+      alignas(64) double gs[8];
+      _mm512_store_pd(gs, g);
+      *gap = gs[lane];
+      return at + size_t(lane);
+    }
+  }
+  return n;
+}
 #endif
 
 size_t first_near_gap(const double* x, const double* y, const double* z, size_t n, size_t from,
@@ -112,6 +207,23 @@ size_t first_near_gap(const double* x, const double* y, const double* z, size_t 
   if (detail::cpu_has_avx512()) return first_near_gap_avx512(x, y, z, n, from, s, tol, skip1, skip2, gap);
 #endif
   return first_near_gap_scalar(x, y, z, n, from, s, tol, skip1, skip2, gap);
+}
+
+size_t first_near_gap_indexed(const Vec3* points, const uint32_t* list, size_t n, size_t from,
+                              const detail::SmallestSphere& s, double tol, uint32_t i, uint32_t j, uint32_t k,
+                              double* gap) {
+#ifdef PM_HAVE_AVX512
+  if (detail::cpu_has_avx512()) return first_near_gap_indexed_avx512(points, list, n, from, s, tol, i, j, k, gap);
+#endif
+  return first_near_gap_indexed_scalar(points, list, n, from, s, tol, i, j, k, gap);
+}
+
+size_t pairs_within(const double* x, const double* y, const double* z, const double* l, size_t from, size_t n,
+                    const Vec3& p, double lp, uint32_t* out) {
+#ifdef PM_HAVE_AVX512
+  if (detail::cpu_has_avx512()) return pairs_within_avx512(x, y, z, l, from, n, p, lp, out);
+#endif
+  return pairs_within_scalar(x, y, z, l, from, n, p, lp, out);
 }
 
 }  // namespace
@@ -350,6 +462,13 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
     // i's list by coordinate, for the spheres' gaps (first_near_gap): where i has the largest
     // L of a triplet (every triplet, on an even sampling), its blockers are measured there.
     std::vector<double> lx, ly, lz;
+    // The triplets waiting to be judged (see below): their places in `near`, their points, and
+    // their spheres.
+    uint32_t pend_a[8], pend_c[8], pend_j[8] = {}, pend_k[8] = {};
+    SmallestSphere spheres[8];
+    // i's higher neighbours within L by coordinate, with their edge limits; one's partners.
+    std::vector<double> nx, ny, nz, nl;
+    std::vector<uint32_t> partners;
     for (size_t b = bb; b < be; ++b) {
       if (tracker.cancelled()) return;
       auto& tris = out[b];
@@ -378,8 +497,6 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
         // computed side by side (smallest_spheres), then each judged in turn, in the order of
         // the pairs, as one at a time.
         size_t pending = 0;
-        uint32_t pend_a[8], pend_c[8], pend_j[8] = {}, pend_k[8] = {};
-        SmallestSphere spheres[8];
         const auto judge = [&](size_t a, size_t c, const SmallestSphere& s) __attribute__((noinline)) {
           const uint32_t j = near[a], k = near[c];
           if (s.degenerate) {
@@ -399,7 +516,7 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
           // in the list: see above), so neither does the verdict; only which tie, if any,
           // is met before it (`ties` counts candidates that met one).
           if (last_blocker != UINT32_MAX && last_blocker != j && last_blocker != k &&
-              sphere_contains(s, P[last_blocker], &tie)) {
+              sphere_contains_inline(s, P[last_blocker], &tie)) {
             blocked = true;
           } else if (widest == i) {
             // The verdict of the loop below, in the same order: the first neighbour strictly
@@ -419,11 +536,19 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
               }
             }
           } else {
-            for (const uint32_t *q = nbr.begin(widest), *qe = nbr.end(widest); q != qe && !blocked; ++q) {
-              if (*q == i || *q == j || *q == k) continue;
-              if (sphere_contains(s, P[*q], &tie)) {
+            // The same, over the widest corner's list (which holds i and the other corner).
+            const uint32_t* list = nbr.begin(widest);
+            const size_t count = size_t(nbr.end(widest) - list);
+            const double tol = kTieTolerance * s.r2;
+            double g = 0;
+            const auto next_near = [&](size_t from) {
+              return first_near_gap_indexed(P.data(), list, count, from, s, tol, i, j, k, &g);
+            };
+            for (size_t at = next_near(0); at < count; at = next_near(at + 1)) {
+              if (g < -tol || sphere_contains(s, P[list[at]], &tie)) {
                 blocked = true;
-                last_blocker = *q;
+                last_blocker = list[at];
+                break;
               }
             }
           }
@@ -444,18 +569,27 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
           for (size_t p = 0; p < pending; ++p) judge(pend_a[p], pend_c[p], spheres[p]);
           pending = 0;
         };
-        for (size_t a = 0; a < near.size(); ++a) {
+        // The pairs (j, k) of the higher neighbours within L whose edge j k is within its limit:
+        // each j's partners found at once (pairs_within, over the neighbours by coordinate).
+        const size_t m = near.size();
+        if (m >= 2) {
+          nx.resize(m), ny.resize(m), nz.resize(m), nl.resize(m), partners.resize(m);
+          for (size_t a = 0; a < m; ++a)
+            nx[a] = lx[near_at[a]], ny[a] = ly[near_at[a]], nz[a] = lz[near_at[a]], nl[a] = Lp[near[a]];
+        }
+        for (size_t a = 0; a + 1 < m; ++a) {
           const uint32_t j = near[a];
-          for (size_t c = a + 1; c < near.size(); ++c) {
-            if (++since_check == 256) {
+          const size_t kept = pairs_within(nx.data(), ny.data(), nz.data(), nl.data(), a + 1, m, P[j], Lp[j], partners.data());
+          since_check += uint32_t((m - a - 1) / 8);  // the pairs not kept: eight cost about one kept
+          for (size_t t = 0; t < kept; ++t) {
+            if (++since_check >= 256) {
               since_check = 0;
               if (tracker.cancelled()) return;
               tracker.tick(0);
             }
-            const uint32_t k = near[c];
-            if (squared_distance(P[j], P[k]) > limit2(j, k)) continue;
-            pend_a[pending] = uint32_t(a), pend_c[pending] = uint32_t(c);
-            pend_j[pending] = j, pend_k[pending] = k;
+            const uint32_t c = partners[t];
+            pend_a[pending] = uint32_t(a), pend_c[pending] = c;
+            pend_j[pending] = j, pend_k[pending] = near[c];
             if (++pending == 8) judge_pending();
           }
         }
