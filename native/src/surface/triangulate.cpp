@@ -93,8 +93,9 @@ size_t first_near_gap_indexed_scalar(const Vec3* points, const uint32_t* list, s
 /// The places c in [from, n) of a point's higher neighbours within L (coordinates x, y, z, edge
 /// limits l) that pair with the one at p (limit lp): squared_distance(p, q_c) not above
 /// pair_limit(lp, l_c)^2 (so NaN pairs, as in the test's loop), in order, into out; their count.
-/// Sixteen at a time where the processor has AVX-512: the triangle test's pairs (j, k), ~100
-/// a point on an irregular sampling, a third of them too long.
+/// Eight at a time where the processor has AVX-512: the triangle test's pairs (j, k), ~100 a
+/// point on an irregular sampling, a third of them too long (one at a time, a branch each that
+/// the processor could not predict).
 size_t pairs_within_scalar(const double* x, const double* y, const double* z, const double* l, size_t from, size_t n,
                            const Vec3& p, double lp, uint32_t* out) {
   size_t kept = 0;
@@ -106,6 +107,32 @@ size_t pairs_within_scalar(const double* x, const double* y, const double* z, co
 }
 
 #ifdef PM_HAVE_AVX512
+/// A sphere's gaps (detail::sphere_gap) eight points at a time: the sphere broadcast once.
+struct SphereGaps8 {
+  __m512d ax, ay, az, cx, cy, cz, r2;
+
+  PM_TARGET_AVX512 explicit SphereGaps8(const detail::SmallestSphere& s)
+      : ax(_mm512_set1_pd(s.a.x)), ay(_mm512_set1_pd(s.a.y)), az(_mm512_set1_pd(s.a.z)),
+        cx(_mm512_set1_pd(s.center_rel.x)), cy(_mm512_set1_pd(s.center_rel.y)), cz(_mm512_set1_pd(s.center_rel.z)),
+        r2(_mm512_set1_pd(s.r2)) {}
+  /// (q - a) - centre, as Vec3 subtractions; its squared norm as dot() sums, x then y then z;
+  /// less r^2.
+  PM_TARGET_AVX512 __m512d operator()(__m512d x, __m512d y, __m512d z) const {
+    const __m512d ex = _mm512_sub_pd(_mm512_sub_pd(x, ax), cx), ey = _mm512_sub_pd(_mm512_sub_pd(y, ay), cy),
+                  ez = _mm512_sub_pd(_mm512_sub_pd(z, az), cz);
+    return _mm512_sub_pd(_mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(ex, ex), _mm512_mul_pd(ey, ey)), _mm512_mul_pd(ez, ez)),
+                         r2);
+  }
+  /// The first lane of `near` (not 0), its gap in *gap.
+  PM_TARGET_AVX512 static int first(__mmask8 near, __m512d g, double* gap) {
+    const int lane = __builtin_ctz(unsigned(near));
+    alignas(64) double gs[8];
+    _mm512_store_pd(gs, g);
+    *gap = gs[lane];
+    return lane;
+  }
+};
+
 PM_TARGET_AVX512 size_t pairs_within_avx512(const double* x, const double* y, const double* z, const double* l,
                                             size_t from, size_t n, const Vec3& p, double lp, uint32_t* out) {
   const __m512d px = _mm512_set1_pd(p.x), py = _mm512_set1_pd(p.y), pz = _mm512_set1_pd(p.z);
@@ -131,31 +158,18 @@ PM_TARGET_AVX512 size_t pairs_within_avx512(const double* x, const double* y, co
 PM_TARGET_AVX512 size_t first_near_gap_avx512(const double* x, const double* y, const double* z,
                                                                 size_t n, size_t from, const detail::SmallestSphere& s,
                                                                 double tol, size_t skip1, size_t skip2, double* gap) {
-  const __m512d ax = _mm512_set1_pd(s.a.x), ay = _mm512_set1_pd(s.a.y), az = _mm512_set1_pd(s.a.z);
-  const __m512d cx = _mm512_set1_pd(s.center_rel.x), cy = _mm512_set1_pd(s.center_rel.y),
-                cz = _mm512_set1_pd(s.center_rel.z);
-  const __m512d r2 = _mm512_set1_pd(s.r2), limit = _mm512_set1_pd(tol);
+  const SphereGaps8 gaps(s);
+  const __m512d limit = _mm512_set1_pd(tol);
   const __m512i lanes = _mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7);
   const __m512i s1 = _mm512_set1_epi64(int64_t(skip1)), s2 = _mm512_set1_epi64(int64_t(skip2));
   for (size_t i = from; i < n; i += 8) {
     const size_t left = n - i;
     const __mmask8 in = __mmask8(left >= 8 ? 0xff : (1u << left) - 1);
-    // (q - a) - centre, as Vec3 subtractions; its squared norm as dot() sums, x then y then z.
-    const __m512d ex = _mm512_sub_pd(_mm512_sub_pd(_mm512_maskz_loadu_pd(in, x + i), ax), cx);
-    const __m512d ey = _mm512_sub_pd(_mm512_sub_pd(_mm512_maskz_loadu_pd(in, y + i), ay), cy);
-    const __m512d ez = _mm512_sub_pd(_mm512_sub_pd(_mm512_maskz_loadu_pd(in, z + i), az), cz);
-    const __m512d g = _mm512_sub_pd(
-        _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(ex, ex), _mm512_mul_pd(ey, ey)), _mm512_mul_pd(ez, ez)), r2);
+    const __m512d g = gaps(_mm512_maskz_loadu_pd(in, x + i), _mm512_maskz_loadu_pd(in, y + i), _mm512_maskz_loadu_pd(in, z + i));
     const __m512i at = _mm512_add_epi64(_mm512_set1_epi64(int64_t(i)), lanes);
     const __mmask8 other = _mm512_mask_cmpneq_epi64_mask(_mm512_cmpneq_epi64_mask(at, s1), at, s2);
     const __mmask8 near = _mm512_mask_cmp_pd_mask(__mmask8(in & other), g, limit, _CMP_NGT_UQ);
-    if (near) {
-      const int lane = __builtin_ctz(unsigned(near));
-      alignas(64) double gs[8];
-      _mm512_store_pd(gs, g);
-      *gap = gs[lane];
-      return i + size_t(lane);
-    }
+    if (near) return i + size_t(SphereGaps8::first(near, g, gap));
   }
   return n;
 }
@@ -165,16 +179,15 @@ PM_TARGET_AVX512 size_t first_near_gap_indexed_avx512(const Vec3* points, const 
                                                       uint32_t i, uint32_t j, uint32_t k, double* gap) {
   static_assert(sizeof(Vec3) == 3 * sizeof(double));
   const double* base = &points[0].x;
-  const __m512d ax = _mm512_set1_pd(s.a.x), ay = _mm512_set1_pd(s.a.y), az = _mm512_set1_pd(s.a.z);
-  const __m512d cx = _mm512_set1_pd(s.center_rel.x), cy = _mm512_set1_pd(s.center_rel.y),
-                cz = _mm512_set1_pd(s.center_rel.z);
-  const __m512d r2 = _mm512_set1_pd(s.r2), limit = _mm512_set1_pd(tol), zero = _mm512_setzero_pd();
+  const SphereGaps8 gaps(s);
+  const __m512d limit = _mm512_set1_pd(tol), zero = _mm512_setzero_pd();
   const __m512i vi = _mm512_set1_epi64(i), vj = _mm512_set1_epi64(j), vk = _mm512_set1_epi64(k);
   const __m256i lane_numbers = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
   for (size_t at = from; at < n; at += 8) {
     const size_t left = n - at;
     const __mmask8 in = __mmask8(left >= 8 ? 0xff : (1u << left) - 1);
-    // The indices (the tail's by an AVX2 masked load, which reads only its lanes).
+    // The indices (the tail's by an AVX2 masked load, which reads only its lanes), and the
+    // points' coordinates gathered by them (Vec3 is three doubles: point q's x at 3 q).
     const __m256i ids = left >= 8 ? _mm256_loadu_si256(reinterpret_cast<const __m256i*>(list + at))
                                   : _mm256_maskload_epi32(reinterpret_cast<const int*>(list + at),
                                                           _mm256_cmpgt_epi32(_mm256_set1_epi32(int(left)), lane_numbers));
@@ -182,20 +195,11 @@ PM_TARGET_AVX512 size_t first_near_gap_indexed_avx512(const Vec3* points, const 
     const __m512i q3 = _mm512_add_epi64(q, _mm512_add_epi64(q, q));
     const __mmask8 other = _mm512_mask_cmpneq_epi64_mask(
         _mm512_mask_cmpneq_epi64_mask(_mm512_mask_cmpneq_epi64_mask(in, q, vi), q, vj), q, vk);
-    // sphere_gap(): (q - a) - centre, its squared norm x then y then z, less r^2.
-    const __m512d ex = _mm512_sub_pd(_mm512_sub_pd(_mm512_mask_i64gather_pd(zero, other, q3, base, 8), ax), cx);
-    const __m512d ey = _mm512_sub_pd(_mm512_sub_pd(_mm512_mask_i64gather_pd(zero, other, q3, base + 1, 8), ay), cy);
-    const __m512d ez = _mm512_sub_pd(_mm512_sub_pd(_mm512_mask_i64gather_pd(zero, other, q3, base + 2, 8), az), cz);
-    const __m512d g = _mm512_sub_pd(
-        _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(ex, ex), _mm512_mul_pd(ey, ey)), _mm512_mul_pd(ez, ez)), r2);
+    const __m512d g = gaps(_mm512_mask_i64gather_pd(zero, other, q3, base, 8),
+                           _mm512_mask_i64gather_pd(zero, other, q3, base + 1, 8),
+                           _mm512_mask_i64gather_pd(zero, other, q3, base + 2, 8));
     const __mmask8 near = _mm512_mask_cmp_pd_mask(other, g, limit, _CMP_NGT_UQ);
-    if (near) {
-      const int lane = __builtin_ctz(unsigned(near));
-      alignas(64) double gs[8];
-      _mm512_store_pd(gs, g);
-      *gap = gs[lane];
-      return at + size_t(lane);
-    }
+    if (near) return at + size_t(SphereGaps8::first(near, g, gap));
   }
   return n;
 }
@@ -462,8 +466,8 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
     // i's list by coordinate, for the spheres' gaps (first_near_gap): where i has the largest
     // L of a triplet (every triplet, on an even sampling), its blockers are measured there.
     std::vector<double> lx, ly, lz;
-    // The triplets waiting to be judged (see below): their places in `near`, their points, and
-    // their spheres.
+    // The triplets waiting to be judged (see below): their places in `near`, their points'
+    // indices (zeroed: smallest_spheres reads all eight), and their spheres.
     uint32_t pend_a[8], pend_c[8], pend_j[8] = {}, pend_k[8] = {};
     SmallestSphere spheres[8];
     // i's higher neighbours within L by coordinate, with their edge limits; one's partners.
@@ -491,11 +495,13 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
         }
         // With the limits lifted one point can have ~1e9 triplets, each tested against up to
         // 1e5 neighbours: the cancel flag is checked inside the point's work too (every 256
-        // pairs; a check costs a relaxed load, and on the calling thread a clock read).
+        // pairs within the limits, eight pairs beyond them counting as one; a check costs a
+        // relaxed load, and on the calling thread a clock read).
         uint32_t since_check = 0;
         // The triplets (j, k) within the limits, judged eight at a time: their smallest spheres
         // computed side by side (smallest_spheres), then each judged in turn, in the order of
-        // the pairs, as one at a time.
+        // the pairs, as one at a time. (The judgement is kept out of line: inlined into the
+        // loop that collects the pairs, the test took 8 % longer.)
         size_t pending = 0;
         const auto judge = [&](size_t a, size_t c, const SmallestSphere& s) __attribute__((noinline)) {
           const uint32_t j = near[a], k = near[c];
@@ -580,7 +586,7 @@ RawTriangulation run_raw_triangulation(const PointCloud& cloud, const Triangulat
         for (size_t a = 0; a + 1 < m; ++a) {
           const uint32_t j = near[a];
           const size_t kept = pairs_within(nx.data(), ny.data(), nz.data(), nl.data(), a + 1, m, P[j], Lp[j], partners.data());
-          since_check += uint32_t((m - a - 1) / 8);  // the pairs not kept: eight cost about one kept
+          since_check += uint32_t((m - a - 1) / 8);
           for (size_t t = 0; t < kept; ++t) {
             if (++since_check >= 256) {
               since_check = 0;
