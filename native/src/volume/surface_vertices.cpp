@@ -51,17 +51,24 @@ void EdgeNeighbours::gather_along(const ParticleField& field, const Vec3& a, dou
   // table), written through a pointer rather than pushed back one at a time.
   const size_t most_runs = size_t(box_hi[0] - box_lo[0] + 1) * size_t(box_hi[1] - box_lo[1] + 1) *
                            size_t(box_hi[2] - box_lo[2] + 1);
-  if (runs_.size() < most_runs) runs_.resize(most_runs);
-  Run* const runs = runs_.data();
-  size_t run_count = 0;
-  field.for_each_column_in(box_lo, box_hi, [&](uint32_t c0, uint32_t c1) {
-    if constexpr (A == 2) {
-      for (uint32_t c = c0; c < c1; ++c) runs[run_count++] = {grid.cell_begin(c), grid.cell_end(c), grid.cell_coord(c)[2]};
-    } else {
-      runs[run_count++] = {grid.cell_begin(c0), grid.cell_begin(c1), grid.cell_coord(c0)[A]};
-    }
-    room += grid.cell_begin(c1) - grid.cell_begin(c0);
-  });
+  Box& box = boxes_[A];
+  if (box.field != &field || box.lo != box_lo || box.hi != box_hi) {
+    if (box.runs.size() < most_runs) box.runs.resize(most_runs);
+    Run* const runs = box.runs.data();
+    size_t count = 0;
+    field.for_each_column_in(box_lo, box_hi, [&](uint32_t c0, uint32_t c1) {
+      if constexpr (A == 2) {
+        for (uint32_t c = c0; c < c1; ++c) runs[count++] = {grid.cell_begin(c), grid.cell_end(c), grid.cell_coord(c)[2]};
+      } else {
+        runs[count++] = {grid.cell_begin(c0), grid.cell_begin(c1), grid.cell_coord(c0)[A]};
+      }
+      room += grid.cell_begin(c1) - grid.cell_begin(c0);
+    });
+    box.field = &field, box.lo = box_lo, box.hi = box_hi, box.count = count, box.room = room;
+  }
+  room = box.room;
+  const Run* const runs = box.runs.data();
+  const size_t run_count = box.count;
   if (near_.size() < room) near_.resize(room);
   Near* const out = near_.data();
   const Vec3* const points = grid.sorted_points().data();

@@ -99,7 +99,15 @@ class EdgeNeighbours {
     uint32_t begin, end;  // sorted indices
     int32_t cell;         // their cell's coordinate along the edge's axis
   };
-  std::vector<Run> runs_;  // room for the gather's runs, reused
+  // Per axis, the last gather's box of grid cells and its runs: neighbouring edges along one
+  // axis mostly have the same box, whose runs are then taken again rather than walked again.
+  struct Box {
+    const ParticleField* field = nullptr;
+    NeighborGrid::CellCoord lo{}, hi{};
+    std::vector<Run> runs;  // room for the runs, reused
+    size_t count = 0, room = 0;
+  };
+  Box boxes_[3];
 };
 
 /// The crossing on the edge from node position a (sample fa) to a + h e_axis (sample fb):
