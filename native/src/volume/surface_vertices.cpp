@@ -51,7 +51,11 @@ void EdgeNeighbours::gather_along(const ParticleField& field, const Vec3& a, dou
   // table), written through a pointer rather than pushed back one at a time.
   const size_t most_runs = size_t(box_hi[0] - box_lo[0] + 1) * size_t(box_hi[1] - box_lo[1] + 1) *
                            size_t(box_hi[2] - box_lo[2] + 1);
-  Box& box = boxes_[A];
+  Box* found = nullptr;
+  for (Box& b : boxes_[A])
+    if (b.field == &field && b.lo == box_lo && b.hi == box_hi) found = &b;
+  if (found == nullptr) found = &boxes_[A][next_box_[A]++ % kBoxes];
+  Box& box = *found;
   if (box.field != &field || box.lo != box_lo || box.hi != box_hi) {
     if (box.runs.size() < most_runs) box.runs.resize(most_runs);
     Run* const runs = box.runs.data();
