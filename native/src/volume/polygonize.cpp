@@ -136,11 +136,22 @@ void gather(const Grid& g, const MeshBlock& mb, float* local) {
     // or inside (any value at or above T): such nodes are in no crossing cell.
     const float fill = si != kNone && g.proof[si] == detail::BlockProof::Inside
                            ? std::numeric_limits<float>::infinity() : 0.0f;
+    // A row of x at a time, copied or filled (the test of src per node, inside the loop,
+    // kept the compiler from copying rows whole).
+    const int width = x1 - x0;
     for (int z = z0; z < z1; ++z)
-      for (int y = y0; y < y1; ++y)
-        for (int x = x0; x < x1; ++x)
-          local[x + kL * (y + kL * z)] =
-              src ? src[(x - x0) + kB * ((y - y0) + kB * (z - z0))] : fill;
+      for (int y = y0; y < y1; ++y) {
+        float* to = local + x0 + kL * (y + kL * z);
+        if (src == nullptr) {
+          std::fill_n(to, width, fill);
+          continue;
+        }
+        const float* from = src + kB * ((y - y0) + kB * (z - z0));
+        if (width == kB)
+          std::memcpy(to, from, kB * sizeof(float));  // (a fixed size: two moves, no library call)
+        else
+          to[0] = from[0];
+      }
   }
 }
 

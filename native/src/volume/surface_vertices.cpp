@@ -52,11 +52,14 @@ void EdgeNeighbours::gather_along(const ParticleField& field, const Vec3& a, dou
   const size_t most_runs = size_t(box_hi[0] - box_lo[0] + 1) * size_t(box_hi[1] - box_lo[1] + 1) *
                            size_t(box_hi[2] - box_lo[2] + 1);
   Box* found = nullptr;
+  const auto same = [](const NeighborGrid::CellCoord& p, const NeighborGrid::CellCoord& q) {
+    return p[0] == q[0] && p[1] == q[1] && p[2] == q[2];  // (std::array's == calls memcmp)
+  };
   for (Box& b : boxes_[A])
-    if (b.field == &field && b.lo == box_lo && b.hi == box_hi) found = &b;
+    if (b.field == &field && same(b.lo, box_lo) && same(b.hi, box_hi)) found = &b;
   if (found == nullptr) found = &boxes_[A][next_box_[A]++ % kBoxes];
   Box& box = *found;
-  if (box.field != &field || box.lo != box_lo || box.hi != box_hi) {
+  if (box.field != &field || !same(box.lo, box_lo) || !same(box.hi, box_hi)) {
     if (box.runs.size() < most_runs) box.runs.resize(most_runs);
     Run* const runs = box.runs.data();
     size_t count = 0;
