@@ -101,8 +101,9 @@ class EdgeNeighbours {
   };
   // Per axis, the last kBoxes gathers' boxes of grid cells and their runs (replaced in turn):
   // neighbouring edges along one axis mostly have one of them (a box is whole grid cells, each
-  // about four lattice cells), whose runs are then taken again rather than walked again. With
-  // one box per axis a third of the walks were saved, with four two thirds.
+  // several lattice cells wide: four with the default cell and radius), whose runs are then
+  // taken again rather than walked again. With one box per axis a third of the walks were
+  // saved on the live frame, with four two thirds.
   struct Box {
     const ParticleField* field = nullptr;
     NeighborGrid::CellCoord lo{}, hi{};
