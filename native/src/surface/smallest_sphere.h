@@ -134,10 +134,10 @@ PM_TARGET_AVX512 inline __m512d gather_coordinate(const double* base, __m512i in
 }
 }  // namespace sphere_lanes
 
-/// smallest_sphere(a, points[j[l]], points[k[l]]) for the lanes l < count (1 to 8), eight at a time: the same
-/// operations in the same order as the scalar function, lane by lane (IEEE arithmetic and
-/// square roots round the same in a vector, and the library is built without fused
-/// multiply-adds), so the same bits. The triangle test computes a sphere for every candidate
+/// smallest_sphere(a, points[j[l]], points[k[l]]) for the lanes l < count (1 to 8), eight at a
+/// time: the same operations in the same order as the scalar function, lane by lane (IEEE
+/// arithmetic and square roots round the same in a vector, and the library is built without
+/// fused multiply-adds), so the same bits. The triangle test computes a sphere for every candidate
 /// triplet (on an irregular sampling ~70 a point, a fifth of a run), and one at a time the
 /// function is a chain of dependent divisions and square roots with unpredictable branches.
 PM_TARGET_AVX512 inline void smallest_spheres_avx512(const Vec3& a, const Vec3* points, const uint32_t* j,
@@ -259,6 +259,33 @@ inline void smallest_spheres(const Vec3& a, const Vec3* points, const uint32_t* 
 /// Where q lies against the sphere: its squared distance from the centre less r^2 (negative
 /// inside), as every test of the sphere takes it.
 inline double sphere_gap(const SmallestSphere& s, const Vec3& q) { return squared_norm((q - s.a) - s.center_rel) - s.r2; }
+
+#ifdef PM_HAVE_AVX512
+/// sphere_gap() of eight points at a time (the triangle test's searches for a blocker), the
+/// same arithmetic: the sphere broadcast once.
+struct SphereGaps8 {
+  __m512d ax, ay, az, cx, cy, cz, r2;
+
+  PM_TARGET_AVX512 explicit SphereGaps8(const SmallestSphere& s)
+      : ax(_mm512_set1_pd(s.a.x)), ay(_mm512_set1_pd(s.a.y)), az(_mm512_set1_pd(s.a.z)),
+        cx(_mm512_set1_pd(s.center_rel.x)), cy(_mm512_set1_pd(s.center_rel.y)), cz(_mm512_set1_pd(s.center_rel.z)),
+        r2(_mm512_set1_pd(s.r2)) {}
+  /// (q - a) - centre, as Vec3 subtractions; its squared norm as dot() sums; less r^2.
+  PM_TARGET_AVX512 __m512d operator()(__m512d x, __m512d y, __m512d z) const {
+    using namespace sphere_lanes;
+    const __m512d ex = sub(sub(x, ax), cx), ey = sub(sub(y, ay), cy), ez = sub(sub(z, az), cz);
+    return sub(dot3(ex, ey, ez, ex, ey, ez), r2);
+  }
+  /// The first lane of `near` (not 0), its gap in *gap.
+  PM_TARGET_AVX512 static int first(__mmask8 near, __m512d g, double* gap) {
+    const int lane = __builtin_ctz(unsigned(near));
+    alignas(64) double gs[8];
+    _mm512_store_pd(gs, g);
+    *gap = gs[lane];
+    return lane;
+  }
+};
+#endif
 
 /// Does q count as strictly inside the sphere? `tie` is set when the symbolic tie-break
 /// decided. q must not be one of the corners.

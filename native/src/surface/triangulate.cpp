@@ -107,32 +107,6 @@ size_t pairs_within_scalar(const double* x, const double* y, const double* z, co
 }
 
 #ifdef PM_HAVE_AVX512
-/// A sphere's gaps (detail::sphere_gap) eight points at a time: the sphere broadcast once.
-struct SphereGaps8 {
-  __m512d ax, ay, az, cx, cy, cz, r2;
-
-  PM_TARGET_AVX512 explicit SphereGaps8(const detail::SmallestSphere& s)
-      : ax(_mm512_set1_pd(s.a.x)), ay(_mm512_set1_pd(s.a.y)), az(_mm512_set1_pd(s.a.z)),
-        cx(_mm512_set1_pd(s.center_rel.x)), cy(_mm512_set1_pd(s.center_rel.y)), cz(_mm512_set1_pd(s.center_rel.z)),
-        r2(_mm512_set1_pd(s.r2)) {}
-  /// (q - a) - centre, as Vec3 subtractions; its squared norm as dot() sums, x then y then z;
-  /// less r^2.
-  PM_TARGET_AVX512 __m512d operator()(__m512d x, __m512d y, __m512d z) const {
-    const __m512d ex = _mm512_sub_pd(_mm512_sub_pd(x, ax), cx), ey = _mm512_sub_pd(_mm512_sub_pd(y, ay), cy),
-                  ez = _mm512_sub_pd(_mm512_sub_pd(z, az), cz);
-    return _mm512_sub_pd(_mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(ex, ex), _mm512_mul_pd(ey, ey)), _mm512_mul_pd(ez, ez)),
-                         r2);
-  }
-  /// The first lane of `near` (not 0), its gap in *gap.
-  PM_TARGET_AVX512 static int first(__mmask8 near, __m512d g, double* gap) {
-    const int lane = __builtin_ctz(unsigned(near));
-    alignas(64) double gs[8];
-    _mm512_store_pd(gs, g);
-    *gap = gs[lane];
-    return lane;
-  }
-};
-
 PM_TARGET_AVX512 size_t pairs_within_avx512(const double* x, const double* y, const double* z, const double* l,
                                             size_t from, size_t n, const Vec3& p, double lp, uint32_t* out) {
   const __m512d px = _mm512_set1_pd(p.x), py = _mm512_set1_pd(p.y), pz = _mm512_set1_pd(p.z);
@@ -158,7 +132,7 @@ PM_TARGET_AVX512 size_t pairs_within_avx512(const double* x, const double* y, co
 PM_TARGET_AVX512 size_t first_near_gap_avx512(const double* x, const double* y, const double* z,
                                                                 size_t n, size_t from, const detail::SmallestSphere& s,
                                                                 double tol, size_t skip1, size_t skip2, double* gap) {
-  const SphereGaps8 gaps(s);
+  const detail::SphereGaps8 gaps(s);
   const __m512d limit = _mm512_set1_pd(tol);
   const __m512i lanes = _mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7);
   const __m512i s1 = _mm512_set1_epi64(int64_t(skip1)), s2 = _mm512_set1_epi64(int64_t(skip2));
@@ -169,7 +143,7 @@ PM_TARGET_AVX512 size_t first_near_gap_avx512(const double* x, const double* y, 
     const __m512i at = _mm512_add_epi64(_mm512_set1_epi64(int64_t(i)), lanes);
     const __mmask8 other = _mm512_mask_cmpneq_epi64_mask(_mm512_cmpneq_epi64_mask(at, s1), at, s2);
     const __mmask8 near = _mm512_mask_cmp_pd_mask(__mmask8(in & other), g, limit, _CMP_NGT_UQ);
-    if (near) return i + size_t(SphereGaps8::first(near, g, gap));
+    if (near) return i + size_t(detail::SphereGaps8::first(near, g, gap));
   }
   return n;
 }
@@ -179,8 +153,8 @@ PM_TARGET_AVX512 size_t first_near_gap_indexed_avx512(const Vec3* points, const 
                                                       uint32_t i, uint32_t j, uint32_t k, double* gap) {
   static_assert(sizeof(Vec3) == 3 * sizeof(double));
   const double* base = &points[0].x;
-  const SphereGaps8 gaps(s);
-  const __m512d limit = _mm512_set1_pd(tol), zero = _mm512_setzero_pd();
+  const detail::SphereGaps8 gaps(s);
+  const __m512d limit = _mm512_set1_pd(tol);
   const __m512i vi = _mm512_set1_epi64(i), vj = _mm512_set1_epi64(j), vk = _mm512_set1_epi64(k);
   const __m256i lane_numbers = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
   for (size_t at = from; at < n; at += 8) {
@@ -195,11 +169,11 @@ PM_TARGET_AVX512 size_t first_near_gap_indexed_avx512(const Vec3* points, const 
     const __m512i q3 = _mm512_add_epi64(q, _mm512_add_epi64(q, q));
     const __mmask8 other = _mm512_mask_cmpneq_epi64_mask(
         _mm512_mask_cmpneq_epi64_mask(_mm512_mask_cmpneq_epi64_mask(in, q, vi), q, vj), q, vk);
-    const __m512d g = gaps(_mm512_mask_i64gather_pd(zero, other, q3, base, 8),
-                           _mm512_mask_i64gather_pd(zero, other, q3, base + 1, 8),
-                           _mm512_mask_i64gather_pd(zero, other, q3, base + 2, 8));
+    using detail::sphere_lanes::gather_coordinate;
+    const __m512d g = gaps(gather_coordinate(base, q3, other), gather_coordinate(base + 1, q3, other),
+                           gather_coordinate(base + 2, q3, other));
     const __mmask8 near = _mm512_mask_cmp_pd_mask(other, g, limit, _CMP_NGT_UQ);
-    if (near) return at + size_t(SphereGaps8::first(near, g, gap));
+    if (near) return at + size_t(detail::SphereGaps8::first(near, g, gap));
   }
   return n;
 }
