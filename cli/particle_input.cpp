@@ -1,7 +1,7 @@
 // Reading particles for the CLI (particle_input.h). .ply, .xyz and the simulators' formats
 // without preprocessing are read by the core reader; .pcd files, PCL preprocessing and
-// --pcl-mesh go through the CLI's PCL module (pcl_module.h), loaded only then, so that the
-// runs that need no PCL do not pay for linking it at start.
+// --pcl-mesh go through one of the CLI's PCL modules (pcl_module.h), loaded only then, so that
+// the runs that need no PCL do not pay for linking it at start.
 #include <dlfcn.h>
 
 #include <cctype>
@@ -40,27 +40,39 @@ std::string lower_extension(const std::string& path) {
   return ext;
 }
 
+/// Whether a PCL preprocessing switch is given: the PCL module then, else the PCD module.
+bool wants_preprocessing(const ParticleInputArgs& a) {
+  return a.uniform_sampling > 0 || a.voxel_grid > 0 || a.remove_outliers || a.mls_radius > 0 || a.estimate_normals;
+}
+
 bool wants_pcl(const std::string& path, const ParticleInputArgs& a) {
-  return lower_extension(path) == ".pcd" || a.uniform_sampling > 0 || a.voxel_grid > 0 || a.remove_outliers ||
-         a.mls_radius > 0 || a.estimate_normals;
+  return lower_extension(path) == ".pcd" || wants_preprocessing(a);
 }
 
 #ifdef PM_CLI_PCL_MODULE
-/// The PCL module, loaded on first use: beside the executable (the build tree), then where
-/// `cmake --install` puts it relative to the executable (the library folder), then by name on
-/// the library search path. @throws Error saying where it looked and why it did not load.
-const PclModule& pcl_module(const std::string& what) {
-  static std::once_flag once;
-  static const PclModule* module = nullptr;
-  static std::string failure;
-  std::call_once(once, [] {
-    const std::string name = PM_CLI_PCL_MODULE;
+/// One of the CLI's PCL modules, named `name`, loaded on first use: beside the executable (the
+/// build tree), then where `cmake --install` puts it relative to the executable (the library
+/// folder), then by name on the library search path. @throws Error saying where it looked and
+/// why it did not load.
+class ModuleLoader {
+ public:
+  explicit ModuleLoader(const char* name) : name_(name) {}
+
+  const PclModule& get(const std::string& what) {
+    std::call_once(once_, [this] { load(); });
+    if (module_ == nullptr)
+      throw Error(Status::IoError, what + " needs the CLI's PCL module, which did not load: " + failure_);
+    return *module_;
+  }
+
+ private:
+  void load() {
     std::error_code ec;
     const fs::path exe_dir = fs::read_symlink("/proc/self/exe", ec).parent_path();
     std::vector<std::string> places;
     if (!ec) {
-      places.push_back((exe_dir / name).string());
-      places.push_back((exe_dir / PM_CLI_PCL_MODULE_FROM_BINDIR / name).lexically_normal().string());
+      places.push_back((exe_dir / name_).string());
+      places.push_back((exe_dir / PM_CLI_PCL_MODULE_FROM_BINDIR / name_).lexically_normal().string());
     }
     std::string tried;
     auto attempt = [&](const std::string& file) {
@@ -77,7 +89,7 @@ const PclModule& pcl_module(const std::string& what) {
         tried += std::string(tried.empty() ? "" : "; ") + file + " is not this version's PCL module";
         return false;
       }
-      module = m;
+      module_ = m;
       return true;
     };
     bool present = false;
@@ -86,18 +98,28 @@ const PclModule& pcl_module(const std::string& what) {
       present = true;
       if (attempt(file)) return;
     }
-    if (!present && attempt(name)) return;
+    if (!present && attempt(name_)) return;
     std::string where;
     for (const std::string& file : places) where += (where.empty() ? "" : " nor ") + fs::path(file).parent_path().string();
-    failure = present ? tried
-                      : name + " is neither beside the program nor in its library folder (" + where +
-                            ") nor on the library path; install particlemesh with the PCL bridge (PM_WITH_PCL=ON)";
-  });
-  if (module == nullptr) throw Error(Status::IoError, what + " needs the CLI's PCL module, which did not load: " + failure);
-  return *module;
+    failure_ = present ? tried
+                       : name_ + " is neither beside the program nor in its library folder (" + where +
+                             ") nor on the library path; install particlemesh with the PCL bridge (PM_WITH_PCL=ON)";
+  }
+
+  const std::string name_;
+  std::once_flag once_;
+  const PclModule* module_ = nullptr;
+  std::string failure_;
+};
+
+/// The module for `what`: with PCL's preprocessing when `preprocessing`, else the PCD module
+/// (reading and --pcl-mesh, PCL's io library alone).
+const PclModule& pcl_module(const std::string& what, bool preprocessing) {
+  static ModuleLoader pcd(PM_CLI_PCD_MODULE), pcl(PM_CLI_PCL_MODULE);
+  return (preprocessing ? pcl : pcd).get(what);
 }
 #else
-[[noreturn]] const PclModule& pcl_module(const std::string& what) {
+[[noreturn]] const PclModule& pcl_module(const std::string& what, bool /*preprocessing*/) {
   throw Error(Status::InvalidArgument, what + " needs the PCL bridge (built with PM_WITH_PCL=OFF)");
 }
 #endif
@@ -248,7 +270,7 @@ ParticleInput read_particles(const std::string& path, const ParticleInputArgs& a
     in = read_natively(path, a);
   } else {
     const std::string what = lower_extension(path) == ".pcd" ? "'" + path + "': .pcd input" : "PCL preprocessing";
-    in = pcl_module(what).read(path, a, threads);
+    in = pcl_module(what, wants_preprocessing(a)).read(path, a, threads);
   }
   if (!in.cloud.not_read.empty()) {
     // Said, not dropped silently: what the file holds per particle that no channel carries.
@@ -260,7 +282,7 @@ ParticleInput read_particles(const std::string& path, const ParticleInputArgs& a
 }
 
 void write_pcl_mesh(const TriMesh& mesh, OutputFile& out) {
-  pcl_module("'" + out.path() + "': --pcl-mesh").write_mesh(mesh, out);
+  pcl_module("'" + out.path() + "': --pcl-mesh", false).write_mesh(mesh, out);
 }
 
 }  // namespace particlemesh::cli

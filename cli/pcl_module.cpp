@@ -1,15 +1,13 @@
-// The CLI's PCL part (pcl_module.h): .pcd input through the bridge (invalid points dropped and
-// reported), PCL preprocessing, and the pcl::PolygonMesh PLY of --pcl-mesh. Built as a module
-// that the CLI loads only when one of these is asked for.
+// The CLI's PCL module (pcl_module.h): what the PCD module does (pcd_input.h) and PCL's
+// preprocessing (outliers, downsampling, moving least squares, normals). Built as a module
+// that the CLI loads only when preprocessing is asked for.
 #include <cstdio>
 #include <string>
+#include <vector>
 
-#include <pcl/console/print.h>
-
+#include "pcd_input.h"
 #include "pcl_module.h"
 #include "particlemesh/core/error.h"
-#include "particlemesh_pcl/conversions.h"
-#include "particlemesh_pcl/io.h"
 #include "particlemesh_pcl/preprocessing.h"
 
 namespace particlemesh::cli {
@@ -17,38 +15,9 @@ namespace particlemesh::cli {
 namespace {
 
 ParticleInput read_with_pcl(const std::string& path, const ParticleInputArgs& a, int threads) {
-  // PCL's own console messages would duplicate ours; errors come back as exceptions.
-  pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
-  ParticleInput in;
-  particlemesh_pcl::LoadReport load;
-  in.cloud = particlemesh_pcl::loadParticles(path, &load);
+  ParticleInput in = read_with_bridge(path, a);
   const std::vector<std::string> not_read = in.cloud.not_read;  // about the file: kept through preprocessing
-  const auto& c = load.conversion;
-  in.report = {{"format", load.format},
-               {"encoding", load.encoding},
-               {"points", c.input_points},
-               {"valid_points", c.valid_points},
-               {"invalid_points", c.invalid_points},
-               {"invalid_normals", c.invalid_normals},
-               {"organized", c.organized},
-               {"width", c.width},
-               {"height", c.height},
-               {"has_normals", c.has_normals},
-               {"has_color", c.has_color},
-               {"has_intensity", c.has_intensity}};
   char line[512];
-  if (load.format == "pcd") {
-    std::snprintf(line, sizeof line, "  input         %zu points (%s%s, pcd %s%s%s%s)", c.input_points,
-                  c.organized ? (std::to_string(c.width) + " x " + std::to_string(c.height)).c_str() : "",
-                  c.organized ? " organized" : "unorganized", load.encoding.c_str(), c.has_normals ? ", normals" : "",
-                  c.has_color ? ", rgb" : "", c.has_intensity ? ", intensity" : "");
-    in.summary += line;
-    if (c.invalid_points > 0) in.summary += "; " + std::to_string(c.invalid_points) + " invalid (NaN/Inf) dropped";
-    if (c.invalid_normals > 0)
-      in.summary += "; normals dropped (" + std::to_string(c.invalid_normals) + " invalid)";
-    in.summary += "\n";
-  }
-
   particlemesh_pcl::PreprocessOptions o;
   o.remove_outliers = a.remove_outliers;
   o.outlier_mean_k = a.outlier_k;
@@ -64,10 +33,8 @@ ParticleInput read_with_pcl(const std::string& path, const ParticleInputArgs& a,
   o.mls_order = a.mls_order;
   o.estimate_normals = a.estimate_normals;
   o.normal_k = a.normal_k;
-  for (int k = 0; k < 3; ++k) o.viewpoint[k] = a.viewpoint.size() == 3 ? float(a.viewpoint[k]) : load.origin[k];
-  in.has_viewpoint = a.viewpoint.size() == 3 || load.format == "pcd";
-  in.viewpoint = a.viewpoint.size() == 3 ? Vec3{a.viewpoint[0], a.viewpoint[1], a.viewpoint[2]}
-                                         : Vec3{load.origin[0], load.origin[1], load.origin[2]};
+  // (--viewpoint's, or a .pcd's VIEWPOINT, which is float: the same floats either way.)
+  for (int k = 0; k < 3; ++k) o.viewpoint[k] = float(in.viewpoint[k]);
   o.threads = threads;
   in.spacing_hint = o.downsampling == particlemesh_pcl::Downsampling::None ? 0.0 : o.leaf_size;
   if (particlemesh_pcl::anyPreprocessing(o)) {
@@ -114,12 +81,6 @@ ParticleInput read_with_pcl(const std::string& path, const ParticleInputArgs& a,
   }
   in.cloud.not_read = not_read;
   return in;
-}
-
-void write_polygon_mesh(const TriMesh& mesh, OutputFile& out) {
-  pcl::PolygonMesh pm;
-  particlemesh_pcl::toPolygonMesh(mesh, pm);
-  particlemesh_pcl::savePLYFile(out, pm);
 }
 
 }  // namespace

@@ -235,7 +235,9 @@ def _plane_pcd(path, n=20):
 
 def test_pcl_is_loaded_only_when_asked_for(pcl_cli, tmp_path):
     # The dynamic linker lists every library it loads (LD_DEBUG=files): PCL's only for a .pcd
-    # file or a PCL switch, from the CLI's PCL module.
+    # file or a PCL switch; PCL's io library alone (the CLI's PCD module) for reading a .pcd
+    # file and --pcl-mesh, its features, filters and surface libraries (the PCL module) only
+    # for preprocessing.
     exe = os.environ["PARTICLEMESH_CLI"]
     xyz = tmp_path / "plane.xyz"
     xyz.write_text("".join(f"{0.1 * i} {0.1 * j} 0\n" for i in range(20) for j in range(20)))
@@ -247,14 +249,20 @@ def test_pcl_is_loaded_only_when_asked_for(pcl_cli, tmp_path):
         assert proc.returncode == 0, proc.stderr[-2000:]
         return proc.stderr
 
+    preprocessing_libraries = ("particlemesh_cli_pcl.so", "libpcl_features", "libpcl_filters", "libpcl_surface")
     for args in (["triangulate", xyz, "-o", tmp_path / "a.ply", "-q"], ["smooth", tmp_path / "a.ply", "-o", tmp_path / "b.ply", "-q"]):
         log = loaded(*args)
-        assert "libpcl_" not in log and "particlemesh_cli_pcl" not in log, args
+        assert "libpcl_" not in log and "particlemesh_cli_pc" not in log, args
     for args in (["triangulate", pcd, "-o", tmp_path / "c.ply", "-q"],
-                 ["triangulate", xyz, "-o", tmp_path / "d.ply", "-q", "--estimate-normals"],
                  ["triangulate", xyz, "-o", tmp_path / "e.ply", "-q", "--pcl-mesh", tmp_path / "e_pcl.ply"]):
         log = loaded(*args)
-        assert "particlemesh_cli_pcl" in log and "libpcl_common" in log, args
+        assert "particlemesh_cli_pcd.so" in log and "libpcl_io" in log, args
+        assert not [name for name in preprocessing_libraries if name in log], args
+    for args in (["triangulate", xyz, "-o", tmp_path / "d.ply", "-q", "--estimate-normals"],
+                 ["triangulate", pcd, "-o", tmp_path / "f.ply", "-q", "--voxel-grid", "0.15"]):
+        log = loaded(*args)
+        assert all(name in log for name in preprocessing_libraries), args
+        assert "particlemesh_cli_pcd.so" not in log, args
 
 
 def test_a_missing_pcl_module_is_a_clear_error(pcl_cli, tmp_path):
@@ -268,13 +276,14 @@ def test_a_missing_pcl_module_is_a_clear_error(pcl_cli, tmp_path):
     ok = subprocess.run([alone, "triangulate", xyz, "-o", tmp_path / "a.ply", "-q"], capture_output=True, text=True)
     assert ok.returncode == 0, ok.stderr
     pcd = _plane_pcd(tmp_path / "plane.pcd")
-    for args, what in (([pcd], ".pcd input"), ([xyz, "--voxel-grid", "0.2"], "PCL preprocessing"),
-                       ([xyz, "--pcl-mesh", tmp_path / "p.ply"], "--pcl-mesh")):
+    for args, what, module in (([pcd], ".pcd input", "libparticlemesh_cli_pcd.so"),
+                               ([xyz, "--voxel-grid", "0.2"], "PCL preprocessing", "libparticlemesh_cli_pcl.so"),
+                               ([xyz, "--pcl-mesh", tmp_path / "p.ply"], "--pcl-mesh", "libparticlemesh_cli_pcd.so")):
         out = tmp_path / "out.ply"
         proc = subprocess.run([alone, "triangulate", *map(str, args), "-o", out], capture_output=True, text=True)
         assert proc.returncode == 1, proc.stdout
         lines = [l for l in proc.stderr.splitlines() if l.strip()]
         assert len(lines) == 1, proc.stderr
-        assert what in lines[0] and "PCL module" in lines[0] and "libparticlemesh_cli_pcl.so" in lines[0], lines[0]
+        assert what in lines[0] and "PCL module" in lines[0] and module in lines[0], lines[0]
         assert str(alone.parent) in lines[0], lines[0]  # where it looked
         assert not out.exists() and not (tmp_path / "p.ply").exists()

@@ -57,19 +57,23 @@ def test_cmake_install_and_the_example(build_dir, tmp_path):
     for name in ("torus.ply", "torus_smooth.ply", "drop.ply"):
         assert (tmp_path / "out" / name).stat().st_size > 10000
     # The command-line tool as installed: the library from the prefix, and PCL's part (a .pcd
-    # file) from its module in the prefix's library folder, with nothing in the environment.
+    # file, PCL's downsampling) from its two modules in the prefix's library folder, with
+    # nothing in the environment.
     exe = prefix / "bin" / "particlemesh"
     if (build_dir / "cli" / "particlemesh").is_file():
         pts = "".join(f"{0.1 * i} {0.1 * j} 0\n" for i in range(20) for j in range(20))
-        inputs = [tmp_path / "plane.xyz"]
-        inputs[0].write_text(pts)
-        if list(prefix.glob("lib*/**/libparticlemesh_cli_pcl.so")):
-            inputs.append(tmp_path / "plane.pcd")
-            inputs[1].write_text("VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 400\n"
-                                 "HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 400\nDATA ascii\n" + pts)
-        for src in inputs:
-            mesh = tmp_path / (src.suffix[1:] + ".ply")
-            run = subprocess.run([str(exe), "triangulate", str(src), "-o", str(mesh)], env=clean_env(),
+        runs = [(tmp_path / "plane.xyz", [])]
+        runs[0][0].write_text(pts)
+        if (build_dir / "cli" / "libparticlemesh_cli_pcl.so").is_file():
+            for name in ("libparticlemesh_cli_pcd.so", "libparticlemesh_cli_pcl.so"):
+                assert list(prefix.glob(f"lib*/**/{name}")), f"{name} is not installed"
+            pcd = tmp_path / "plane.pcd"
+            pcd.write_text("VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 400\n"
+                           "HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 400\nDATA ascii\n" + pts)
+            runs += [(pcd, []), (runs[0][0], ["--voxel-grid", "0.1"])]
+        for k, (src, extra) in enumerate(runs):
+            mesh = tmp_path / f"{k}.ply"
+            run = subprocess.run([str(exe), "triangulate", str(src), "-o", str(mesh), *extra], env=clean_env(),
                                  capture_output=True, text=True, timeout=120, cwd=tmp_path)
             assert run.returncode == 0, run.stderr
             assert "triangles" in run.stdout and mesh.stat().st_size > 1000
