@@ -111,6 +111,9 @@ struct RayCaster::Impl {
   double threshold = 0;
   double eps_f = 0;              // tangent tolerance in units of F
   double r_min = 0;
+  // The most any particle's value changes per unit t along a unit-speed ray: max over s of
+  // 2 sqrt(s) |g'(s)| x wmax / r_min, rounded up (build()); 0 for Blinn (no running bound).
+  double slope = 0;
   bool aniso = false;            // ellipsoidal kernels (metric per particle)
   std::vector<Vec3> pos;         // kernel centres in hierarchy order
   std::vector<double> r2, inv_r2, w;
@@ -143,6 +146,16 @@ struct RayCaster::Impl {
     // whole ray, w g(e2 ir2), kept as they enter and leave; and the sum of every value
     // added since the active list was last empty (bounds the rounding of the former).
     double peak_sum = 0, peak_added = 0;
+    // Every peak entered so far (not lowered by exits), and how many particles, handed over
+    // as peak_sum is.
+    double peaks_entered = 0;
+    size_t count_entered = 0;
+    // The running bound of F outside the surface (interval()): on [ta, tb], tb >= rb_t, F is
+    // at most rb_f + min(rb_rate (tb - rb_t), rb_room) + for the particles entered since, the
+    // smaller of their peaks' sum and their count x slope x (tb - rb_t).
+    bool rb_valid = false;
+    double rb_f = 0, rb_rate = 0, rb_room = 0, rb_t = 0, rb_entered = 0;
+    size_t rb_count = 0;
     std::vector<RayHit>* out = nullptr;
 
     bool box(const Node& n, double* t_enter) const {
@@ -285,7 +298,8 @@ void RayCaster::Impl::Query::sweep(Scratch& sc, Source& source) {
   constexpr double kNone = std::numeric_limits<double>::infinity();
   // The running sums in locals, handed to interval() through the members (updating the
   // members as a pair and alone stalled the loads that forward them).
-  double psum = 0, padded = 0;
+  double psum = 0, padded = 0, entered = 0;
+  size_t n_entered = 0;
   auto& where = sc.where;
   // One event applied: an entry appends the particle, an exit moves the last one into its
   // place (each particle is offered once, so its exit follows its entry).
@@ -303,6 +317,8 @@ void RayCaster::Impl::Query::sweep(Scratch& sc, Source& source) {
       active.push_back(offered[e.slot]);
       psum += peak;
       padded += peak;
+      entered += peak;
+      ++n_entered;
     }
   };
   double cur = tlo;
@@ -322,6 +338,8 @@ void RayCaster::Impl::Query::sweep(Scratch& sc, Source& source) {
       if (te > cur) {
         peak_sum = psum;
         peak_added = padded;
+        peaks_entered = entered;
+        count_entered = n_entered;
         interval(cur, te, active);
         cur = te;
         if (done) break;

@@ -645,6 +645,54 @@ TEST(RayCaster, FirstCrossingsOfSmallBlobsAndThinSheetsInFrontOfABlock) {
   }
 }
 
+// Outside the surface an interval is excluded without a loop over its particles where the
+// bound of the last such loop, raised by the particles' steepest rise since, stays below T.
+// Here the bound is nearly tight: one particle on the ray's line rises at the kernel's
+// steepest (2 sqrt(s) |g'(s)| largest) over the interval [a, b] between two far, faint
+// particles' events, and T is just below its value at b, so the crossing lies just before b.
+// A slope 2 % too small would exclude the interval and move the hit to b.
+TEST(RayCaster, TheRunningBoundHoldsWhereAParticleRisesAtItsSteepest) {
+  for (const Kernel k : {Kernel::Wyvill, Kernel::Poly4, Kernel::Poly6}) {
+    SCOPED_TRACE(kernel_name(k));
+    // s* where a particle's value along a line through its centre changes fastest.
+    double s_star = 0, steepest = 0;
+    for (int i = 1; i < 100000; ++i) {
+      const double s = i / 100000.0;
+      const double h = 2 * std::sqrt(s) * std::abs(kernel_derivative(k, s));
+      if (h > steepest) steepest = h, s_star = s;
+    }
+    // The particle at the origin (R = 1, w = 1), met along +x: F = g(x^2) for x in [-1, 0].
+    const double delta = 0.04, a = -std::sqrt(s_star) - delta, b = -std::sqrt(s_star) + delta;
+    ASSERT_GT(a, -1.0);
+    ASSERT_LT(b, 0.0);
+    auto F = [&](double x) { return kernel_value(k, x * x); };
+    const double T = F(b) - 1e-4;
+    // Two faint particles beside the line, whose supports end at a and begin at b.
+    const double e = 0.95, c = std::sqrt(1 - e * e);
+    const std::vector<Vec3> p{{0, 0, 0}, {a - c, e, 0}, {b + c, e, 0}};
+    FieldParams fp = params(k, 1.0, T);
+    fp.strengths = {1.0, 1e-3, 1e-3};
+    const ParticleField field(p, fp);
+    const RayCaster caster(field);
+    // The crossing: g(x^2) = T on [a, b], by bisection (F rises there).
+    double lo = a, hi = b;
+    ASSERT_LT(F(lo), T);
+    ASSERT_GT(F(hi), T);
+    for (int it = 0; it < 200; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (F(mid) < T ? lo : hi) = mid;
+    }
+    const Vec3 origin{-3, 0, 0}, dir{1, 0, 0};
+    const auto hit = caster.first_hit(origin, dir);
+    ASSERT_TRUE(hit.has_value());
+    EXPECT_NEAR(hit->t, lo + 3.0, 1e-9);
+    EXPECT_TRUE(hit->entering);
+    const RayHits all = caster.all_hits(origin, dir);
+    ASSERT_FALSE(all.hits.empty());
+    EXPECT_EQ(all.hits[0].t, hit->t);
+  }
+}
+
 TEST(RayCaster, BadRaysGiveClearErrors) {
   const RayCaster caster(ParticleField({{0, 0, 0}}, params(Kernel::Poly4, 1, 0.5)));
   auto message = [&](auto&& f) {
