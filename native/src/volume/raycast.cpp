@@ -302,27 +302,8 @@ double field_upper_bound(double ta, double tb, const std::vector<Active>& active
 
 }  // namespace
 
-void RayCaster::Impl::Query::interval(double ta, double tb, const std::vector<Active>& active) {
-  if (active.empty()) {
-    // Outside every support: F = 0 < T.
-    if (started && inside) emit(ta, 0.0, active);
-    started = true;
-    observe(im.threshold);
-    return;
-  }
-  ++stats.intervals;
+void RayCaster::Impl::Query::interval_bounded(double ta, double tb, const std::vector<Active>& active) {
   if (!started || !inside) {
-    // Cheaper still, where no crossing waits for the tangent rule (so that the size of the
-    // margin observed does not matter): the sum of the active particles' peaks bounds the
-    // sum below term by term (both rounded upwards alike, in the same order), with room for
-    // the rounding of its running total. Below T: excluded, as the sum below would have been.
-    if (!has_pending && peak_sum + 1e-9 * peak_added < im.threshold) {
-      if (!started && ta <= tlo) starts_inside = false;
-      started = true;
-      inside = false;
-      observe(im.threshold - peak_sum);
-      return;
-    }
     // Cheaper, where no crossing waits for the tangent rule: the running bound, taken where
     // the bound below last excluded an interval [ta', rb_t] (its value rb_f). Of the
     // particles active then, one whose closest approach lies behind rb_t only falls from

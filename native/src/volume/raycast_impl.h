@@ -142,12 +142,8 @@ struct RayCaster::Impl {
     RayHit pending;
     double height = 0;   // max |F - T| sampled since the pending crossing
     bool done = false;
-    // Sum over the active particles of positive strength of their largest value along the
-    // whole ray, w g(e2 ir2), kept as they enter and leave; and the sum of every value
-    // added since the active list was last empty (bounds the rounding of the former).
-    double peak_sum = 0, peak_added = 0;
     // Every peak entered so far (not lowered by exits), and how many particles, handed over
-    // as peak_sum is.
+    // by the sweep before each interval.
     double peaks_entered = 0;
     size_t count_entered = 0;
     // The running bound of F outside the surface (interval()): on [ta, tb], tb >= rb_t, F is
@@ -225,7 +221,35 @@ struct RayCaster::Impl {
       height = 0;
     }
 
-    void interval(double ta, double tb, const std::vector<Active>& active);
+    // The interval [ta, tb] between two events, with the active particles' peaks' sum and the
+    // sum of every peak added since the active list was last empty. The cheap cases here,
+    // inlined into the sweep (about half the intervals before the surface end here); the
+    // rest in interval_bounded().
+    void interval(double ta, double tb, const std::vector<Active>& active, double peak_sum, double peak_added) {
+      if (active.empty()) {
+        // Outside every support: F = 0 < T.
+        if (started && inside) emit(ta, 0.0, active);
+        started = true;
+        observe(im.threshold);
+        return;
+      }
+      ++stats.intervals;
+      // Outside, where no crossing waits for the tangent rule (so that the size of the margin
+      // observed does not matter): the sum of the active particles' peaks bounds the field's
+      // upper bound (interval_bounded()) term by term (both rounded upwards alike, in the same
+      // order), with room for the rounding of its running total. Below T: excluded, as that
+      // bound would have excluded it.
+      if ((!started || !inside) && !has_pending && peak_sum + 1e-9 * peak_added < im.threshold) {
+        if (!started && ta <= tlo) starts_inside = false;
+        started = true;
+        inside = false;
+        observe(im.threshold - peak_sum);
+        return;
+      }
+      interval_bounded(ta, tb, active);
+    }
+    // The rest: the running bound, the field's upper bound, the interval's polynomial.
+    void interval_bounded(double ta, double tb, const std::vector<Active>& active);
     void interval_blinn(double ta, double tb, const std::vector<Active>& active);
     // The sphere (or ellipsoid) of particle k: its entry and exit events, if the ray meets it.
     void offer(uint32_t k, Scratch& sc);
@@ -296,8 +320,11 @@ void RayCaster::Impl::Query::sweep(Scratch& sc, Source& source) {
   sc.peaks.clear();
   sc.where.clear();
   constexpr double kNone = std::numeric_limits<double>::infinity();
-  // The running sums in locals, handed to interval() through the members (updating the
-  // members as a pair and alone stalled the loads that forward them).
+  // The running sums in locals, handed to interval() (updating members as a pair and alone
+  // stalled the loads that forward them): over the active particles of positive strength,
+  // the sum of their largest values along the whole ray, w g(e2 ir2), kept as they enter and
+  // leave, and the sum of every value added since the active list was last empty (bounds the
+  // rounding of the former); every peak and particle entered so far.
   double psum = 0, padded = 0, entered = 0;
   size_t n_entered = 0;
   auto& where = sc.where;
@@ -336,11 +363,9 @@ void RayCaster::Impl::Query::sweep(Scratch& sc, Source& source) {
       const double te = std::min(tn, tx);
       if (!(te < horizon)) break;
       if (te > cur) {
-        peak_sum = psum;
-        peak_added = padded;
         peaks_entered = entered;
         count_entered = n_entered;
-        interval(cur, te, active);
+        interval(cur, te, active, psum, padded);
         cur = te;
         if (done) break;
         if (++since_check >= 32) {
