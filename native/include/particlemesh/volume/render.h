@@ -66,7 +66,7 @@ PM_EXPORT Vec3 camera_ray_direction(const Camera& camera, int width, int height,
 
 /// First hits of the camera's primary rays, pixel i = y * width + x (t in units of
 /// camera_ray_direction's length): RayCaster::first_hit of each ray, bit for bit, but traced
-/// in tiles of 8 x 8 pixels that share one walk of the hierarchy (render() uses it). threads:
+/// in tiles of 12 x 12 pixels that share one walk of the hierarchy (render() uses it). threads:
 /// 0 = all cores; the result does not depend on it. @throws as camera_ray_direction;
 /// Error(Cancelled) from the progress callback.
 PM_EXPORT FirstHits cast_camera_rays(const RayCaster& caster, const Camera& camera, int width, int height,
