@@ -152,7 +152,7 @@ class TileCandidates {
 // a third of a tile's candidates miss a given ray, an unpredictable branch when each was
 // tested as it was offered), and those the ray misses are passed over: they would add no
 // event, so the horizon is the next sphere the ray meets. Each test is offer_sphere()'s own
-// arithmetic, so the same entries, exits and hits.
+// (Query::chord), so the same entries, exits and hits.
 struct TileSource {
   static constexpr size_t kBatch = 8;
   TileSource(TileCandidates& t, const RayCaster::Impl::Query& q) : tile(t), query(q) {}
@@ -160,21 +160,13 @@ struct TileSource {
   const RayCaster::Impl::Query& query;
   size_t next = 0;
   size_t batch_begin = 0, batch_end = 0;  // the candidates tested: [batch_begin, batch_end)
-  double b[kBatch] = {}, e2[kBatch] = {}, h2[kBatch] = {};
+  RayCaster::Impl::Query::Chord chords[kBatch] = {};
 
   void test_batch() {
     batch_begin = next;
     batch_end = std::min(next + kBatch, tile.list.size());
-    for (size_t i = batch_begin; i < batch_end; ++i) {
-      const Listed& c = tile.list[i];
-      const Vec3 q = query.o - c.centre;
-      const double bi = dot(q, query.dn);
-      const Vec3 e = q - query.dn * bi;  // from the centre to the closest point of the line
-      const double ei = squared_norm(e);
-      b[i - batch_begin] = bi;
-      e2[i - batch_begin] = ei;
-      h2[i - batch_begin] = c.r2 - ei;
-    }
+    for (size_t i = batch_begin; i < batch_end; ++i)
+      chords[i - batch_begin] = query.chord(tile.list[i].centre, tile.list[i].r2);
   }
 
   double horizon() {
@@ -184,7 +176,7 @@ struct TileSource {
       if (next == tile.list.size()) return kInf;
       if (query.im.aniso) return tile.list[next].key;
       if (next >= batch_end) test_batch();
-      if (h2[next - batch_begin] > 0) return tile.list[next].key;
+      if (chords[next - batch_begin].h2 > 0) return tile.list[next].key;
       ++next;  // missed: no event
     }
   }
@@ -195,8 +187,8 @@ struct TileSource {
       q.offer(c.k, sc);
       return;
     }
-    const size_t j = i - batch_begin;  // met by the ray (horizon())
-    q.enter(c.k, -b[j], e2[j], c.inv_r2, c.w, h2[j], sc);
+    const RayCaster::Impl::Query::Chord& ch = chords[i - batch_begin];  // met by the ray (horizon())
+    q.enter(c.k, ch.tstar, ch.e2, c.inv_r2, c.w, ch.h2, sc);
   }
 };
 

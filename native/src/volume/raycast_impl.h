@@ -256,12 +256,21 @@ struct RayCaster::Impl {
     // The same for a sphere given by its centre, R^2, 1 / R^2 and strength (as offer()
     // reads them from the caster).
     void offer_sphere(uint32_t k, const Vec3& p, double r2, double ir2, double w, Scratch& sc) {
+      const Chord c = chord(p, r2);
+      if (c.h2 > 0) enter(k, c.tstar, c.e2, ir2, w, c.h2, sc);
+    }
+    // Where the line meets the sphere of centre p and squared radius r2: its closest
+    // approach tstar, the squared distance e2 from p there, and the squared half chord h2
+    // (> 0 where it meets it).
+    struct Chord {
+      double tstar, e2, h2;
+    };
+    Chord chord(const Vec3& p, double r2) const {
       const Vec3 q = o - p;
       const double b = dot(q, dn);
       const Vec3 e = q - dn * b;  // from the centre to the closest point of the line
       const double e2 = squared_norm(e);
-      const double h2 = r2 - e2;
-      if (h2 > 0) enter(k, -b, e2, ir2, w, h2, sc);
+      return {-b, e2, r2 - e2};
     }
     // A support the line meets (half chord h2 > 0; the Active's fields): its events, if
     // within [tlo, thi].
