@@ -7,7 +7,6 @@
 
 #include <pcl/console/print.h>
 
-#include "particlemesh/core/error.h"
 #include "particlemesh_pcl/conversions.h"
 #include "particlemesh_pcl/io.h"
 

@@ -7,7 +7,6 @@
 
 #include "pcd_input.h"
 #include "pcl_module.h"
-#include "particlemesh/core/error.h"
 #include "particlemesh_pcl/preprocessing.h"
 
 namespace particlemesh::cli {

@@ -137,7 +137,8 @@ void gather(const Grid& g, const MeshBlock& mb, float* local) {
     const float fill = si != kNone && g.proof[si] == detail::BlockProof::Inside
                            ? std::numeric_limits<float>::infinity() : 0.0f;
     // A row of x at a time, copied or filled (the test of src per node, inside the loop,
-    // kept the compiler from copying rows whole).
+    // kept the compiler from copying rows whole): a whole row of kB nodes, or the one node
+    // at x = kB from the block beyond.
     const int width = x1 - x0;
     for (int z = z0; z < z1; ++z)
       for (int y = y0; y < y1; ++y) {

@@ -79,8 +79,8 @@ void RayCaster::Impl::build() {
       d[i] = (i % 2 ? -v : v);
     }
     d[0] = 0;  // g(1) = 0 exactly (the sum of the coefficients is 0 up to rounding)
-    // The running bound's slope (interval()): along a unit-speed ray a particle's value w
-    // g(s) changes at |w g'(s) 2 ir2 (t - tstar)| <= w sqrt(ir2) 2 sqrt(s) |g'(s)|, as
+    // The running bound's slope (interval_bounded()): along a unit-speed ray a particle's
+    // value w g(s) changes at |w g'(s) 2 ir2 (t - tstar)| <= w sqrt(ir2) 2 sqrt(s) |g'(s)|, as
     // (t - tstar)^2 ir2 <= s. The largest of 2 sqrt(s) |g'(s)| over fine samples of [0, 1],
     // raised by a thousandth (the function is smooth: the samples miss its maximum by far
     // less). Blinn's kernel, marched, keeps no running bound (slope 0).
@@ -260,9 +260,9 @@ inline double kernel_slope(double s) {
   return 3.0 * t * t;
 }
 
-// What the running bound keeps of an exclusion (interval()): over the particles whose
-// closest approach to the ray lies beyond tb, how fast their values can rise from tb on, and
-// how far (their peaks less their values at tb).
+// What the running bound keeps of an exclusion (interval_bounded()): over the particles
+// whose closest approach to the ray lies beyond tb, how fast their values can rise from tb
+// on, and how far (their peaks less their values at tb).
 struct Rise {
   double rate = 0, room = 0;
 };
@@ -302,7 +302,8 @@ double field_upper_bound(double ta, double tb, const std::vector<Active>& active
 
 }  // namespace
 
-void RayCaster::Impl::Query::interval_bounded(double ta, double tb, const std::vector<Active>& active) {
+void RayCaster::Impl::Query::interval_bounded(double ta, double tb, const std::vector<Active>& active,
+                                              double peaks_entered, size_t count_entered) {
   if (!started || !inside) {
     // Cheaper, where no crossing waits for the tangent rule: the running bound, taken where
     // the bound below last excluded an interval [ta', rb_t] (its value rb_f). Of the

@@ -142,13 +142,9 @@ struct RayCaster::Impl {
     RayHit pending;
     double height = 0;   // max |F - T| sampled since the pending crossing
     bool done = false;
-    // Every peak entered so far (not lowered by exits), and how many particles, handed over
-    // by the sweep before each interval.
-    double peaks_entered = 0;
-    size_t count_entered = 0;
-    // The running bound of F outside the surface (interval()): on [ta, tb], tb >= rb_t, F is
-    // at most rb_f + min(rb_rate (tb - rb_t), rb_room) + for the particles entered since, the
-    // smaller of their peaks' sum and their count x slope x (tb - rb_t).
+    // The running bound of F outside the surface (interval_bounded()): on [ta, tb], tb >= rb_t,
+    // F is at most rb_f + min(rb_rate (tb - rb_t), rb_room) + for the particles entered since,
+    // the smaller of their peaks' sum and their count x slope x (tb - rb_t).
     bool rb_valid = false;
     double rb_f = 0, rb_rate = 0, rb_room = 0, rb_t = 0, rb_entered = 0;
     size_t rb_count = 0;
@@ -221,11 +217,13 @@ struct RayCaster::Impl {
       height = 0;
     }
 
-    // The interval [ta, tb] between two events, with the active particles' peaks' sum and the
-    // sum of every peak added since the active list was last empty. The cheap cases here,
-    // inlined into the sweep (about half the intervals before the surface end here); the
-    // rest in interval_bounded().
-    void interval(double ta, double tb, const std::vector<Active>& active, double peak_sum, double peak_added) {
+    // The interval [ta, tb] between two events, with the active particles' peaks' sum, the
+    // sum of every peak added since the active list was last empty, and every peak and
+    // particle entered so far (the sweep's running sums). The cheap cases here, inlined into
+    // the sweep (about half the intervals before the surface end here); the rest in
+    // interval_bounded().
+    void interval(double ta, double tb, const std::vector<Active>& active, double peak_sum, double peak_added,
+                  double peaks_entered, size_t count_entered) {
       if (active.empty()) {
         // Outside every support: F = 0 < T.
         if (started && inside) emit(ta, 0.0, active);
@@ -246,10 +244,11 @@ struct RayCaster::Impl {
         observe(im.threshold - peak_sum);
         return;
       }
-      interval_bounded(ta, tb, active);
+      interval_bounded(ta, tb, active, peaks_entered, count_entered);
     }
     // The rest: the running bound, the field's upper bound, the interval's polynomial.
-    void interval_bounded(double ta, double tb, const std::vector<Active>& active);
+    void interval_bounded(double ta, double tb, const std::vector<Active>& active, double peaks_entered,
+                          size_t count_entered);
     void interval_blinn(double ta, double tb, const std::vector<Active>& active);
     // The sphere (or ellipsoid) of particle k: its entry and exit events, if the ray meets it.
     void offer(uint32_t k, Scratch& sc);
@@ -372,9 +371,7 @@ void RayCaster::Impl::Query::sweep(Scratch& sc, Source& source) {
       const double te = std::min(tn, tx);
       if (!(te < horizon)) break;
       if (te > cur) {
-        peaks_entered = entered;
-        count_entered = n_entered;
-        interval(cur, te, active, psum, padded);
+        interval(cur, te, active, psum, padded, entered, n_entered);
         cur = te;
         if (done) break;
         if (++since_check >= 32) {

@@ -57,9 +57,9 @@ void EdgeNeighbours::gather_along(const ParticleField& field, const Vec3& a, dou
   };
   for (Box& b : boxes_[A])
     if (b.field == &field && same(b.lo, box_lo) && same(b.hi, box_hi)) found = &b;
-  if (found == nullptr) found = &boxes_[A][next_box_[A]++ % kBoxes];
-  Box& box = *found;
-  if (box.field != &field || !same(box.lo, box_lo) || !same(box.hi, box_hi)) {
+  if (found == nullptr) {
+    // Not among the last ones: the oldest box's place takes this one's runs.
+    Box& box = boxes_[A][next_box_[A]++ % kBoxes];
     if (box.runs.size() < most_runs) box.runs.resize(most_runs);
     Run* const runs = box.runs.data();
     size_t count = 0;
@@ -72,10 +72,11 @@ void EdgeNeighbours::gather_along(const ParticleField& field, const Vec3& a, dou
       room += grid.cell_begin(c1) - grid.cell_begin(c0);
     });
     box.field = &field, box.lo = box_lo, box.hi = box_hi, box.count = count, box.room = room;
+    found = &box;
   }
-  room = box.room;
-  const Run* const runs = box.runs.data();
-  const size_t run_count = box.count;
+  room = found->room;
+  const Run* const runs = found->runs.data();
+  const size_t run_count = found->count;
   if (near_.size() < room) near_.resize(room);
   Near* const out = near_.data();
   const Vec3* const points = grid.sorted_points().data();
