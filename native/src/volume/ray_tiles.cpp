@@ -8,6 +8,7 @@
 // every particle a ray meets is in its tile's list before the ray's horizon passes it, so the
 // hits are those of RayCaster::first_hit, bit for bit.
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 #include "core/parallel.h"
@@ -184,7 +185,7 @@ struct TileSource {
       // candidate, taken for a third of them at random, cost more than the test).
       const unsigned ahead = met >> (next - batch_begin);
       if (ahead != 0) {
-        next += size_t(__builtin_ctz(ahead));
+        next += size_t(std::countr_zero(ahead));
         return tile.list[next].key;
       }
       next = batch_end;  // the rest of the batch missed: no event
