@@ -104,6 +104,7 @@ void NeighborGrid::build(const Vec3* points, size_t n, double cell_size, const V
     }
   }
   if (n == 0) lo = hi = Vec3{};
+  const Vec3 points_lo = lo;  // the points' own lower corner (lo may move to *lower)
   if (lower) {
     for (int a = 0; a < 3; ++a) {
       if (!std::isfinite((*lower)[a]))
@@ -119,6 +120,17 @@ void NeighborGrid::build(const Vec3* points, size_t n, double cell_size, const V
   for (int a = 0; a < 3; ++a) {
     const double cells = (hi[a] - lo[a]) * inv_cell_;
     if (!(cells < double(kMaxCellsPerAxis - 4))) {
+      const std::string axis(1, "xyz"[a]);
+      const std::string span = "the points span " + detail::format_number(cells) + " cells of size " +
+                               detail::format_number(cell_size) + " along " + axis + " (at most 2097148)";
+      if (n < 2 || (hi[a] - points_lo[a]) * inv_cell_ < double(kMaxCellsPerAxis - 4)) {
+        // The points alone would fit (one point spans no cells): the span is from the grid's
+        // given lower corner.
+        throw Error(Status::LimitExceeded,
+                    span + ", from the grid's lower corner " + axis + " = " + detail::format_number(lo[a]) +
+                        " to " + axis + " = " + detail::format_number(hi[a]) +
+                        ": use a lower corner nearer the points, or larger cells");
+      }
       // Name the point farthest from the others' median along the axis: usually a stray one (a
       // particle a simulation flung away, a scanner's invalid return at the origin of
       // georeferenced coordinates); and the widest empty stretch along it, with the points on
@@ -134,11 +146,8 @@ void NeighborGrid::build(const Vec3* points, size_t n, double cell_size, const V
       size_t below = 1;  // the points at or below the widest gap's lower end
       for (size_t i = 2; i < n; ++i)
         if (along[i] - along[i - 1] > along[below] - along[below - 1]) below = i;
-      const std::string axis(1, "xyz"[a]);
       throw Error(Status::LimitExceeded,
-                  "the points span " + detail::format_number(cells) + " cells of size " +
-                      detail::format_number(cell_size) + " along " + axis + " (at most 2097148): point " +
-                      std::to_string(far) + " (" + axis + " = " + detail::format_number(points[far][a]) +
+                  span + ": point " + std::to_string(far) + " (" + axis + " = " + detail::format_number(points[far][a]) +
                       ") lies " + detail::format_number(std::abs(points[far][a] - median)) +
                       " from the points' median " + axis + " = " + detail::format_number(median) +
                       "; none lies between " + axis + " = " + detail::format_number(along[below - 1]) + " and " +

@@ -477,7 +477,8 @@ ParticleField FieldBuilder::build(const Vec3* positions, size_t n, const FieldPa
     }
   } catch (const Error& e) {
     if (e.status() != Status::LimitExceeded) throw;
-    throw Error(e.status(), std::string(e.what()) + " (the cells follow the particle radius)");
+    throw Error(e.status(), std::string(e.what()) + (domain.min ? " (the grid's lower corner is domain_min; " : " (") +
+                                "the cells follow the particle radius)");
   }
   f.sorted_index_.resize(n);
   for (uint32_t s = 0; s < n; ++s) f.sorted_index_[f.grid_.original_index(s)] = s;

@@ -208,6 +208,13 @@ TEST(PolygonizeTiles, BadTileOptionsGiveClearErrors) {
   o.domain_min = lowest(c) - Vec3{1e7, 0, 0};
   EXPECT_EQ(status_of([&] { polygonize(c, o); }, &msg), Status::LimitExceeded);
   EXPECT_NE(msg.find("along x"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("lower corner is domain_min"), std::string::npos) << msg;
+  // The same with one particle (the message's search for a gap between particles needs two:
+  // it read past the one; found by fuzzing).
+  PointCloud one;
+  one.positions = {c.positions[0]};
+  EXPECT_EQ(status_of([&] { polygonize(one, o); }, &msg), Status::LimitExceeded);
+  EXPECT_NE(msg.find("from the grid's lower corner x = "), std::string::npos) << msg;
   o.cell_size = 0.02;  // 350000 / 0.2 cells of the particle grid fit, 350000 / 0.02 of the lattice do not
   o.domain_min = lowest(c) - Vec3{350000, 0, 0};
   EXPECT_EQ(status_of([&] { polygonize(c, o); }, &msg), Status::LimitExceeded);
