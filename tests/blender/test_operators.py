@@ -729,7 +729,7 @@ def test_write_raises_what_the_edge_numbering_refuses(pm):
     bpy.data.meshes.remove(mesh)
 
 
-# ---- smooth and polygonize (C ABI from issues 4 and 7) ----------------------------------------
+# ---- smooth and polygonize (the smoothing and volume C ABI) -----------------------------------
 
 def icosphere_object():
     bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=2, radius=1.0)

@@ -1,4 +1,4 @@
-// The C ABI's read-back of a cloud's attributes (issue 6): query then copy, statuses and
+// The C ABI's read-back of a cloud's attributes: query then copy, statuses and
 // messages for misuse with outputs untouched, and what pm_cloud_read puts there: a PLY
 // file's vertex colours as "color" (3 floats in [0, 1]).
 #include "particlemesh/particlemesh.h"

@@ -1,4 +1,4 @@
-// The C ABI under hostile calls (issue 9): every pointer argument NULL in turn, bad values
+// The C ABI under hostile calls: every pointer argument NULL in turn, bad values
 // named with their index, counts that disagree with the arrays, the resource limits, and
 // cancellation: a status and a message naming the argument, the outputs untouched, and no
 // leak (LeakSanitizer in the sanitizer build, scripts/sanitize.sh).

@@ -1,4 +1,4 @@
-// The ray-casting C ABI (issue 8): the same hits as the C++ API, first-hit and all-hits
+// The ray-casting C ABI: the same hits as the C++ API, first-hit and all-hits
 // batches with query-then-copy, CSG, and statuses + messages for misuse, with outputs
 // untouched on failure.
 #include "particlemesh/particlemesh.h"

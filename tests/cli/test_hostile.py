@@ -1,4 +1,4 @@
-"""Hostile inputs through the CLI (issue 9): limits refused with a one-line error and exit 1,
+"""Hostile inputs through the CLI: limits refused with a one-line error and exit 1,
 lying files, and no output file (nor report, nor temporary file) after a failed or cancelled
 run. docs/hostile_inputs.md lists every case."""
 import os

@@ -1,4 +1,4 @@
-"""particlemesh polygonize, end to end through the binary (issue 7)."""
+"""particlemesh polygonize, end to end through the binary."""
 import json
 import math
 import random

@@ -1,4 +1,4 @@
-"""particlemesh render, end to end through the binary (issue 8)."""
+"""particlemesh render, end to end through the binary."""
 import struct
 import zlib
 from pathlib import Path

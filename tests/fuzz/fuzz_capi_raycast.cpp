@@ -1,4 +1,4 @@
-// Fuzz target: the ray casting C ABI (issue 8) fed arbitrary arrays and parameter structs:
+// Fuzz target: the ray casting C ABI fed arbitrary arrays and parameter structs:
 // pm_field_create (particles, radii, strengths, every option field including anisotropic
 // kernels, struct_size), then
 // batches of rays with any origins and directions (zero, NaN, Inf, huge) through

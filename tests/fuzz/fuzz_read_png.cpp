@@ -1,4 +1,4 @@
-// Fuzz target: PNG files (read_png, issue 8's reader behind the render tests and tools):
+// Fuzz target: PNG files (read_png, the reader behind the render tests and tools):
 // any bytes as a .png file. Checks: only particlemesh::Error escapes, and an image comes back
 // with a pixel buffer of exactly width x height x 3 bytes.
 #include "fuzz_support.h"

@@ -1,8 +1,8 @@
-// Every writer writes atomically (issue 9): a write that fails half-way (here: the process's
+// Every writer writes atomically: a write that fails half-way (here: the process's
 // file size limit, as a full disk would) leaves neither a file under the requested name nor a
 // temporary file, and an existing file under that name is left as it was.
 //
-// Before issue 9, OpenMesh's writers did not check their stream: a mesh cut at the size limit
+// Before the hostile-input suite, OpenMesh's writers did not check their stream: a mesh cut at the size limit
 // was renamed into place and reported as written.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// Cancellation through every long call of the C++ API (issue 9): a host asks to stop from
+// Cancellation through every long call of the C++ API: a host asks to stop from
 // another thread at several points of a run (a flag its progress callback returns); the call
 // must throw Error(Cancelled) within a bounded time of the request, whatever stage it is in.
 // The sanitizer build checks that nothing leaks on the way out (LeakSanitizer at exit).

@@ -1,4 +1,4 @@
-// Determinism (issue 9): every stage gives byte-identical output for any thread count and on
+// Determinism: every stage gives byte-identical output for any thread count and on
 // every run (render farms cache on it). Threads beyond the machine's cores are clamped by the
 // library, so on a 2-core machine this compares 1 and 2 workers, and repeated runs.
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Files whose header promises more data than the file holds (issue 9): a FormatError naming
+// Files whose header promises more data than the file holds: a FormatError naming
 // the file and what is missing, before anything is allocated from the promised counts.
 // OpenMesh's readers trust their headers: unchecked, an ASCII PLY promising 2e9 vertices read
 // as a 4-vertex mesh (one made up), an OFF file promising 1e9 vertices looped and allocated

@@ -1,4 +1,4 @@
-// Helpers for the hostile-input suite (issue 9): statuses of throwing calls, a byte hash of
+// Helpers for the hostile-input suite: statuses of throwing calls, a byte hash of
 // meshes (determinism), and a cancellation probe that measures how long a call takes to
 // return after cancellation is requested from another thread.
 #pragma once

@@ -1,4 +1,4 @@
-// Bounded resources (issue 9): inputs that would blow up time or memory get a clear error
+// Bounded resources: inputs that would blow up time or memory get a clear error
 // before they do, and every limit is settable.
 #include <gtest/gtest.h>
 

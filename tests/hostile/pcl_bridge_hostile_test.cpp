@@ -1,4 +1,4 @@
-// The PCL bridge's files (issue 9): PCD headers whose counts overflow, and the PLY writer
+// The PCL bridge's files: PCD headers whose counts overflow, and the PLY writer
 // (pcl::io::savePLYFileBinary behind particlemesh_pcl::savePLYFile) under a failing write.
 #include <gtest/gtest.h>
 

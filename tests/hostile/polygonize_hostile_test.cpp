@@ -1,4 +1,4 @@
-// Polygonization (issue 7) under hostile inputs (issue 9): the grid memory budget (C++ and
+// Polygonization under hostile inputs: the grid memory budget (C++ and
 // C ABI), bad radii and strengths named with their index, cancellation of a 1M-particle run,
 // and byte-identical output for any thread count. The CLI's budget flag (--max-grid-mib) and
 // Ctrl-C are tested in tests/cli/test_polygonize.py.

@@ -1,4 +1,4 @@
-// Ray casting and rendering (issue 8) under hostile inputs (issue 9): bad rays named by index,
+// Ray casting and rendering under hostile inputs: bad rays named by index,
 // cancellation of a large batch and of a render, byte-identical hits and images for any thread
 // count, and the PNG writer under a failing write.
 #include <gtest/gtest.h>

@@ -471,7 +471,7 @@ TEST(ParticleTriangulation, PreprocessingSwitchesKeepInputIndices) {
 // Each shared PCD, loaded the PCL way and meshed (the depth frame after the documented
 // preprocessing): a manifold, consistently oriented surface indexing the original points.
 //
-// On these open, irregular scans the surface stage (issue 3) still closes a few tiny pieces
+// On these open, irregular scans the surface stage still closes a few tiny pieces
 // (zero-volume tetrahedra and the like); they are bounded here, not hidden.
 TEST(ParticleTriangulation, SharedScansReconstruct) {
   PM_REQUIRE_DATA(bun0, "pcd/bun0.pcd");

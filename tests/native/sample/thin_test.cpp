@@ -1,4 +1,4 @@
-// Thinning (issue 6's coarse viewport preview): an even subset that still meshes as a surface.
+// Thinning (the add-on's coarse viewport preview): an even subset that still meshes as a surface.
 #include "particlemesh/sample/thin.h"
 
 #include <gtest/gtest.h>

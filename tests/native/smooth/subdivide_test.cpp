@@ -1,6 +1,6 @@
 // smooth_mesh(): Loop through OpenSubdiv and modified butterfly through OpenMesh.
 //
-// What is checked (issue 4, "How it is checked"):
+// What is checked:
 //  - counts after k levels on closed meshes: F * 4^k triangles, V' = V + E per level, Euler
 //    characteristic unchanged, still a closed, consistently and outward oriented manifold;
 //  - one Loop level on small meshes against the Loop masks computed here by hand (interior

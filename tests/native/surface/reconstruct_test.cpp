@@ -1,4 +1,4 @@
-// The finished surface (issue 3): closed, oriented, manifold meshes with the right topology
+// The finished surface: closed, oriented, manifold meshes with the right topology
 // from even samplings; no bridges between sheets that merely come close; real openings kept.
 #include "particlemesh/surface/reconstruct.h"
 

@@ -1,4 +1,4 @@
-// The polygonizer, checked as issue 7 says: one particle on its analytic iso-sphere, two
+// The polygonizer, checked: one particle on its analytic iso-sphere, two
 // particles joining where the field says, random clouds watertight and manifold and outward,
 // convergence as the cell shrinks, memory following a thin sheet rather than its bounding box,
 // determinism, and clear errors for bad input and absurd grids.

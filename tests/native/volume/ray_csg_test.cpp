@@ -1,4 +1,4 @@
-// CSG of two particle fields along rays (issue 8): the identities A ∪ A = A, A − A = ∅,
+// CSG of two particle fields along rays: the identities A ∪ A = A, A − A = ∅,
 // A ∩ B ⊆ A on sampled rays, membership of every combination against the two fields point
 // by point, and the normals of a difference.
 #include "particlemesh/volume/ray_csg.h"

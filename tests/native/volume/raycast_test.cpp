@@ -1,6 +1,6 @@
-// Ray casting of the iso-surface of volume particles (issue 8): exact hits on one particle,
+// Ray casting of the iso-surface of volume particles: exact hits on one particle,
 // tangent rays, random configurations against dense brute-force sampling of F, agreement with
-// the polygonized mesh (issue 7), the root solvers on their own, cost, determinism, errors.
+// the polygonized mesh, the root solvers on their own, cost, determinism, errors.
 #include "particlemesh/volume/raycast.h"
 
 #include <gtest/gtest.h>
@@ -406,7 +406,7 @@ TEST(RayCaster, GrazingRaysStayConsistent) {
   }
 }
 
-// ---- agreement with the polygonized mesh (issue 7) -------------------------------------------
+// ---- agreement with the polygonized mesh ---------------------------------------------------
 
 // Moller-Trumbore: the smallest t > 0 at which the ray meets a triangle of the mesh.
 static std::optional<double> ray_mesh(const TriMesh& m, const Vec3& o, const Vec3& d) {

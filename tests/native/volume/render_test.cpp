@@ -1,4 +1,4 @@
-// The renderer (issue 8): the image of a test scene against a stored reference (made by the
+// The renderer: the image of a test scene against a stored reference (made by the
 // renderer and looked at), determinism, default framing, PNG round trip, errors.
 #include "particlemesh/volume/render.h"
 
