@@ -123,9 +123,9 @@ void NeighborGrid::build(const Vec3* points, size_t n, double cell_size, const V
       const std::string axis(1, "xyz"[a]);
       const std::string span = "the points span " + detail::format_number(cells) + " cells of size " +
                                detail::format_number(cell_size) + " along " + axis + " (at most 2097148)";
-      if (n < 2 || (hi[a] - points_lo[a]) * inv_cell_ < double(kMaxCellsPerAxis - 4)) {
-        // The points alone would fit (one point spans no cells): the span is from the grid's
-        // given lower corner.
+      if ((hi[a] - points_lo[a]) * inv_cell_ < double(kMaxCellsPerAxis - 4)) {
+        // The points alone would fit (one point always does: the gap search below needs two):
+        // the span is from the grid's given lower corner.
         throw Error(Status::LimitExceeded,
                     span + ", from the grid's lower corner " + axis + " = " + detail::format_number(lo[a]) +
                         " to " + axis + " = " + detail::format_number(hi[a]) +
